@@ -1,0 +1,47 @@
+# Small helpers so every module, test and benchmark is declared the same way.
+
+# Warnings and sanitizers shared by every target of ours.
+function(impactdic_target_defaults target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor
+                                           -Wno-missing-field-initializers)
+  if(IMPACTDIC_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+  if(IMPACTDIC_SANITIZE)
+    target_compile_options(${target} PRIVATE -fsanitize=address,undefined -fno-omit-frame-pointer
+                                             -fno-sanitize-recover=undefined)
+    target_link_options(${target} PRIVATE -fsanitize=address,undefined)
+  endif()
+endfunction()
+
+# impactdic_add_module(NAME dic SOURCES a.cc b.cc DEPS impactdic::core PRIVATE_DEPS ...)
+# creates the library impactdic_<NAME> with the alias impactdic::<NAME>.
+function(impactdic_add_module)
+  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS;PRIVATE_DEPS" ${ARGN})
+  set(target impactdic_${ARG_NAME})
+  add_library(${target} STATIC ${ARG_SOURCES})
+  add_library(impactdic::${ARG_NAME} ALIAS ${target})
+  target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>)
+  target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  impactdic_target_defaults(${target})
+endfunction()
+
+# impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow])
+function(impactdic_add_test)
+  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
+  add_executable(${ARG_NAME} ${ARG_SOURCES})
+  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  target_compile_definitions(${ARG_NAME} PRIVATE
+      IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+      IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
+  impactdic_target_defaults(${ARG_NAME})
+  gtest_discover_tests(${ARG_NAME} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+endfunction()
+
+# impactdic_add_benchmark(NAME dic_benchmark SOURCES dic_benchmark.cc DEPS impactdic::dic)
+function(impactdic_add_benchmark)
+  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS" ${ARGN})
+  add_executable(${ARG_NAME} ${ARG_SOURCES})
+  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} benchmark::benchmark)
+  impactdic_target_defaults(${ARG_NAME})
+endfunction()

@@ -1,0 +1,55 @@
+// A small numeric CSV reader/writer with clear errors.
+//
+// Reading: a header row of column names, then rows of numbers separated by commas. Errors name
+// the file, line and column: malformed numbers, NaN/inf where not allowed, missing columns,
+// ragged rows, non-monotonic time columns.
+//
+//   CsvReadOptions opts;
+//   opts.required_columns = {"time_s", "accel_g"};
+//   opts.increasing_column = "time_s";
+//   CsvTable t = ReadCsv("daq.csv", opts);
+//   const std::vector<double>& time = t.Column("time_s");
+#ifndef IMPACTDIC_IO_CSV_H_
+#define IMPACTDIC_IO_CSV_H_
+
+#include <string>
+#include <vector>
+
+namespace impactdic {
+
+struct CsvTable {
+  std::string path;                          // Where it was read from (for messages).
+  std::vector<std::string> names;            // Column names, in file order.
+  std::vector<std::vector<double>> columns;  // columns[c][row].
+
+  std::size_t rows() const { return columns.empty() ? 0 : columns[0].size(); }
+  bool Has(const std::string& name) const;
+  // Error kFileFormat naming the file and the missing column (with the available ones).
+  const std::vector<double>& Column(const std::string& name) const;
+};
+
+struct CsvReadOptions {
+  // Columns that must be present (Error otherwise, listing the columns found).
+  std::vector<std::string> required_columns;
+  // Whether NaN / inf / empty cells are accepted (read as NaN). Off: an error names the cell.
+  bool allow_non_finite = false;
+  // If not empty: this column must be strictly increasing (a time axis).
+  std::string increasing_column;
+  // Lines starting with this character are skipped (before and after the header).
+  char comment = '#';
+};
+
+CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options = {});
+
+// Writes the columns (all the same length) with a header row, atomically. Numbers are written with
+// `precision` significant digits; NaN as "nan".
+void WriteCsv(const std::string& path, const std::vector<std::string>& names,
+              const std::vector<std::vector<double>>& columns, int precision = 10);
+
+// For tables with text cells (e.g. a status column): rows of already-formatted cells.
+void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
+                  const std::vector<std::vector<std::string>>& rows);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_IO_CSV_H_

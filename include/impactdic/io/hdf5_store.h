@@ -1,0 +1,99 @@
+// The HDF5 result store: named datasets (1-D..4-D, float/double/int32) with `units` and
+// `description` string attributes, string attributes on groups and datasets, nested groups.
+// Files are plain HDF5 (row-major, native little-endian types, variable-length UTF-8 strings as
+// attributes), so h5py, MATLAB's h5read/h5readatt and HDFView open them without conversion.
+// (MATLAB shows the dimensions reversed, as for every row-major file.)
+//
+// Writing goes to a temporary file in the same folder; Commit() closes and renames it. A writer
+// destroyed without Commit() deletes the temporary file: an interrupted run leaves no final file.
+//
+//   H5Writer out("run/results.h5");
+//   out.WriteProvenance(scene_yaml_text);
+//   out.Write("dic/u_px", u, {frames, rows, cols}, "px", "horizontal displacement, x right");
+//   out.SetAttribute("dic", "interpolation", "bicubic");
+//   out.Commit();
+//
+//   H5Reader in("run/results.h5");
+//   std::vector<std::size_t> dims;
+//   std::vector<double> u = in.ReadDouble("dic/u_px", &dims);
+#ifndef IMPACTDIC_IO_HDF5_STORE_H_
+#define IMPACTDIC_IO_HDF5_STORE_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace impactdic {
+
+using Dims = std::vector<std::size_t>;
+
+class H5Writer {
+ public:
+  explicit H5Writer(const std::string& final_path);
+  ~H5Writer();
+  H5Writer(const H5Writer&) = delete;
+  H5Writer& operator=(const H5Writer&) = delete;
+
+  // Creates a group (and its parents); a no-op if it exists.
+  void CreateGroup(const std::string& path);
+
+  // Writes a dataset at `path` (parent groups are created). dims has 1..4 entries whose product
+  // equals data.size(). Datasets of >= 4096 elements are chunked and deflate-compressed.
+  void Write(const std::string& path, const std::vector<double>& data, const Dims& dims,
+             const std::string& units, const std::string& description);
+  void Write(const std::string& path, const std::vector<float>& data, const Dims& dims,
+             const std::string& units, const std::string& description);
+  void Write(const std::string& path, const std::vector<std::int32_t>& data, const Dims& dims,
+             const std::string& units, const std::string& description);
+  // 1-D convenience.
+  void Write(const std::string& path, const std::vector<double>& data, const std::string& units,
+             const std::string& description);
+
+  // String / numeric attribute on an existing group or dataset ("/" is the root).
+  void SetAttribute(const std::string& object_path, const std::string& name,
+                    const std::string& value);
+  void SetAttribute(const std::string& object_path, const std::string& name, double value);
+
+  // Root attributes `tool`, `tool_version`, `git_revision`, `created_utc` and the dataset
+  // `/provenance/scene_yaml` (the scene text, as a string attribute `text` of that group).
+  void WriteProvenance(const std::string& scene_yaml_text);
+
+  // Closes the file and renames it to its final name.
+  void Commit();
+  const std::string& final_path() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+class H5Reader {
+ public:
+  explicit H5Reader(const std::string& path);
+  ~H5Reader();
+  H5Reader(const H5Reader&) = delete;
+  H5Reader& operator=(const H5Reader&) = delete;
+
+  bool Exists(const std::string& path) const;
+  Dims Dimensions(const std::string& path) const;
+  // Reads any numeric dataset converted to the requested type; `dims` (optional) receives the
+  // shape. Error kFileFormat naming the file and the dataset if it is missing.
+  std::vector<double> ReadDouble(const std::string& path, Dims* dims = nullptr) const;
+  std::vector<float> ReadFloat(const std::string& path, Dims* dims = nullptr) const;
+  std::vector<std::int32_t> ReadInt(const std::string& path, Dims* dims = nullptr) const;
+  std::string ReadStringAttribute(const std::string& object_path, const std::string& name) const;
+  double ReadNumberAttribute(const std::string& object_path, const std::string& name) const;
+  bool HasAttribute(const std::string& object_path, const std::string& name) const;
+  // Names of the members of a group.
+  std::vector<std::string> List(const std::string& group_path) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_IO_HDF5_STORE_H_

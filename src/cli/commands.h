@@ -1,0 +1,28 @@
+// The CLI's subcommands. Each Register* function adds one subcommand to the app: it declares and
+// validates the options (naming the option, the value given and what is allowed), then calls a
+// library function that tests can call directly. Errors are impactdic::Error, caught in main().
+#ifndef IMPACTDIC_CLI_COMMANDS_H_
+#define IMPACTDIC_CLI_COMMANDS_H_
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace impactdic::cli {
+
+void RegisterRunCommand(CLI::App& app);
+void RegisterSynthCommand(CLI::App& app);
+void RegisterCalibrateCommand(CLI::App& app);
+void RegisterCorrelateCommand(CLI::App& app);
+void RegisterAnalyzeCommand(CLI::App& app);
+void RegisterModelCommand(CLI::App& app);
+void RegisterRenderCommand(CLI::App& app);
+void RegisterCampaignCommand(CLI::App& app);
+void RegisterVersionCommand(CLI::App& app);
+
+// Throws Error(kNotImplemented) for a subcommand whose stage does not exist yet (exit status 2).
+[[noreturn]] void NotImplemented(const std::string& subcommand);
+
+}  // namespace impactdic::cli
+
+#endif  // IMPACTDIC_CLI_COMMANDS_H_

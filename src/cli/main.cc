@@ -1,0 +1,83 @@
+// impactdic: command-line entry point. Parses the global options, dispatches to a subcommand and
+// turns every error into one message on stderr and a non-zero exit code.
+#include <CLI/CLI.hpp>
+
+#include <exception>
+#include <iostream>
+#include <string>
+
+#include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+
+namespace impactdic::cli {
+
+[[noreturn]] void NotImplemented(const std::string& subcommand) {
+  throw Error(ErrorKind::kNotImplemented,
+              "impactdic " + subcommand + ": not implemented yet (this stage does not exist yet)");
+}
+
+}  // namespace impactdic::cli
+
+int main(int argc, char** argv) {
+  using namespace impactdic;
+  CLI::App app{
+      "impactdic: DIC of pounder impacts on sand, momentum validation and the added-mass impact "
+      "model"};
+  app.require_subcommand(1);
+  bool verbose = false, quiet = false;
+  app.add_flag("-v,--verbose", verbose, "More log output (debug level)");
+  app.add_flag("-q,--quiet", quiet, "Only warnings and errors");
+  app.parse_complete_callback([&] {
+    SetLogLevel(verbose ? LogLevel::kDebug : quiet ? LogLevel::kWarning : LogLevel::kInfo);
+  });
+
+  cli::RegisterRunCommand(app);
+  cli::RegisterSynthCommand(app);
+  cli::RegisterCalibrateCommand(app);
+  cli::RegisterCorrelateCommand(app);
+  cli::RegisterAnalyzeCommand(app);
+  cli::RegisterModelCommand(app);
+  cli::RegisterRenderCommand(app);
+  cli::RegisterCampaignCommand(app);
+  cli::RegisterVersionCommand(app);
+
+  // An unknown first word is reported as such (CLI11 would only say a subcommand is required).
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') continue;
+    std::string names;
+    bool known = false;
+    for (const auto* sub : app.get_subcommands({})) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == word;
+    }
+    if (!known) {
+      std::cerr << "impactdic: error: unknown subcommand '" << word << "'; expected one of: " << names
+                << "\n";
+      return 1;
+    }
+    break;
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "impactdic: error: " << e.what() << "\n";
+    if (e.get_exit_code() == 0) return 0;
+    std::cerr << "Run with --help for the allowed options.\n";
+    return 1;
+  } catch (const Error& e) {
+    std::cerr << "impactdic: " << (e.kind() == ErrorKind::kNotImplemented ? "" : "error: ")
+              << e.what() << "\n";
+    return ExitCode(e.kind());
+  } catch (const std::exception& e) {
+    std::cerr << "impactdic: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,15 @@
+#include <iostream>
+
+#include "commands.h"
+#include "impactdic/core/version.h"
+
+namespace impactdic::cli {
+
+void RegisterVersionCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand("version", "Print the tool version and git revision");
+  cmd->callback([] {
+    std::cout << "impactdic " << Version() << " (git " << GitRevision() << ")\n";
+  });
+}
+
+}  // namespace impactdic::cli

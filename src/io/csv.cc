@@ -1,0 +1,206 @@
+#include "impactdic/io/csv.h"
+
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
+
+namespace impactdic {
+namespace {
+
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\"");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\"");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> SplitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) cells.push_back(Trim(cell));
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// Parses a cell as a double; returns false when it is not a number at all.
+bool ParseNumber(const std::string& cell, double* value) {
+  if (cell.empty()) {
+    *value = std::nan("");
+    return true;
+  }
+  std::string lower;
+  for (char c : cell) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower == "nan" || lower == "-nan") {
+    *value = std::nan("");
+    return true;
+  }
+  if (lower == "inf" || lower == "+inf" || lower == "infinity") {
+    *value = HUGE_VAL;
+    return true;
+  }
+  if (lower == "-inf" || lower == "-infinity") {
+    *value = -HUGE_VAL;
+    return true;
+  }
+  const char* begin = cell.data();
+  if (*begin == '+') ++begin;
+  const char* end = cell.data() + cell.size();
+  auto [ptr, ec] = std::from_chars(begin, end, *value);
+  return ec == std::errc() && ptr == end;
+}
+
+}  // namespace
+
+bool CsvTable::Has(const std::string& name) const {
+  for (const auto& n : names)
+    if (n == name) return true;
+  return false;
+}
+
+const std::vector<double>& CsvTable::Column(const std::string& name) const {
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] == name) return columns[i];
+  throw Error(ErrorKind::kFileFormat, "column '" + name + "'", "missing; columns are " + JoinNames(names),
+              "a header with a '" + name + "' column")
+      .WithFile(path);
+}
+
+CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
+  std::ifstream in(path);
+  if (!in) {
+    throw Error(ErrorKind::kFileNotFound, "", "", "a readable CSV file").WithFile(path);
+  }
+  CsvTable table;
+  table.path = path;
+  std::string line;
+  int line_no = 0;
+  bool have_header = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (Trim(line).empty() || line[0] == options.comment) continue;
+    std::vector<std::string> cells = SplitCells(line);
+    if (!have_header) {
+      for (const auto& c : cells) {
+        double dummy;
+        if (c.empty() || ParseNumber(c, &dummy)) {
+          throw Error(ErrorKind::kFileFormat, "header", "'" + line + "'",
+                      "a header row of column names")
+              .WithFile(path, line_no);
+        }
+      }
+      table.names = cells;
+      table.columns.assign(cells.size(), {});
+      have_header = true;
+      continue;
+    }
+    if (cells.size() != table.names.size()) {
+      throw Error(ErrorKind::kFileFormat, "row",
+                  fmt::format("{} cells", cells.size()),
+                  fmt::format("{} cells as in the header", table.names.size()))
+          .WithFile(path, line_no);
+    }
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      double value;
+      if (!ParseNumber(cells[c], &value)) {
+        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
+                    "'" + cells[c] + "'", "a number")
+            .WithFile(path, line_no, static_cast<int>(c + 1));
+      }
+      if (!std::isfinite(value) && !options.allow_non_finite) {
+        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
+                    cells[c].empty() ? "an empty cell" : "'" + cells[c] + "'",
+                    "a finite number")
+            .WithFile(path, line_no, static_cast<int>(c + 1));
+      }
+      table.columns[c].push_back(value);
+    }
+  }
+  if (!have_header) {
+    throw Error(ErrorKind::kFileFormat, "", "an empty file", "a header row and data rows")
+        .WithFile(path);
+  }
+  for (const auto& required : options.required_columns) table.Column(required);
+  if (!options.increasing_column.empty()) {
+    const auto& t = table.Column(options.increasing_column);
+    std::size_t col = 0;
+    while (table.names[col] != options.increasing_column) ++col;
+    // Reconstruct line numbers: data rows follow the header in order, skipping comments/blank
+    // lines; re-scan to report the exact line.
+    for (std::size_t i = 1; i < t.size(); ++i) {
+      if (!(t[i] > t[i - 1])) {
+        std::ifstream again(path);
+        int ln = 0, data_row = -1;
+        bool header_seen = false;
+        while (std::getline(again, line)) {
+          ++ln;
+          if (!line.empty() && line.back() == '\r') line.pop_back();
+          if (Trim(line).empty() || line[0] == options.comment) continue;
+          if (!header_seen) {
+            header_seen = true;
+            continue;
+          }
+          if (++data_row == static_cast<int>(i)) break;
+        }
+        throw Error(ErrorKind::kFileFormat, "column '" + options.increasing_column + "'",
+                    fmt::format("{} after {}", t[i], t[i - 1]), "strictly increasing values")
+            .WithFile(path, ln, static_cast<int>(col + 1));
+      }
+    }
+  }
+  return table;
+}
+
+void WriteCsv(const std::string& path, const std::vector<std::string>& names,
+              const std::vector<std::vector<double>>& columns, int precision) {
+  if (names.size() != columns.size()) {
+    throw Error(ErrorKind::kInvalidValue, "WriteCsv", fmt::format("{} names for {} columns",
+                names.size(), columns.size()), "one name per column");
+  }
+  const std::size_t rows = columns.empty() ? 0 : columns[0].size();
+  for (const auto& c : columns) {
+    if (c.size() != rows) {
+      throw Error(ErrorKind::kInvalidValue, "WriteCsv", "columns of different lengths",
+                  "equal-length columns");
+    }
+  }
+  std::string text;
+  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + names[c];
+  text += "\n";
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (c) text += ",";
+      const double v = columns[c][r];
+      text += std::isnan(v) ? std::string("nan") : fmt::format("{:.{}g}", v, precision);
+    }
+    text += "\n";
+  }
+  WriteTextFileAtomic(path, text);
+}
+
+void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
+                  const std::vector<std::vector<std::string>>& rows) {
+  std::string text;
+  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + names[c];
+  text += "\n";
+  for (const auto& row : rows) {
+    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + row[c];
+    text += "\n";
+  }
+  WriteTextFileAtomic(path, text);
+}
+
+}  // namespace impactdic

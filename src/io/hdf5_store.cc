@@ -1,0 +1,388 @@
+#include "impactdic/io/hdf5_store.h"
+
+#include <H5Cpp.h>
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <numeric>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/version.h"
+#include "impactdic/io/atomic_file.h"
+
+namespace impactdic {
+namespace {
+
+// Datasets at least this large are chunked and deflate-compressed.
+constexpr std::size_t kCompressThreshold = 4096;
+constexpr int kDeflateLevel = 4;
+
+std::vector<std::string> SplitPath(const std::string& path) {
+  std::vector<std::string> parts;
+  std::string part;
+  for (char c : path) {
+    if (c == '/') {
+      if (!part.empty()) parts.push_back(part);
+      part.clear();
+    } else {
+      part += c;
+    }
+  }
+  if (!part.empty()) parts.push_back(part);
+  return parts;
+}
+
+std::string ParentOf(const std::string& path) {
+  const auto parts = SplitPath(path);
+  std::string parent;
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) parent += "/" + parts[i];
+  return parent.empty() ? "/" : parent;
+}
+
+std::string Normalise(const std::string& path) {
+  std::string p;
+  for (const auto& part : SplitPath(path)) p += "/" + part;
+  return p.empty() ? "/" : p;
+}
+
+void WriteStringAttribute(H5::H5Object& object, const std::string& name, const std::string& value) {
+  H5::StrType type(H5::PredType::C_S1, H5T_VARIABLE);
+  type.setCset(H5T_CSET_UTF8);
+  if (object.attrExists(name)) object.removeAttr(name);
+  H5::Attribute attr = object.createAttribute(name, type, H5::DataSpace(H5S_SCALAR));
+  attr.write(type, value);
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buffer[32];
+  std::strftime(buffer, sizeof buffer, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buffer;
+}
+
+template <typename Fn>
+auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltype(fn()) {
+  try {
+    return fn();
+  } catch (const H5::Exception& e) {
+    throw Error(ErrorKind::kIo, what, e.getDetailMsg(), "a valid HDF5 operation").WithFile(file);
+  }
+}
+
+}  // namespace
+
+struct H5Writer::Impl {
+  std::unique_ptr<AtomicFile> atomic;
+  H5::H5File file;
+  bool open = false;
+};
+
+H5Writer::H5Writer(const std::string& final_path) : impl_(std::make_unique<Impl>()) {
+  H5::Exception::dontPrint();
+  impl_->atomic = std::make_unique<AtomicFile>(final_path);
+  Guard(final_path, "create", [&] {
+    impl_->file = H5::H5File(impl_->atomic->temp_path(), H5F_ACC_TRUNC);
+    impl_->open = true;
+  });
+}
+
+H5Writer::~H5Writer() {
+  if (impl_->open) {
+    try {
+      impl_->file.close();
+    } catch (...) {
+    }
+  }
+  // The AtomicFile deletes the temporary file unless Commit() ran.
+}
+
+const std::string& H5Writer::final_path() const { return impl_->atomic->final_path(); }
+
+void H5Writer::CreateGroup(const std::string& path) {
+  Guard(final_path(), "group " + path, [&] {
+    std::string current;
+    for (const auto& part : SplitPath(path)) {
+      current += "/" + part;
+      if (!impl_->file.nameExists(current)) impl_->file.createGroup(current);
+    }
+  });
+}
+
+namespace {
+
+template <typename T>
+void WriteDataset(H5::H5File& file, const std::string& file_name, const std::string& path,
+                  const std::vector<T>& data, const Dims& dims, const H5::PredType& mem_type,
+                  const H5::PredType& file_type, const std::string& units,
+                  const std::string& description) {
+  if (dims.empty() || dims.size() > 4) {
+    throw Error(ErrorKind::kInvalidValue, "dataset " + path, std::to_string(dims.size()) + " dims",
+                "1 to 4 dimensions");
+  }
+  const std::size_t count =
+      std::accumulate(dims.begin(), dims.end(), std::size_t{1}, std::multiplies<>());
+  if (count != data.size()) {
+    throw Error(ErrorKind::kInvalidValue, "dataset " + path,
+                std::to_string(data.size()) + " values", std::to_string(count) + " = product of dims");
+  }
+  std::vector<hsize_t> h_dims(dims.begin(), dims.end());
+  H5::DataSpace space(static_cast<int>(h_dims.size()), h_dims.data());
+  H5::DSetCreatPropList props;
+  if (count >= kCompressThreshold) {
+    // Chunks of whole trailing dimensions, about 64k elements each.
+    std::vector<hsize_t> chunk = h_dims;
+    std::size_t elements = count;
+    for (std::size_t d = 0; d < chunk.size() && elements > 65536; ++d) {
+      const std::size_t rest = elements / chunk[d];
+      const hsize_t keep = std::max<hsize_t>(1, 65536 / std::max<std::size_t>(rest, 1));
+      if (keep < chunk[d]) chunk[d] = keep;
+      elements = rest * chunk[d];
+    }
+    props.setChunk(static_cast<int>(chunk.size()), chunk.data());
+    props.setShuffle();
+    props.setDeflate(kDeflateLevel);
+  }
+  Guard(file_name, "dataset " + path, [&] {
+    if (file.nameExists(path)) file.unlink(path);
+    H5::DataSet ds = file.createDataSet(path, file_type, space, props);
+    if (count > 0) ds.write(data.data(), mem_type);
+    WriteStringAttribute(ds, "units", units);
+    WriteStringAttribute(ds, "description", description);
+  });
+}
+
+}  // namespace
+
+void H5Writer::Write(const std::string& path, const std::vector<double>& data, const Dims& dims,
+                     const std::string& units, const std::string& description) {
+  CreateGroup(ParentOf(path));
+  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_DOUBLE,
+               H5::PredType::IEEE_F64LE, units, description);
+}
+void H5Writer::Write(const std::string& path, const std::vector<float>& data, const Dims& dims,
+                     const std::string& units, const std::string& description) {
+  CreateGroup(ParentOf(path));
+  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_FLOAT,
+               H5::PredType::IEEE_F32LE, units, description);
+}
+void H5Writer::Write(const std::string& path, const std::vector<std::int32_t>& data,
+                     const Dims& dims, const std::string& units, const std::string& description) {
+  CreateGroup(ParentOf(path));
+  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_INT32,
+               H5::PredType::STD_I32LE, units, description);
+}
+void H5Writer::Write(const std::string& path, const std::vector<double>& data,
+                     const std::string& units, const std::string& description) {
+  Write(path, data, Dims{data.size()}, units, description);
+}
+
+void H5Writer::SetAttribute(const std::string& object_path, const std::string& name,
+                            const std::string& value) {
+  Guard(final_path(), "attribute " + name + " of " + object_path, [&] {
+    const std::string path = Normalise(object_path);
+    if (path == "/") {
+      H5::Group root = impl_->file.openGroup("/");
+      WriteStringAttribute(root, name, value);
+      return;
+    }
+    if (!impl_->file.nameExists(path)) CreateGroup(path);
+    if (impl_->file.childObjType(path) == H5O_TYPE_DATASET) {
+      H5::DataSet ds = impl_->file.openDataSet(path);
+      WriteStringAttribute(ds, name, value);
+    } else {
+      H5::Group g = impl_->file.openGroup(path);
+      WriteStringAttribute(g, name, value);
+    }
+  });
+}
+
+void H5Writer::SetAttribute(const std::string& object_path, const std::string& name, double value) {
+  Guard(final_path(), "attribute " + name + " of " + object_path, [&] {
+    const std::string path = Normalise(object_path);
+    if (path != "/" && !impl_->file.nameExists(path)) CreateGroup(path);
+    auto write = [&](H5::H5Object& obj) {
+      if (obj.attrExists(name)) obj.removeAttr(name);
+      H5::Attribute attr =
+          obj.createAttribute(name, H5::PredType::IEEE_F64LE, H5::DataSpace(H5S_SCALAR));
+      attr.write(H5::PredType::NATIVE_DOUBLE, &value);
+    };
+    if (path != "/" && impl_->file.childObjType(path) == H5O_TYPE_DATASET) {
+      H5::DataSet ds = impl_->file.openDataSet(path);
+      write(ds);
+    } else {
+      H5::Group g = impl_->file.openGroup(path);
+      write(g);
+    }
+  });
+}
+
+void H5Writer::WriteProvenance(const std::string& scene_yaml_text) {
+  SetAttribute("/", "tool", "impactdic");
+  SetAttribute("/", "tool_version", Version());
+  SetAttribute("/", "git_revision", GitRevision());
+  SetAttribute("/", "created_utc", UtcNow());
+  CreateGroup("/provenance");
+  SetAttribute("/provenance", "scene_yaml", scene_yaml_text);
+  SetAttribute("/provenance", "tool_version", Version());
+  SetAttribute("/provenance", "git_revision", GitRevision());
+}
+
+void H5Writer::Commit() {
+  Guard(final_path(), "close", [&] {
+    impl_->file.flush(H5F_SCOPE_GLOBAL);
+    impl_->file.close();
+    impl_->open = false;
+  });
+  impl_->atomic->Commit();
+}
+
+struct H5Reader::Impl {
+  std::string path;
+  H5::H5File file;
+};
+
+H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+  H5::Exception::dontPrint();
+  impl_->path = path;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw Error(ErrorKind::kFileNotFound, "HDF5 file", "", "an existing .h5 file").WithFile(path);
+  }
+  try {
+    impl_->file = H5::H5File(path, H5F_ACC_RDONLY);
+  } catch (const H5::Exception& e) {
+    throw Error(ErrorKind::kFileFormat, "HDF5 file", "a file HDF5 cannot open (" + e.getDetailMsg() + ")",
+                "an HDF5 file")
+        .WithFile(path);
+  }
+}
+
+H5Reader::~H5Reader() = default;
+
+bool H5Reader::Exists(const std::string& path) const {
+  const std::string p = Normalise(path);
+  if (p == "/") return true;
+  // nameExists fails if an intermediate group is missing; check each level.
+  std::string current;
+  for (const auto& part : SplitPath(p)) {
+    current += "/" + part;
+    if (!impl_->file.nameExists(current)) return false;
+  }
+  return true;
+}
+
+Dims H5Reader::Dimensions(const std::string& path) const {
+  if (!Exists(path)) {
+    throw Error(ErrorKind::kFileFormat, "dataset " + path, "missing", "the dataset to exist")
+        .WithFile(impl_->path);
+  }
+  return Guard(impl_->path, "dataset " + path, [&] {
+    H5::DataSet ds = impl_->file.openDataSet(Normalise(path));
+    H5::DataSpace space = ds.getSpace();
+    std::vector<hsize_t> h(space.getSimpleExtentNdims());
+    space.getSimpleExtentDims(h.data());
+    return Dims(h.begin(), h.end());
+  });
+}
+
+namespace {
+
+template <typename T>
+std::vector<T> ReadAs(const H5::H5File& file, const std::string& file_name, const std::string& path,
+                      const H5::PredType& type, Dims* dims, const Dims& shape) {
+  const std::size_t count =
+      std::accumulate(shape.begin(), shape.end(), std::size_t{1}, std::multiplies<>());
+  std::vector<T> data(count);
+  Guard(file_name, "dataset " + path, [&] {
+    H5::DataSet ds = file.openDataSet(path);
+    if (count > 0) ds.read(data.data(), type);
+  });
+  if (dims) *dims = shape;
+  return data;
+}
+
+}  // namespace
+
+std::vector<double> H5Reader::ReadDouble(const std::string& path, Dims* dims) const {
+  const Dims shape = Dimensions(path);
+  return ReadAs<double>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_DOUBLE,
+                        dims, shape);
+}
+std::vector<float> H5Reader::ReadFloat(const std::string& path, Dims* dims) const {
+  const Dims shape = Dimensions(path);
+  return ReadAs<float>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_FLOAT, dims,
+                       shape);
+}
+std::vector<std::int32_t> H5Reader::ReadInt(const std::string& path, Dims* dims) const {
+  const Dims shape = Dimensions(path);
+  return ReadAs<std::int32_t>(impl_->file, impl_->path, Normalise(path),
+                              H5::PredType::NATIVE_INT32, dims, shape);
+}
+
+namespace {
+
+H5::Attribute OpenAttribute(const H5::H5File& file, const std::string& object_path,
+                            const std::string& name) {
+  const std::string path = Normalise(object_path);
+  if (path != "/" && file.childObjType(path) == H5O_TYPE_DATASET) {
+    return file.openDataSet(path).openAttribute(name);
+  }
+  return file.openGroup(path).openAttribute(name);
+}
+
+}  // namespace
+
+bool H5Reader::HasAttribute(const std::string& object_path, const std::string& name) const {
+  if (!Exists(object_path)) return false;
+  const std::string path = Normalise(object_path);
+  return Guard(impl_->path, "attribute " + name, [&] {
+    if (path != "/" && impl_->file.childObjType(path) == H5O_TYPE_DATASET) {
+      return impl_->file.openDataSet(path).attrExists(name);
+    }
+    return impl_->file.openGroup(path).attrExists(name);
+  });
+}
+
+std::string H5Reader::ReadStringAttribute(const std::string& object_path,
+                                          const std::string& name) const {
+  if (!HasAttribute(object_path, name)) {
+    throw Error(ErrorKind::kFileFormat, "attribute " + name + " of " + object_path, "missing",
+                "the attribute to exist")
+        .WithFile(impl_->path);
+  }
+  return Guard(impl_->path, "attribute " + name, [&] {
+    H5::Attribute attr = OpenAttribute(impl_->file, object_path, name);
+    H5::StrType type = attr.getStrType();
+    std::string value;
+    attr.read(type, value);
+    return value;
+  });
+}
+
+double H5Reader::ReadNumberAttribute(const std::string& object_path, const std::string& name) const {
+  if (!HasAttribute(object_path, name)) {
+    throw Error(ErrorKind::kFileFormat, "attribute " + name + " of " + object_path, "missing",
+                "the attribute to exist")
+        .WithFile(impl_->path);
+  }
+  return Guard(impl_->path, "attribute " + name, [&] {
+    H5::Attribute attr = OpenAttribute(impl_->file, object_path, name);
+    double value = 0;
+    attr.read(H5::PredType::NATIVE_DOUBLE, &value);
+    return value;
+  });
+}
+
+std::vector<std::string> H5Reader::List(const std::string& group_path) const {
+  return Guard(impl_->path, "group " + group_path, [&] {
+    H5::Group g = impl_->file.openGroup(Normalise(group_path));
+    std::vector<std::string> names;
+    for (hsize_t i = 0; i < g.getNumObjs(); ++i) names.push_back(g.getObjnameByIdx(i));
+    return names;
+  });
+}
+
+}  // namespace impactdic

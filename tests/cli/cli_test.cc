@@ -1,0 +1,36 @@
+// Runs the built impactdic binary and checks exit codes and messages.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include "cli_runner.h"
+
+namespace impactdic {
+namespace {
+
+TEST(Cli, VersionPrintsVersionAndRevision) {
+  const CliResult r = RunCli("version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.output.find("impactdic 0."), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("git "), std::string::npos) << r.output;
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* sub : {"run", "synth", "calibrate", "correlate", "analyze", "model", "render",
+                          "campaign", "version"}) {
+    const CliResult r = RunCli(std::string(sub) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub << ": " << r.output;
+    EXPECT_NE(r.output.find(sub), std::string::npos) << r.output;
+  }
+}
+
+TEST(Cli, UnknownSubcommandFails) {
+  const CliResult r = RunCli("frobnicate");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("frobnicate"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace impactdic
