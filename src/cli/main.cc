@@ -1,7 +1,6 @@
 // impactdic: command-line entry point. Parses the global options, dispatches to a subcommand and
 // turns every error into one message on stderr and a non-zero exit code.
 #include <CLI/CLI.hpp>
-
 #include <exception>
 #include <iostream>
 #include <string>
@@ -53,8 +52,8 @@ int main(int argc, char** argv) {
       known = known || sub->get_name() == word;
     }
     if (!known) {
-      std::cerr << "impactdic: error: unknown subcommand '" << word << "'; expected one of: " << names
-                << "\n";
+      std::cerr << "impactdic: error: unknown subcommand '" << word
+                << "'; expected one of: " << names << "\n";
       return 1;
     }
     break;

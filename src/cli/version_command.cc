@@ -7,9 +7,8 @@ namespace impactdic::cli {
 
 void RegisterVersionCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand("version", "Print the tool version and git revision");
-  cmd->callback([] {
-    std::cout << "impactdic " << Version() << " (git " << GitRevision() << ")\n";
-  });
+  cmd->callback(
+      [] { std::cout << "impactdic " << Version() << " (git " << GitRevision() << ")\n"; });
 }
 
 }  // namespace impactdic::cli

@@ -25,8 +25,8 @@ AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_pat
                 "an existing, writable folder");
   }
   if (access(folder.c_str(), W_OK) != 0) {
-    throw Error(ErrorKind::kIo, final_path_, "output folder " + folder.string() + " is not writable",
-                "a writable folder");
+    throw Error(ErrorKind::kIo, final_path_,
+                "output folder " + folder.string() + " is not writable", "a writable folder");
   }
   std::random_device rd;
   std::ostringstream name;

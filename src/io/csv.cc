@@ -73,8 +73,8 @@ bool CsvTable::Has(const std::string& name) const {
 const std::vector<double>& CsvTable::Column(const std::string& name) const {
   for (std::size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return columns[i];
-  throw Error(ErrorKind::kFileFormat, "column '" + name + "'", "missing; columns are " + JoinNames(names),
-              "a header with a '" + name + "' column")
+  throw Error(ErrorKind::kFileFormat, "column '" + name + "'",
+              "missing; columns are " + JoinNames(names), "a header with a '" + name + "' column")
       .WithFile(path);
 }
 
@@ -108,22 +108,20 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
       continue;
     }
     if (cells.size() != table.names.size()) {
-      throw Error(ErrorKind::kFileFormat, "row",
-                  fmt::format("{} cells", cells.size()),
+      throw Error(ErrorKind::kFileFormat, "row", fmt::format("{} cells", cells.size()),
                   fmt::format("{} cells as in the header", table.names.size()))
           .WithFile(path, line_no);
     }
     for (std::size_t c = 0; c < cells.size(); ++c) {
       double value;
       if (!ParseNumber(cells[c], &value)) {
-        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
-                    "'" + cells[c] + "'", "a number")
+        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'", "'" + cells[c] + "'",
+                    "a number")
             .WithFile(path, line_no, static_cast<int>(c + 1));
       }
       if (!std::isfinite(value) && !options.allow_non_finite) {
         throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
-                    cells[c].empty() ? "an empty cell" : "'" + cells[c] + "'",
-                    "a finite number")
+                    cells[c].empty() ? "an empty cell" : "'" + cells[c] + "'", "a finite number")
             .WithFile(path, line_no, static_cast<int>(c + 1));
       }
       table.columns[c].push_back(value);
@@ -167,8 +165,9 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
 void WriteCsv(const std::string& path, const std::vector<std::string>& names,
               const std::vector<std::vector<double>>& columns, int precision) {
   if (names.size() != columns.size()) {
-    throw Error(ErrorKind::kInvalidValue, "WriteCsv", fmt::format("{} names for {} columns",
-                names.size(), columns.size()), "one name per column");
+    throw Error(ErrorKind::kInvalidValue, "WriteCsv",
+                fmt::format("{} names for {} columns", names.size(), columns.size()),
+                "one name per column");
   }
   const std::size_t rows = columns.empty() ? 0 : columns[0].size();
   for (const auto& c : columns) {

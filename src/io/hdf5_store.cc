@@ -126,7 +126,8 @@ void WriteDataset(H5::H5File& file, const std::string& file_name, const std::str
       std::accumulate(dims.begin(), dims.end(), std::size_t{1}, std::multiplies<>());
   if (count != data.size()) {
     throw Error(ErrorKind::kInvalidValue, "dataset " + path,
-                std::to_string(data.size()) + " values", std::to_string(count) + " = product of dims");
+                std::to_string(data.size()) + " values",
+                std::to_string(count) + " = product of dims");
   }
   std::vector<hsize_t> h_dims(dims.begin(), dims.end());
   H5::DataSpace space(static_cast<int>(h_dims.size()), h_dims.data());
@@ -254,8 +255,8 @@ H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
   try {
     impl_->file = H5::H5File(path, H5F_ACC_RDONLY);
   } catch (const H5::Exception& e) {
-    throw Error(ErrorKind::kFileFormat, "HDF5 file", "a file HDF5 cannot open (" + e.getDetailMsg() + ")",
-                "an HDF5 file")
+    throw Error(ErrorKind::kFileFormat, "HDF5 file",
+                "a file HDF5 cannot open (" + e.getDetailMsg() + ")", "an HDF5 file")
         .WithFile(path);
   }
 }
@@ -318,8 +319,8 @@ std::vector<float> H5Reader::ReadFloat(const std::string& path, Dims* dims) cons
 }
 std::vector<std::int32_t> H5Reader::ReadInt(const std::string& path, Dims* dims) const {
   const Dims shape = Dimensions(path);
-  return ReadAs<std::int32_t>(impl_->file, impl_->path, Normalise(path),
-                              H5::PredType::NATIVE_INT32, dims, shape);
+  return ReadAs<std::int32_t>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_INT32,
+                              dims, shape);
 }
 
 namespace {
@@ -362,7 +363,8 @@ std::string H5Reader::ReadStringAttribute(const std::string& object_path,
   });
 }
 
-double H5Reader::ReadNumberAttribute(const std::string& object_path, const std::string& name) const {
+double H5Reader::ReadNumberAttribute(const std::string& object_path,
+                                     const std::string& name) const {
   if (!HasAttribute(object_path, name)) {
     throw Error(ErrorKind::kFileFormat, "attribute " + name + " of " + object_path, "missing",
                 "the attribute to exist")

@@ -35,7 +35,8 @@ cv::Mat ReadGreyImage(const std::string& path) {
   }
   cv::Mat image = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   if (image.empty()) {
-    throw Error(ErrorKind::kFileFormat, "image", "a file OpenCV cannot decode (corrupt or truncated?)",
+    throw Error(ErrorKind::kFileFormat, "image",
+                "a file OpenCV cannot decode (corrupt or truncated?)",
                 "an 8- or 16-bit TIFF/PNG/BMP/JPEG image")
         .WithFile(path);
   }
@@ -65,7 +66,8 @@ void WriteImage(const std::string& path, const cv::Mat& image) {
   if (!ok) {
     std::error_code ec;
     fs::remove(temp, ec);
-    throw Error(ErrorKind::kIo, "image", "OpenCV could not write it", "a writable path with an image extension")
+    throw Error(ErrorKind::kIo, "image", "OpenCV could not write it",
+                "a writable path with an image extension")
         .WithFile(path);
   }
   std::error_code ec;
@@ -78,15 +80,16 @@ std::vector<std::string> ListFrames(const std::string& source) {
   std::error_code ec;
   if (fs::is_directory(source, ec)) {
     for (const auto& entry : fs::directory_iterator(source)) {
-      if (entry.is_regular_file() && IsImageFile(entry.path())) files.push_back(entry.path().string());
+      if (entry.is_regular_file() && IsImageFile(entry.path()))
+        files.push_back(entry.path().string());
     }
   } else if (source.find_first_of("*?[") != std::string::npos) {
     const fs::path pattern(source);
     fs::path folder = pattern.parent_path();
     if (folder.empty()) folder = ".";
     if (!fs::is_directory(folder, ec)) {
-      throw Error(ErrorKind::kFileNotFound, "frames", "folder " + folder.string() + " does not exist",
-                  "a folder, glob or image file")
+      throw Error(ErrorKind::kFileNotFound, "frames",
+                  "folder " + folder.string() + " does not exist", "a folder, glob or image file")
           .WithFile(source);
     }
     const std::string name_pattern = pattern.filename().string();
@@ -153,7 +156,8 @@ void CheckSameSize(const std::vector<cv::Mat>& images, const std::vector<std::st
                   std::to_string(images[i].cols) + "x" + std::to_string(images[i].rows) +
                       (images[i].depth() == CV_16U ? " 16-bit" : " 8-bit"),
                   std::to_string(images[0].cols) + "x" + std::to_string(images[0].rows) +
-                      (images[0].depth() == CV_16U ? " 16-bit" : " 8-bit") + " like the first image")
+                      (images[0].depth() == CV_16U ? " 16-bit" : " 8-bit") +
+                      " like the first image")
           .WithFile(name);
     }
   }

@@ -8,8 +8,9 @@ namespace {
 TEST(Error, NamesWhereFoundAndExpected) {
   Error e(ErrorKind::kInvalidValue, "dic.subset_size", "24", "an odd integer >= 5");
   e.WithFile("scene.yaml", 12, 3);
-  EXPECT_STREQ(e.what(),
-               "scene.yaml:12:3: dic.subset_size: invalid value (got 24); expected an odd integer >= 5");
+  EXPECT_STREQ(
+      e.what(),
+      "scene.yaml:12:3: dic.subset_size: invalid value (got 24); expected an odd integer >= 5");
   EXPECT_EQ(e.line(), 12);
   EXPECT_EQ(ExitCode(e.kind()), 1);
   EXPECT_EQ(ExitCode(ErrorKind::kNotImplemented), 2);

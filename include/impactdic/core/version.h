@@ -4,8 +4,9 @@
 
 namespace impactdic {
 
-const char* Version();      // e.g. "0.1.0"
-const char* GitRevision();  // short hash, with "-dirty" for uncommitted changes; "unknown" outside git
+const char* Version();  // e.g. "0.1.0"
+const char*
+GitRevision();  // short hash, with "-dirty" for uncommitted changes; "unknown" outside git
 
 }  // namespace impactdic
 

@@ -4,7 +4,6 @@
 #define IMPACTDIC_IO_IMAGE_IO_H_
 
 #include <opencv2/core.hpp>
-
 #include <string>
 #include <vector>
 

@@ -23,20 +23,20 @@ struct SceneInputs {
   std::string frames;       // Folder, glob ("frames/*.png") or video file; resolved path.
   double fps = 1600;        // Camera frame rate [1/s], > 0.
   std::string calibration;  // Calibration YAML (calib module); empty = none (scale from mm_per_px).
-  double mm_per_px = 0;     // Scale when there is no calibration file [mm/px]; 0 = from calibration.
-  std::string sensor;       // DAQ CSV; empty = no sensor stage.
-  std::string truth;        // Optional ground-truth HDF5 (synthetic scenes) for comparison.
+  double mm_per_px = 0;  // Scale when there is no calibration file [mm/px]; 0 = from calibration.
+  std::string sensor;    // DAQ CSV; empty = no sensor stage.
+  std::string truth;     // Optional ground-truth HDF5 (synthetic scenes) for comparison.
 };
 
 struct SceneTest {
-  double mass_kg = 10;                  // Pounder mass m_p [kg], > 0.
-  double drop_height_m = 0.7;           // Drop height h [m], >= 0 (used if no impact velocity).
+  double mass_kg = 10;         // Pounder mass m_p [kg], > 0.
+  double drop_height_m = 0.7;  // Drop height h [m], >= 0 (used if no impact velocity).
   std::optional<double> impact_velocity_m_s;  // v0 [m/s] > 0; overrides sqrt(2 g h).
-  double width_m = 0.15;                // Pounder width D [m], > 0.
-  double depth_m = 0.192;               // Out-of-plane depth t_z [m], > 0.
-  double density_kg_m3 = 1550;          // Dry density rho_d [kg/m^3], > 0.
-  double bed_height_m = 0.6;            // Sand bed height [m], > 0.
-  double g_m_s2 = 9.81;                 // Gravitational acceleration [m/s^2], > 0.
+  double width_m = 0.15;                      // Pounder width D [m], > 0.
+  double depth_m = 0.192;                     // Out-of-plane depth t_z [m], > 0.
+  double density_kg_m3 = 1550;                // Dry density rho_d [kg/m^3], > 0.
+  double bed_height_m = 0.6;                  // Sand bed height [m], > 0.
+  double g_m_s2 = 9.81;                       // Gravitational acceleration [m/s^2], > 0.
 
   // v0 = impact_velocity_m_s if given, else sqrt(2 g h).
   double ImpactVelocity() const;
@@ -45,12 +45,12 @@ struct SceneTest {
 };
 
 struct ScenePreprocess {
-  bool gaussian = false;       // Gaussian blur on/off.
-  double gaussian_sigma = 1.0; // [px], > 0.
-  int gaussian_kernel = 5;     // Kernel size [px], odd >= 3.
-  bool clahe = false;          // CLAHE on/off.
+  bool gaussian = false;          // Gaussian blur on/off.
+  double gaussian_sigma = 1.0;    // [px], > 0.
+  int gaussian_kernel = 5;        // Kernel size [px], odd >= 3.
+  bool clahe = false;             // CLAHE on/off.
   double clahe_clip_limit = 2.0;  // > 0.
-  int clahe_tile_grid = 8;     // Tiles per side, >= 1.
+  int clahe_tile_grid = 8;        // Tiles per side, >= 1.
 };
 
 struct SceneDic {
@@ -58,9 +58,9 @@ struct SceneDic {
   int step = 10;         // Grid step [px], >= 1.
   // Region of interest x0, y0, x1, y1 [px] in the first frame; all zero = whole image less margins.
   std::array<int, 4> roi{0, 0, 0, 0};
-  std::string interpolation = "bicubic";     // bicubic | biquintic
-  std::string shape = "affine";              // affine | quadratic
-  std::string reference_update = "auto";     // fixed | incremental | every:N | auto
+  std::string interpolation = "bicubic";  // bicubic | biquintic
+  std::string shape = "affine";           // affine | quadratic
+  std::string reference_update = "auto";  // fixed | incremental | every:N | auto
   double min_zncc = 0.8;         // Correlation threshold for `auto` updates and validity, (0, 1).
   int max_iterations = 30;       // IC-GN iteration cap, >= 1.
   double convergence_px = 1e-3;  // IC-GN stop when the update moves no subset point more [px], > 0.
@@ -73,17 +73,18 @@ struct SceneDic {
 struct SceneSensor {
   std::string time_column = "time_s";
   std::string accel_column = "accel_g";
-  std::string accel_unit = "g";          // g | m/s^2
-  std::string exposure_column = "exposure";  // Empty or absent in the CSV = use frame_time_offset_s.
-  double cutoff_hz = 1500;               // Low-pass cut-off [Hz], > 0 and < fs/2.
-  std::string integrate_from = "release";    // release | impact (impact uses test's v0)
-  double frame_time_offset_s = 0;        // Time of frame 0 on the DAQ clock [s] (no exposure channel).
-  double quiet_window_s = 0.005;         // Length of the quiet window for offset correction [s], > 0.
+  std::string accel_unit = "g";  // g | m/s^2
+  std::string exposure_column =
+      "exposure";                          // Empty or absent in the CSV = use frame_time_offset_s.
+  double cutoff_hz = 1500;                 // Low-pass cut-off [Hz], > 0 and < fs/2.
+  std::string integrate_from = "release";  // release | impact (impact uses test's v0)
+  double frame_time_offset_s = 0;  // Time of frame 0 on the DAQ clock [s] (no exposure channel).
+  double quiet_window_s = 0.005;   // Length of the quiet window for offset correction [s], > 0.
 };
 
 struct SceneMomentum {
-  int grid_cols = 6;   // Subsets across the pounder's footprint, >= 1.
-  int grid_rows = 2;   // Subset rows beneath the pounder, >= 1.
+  int grid_cols = 6;  // Subsets across the pounder's footprint, >= 1.
+  int grid_rows = 2;  // Subset rows beneath the pounder, >= 1.
   // Optional rectangle in panel millimetres (x0, y0, x1, y1) instead of the default grid.
   std::optional<std::array<double, 4>> rect_mm;
 };
@@ -91,7 +92,7 @@ struct SceneMomentum {
 struct SceneModel {
   std::optional<double> added_mass_kg;  // M; default: Eq. 4 from m_p, v0, A.
   double K = 50, n = 0.2, u = 1.9, T_s = 0.002, b_per_s = 2500;  // Table 2.
-  std::string solver = "auto";  // auto | dopri5 | stiff
+  std::string solver = "auto";                                   // auto | dopri5 | stiff
   double rtol = 1e-8, atol = 1e-12;
 };
 

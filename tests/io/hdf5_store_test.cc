@@ -1,0 +1,114 @@
+#include "impactdic/io/hdf5_store.h"
+
+#include <H5Cpp.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/version.h"
+#include "test_dir.h"
+
+namespace impactdic {
+namespace {
+
+TEST(Hdf5Store, RoundTripOfValuesUnitsAttributesAndProvenance) {
+  TestDir dir;
+  const std::string path = dir.File("results.h5");
+  std::vector<double> series = {0.0, 1.5, -2.25, std::nan("")};
+  std::vector<float> field(3 * 4 * 5 * 2);
+  for (std::size_t i = 0; i < field.size(); ++i) field[i] = 0.5f * static_cast<float>(i);
+  std::vector<std::int32_t> status = {0, 1, 2, 3, 4, 5};
+  {
+    H5Writer out(path);
+    out.WriteProvenance("name: demo\n");
+    out.Write("sensor/t_s", series, "s", "time since impact");
+    out.Write("dic/field", field, {3, 4, 5, 2}, "px", "a 4-D field");
+    out.Write("dic/status", status, {2, 3}, "1", "status codes");
+    out.SetAttribute("dic", "interpolation", "bicubic");
+    out.SetAttribute("dic/field", "scale_mm_per_px", 0.25);
+    out.Commit();
+  }
+  H5Reader in(path);
+  Dims dims;
+  const auto t = in.ReadDouble("sensor/t_s", &dims);
+  ASSERT_EQ(dims, Dims{4});
+  EXPECT_EQ(t[1], 1.5);
+  EXPECT_EQ(t[2], -2.25);
+  EXPECT_TRUE(std::isnan(t[3]));
+  EXPECT_EQ(in.ReadStringAttribute("sensor/t_s", "units"), "s");
+  EXPECT_EQ(in.ReadStringAttribute("sensor/t_s", "description"), "time since impact");
+  const auto f = in.ReadFloat("dic/field", &dims);
+  EXPECT_EQ(dims, (Dims{3, 4, 5, 2}));
+  EXPECT_EQ(f, field);
+  const auto s = in.ReadInt("/dic/status", &dims);
+  EXPECT_EQ(dims, (Dims{2, 3}));
+  EXPECT_EQ(s, status);
+  EXPECT_EQ(in.ReadStringAttribute("dic", "interpolation"), "bicubic");
+  EXPECT_EQ(in.ReadNumberAttribute("dic/field", "scale_mm_per_px"), 0.25);
+  EXPECT_EQ(in.ReadStringAttribute("/", "tool_version"), Version());
+  EXPECT_EQ(in.ReadStringAttribute("/", "git_revision"), GitRevision());
+  EXPECT_EQ(in.ReadStringAttribute("/provenance", "scene_yaml"), "name: demo\n");
+  EXPECT_TRUE(in.Exists("dic/field"));
+  EXPECT_FALSE(in.Exists("dic/nothing/here"));
+  const auto members = in.List("dic");
+  EXPECT_EQ(members.size(), 2u);
+}
+
+TEST(Hdf5Store, LargeDatasetsAreChunkedAndCompressed) {
+  TestDir dir;
+  const std::string path = dir.File("big.h5");
+  std::vector<float> field(100 * 200, 1.0f);
+  {
+    H5Writer out(path);
+    out.Write("f", field, {100, 200}, "px", "constant");
+    out.Commit();
+  }
+  H5::H5File file(path, H5F_ACC_RDONLY);
+  H5::DataSet ds = file.openDataSet("/f");
+  H5::DSetCreatPropList props = ds.getCreatePlist();
+  EXPECT_EQ(props.getLayout(), H5D_CHUNKED);
+  EXPECT_GE(props.getNfilters(), 1);
+  EXPECT_LT(ds.getStorageSize(), field.size() * sizeof(float) / 10);  // constant data compresses
+}
+
+TEST(Hdf5Store, InterruptedWriteLeavesNoFinalFile) {
+  TestDir dir;
+  const std::string path = dir.File("results.h5");
+  {
+    H5Writer out(path);
+    out.Write("x", std::vector<double>{1, 2, 3}, "m", "x");
+    // While writing, only a temporary file exists.
+    EXPECT_FALSE(std::filesystem::exists(path));
+    // Destroyed without Commit(), as when a stage throws.
+  }
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "temporary file left behind";
+}
+
+TEST(Hdf5Store, ErrorsNameTheFileAndDataset) {
+  TestDir dir;
+  const std::string path = dir.File("r.h5");
+  {
+    H5Writer out(path);
+    out.Write("x", std::vector<double>{1}, "m", "x");
+    EXPECT_THROW(out.Write("y", std::vector<double>{1, 2, 3}, Dims{2, 2}, "m", "bad dims"), Error);
+    out.Commit();
+  }
+  H5Reader in(path);
+  try {
+    in.ReadDouble("missing/dataset");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("missing/dataset"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("r.h5"), std::string::npos);
+  }
+  EXPECT_THROW(H5Reader(dir.File("none.h5")), Error);
+  const std::string not_h5 = dir.Write("text.h5", "hello");
+  EXPECT_THROW(H5Reader{not_h5}, Error);
+  EXPECT_THROW(H5Writer(dir.File("no/such/folder/r.h5")), Error);
+}
+
+}  // namespace
+}  // namespace impactdic

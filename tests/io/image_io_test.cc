@@ -1,0 +1,64 @@
+#include "impactdic/io/image_io.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "impactdic/core/error.h"
+#include "test_dir.h"
+
+namespace impactdic {
+namespace {
+
+TEST(ImageIo, Reads8And16BitAndListsFramesSorted) {
+  TestDir dir;
+  cv::Mat a(20, 30, CV_8U, cv::Scalar(7));
+  cv::Mat b(20, 30, CV_16U, cv::Scalar(4000));
+  WriteImage(dir.File("f_002.png"), a);
+  WriteImage(dir.File("f_001.png"), a);
+  WriteImage(dir.File("g.tif"), b);
+  EXPECT_EQ(ReadGreyImage(dir.File("f_001.png")).at<uchar>(3, 4), 7);
+  const cv::Mat c = ReadGreyImage(dir.File("g.tif"));
+  EXPECT_EQ(c.depth(), CV_16U);
+  EXPECT_EQ(c.at<std::uint16_t>(1, 1), 4000);
+  const auto glob = ListFrames(dir.File("f_*.png"));
+  ASSERT_EQ(glob.size(), 2u);
+  EXPECT_NE(glob[0].find("f_001"), std::string::npos);
+  EXPECT_EQ(ListFrames(dir.path().string()).size(), 3u);
+}
+
+TEST(ImageIo, ClearErrorsForMissingCorruptAndMixedSizes) {
+  TestDir dir;
+  try {
+    ReadGreyImage(dir.File("missing.png"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kFileNotFound);
+    EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos);
+  }
+  // A truncated PNG.
+  WriteImage(dir.File("ok.png"), cv::Mat(40, 40, CV_8U, cv::Scalar(1)));
+  std::ifstream in(dir.File("ok.png"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  dir.Write("trunc.png", bytes.substr(0, bytes.size() / 3));
+  try {
+    ReadGreyImage(dir.File("trunc.png"));
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kFileFormat);
+    EXPECT_NE(std::string(e.what()).find("trunc.png"), std::string::npos);
+  }
+  EXPECT_THROW(ListFrames(dir.File("nothing_*.png")), Error);
+  std::vector<cv::Mat> images = {cv::Mat(10, 10, CV_8U), cv::Mat(10, 12, CV_8U)};
+  try {
+    CheckSameSize(images, {"a.png", "b.png"});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("b.png"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("12x10"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace impactdic
