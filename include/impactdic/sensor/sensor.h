@@ -1,0 +1,182 @@
+// Accelerometer processing: DAQ CSV -> pounder acceleration, velocity and penetration, impact
+// detection and the frame timeline (SPEC 2.5).
+//
+// Sign convention (stated once, used everywhere): the accelerometer axis points UP. Its reading
+// a_g (in g) is 0 in free fall, +1 at rest and 1 + deceleration / g while the sand stops the
+// pounder. The pounder's DOWNWARD acceleration is therefore
+//     a_down = g (1 - a_g)          [m/s^2, downward positive],
+// and its velocity v (downward positive) and position z (downward positive) are the trapezoidal
+// integrals of a_down. Deceleration in g = a_g - 1.
+//
+//   SensorOptions opt;                       // 1500 Hz, offset from the free fall before impact
+//   opt.integrate_from = IntegrationStart::kRelease;
+//   SensorResult r = AnalyzeSensorCsv("daq.csv", opt);
+//   std::cout << r.summary.BriefReport();
+//   std::vector<double> t_frames = FrameTimes(r, /*n_frames=*/200, /*fps=*/1600, /*offset_s=*/0);
+#ifndef IMPACTDIC_SENSOR_SENSOR_H_
+#define IMPACTDIC_SENSOR_SENSOR_H_
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace impactdic {
+
+// Unit of the acceleration column. kAuto: from the column name ("..._g" = g, "..._m_s2" or
+// "...m/s^2" = m/s^2).
+enum class AccelUnit { kAuto, kG, kMetrePerSecond2 };
+const char* ToString(AccelUnit unit);                    // "auto", "g", "m/s^2"
+AccelUnit AccelUnitFromString(const std::string& text);  // also accepts "m_s2"
+
+// Which quiet window fixes the accelerometer's additive offset.
+//   kFreeFall: the window just before the impact (free fall) must read 0 g (default: it needs no
+//              rest period in the record and is closest in time to the impact);
+//   kRest:     the first window of the record (pounder held before release) must read 1 g;
+//   kNone:     no correction.
+enum class OffsetReference { kFreeFall, kRest, kNone };
+const char* ToString(OffsetReference reference);  // "free-fall", "rest", "none"
+OffsetReference OffsetReferenceFromString(const std::string& text);
+
+// Where the velocity integration starts.
+//   kRelease: v = 0 at release. The record must start with the pounder at rest (reading ~1 g), or
+//             release_time_s must be given (then v = g (t - t_release) until the record starts:
+//             free fall);
+//   kImpact:  v = impact_velocity_m_s at the detected impact time, z = 0 there.
+enum class IntegrationStart { kRelease, kImpact };
+const char* ToString(IntegrationStart start);  // "release", "impact"
+IntegrationStart IntegrationStartFromString(const std::string& text);
+
+struct SensorColumns {
+  std::string time = "time_s";  // Time column [s], strictly increasing, uniform sampling.
+  // Acceleration column; empty = the first of "accel_g", "accel_m_s2" present in the file.
+  std::string accel = "accel_g";
+  AccelUnit accel_unit = AccelUnit::kAuto;
+  // Camera exposure channel (high while the shutter is open); empty or absent in the file = none.
+  std::string exposure = "exposure";
+  // Force channels kept (filtered); empty = every column whose name starts with "force".
+  std::vector<std::string> force;
+};
+
+struct SensorOptions {
+  SensorColumns columns;
+  double g_m_s2 = 9.81;     // Gravitational acceleration [m/s^2], > 0.
+  double cutoff_hz = 1500;  // Low-pass cut-off [Hz], 0 < f_c < f_s / 2 (paper: 1500 Hz).
+  OffsetReference offset_reference = OffsetReference::kFreeFall;
+  double quiet_window_s = 0.005;  // Length of the offset / noise window [s], > 0.
+  double quiet_guard_s = 0.001;   // Gap between the free-fall window and the impact [s], >= 0.
+  IntegrationStart integrate_from = IntegrationStart::kRelease;
+  // kImpact: the impact velocity [m/s], > 0 (NaN otherwise).
+  double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
+  // kRelease: release time on the DAQ clock [s]; NaN = the record starts at rest.
+  double release_time_s = std::numeric_limits<double>::quiet_NaN();
+  // A filtered reading above this [g] is certainly the impact (coarse search only; the impact time
+  // is the onset found backwards from it), > 1 (the rest level).
+  double impact_threshold_g = 5;
+  // Half-width of the noise band around the free-fall level, in standard deviations, > 0.
+  double noise_band_sigma = 4;
+  // The pounder has stopped when its velocity falls to this [m/s] (>= 0) after the peak.
+  double stop_velocity_m_s = 0.01;
+  // Largest relative deviation of one time step from the median step, in (0, 0.5].
+  double max_step_deviation = 0.01;
+
+  // Throws Error(kInvalidValue) naming the broken field.
+  void Check() const;
+};
+
+// The raw record as read (acceleration converted to g).
+struct SensorRecord {
+  std::string path;
+  std::vector<double> time_s;
+  std::vector<double> accel_g;   // Accelerometer reading [g], axis up (see the file comment).
+  std::vector<double> exposure;  // Empty when there is no exposure channel.
+  std::vector<std::string> force_names;
+  std::vector<std::vector<double>> force;  // force[channel][sample], units as in the file.
+  double sample_rate_hz = 0;               // 1 / median time step.
+};
+
+// Reads and validates the DAQ CSV: columns present, every value finite, time strictly increasing
+// and uniformly sampled (no gaps). Errors name the file, column and row.
+SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns,
+                           double g_m_s2 = 9.81, double max_step_deviation = 0.01);
+
+struct SensorSummary {
+  double sample_rate_hz = 0;
+  std::size_t samples = 0;
+  double cutoff_hz = 0;
+  double offset_g = 0;  // Subtracted from the reading.
+  double noise_g = 0;   // Standard deviation of the raw reading in the quiet window.
+  double release_time_s = std::numeric_limits<double>::quiet_NaN();  // DAQ clock; NaN = unknown.
+  double impact_time_s = std::numeric_limits<double>::quiet_NaN();   // DAQ clock (onset).
+  std::size_t impact_index = 0;  // First sample at or after the impact.
+  double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
+  double peak_deceleration_g = std::numeric_limits<double>::quiet_NaN();  // max(a_g - 1).
+  double t_peak_s = std::numeric_limits<double>::quiet_NaN();             // After impact.
+  double peak_time_s = std::numeric_limits<double>::quiet_NaN();          // DAQ clock.
+  double stop_time_s = std::numeric_limits<double>::quiet_NaN();          // DAQ clock.
+  double final_penetration_m = std::numeric_limits<double>::quiet_NaN();  // Crater depth.
+  bool stopped = false;  // The velocity returned to ~0 inside the record.
+  double seconds = 0;    // Processing wall time.
+  std::vector<std::string> warnings;
+
+  bool IsUsable() const {
+    return std::isfinite(impact_time_s) && std::isfinite(final_penetration_m);
+  }
+  std::string BriefReport() const;
+  std::string FullReport() const;
+};
+
+struct SensorResult {
+  std::vector<double> time_s;
+  std::vector<double> accel_g;          // Offset-corrected, filtered reading [g].
+  std::vector<double> accel_down_m_s2;  // g (1 - accel_g), downward positive.
+  std::vector<double> velocity_m_s;     // Downward positive.
+  std::vector<double> penetration_m;    // z - z(impact), downward positive.
+  std::vector<double> exposure;         // Raw exposure channel (empty if none).
+  std::vector<std::string> force_names;
+  std::vector<std::vector<double>> force;  // Filtered force channels.
+  SensorSummary summary;
+};
+
+// Offset correction, zero-phase filter, impact detection, integration, summary.
+SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options);
+// ReadSensorCsv + ProcessSensor.
+SensorResult AnalyzeSensorCsv(const std::string& path, const SensorOptions& options);
+
+// Impact onset on a (offset-corrected) reading that is ~0 g in free fall:
+//  1. the first filtered sample above threshold_g (after `search_from`) is certainly in the impact;
+//  2. walk back to the last filtered sample inside the free-fall noise band;
+//  3. refine with a change-point fit on the raw reading: constant before, step + ramp after, the
+//     change point chosen by least squares over the samples around the walk-back point; the onset
+//     is where the fitted ramp leaves the baseline (clamped to the preceding sample interval).
+// Returns the onset time; *index receives the first sample at or after it.
+struct OnsetOptions {
+  double threshold_g = 5;
+  double noise_band_sigma = 4;
+  double window_s = 0.005;  // Baseline window before the coarse crossing.
+  double guard_s = 0.001;
+};
+double DetectImpactOnset(const std::vector<double>& time_s, const std::vector<double>& raw_g,
+                         const std::vector<double>& filtered_g, std::size_t search_from,
+                         const OnsetOptions& options, std::size_t* index);
+
+// Rising edges of the exposure channel (threshold halfway between its low and high levels),
+// located by linear interpolation between the samples either side. Times on the DAQ clock.
+std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
+                                        const std::vector<double>& exposure);
+
+// Times of frames 0..n_frames-1 on the DAQ clock: the exposure rising edges when the record has
+// an exposure channel, else offset_s + k / fps. Error (kInvalidValue) if there are fewer edges
+// than frames or a frame lies outside the sensor record.
+std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
+                               double offset_s);
+
+// Linear interpolation of series(time) at the query times; Error naming `what` when a query lies
+// outside [time.front(), time.back()].
+std::vector<double> SampleSeries(const std::vector<double>& time_s,
+                                 const std::vector<double>& series,
+                                 const std::vector<double>& query_s, const std::string& what);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_SENSOR_SENSOR_H_

@@ -1,0 +1,602 @@
+#include "impactdic/sensor/sensor.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/sensor/filter.h"
+
+namespace impactdic {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+double Mean(const std::vector<double>& x, std::size_t begin, std::size_t end) {
+  double s = 0;
+  for (std::size_t i = begin; i < end; ++i) s += x[i];
+  return s / static_cast<double>(end - begin);
+}
+
+double StdDev(const std::vector<double>& x, std::size_t begin, std::size_t end) {
+  const double m = Mean(x, begin, end);
+  double s = 0;
+  for (std::size_t i = begin; i < end; ++i) s += (x[i] - m) * (x[i] - m);
+  return end - begin > 1 ? std::sqrt(s / static_cast<double>(end - begin - 1)) : 0.0;
+}
+
+// Linear interpolation of y(t) at tq, t increasing, tq inside [t.front(), t.back()].
+double Interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
+  if (tq <= t.front()) return y.front();
+  if (tq >= t.back()) return y.back();
+  const auto it = std::upper_bound(t.begin(), t.end(), tq);
+  const std::size_t k = static_cast<std::size_t>(it - t.begin());
+  const double w = (tq - t[k - 1]) / (t[k] - t[k - 1]);
+  return y[k - 1] + w * (y[k] - y[k - 1]);
+}
+
+std::size_t FirstIndexAtOrAfter(const std::vector<double>& t, double tq) {
+  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), tq) - t.begin());
+}
+
+}  // namespace
+
+const char* ToString(AccelUnit unit) {
+  switch (unit) {
+    case AccelUnit::kAuto: return "auto";
+    case AccelUnit::kG: return "g";
+    case AccelUnit::kMetrePerSecond2: return "m/s^2";
+  }
+  return "?";
+}
+
+AccelUnit AccelUnitFromString(const std::string& text) {
+  const std::string t = Lower(text);
+  if (t == "auto") return AccelUnit::kAuto;
+  if (t == "g") return AccelUnit::kG;
+  if (t == "m/s^2" || t == "m_s2" || t == "m/s2") return AccelUnit::kMetrePerSecond2;
+  throw Error(ErrorKind::kInvalidValue, "accel_unit", "'" + text + "'", "auto, g or m/s^2");
+}
+
+const char* ToString(OffsetReference reference) {
+  switch (reference) {
+    case OffsetReference::kFreeFall: return "free-fall";
+    case OffsetReference::kRest: return "rest";
+    case OffsetReference::kNone: return "none";
+  }
+  return "?";
+}
+
+OffsetReference OffsetReferenceFromString(const std::string& text) {
+  const std::string t = Lower(text);
+  if (t == "free-fall" || t == "freefall" || t == "free_fall") return OffsetReference::kFreeFall;
+  if (t == "rest") return OffsetReference::kRest;
+  if (t == "none") return OffsetReference::kNone;
+  throw Error(ErrorKind::kInvalidValue, "offset_reference", "'" + text + "'",
+              "free-fall, rest or none");
+}
+
+const char* ToString(IntegrationStart start) {
+  return start == IntegrationStart::kRelease ? "release" : "impact";
+}
+
+IntegrationStart IntegrationStartFromString(const std::string& text) {
+  const std::string t = Lower(text);
+  if (t == "release") return IntegrationStart::kRelease;
+  if (t == "impact") return IntegrationStart::kImpact;
+  throw Error(ErrorKind::kInvalidValue, "integrate_from", "'" + text + "'", "release or impact");
+}
+
+void SensorOptions::Check() const {
+  CheckValue(!columns.time.empty(), "sensor.columns.time", "an empty name", "a column name");
+  CheckValue(std::isfinite(g_m_s2) && g_m_s2 > 0, "sensor.g_m_s2", fmt::format("{}", g_m_s2),
+             "> 0");
+  CheckValue(std::isfinite(cutoff_hz) && cutoff_hz > 0, "sensor.cutoff_hz",
+             fmt::format("{}", cutoff_hz), "> 0 Hz and below the Nyquist frequency");
+  CheckValue(std::isfinite(quiet_window_s) && quiet_window_s > 0, "sensor.quiet_window_s",
+             fmt::format("{}", quiet_window_s), "> 0 s");
+  CheckValue(std::isfinite(quiet_guard_s) && quiet_guard_s >= 0, "sensor.quiet_guard_s",
+             fmt::format("{}", quiet_guard_s), ">= 0 s");
+  if (integrate_from == IntegrationStart::kImpact) {
+    CheckValue(std::isfinite(impact_velocity_m_s) && impact_velocity_m_s > 0,
+               "sensor.impact_velocity_m_s", fmt::format("{}", impact_velocity_m_s),
+               "> 0 m/s when integrating from the impact");
+  }
+  CheckValue(std::isnan(release_time_s) || std::isfinite(release_time_s), "sensor.release_time_s",
+             fmt::format("{}", release_time_s), "a finite time or NaN (unknown)");
+  CheckValue(std::isfinite(impact_threshold_g) && impact_threshold_g > 1,
+             "sensor.impact_threshold_g", fmt::format("{}", impact_threshold_g),
+             "> 1 g (above the rest level)");
+  CheckValue(std::isfinite(noise_band_sigma) && noise_band_sigma > 0, "sensor.noise_band_sigma",
+             fmt::format("{}", noise_band_sigma), "> 0");
+  CheckValue(std::isfinite(stop_velocity_m_s) && stop_velocity_m_s >= 0, "sensor.stop_velocity_m_s",
+             fmt::format("{}", stop_velocity_m_s), ">= 0 m/s");
+  CheckValue(
+      std::isfinite(max_step_deviation) && max_step_deviation > 0 && max_step_deviation <= 0.5,
+      "sensor.max_step_deviation", fmt::format("{}", max_step_deviation), "in (0, 0.5]");
+}
+
+SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns, double g_m_s2,
+                           double max_step_deviation) {
+  CsvReadOptions csv;
+  csv.required_columns = {columns.time};
+  csv.increasing_column = columns.time;
+  const CsvTable table = ReadCsv(path, csv);
+
+  std::string names;
+  for (const auto& n : table.names) names += (names.empty() ? "" : ", ") + n;
+  std::string accel = columns.accel;
+  if (accel.empty()) {
+    for (const char* candidate : {"accel_g", "accel_m_s2"})
+      if (table.Has(candidate)) {
+        accel = candidate;
+        break;
+      }
+    if (accel.empty()) {
+      throw Error(ErrorKind::kFileFormat, "acceleration column", "none; columns are " + names,
+                  "a column 'accel_g' or 'accel_m_s2' (or name it with the accel column option)")
+          .WithFile(path);
+    }
+  }
+  if (!table.Has(accel)) {
+    throw Error(ErrorKind::kFileFormat, "column '" + accel + "'", "missing; columns are " + names,
+                "the acceleration column named in the options")
+        .WithFile(path);
+  }
+  AccelUnit unit = columns.accel_unit;
+  if (unit == AccelUnit::kAuto) {
+    const std::string l = Lower(accel);
+    if (EndsWith(l, "_g") || l == "g") {
+      unit = AccelUnit::kG;
+    } else if (EndsWith(l, "_m_s2") || EndsWith(l, "m/s^2") || EndsWith(l, "m/s2")) {
+      unit = AccelUnit::kMetrePerSecond2;
+    } else {
+      throw Error(ErrorKind::kInvalidValue, "accel_unit",
+                  "auto, but column '" + accel + "' does not name its unit",
+                  "g or m/s^2 (or a column name ending _g or _m_s2)")
+          .WithFile(path);
+    }
+  }
+
+  SensorRecord r;
+  r.path = path;
+  r.time_s = table.Column(columns.time);
+  r.accel_g = table.Column(accel);
+  if (unit == AccelUnit::kMetrePerSecond2)
+    for (double& a : r.accel_g) a /= g_m_s2;
+  if (!columns.exposure.empty() && table.Has(columns.exposure))
+    r.exposure = table.Column(columns.exposure);
+  if (columns.force.empty()) {
+    for (const auto& n : table.names)
+      if (Lower(n).rfind("force", 0) == 0) r.force_names.push_back(n);
+  } else {
+    r.force_names = columns.force;
+  }
+  for (const auto& n : r.force_names) r.force.push_back(table.Column(n));
+
+  const std::size_t n = r.time_s.size();
+  if (n < 32) {
+    throw Error(ErrorKind::kFileFormat, "rows", fmt::format("{} samples", n), "at least 32 samples")
+        .WithFile(path);
+  }
+  std::vector<double> dt(n - 1);
+  for (std::size_t i = 1; i < n; ++i) dt[i - 1] = r.time_s[i] - r.time_s[i - 1];
+  std::vector<double> sorted = dt;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  for (std::size_t i = 0; i < dt.size(); ++i) {
+    if (std::abs(dt[i] - median) > max_step_deviation * median) {
+      throw Error(ErrorKind::kFileFormat, "column '" + columns.time + "'",
+                  fmt::format("a time step of {:.6g} s between t = {:.9g} s and t = {:.9g} s "
+                              "(data rows {} and {}); the median step is {:.6g} s",
+                              dt[i], r.time_s[i], r.time_s[i + 1], i + 1, i + 2, median),
+                  fmt::format("uniform sampling (every step within {:.3g} % of the median): "
+                              "gaps or jitter break the filter and the integration",
+                              100 * max_step_deviation))
+          .WithFile(path);
+    }
+  }
+  r.sample_rate_hz = 1 / median;
+  return r;
+}
+
+double DetectImpactOnset(const std::vector<double>& time_s, const std::vector<double>& raw_g,
+                         const std::vector<double>& filtered_g, std::size_t search_from,
+                         const OnsetOptions& options, std::size_t* index) {
+  const std::size_t n = time_s.size();
+  std::size_t ks = search_from;
+  while (ks < n && !(filtered_g[ks] > options.threshold_g)) ++ks;
+  if (ks >= n) {
+    const auto it = std::max_element(filtered_g.begin(), filtered_g.end());
+    throw Error(ErrorKind::kNumerical, "impact detection",
+                fmt::format("the filtered reading never exceeds {} g (maximum {:.3g} g at "
+                            "t = {:.6g} s)",
+                            options.threshold_g, *it,
+                            time_s[static_cast<std::size_t>(it - filtered_g.begin())]),
+                "a record containing the impact (or lower impact_threshold_g)");
+  }
+  const double dt = (time_s.back() - time_s.front()) / static_cast<double>(n - 1);
+  const auto w = static_cast<std::size_t>(std::lround(options.window_s / dt));
+  const auto guard = static_cast<std::size_t>(std::lround(options.guard_s / dt));
+  if (ks < guard + 8) {
+    throw Error(ErrorKind::kInvalidValue, "impact detection",
+                fmt::format("the impact at t = {:.6g} s is only {} samples after the record "
+                            "starts",
+                            time_s[ks], ks),
+                "a free-fall part before the impact (quiet_guard_s + at least 8 samples)");
+  }
+  const std::size_t a1 = ks - guard;
+  const std::size_t a0 = a1 > w ? a1 - w : 0;
+  const double base = Mean(filtered_g, a0, a1);
+  const double sigma = StdDev(filtered_g, a0, a1);
+  const double band = std::max(options.noise_band_sigma * sigma, 0.01 * options.threshold_g);
+  std::size_t k0 = ks;
+  while (k0 > a1 && filtered_g[k0] > base + band) --k0;
+
+  // Change-point fit on the raw reading: y = c (j < m), y = c + J + s (t_j - t_m) (j >= m).
+  // The two parts decouple: c is the mean before m, (c + J, s) a straight-line fit after.
+  const std::size_t span = std::max<std::size_t>(10, ks - k0);
+  const std::size_t lo = k0 > span ? k0 - span : 0;
+  const std::size_t hi = std::min(n - 1, ks + 3);
+  const std::size_t m_first = std::max(lo + 3, k0 > 3 ? k0 - 3 : 0);
+  const std::size_t m_last = std::min(ks + 1, hi - 1);
+  double best_sse = std::numeric_limits<double>::infinity();
+  std::size_t best_m = ks;
+  double best_jump = 0, best_slope = 0;
+  for (std::size_t m = m_first; m <= m_last; ++m) {
+    const double c = Mean(raw_g, lo, m);
+    double sse = 0;
+    for (std::size_t j = lo; j < m; ++j) sse += (raw_g[j] - c) * (raw_g[j] - c);
+    // Line fit over j = m..hi in x = t_j - t_m.
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    const double cnt = static_cast<double>(hi - m + 1);
+    for (std::size_t j = m; j <= hi; ++j) {
+      const double x = time_s[j] - time_s[m];
+      sx += x;
+      sy += raw_g[j];
+      sxx += x * x;
+      sxy += x * raw_g[j];
+    }
+    const double det = cnt * sxx - sx * sx;
+    const double slope = det > 0 ? (cnt * sxy - sx * sy) / det : 0;
+    const double intercept = (sy - slope * sx) / cnt;
+    for (std::size_t j = m; j <= hi; ++j) {
+      const double r = raw_g[j] - intercept - slope * (time_s[j] - time_s[m]);
+      sse += r * r;
+    }
+    if (sse < best_sse) {
+      best_sse = sse;
+      best_m = m;
+      best_jump = intercept - c;
+      best_slope = slope;
+    }
+  }
+  const double step = time_s[best_m] - time_s[best_m - 1];
+  double back = 0.5 * step;
+  if (best_slope > 0) back = std::clamp(best_jump / best_slope, 0.0, step);
+  const double onset = time_s[best_m] - back;
+  *index = back >= step ? best_m - 1 : best_m;
+  return onset;
+}
+
+SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options) {
+  WallTimer timer;
+  options.Check();
+  const std::size_t n = record.time_s.size();
+  CheckValue(n >= 32 && record.accel_g.size() == n, "sensor record",
+             fmt::format("{} times, {} readings", n, record.accel_g.size()),
+             "at least 32 samples, one reading per time");
+  const double fs = record.sample_rate_hz > 0 ? record.sample_rate_hz
+                                              : static_cast<double>(n - 1) /
+                                                    (record.time_s.back() - record.time_s.front());
+  if (!(options.cutoff_hz < 0.5 * fs)) {
+    throw Error(ErrorKind::kInvalidValue, "cutoff_hz", fmt::format("{} Hz", options.cutoff_hz),
+                fmt::format("below the Nyquist frequency {} Hz of this record", 0.5 * fs));
+  }
+  const double g = options.g_m_s2;
+  const std::vector<double>& t = record.time_s;
+  const FirstOrderLowpass lp = DesignButterworthLowpass1(options.cutoff_hz, fs);
+  const std::vector<double> filtered_raw = FiltFilt(lp, record.accel_g);
+
+  SensorResult out;
+  SensorSummary& s = out.summary;
+  s.sample_rate_hz = fs;
+  s.samples = n;
+  s.cutoff_hz = options.cutoff_hz;
+
+  const auto w = static_cast<std::size_t>(std::lround(options.quiet_window_s * fs));
+  const auto guard = static_cast<std::size_t>(std::lround(options.quiet_guard_s * fs));
+  CheckValue(w >= 8 && w < n / 2, "sensor.quiet_window_s",
+             fmt::format("{} s = {} samples", options.quiet_window_s, w),
+             fmt::format("at least 8 samples and less than half the record ({} samples)", n));
+
+  // Coarse impact on the uncorrected reading (the threshold is far above any plausible offset).
+  std::size_t ks = 0;
+  while (ks < n && !(filtered_raw[ks] > options.impact_threshold_g)) ++ks;
+  if (ks >= n) {
+    const auto it = std::max_element(filtered_raw.begin(), filtered_raw.end());
+    throw Error(ErrorKind::kNumerical, "impact detection",
+                fmt::format("the filtered reading never exceeds {} g (maximum {:.3g} g at "
+                            "t = {:.6g} s)",
+                            options.impact_threshold_g, *it,
+                            t[static_cast<std::size_t>(it - filtered_raw.begin())]),
+                "a record containing the impact (or a lower impact threshold)")
+        .WithFile(record.path);
+  }
+  if (ks < guard + w) {
+    throw Error(ErrorKind::kInvalidValue, "sensor.quiet_window_s",
+                fmt::format("{} s of free fall needed before the impact at t = {:.6g} s, the "
+                            "record has {:.6g} s",
+                            options.quiet_window_s + options.quiet_guard_s, t[ks], t[ks] - t[0]),
+                "a record with free fall before the impact, or a shorter quiet window")
+        .WithFile(record.path);
+  }
+  const std::size_t ff1 = ks - guard, ff0 = ff1 - w;
+  const double first_mean = Mean(record.accel_g, 0, w);
+  switch (options.offset_reference) {
+    case OffsetReference::kFreeFall: s.offset_g = Mean(record.accel_g, ff0, ff1); break;
+    case OffsetReference::kRest: s.offset_g = first_mean - 1; break;
+    case OffsetReference::kNone: s.offset_g = 0; break;
+  }
+  s.noise_g = StdDev(record.accel_g, ff0, ff1);
+  if (std::abs(s.offset_g) > 0.2)
+    s.warnings.push_back(fmt::format("large accelerometer offset {:.3g} g", s.offset_g));
+  const double ff_level = Mean(record.accel_g, ff0, ff1) - s.offset_g;
+  if (std::abs(ff_level) > 0.1 + 5 * s.noise_g) {
+    s.warnings.push_back(fmt::format(
+        "the window before the impact reads {:.3g} g after offset correction, not 0 g (free fall)",
+        ff_level));
+  }
+
+  std::vector<double> raw(n), acc(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    raw[i] = record.accel_g[i] - s.offset_g;
+    acc[i] = filtered_raw[i] - s.offset_g;  // The filter has unit DC gain and is linear.
+  }
+  OnsetOptions onset;
+  onset.threshold_g = options.impact_threshold_g;
+  onset.noise_band_sigma = options.noise_band_sigma;
+  onset.window_s = options.quiet_window_s;
+  onset.guard_s = options.quiet_guard_s;
+  std::size_t ki = 0;
+  s.impact_time_s = DetectImpactOnset(t, raw, acc, 0, onset, &ki);
+  s.impact_index = ki;
+
+  out.time_s = t;
+  out.accel_g = acc;
+  out.accel_down_m_s2.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out.accel_down_m_s2[i] = g * (1 - acc[i]);
+  const std::vector<double>& a = out.accel_down_m_s2;
+  std::vector<double> v(n, 0.0), z(n, 0.0);
+
+  const bool starts_at_rest = std::abs(first_mean - s.offset_g - 1) < 0.5;
+  if (starts_at_rest) {
+    // Release: the reading steps from the rest level (1 g) to free fall (0 g). The zero-phase
+    // filter's kernel is symmetric, so a step's instant is where the filtered reading crosses the
+    // midpoint 0.5 g (interpolated between samples).
+    std::size_t kr = w;
+    while (kr < ki && acc[kr] > 0.5) ++kr;
+    if (kr > 0 && kr < ki) {
+      const double f = (acc[kr - 1] - 0.5) / (acc[kr - 1] - acc[kr]);
+      s.release_time_s = t[kr - 1] + std::clamp(f, 0.0, 1.0) * (t[kr] - t[kr - 1]);
+    }
+  }
+  if (options.integrate_from == IntegrationStart::kRelease) {
+    std::size_t i0 = 0;
+    if (std::isfinite(options.release_time_s)) {
+      const double tr = options.release_time_s;
+      CheckValue(tr < s.impact_time_s, "release_time_s", fmt::format("{} s", tr),
+                 fmt::format("before the detected impact at {:.6g} s", s.impact_time_s));
+      s.release_time_s = tr;
+      i0 = FirstIndexAtOrAfter(t, tr);
+      const double fall = t[i0] - tr;  // Free fall between the release and sample i0.
+      v[i0] = g * fall;
+      z[i0] = 0.5 * g * fall * fall;
+    } else if (!starts_at_rest) {
+      throw Error(ErrorKind::kInvalidValue, "integrate_from = release",
+                  fmt::format("a record starting at {:.3g} g (the first {} s), not at rest (1 g)",
+                              first_mean - s.offset_g, options.quiet_window_s),
+                  "a record that starts with the pounder held at rest, a release time, or "
+                  "integration from the impact with a given impact velocity")
+          .WithFile(record.path);
+    }
+    for (std::size_t i = i0 + 1; i < n; ++i) {
+      const double h = t[i] - t[i - 1];
+      v[i] = v[i - 1] + 0.5 * (a[i - 1] + a[i]) * h;
+      z[i] = z[i - 1] + 0.5 * (v[i - 1] + v[i]) * h;
+    }
+    s.impact_velocity_m_s = Interp(t, v, s.impact_time_s);
+    const double zi = Interp(t, z, s.impact_time_s);
+    for (std::size_t i = 0; i < n; ++i) z[i] -= zi;
+  } else {
+    const double ti = s.impact_time_s, v0 = options.impact_velocity_m_s;
+    const std::size_t m = FirstIndexAtOrAfter(t, ti);
+    const double ai = Interp(t, a, ti);
+    v[m] = v0 + 0.5 * (ai + a[m]) * (t[m] - ti);
+    z[m] = 0.5 * (v0 + v[m]) * (t[m] - ti);
+    for (std::size_t i = m + 1; i < n; ++i) {
+      const double h = t[i] - t[i - 1];
+      v[i] = v[i - 1] + 0.5 * (a[i - 1] + a[i]) * h;
+      z[i] = z[i - 1] + 0.5 * (v[i - 1] + v[i]) * h;
+    }
+    for (std::size_t i = m; i-- > 0;) {
+      const double h = t[i + 1] - t[i];
+      v[i] = v[i + 1] - 0.5 * (a[i] + a[i + 1]) * h;
+      z[i] = z[i + 1] - 0.5 * (v[i] + v[i + 1]) * h;
+    }
+    s.impact_velocity_m_s = v0;
+  }
+
+  // Stop: the first sample after the impact where v <= stop_velocity (the zero crossing located
+  // by linear interpolation when v goes through 0 there).
+  std::size_t k = ki + 1;
+  while (k < n && v[k] > options.stop_velocity_m_s) ++k;
+  std::size_t kend;
+  if (k < n) {
+    s.stopped = true;
+    const double level = (v[k] <= 0 && v[k - 1] > 0) ? 0.0 : options.stop_velocity_m_s;
+    const double f = (v[k - 1] - level) / (v[k - 1] - v[k]);
+    s.stop_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
+    s.final_penetration_m = Interp(t, z, s.stop_time_s);
+    kend = k;
+  } else {
+    const auto it = std::min_element(v.begin() + static_cast<std::ptrdiff_t>(ki), v.end());
+    kend = static_cast<std::size_t>(it - v.begin());
+    s.stop_time_s = t[kend];
+    s.final_penetration_m = z[kend];
+    s.warnings.push_back(fmt::format(
+        "the pounder velocity never fell to {} m/s after the impact (minimum {:.4g} m/s at "
+        "t = {:.6g} s); the final penetration is taken there",
+        options.stop_velocity_m_s, *it, t[kend]));
+  }
+  // Peak deceleration (a_g - 1) between impact and stop, refined by a parabola through the
+  // largest sample and its neighbours.
+  std::size_t kp = ki;
+  for (std::size_t i = ki; i <= kend && i < n; ++i)
+    if (acc[i] > acc[kp]) kp = i;
+  double tp = t[kp], peak = acc[kp] - 1;
+  if (kp > 0 && kp + 1 < n) {
+    const double ym = acc[kp - 1], y0 = acc[kp], yp = acc[kp + 1];
+    const double den = ym - 2 * y0 + yp;
+    if (den < 0) {
+      const double d = 0.5 * (ym - yp) / den;
+      tp = t[kp] + d * (t[kp + 1] - t[kp - 1]) / 2;
+      peak = y0 - 0.25 * (ym - yp) * d - 1;
+    }
+  }
+  s.peak_deceleration_g = peak;
+  s.peak_time_s = tp;
+  s.t_peak_s = tp - s.impact_time_s;
+  if (s.impact_time_s - t.front() < 0.01)
+    s.warnings.push_back("less than 10 ms of record before the impact");
+
+  out.velocity_m_s = std::move(v);
+  out.penetration_m = std::move(z);
+  out.exposure = record.exposure;
+  out.force_names = record.force_names;
+  for (const auto& f : record.force) out.force.push_back(FiltFilt(lp, f));
+  s.seconds = timer.ElapsedSeconds();
+  for (const auto& wmsg : s.warnings) LogWarning("sensor: {}", wmsg);
+  return out;
+}
+
+SensorResult AnalyzeSensorCsv(const std::string& path, const SensorOptions& options) {
+  options.Check();
+  const SensorRecord record =
+      ReadSensorCsv(path, options.columns, options.g_m_s2, options.max_step_deviation);
+  return ProcessSensor(record, options);
+}
+
+std::string SensorSummary::BriefReport() const {
+  return fmt::format(
+      "impact at {:.6f} s, v0 = {:.4f} m/s, crater depth = {:.5f} m, peak deceleration = {:.1f} g "
+      "at {:.3f} ms after impact{}",
+      impact_time_s, impact_velocity_m_s, final_penetration_m, peak_deceleration_g, 1e3 * t_peak_s,
+      warnings.empty() ? "" : fmt::format(" ({} warnings)", warnings.size()));
+}
+
+std::string SensorSummary::FullReport() const {
+  std::string r;
+  r += fmt::format("sample rate           {:.1f} Hz ({} samples)\n", sample_rate_hz, samples);
+  r += fmt::format("low-pass cut-off      {:.1f} Hz (zero-phase 1st-order Butterworth)\n",
+                   cutoff_hz);
+  r += fmt::format("offset / noise        {:.5f} g / {:.5f} g\n", offset_g, noise_g);
+  r += fmt::format("release time          {:.6f} s\n", release_time_s);
+  r += fmt::format("impact time           {:.6f} s (sample {})\n", impact_time_s, impact_index);
+  r += fmt::format("impact velocity       {:.5f} m/s\n", impact_velocity_m_s);
+  r += fmt::format("peak deceleration     {:.2f} g at {:.4f} ms after impact\n",
+                   peak_deceleration_g, 1e3 * t_peak_s);
+  r += fmt::format("stop time             {:.6f} s{}\n", stop_time_s,
+                   stopped ? "" : " (not stopped)");
+  r += fmt::format("final penetration     {:.6f} m\n", final_penetration_m);
+  r += fmt::format("processing time       {:.4f} s\n", seconds);
+  for (const auto& w : warnings) r += "warning: " + w + "\n";
+  return r;
+}
+
+std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
+                                        const std::vector<double>& exposure) {
+  std::vector<double> edges;
+  if (exposure.size() < 2) return edges;
+  const auto [lo_it, hi_it] = std::minmax_element(exposure.begin(), exposure.end());
+  const double lo = *lo_it, hi = *hi_it;
+  if (!(hi - lo > 0)) return edges;
+  const double threshold = 0.5 * (lo + hi);
+  for (std::size_t i = 1; i < exposure.size(); ++i) {
+    if (exposure[i - 1] < threshold && exposure[i] >= threshold) {
+      const double f = (threshold - exposure[i - 1]) / (exposure[i] - exposure[i - 1]);
+      edges.push_back(time_s[i - 1] + f * (time_s[i] - time_s[i - 1]));
+    }
+  }
+  return edges;
+}
+
+std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
+                               double offset_s) {
+  CheckValue(n_frames >= 1, "n_frames", fmt::format("{}", n_frames), ">= 1");
+  std::vector<double> times;
+  if (!result.exposure.empty()) {
+    times = ExposureRisingEdges(result.time_s, result.exposure);
+    if (times.size() < static_cast<std::size_t>(n_frames)) {
+      throw Error(ErrorKind::kInvalidValue, "exposure channel",
+                  fmt::format("{} rising edges", times.size()),
+                  fmt::format("one rising edge per frame ({} frames): the sensor record does not "
+                              "cover the frames",
+                              n_frames));
+    }
+    times.resize(static_cast<std::size_t>(n_frames));
+  } else {
+    CheckValue(std::isfinite(fps) && fps > 0, "fps", fmt::format("{}", fps), "> 0");
+    CheckValue(std::isfinite(offset_s), "frame_time_offset_s", fmt::format("{}", offset_s),
+               "a finite time");
+    for (int k = 0; k < n_frames; ++k) times.push_back(offset_s + k / fps);
+  }
+  const double t0 = result.time_s.front(), t1 = result.time_s.back();
+  if (times.front() < t0 || times.back() > t1) {
+    throw Error(ErrorKind::kInvalidValue, "frame times",
+                fmt::format("frames from {:.6g} s to {:.6g} s", times.front(), times.back()),
+                fmt::format("inside the sensor record [{:.6g} s, {:.6g} s]: the sensor record "
+                            "does not cover the frames",
+                            t0, t1));
+  }
+  return times;
+}
+
+std::vector<double> SampleSeries(const std::vector<double>& time_s,
+                                 const std::vector<double>& series,
+                                 const std::vector<double>& query_s, const std::string& what) {
+  CheckValue(time_s.size() >= 2 && series.size() == time_s.size(), what,
+             fmt::format("{} times and {} values", time_s.size(), series.size()),
+             "equal lengths >= 2");
+  std::vector<double> out(query_s.size());
+  for (std::size_t i = 0; i < query_s.size(); ++i) {
+    const double q = query_s[i];
+    if (!(q >= time_s.front() && q <= time_s.back())) {
+      throw Error(ErrorKind::kInvalidValue, what, fmt::format("query {} at t = {:.6g} s", i, q),
+                  fmt::format("times inside the record [{:.6g} s, {:.6g} s]: the sensor record "
+                              "does not cover the frames",
+                              time_s.front(), time_s.back()));
+    }
+    out[i] = Interp(time_s, series, q);
+  }
+  return out;
+}
+
+}  // namespace impactdic
