@@ -1,0 +1,59 @@
+// Re-rendering the figures and the animation of a results file (`impactdic render RESULTS.h5`).
+// Reads what exists (names in results_layout.h, documented in docs/render.md) and skips, with a log
+// line and an entry in the summary, every output whose data is absent.
+//
+//   RenderResultsOptions options;
+//   options.output_dir = "run1/figures";
+//   RenderResultsSummary s = RenderResults("run1/results.h5", options);
+//   std::cout << s.FullReport();
+#ifndef IMPACTDIC_RENDER_RENDER_RESULTS_H_
+#define IMPACTDIC_RENDER_RENDER_RESULTS_H_
+
+#include <string>
+#include <vector>
+
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/render/animation.h"
+#include "impactdic/render/figures.h"
+#include "impactdic/render/gnuplot.h"
+#include "impactdic/render/velocity_field.h"
+
+namespace impactdic {
+
+struct RenderResultsOptions {
+  std::string output_dir;   // folder for the outputs (created if missing); empty = the file's folder
+  bool figures = true;      // the gnuplot figures
+  bool snapshot = true;     // the velocity field at the end of the peak stage
+  bool animation = true;    // the velocity animation
+  bool png_frames = false;  // also every animation frame as PNG (output_dir/velocity_frames)
+  PlotOptions plot;
+  AnimationOptions animation_options;  // png_frames_dir is set from png_frames
+
+  void Check() const;
+};
+
+struct RenderResultsSummary {
+  std::vector<std::string> written;  // output files
+  std::vector<std::string> skipped;  // "<output>: <reason>"
+  bool has_animation = false;
+  AnimationSummary animation;
+  double wall_s = 0.0;
+
+  std::string BriefReport() const;  // one line
+  std::string FullReport() const;   // one line per output
+};
+
+// The velocity-field data of a results file, or an Error kFileFormat naming the missing or
+// inconsistent dataset. `require_frames` = false allows files without /frames/images (then
+// `frames` is empty and the sequence cannot be rendered).
+VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool require_frames = true);
+
+// Renders everything the file has data for. Errors: kFileNotFound / kFileFormat for a missing or
+// unreadable file, kFileFormat when the file has none of the data any output needs (naming what
+// was looked for) or inconsistent shapes, kIo for an output folder that cannot be written.
+RenderResultsSummary RenderResults(const std::string& results_path,
+                                   const RenderResultsOptions& options = {});
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_RENDER_RENDER_RESULTS_H_

@@ -1,0 +1,220 @@
+#include "impactdic/render/animation.h"
+
+#include <opencv2/videoio.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <optional>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/io/image_io.h"
+#include "subprocess.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+
+const char* ToString(VideoCodec codec) {
+  switch (codec) {
+    case VideoCodec::kAuto: return "auto";
+    case VideoCodec::kH264: return "h264";
+    case VideoCodec::kMjpg: return "mjpg";
+  }
+  return "?";
+}
+
+VideoCodec VideoCodecFromString(const std::string& text) {
+  for (auto c : {VideoCodec::kAuto, VideoCodec::kH264, VideoCodec::kMjpg}) {
+    if (text == ToString(c)) return c;
+  }
+  throw Error(ErrorKind::kInvalidValue, "video codec", text, "one of auto, h264, mjpg");
+}
+
+void AnimationOptions::Check() const {
+  CheckValue(fps > 0 && fps <= 240, "AnimationOptions.fps", std::to_string(fps), "(0, 240]");
+  for (const auto& f : h264_fourccs) {
+    CheckValue(f.size() == 4, "AnimationOptions.h264_fourccs", "'" + f + "'",
+               "four-character codes such as avc1");
+  }
+  CheckValue(codec == VideoCodec::kMjpg || !h264_fourccs.empty(), "AnimationOptions.h264_fourccs",
+             "empty", "at least one fourcc unless codec is mjpg");
+  overlay.Check();
+}
+
+std::string AnimationSummary::BriefReport() const {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "%s: %zu frames (%zu read back), %s (%s), %dx%d at %.3g fps",
+                path.c_str(), frames, frames_read_back, codec.c_str(), fourcc.c_str(), size.width,
+                size.height, fps);
+  std::string text = buf;
+  if (fell_back) text += "; fell back to MJPG AVI because " + fallback_reason;
+  if (png_frames > 0) text += "; " + std::to_string(png_frames) + " PNG frames in " + png_frames_dir;
+  return text;
+}
+
+std::size_t CountVideoFrames(const std::string& path) {
+  cv::VideoCapture capture;
+  try {
+    capture.open(path, cv::CAP_FFMPEG);
+    if (!capture.isOpened()) capture.open(path, cv::CAP_ANY);
+  } catch (const cv::Exception&) {
+    return 0;
+  }
+  if (!capture.isOpened()) return 0;
+  std::size_t count = 0;
+  while (capture.grab()) ++count;
+  return count;
+}
+
+namespace {
+
+struct Attempt {
+  std::string container;  // ".mp4" / ".avi"
+  std::string codec;      // "H.264" / "MJPG"
+  std::string fourcc;
+};
+
+// Result of one encoding attempt: empty reason = success.
+struct AttemptResult {
+  bool opened = false;
+  std::string failure;
+  std::size_t read_back = 0;
+};
+
+int Fourcc(const std::string& f) { return cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]); }
+
+}  // namespace
+
+AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
+                                        const std::string& output_path,
+                                        const AnimationOptions& options) {
+  WallTimer wall;
+  options.Check();
+  sequence.Check();
+  CheckValue(!output_path.empty(), "animation output path", "empty", "a file name");
+  render_internal::CheckOutputFolder(output_path);
+  const VelocityFieldRenderer renderer(sequence, options.overlay);
+  const std::size_t frames = sequence.num_frames();
+
+  AnimationSummary summary;
+  summary.frames = frames;
+  summary.size = renderer.canvas_size();
+  summary.fps = options.fps;
+  summary.color_max_mm_s = renderer.color_max_mm_s();
+
+  if (!options.png_frames_dir.empty()) {
+    std::error_code ec;
+    fs::create_directories(options.png_frames_dir, ec);
+    if (ec || !fs::is_directory(options.png_frames_dir)) {
+      throw Error(ErrorKind::kIo, "--png-frames folder", options.png_frames_dir,
+                  "a folder that can be created: " + ec.message());
+    }
+    summary.png_frames_dir = options.png_frames_dir;
+  }
+
+  std::vector<Attempt> attempts;
+  if (options.codec != VideoCodec::kMjpg) {
+    for (const auto& f : options.h264_fourccs) attempts.push_back({".mp4", "H.264", f});
+  }
+  if (options.codec != VideoCodec::kH264) attempts.push_back({".avi", "MJPG", "MJPG"});
+
+  const fs::path stem = fs::path(output_path).replace_extension();
+  std::string h264_failures;
+  bool png_done = options.png_frames_dir.empty();
+  double render_s = 0, encode_s = 0;
+
+  for (const auto& attempt : attempts) {
+    const std::string final_path = stem.string() + attempt.container;
+    const std::string temp = render_internal::TempSiblingPath(final_path, attempt.container);
+    struct Cleanup {
+      std::string path;
+      ~Cleanup() {
+        std::error_code ec;
+        fs::remove(path, ec);
+      }
+    } cleanup{temp};
+
+    AttemptResult result;
+    {
+      cv::VideoWriter writer;
+      try {
+        result.opened = writer.open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
+                                    renderer.canvas_size(), /*isColor=*/true);
+      } catch (const cv::Exception& e) {
+        result.failure = e.what();
+      }
+      if (!result.opened) {
+        if (result.failure.empty()) result.failure = "the OpenCV video writer did not open";
+      } else {
+        ProgressBar bar("animation", frames);
+        for (std::size_t i = 0; i < frames; ++i) {
+          WallTimer t;
+          const cv::Mat image = renderer.RenderFrame(i);
+          render_s += t.ElapsedSeconds();
+          if (!png_done) {
+            char name[32];
+            std::snprintf(name, sizeof name, "frame_%05zu.png", i);
+            WriteImage((fs::path(options.png_frames_dir) / name).string(), image);
+            ++summary.png_frames;
+          }
+          t.Restart();
+          writer.write(image);
+          encode_s += t.ElapsedSeconds();
+          bar.Advance();
+        }
+        bar.Finish();
+        png_done = true;
+        WallTimer t;
+        writer.release();
+        result.read_back = CountVideoFrames(temp);
+        encode_s += t.ElapsedSeconds();
+        if (result.read_back != frames) {
+          result.failure = "the written file reads back with " + std::to_string(result.read_back) +
+                           " frames instead of " + std::to_string(frames);
+        }
+      }
+    }
+    if (result.failure.empty()) {
+      std::error_code ec;
+      fs::rename(temp, final_path, ec);
+      if (ec) {
+        throw Error(ErrorKind::kIo, final_path, "cannot rename the temporary video: " + ec.message(),
+                    "a writable output location");
+      }
+      cleanup.path.clear();
+      summary.path = final_path;
+      summary.codec = attempt.codec;
+      summary.fourcc = attempt.fourcc;
+      summary.frames_read_back = result.read_back;
+      if (attempt.codec == "MJPG" && options.codec == VideoCodec::kAuto) {
+        summary.fell_back = true;
+        summary.fallback_reason = h264_failures.empty() ? "no H.264 fourcc was tried" : h264_failures;
+        LogWarning("animation: H.264 did not work ({}); wrote Motion-JPEG AVI {} instead",
+                   summary.fallback_reason, final_path);
+      }
+      break;
+    }
+    LogDebug("animation: {} ({}) failed: {}", attempt.codec, attempt.fourcc, result.failure);
+    if (attempt.codec == "H.264") {
+      h264_failures += (h264_failures.empty() ? "" : "; ") + attempt.fourcc + ": " + result.failure;
+    } else {
+      h264_failures += (h264_failures.empty() ? "" : "; ") + std::string("MJPG: ") + result.failure;
+    }
+  }
+  if (summary.path.empty()) {
+    throw Error(ErrorKind::kIo, "animation " + output_path,
+                "no video could be written and read back (" + h264_failures + ")",
+                options.codec == VideoCodec::kH264 ? "an OpenCV build with an H.264 encoder"
+                                                   : "an OpenCV build with FFmpeg video writing");
+  }
+  summary.render_s = render_s;
+  summary.encode_s = encode_s;
+  summary.wall_s = wall.ElapsedSeconds();
+  LogInfo("animation: {}", summary.BriefReport());
+  return summary;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,196 @@
+#include "impactdic/render/figures.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "impactdic/core/error.h"
+
+namespace impactdic {
+namespace {
+
+constexpr const char* kBlue = "#0072B2";
+constexpr const char* kRed = "#D55E00";
+constexpr const char* kGreen = "#009E73";
+constexpr const char* kGrey = "#505050";
+
+std::vector<double> ToMs(const std::vector<double>& t_s) {
+  std::vector<double> t_ms(t_s.size());
+  std::transform(t_s.begin(), t_s.end(), t_ms.begin(), [](double t) { return 1e3 * t; });
+  return t_ms;
+}
+
+void CheckSameLength(const std::vector<double>& t, const std::vector<double>& y,
+                     const std::string& name) {
+  CheckValue(y.empty() || y.size() == t.size(), name,
+             std::to_string(y.size()) + " values for " + std::to_string(t.size()) + " times",
+             "one value per time (or none)");
+}
+
+void AddSeries(Plot* plot, const std::vector<double>& t_ms, const std::vector<double>& y,
+               const std::string& label, const char* color, SeriesStyle style = SeriesStyle::kLines) {
+  if (y.empty()) return;
+  PlotSeries s;
+  s.x = t_ms;
+  s.y = y;
+  s.label = label;
+  s.color = color;
+  s.style = style;
+  plot->series.push_back(std::move(s));
+}
+
+void AddTeMarker(Plot* plot, double t_e_s) {
+  if (!std::isfinite(t_e_s)) return;
+  plot->markers.push_back({.orientation = MarkerOrientation::kVertical,
+                           .value = 1e3 * t_e_s,
+                           .label = "t_e = " + [&] {
+                             char buf[32];
+                             std::snprintf(buf, sizeof buf, "%.2f ms", 1e3 * t_e_s);
+                             return std::string(buf);
+                           }(),
+                           .color = kGrey});
+}
+
+}  // namespace
+
+Plot MakeMomentumPlot(const MomentumFigureData& d) {
+  CheckSameLength(d.t_s, d.p_pounder_Ns, "momentum figure p_pounder");
+  CheckSameLength(d.t_s, d.p_gran_Ns, "momentum figure p_gran");
+  CheckSameLength(d.t_s, d.p_total_Ns, "momentum figure p_total");
+  Plot plot;
+  plot.title = "Momentum of pounder and soil";
+  plot.x_label = "time since impact t [ms]";
+  plot.y_label = "momentum p [N s]";
+  plot.enhanced_text = true;
+  plot.legend = LegendPosition::kBottomRight;
+  const auto t_ms = ToMs(d.t_s);
+  AddSeries(&plot, t_ms, d.p_pounder_Ns, "pounder p_p = m_p v_p", kBlue);
+  AddSeries(&plot, t_ms, d.p_gran_Ns, "granular p_{gran}", kGreen, SeriesStyle::kDashed);
+  AddSeries(&plot, t_ms, d.p_total_Ns, "total p_p + p_{gran}", kRed);
+  if (std::isfinite(d.p_max_Ns)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "p_{max} = %.3g N s", d.p_max_Ns);
+    plot.markers.push_back({.orientation = MarkerOrientation::kHorizontal,
+                            .value = d.p_max_Ns,
+                            .label = buf,
+                            .color = "#000000"});
+  }
+  AddTeMarker(&plot, d.t_e_s);
+  return plot;
+}
+
+PlotSummary PlotMomentum(const MomentumFigureData& data, const std::string& png_path,
+                         const PlotOptions& options) {
+  return RenderPlot(MakeMomentumPlot(data), png_path, options);
+}
+
+Plot MakeDecelerationPlot(const DecelerationFigureData& d) {
+  CheckSameLength(d.measured_t_s, d.measured_decel_g, "deceleration figure measured_decel_g");
+  CheckSameLength(d.model_t_s, d.model_decel_g, "deceleration figure model_decel_g");
+  CheckValue(d.measured_decel_g.empty() || !d.measured_t_s.empty(), "deceleration figure",
+             "values without times", "times for the measured series");
+  Plot plot;
+  plot.title = "Pounder deceleration: measured and modelled";
+  plot.x_label = "time since impact t [ms]";
+  plot.y_label = "deceleration -a_p [g]";
+  plot.enhanced_text = true;
+  AddSeries(&plot, ToMs(d.measured_t_s), d.measured_decel_g, "measured (accelerometer)", kBlue);
+  AddSeries(&plot, ToMs(d.model_t_s), d.model_decel_g, "model (Eq. 9)", kRed);
+  plot.markers.push_back({.orientation = MarkerOrientation::kHorizontal,
+                          .value = 0.0,
+                          .label = "",
+                          .color = "#a0a0a0"});
+  AddTeMarker(&plot, d.t_e_s);
+  return plot;
+}
+
+PlotSummary PlotDeceleration(const DecelerationFigureData& data, const std::string& png_path,
+                             const PlotOptions& options) {
+  return RenderPlot(MakeDecelerationPlot(data), png_path, options);
+}
+
+double SigmoidAddedMass(double t_s, double M_kg, double b_per_s, double T_s) {
+  // M / (1 + e^{-x}) with x = b (t - T): for x < 0 use M e^{x} / (1 + e^{x}) so that no
+  // exponential of a large positive number is formed.
+  const double x = b_per_s * (t_s - T_s);
+  if (x >= 0) return M_kg / (1.0 + std::exp(-x));
+  const double e = std::exp(x);
+  return M_kg * e / (1.0 + e);
+}
+
+Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
+  CheckSameLength(d.t_s, d.m_add_kg, "added-mass figure m_add_kg");
+  Plot plot;
+  plot.title = "Added mass m_{add}(t)";
+  plot.x_label = "time since impact t [ms]";
+  plot.y_label = "added mass m_{add} [kg]";
+  plot.enhanced_text = true;
+  plot.legend = LegendPosition::kBottomRight;
+  AddSeries(&plot, ToMs(d.t_s), d.m_add_kg, "measured p_{max}/v_p - m_p (Eq. 3)", kBlue,
+            SeriesStyle::kLinesPoints);
+  if (!plot.series.empty()) plot.series.back().line_width = 1.5;
+  if (std::isfinite(d.sigmoid_M_kg) && std::isfinite(d.sigmoid_b_per_s) &&
+      std::isfinite(d.sigmoid_T_s)) {
+    // The fit over the measured time span (or around T if there is none), 400 samples.
+    double t0 = d.sigmoid_T_s - 6.0 / std::max(std::abs(d.sigmoid_b_per_s), 1e-12);
+    double t1 = d.sigmoid_T_s + 6.0 / std::max(std::abs(d.sigmoid_b_per_s), 1e-12);
+    bool have_data = false;
+    double lo = HUGE_VAL, hi = -HUGE_VAL;
+    for (double t : d.t_s) {
+      if (!std::isfinite(t)) continue;
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+      have_data = true;
+    }
+    if (have_data && hi > lo) {
+      t0 = lo;
+      t1 = hi;
+    }
+    PlotSeries fit;
+    fit.label = "sigmoid fit (Eq. 5)";
+    fit.color = kRed;
+    constexpr int kSamples = 400;
+    for (int i = 0; i < kSamples; ++i) {
+      const double t = t0 + (t1 - t0) * i / (kSamples - 1);
+      fit.x.push_back(1e3 * t);
+      fit.y.push_back(SigmoidAddedMass(t, d.sigmoid_M_kg, d.sigmoid_b_per_s, d.sigmoid_T_s));
+    }
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "fit: M = %.3g kg, b = %.4g 1/s, T = %.3g ms", d.sigmoid_M_kg,
+                  d.sigmoid_b_per_s, 1e3 * d.sigmoid_T_s);
+    fit.label = buf;
+    plot.series.push_back(std::move(fit));
+  }
+  AddTeMarker(&plot, d.t_e_s);
+  return plot;
+}
+
+PlotSummary PlotAddedMass(const AddedMassFigureData& data, const std::string& png_path,
+                          const PlotOptions& options) {
+  return RenderPlot(MakeAddedMassPlot(data), png_path, options);
+}
+
+Plot MakeXyPlot(const XyFigureData& d) {
+  Plot plot;
+  plot.title = d.title;
+  plot.x_label = d.x_label;
+  plot.y_label = d.y_label;
+  plot.log_x = d.log_x;
+  plot.log_y = d.log_y;
+  plot.legend = d.legend;
+  for (const auto& s : d.series) {
+    PlotSeries p;
+    p.x = s.x;
+    p.y = s.y;
+    p.label = s.label;
+    p.style = s.style;
+    plot.series.push_back(std::move(p));
+  }
+  return plot;
+}
+
+PlotSummary PlotXy(const XyFigureData& data, const std::string& png_path,
+                   const PlotOptions& options) {
+  return RenderPlot(MakeXyPlot(data), png_path, options);
+}
+
+}  // namespace impactdic

@@ -1,0 +1,428 @@
+#include "impactdic/render/gnuplot.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "subprocess.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+using render_internal::RunProcess;
+using render_internal::TempFile;
+
+const char* ToString(SeriesStyle style) {
+  switch (style) {
+    case SeriesStyle::kLines: return "lines";
+    case SeriesStyle::kDashed: return "dashed";
+    case SeriesStyle::kPoints: return "points";
+    case SeriesStyle::kLinesPoints: return "linespoints";
+  }
+  return "?";
+}
+
+SeriesStyle SeriesStyleFromString(const std::string& text) {
+  for (SeriesStyle s : {SeriesStyle::kLines, SeriesStyle::kDashed, SeriesStyle::kPoints,
+                        SeriesStyle::kLinesPoints}) {
+    if (text == ToString(s)) return s;
+  }
+  throw Error(ErrorKind::kInvalidValue, "series style", text,
+              "one of lines, dashed, points, linespoints");
+}
+
+const char* ToString(MarkerOrientation orientation) {
+  return orientation == MarkerOrientation::kVertical ? "vertical" : "horizontal";
+}
+
+const char* ToString(LegendPosition position) {
+  switch (position) {
+    case LegendPosition::kTopRight: return "top_right";
+    case LegendPosition::kTopLeft: return "top_left";
+    case LegendPosition::kBottomRight: return "bottom_right";
+    case LegendPosition::kBottomLeft: return "bottom_left";
+    case LegendPosition::kOutsideRight: return "outside_right";
+    case LegendPosition::kNone: return "none";
+  }
+  return "?";
+}
+
+void PlotOptions::Check() const {
+  CheckValue(width_px >= 320 && width_px <= 8000, "PlotOptions.width_px", std::to_string(width_px),
+             "320..8000");
+  CheckValue(height_px >= 240 && height_px <= 8000, "PlotOptions.height_px",
+             std::to_string(height_px), "240..8000");
+  CheckValue(font_size_pt >= 6 && font_size_pt <= 72, "PlotOptions.font_size_pt",
+             std::to_string(font_size_pt), "6..72");
+  CheckValue(!font.empty() && font.find_first_of("'\"\n") == std::string::npos, "PlotOptions.font",
+             font, "a font name without quotes");
+}
+
+std::string ResolveGnuplotBinary(const PlotOptions& options) {
+  if (!options.gnuplot_binary.empty()) return options.gnuplot_binary;
+  if (const char* env = std::getenv("IMPACTDIC_GNUPLOT"); env != nullptr && *env != '\0') {
+    return env;
+  }
+  return "gnuplot";
+}
+
+namespace {
+
+// Colour-blind safe palette (Okabe & Ito, "Color Universal Design", 2008).
+constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                    "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+
+// A gnuplot single-quoted string: no escapes are processed, a quote is written twice.
+std::string Quote(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) {
+    if (c == '\'') out += "''";
+    else if (c == '\n') out += ' ';
+    else out += c;
+  }
+  return out + "'";
+}
+
+std::string Number(double value) {
+  std::ostringstream s;
+  s.precision(17);
+  s << value;
+  return s.str();
+}
+
+std::string MissingGnuplotMessage(const std::string& binary) {
+  return "gnuplot is needed to draw figures but '" + binary +
+         "' cannot be run; install it (Debian: apt-get install gnuplot-nox) or set "
+         "IMPACTDIC_GNUPLOT to the gnuplot binary";
+}
+
+// A point is drawn if it is finite and, on a log axis, positive.
+bool Drawable(double x, double y, bool log_x, bool log_y) {
+  return std::isfinite(x) && std::isfinite(y) && (!log_x || x > 0) && (!log_y || y > 0);
+}
+
+bool SeriesHasPoints(const PlotSeries& s, const Plot& plot) {
+  const bool log_y = s.second_y_axis ? plot.log_y2 : plot.log_y;
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (Drawable(s.x[i], s.y[i], plot.log_x, log_y)) return true;
+  }
+  return false;
+}
+
+bool MarkerDrawable(const PlotMarker& m, const Plot& plot) {
+  if (!std::isfinite(m.value)) return false;
+  if (m.orientation == MarkerOrientation::kVertical) return !plot.log_x || m.value > 0;
+  return !(m.second_y_axis ? plot.log_y2 : plot.log_y) || m.value > 0;
+}
+
+// Writes the drawable series as data blocks (gnuplot `index` k = k-th drawable series); a single
+// blank line inside a block breaks the line at non-drawable points. Returns the points written.
+std::size_t WriteData(const Plot& plot, const std::string& path) {
+  std::ofstream out(path);
+  std::size_t points = 0;
+  bool first_block = true;
+  for (const auto& s : plot.series) {
+    if (!SeriesHasPoints(s, plot)) continue;
+    if (!first_block) out << "\n\n";
+    first_block = false;
+    const bool log_y = s.second_y_axis ? plot.log_y2 : plot.log_y;
+    bool wrote_any = false, last_blank = false;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (Drawable(s.x[i], s.y[i], plot.log_x, log_y)) {
+        out << Number(s.x[i]) << ' ' << Number(s.y[i]) << '\n';
+        wrote_any = true;
+        last_blank = false;
+        ++points;
+      } else if (wrote_any && !last_blank) {
+        out << '\n';
+        last_blank = true;
+      }
+    }
+  }
+  out.flush();
+  if (!out) throw Error(ErrorKind::kIo, "gnuplot data file", "write failed", "").WithFile(path);
+  return points;
+}
+
+// The finite, drawable range of the data along x (axis 0), y1 (1) or y2 (2).
+bool DataRange(const Plot& plot, int axis, double* lo, double* hi) {
+  *lo = HUGE_VAL;
+  *hi = -HUGE_VAL;
+  for (const auto& s : plot.series) {
+    if (axis == 1 && s.second_y_axis) continue;
+    if (axis == 2 && !s.second_y_axis) continue;
+    const bool log_y = s.second_y_axis ? plot.log_y2 : plot.log_y;
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      if (!Drawable(s.x[i], s.y[i], plot.log_x, log_y)) continue;
+      const double v = axis == 0 ? s.x[i] : s.y[i];
+      *lo = std::min(*lo, v);
+      *hi = std::max(*hi, v);
+    }
+  }
+  return *lo <= *hi;
+}
+
+// An explicit range when a marker lies outside the data (gnuplot's autoscale ignores markers).
+std::string RangeCommand(const Plot& plot, int axis, double given_lo, double given_hi) {
+  const char* name = axis == 0 ? "xrange" : axis == 1 ? "yrange" : "y2range";
+  double lo = given_lo, hi = given_hi;
+  double data_lo = 0, data_hi = 0;
+  if (DataRange(plot, axis, &data_lo, &data_hi)) {
+    double want_lo = data_lo, want_hi = data_hi;
+    bool extend = false;
+    for (const auto& m : plot.markers) {
+      if (!MarkerDrawable(m, plot)) continue;
+      const int marker_axis =
+          m.orientation == MarkerOrientation::kVertical ? 0 : (m.second_y_axis ? 2 : 1);
+      if (marker_axis != axis) continue;
+      if (m.value < want_lo || m.value > want_hi) extend = true;
+      want_lo = std::min(want_lo, m.value);
+      want_hi = std::max(want_hi, m.value);
+    }
+    const bool log = axis == 0 ? plot.log_x : axis == 1 ? plot.log_y : plot.log_y2;
+    if (extend && !log) {
+      const double pad = 0.05 * std::max(want_hi - want_lo, 1e-300);
+      if (!std::isfinite(lo)) lo = want_lo - pad;
+      if (!std::isfinite(hi)) hi = want_hi + pad;
+    }
+  }
+  if (!std::isfinite(lo) && !std::isfinite(hi)) return "";
+  return std::string("set ") + name + " [" + (std::isfinite(lo) ? Number(lo) : "*") + ":" +
+         (std::isfinite(hi) ? Number(hi) : "*") + "]\n";
+}
+
+const char* KeyPlacement(LegendPosition p) {
+  switch (p) {
+    case LegendPosition::kTopRight: return "inside top right";
+    case LegendPosition::kTopLeft: return "inside top left";
+    case LegendPosition::kBottomRight: return "inside bottom right";
+    case LegendPosition::kBottomLeft: return "inside bottom left";
+    case LegendPosition::kOutsideRight: return "outside right top";
+    case LegendPosition::kNone: return "";
+  }
+  return "";
+}
+
+}  // namespace
+
+std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const std::string& terminal,
+                          const std::string& data_path, const std::string& output_path) {
+  std::ostringstream g;
+  const std::string font = options.font + "," + std::to_string(options.font_size_pt);
+  g << "set encoding utf8\n";
+  g << "set terminal " << terminal << " size " << options.width_px << "," << options.height_px
+    << (plot.enhanced_text ? " enhanced" : " noenhanced") << " font " << Quote(font);
+  if (terminal == "pngcairo") g << " linewidth 1.0 rounded";
+  g << " background '#ffffff'\n";
+  g << "set output " << Quote(output_path) << "\n";
+  if (!plot.title.empty()) {
+    g << "set title " << Quote(plot.title) << " font "
+      << Quote("," + std::to_string(options.font_size_pt + 3)) << "\n";
+  }
+  g << "set xlabel " << Quote(plot.x_label) << "\n";
+  g << "set ylabel " << Quote(plot.y_label) << "\n";
+  g << "set border 3 lw 1.5 lc rgb '#303030'\n";
+  g << "set grid xtics ytics mxtics mytics lw 1 lc rgb '#e0e0e0', lw 0.5 lc rgb '#f0f0f0'\n";
+  g << "set tics out nomirror\n";
+  g << "set mxtics\nset mytics\n";
+  const bool any_y2 = std::any_of(plot.series.begin(), plot.series.end(),
+                                  [](const PlotSeries& s) { return s.second_y_axis; });
+  if (any_y2) {
+    g << "set border 11 lw 1.5 lc rgb '#303030'\n";
+    g << "set y2tics out\nset my2tics\n";
+    g << "set y2label " << Quote(plot.y2_label) << "\n";
+  }
+  if (plot.log_x) g << "set logscale x 10\nset format x '%g'\n";
+  if (plot.log_y) g << "set logscale y 10\nset format y '%g'\n";
+  if (plot.log_y2 && any_y2) g << "set logscale y2 10\n";
+  g << RangeCommand(plot, 0, plot.x_min, plot.x_max);
+  g << RangeCommand(plot, 1, plot.y_min, plot.y_max);
+  if (any_y2) g << RangeCommand(plot, 2, NAN, NAN);
+  if (plot.legend == LegendPosition::kNone) {
+    g << "set key off\n";
+  } else {
+    g << "set key " << KeyPlacement(plot.legend)
+      << " box lw 1 lc rgb '#b0b0b0' opaque spacing 1.3 samplen 3 width 1\n";
+  }
+  int arrow = 1;
+  for (const auto& m : plot.markers) {
+    if (!MarkerDrawable(m, plot)) continue;
+    const std::string color = m.color.empty() ? "#505050" : m.color;
+    const std::string v = Number(m.value);
+    if (m.orientation == MarkerOrientation::kVertical) {
+      g << "set arrow " << arrow++ << " from first " << v << ", graph 0 to first " << v
+        << ", graph 1 nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
+      if (!m.label.empty()) {
+        g << "set label " << Quote(m.label) << " at first " << v
+          << ", graph 0.96 offset character 0.6,0 left front textcolor rgb " << Quote(color)
+          << "\n";
+      }
+    } else {
+      const char* sys = m.second_y_axis ? "second" : "first";
+      g << "set arrow " << arrow++ << " from graph 0, " << sys << " " << v << " to graph 1, " << sys
+        << " " << v << " nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
+      if (!m.label.empty()) {
+        g << "set label " << Quote(m.label) << " at graph 0.02, " << sys << " " << v
+          << " offset 0,character 0.7 left front textcolor rgb " << Quote(color) << "\n";
+      }
+    }
+  }
+  // The plot command: one element per drawable series.
+  std::ostringstream elements;
+  int index = 0;
+  int palette_index = 0;
+  for (const auto& s : plot.series) {
+    const std::string color =
+        s.color.empty() ? kPalette[palette_index % std::size(kPalette)] : s.color;
+    ++palette_index;
+    if (!SeriesHasPoints(s, plot)) continue;
+    if (index > 0) elements << ", \\\n     ";
+    elements << Quote(data_path) << " index " << index++ << " using 1:2";
+    if (s.second_y_axis) elements << " axes x1y2";
+    switch (s.style) {
+      case SeriesStyle::kLines:
+        elements << " with lines lw " << Number(s.line_width) << " dt 1";
+        break;
+      case SeriesStyle::kDashed:
+        elements << " with lines lw " << Number(s.line_width) << " dt (8,5)";
+        break;
+      case SeriesStyle::kPoints:
+        elements << " with points pt 7 ps 1.1";
+        break;
+      case SeriesStyle::kLinesPoints:
+        elements << " with linespoints lw " << Number(s.line_width) << " pt 7 ps 1.1";
+        break;
+    }
+    elements << " lc rgb " << Quote(color);
+    elements << (s.label.empty() ? " notitle" : " title " + Quote(s.label));
+  }
+  if (index > 0) {
+    g << "plot " << elements.str() << "\n";
+  } else {
+    // Markers only: an empty frame over the given range.
+    g << "set key off\nplot NaN notitle\n";
+  }
+  g << "unset output\n";
+  return g.str();
+}
+
+std::string DetectPngTerminal(const std::string& binary) {
+  static std::mutex mutex;
+  static std::map<std::string, std::string> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  if (auto it = cache.find(binary); it != cache.end()) return it->second;
+  const auto result = RunProcess(binary, {"-e", "set terminal"});
+  if (!result.started) {
+    throw Error(ErrorKind::kFileNotFound,
+                MissingGnuplotMessage(binary) + " (" + std::strerror(result.start_errno) + ")");
+  }
+  std::string terminal;
+  if (result.output.find("pngcairo") != std::string::npos) {
+    terminal = "pngcairo";
+  } else if (result.output.find(" png ") != std::string::npos ||
+             result.output.find("\npng") != std::string::npos) {
+    terminal = "png";
+  } else {
+    throw Error(ErrorKind::kIo, "gnuplot '" + binary + "' offers no PNG terminal (exit code " +
+                                    std::to_string(result.exit_code) + "); it printed: " +
+                                    result.output.substr(0, 2000));
+  }
+  cache[binary] = terminal;
+  return terminal;
+}
+
+bool HasPngSignature(const std::string& path) {
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[8] = {};
+  in.read(reinterpret_cast<char*>(head), 8);
+  return in.gcount() == 8 && std::memcmp(head, kSignature, 8) == 0;
+}
+
+PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const PlotOptions& options) {
+  WallTimer timer;
+  options.Check();
+  for (std::size_t i = 0; i < plot.series.size(); ++i) {
+    const auto& s = plot.series[i];
+    CheckValue(s.x.size() == s.y.size(), "plot series " + std::to_string(i) + " ('" + s.label + "')",
+               std::to_string(s.x.size()) + " x values and " + std::to_string(s.y.size()) +
+                   " y values",
+               "as many x as y values");
+    CheckValue(s.line_width > 0, "plot series line_width", Number(s.line_width), "> 0");
+  }
+  const bool any_points = std::any_of(plot.series.begin(), plot.series.end(),
+                                      [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
+  const bool any_marker = std::any_of(plot.markers.begin(), plot.markers.end(),
+                                      [&](const PlotMarker& m) { return MarkerDrawable(m, plot); });
+  if (!any_points && !any_marker) {
+    throw Error(ErrorKind::kInvalidValue, "plot '" + plot.title + "'",
+                "no finite data point (or no positive one on a log axis)",
+                "at least one drawable point")
+        .WithFile(png_path);
+  }
+  render_internal::CheckOutputFolder(png_path);
+
+  PlotSummary summary;
+  summary.gnuplot_binary = ResolveGnuplotBinary(options);
+  summary.terminal = DetectPngTerminal(summary.gnuplot_binary);
+
+  TempFile data(".dat");
+  TempFile script(".gp");
+  summary.points = WriteData(plot, data.path());
+  summary.series = static_cast<int>(std::count_if(
+      plot.series.begin(), plot.series.end(),
+      [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); }));
+
+  const std::string temp_png = render_internal::TempSiblingPath(png_path, ".png");
+  struct Cleanup {
+    std::string path;
+    bool keep = false;
+    ~Cleanup() {
+      if (!keep) {
+        std::error_code ec;
+        fs::remove(path, ec);
+      }
+    }
+  } cleanup{temp_png};
+  {
+    std::ofstream out(script.path());
+    out << GnuplotScript(plot, options, summary.terminal, data.path(), temp_png);
+    if (!out) throw Error(ErrorKind::kIo, "gnuplot script", "write failed", "").WithFile(script.path());
+  }
+  const auto result = RunProcess(summary.gnuplot_binary, {script.path()});
+  if (!result.started) {
+    throw Error(ErrorKind::kFileNotFound, MissingGnuplotMessage(summary.gnuplot_binary));
+  }
+  if (result.exit_code != 0) {
+    throw Error(ErrorKind::kIo, "gnuplot failed drawing '" + png_path + "' (exit code " +
+                                    std::to_string(result.exit_code) + "); gnuplot said:\n" +
+                                    result.output.substr(0, 4000));
+  }
+  std::error_code ec;
+  if (!fs::is_regular_file(temp_png, ec) || !HasPngSignature(temp_png)) {
+    throw Error(ErrorKind::kIo, "gnuplot exited normally but wrote no valid PNG for '" + png_path +
+                                    "'; gnuplot said:\n" + result.output.substr(0, 4000));
+  }
+  fs::rename(temp_png, png_path, ec);
+  if (ec) {
+    throw Error(ErrorKind::kIo, png_path, "cannot rename the temporary PNG: " + ec.message(),
+                "a writable output location");
+  }
+  cleanup.keep = true;
+  summary.path = png_path;
+  summary.gnuplot_messages = result.output;
+  if (!result.output.empty()) LogDebug("gnuplot ({}): {}", png_path, result.output);
+  summary.wall_s = timer.ElapsedSeconds();
+  return summary;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,345 @@
+#include "impactdic/render/render_results.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/render/results_layout.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+namespace L = results_layout;
+
+void RenderResultsOptions::Check() const {
+  plot.Check();
+  animation_options.Check();
+}
+
+std::string RenderResultsSummary::BriefReport() const {
+  std::string text = "render: " + std::to_string(written.size()) + " file(s) written, " +
+                     std::to_string(skipped.size()) + " skipped";
+  if (has_animation) {
+    text += "; animation " + animation.codec + " " + std::to_string(animation.frames) + " frames";
+    if (animation.fell_back) text += " (MJPG fallback)";
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, " in %.2f s", wall_s);
+  return text + buf;
+}
+
+std::string RenderResultsSummary::FullReport() const {
+  std::string text = BriefReport() + "\n";
+  for (const auto& w : written) text += "  wrote   " + w + "\n";
+  for (const auto& s : skipped) text += "  skipped " + s + "\n";
+  if (has_animation) text += "  " + animation.BriefReport() + "\n";
+  return text;
+}
+
+namespace {
+
+std::string Dims2Text(const Dims& d) {
+  std::string t = "[";
+  for (std::size_t i = 0; i < d.size(); ++i) t += (i ? " x " : "") + std::to_string(d[i]);
+  return t + "]";
+}
+
+[[noreturn]] void ShapeError(const H5Reader&, const std::string& path, const std::string& file,
+                             const Dims& found, const std::string& expected) {
+  throw Error(ErrorKind::kFileFormat, "dataset " + path, "shape " + Dims2Text(found), expected)
+      .WithFile(file);
+}
+
+double NumberAttribute(const H5Reader& r, const std::string& object, const std::string& name) {
+  return r.HasAttribute(object, name) ? r.ReadNumberAttribute(object, name)
+                                      : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<double> ReadIf(const H5Reader& r, const std::string& path) {
+  return r.Exists(path) ? r.ReadDouble(path) : std::vector<double>{};
+}
+
+std::string FormatMs(double t_s) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f ms", 1e3 * t_s);
+  return buf;
+}
+
+}  // namespace
+
+VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_frames) {
+  // The file name for messages is not exposed by H5Reader; the callers add it.
+  const std::string file;
+  VelocityFieldSequence seq;
+  for (const char* path : {L::kTimeMs, L::kDicX, L::kDicY, L::kVx, L::kVy}) {
+    if (!r.Exists(path)) {
+      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(path), "missing",
+                  "the velocity field data (" + std::string(L::kTimeMs) + ", " + L::kDicX + ", " +
+                      L::kDicY + ", " + L::kVx + ", " + L::kVy + ")");
+    }
+  }
+  Dims dt, dx, dy, dvx, dvy;
+  seq.time_ms = r.ReadDouble(L::kTimeMs, &dt);
+  const std::vector<double> x = r.ReadDouble(L::kDicX, &dx);
+  const std::vector<double> y = r.ReadDouble(L::kDicY, &dy);
+  seq.vx_mm_s = r.ReadDouble(L::kVx, &dvx);
+  seq.vy_mm_s = r.ReadDouble(L::kVy, &dvy);
+  if (dt.size() != 1) ShapeError(r, L::kTimeMs, file, dt, "[frames]");
+  const std::size_t f = dt[0];
+  if (dvx.size() != 2 || dvx[0] != f) {
+    ShapeError(r, L::kVx, file, dvx, "[frames x subsets] with frames = " + std::to_string(f));
+  }
+  const std::size_t n = dvx[1];
+  if (dvy != dvx) ShapeError(r, L::kVy, file, dvy, "the shape of " + std::string(L::kVx));
+  const bool fixed = dx.size() == 1 && dx[0] == n;
+  const bool moving = dx.size() == 2 && dx[0] == f && dx[1] == n;
+  if (!fixed && !moving) {
+    ShapeError(r, L::kDicX, file, dx, "[subsets] or [frames x subsets] matching " +
+                                          std::string(L::kVx) + " " + Dims2Text(dvx));
+  }
+  if (dy != dx) ShapeError(r, L::kDicY, file, dy, "the shape of " + std::string(L::kDicX));
+  seq.num_subsets = n;
+  seq.x_px = x;
+  seq.y_px = y;
+  // Lagrangian positions from the accumulated displacement, when stored.
+  if (fixed && r.Exists(L::kDicU) && r.Exists(L::kDicV)) {
+    Dims du, dv;
+    const auto u = r.ReadDouble(L::kDicU, &du);
+    const auto v = r.ReadDouble(L::kDicV, &dv);
+    if (du != dvx) ShapeError(r, L::kDicU, file, du, "[frames x subsets] = " + Dims2Text(dvx));
+    if (dv != dvx) ShapeError(r, L::kDicV, file, dv, "[frames x subsets] = " + Dims2Text(dvx));
+    seq.x_px.assign(f * n, 0.0);
+    seq.y_px.assign(f * n, 0.0);
+    for (std::size_t i = 0; i < f; ++i) {
+      for (std::size_t s = 0; s < n; ++s) {
+        seq.x_px[i * n + s] = x[s] + u[i * n + s];
+        seq.y_px[i * n + s] = y[s] + v[i * n + s];
+      }
+    }
+  }
+  seq.mm_per_px = NumberAttribute(r, L::kKinematicsGroup, L::kMmPerPxAttr);
+  if (r.HasAttribute(L::kKinematicsGroup, L::kVyDirectionAttr)) {
+    const std::string dir = r.ReadStringAttribute(L::kKinematicsGroup, L::kVyDirectionAttr);
+    if (dir != "up" && dir != "down") {
+      throw Error(ErrorKind::kFileFormat,
+                  "attribute " + std::string(L::kVyDirectionAttr) + " of " + L::kKinematicsGroup,
+                  dir, "up or down");
+    }
+    seq.vy_positive_down = dir == "down";
+  }
+  if (!r.Exists(L::kFrameImages)) {
+    if (require_frames) {
+      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(L::kFrameImages), "missing",
+                  "the camera frames [frames x rows x cols]");
+    }
+    return seq;
+  }
+  Dims di;
+  const std::vector<float> pixels = r.ReadFloat(L::kFrameImages, &di);
+  if (di.size() != 3 || di[0] != f || di[1] == 0 || di[2] == 0) {
+    ShapeError(r, L::kFrameImages, file, di,
+               "[frames x rows x cols] with frames = " + std::to_string(f));
+  }
+  float max_value = 0.f;
+  bool integral = true;
+  for (float p : pixels) {
+    if (std::isfinite(p)) max_value = std::max(max_value, p);
+    integral = integral && std::isfinite(p) && p >= 0 && p == std::floor(p);
+  }
+  double bit_depth = NumberAttribute(r, L::kFramesGroup, L::kBitDepthAttr);
+  if (std::isnan(bit_depth) && integral) bit_depth = max_value <= 255.f ? 8 : max_value <= 65535.f ? 16 : 0;
+  const int rows = static_cast<int>(di[1]), cols = static_cast<int>(di[2]);
+  const std::size_t per_frame = di[1] * di[2];
+  for (std::size_t i = 0; i < f; ++i) {
+    cv::Mat as_float(rows, cols, CV_32F, const_cast<float*>(pixels.data() + i * per_frame));
+    cv::Mat frame;
+    if (bit_depth == 8) {
+      as_float.convertTo(frame, CV_8U);
+    } else if (bit_depth == 16) {
+      as_float.convertTo(frame, CV_16U);
+    } else {
+      frame = as_float.clone();
+    }
+    seq.frames.push_back(frame);
+  }
+  return seq;
+}
+
+RenderResultsSummary RenderResults(const std::string& results_path,
+                                   const RenderResultsOptions& options) {
+  WallTimer wall;
+  options.Check();
+  const H5Reader reader(results_path);
+  RenderResultsSummary summary;
+
+  // Output folder.
+  std::string out_dir = options.output_dir;
+  if (out_dir.empty()) {
+    out_dir = fs::path(results_path).parent_path().string();
+    if (out_dir.empty()) out_dir = ".";
+  }
+  {
+    std::error_code ec;
+    fs::create_directories(out_dir, ec);
+    if (!fs::is_directory(out_dir, ec)) {
+      throw Error(ErrorKind::kIo, "output folder", out_dir,
+                  "a folder that exists or can be created");
+    }
+    if (access(out_dir.c_str(), W_OK) != 0) {
+      throw Error(ErrorKind::kIo, "output folder", out_dir + " is not writable",
+                  "a writable folder");
+    }
+  }
+  auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  auto skip = [&](const std::string& output, const std::string& reason) {
+    LogInfo("render: skipping {}: {}", output, reason);
+    summary.skipped.push_back(output + ": " + reason);
+  };
+
+  // What the file has.
+  const bool has_momentum_t = reader.Exists(L::kMomentumT);
+  const bool has_momentum = has_momentum_t && (reader.Exists(L::kPPounder) ||
+                                               reader.Exists(L::kPGran) ||
+                                               reader.Exists(L::kPTotal));
+  const bool has_sensor = reader.Exists(L::kSensorT) && reader.Exists(L::kSensorDecel);
+  const bool has_model = reader.Exists(L::kModelT) && reader.Exists(L::kModelDecel);
+  const bool has_madd = has_momentum_t && reader.Exists(L::kMAdd);
+  const bool has_field = reader.Exists(L::kTimeMs) && reader.Exists(L::kDicX) &&
+                         reader.Exists(L::kDicY) && reader.Exists(L::kVx) &&
+                         reader.Exists(L::kVy);
+  if (!has_momentum && !has_sensor && !has_model && !has_madd && !has_field) {
+    throw Error(ErrorKind::kFileFormat, "results file",
+                "none of the datasets render draws from",
+                std::string("at least one of: ") + L::kMomentumT + " with " + L::kPPounder + "/" +
+                    L::kPGran + "/" + L::kPTotal + "; " + L::kSensorT + " + " + L::kSensorDecel +
+                    "; " + L::kModelT + " + " + L::kModelDecel + "; " + L::kMAdd + "; " +
+                    L::kTimeMs + " + " + L::kDicX + " + " + L::kDicY + " + " + L::kVx + " + " +
+                    L::kVy + " (+ " + L::kFrameImages + ")")
+        .WithFile(results_path);
+  }
+  const double t_e_s = reader.Exists(L::kMomentumGroup)
+                           ? NumberAttribute(reader, L::kMomentumGroup, L::kTeAttr)
+                           : std::numeric_limits<double>::quiet_NaN();
+
+  try {
+    if (options.figures) {
+      if (has_momentum) {
+        MomentumFigureData d;
+        d.t_s = reader.ReadDouble(L::kMomentumT);
+        d.p_pounder_Ns = ReadIf(reader, L::kPPounder);
+        d.p_gran_Ns = ReadIf(reader, L::kPGran);
+        d.p_total_Ns = ReadIf(reader, L::kPTotal);
+        d.p_max_Ns = NumberAttribute(reader, L::kMomentumGroup, L::kPMaxAttr);
+        d.t_e_s = t_e_s;
+        summary.written.push_back(PlotMomentum(d, out(L::kMomentumPng), options.plot).path);
+      } else {
+        skip(L::kMomentumPng, std::string("no ") + L::kMomentumT + " with " + L::kPPounder + "/" +
+                                  L::kPGran + "/" + L::kPTotal);
+      }
+      if (has_sensor || has_model) {
+        DecelerationFigureData d;
+        if (has_sensor) {
+          d.measured_t_s = reader.ReadDouble(L::kSensorT);
+          d.measured_decel_g = reader.ReadDouble(L::kSensorDecel);
+        } else {
+          LogInfo("render: no {}; the deceleration figure shows the model only", L::kSensorDecel);
+        }
+        if (has_model) {
+          d.model_t_s = reader.ReadDouble(L::kModelT);
+          d.model_decel_g = reader.ReadDouble(L::kModelDecel);
+        } else {
+          LogInfo("render: no {}; the deceleration figure shows the measurement only",
+                  L::kModelDecel);
+        }
+        d.t_e_s = t_e_s;
+        summary.written.push_back(
+            PlotDeceleration(d, out(L::kDecelerationPng), options.plot).path);
+      } else {
+        skip(L::kDecelerationPng, std::string("neither ") + L::kSensorDecel + " nor " +
+                                      L::kModelDecel + " (with their t_s)");
+      }
+      if (has_madd) {
+        AddedMassFigureData d;
+        d.t_s = reader.ReadDouble(L::kMomentumT);
+        d.m_add_kg = reader.ReadDouble(L::kMAdd);
+        d.sigmoid_M_kg = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidMAttr);
+        d.sigmoid_b_per_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidBAttr);
+        d.sigmoid_T_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidTAttr);
+        d.t_e_s = t_e_s;
+        if (std::isnan(d.sigmoid_M_kg)) {
+          LogInfo("render: no sigmoid attributes on {}; m_add drawn without its fit",
+                  L::kMomentumGroup);
+        }
+        summary.written.push_back(PlotAddedMass(d, out(L::kAddedMassPng), options.plot).path);
+      } else {
+        skip(L::kAddedMassPng, std::string("no ") + L::kMAdd + " with " + L::kMomentumT);
+      }
+    }
+
+    if (options.snapshot || options.animation) {
+      if (!has_field) {
+        const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " +
+                                   L::kDicX + ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
+        if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+        if (options.animation) skip(L::kAnimationName, reason);
+      } else {
+        const VelocityFieldSequence seq =
+            ReadVelocityFieldSequence(reader, /*require_frames=*/false);
+        if (seq.frames.empty()) {
+          const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
+          if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+          if (options.animation) skip(L::kAnimationName, reason);
+        } else {
+          if (options.snapshot) {
+            std::size_t frame = 0;
+            std::string title;
+            if (std::isfinite(t_e_s)) {
+              frame = FrameNearestTime(seq, 1e3 * t_e_s);
+              title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
+            } else {
+              // Without t_e: the frame of the largest mean speed.
+              double best = -1;
+              for (std::size_t i = 0; i < seq.num_frames(); ++i) {
+                double sum = 0;
+                std::size_t count = 0;
+                for (std::size_t s = 0; s < seq.num_subsets; ++s) {
+                  const double v = std::hypot(seq.vx_mm_s[i * seq.num_subsets + s],
+                                              seq.vy_mm_s[i * seq.num_subsets + s]);
+                  if (std::isfinite(v)) sum += v, ++count;
+                }
+                if (count > 0 && sum / count > best) best = sum / count, frame = i;
+              }
+              LogInfo("render: no {} attribute on {}; the snapshot shows the frame of the largest "
+                      "mean speed ({})",
+                      L::kTeAttr, L::kMomentumGroup, frame);
+              title = "Velocity field at the largest mean speed";
+            }
+            RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng),
+                                   options.animation_options.overlay, title);
+            summary.written.push_back(out(L::kVelocitySnapshotPng));
+          }
+          if (options.animation) {
+            AnimationOptions a = options.animation_options;
+            if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
+            summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
+            summary.has_animation = true;
+            summary.written.push_back(summary.animation.path);
+          }
+        }
+      }
+    }
+  } catch (Error& e) {
+    if (e.file().empty() && e.kind() == ErrorKind::kFileFormat) e.WithFile(results_path);
+    throw;
+  }
+  summary.wall_s = wall.ElapsedSeconds();
+  LogInfo("{}", summary.BriefReport());
+  return summary;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,125 @@
+#include "subprocess.h"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "impactdic/core/error.h"
+
+extern char** environ;
+
+namespace impactdic::render_internal {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string RandomTag() {
+  std::random_device rd;
+  std::ostringstream tag;
+  tag << getpid() << "-" << std::hex << rd() << rd();
+  return tag.str();
+}
+
+}  // namespace
+
+TempFile::TempFile(const std::string& suffix) {
+  std::error_code ec;
+  fs::path folder = fs::temp_directory_path(ec);
+  if (ec) folder = "/tmp";
+  for (int attempt = 0; attempt < 16; ++attempt) {
+    std::string name = "impactdic-";
+    name.append(RandomTag()).append(suffix);
+    const std::string candidate = (folder / name).string();
+    const int fd = open(candidate.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
+    if (fd >= 0) {
+      close(fd);
+      path_ = candidate;
+      return;
+    }
+  }
+  throw Error(ErrorKind::kIo, "temporary file", "cannot create one in " + folder.string(),
+              "a writable temporary folder (TMPDIR)");
+}
+
+TempFile::~TempFile() {
+  std::error_code ec;
+  fs::remove(path_, ec);
+}
+
+std::string TempSiblingPath(const std::string& final_path, const std::string& extension) {
+  const fs::path final_fs(final_path);
+  fs::path folder = final_fs.parent_path();
+  if (folder.empty()) folder = ".";
+  std::string name = ".";
+  name.append(final_fs.stem().string()).append(".tmp-").append(RandomTag()).append(extension);
+  return (folder / name).string();
+}
+
+void CheckOutputFolder(const std::string& final_path) {
+  fs::path folder = fs::path(final_path).parent_path();
+  if (folder.empty()) folder = ".";
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) {
+    throw Error(ErrorKind::kIo, final_path, "output folder " + folder.string() + " does not exist",
+                "an existing, writable folder");
+  }
+  if (access(folder.c_str(), W_OK) != 0) {
+    throw Error(ErrorKind::kIo, final_path, "output folder " + folder.string() + " is not writable",
+                "a writable folder");
+  }
+}
+
+ProcessResult RunProcess(const std::string& program, const std::vector<std::string>& arguments) {
+  ProcessResult result;
+  TempFile capture(".log");
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, capture.path().c_str(),
+                                   O_WRONLY | O_TRUNC, 0600);
+  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
+
+  std::vector<std::string> args_storage;
+  args_storage.push_back(program);
+  args_storage.insert(args_storage.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  for (auto& a : args_storage) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  pid_t pid = 0;
+  const bool has_slash = program.find('/') != std::string::npos;
+  const int rc = has_slash ? posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(),
+                                         environ)
+                           : posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(),
+                                          environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (rc != 0) {
+    result.start_errno = rc;
+    return result;
+  }
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) break;
+  }
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  // 127: the child could not execute the program (older C libraries report it this way).
+  result.started = result.exit_code != 127;
+  if (!result.started) result.start_errno = ENOENT;
+  std::ifstream in(capture.path(), std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  result.output = text.str();
+  return result;
+}
+
+}  // namespace impactdic::render_internal

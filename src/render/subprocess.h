@@ -1,0 +1,43 @@
+// Running a helper program (gnuplot) without a shell, capturing what it prints. Internal to render.
+#ifndef IMPACTDIC_SRC_RENDER_SUBPROCESS_H_
+#define IMPACTDIC_SRC_RENDER_SUBPROCESS_H_
+
+#include <string>
+#include <vector>
+
+namespace impactdic::render_internal {
+
+struct ProcessResult {
+  bool started = false;   // false: the program could not be executed at all
+  int start_errno = 0;    // errno of the failed start
+  int exit_code = -1;     // exit status; -1 if killed by a signal
+  std::string output;     // stdout and stderr together
+};
+
+// Runs `program` (a path, or a name looked up in PATH) with `arguments`, stdin from /dev/null.
+ProcessResult RunProcess(const std::string& program, const std::vector<std::string>& arguments);
+
+// A file in the system temporary folder, created empty with a unique name and deleted by the
+// destructor.
+class TempFile {
+ public:
+  explicit TempFile(const std::string& suffix);
+  ~TempFile();
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+// A unique temporary path in the folder of `final_path`, ending in `extension` (e.g. ".mp4"), so
+// programs that choose the format from the extension still work; nothing is created.
+std::string TempSiblingPath(const std::string& final_path, const std::string& extension);
+
+// Throws Error kIo unless the folder that will hold `final_path` exists and is writable.
+void CheckOutputFolder(const std::string& final_path);
+
+}  // namespace impactdic::render_internal
+
+#endif  // IMPACTDIC_SRC_RENDER_SUBPROCESS_H_

@@ -1,0 +1,112 @@
+// Shared helpers of the render tests: scratch folders, PNG checks and synthetic velocity fields.
+#ifndef IMPACTDIC_TESTS_RENDER_TEST_UTIL_H_
+#define IMPACTDIC_TESTS_RENDER_TEST_UTIL_H_
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "impactdic/render/velocity_field.h"
+
+namespace impactdic::test {
+
+// A fresh, empty folder under the system temp folder, removed at the end of the test.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const std::string& name) {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = std::filesystem::temp_directory_path() /
+            ("impactdic_render_" + name + "_" + (info ? info->name() : "x") + "_" +
+             std::to_string(getpid()));
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+  const std::filesystem::path& path() const { return path_; }
+  // Names of all entries (hidden temporaries included).
+  std::vector<std::string> Entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(path_)) {
+      names.push_back(e.path().filename().string());
+    }
+    return names;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// The PNG at `path` decodes and is at least min_w x min_h.
+inline ::testing::AssertionResult IsPngOfSize(const std::string& path, int min_w, int min_h) {
+  static constexpr unsigned char kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return ::testing::AssertionFailure() << path << " does not exist";
+  unsigned char head[8] = {};
+  const std::size_t got = std::fread(head, 1, 8, f);
+  std::fclose(f);
+  if (got != 8 || std::memcmp(head, kSig, 8) != 0) {
+    return ::testing::AssertionFailure() << path << " lacks the PNG signature";
+  }
+  const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+  if (img.empty()) return ::testing::AssertionFailure() << path << " does not decode";
+  if (img.cols < min_w || img.rows < min_h) {
+    return ::testing::AssertionFailure()
+           << path << " is " << img.cols << "x" << img.rows << ", expected >= " << min_w << "x"
+           << min_h;
+  }
+  return ::testing::AssertionSuccess();
+}
+
+// A synthetic sequence: speckle frames (seeded), a regular grid of subsets with `step` px spacing
+// inside the central part of the frame, and a velocity field (mm/s) that grows with the frame
+// index and points down and outwards: v = (k * (x - cx) / w, k * 300) with k = frame + 1.
+inline VelocityFieldSequence MakeSequence(int frames, int width, int height, int step,
+                                          int depth = CV_8U, unsigned seed = 7) {
+  VelocityFieldSequence seq;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  cv::Mat base(height, width, CV_32F);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) base.at<float>(y, x) = float(uni(rng));
+  }
+  for (int i = 0; i < frames; ++i) {
+    cv::Mat frame;
+    const double full = depth == CV_16U ? 4095.0 : depth == CV_32F ? 1.0 : 255.0;
+    base.convertTo(frame, depth, 0.2 * full + 0 * i, 0.4 * full);
+    seq.frames.push_back(frame);
+    seq.time_ms.push_back(0.625 * i);
+  }
+  for (int y = height / 3; y < height - step / 2; y += step) {
+    for (int x = width / 6; x < width - width / 6; x += step) {
+      seq.x_px.push_back(x);
+      seq.y_px.push_back(y);
+    }
+  }
+  seq.num_subsets = seq.x_px.size();
+  for (int i = 0; i < frames; ++i) {
+    for (std::size_t s = 0; s < seq.num_subsets; ++s) {
+      const double k = i + 1;
+      seq.vx_mm_s.push_back(k * 200.0 * (seq.x_px[s] - width / 2.0) / width);
+      seq.vy_mm_s.push_back(k * 30.0);
+    }
+  }
+  seq.mm_per_px = 0.25;
+  return seq;
+}
+
+}  // namespace impactdic::test
+
+#endif  // IMPACTDIC_TESTS_RENDER_TEST_UTIL_H_
