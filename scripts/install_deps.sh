@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages impactdic needs, and nothing when all are present (idempotent).
+# Run as root (or with sudo available). Used by both README commands.
+set -euo pipefail
+
+PACKAGES=(
+  cmake ninja-build g++ pkg-config git          # toolchain
+  libopencv-dev                                 # OpenCV 4.6: core imgproc imgcodecs videoio calib3d
+  libeigen3-dev                                 # Eigen 3.4
+  libhdf5-dev                                   # HDF5 1.10 with the C++ API
+  libtbb-dev                                    # oneTBB 2021
+  libgtest-dev libgmock-dev                     # GoogleTest 1.12
+  libbenchmark-dev                              # Google Benchmark 1.7 (bench/, built on request)
+  libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
+  gnuplot-nox                                   # figures (PNG through gnuplot's cairo/png terminal)
+  python3-h5py                                  # tests check that h5py opens our files
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install_deps: all ${#PACKAGES[@]} packages present, nothing to do"
+  exit 0
+fi
+
+echo "install_deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
