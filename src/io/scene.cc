@@ -413,6 +413,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   sen.Finish();
 
   Section mom = top.Sub("momentum");
+  mom.OptionalNumber("pounder_center_x_px", &scene.momentum.pounder_center_x_px, NonNegative,
+                     "a pixel column >= 0");
+  mom.OptionalNumber("surface_y_px", &scene.momentum.surface_y_px, NonNegative, "a pixel row >= 0");
   mom.Integer(
       "grid_cols", &scene.momentum.grid_cols, [](int v) { return v >= 1; }, "a subset count >= 1");
   mom.Integer(

@@ -83,6 +83,12 @@ struct SceneSensor {
 };
 
 struct SceneMomentum {
+  // Where the pounder hits, in pixels of the first frame (x right, y down): the horizontal centre
+  // of its footprint and the sand surface line (its bottom at impact). The default grid is
+  // grid_cols x grid_rows subsets centred under the footprint, starting just below the surface.
+  // Required by the momentum stage unless rect_mm is given.
+  std::optional<double> pounder_center_x_px;
+  std::optional<double> surface_y_px;
   int grid_cols = 6;  // Subsets across the pounder's footprint, >= 1.
   int grid_rows = 2;  // Subset rows beneath the pounder, >= 1.
   // Optional rectangle in panel millimetres (x0, y0, x1, y1) instead of the default grid.
