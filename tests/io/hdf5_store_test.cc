@@ -112,3 +112,41 @@ TEST(Hdf5Store, ErrorsNameTheFileAndDataset) {
 
 }  // namespace
 }  // namespace impactdic
+
+namespace impactdic {
+namespace {
+
+// The files open in h5py without conversion (Debian's python3-h5py, installed by
+// scripts/install_deps.sh): values, shapes, units and string attributes.
+TEST(Hdf5Store, ReadableByH5py) {
+  TestDir dir;
+  const std::string path = dir.File("py.h5");
+  {
+    H5Writer out(path);
+    out.WriteProvenance("name: py\n");
+    out.Write("dic/u_px", std::vector<float>{1, 2, 3, 4, 5, 6}, {2, 3}, "px", "u");
+    out.Commit();
+  }
+  const std::string script = dir.Write("check.py", R"(
+import sys, h5py
+f = h5py.File(sys.argv[1], "r")
+d = f["dic/u_px"]
+assert d.shape == (2, 3), d.shape
+assert float(d[1, 2]) == 6.0
+assert d.attrs["units"] == "px", d.attrs["units"]
+assert f.attrs["tool"] == "impactdic"
+assert f["provenance"].attrs["scene_yaml"] == "name: py\n"
+print("h5py-ok")
+)");
+  const std::string command = "/usr/bin/python3 " + script + " " + path + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char buffer[4096];
+  std::string output;
+  while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
+  EXPECT_EQ(pclose(pipe), 0) << output;
+  EXPECT_NE(output.find("h5py-ok"), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace impactdic
