@@ -80,12 +80,40 @@ struct H5Writer::Impl {
   bool open = false;
 };
 
-H5Writer::H5Writer(const std::string& final_path) : impl_(std::make_unique<Impl>()) {
+H5Writer::H5Writer(const std::string& final_path) : H5Writer(final_path, Mode::kCreate) {}
+
+H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_unique<Impl>()) {
   H5::Exception::dontPrint();
+  if (mode == Mode::kUpdate) {
+    H5Reader check(final_path);  // Error if missing or not HDF5.
+  }
   impl_->atomic = std::make_unique<AtomicFile>(final_path);
-  Guard(final_path, "create", [&] {
-    impl_->file = H5::H5File(impl_->atomic->temp_path(), H5F_ACC_TRUNC);
+  if (mode == Mode::kUpdate) {
+    std::error_code ec;
+    std::filesystem::copy_file(final_path, impl_->atomic->temp_path(),
+                               std::filesystem::copy_options::overwrite_existing, ec);
+    if (ec) {
+      throw Error(ErrorKind::kIo, "copy for update", ec.message(),
+                  "a readable file and writable folder")
+          .WithFile(final_path);
+    }
+  }
+  Guard(final_path, "open", [&] {
+    impl_->file = H5::H5File(impl_->atomic->temp_path(),
+                             mode == Mode::kUpdate ? H5F_ACC_RDWR : H5F_ACC_TRUNC);
     impl_->open = true;
+  });
+}
+
+void H5Writer::Remove(const std::string& path) {
+  Guard(final_path(), "remove " + path, [&] {
+    std::string current;
+    for (const auto& part : SplitPath(path)) {
+      current += "/" + part;
+      if (!impl_->file.nameExists(current)) return;
+    }
+    if (current.empty()) return;
+    impl_->file.unlink(current);
   });
 }
 

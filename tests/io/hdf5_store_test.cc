@@ -150,3 +150,33 @@ print("h5py-ok")
 
 }  // namespace
 }  // namespace impactdic
+
+namespace impactdic {
+namespace {
+
+TEST(Hdf5Store, UpdateAddsAndReplacesGroupsAtomically) {
+  TestDir dir;
+  const std::string path = dir.File("r.h5");
+  {
+    H5Writer out(path);
+    out.Write("dic/u_px", std::vector<double>{1, 2}, "px", "u");
+    out.Write("momentum/p", std::vector<double>{5}, "N s", "old");
+    out.Commit();
+  }
+  {
+    H5Writer update(path, H5Writer::Mode::kUpdate);
+    update.Remove("momentum");
+    update.Write("momentum/q", std::vector<double>{7}, "N s", "new");
+    // Before Commit() the original is untouched.
+    EXPECT_TRUE(H5Reader(path).Exists("momentum/p"));
+    update.Commit();
+  }
+  H5Reader in(path);
+  EXPECT_EQ(in.ReadDouble("dic/u_px")[1], 2);
+  EXPECT_FALSE(in.Exists("momentum/p"));
+  EXPECT_EQ(in.ReadDouble("momentum/q")[0], 7);
+  EXPECT_THROW(H5Writer(dir.File("missing.h5"), H5Writer::Mode::kUpdate), Error);
+}
+
+}  // namespace
+}  // namespace impactdic

@@ -31,13 +31,20 @@ using Dims = std::vector<std::size_t>;
 
 class H5Writer {
  public:
+  // Starts a new file; an existing file of that name is replaced on Commit().
   explicit H5Writer(const std::string& final_path);
+  // kUpdate: starts from a copy of the existing file at final_path (Error if it is missing or not
+  // HDF5), so groups can be added or replaced; the original stays untouched until Commit().
+  enum class Mode { kCreate, kUpdate };
+  H5Writer(const std::string& final_path, Mode mode);
   ~H5Writer();
   H5Writer(const H5Writer&) = delete;
   H5Writer& operator=(const H5Writer&) = delete;
 
   // Creates a group (and its parents); a no-op if it exists.
   void CreateGroup(const std::string& path);
+  // Removes a group or dataset (and everything below it) if it exists.
+  void Remove(const std::string& path);
 
   // Writes a dataset at `path` (parent groups are created). dims has 1..4 entries whose product
   // equals data.size(). Datasets of >= 4096 elements are chunked and deflate-compressed.
