@@ -1,0 +1,768 @@
+#include "impactdic/model/impact_model.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/timer.h"
+
+namespace impactdic {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string Num(double v) { return fmt::format("{:.6g}", v); }
+
+// Names the field and the rule when `ok` is false.
+void Require(bool ok, const char* field, double value, const char* allowed) {
+  CheckValue(ok, field, Num(value), allowed);
+}
+
+}  // namespace
+
+double ImpactVelocityFromHeight(double height_m, double g_m_s2) {
+  return std::sqrt(2.0 * g_m_s2 * height_m);
+}
+
+double AddedMassMaxEq4(double pounder_mass_kg, double impact_velocity_m_s, double area_m2) {
+  return 425.0 * std::pow(pounder_mass_kg, 0.1) * std::pow(impact_velocity_m_s, 0.2) *
+         std::pow(area_m2, 1.3);
+}
+
+void ImpactModelParameters::Check() const {
+  Require(std::isfinite(pounder_mass_kg) && pounder_mass_kg > 0, "pounder_mass_kg", pounder_mass_kg,
+          "a finite mass > 0 kg");
+  Require(std::isfinite(impact_velocity_m_s) && impact_velocity_m_s > 0, "impact_velocity_m_s",
+          impact_velocity_m_s, "a finite velocity > 0 m/s");
+  Require(std::isfinite(width_m) && width_m > 0, "width_m", width_m, "a finite width > 0 m");
+  Require(std::isfinite(depth_m) && depth_m > 0, "depth_m", depth_m, "a finite depth > 0 m");
+  Require(std::isnan(added_mass_kg) || (std::isfinite(added_mass_kg) && added_mass_kg >= 0),
+          "added_mass_kg", added_mass_kg, "a finite mass >= 0 kg (or unset: Eq. 4)");
+  Require(std::isfinite(friction_K) && friction_K >= 0, "friction_K", friction_K,
+          "a finite K >= 0");
+  Require(std::isfinite(damping_exponent_n) && damping_exponent_n >= 0 && damping_exponent_n <= 1,
+          "damping_exponent_n", damping_exponent_n, "n in [0, 1]");
+  Require(std::isfinite(damping_factor_u) && damping_factor_u >= 1, "damping_factor_u",
+          damping_factor_u, "u >= 1 (F_dyn must resist the motion)");
+  Require(std::isfinite(sigmoid_delay_T_s) && sigmoid_delay_T_s >= 0, "sigmoid_delay_T_s",
+          sigmoid_delay_T_s, "T >= 0 s");
+  Require(std::isfinite(sigmoid_rate_b_per_s) && sigmoid_rate_b_per_s > 0 &&
+              sigmoid_rate_b_per_s <= 1e12,
+          "sigmoid_rate_b_per_s", sigmoid_rate_b_per_s, "b in (0, 1e12] 1/s");
+  Require(std::isfinite(density_kg_m3) && density_kg_m3 > 0, "density_kg_m3", density_kg_m3,
+          "a finite density > 0 kg/m^3");
+  Require(std::isfinite(gravity_m_s2) && gravity_m_s2 >= 0, "gravity_m_s2", gravity_m_s2,
+          "a finite g >= 0 m/s^2");
+  Require(std::isfinite(bed_height_m) && bed_height_m > 0, "bed_height_m", bed_height_m,
+          "a finite bed height > 0 m");
+}
+
+double ImpactModelParameters::AddedMassMax_kg() const {
+  if (!std::isnan(added_mass_kg)) return added_mass_kg;
+  return AddedMassMaxEq4(pounder_mass_kg, impact_velocity_m_s, ContactArea_m2());
+}
+
+double ImpactModelParameters::Stiffness_N_m() const {
+  return friction_K * density_kg_m3 * gravity_m_s2 * ContactArea_m2();
+}
+
+bool ImpactModelParameters::SingularEnd() const {
+  return damping_exponent_n > 0 && Stiffness_N_m() > 0 && damping_factor_u > 1;
+}
+
+AddedMass SigmoidAddedMass(double M_kg, double b_per_s, double T_s, double t_s) {
+  // sigma(x) = 1 / (1 + e^-x) written with e^-|x| only (never overflows);
+  // sigma (1 - sigma) = e^-|x| / (1 + e^-|x|)^2; 1 - 2 sigma = -tanh(x / 2).
+  const double x = b_per_s * (t_s - T_s);
+  const double e = std::exp(-std::abs(x));
+  const double sigma = x >= 0 ? 1.0 / (1.0 + e) : e / (1.0 + e);
+  const double s1s = e / ((1.0 + e) * (1.0 + e));
+  AddedMass out;
+  out.m_add_kg = M_kg * sigma;
+  out.dm_dt_kg_s = M_kg * b_per_s * s1s;
+  out.d2m_dt2_kg_s2 = -M_kg * b_per_s * b_per_s * s1s * std::tanh(0.5 * x);
+  return out;
+}
+
+ImpactForces EvaluateImpactForces(const ImpactModelParameters& p, double M_kg, double t_s,
+                                  double z_m, double v_m_s) {
+  ImpactForces f;
+  f.added = SigmoidAddedMass(M_kg, p.sigmoid_rate_b_per_s, p.sigmoid_delay_T_s, t_s);
+  const double m = p.pounder_mass_kg + f.added.m_add_kg;
+  const double k = p.Stiffness_N_m();
+  f.inertia_N = -f.added.dm_dt_kg_s * v_m_s;
+  const double vn = p.damping_exponent_n == 0
+                        ? 1.0
+                        : std::pow(std::max(std::abs(v_m_s), 1e-300), p.damping_exponent_n);
+  f.dynamic_N = -k * z_m * (p.damping_factor_u - 1.0) / vn;
+  f.friction_N = -k * z_m;
+  f.gravity_N = m * p.gravity_m_s2;
+  f.dv_dt_m_s2 = (f.inertia_N + f.dynamic_N + f.friction_N + f.gravity_N) / m;
+  return f;
+}
+
+const char* ToString(ImpactSolver solver) {
+  switch (solver) {
+    case ImpactSolver::kAuto: return "auto";
+    case ImpactSolver::kDopri5: return "dopri5";
+    case ImpactSolver::kStiff: return "stiff";
+  }
+  return "?";
+}
+
+ImpactSolver ImpactSolverFromString(const std::string& name) {
+  if (name == "auto") return ImpactSolver::kAuto;
+  if (name == "dopri5") return ImpactSolver::kDopri5;
+  if (name == "stiff") return ImpactSolver::kStiff;
+  throw Error(ErrorKind::kInvalidValue, "solver", name, "one of auto, dopri5, stiff");
+}
+
+const char* ToString(ErrorEstimator estimator) {
+  return estimator == ErrorEstimator::kCompanion ? "companion" : "local";
+}
+
+ErrorEstimator ErrorEstimatorFromString(const std::string& name) {
+  if (name == "companion") return ErrorEstimator::kCompanion;
+  if (name == "local") return ErrorEstimator::kLocalSum;
+  throw Error(ErrorKind::kInvalidValue, "error_estimator", name, "one of companion, local");
+}
+
+void ImpactSolverOptions::Check() const {
+  Require(std::isnan(rtol) || (std::isfinite(rtol) && rtol >= 1e-14 && rtol <= 0.1), "rtol", rtol,
+          "a relative tolerance in [1e-14, 0.1] (or unset: 1e-6)");
+  Require(std::isnan(atol) || (std::isfinite(atol) && atol > 0), "atol", atol,
+          "an absolute tolerance > 0 (or unset: 1e-3 * rtol)");
+  Require(std::isfinite(t_max_s) && t_max_s > 0, "t_max_s", t_max_s, "a time > 0 s");
+  Require(std::isfinite(sigmoid_window) && sigmoid_window > 0, "sigmoid_window", sigmoid_window,
+          "> 0");
+  Require(std::isfinite(sigmoid_step) && sigmoid_step > 0, "sigmoid_step", sigmoid_step, "> 0");
+  Require(switch_velocity_fraction > 0 && switch_velocity_fraction <= 1, "switch_velocity_fraction",
+          switch_velocity_fraction, "a fraction in (0, 1]");
+  Require(max_steps > 0, "max_steps", static_cast<double>(max_steps), "> 0");
+  Require(error_warning_factor >= 1, "error_warning_factor", error_warning_factor, ">= 1");
+  if (ode45_defaults && solver == ImpactSolver::kStiff)
+    throw Error(ErrorKind::kInvalidValue, "ode45_defaults", "with solver stiff",
+                "ode45 rules apply to the Dormand-Prince pair: solver auto or dopri5");
+}
+
+double ImpactSolverOptions::EffectiveRtol() const {
+  if (!std::isnan(rtol)) return rtol;
+  return ode45_defaults ? 1e-3 : 1e-6;
+}
+
+double ImpactSolverOptions::EffectiveAtol() const {
+  if (!std::isnan(atol)) return atol;
+  return 1e-3 * EffectiveRtol();  // ode45: RelTol 1e-3, AbsTol 1e-6
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dense output.
+
+ImpactState ImpactSolution::AtCoordinate(double u) const {
+  const double n_time = static_cast<double>(time_steps.size());
+  u = std::clamp(u, 0.0, CoordinateEnd());
+  ImpactState s;
+  if (u < n_time || end_steps.empty()) {
+    if (time_steps.empty()) return ImpactState{0.0, z_end_m, v_end_m_s};
+    std::size_t i = std::min(static_cast<std::size_t>(u), time_steps.size() - 1);
+    const OdeStep& st = time_steps[i];
+    const double theta = std::clamp(u - static_cast<double>(i), 0.0, 1.0);
+    const Vec2 y = theta == 1.0 ? st.y1 : st.Interpolate(theta);
+    s.t_s = st.x0 + theta * st.h;
+    s.z_m = y[0];
+    s.v_m_s = y[1];
+    return s;
+  }
+  std::size_t i = std::min(static_cast<std::size_t>(u - n_time), end_steps.size() - 1);
+  const OdeStep& st = end_steps[i];
+  const double theta = std::clamp(u - n_time - static_cast<double>(i), 0.0, 1.0);
+  const Vec2 y = theta == 1.0 ? st.y1 : st.Interpolate(theta);
+  const double sv = std::max(0.0, st.x0 + theta * st.h);
+  s.t_s = y[0];
+  s.z_m = y[1];
+  s.v_m_s = std::pow(sv, 1.0 / end_exponent_p);
+  return s;
+}
+
+ImpactState ImpactSolution::StateAt(double t_s) const {
+  if (!time_steps.empty() && t_s <= time_steps.front().x0)
+    return {time_steps.front().x0, time_steps.front().y0[0], time_steps.front().y0[1]};
+  if (t_s >= t_end_s) return {t_end_s, z_end_m, v_end_m_s};
+  // Time phase: find the step by binary search.
+  if (!time_steps.empty() && t_s <= time_steps.back().x0 + time_steps.back().h) {
+    auto it = std::upper_bound(time_steps.begin(), time_steps.end(), t_s,
+                               [](double t, const OdeStep& s) { return t < s.x0; });
+    const std::size_t i = (it == time_steps.begin()) ? 0 : (it - time_steps.begin()) - 1;
+    const OdeStep& st = time_steps[i];
+    const double theta = std::clamp((t_s - st.x0) / st.h, 0.0, 1.0);
+    const Vec2 y = st.Interpolate(theta);
+    return {t_s, y[0], y[1]};
+  }
+  // End phase: t increases along the steps; bisection on theta.
+  auto it = std::upper_bound(end_steps.begin(), end_steps.end(), t_s,
+                             [](double t, const OdeStep& s) { return t < s.y0[0]; });
+  const std::size_t i = (it == end_steps.begin()) ? 0 : (it - end_steps.begin()) - 1;
+  if (i >= end_steps.size()) return {t_end_s, z_end_m, v_end_m_s};
+  const OdeStep& st = end_steps[i];
+  double lo = 0.0, hi = 1.0;
+  for (int iter = 0; iter < 200 && hi - lo > 1e-17; ++iter) {
+    const double mid = 0.5 * (lo + hi);
+    if (st.Interpolate(mid)[0] < t_s)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  const double theta = 0.5 * (lo + hi);
+  const Vec2 y = st.Interpolate(theta);
+  const double sv = std::max(0.0, st.x0 + theta * st.h);
+  return {t_s, y[1], std::pow(sv, 1.0 / end_exponent_p)};
+}
+
+std::vector<ImpactState> ImpactSolution::StepStates() const {
+  std::vector<ImpactState> out;
+  if (!time_steps.empty())
+    out.push_back({time_steps.front().x0, time_steps.front().y0[0], time_steps.front().y0[1]});
+  for (const OdeStep& st : time_steps) out.push_back({st.x0 + st.h, st.y1[0], st.y1[1]});
+  for (const OdeStep& st : end_steps) {
+    const double sv = std::max(0.0, st.x0 + st.h);
+    out.push_back({st.y1[0], st.y1[1], std::pow(sv, 1.0 / end_exponent_p)});
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The simulation.
+
+namespace {
+
+struct PeakResult {
+  double value = kNaN;  // -dv/dt (m/s^2)
+  double t = kNaN;
+};
+
+// The largest distinct interior local maximum of -dv/dt along the trajectory: sampled at 8
+// points per step, candidates are samples larger than both neighbours whose topographic
+// prominence exceeds 1e-3 of their value; each candidate is refined by golden-section search on
+// the dense output over its two neighbouring samples.
+PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSolution& sol) {
+  constexpr int kSub = 8;
+  auto decel = [&](double u) {
+    const ImpactState s = sol.AtCoordinate(u);
+    if (s.v_m_s <= 0.0) return kInf;
+    return -EvaluateImpactForces(p, M, s.t_s, s.z_m, s.v_m_s).dv_dt_m_s2;
+  };
+  const int n = static_cast<int>(sol.CoordinateEnd() * kSub);
+  if (n < 3) return {};
+  std::vector<double> us(n + 1), g(n + 1);
+  for (int i = 0; i <= n; ++i) {
+    us[i] = static_cast<double>(i) / kSub;
+    g[i] = decel(us[i]);
+  }
+  PeakResult best;
+  for (int i = 1; i < n; ++i) {
+    if (!(g[i] > g[i - 1] && g[i] >= g[i + 1])) continue;
+    double left_min = g[i], right_min = g[i];
+    for (int j = i - 1; j >= 0 && g[j] <= g[i]; --j) left_min = std::min(left_min, g[j]);
+    for (int j = i + 1; j <= n && g[j] <= g[i]; ++j) right_min = std::min(right_min, g[j]);
+    const double prominence = g[i] - std::max(left_min, right_min);
+    if (!(prominence > 1e-3 * std::abs(g[i]) + 1e-9)) continue;
+    // Golden-section search for the maximum in [u_{i-1}, u_{i+1}].
+    const double r = (std::sqrt(5.0) - 1.0) / 2.0;
+    double a = us[i - 1], b = us[i + 1];
+    double c = b - r * (b - a), d = a + r * (b - a);
+    double gc = decel(c), gd = decel(d);
+    for (int it = 0; it < 200 && b - a > 1e-13 * std::max(1.0, std::abs(b)); ++it) {
+      if (gc > gd) {
+        b = d;
+        d = c;
+        gd = gc;
+        c = b - r * (b - a);
+        gc = decel(c);
+      } else {
+        a = c;
+        c = d;
+        gc = gd;
+        d = a + r * (b - a);
+        gd = decel(d);
+      }
+    }
+    const double u = 0.5 * (a + b);
+    const double value = std::max(decel(u), g[i]);
+    if (std::isnan(best.value) || value > best.value) {
+      best.value = value;
+      best.t = decel(u) >= g[i] ? sol.AtCoordinate(u).t_s : sol.AtCoordinate(us[i]).t_s;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+namespace {
+
+// One run with the local-sum estimate (no companion run, no tolerance warning).
+ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOptions& options) {
+  WallTimer timer;
+  const ImpactModelParameters& p = params;
+  const double M = p.AddedMassMax_kg();
+  const double k = p.Stiffness_N_m();
+  const double mp = p.pounder_mass_kg, g = p.gravity_m_s2, u1 = p.damping_factor_u - 1.0;
+  const double n = p.damping_exponent_n, b = p.sigmoid_rate_b_per_s, T = p.sigmoid_delay_T_s;
+  const bool singular = p.SingularEnd();
+  const double pexp = singular ? n : 1.0;  // s = v^pexp in the end phase.
+  const double rtol = options.EffectiveRtol(), atol = options.EffectiveAtol();
+  const double t1 = T + 4.0 / b;
+  const double tw0 = T - options.sigmoid_window / b, tw1 = T + options.sigmoid_window / b;
+  const double h_window = options.sigmoid_step / b;
+
+  ImpactRun run;
+  ImpactSummary& sum = run.summary;
+  ImpactSolution& sol = run.solution;
+  sol.end_exponent_p = pexp;
+  sum.added_mass_max_kg = M;
+  sum.t1_s = t1;
+
+  OdeMethod method = OdeMethod::kDopri5;
+  if (options.ode45_defaults) {
+    method = OdeMethod::kOde45;
+  } else if (options.solver == ImpactSolver::kStiff) {
+    method = OdeMethod::kRodas3;
+  } else if (options.solver == ImpactSolver::kAuto) {
+    method = OdeMethod::kAuto;
+  }
+
+  // ---- Time phase: y = (z, v), x = t.
+  OdeSystem time_sys;
+  time_sys.rhs = [&](double t, const Vec2& y) {
+    return Vec2{y[1], EvaluateImpactForces(p, M, t, y[0], y[1]).dv_dt_m_s2};
+  };
+  time_sys.jacobian = [&](double t, const Vec2& y, Mat2* J, Vec2* ft) {
+    const ImpactForces f = EvaluateImpactForces(p, M, t, y[0], y[1]);
+    const double m = mp + f.added.m_add_kg;
+    const double v = std::max(std::abs(y[1]), 1e-300);
+    const double vn = n == 0 ? 1.0 : std::pow(v, n);
+    const double a_z = (-k * u1 / vn - k) / m;
+    const double a_v = (-f.added.dm_dt_kg_s + n * k * y[0] * u1 / (vn * v)) / m;
+    const double a_t = (-f.added.d2m_dt2_kg_s2 * y[1] + f.added.dm_dt_kg_s * g -
+                        f.dv_dt_m_s2 * f.added.dm_dt_kg_s) /
+                       m;
+    *J = {0.0, 1.0, a_z, a_v};
+    *ft = {0.0, a_t};
+  };
+  time_sys.in_domain = [](double, const Vec2& y) { return y[1] > 0.0; };
+
+  double vmax = p.impact_velocity_m_s;
+  auto end_phase_ready = [&](double t, const Vec2& y, double a) {
+    if (!(a < 0.0)) return false;
+    if (singular) return k * y[0] * u1 > 0.0;
+    // Regular end: dv/dt at v = 0 must be negative for v to reach 0.
+    const double m = mp + SigmoidAddedMass(M, b, T, t).m_add_kg;
+    return m * g - k * y[0] < 0.0;
+  };
+
+  OdeOptions to;
+  to.method = method;
+  to.rtol = rtol;
+  to.atol = atol;
+  to.max_steps = options.max_steps;
+  to.landmarks = {tw0, tw1, t1};
+  to.max_step_at = [&](double t) { return (t >= tw0 && t < tw1) ? h_window : kInf; };
+  if (method == OdeMethod::kOde45) to.max_step = 0.1 * options.t_max_s;  // ode45's MaxStep rule
+  to.stop_on_domain_exit = true;
+  to.stop_after_step = [&](double t, const Vec2& y, const Vec2& f) {
+    vmax = std::max(vmax, y[1]);
+    return t >= tw1 && y[1] <= options.switch_velocity_fraction * vmax &&
+           end_phase_ready(t, y, f[1]);
+  };
+  const OdeResult r1 = IntegrateOde(time_sys, 0.0, {0.0, p.impact_velocity_m_s}, options.t_max_s,
+                                    to, &sol.time_steps);
+  sum.steps = r1.steps;
+  sum.rejected_steps = r1.rejected_steps;
+  sum.rhs_evals = r1.rhs_evals;
+  sum.jacobian_evals = r1.jacobian_evals;
+  bool stiff_switch = r1.stiffness_detected;
+  double stiff_at = r1.stiffness_x;
+  double max_h_lambda = r1.max_h_lambda;
+  bool tolerance_trouble = false;
+  sol.t_end_s = r1.x;
+  sol.z_end_m = r1.y[0];
+  sol.v_end_m_s = r1.y[1];
+
+  bool do_end_phase = false;
+  switch (r1.status) {
+    case OdeStatus::kReachedEnd:
+      sum.warnings.push_back(
+          fmt::format("v did not reach 0 by t_max = {} s (v = {} m/s, z = {} m): no crater depth",
+                      Num(options.t_max_s), Num(r1.y[1]), Num(r1.y[0])));
+      break;
+    case OdeStatus::kStoppedByCallback: do_end_phase = true; break;
+    case OdeStatus::kLeftDomain:
+      if (r1.f[1] < 0.0) {
+        do_end_phase = true;
+      } else {
+        sum.warnings.push_back(
+            fmt::format("a step would have made v <= 0 at t = {} s while dv/dt >= 0; stopped there",
+                        Num(r1.x)));
+      }
+      break;
+    case OdeStatus::kStepSizeUnderflow:
+    case OdeStatus::kMaxSteps:
+      tolerance_trouble = true;
+      sum.warnings.push_back(fmt::format("tolerance not met: {} at t = {} s in the time phase",
+                                         ToString(r1.status), Num(r1.x)));
+      if (r1.f[1] < 0.0 && r1.y[1] > 0.0) do_end_phase = true;
+      break;
+  }
+
+  // ---- End phase: y = (t, z), x = s = v^pexp, from s0 down to 0.
+  if (do_end_phase) {
+    sum.t_switch_s = r1.x;
+    OdeSystem end_sys;
+    // Returns q = v^n dv/dt (singular) or dv/dt (regular) and its partial derivatives.
+    struct QTerms {
+      double q, q_t, q_z, q_s, v, dv_ds;
+    };
+    auto qterms = [&](double s, const Vec2& y) {
+      QTerms r{};
+      const double t = y[0], z = y[1];
+      const double sv = std::max(s, 0.0);
+      const AddedMass am = SigmoidAddedMass(M, b, T, t);
+      const double m = mp + am.m_add_kg;
+      if (singular) {
+        r.v = std::pow(sv, 1.0 / n);
+        r.dv_ds = std::pow(sv, 1.0 / n - 1.0) / n;
+        const double G = -am.dm_dt_kg_s * r.v - k * z + m * g;
+        const double P = sv * G - k * z * u1;
+        r.q = P / m;
+        const double P_t = sv * (-am.d2m_dt2_kg_s2 * r.v + am.dm_dt_kg_s * g);
+        r.q_t = P_t / m - P * am.dm_dt_kg_s / (m * m);
+        r.q_z = (-sv * k - k * u1) / m;
+        r.q_s = (G - am.dm_dt_kg_s * r.v / n) / m;
+      } else {
+        r.v = sv;
+        r.dv_ds = 1.0;
+        const ImpactForces f = EvaluateImpactForces(p, M, t, z, sv);
+        r.q = f.dv_dt_m_s2;
+        const double vn = n == 0 ? 1.0 : std::pow(std::max(sv, 1e-300), n);
+        r.q_z = (-k * u1 / vn - k) / m;
+        r.q_s = (-am.dm_dt_kg_s) / m;  // no v^-n term here (regular end)
+        r.q_t = (-am.d2m_dt2_kg_s2 * sv + am.dm_dt_kg_s * g - r.q * am.dm_dt_kg_s) / m;
+      }
+      return r;
+    };
+    end_sys.rhs = [&](double s, const Vec2& y) {
+      const QTerms q = qterms(s, y);
+      // singular: dt/ds = (dv/ds) / a = v / (n q); regular: dt/ds = 1 / a.
+      const double dtds = singular ? q.v / (n * q.q) : 1.0 / q.q;
+      return Vec2{dtds, q.v * dtds};
+    };
+    end_sys.jacobian = [&](double s, const Vec2& y, Mat2* J, Vec2* fs) {
+      const QTerms q = qterms(s, y);
+      double f1, f1_t, f1_z, f1_s;
+      if (singular) {
+        f1 = q.v / (n * q.q);
+        const double c = -q.v / (n * q.q * q.q);
+        f1_t = c * q.q_t;
+        f1_z = c * q.q_z;
+        f1_s = q.dv_ds / (n * q.q) + c * q.q_s;
+      } else {
+        f1 = 1.0 / q.q;
+        const double c = -1.0 / (q.q * q.q);
+        f1_t = c * q.q_t;
+        f1_z = c * q.q_z;
+        f1_s = c * q.q_s;
+      }
+      *J = {f1_t, f1_z, q.v * f1_t, q.v * f1_z};
+      *fs = {f1_s, q.dv_ds * f1 + q.v * f1_s};
+    };
+    end_sys.in_domain = [&](double s, const Vec2& y) {
+      const double q = qterms(s, y).q;
+      return q < 0.0 && std::isfinite(q);
+    };
+    double last_t = r1.x;
+    double last_dtds = 0.0;
+    OdeOptions eo;
+    eo.method = (method == OdeMethod::kAuto && stiff_switch) ? OdeMethod::kRodas3 : method;
+    eo.rtol = rtol;
+    eo.atol = atol;
+    eo.max_steps = options.max_steps;
+    // Never step over the sigmoid in time either (only matters if the switch came early).
+    eo.max_step_at = [&](double) {
+      if (last_t < tw1 && last_dtds != 0.0) return h_window / std::abs(last_dtds);
+      return kInf;
+    };
+    eo.stop_after_step = [&](double, const Vec2& y, const Vec2& f) {
+      last_t = y[0];
+      last_dtds = f[0];
+      return false;
+    };
+    const double s0 = std::pow(r1.y[1], pexp);
+    {
+      const Vec2 f0 = end_sys.rhs(s0, {r1.x, r1.y[0]});
+      last_dtds = f0[0];
+    }
+    const OdeResult r2 = IntegrateOde(end_sys, s0, {r1.x, r1.y[0]}, 0.0, eo, &sol.end_steps);
+    sum.steps += r2.steps;
+    sum.end_phase_steps = r2.steps;
+    sum.rejected_steps += r2.rejected_steps;
+    sum.rhs_evals += r2.rhs_evals + 1;
+    sum.jacobian_evals += r2.jacobian_evals;
+    if (r2.stiffness_detected && !stiff_switch) {
+      stiff_switch = true;
+      stiff_at = r2.y[0];
+    }
+    max_h_lambda = std::max(max_h_lambda, r2.max_h_lambda);
+    sol.t_end_s = r2.y[0];
+    sol.z_end_m = r2.y[1];
+    sol.v_end_m_s = std::pow(std::max(r2.x, 0.0), 1.0 / pexp);
+    if (r2.status == OdeStatus::kReachedEnd) {
+      sum.stopped = true;
+      sol.v_end_m_s = 0.0;
+    } else {
+      tolerance_trouble = true;
+      sum.warnings.push_back(fmt::format(
+          "tolerance not met: {} in the end phase at v = {} m/s (t = {} s); v = 0 not reached",
+          ToString(r2.status), Num(sol.v_end_m_s), Num(r2.y[0])));
+    }
+  }
+
+  // ---- Summary.
+  sum.t_end_s = sol.t_end_s;
+  const double g_unit = g > 0 ? g : 9.81;
+  if (sum.stopped) {
+    sum.crater_depth_m = sol.z_end_m;
+    sum.relative_penetration = sol.z_end_m / p.width_m;
+  }
+  // Error estimate: sensitivity-weighted sum of the local error estimates.
+  {
+    double ez = 0.0, et = 0.0;
+    const double t_end = sol.t_end_s;
+    for (const OdeStep& st : sol.time_steps) {
+      const double te = st.x0 + st.h;
+      const double remaining = std::max(t_end - te, 0.0);
+      const double v = std::max(st.y1[1], 1e-300);
+      ez += std::abs(st.local_error[0]) + std::abs(st.local_error[1]) * remaining;
+      et += std::abs(st.local_error[1]) * remaining / v;
+    }
+    for (const OdeStep& st : sol.end_steps) {
+      et += std::abs(st.local_error[0]);
+      ez += std::abs(st.local_error[1]);
+    }
+    const double zref = std::abs(sol.z_end_m), tref = std::abs(t_end);
+    sum.error_estimate_local =
+        std::max(zref > 0 ? ez / zref : 0.0, tref > 0 && sum.stopped ? et / tref : 0.0);
+    sum.error_estimate = sum.error_estimate_local;
+    sum.error_estimator = "local";
+  }
+  // Peak.
+  const PeakResult peak = FindPeak(p, M, sol);
+  sum.peak_deceleration_g = peak.value / g_unit;
+  sum.t_peak_s = peak.t;
+  if (std::isnan(peak.value))
+    sum.warnings.push_back(
+        "no distinct peak: -dv/dt has no interior local maximum on (0, t_end) (the pounder is "
+        "still accelerating during the peak stage); peak deceleration is NaN");
+  // Plateau and momentum ratio at t1 = T + 4 / b.
+  if (sum.stopped && t1 < sol.t_end_s) {
+    ImpactState s1;
+    bool exact = false;
+    for (const OdeStep& st : sol.time_steps) {
+      if (st.x0 + st.h == t1) {
+        s1 = {t1, st.y1[0], st.y1[1]};
+        exact = true;
+        break;
+      }
+    }
+    if (!exact) s1 = sol.StateAt(t1);
+    sum.v_t1_m_s = s1.v_m_s;
+    sum.plateau_deceleration_g = s1.v_m_s / (sol.t_end_s - t1) / g_unit;
+    sum.momentum_ratio =
+        SigmoidAddedMass(M, b, T, t1).m_add_kg * s1.v_m_s / (mp * p.impact_velocity_m_s);
+  } else if (sum.stopped) {
+    sum.warnings.push_back(fmt::format(
+        "the pounder stopped at t_end = {} s before t1 = T + 4/b = {} s: no plateau deceleration "
+        "or momentum ratio",
+        Num(sol.t_end_s), Num(t1)));
+  }
+  // Physical warnings.
+  if (sum.stopped && singular) {
+    const double m_end = mp + SigmoidAddedMass(M, b, T, sol.t_end_s).m_add_kg;
+    const double friction = k * sol.z_end_m, weight = m_end * g;
+    if (friction < weight)
+      sum.warnings.push_back(fmt::format(
+          "stopped only by the v^-n damping term: friction k z = {} N is below the weight "
+          "(m_p + m_add) g = {} N at v = 0",
+          Num(friction), Num(weight)));
+  }
+  const double z_final = sum.stopped ? sum.crater_depth_m : sol.z_end_m;
+  if (z_final > p.bed_height_m)
+    sum.warnings.push_back(fmt::format(
+        "penetration {} m is beyond the bed height {} m (the model's soil is unbounded below)",
+        Num(z_final), Num(p.bed_height_m)));
+  if (tolerance_trouble) sum.error_estimate = std::numeric_limits<double>::infinity();
+
+  // Which solver ran and why.
+  if (method == OdeMethod::kOde45) {
+    sum.solver = "ode45(dopri5)";
+    sum.solver_reason = fmt::format(
+        "requested --ode45-defaults: Dormand-Prince 5(4) with MATLAB ode45's error norm, initial "
+        "step and step factors, RelTol {}, AbsTol {}",
+        Num(rtol), Num(atol));
+  } else if (method == OdeMethod::kRodas3) {
+    sum.solver = "rodas3";
+    sum.solver_reason = "requested: stiff solver (Rosenbrock Rodas3, analytic Jacobian)";
+  } else if (method == OdeMethod::kDopri5) {
+    sum.solver = "dopri5";
+    sum.solver_reason = "requested: Dormand-Prince 5(4)";
+  } else if (stiff_switch) {
+    sum.solver = "auto(dopri5->rodas3)";
+    sum.solver_reason = fmt::format(
+        "Hairer's stiffness test fired (h|lambda| > 3.25 on 15 accepted Dormand-Prince steps) at "
+        "t = {} s; the rest was integrated by Rodas3",
+        Num(stiff_at));
+  } else {
+    sum.solver = "auto(dopri5)";
+    sum.solver_reason = fmt::format(
+        "no stiffness detected (largest h|lambda| = {:.3g} <= 3.25): the step limit {} s near "
+        "the sigmoid keeps Dormand-Prince stable",
+        max_h_lambda, Num(h_window));
+  }
+  sum.wall_time_s = timer.ElapsedSeconds();
+  sum.primary_wall_time_s = sum.wall_time_s;
+  return run;
+}
+
+}  // namespace
+
+ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolverOptions& options) {
+  params.Check();
+  options.Check();
+  WallTimer timer;
+  ImpactRun run = SimulateOnce(params, options);
+  ImpactSummary& sum = run.summary;
+  const double rtol = options.EffectiveRtol();
+  if (options.error_estimator == ErrorEstimator::kCompanion) {
+    ImpactSolverOptions tighter = options;
+    tighter.rtol = rtol / 10.0;
+    tighter.atol = options.EffectiveAtol() / 10.0;
+    const ImpactRun companion = SimulateOnce(params, tighter);
+    sum.companion_rhs_evals = companion.summary.rhs_evals;
+    auto rel = [](double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); };
+    double diff;
+    if (sum.stopped && companion.summary.stopped) {
+      diff = std::max(rel(sum.crater_depth_m, companion.summary.crater_depth_m),
+                      rel(sum.t_end_s, companion.summary.t_end_s));
+    } else {
+      diff = std::max(
+          rel(run.solution.z_end_m, companion.solution.z_end_m),
+          rel(run.solution.v_end_m_s, companion.solution.v_end_m_s) * (sum.stopped ? 0.0 : 1.0));
+    }
+    // Under tolerance proportionality err(tol) ~ C tol, so Q(tol) - Q(tol/10) ~ 0.9 err(tol).
+    sum.error_estimate_companion = diff / 0.9;
+    if (std::isfinite(sum.error_estimate))  // not already infinite (tolerance trouble)
+      sum.error_estimate = sum.error_estimate_companion;
+    sum.error_estimator = "companion";
+  }
+  if (std::isfinite(sum.error_estimate) && sum.error_estimate > options.error_warning_factor * rtol)
+    sum.warnings.push_back(
+        fmt::format("tolerance not met: the error estimate ({}) {} exceeds {} x rtol = {}",
+                    sum.error_estimator, Num(sum.error_estimate), Num(options.error_warning_factor),
+                    Num(options.error_warning_factor * rtol)));
+  sum.wall_time_s = timer.ElapsedSeconds();
+  return run;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+bool ImpactSummary::IsUsable() const {
+  return stopped && std::isfinite(crater_depth_m) && std::isfinite(t_end_s);
+}
+
+std::string ImpactSummary::BriefReport() const {
+  return fmt::format(
+      "t_end {:.6g} s, crater depth {:.6g} m ({:.4g} D), peak {:.5g} g at {:.5g} s, plateau "
+      "{:.5g} g, momentum ratio {:.4g}, solver {}, {} steps, error estimate {:.2g}",
+      t_end_s, crater_depth_m, relative_penetration, peak_deceleration_g, t_peak_s,
+      plateau_deceleration_g, momentum_ratio, solver, steps, error_estimate);
+}
+
+std::string ImpactSummary::FullReport() const {
+  std::string out;
+  out += fmt::format("t_end                  {:.10g} s\n", t_end_s);
+  out += fmt::format("crater depth           {:.10g} m\n", crater_depth_m);
+  out += fmt::format("relative penetration   {:.10g}\n", relative_penetration);
+  out += fmt::format("added mass M           {:.10g} kg\n", added_mass_max_kg);
+  out += fmt::format("peak deceleration      {:.10g} g at t = {:.10g} s\n", peak_deceleration_g,
+                     t_peak_s);
+  out += fmt::format("plateau deceleration   {:.10g} g (t1 = {:.6g} s, v(t1) = {:.10g} m/s)\n",
+                     plateau_deceleration_g, t1_s, v_t1_m_s);
+  out += fmt::format("momentum ratio         {:.10g}\n", momentum_ratio);
+  out += fmt::format("solver                 {} ({})\n", solver, solver_reason);
+  out += fmt::format(
+      "cost                   {} steps ({} in the end phase from t = {:.6g} s), {} rejected, "
+      "{} RHS, {} Jacobian evaluations, {:.3g} s\n",
+      steps, end_phase_steps, t_switch_s, rejected_steps, rhs_evals, jacobian_evals, wall_time_s);
+  out += fmt::format(
+      "error estimate         {:.3g} ({}; relative, crater depth / t_end; local sum {:.3g})\n",
+      error_estimate, error_estimator, error_estimate_local);
+  for (const std::string& w : warnings) out += "warning: " + w + "\n";
+  return out;
+}
+
+ImpactSeries MakeImpactSeries(const ImpactModelParameters& params, const ImpactRun& run) {
+  ImpactSeries s;
+  const double M = run.summary.added_mass_max_kg;
+  for (const ImpactState& st : run.solution.StepStates()) {
+    const ImpactForces f = EvaluateImpactForces(params, M, st.t_s, st.z_m, st.v_m_s);
+    const bool singular_point = st.v_m_s <= 0.0;
+    s.t_s.push_back(st.t_s);
+    s.z_m.push_back(st.z_m);
+    s.v_m_s.push_back(st.v_m_s);
+    s.dv_dt_m_s2.push_back(singular_point ? kNaN : f.dv_dt_m_s2);
+    s.m_add_kg.push_back(f.added.m_add_kg);
+    s.dm_add_dt_kg_s.push_back(f.added.dm_dt_kg_s);
+    s.inertia_N.push_back(f.inertia_N);
+    s.dynamic_N.push_back(singular_point ? kNaN : f.dynamic_N);
+    s.friction_N.push_back(f.friction_N);
+    s.gravity_N.push_back(f.gravity_N);
+  }
+  return s;
+}
+
+ImpactState ExactConservedMomentum(const ImpactModelParameters& p, double t_s) {
+  const double M = p.AddedMassMax_kg(), mp = p.pounder_mass_kg;
+  const double b = p.sigmoid_rate_b_per_s, T = p.sigmoid_delay_T_s;
+  const double p0 = (mp + SigmoidAddedMass(M, b, T, 0.0).m_add_kg) * p.impact_velocity_m_s;
+  // int dt / (m_p + M sigma(b (t - T))) with x = b (t - T):
+  //   (1/b) [ x / a + M / (a c) (x - ln(a e^x + c)) ],  a = m_p + M, c = m_p.
+  const double a = mp + M, c = mp;
+  auto L = [&](double x) {
+    return x > 0 ? x + std::log(a + c * std::exp(-x))
+                 : std::log(c) + std::log1p(a * std::exp(x) / c);
+  };
+  const double x = b * (t_s - T), x0 = -b * T;
+  const double integral = ((x - x0) / a + M / (a * c) * ((x - x0) - (L(x) - L(x0)))) / b;
+  ImpactState s;
+  s.t_s = t_s;
+  s.z_m = p0 * integral;
+  s.v_m_s = p0 / (mp + SigmoidAddedMass(M, b, T, t_s).m_add_kg);
+  return s;
+}
+
+HarmonicStop ExactHarmonicStop(const ImpactModelParameters& p) {
+  const double k = p.Stiffness_N_m(), m = p.pounder_mass_kg, v0 = p.impact_velocity_m_s;
+  const double omega = std::sqrt(k / m);
+  const double delta = m * p.gravity_m_s2 / k;  // static deflection
+  // z = delta (1 - cos wt) + (v0 / w) sin wt; v = 0 first at wt = pi - atan(v0 / (delta w)).
+  const double theta = std::numbers::pi - std::atan2(v0, delta * omega);
+  HarmonicStop out;
+  out.t_end_s = theta / omega;
+  out.crater_depth_m = delta + std::hypot(delta, v0 / omega);
+  return out;
+}
+
+}  // namespace impactdic
