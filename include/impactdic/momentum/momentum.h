@@ -1,0 +1,141 @@
+// The momentum validation of Eq. 3 of the paper (SPEC 2.6): granular momentum of the soil beneath
+// the pounder, pounder momentum, the end of the peak stage, added mass and its sigmoid fit.
+//
+// Conventions: vertical velocities are DOWNWARD positive (pounder: sensor module; soil: the
+// kinematics module's panel y axis, which points down). Times are on the DAQ clock unless named
+// *_after_impact_s (t = 0 at the detected impact).
+//
+//  - Grid: by count (default 6 x 2): the `grid_rows` subset rows whose centres lie just below the
+//    pounder's initial bottom edge, and in them the `grid_cols` subset columns nearest the
+//    pounder's centre line among those whose centres lie within its width; or by a rectangle in
+//    panel mm (every subset whose centre lies inside). Area in the panel plane: by count, the
+//    number of subsets times one grid cell (step_x * step_y in mm, from the subset spacing); by
+//    rectangle, the rectangle's area. Mass m_s = rho_d * area * t_z.
+//  - p_gran(t) = m_s * mean vertical soil velocity over the grid (NaN subsets skipped);
+//    p_p(t) = m_p v_p(t); p_max = max p_p after the impact (at the DAQ rate); p_tot = p_p + p_gran.
+//  - t_e (end of the peak stage): the first frame after the impact from which the mean soil
+//    acceleration stays <= sand_accel_tolerance * (its maximum after the impact) until the pounder
+//    stops, and where |v_p - v_sand| <= velocity_match_tolerance * v_p,max. If no frame satisfies
+//    both, the frame of the maximum soil velocity, with a warning.
+//  - Conservation error |p_tot(t_e) - p_max| / p_max.
+//  - m_add(t) = p_max / v_p(t) - m_p (Eq. 3) from the impact to t_e; m_add,max = m_add(t_e).
+//  - Sigmoid (Eq. 5) fitted to m_add(t) at the DAQ rate between impact and t_e, thinned to one
+//    sample per filter resolution (f_s / (2 f_c) samples) so that residuals are nearly
+//    independent.
+//  - Momentum ratio (Eq. 11) = m_add,max * v_sand,max / (m_p * v_p,max).
+#ifndef IMPACTDIC_MOMENTUM_MOMENTUM_H_
+#define IMPACTDIC_MOMENTUM_MOMENTUM_H_
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "impactdic/io/json.h"
+#include "impactdic/kinematics/kinematics.h"
+#include "impactdic/momentum/fit.h"
+#include "impactdic/sensor/sensor.h"
+
+namespace impactdic {
+
+class H5Writer;
+
+// The pounder's footprint in panel mm at frame 0 (x right, y down). NaN = default: centred on the
+// correlated grid, width pounder_width_m, bottom edge half a grid step above the top subset row.
+struct PounderFootprint {
+  double x_left_mm = std::numeric_limits<double>::quiet_NaN();
+  double x_right_mm = std::numeric_limits<double>::quiet_NaN();
+  double bottom_y_mm = std::numeric_limits<double>::quiet_NaN();
+};
+
+struct MomentumOptions {
+  double pounder_mass_kg = 10;                   // m_p [kg], > 0.
+  double pounder_width_m = 0.15;                 // D [m], > 0 (default footprint only).
+  double depth_m = 0.192;                        // Out-of-plane depth t_z [m], > 0.
+  double density_kg_m3 = 1550;                   // Dry density rho_d [kg/m^3], > 0.
+  int grid_cols = 6;                             // Subsets across the footprint, >= 1.
+  int grid_rows = 2;                             // Subset rows beneath the pounder, >= 1.
+  std::optional<std::array<double, 4>> rect_mm;  // x0, y0, x1, y1 [mm], x0 < x1, y0 < y1.
+  PounderFootprint footprint;
+  double velocity_match_tolerance = 0.05;  // Of v_p,max, in (0, 1].
+  double sand_accel_tolerance = 0.05;      // Of the maximum soil acceleration, in [0, 1).
+  bool fit_sigmoid = true;
+  SigmoidFitOptions sigmoid;
+  void Check() const;
+};
+
+// The subsets of the momentum grid.
+struct MomentumGrid {
+  std::vector<std::size_t> subset_ids;
+  int cols = 0, rows = 0;
+  std::array<double, 4> rect_mm{};  // Extent of the grid cells (x0, y0, x1, y1).
+  double area_m2 = 0;
+  double mass_kg = 0;
+};
+
+// Selects the grid (file comment). Error (kInvalidValue) when the requested grid lies (partly)
+// outside the correlated region.
+MomentumGrid SelectMomentumGrid(const KinematicsResult& kin, const MomentumOptions& options);
+
+struct MomentumSummary {
+  MomentumGrid grid;
+  double p_max_kg_m_s = std::numeric_limits<double>::quiet_NaN();
+  double t_p_max_s = std::numeric_limits<double>::quiet_NaN();
+  double v_p_max_m_s = std::numeric_limits<double>::quiet_NaN();
+  std::size_t end_frame = 0;                                       // Frame index of t_e.
+  double t_end_peak_s = std::numeric_limits<double>::quiet_NaN();  // t_e after the impact.
+  double t_end_peak_daq_s = std::numeric_limits<double>::quiet_NaN();
+  double momentum_conservation_error = std::numeric_limits<double>::quiet_NaN();
+  double added_mass_max_kg = std::numeric_limits<double>::quiet_NaN();
+  double v_sand_max_m_s = std::numeric_limits<double>::quiet_NaN();
+  double momentum_ratio = std::numeric_limits<double>::quiet_NaN();
+  bool t_end_found = false;  // Both t_e criteria met.
+  SigmoidFit sigmoid;
+  bool sigmoid_fitted = false;
+  double seconds = 0;
+  std::vector<std::string> warnings;
+  std::string BriefReport() const;
+  std::string FullReport() const;
+  // The analyze command's JSON keys: p_max_kg_m_s, t_end_peak_s, momentum_conservation_error,
+  // added_mass_max_kg, sigmoid_b_per_s, sigmoid_T_s, momentum_ratio, v_sand_max_m_s, then more.
+  JsonObject ToJson() const;
+};
+
+struct MomentumResult {
+  // Per frame.
+  std::vector<double> frame_time_s;  // DAQ clock.
+  std::vector<double> v_pounder_m_s;
+  std::vector<double> v_sand_m_s;  // Mean over the grid.
+  std::vector<double> a_sand_m_s2;
+  std::vector<double> p_pounder_kg_m_s, p_gran_kg_m_s, p_total_kg_m_s;
+  std::vector<double> added_mass_kg;  // NaN outside [impact, t_e].
+  std::vector<double> valid_subsets;  // Count of finite velocities in the grid.
+  // At the DAQ rate between impact and t_e (what the sigmoid is fitted to, before thinning).
+  std::vector<double> added_mass_time_after_impact_s, added_mass_daq_kg;
+  MomentumSummary summary;
+};
+
+// kin: soil kinematics; frame_time_s: the frames on the DAQ clock (FrameTimes); sensor: pounder.
+MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
+                               const SensorResult& sensor, const MomentumOptions& options);
+
+// The whole analysis of one scene from the correlation arrays: frame times from the sensor
+// (exposure edges, or frame_time_offset_s + k / fps), kinematics, momentum.
+struct SceneAnalysis {
+  KinematicsResult kinematics;
+  std::vector<double> frame_time_s;
+  MomentumResult momentum;
+};
+SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
+                                 double fps, double frame_time_offset_s, const SensorResult& sensor,
+                                 const MomentumOptions& options);
+
+// Writes /kinematics, /sensor and /momentum groups (datasets with units and descriptions).
+void WriteSensor(H5Writer& out, const SensorResult& sensor);
+void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_MOMENTUM_MOMENTUM_H_

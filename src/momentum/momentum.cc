@@ -1,0 +1,465 @@
+#include "impactdic/momentum/momentum.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/io/hdf5_store.h"
+
+namespace impactdic {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::vector<double> UniqueSorted(std::vector<double> v, double tol) {
+  std::sort(v.begin(), v.end());
+  std::vector<double> out;
+  for (double x : v)
+    if (out.empty() || x - out.back() > tol) out.push_back(x);
+  return out;
+}
+
+double MedianStep(const std::vector<double>& sorted) {
+  if (sorted.size() < 2) return kNaN;
+  std::vector<double> d;
+  for (std::size_t i = 1; i < sorted.size(); ++i) d.push_back(sorted[i] - sorted[i - 1]);
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace
+
+void MomentumOptions::Check() const {
+  CheckValue(std::isfinite(pounder_mass_kg) && pounder_mass_kg > 0, "momentum.pounder_mass_kg",
+             fmt::format("{}", pounder_mass_kg), "> 0 kg");
+  CheckValue(std::isfinite(pounder_width_m) && pounder_width_m > 0, "momentum.pounder_width_m",
+             fmt::format("{}", pounder_width_m), "> 0 m");
+  CheckValue(std::isfinite(depth_m) && depth_m > 0, "momentum.depth_m", fmt::format("{}", depth_m),
+             "> 0 m");
+  CheckValue(std::isfinite(density_kg_m3) && density_kg_m3 > 0, "momentum.density_kg_m3",
+             fmt::format("{}", density_kg_m3), "> 0 kg/m^3");
+  CheckValue(grid_cols >= 1, "momentum.grid_cols", fmt::format("{}", grid_cols), ">= 1");
+  CheckValue(grid_rows >= 1, "momentum.grid_rows", fmt::format("{}", grid_rows), ">= 1");
+  if (rect_mm) {
+    const auto& r = *rect_mm;
+    CheckValue(std::isfinite(r[0] + r[1] + r[2] + r[3]) && r[0] < r[2] && r[1] < r[3],
+               "momentum.rect_mm", fmt::format("[{}, {}, {}, {}]", r[0], r[1], r[2], r[3]),
+               "finite x0 < x1 and y0 < y1");
+  }
+  CheckValue(velocity_match_tolerance > 0 && velocity_match_tolerance <= 1,
+             "momentum.velocity_match_tolerance", fmt::format("{}", velocity_match_tolerance),
+             "in (0, 1]");
+  CheckValue(sand_accel_tolerance >= 0 && sand_accel_tolerance < 1, "momentum.sand_accel_tolerance",
+             fmt::format("{}", sand_accel_tolerance), "in [0, 1)");
+  sigmoid.Check();
+}
+
+MomentumGrid SelectMomentumGrid(const KinematicsResult& kin, const MomentumOptions& options) {
+  options.Check();
+  CheckValue(kin.subsets >= 1 && kin.x_mm.size() == kin.subsets, "kinematics",
+             fmt::format("{} subsets", kin.subsets), "a correlated grid");
+  const auto [xmin_it, xmax_it] = std::minmax_element(kin.x_mm.begin(), kin.x_mm.end());
+  const auto [ymin_it, ymax_it] = std::minmax_element(kin.y_mm.begin(), kin.y_mm.end());
+  const double extent = std::max({1.0, *xmax_it - *xmin_it, *ymax_it - *ymin_it});
+  const double tol = 1e-6 * extent;
+  const std::vector<double> xs = UniqueSorted(kin.x_mm, tol), ys = UniqueSorted(kin.y_mm, tol);
+  double sx = MedianStep(xs), sy = MedianStep(ys);
+  if (std::isnan(sx)) sx = sy;
+  if (std::isnan(sy)) sy = sx;
+  const std::string region = fmt::format(
+      "the correlated grid has subset centres x = [{:.3f}, {:.3f}] mm, y = [{:.3f}, {:.3f}] mm",
+      xs.front(), xs.back(), ys.front(), ys.back());
+  MomentumGrid grid;
+  if (options.rect_mm) {
+    const auto& r = *options.rect_mm;
+    const double hx = std::isnan(sx) ? 0 : 0.5 * sx, hy = std::isnan(sy) ? 0 : 0.5 * sy;
+    const bool inside = r[0] >= xs.front() - hx - tol && r[2] <= xs.back() + hx + tol &&
+                        r[1] >= ys.front() - hy - tol && r[3] <= ys.back() + hy + tol;
+    if (!inside) {
+      throw Error(ErrorKind::kInvalidValue, "momentum.rect_mm",
+                  fmt::format("[{}, {}, {}, {}] mm", r[0], r[1], r[2], r[3]),
+                  "a rectangle inside the correlated region (" + region +
+                      "): the grid lies outside the correlated region");
+    }
+    std::vector<double> cx, cy;
+    for (std::size_t i = 0; i < kin.subsets; ++i) {
+      if (kin.x_mm[i] >= r[0] && kin.x_mm[i] <= r[2] && kin.y_mm[i] >= r[1] &&
+          kin.y_mm[i] <= r[3]) {
+        grid.subset_ids.push_back(i);
+        cx.push_back(kin.x_mm[i]);
+        cy.push_back(kin.y_mm[i]);
+      }
+    }
+    if (grid.subset_ids.empty()) {
+      throw Error(
+          ErrorKind::kInvalidValue, "momentum.rect_mm",
+          fmt::format("[{}, {}, {}, {}] mm containing no subset centre", r[0], r[1], r[2], r[3]),
+          "a rectangle containing subset centres (" + region + ")");
+    }
+    grid.cols = static_cast<int>(UniqueSorted(cx, tol).size());
+    grid.rows = static_cast<int>(UniqueSorted(cy, tol).size());
+    grid.rect_mm = r;
+    grid.area_m2 = (r[2] - r[0]) * (r[3] - r[1]) * 1e-6;
+  } else {
+    if (std::isnan(sx)) {
+      throw Error(ErrorKind::kInvalidValue, "correlated grid", "a single subset",
+                  "at least two subsets (the grid step defines the cell area), or rect_mm");
+    }
+    PounderFootprint fp = options.footprint;
+    const double half_width = 500 * options.pounder_width_m;
+    const double centre_default = 0.5 * (xs.front() + xs.back());
+    if (std::isnan(fp.x_left_mm)) fp.x_left_mm = centre_default - half_width;
+    if (std::isnan(fp.x_right_mm)) fp.x_right_mm = centre_default + half_width;
+    if (std::isnan(fp.bottom_y_mm)) fp.bottom_y_mm = ys.front() - 0.5 * sy;
+    const double centre = 0.5 * (fp.x_left_mm + fp.x_right_mm);
+    std::vector<double> cols;
+    for (double x : xs)
+      if (x >= fp.x_left_mm - tol && x <= fp.x_right_mm + tol) cols.push_back(x);
+    if (cols.size() < static_cast<std::size_t>(options.grid_cols)) {
+      throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                  fmt::format("{} subset columns under the pounder footprint x = [{:.3f}, {:.3f}] "
+                              "mm",
+                              cols.size(), fp.x_left_mm, fp.x_right_mm),
+                  fmt::format("grid_cols = {} columns ({}): the grid lies outside the correlated "
+                              "region",
+                              options.grid_cols, region));
+    }
+    std::stable_sort(cols.begin(), cols.end(), [&](double a, double b) {
+      return std::abs(a - centre) < std::abs(b - centre);
+    });
+    cols.resize(static_cast<std::size_t>(options.grid_cols));
+    std::sort(cols.begin(), cols.end());
+    std::vector<double> rows;
+    for (double y : ys)
+      if (y > fp.bottom_y_mm + tol && rows.size() < static_cast<std::size_t>(options.grid_rows))
+        rows.push_back(y);
+    if (rows.size() < static_cast<std::size_t>(options.grid_rows)) {
+      throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                  fmt::format("{} subset rows below the pounder's bottom edge y = {:.3f} mm",
+                              rows.size(), fp.bottom_y_mm),
+                  fmt::format("grid_rows = {} rows ({}): the grid lies outside the correlated "
+                              "region",
+                              options.grid_rows, region));
+    }
+    for (double y : rows) {
+      for (double x : cols) {
+        std::size_t found = kin.subsets;
+        for (std::size_t i = 0; i < kin.subsets && found == kin.subsets; ++i)
+          if (std::abs(kin.x_mm[i] - x) <= tol && std::abs(kin.y_mm[i] - y) <= tol) found = i;
+        if (found == kin.subsets) {
+          throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                      fmt::format("no correlated subset at x = {:.3f} mm, y = {:.3f} mm", x, y),
+                      "a complete grid of correlated subsets: the grid lies outside the "
+                      "correlated region (" +
+                          region + ")");
+        }
+        grid.subset_ids.push_back(found);
+      }
+    }
+    grid.cols = options.grid_cols;
+    grid.rows = options.grid_rows;
+    grid.rect_mm = {cols.front() - 0.5 * sx, rows.front() - 0.5 * sy, cols.back() + 0.5 * sx,
+                    rows.back() + 0.5 * sy};
+    grid.area_m2 = static_cast<double>(grid.subset_ids.size()) * sx * sy * 1e-6;
+  }
+  grid.mass_kg = options.density_kg_m3 * grid.area_m2 * options.depth_m;
+  return grid;
+}
+
+MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
+                               const SensorResult& sensor, const MomentumOptions& options) {
+  WallTimer timer;
+  options.Check();
+  const std::size_t nf = kin.frames, ns = kin.subsets;
+  CheckValue(frame_time_s.size() == nf, "frame times", fmt::format("{}", frame_time_s.size()),
+             fmt::format("one per frame ({})", nf));
+  const SensorSummary& ss = sensor.summary;
+  CheckValue(std::isfinite(ss.impact_time_s) && !sensor.time_s.empty(), "sensor results",
+             "no impact time", "a processed sensor record");
+  MomentumResult r;
+  MomentumSummary& s = r.summary;
+  s.grid = SelectMomentumGrid(kin, options);
+  const double mp = options.pounder_mass_kg, ms = s.grid.mass_kg;
+
+  r.frame_time_s = frame_time_s;
+  r.v_pounder_m_s = SampleSeries(sensor.time_s, sensor.velocity_m_s, frame_time_s,
+                                 "pounder velocity at the frames");
+  r.v_sand_m_s.resize(nf);
+  r.a_sand_m_s2.resize(nf);
+  r.valid_subsets.resize(nf);
+  r.p_pounder_kg_m_s.resize(nf);
+  r.p_gran_kg_m_s.resize(nf);
+  r.p_total_kg_m_s.resize(nf);
+  r.added_mass_kg.assign(nf, kNaN);
+  std::size_t empty_frames = 0;
+  for (std::size_t k = 0; k < nf; ++k) {
+    std::size_t count = 0;
+    r.v_sand_m_s[k] = 1e-3 * MeanOverSubsets(kin.vel_y_mm_s, ns, k, s.grid.subset_ids, &count);
+    r.a_sand_m_s2[k] = 1e-3 * MeanOverSubsets(kin.acc_y_mm_s2, ns, k, s.grid.subset_ids);
+    r.valid_subsets[k] = static_cast<double>(count);
+    if (count == 0) ++empty_frames;
+    r.p_pounder_kg_m_s[k] = mp * r.v_pounder_m_s[k];
+    r.p_gran_kg_m_s[k] = ms * r.v_sand_m_s[k];
+    r.p_total_kg_m_s[k] = r.p_pounder_kg_m_s[k] + r.p_gran_kg_m_s[k];
+  }
+  if (empty_frames > 0) {
+    s.warnings.push_back(
+        fmt::format("{} frames have no valid subset in the momentum grid "
+                    "(p_gran is NaN there)",
+                    empty_frames));
+  }
+
+  // p_max at the DAQ rate between the impact and the stop.
+  const std::vector<double>& t = sensor.time_s;
+  const std::vector<double>& v = sensor.velocity_m_s;
+  const std::size_t n = t.size();
+  std::size_t i_stop = std::isfinite(ss.stop_time_s)
+                           ? static_cast<std::size_t>(
+                                 std::lower_bound(t.begin(), t.end(), ss.stop_time_s) - t.begin())
+                           : n - 1;
+  i_stop = std::min(i_stop, n - 1);
+  std::size_t i_max = std::min(ss.impact_index, n - 1);
+  for (std::size_t i = i_max; i <= i_stop; ++i)
+    if (v[i] > v[i_max]) i_max = i;
+  s.v_p_max_m_s = v[i_max];
+  s.p_max_kg_m_s = mp * v[i_max];
+  s.t_p_max_s = t[i_max];
+
+  // Frames of the peak stage: from the first frame at/after the impact to the last before stop.
+  std::size_t ki = 0;
+  while (ki < nf && frame_time_s[ki] < ss.impact_time_s) ++ki;
+  if (ki >= nf) {
+    throw Error(ErrorKind::kInvalidValue, "frame times",
+                fmt::format("the last frame at {:.6g} s", frame_time_s.back()),
+                fmt::format("frames after the impact at {:.6g} s", ss.impact_time_s));
+  }
+  std::size_t kend = nf - 1;
+  if (std::isfinite(ss.stop_time_s))
+    while (kend > ki && frame_time_s[kend] > ss.stop_time_s) --kend;
+  if (kend <= ki + 1) {
+    throw Error(ErrorKind::kInvalidValue, "frame times",
+                fmt::format("{} frames between the impact ({:.6g} s) and the stop ({:.6g} s)",
+                            kend + 1 - ki, ss.impact_time_s, ss.stop_time_s),
+                "at least 3 frames in the peak and plateau stages");
+  }
+  double a_max = 0;
+  s.v_sand_max_m_s = kNaN;
+  for (std::size_t k = ki; k <= kend; ++k) {
+    if (std::isfinite(r.a_sand_m_s2[k])) a_max = std::max(a_max, r.a_sand_m_s2[k]);
+    if (std::isfinite(r.v_sand_m_s[k]) && !(r.v_sand_m_s[k] <= s.v_sand_max_m_s))  // NaN-safe max
+      s.v_sand_max_m_s = r.v_sand_m_s[k];
+  }
+  const double tol_a = options.sand_accel_tolerance * a_max;
+  const double tol_v = options.velocity_match_tolerance * s.v_p_max_m_s;
+  std::vector<bool> no_more_accel(kend + 2, true);
+  for (std::size_t k = kend + 1; k-- > ki;)
+    no_more_accel[k] = no_more_accel[k + 1] && !(r.a_sand_m_s2[k] > tol_a);
+  std::size_t ke = nf;
+  for (std::size_t k = ki; k <= kend && ke == nf; ++k) {
+    if (no_more_accel[k] && std::isfinite(r.v_sand_m_s[k]) &&
+        std::abs(r.v_pounder_m_s[k] - r.v_sand_m_s[k]) <= tol_v)
+      ke = k;
+  }
+  if (ke < nf) {
+    s.t_end_found = true;
+  } else {
+    ke = ki;
+    for (std::size_t k = ki; k <= kend; ++k)
+      if (std::isfinite(r.v_sand_m_s[k]) && !(r.v_sand_m_s[k] <= r.v_sand_m_s[ke])) ke = k;
+    s.warnings.push_back(fmt::format(
+        "no frame where the soil stops accelerating and moves with the pounder (within {:.0f} % "
+        "of v_p,max); t_e is the frame of the maximum soil velocity",
+        100 * options.velocity_match_tolerance));
+  }
+  s.end_frame = ke;
+  s.t_end_peak_daq_s = frame_time_s[ke];
+  s.t_end_peak_s = frame_time_s[ke] - ss.impact_time_s;
+  s.momentum_conservation_error = std::abs(r.p_total_kg_m_s[ke] - s.p_max_kg_m_s) / s.p_max_kg_m_s;
+  for (std::size_t k = ki; k <= ke; ++k)
+    if (r.v_pounder_m_s[k] > 0) r.added_mass_kg[k] = s.p_max_kg_m_s / r.v_pounder_m_s[k] - mp;
+  s.added_mass_max_kg = r.added_mass_kg[ke];
+  s.momentum_ratio = s.added_mass_max_kg * s.v_sand_max_m_s / (mp * s.v_p_max_m_s);
+  if (s.momentum_conservation_error > 0.1) {
+    s.warnings.push_back(fmt::format("momentum is not conserved to 10 % at t_e (error {:.1f} %)",
+                                     100 * s.momentum_conservation_error));
+  }
+
+  // Added mass at the DAQ rate from the impact to t_e, and the Eq. 5 fit.
+  for (std::size_t i = std::min(ss.impact_index, n - 1); i < n && t[i] <= s.t_end_peak_daq_s; ++i) {
+    if (v[i] <= 0) continue;
+    r.added_mass_time_after_impact_s.push_back(t[i] - ss.impact_time_s);
+    r.added_mass_daq_kg.push_back(s.p_max_kg_m_s / v[i] - mp);
+  }
+  if (options.fit_sigmoid) {
+    std::size_t stride = 1;
+    if (ss.sample_rate_hz > 0 && ss.cutoff_hz > 0)
+      stride = std::max<std::size_t>(
+          1, static_cast<std::size_t>(std::lround(ss.sample_rate_hz / (2 * ss.cutoff_hz))));
+    if (r.added_mass_daq_kg.size() < 6 * stride) stride = 1;
+    std::vector<double> ft, fm;
+    for (std::size_t i = 0; i < r.added_mass_daq_kg.size(); i += stride) {
+      ft.push_back(r.added_mass_time_after_impact_s[i]);
+      fm.push_back(r.added_mass_daq_kg[i]);
+    }
+    try {
+      s.sigmoid = FitSigmoid(ft, fm, options.sigmoid);
+      s.sigmoid_fitted = true;
+      if (!s.sigmoid.converged) s.warnings.push_back("sigmoid fit: " + s.sigmoid.message);
+    } catch (const Error& e) {
+      s.warnings.push_back(std::string("sigmoid fit skipped: ") + e.what());
+    }
+  }
+  s.seconds = timer.ElapsedSeconds();
+  for (const auto& w : s.warnings) LogWarning("momentum: {}", w);
+  return r;
+}
+
+SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
+                                 double fps, double frame_time_offset_s, const SensorResult& sensor,
+                                 const MomentumOptions& options) {
+  SceneAnalysis a;
+  KinematicsOptions kopt;
+  kopt.fps = fps;
+  a.kinematics = ComputeKinematics(dic, mapping, kopt);
+  a.frame_time_s = FrameTimes(sensor, static_cast<int>(dic.frames), fps, frame_time_offset_s);
+  a.momentum = AnalyzeMomentum(a.kinematics, a.frame_time_s, sensor, options);
+  return a;
+}
+
+std::string MomentumSummary::BriefReport() const {
+  return fmt::format(
+      "p_max = {:.4g} kg m/s, t_e = {:.3f} ms, conservation error = {:.2f} %, m_add,max = {:.4g} "
+      "kg, momentum ratio = {:.4g}",
+      p_max_kg_m_s, 1e3 * t_end_peak_s, 100 * momentum_conservation_error, added_mass_max_kg,
+      momentum_ratio);
+}
+
+std::string MomentumSummary::FullReport() const {
+  std::string r;
+  r += fmt::format("grid                  {} x {} subsets, area {:.6g} m^2, mass {:.4g} kg\n",
+                   grid.cols, grid.rows, grid.area_m2, grid.mass_kg);
+  r += fmt::format("p_max                 {:.5g} kg m/s (v_p,max {:.4f} m/s)\n", p_max_kg_m_s,
+                   v_p_max_m_s);
+  r += fmt::format("t_e                   {:.4f} ms after impact{}\n", 1e3 * t_end_peak_s,
+                   t_end_found ? "" : " (fallback: max soil velocity)");
+  r += fmt::format("conservation error    {:.3f} %\n", 100 * momentum_conservation_error);
+  r += fmt::format("m_add,max             {:.5g} kg\n", added_mass_max_kg);
+  r += fmt::format("v_sand,max            {:.4f} m/s\n", v_sand_max_m_s);
+  r += fmt::format("momentum ratio        {:.4f}\n", momentum_ratio);
+  if (sigmoid_fitted) r += "sigmoid (Eq. 5)       " + sigmoid.BriefReport() + "\n";
+  for (const auto& w : warnings) r += "warning: " + w + "\n";
+  return r;
+}
+
+JsonObject MomentumSummary::ToJson() const {
+  JsonObject j;
+  j.Add("p_max_kg_m_s", p_max_kg_m_s)
+      .Add("t_end_peak_s", t_end_peak_s)
+      .Add("momentum_conservation_error", momentum_conservation_error)
+      .Add("added_mass_max_kg", added_mass_max_kg)
+      .Add("sigmoid_b_per_s", sigmoid_fitted ? sigmoid.b_per_s : kNaN)
+      .Add("sigmoid_T_s", sigmoid_fitted ? sigmoid.T_s : kNaN)
+      .Add("momentum_ratio", momentum_ratio)
+      .Add("v_sand_max_m_s", v_sand_max_m_s)
+      .Add("sigmoid_M_kg", sigmoid_fitted ? sigmoid.M_kg : kNaN)
+      .Add("grid_mass_kg", grid.mass_kg)
+      .Add("grid_area_m2", grid.area_m2)
+      .Add("t_end_found", t_end_found)
+      .Add("warnings", warnings);
+  return j;
+}
+
+void WriteSensor(H5Writer& out, const SensorResult& sensor) {
+  out.Write("sensor/time_s", sensor.time_s, "s", "DAQ time");
+  out.Write("sensor/accel_g", sensor.accel_g, "g",
+            "accelerometer reading (axis up; 0 in free fall, 1 at rest), offset-corrected and "
+            "zero-phase low-pass filtered");
+  out.Write("sensor/accel_down_m_s2", sensor.accel_down_m_s2, "m/s^2",
+            "pounder acceleration g (1 - accel_g), downward positive");
+  out.Write("sensor/velocity_m_s", sensor.velocity_m_s, "m/s",
+            "pounder velocity, downward positive");
+  out.Write("sensor/penetration_m", sensor.penetration_m, "m",
+            "pounder position relative to the impact position, downward positive");
+  for (std::size_t c = 0; c < sensor.force.size(); ++c)
+    out.Write("sensor/force/" + sensor.force_names[c], sensor.force[c], "as in the CSV",
+              "force channel, zero-phase low-pass filtered");
+  const SensorSummary& s = sensor.summary;
+  out.SetAttribute("sensor", "sample_rate_hz", s.sample_rate_hz);
+  out.SetAttribute("sensor", "cutoff_hz", s.cutoff_hz);
+  out.SetAttribute("sensor", "offset_g", s.offset_g);
+  out.SetAttribute("sensor", "noise_g", s.noise_g);
+  out.SetAttribute("sensor", "impact_time_s", s.impact_time_s);
+  out.SetAttribute("sensor", "impact_velocity_m_s", s.impact_velocity_m_s);
+  out.SetAttribute("sensor", "final_penetration_m", s.final_penetration_m);
+  out.SetAttribute("sensor", "peak_deceleration_g", s.peak_deceleration_g);
+  out.SetAttribute("sensor", "t_peak_s", s.t_peak_s);
+  out.SetAttribute("sensor", "stop_time_s", s.stop_time_s);
+  out.SetAttribute("sensor", "release_time_s", s.release_time_s);
+  out.SetAttribute("sensor", "sign_convention",
+                   "accelerometer axis up; velocity and penetration downward positive");
+}
+
+void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor) {
+  const KinematicsResult& k = analysis.kinematics;
+  const Dims fs{k.frames, k.subsets};
+  out.Write("kinematics/time_s", k.time_s, "s", "frame time k / fps since frame 0");
+  out.Write("kinematics/frame_time_daq_s", analysis.frame_time_s, "s",
+            "frame time on the DAQ clock (exposure edges or offset + k / fps)");
+  out.Write("kinematics/x_mm", k.x_mm, "mm", "reference subset centre x (panel, right)");
+  out.Write("kinematics/y_mm", k.y_mm, "mm", "reference subset centre y (panel, down)");
+  out.Write("kinematics/disp_x_mm", k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
+  out.Write("kinematics/disp_y_mm", k.disp_y_mm, fs, "mm",
+            "displacement y, downward positive [frames x subsets]");
+  out.Write("kinematics/vel_x_mm_s", k.vel_x_mm_s, fs, "mm/s", "velocity x, central differences");
+  out.Write("kinematics/vel_y_mm_s", k.vel_y_mm_s, fs, "mm/s",
+            "velocity y (downward positive), central differences");
+  out.Write("kinematics/acc_x_mm_s2", k.acc_x_mm_s2, fs, "mm/s^2", "acceleration x");
+  out.Write("kinematics/acc_y_mm_s2", k.acc_y_mm_s2, fs, "mm/s^2",
+            "acceleration y (downward positive)");
+  WriteSensor(out, sensor);
+  const MomentumResult& m = analysis.momentum;
+  const MomentumSummary& s = m.summary;
+  out.Write("momentum/time_s", m.frame_time_s, "s", "frame time on the DAQ clock");
+  out.Write("momentum/v_pounder_m_s", m.v_pounder_m_s, "m/s", "pounder velocity at the frames");
+  out.Write("momentum/v_sand_m_s", m.v_sand_m_s, "m/s",
+            "mean soil velocity over the grid (down +)");
+  out.Write("momentum/a_sand_m_s2", m.a_sand_m_s2, "m/s^2", "mean soil acceleration over the grid");
+  out.Write("momentum/p_pounder_kg_m_s", m.p_pounder_kg_m_s, "kg m/s", "m_p v_p");
+  out.Write("momentum/p_gran_kg_m_s", m.p_gran_kg_m_s, "kg m/s", "rho_d area t_z v_sand");
+  out.Write("momentum/p_total_kg_m_s", m.p_total_kg_m_s, "kg m/s", "p_p + p_gran");
+  out.Write("momentum/added_mass_kg", m.added_mass_kg, "kg",
+            "p_max / v_p - m_p (Eq. 3), NaN outside [impact, t_e]");
+  out.Write("momentum/valid_subsets", m.valid_subsets, "1", "valid subsets in the grid per frame");
+  if (!m.added_mass_daq_kg.empty()) {
+    out.Write("momentum/added_mass_daq/time_after_impact_s", m.added_mass_time_after_impact_s, "s",
+              "DAQ sample time after the impact");
+    out.Write("momentum/added_mass_daq/added_mass_kg", m.added_mass_daq_kg, "kg",
+              "p_max / v_p - m_p at the DAQ rate");
+  }
+  std::vector<std::int32_t> ids(s.grid.subset_ids.begin(), s.grid.subset_ids.end());
+  out.Write("momentum/grid_subset_ids", ids, Dims{ids.size()}, "1", "subsets of the momentum grid");
+  const std::vector<std::pair<const char*, double>> attrs = {
+      {"p_max_kg_m_s", s.p_max_kg_m_s},
+      {"t_end_peak_s", s.t_end_peak_s},
+      {"momentum_conservation_error", s.momentum_conservation_error},
+      {"added_mass_max_kg", s.added_mass_max_kg},
+      {"momentum_ratio", s.momentum_ratio},
+      {"v_sand_max_m_s", s.v_sand_max_m_s},
+      {"v_p_max_m_s", s.v_p_max_m_s},
+      {"grid_area_m2", s.grid.area_m2},
+      {"grid_mass_kg", s.grid.mass_kg},
+      {"sigmoid_M_kg", s.sigmoid_fitted ? s.sigmoid.M_kg : kNaN},
+      {"sigmoid_b_per_s", s.sigmoid_fitted ? s.sigmoid.b_per_s : kNaN},
+      {"sigmoid_T_s", s.sigmoid_fitted ? s.sigmoid.T_s : kNaN},
+      {"sigmoid_se_M_kg", s.sigmoid_fitted ? s.sigmoid.se_M_kg : kNaN},
+      {"sigmoid_se_b_per_s", s.sigmoid_fitted ? s.sigmoid.se_b_per_s : kNaN},
+      {"sigmoid_se_T_s", s.sigmoid_fitted ? s.sigmoid.se_T_s : kNaN}};
+  for (const auto& [name, value] : attrs) out.SetAttribute("momentum", name, value);
+}
+
+}  // namespace impactdic
