@@ -1,0 +1,336 @@
+#include "impactdic/calib/calibration.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgproc.hpp>
+
+#include "impactdic/core/error.h"
+#include "impactdic/synth/checkerboard.h"
+
+namespace impactdic {
+namespace {
+
+// Expects `f` to throw impactdic::Error whose message contains `text`.
+template <typename F>
+void ExpectErrorContaining(F&& f, const std::string& text) {
+  try {
+    f();
+    ADD_FAILURE() << "no error; expected one containing '" << text << "'";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
+}
+
+BoardSpec ToBoardSpec(const CheckerboardSpec& c) { return {c.cols, c.rows, c.square_mm}; }
+
+// 14 rendered views of the sample camera (640x480, k1 = -0.08, k2 = 0.05, p1, p2 != 0), noise
+// sigma = 1 grey level, 8-bit, calibrated once for the suite.
+class CalibrationFixture : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    camera_ = SampleCamera();
+    poses_ = CalibrationPoses(camera_, board_, /*count=*/14, /*seed=*/21);
+    CheckerboardRenderOptions render;
+    render.noise_sigma = 1.0;
+    for (std::size_t k = 0; k < poses_.size(); ++k) {
+      render.seed = 100 + k;
+      images_.push_back(RenderCheckerboard(camera_, board_, poses_[k], render));
+      names_.push_back("view_" + std::to_string(k));
+    }
+    CalibrationOptions options;
+    options.board = ToBoardSpec(board_);
+    calibration_ = CalibrateCamera(images_, names_, options, &summary_);
+  }
+  static inline SynthCamera camera_;
+  static inline CheckerboardSpec board_;
+  static inline std::vector<BoardPose> poses_;
+  static inline std::vector<cv::Mat> images_;
+  static inline std::vector<std::string> names_;
+  static inline CameraCalibration calibration_;
+  static inline CalibrationSummary summary_;
+};
+
+TEST_F(CalibrationFixture, RecoversIntrinsicsWithinHalfPercent) {
+  const CameraCalibration& c = calibration_;
+  EXPECT_EQ(summary_.images_used, 14);
+  EXPECT_EQ(c.image_width, 640);
+  EXPECT_EQ(c.image_height, 480);
+  // Done-when tolerance: 0.5 % (measured errors are ~0.05 %).
+  EXPECT_NEAR(c.fx, camera_.fx, 0.005 * camera_.fx);
+  EXPECT_NEAR(c.fy, camera_.fy, 0.005 * camera_.fy);
+  EXPECT_NEAR(c.cx, camera_.cx, 0.005 * camera_.cx);
+  EXPECT_NEAR(c.cy, camera_.cy, 0.005 * camera_.cy);
+  std::printf("fx %.3f (%.3f) fy %.3f (%.3f) cx %.3f (%.3f) cy %.3f (%.3f) rms %.4f\n", c.fx,
+              camera_.fx, c.fy, camera_.fy, c.cx, camera_.cx, c.cy, camera_.cy, c.rms_px);
+  std::printf("dist %.5f %.5f %.6f %.6f %.5f\n", c.dist[0], c.dist[1], c.dist[2], c.dist[3],
+              c.dist[4]);
+  ASSERT_EQ(c.views.size(), 14u);
+  for (const ViewRecord& v : c.views) EXPECT_LT(v.rms_px, 0.1) << v.image;
+}
+
+// "RMS at the noise level": the reprojection RMS is that of the corner detector's own errors
+// (detected vs. true corners, measured on the same images), not larger.
+TEST_F(CalibrationFixture, RmsIsAtTheCornerNoiseLevel) {
+  double sq = 0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < images_.size(); ++k) {
+    const auto found = DetectBoard(images_[k], ToBoardSpec(board_), DetectionOptions{});
+    ASSERT_TRUE(found);
+    const auto truth = ProjectCorners(camera_, board_, poses_[k]);
+    // The detector may number the corners from the opposite end (180-degree symmetry).
+    double forward = 0, backward = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      forward += cv::norm(cv::Point2d((*found)[i]) - truth[i]);
+      backward += cv::norm(cv::Point2d((*found)[truth.size() - 1 - i]) - truth[i]);
+    }
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      const cv::Point2d d =
+          cv::Point2d((*found)[forward <= backward ? i : truth.size() - 1 - i]) - truth[i];
+      sq += d.dot(d);
+      ++n;
+    }
+  }
+  const double detection_rms = std::sqrt(sq / n);
+  std::printf("detection RMS %.4f px, reprojection RMS %.4f px\n", detection_rms,
+              calibration_.rms_px);
+  // The fit absorbs part of the detection error (and the pose-correlated part of its bias), so
+  // the RMS lies below the detection RMS, but not far below; both are a few hundredths of a px.
+  EXPECT_LT(calibration_.rms_px, 1.2 * detection_rms);
+  EXPECT_GT(calibration_.rms_px, 0.3 * detection_rms);
+  EXPECT_LT(calibration_.rms_px, 0.1);
+}
+
+// The estimated lens model undistorts the true corner positions to within 0.05 px of their true
+// pinhole positions (all corners of all views, i.e. the whole area the board covered).
+TEST_F(CalibrationFixture, UndistortedCornersWithinFiveHundredthsOfAPixel) {
+  double worst = 0, sq = 0;
+  std::size_t n = 0;
+  for (const BoardPose& pose : poses_) {
+    const auto distorted = ProjectCorners(camera_, board_, pose);
+    const auto truth = ProjectCornersPinhole(camera_, board_, pose);
+    const auto undistorted = calibration_.UndistortPixels(distorted);
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      const double e = cv::norm(undistorted[i] - truth[i]);
+      worst = std::max(worst, e);
+      sq += e * e;
+      ++n;
+    }
+  }
+  std::printf("undistorted corners: max error %.4f px, RMS %.4f px\n", worst, std::sqrt(sq / n));
+  EXPECT_LT(worst, 0.05);
+}
+
+TEST_F(CalibrationFixture, PlaneScaleWithinTwoTenthsOfAPercent) {
+  const double distance = 420;
+  const BoardPose pose = PanelPose(camera_, board_, distance, /*roll_deg=*/3);
+  CheckerboardRenderOptions render;
+  render.seed = 999;
+  const cv::Mat plane = RenderCheckerboard(camera_, board_, pose, render);
+  const double truth = distance / std::sqrt(camera_.fx * camera_.fy);
+  const PlaneScale scale = MeasurePlaneScale(plane, "plane", calibration_);
+  std::printf("mm/px %.6f +- %.6f, truth %.6f (rel error %.4f %%)\n", scale.mm_per_px,
+              scale.mm_per_px_uncertainty, truth, 100 * (scale.mm_per_px / truth - 1));
+  EXPECT_NEAR(scale.mm_per_px, truth, 0.002 * truth);
+  EXPECT_GT(scale.mm_per_px_uncertainty, 0);
+  EXPECT_LT(scale.mm_per_px_uncertainty, 0.002 * truth);
+  EXPECT_EQ(scale.corners, 54);
+  // Homography consistency: a corner's undistorted pixel maps to its board millimetres (up to the
+  // detector's ~0.03 px error times the scale, and the 180-degree numbering ambiguity).
+  EXPECT_LT(scale.residual_rms_mm, 0.05 * truth * 2);
+}
+
+TEST(Calibration, PlaneScaleWithTheTrueCameraIsExact) {
+  const SynthCamera camera = SampleCamera();
+  const CheckerboardSpec board;
+  CameraCalibration exact;
+  exact.image_width = camera.width;
+  exact.image_height = camera.height;
+  exact.fx = camera.fx;
+  exact.fy = camera.fy;
+  exact.cx = camera.cx;
+  exact.cy = camera.cy;
+  exact.dist = camera.dist;
+  exact.board = ToBoardSpec(board);
+  const double distance = 500;
+  const cv::Mat plane = RenderCheckerboard(camera, board, PanelPose(camera, board, distance, 0),
+                                           CheckerboardRenderOptions{});
+  const PlaneScale scale = MeasurePlaneScale(plane, "plane", exact);
+  const double truth = distance / std::sqrt(camera.fx * camera.fy);
+  // Only the corner detector's error remains: ~0.03 px over a ~300 px board, i.e. 1e-4 relative.
+  EXPECT_NEAR(scale.mm_per_px, truth, 5e-4 * truth);
+  EXPECT_LT(scale.local_scale_spread_rel, 1e-3);
+}
+
+TEST_F(CalibrationFixture, RejectsViewsWithoutTheBoardWithAMessage) {
+  std::vector<cv::Mat> images(images_.begin(), images_.begin() + 7);
+  std::vector<std::string> names(names_.begin(), names_.begin() + 7);
+  images.push_back(cv::Mat(480, 640, CV_8U, cv::Scalar(128)));
+  names.push_back("blank.png");
+  CalibrationOptions options;
+  options.board = ToBoardSpec(board_);
+  CalibrationSummary summary;
+  const CameraCalibration c = CalibrateCamera(images, names, options, &summary);
+  EXPECT_EQ(summary.images_used, 7);
+  EXPECT_EQ(summary.images_rejected, 1);
+  ASSERT_EQ(c.rejected.size(), 1u);
+  EXPECT_EQ(c.rejected[0].image, "blank.png");
+  EXPECT_NE(c.rejected[0].reason.find("not found"), std::string::npos);
+  EXPECT_NE(summary.FullReport(c).find("rejected blank.png"), std::string::npos);
+}
+
+TEST_F(CalibrationFixture, BadInputGivesClearErrors) {
+  CalibrationOptions options;
+  options.board = ToBoardSpec(board_);
+  // No images at all.
+  ExpectErrorContaining([&] { CalibrateCamera({}, {}, options); }, "calibration images");
+  // No board in any image (wrong board size given: 8x5 instead of 9x6 is not found either).
+  std::vector<cv::Mat> blank(6, cv::Mat(480, 640, CV_8U, cv::Scalar(100)));
+  ExpectErrorContaining([&] { CalibrateCamera(blank, {}, options); },
+                        "no board found in any of the 6");
+  // Mixed image sizes: names the odd image and both sizes.
+  std::vector<cv::Mat> mixed(images_.begin(), images_.begin() + 6);
+  std::vector<std::string> names(names_.begin(), names_.begin() + 6);
+  cv::Mat small;
+  cv::resize(images_[3], small, cv::Size(320, 240));
+  mixed[3] = small;
+  ExpectErrorContaining([&] { CalibrateCamera(mixed, names, options); },
+                        "mixed image sizes: view_3 is 320x240 but view_0 is 640x480");
+  // Too few usable views.
+  std::vector<cv::Mat> few(images_.begin(), images_.begin() + 3);
+  few.push_back(blank[0]);
+  ExpectErrorContaining([&] { CalibrateCamera(few, {}, options); },
+                        "too few calibration images: the board was found in 3 of 4");
+  // Implausible RMS is refused.
+  CalibrationOptions strict = options;
+  strict.max_rms_px = 1e-4;
+  ExpectErrorContaining([&] { CalibrateCamera(images_, names_, strict); },
+                        "implausible calibration: reprojection RMS");
+  // Colour or float images.
+  ExpectErrorContaining(
+      [&] {
+        CalibrateCamera({cv::Mat(480, 640, CV_8UC3, cv::Scalar::all(0))}, {"c.png"}, options);
+      },
+      "c.png");
+}
+
+TEST_F(CalibrationFixture, FrameSizeMismatchIsAClearError) {
+  EXPECT_NO_THROW(CheckFrameSize(calibration_, {640, 480}));
+  ExpectErrorContaining(
+      [&] {
+        CheckFrameSize(calibration_, {1920, 1440}, "frame_0007.png");
+      },
+      "frame_0007.png has size 1920x1440 but the calibration was made for "
+      "640x480 images");
+  // The plane view must match too.
+  ExpectErrorContaining(
+      [&] { MeasurePlaneScale(cv::Mat(240, 320, CV_8U, cv::Scalar(0)), "p.png", calibration_); },
+      "plane image p.png has size 320x240");
+}
+
+TEST_F(CalibrationFixture, YamlRoundTrip) {
+  CameraCalibration c = calibration_;
+  PlaneScale plane;
+  plane.image = "plane.png";
+  plane.mm_per_px = 0.61;
+  plane.mm_per_px_uncertainty = 1e-4;
+  plane.mm_from_px = cv::Matx33d(0.6, 0.01, -3, 0.002, 0.61, -4, 1e-6, 2e-6, 1);
+  plane.corners = 54;
+  c.plane = plane;
+  c.rejected.push_back({"blank.png", "not found"});
+  const std::string path = ::testing::TempDir() + "/impactdic_calib_roundtrip.yaml";
+  SaveCalibration(c, path);
+  const CameraCalibration back = LoadCalibration(path);
+  EXPECT_EQ(back.image_width, c.image_width);
+  EXPECT_EQ(back.image_height, c.image_height);
+  EXPECT_DOUBLE_EQ(back.fx, c.fx);
+  EXPECT_DOUBLE_EQ(back.cy, c.cy);
+  for (int k = 0; k < 5; ++k) EXPECT_DOUBLE_EQ(back.dist[k], c.dist[k]);
+  EXPECT_DOUBLE_EQ(back.rms_px, c.rms_px);
+  EXPECT_EQ(back.board.cols, 9);
+  EXPECT_EQ(back.views.size(), c.views.size());
+  ASSERT_EQ(back.rejected.size(), 1u);
+  EXPECT_EQ(back.rejected[0].reason, "not found");
+  ASSERT_TRUE(back.plane);
+  EXPECT_DOUBLE_EQ(back.plane->mm_per_px, 0.61);
+  EXPECT_DOUBLE_EQ(back.plane->mm_from_px(2, 1), 2e-6);
+  EXPECT_EQ(back.plane->image, "plane.png");
+}
+
+TEST(CalibrationYaml, BadFilesNameTheKey) {
+  const std::string path = ::testing::TempDir() + "/impactdic_calib_bad.yaml";
+  auto write = [&](const std::string& text) { std::ofstream(path) << text; };
+  const std::string good_head =
+      "format: impactdic-calibration-1\nimage_width: 640\nimage_height: 480\n"
+      "board: {cols: 9, rows: 6, square_mm: 25}\n";
+  write(good_head + "fx: 800\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0]\n");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "dist");
+  write(good_head + "fx: abc\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "fx");
+  write(good_head + "fy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "fx: bad file format (got missing)");
+  write(good_head + "fx: 800\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\nfocal: 3\n");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "focal");
+  write(good_head + "fx: 800\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");
+  const CameraCalibration c = LoadCalibration(path);
+  EXPECT_FALSE(c.plane);
+  EXPECT_FALSE(c.HasDistortion());
+  ExpectErrorContaining([&] { LoadCalibration(path + ".missing"); }, ".missing");
+}
+
+TEST(Calibration, ParseBoard) {
+  const BoardSpec b = ParseBoard("9x6", 25);
+  EXPECT_EQ(b.cols, 9);
+  EXPECT_EQ(b.rows, 6);
+  EXPECT_EQ(b.square_mm, 25);
+  EXPECT_EQ(ParseBoard("7X5", 10).rows, 5);
+  ExpectErrorContaining([] { ParseBoard("9-6", 25); }, "--board");
+  ExpectErrorContaining([] { ParseBoard("9x", 25); }, "COLSxROWS");
+  ExpectErrorContaining([] { ParseBoard("1x6", 25); }, "at least 2x2");
+  ExpectErrorContaining([] { ParseBoard("9x6", 0); }, "--square");
+  ExpectErrorContaining([] { ParseBoard("9x6", -3); }, "--square");
+}
+
+TEST(Calibration, OptionsCheckNamesTheField) {
+  EXPECT_NO_THROW(CalibrationOptions{}.Check());
+  CalibrationOptions o;
+  o.min_views = 2;
+  ExpectErrorContaining([&] { o.Check(); }, "calibration.min_views");
+  o = {};
+  o.max_rms_px = 0;
+  ExpectErrorContaining([&] { o.Check(); }, "calibration.max_rms_px");
+  o = {};
+  o.detection.subpix_half_window = 1;
+  ExpectErrorContaining([&] { o.Check(); }, "detection.subpix_half_window");
+  o = {};
+  o.board.square_mm = -1;
+  ExpectErrorContaining([&] { o.Check(); }, "board.square_mm");
+}
+
+// 16-bit frames: the detector works on a stretched 8-bit copy and refines on the full depth;
+// the corners agree with those of the same view rendered in 8 bit.
+TEST(Calibration, Detects16BitBoards) {
+  const SynthCamera camera = SampleCamera();
+  const CheckerboardSpec board;
+  const BoardPose pose = CalibrationPoses(camera, board, 1, /*seed=*/5)[0];
+  CheckerboardRenderOptions render;
+  render.noise_sigma = 0;
+  const cv::Mat image8 = RenderCheckerboard(camera, board, pose, render);
+  render.bits = 16;
+  const cv::Mat image16 = RenderCheckerboard(camera, board, pose, render);
+  const auto c8 = DetectBoard(image8, ToBoardSpec(board), {});
+  const auto c16 = DetectBoard(image16, ToBoardSpec(board), {});
+  ASSERT_TRUE(c8 && c16);
+  const auto truth = ProjectCorners(camera, board, pose);
+  double e16 = 0;
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    e16 = std::max(e16, std::min(cv::norm(cv::Point2d((*c16)[i]) - truth[i]),
+                                 cv::norm(cv::Point2d((*c16)[truth.size() - 1 - i]) - truth[i])));
+  EXPECT_LT(e16, 0.1);
+}
+
+}  // namespace
+}  // namespace impactdic
