@@ -375,7 +375,15 @@ JsonObject MomentumSummary::ToJson() const {
 }
 
 void WriteSensor(H5Writer& out, const SensorResult& sensor) {
-  out.Write("sensor/time_s", sensor.time_s, "s", "DAQ time");
+  const SensorSummary& s = sensor.summary;
+  out.Remove("sensor");  // Idempotent: WriteAnalysis writes it too.
+  std::vector<double> t_after(sensor.time_s.size()), decel(sensor.accel_g.size());
+  for (std::size_t i = 0; i < t_after.size(); ++i) t_after[i] = sensor.time_s[i] - s.impact_time_s;
+  for (std::size_t i = 0; i < decel.size(); ++i) decel[i] = sensor.accel_g[i] - 1;
+  out.Write("sensor/t_s", t_after, "s", "time since the detected impact");
+  out.Write("sensor/time_daq_s", sensor.time_s, "s", "DAQ clock time");
+  out.Write("sensor/decel_g", decel, "g",
+            "pounder deceleration accel_g - 1 (positive = slowing down)");
   out.Write("sensor/accel_g", sensor.accel_g, "g",
             "accelerometer reading (axis up; 0 in free fall, 1 at rest), offset-corrected and "
             "zero-phase low-pass filtered");
@@ -388,62 +396,78 @@ void WriteSensor(H5Writer& out, const SensorResult& sensor) {
   for (std::size_t c = 0; c < sensor.force.size(); ++c)
     out.Write("sensor/force/" + sensor.force_names[c], sensor.force[c], "as in the CSV",
               "force channel, zero-phase low-pass filtered");
-  const SensorSummary& s = sensor.summary;
-  out.SetAttribute("sensor", "sample_rate_hz", s.sample_rate_hz);
-  out.SetAttribute("sensor", "cutoff_hz", s.cutoff_hz);
-  out.SetAttribute("sensor", "offset_g", s.offset_g);
-  out.SetAttribute("sensor", "noise_g", s.noise_g);
-  out.SetAttribute("sensor", "impact_time_s", s.impact_time_s);
-  out.SetAttribute("sensor", "impact_velocity_m_s", s.impact_velocity_m_s);
-  out.SetAttribute("sensor", "final_penetration_m", s.final_penetration_m);
-  out.SetAttribute("sensor", "peak_deceleration_g", s.peak_deceleration_g);
-  out.SetAttribute("sensor", "t_peak_s", s.t_peak_s);
-  out.SetAttribute("sensor", "stop_time_s", s.stop_time_s);
-  out.SetAttribute("sensor", "release_time_s", s.release_time_s);
+  const std::vector<std::pair<const char*, double>> attrs = {
+      {"sample_rate_hz", s.sample_rate_hz},
+      {"cutoff_hz", s.cutoff_hz},
+      {"offset_g", s.offset_g},
+      {"noise_g", s.noise_g},
+      {"impact_time_s", s.impact_time_s},
+      {"impact_velocity_m_s", s.impact_velocity_m_s},
+      {"final_penetration_m", s.final_penetration_m},
+      {"peak_deceleration_g", s.peak_deceleration_g},
+      {"t_peak_s", s.t_peak_s},
+      {"stop_time_s", s.stop_time_s},
+      {"release_time_s", s.release_time_s}};
+  for (const auto& [name, value] : attrs) out.SetAttribute("sensor", name, value);
   out.SetAttribute("sensor", "sign_convention",
-                   "accelerometer axis up; velocity and penetration downward positive");
+                   "accelerometer axis up (reads 0 g in free fall, 1 g at rest); velocity and "
+                   "penetration downward positive");
 }
 
 void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor) {
   const KinematicsResult& k = analysis.kinematics;
   const Dims fs{k.frames, k.subsets};
+  out.Remove("kinematics");
+  out.Remove("momentum");
   out.Write("kinematics/time_s", k.time_s, "s", "frame time k / fps since frame 0");
   out.Write("kinematics/frame_time_daq_s", analysis.frame_time_s, "s",
             "frame time on the DAQ clock (exposure edges or offset + k / fps)");
   out.Write("kinematics/x_mm", k.x_mm, "mm", "reference subset centre x (panel, right)");
   out.Write("kinematics/y_mm", k.y_mm, "mm", "reference subset centre y (panel, down)");
-  out.Write("kinematics/disp_x_mm", k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
-  out.Write("kinematics/disp_y_mm", k.disp_y_mm, fs, "mm",
+  out.Write("kinematics/ux_mm", k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
+  out.Write("kinematics/uy_mm", k.disp_y_mm, fs, "mm",
             "displacement y, downward positive [frames x subsets]");
-  out.Write("kinematics/vel_x_mm_s", k.vel_x_mm_s, fs, "mm/s", "velocity x, central differences");
-  out.Write("kinematics/vel_y_mm_s", k.vel_y_mm_s, fs, "mm/s",
-            "velocity y (downward positive), central differences");
-  out.Write("kinematics/acc_x_mm_s2", k.acc_x_mm_s2, fs, "mm/s^2", "acceleration x");
-  out.Write("kinematics/acc_y_mm_s2", k.acc_y_mm_s2, fs, "mm/s^2",
-            "acceleration y (downward positive)");
+  out.Write("kinematics/vx_mm_s", k.vel_x_mm_s, fs, "mm/s",
+            "subset velocity x (right), central differences");
+  out.Write("kinematics/vy_mm_s", k.vel_y_mm_s, fs, "mm/s",
+            "subset velocity y (down), central differences");
+  out.Write("kinematics/ax_mm_s2", k.acc_x_mm_s2, fs, "mm/s^2", "subset acceleration x (right)");
+  out.Write("kinematics/ay_mm_s2", k.acc_y_mm_s2, fs, "mm/s^2", "subset acceleration y (down)");
+  out.SetAttribute("kinematics", "vy_positive", "down");
   WriteSensor(out, sensor);
   const MomentumResult& m = analysis.momentum;
   const MomentumSummary& s = m.summary;
-  out.Write("momentum/time_s", m.frame_time_s, "s", "frame time on the DAQ clock");
-  out.Write("momentum/v_pounder_m_s", m.v_pounder_m_s, "m/s", "pounder velocity at the frames");
+  const double ti = sensor.summary.impact_time_s;
+  std::vector<double> t_after(m.frame_time_s.size());
+  for (std::size_t i = 0; i < t_after.size(); ++i) t_after[i] = m.frame_time_s[i] - ti;
+  out.Write("momentum/t_s", t_after, "s", "frame time since the detected impact");
+  out.Write("momentum/time_daq_s", m.frame_time_s, "s", "frame time on the DAQ clock");
+  out.Write("momentum/v_pounder_m_s", m.v_pounder_m_s, "m/s",
+            "pounder velocity at the frames (down +)");
   out.Write("momentum/v_sand_m_s", m.v_sand_m_s, "m/s",
             "mean soil velocity over the grid (down +)");
-  out.Write("momentum/a_sand_m_s2", m.a_sand_m_s2, "m/s^2", "mean soil acceleration over the grid");
-  out.Write("momentum/p_pounder_kg_m_s", m.p_pounder_kg_m_s, "kg m/s", "m_p v_p");
-  out.Write("momentum/p_gran_kg_m_s", m.p_gran_kg_m_s, "kg m/s", "rho_d area t_z v_sand");
-  out.Write("momentum/p_total_kg_m_s", m.p_total_kg_m_s, "kg m/s", "p_p + p_gran");
-  out.Write("momentum/added_mass_kg", m.added_mass_kg, "kg",
-            "p_max / v_p - m_p (Eq. 3), NaN outside [impact, t_e]");
+  out.Write("momentum/a_sand_m_s2", m.a_sand_m_s2, "m/s^2",
+            "mean soil acceleration over the grid (down +)");
+  out.Write("momentum/p_pounder", m.p_pounder_kg_m_s, "N s", "pounder momentum m_p v_p");
+  out.Write("momentum/p_gran", m.p_gran_kg_m_s, "N s", "granular momentum rho_d area t_z v_sand");
+  out.Write("momentum/p_total", m.p_total_kg_m_s, "N s", "p_pounder + p_gran");
+  out.Write("momentum/m_add_kg", m.added_mass_kg, "kg",
+            "added mass p_max / v_p - m_p (Eq. 3), NaN outside [impact, t_e]");
   out.Write("momentum/valid_subsets", m.valid_subsets, "1", "valid subsets in the grid per frame");
   if (!m.added_mass_daq_kg.empty()) {
-    out.Write("momentum/added_mass_daq/time_after_impact_s", m.added_mass_time_after_impact_s, "s",
-              "DAQ sample time after the impact");
-    out.Write("momentum/added_mass_daq/added_mass_kg", m.added_mass_daq_kg, "kg",
-              "p_max / v_p - m_p at the DAQ rate");
+    out.Write("momentum/added_mass_daq/t_s", m.added_mass_time_after_impact_s, "s",
+              "DAQ sample time since the impact");
+    out.Write("momentum/added_mass_daq/m_add_kg", m.added_mass_daq_kg, "kg",
+              "p_max / v_p - m_p at the DAQ rate (what the sigmoid is fitted to)");
   }
   std::vector<std::int32_t> ids(s.grid.subset_ids.begin(), s.grid.subset_ids.end());
   out.Write("momentum/grid_subset_ids", ids, Dims{ids.size()}, "1", "subsets of the momentum grid");
   const std::vector<std::pair<const char*, double>> attrs = {
+      {"p_max", s.p_max_kg_m_s},
+      {"t_e", s.t_end_peak_s},
+      {"M", s.sigmoid_fitted ? s.sigmoid.M_kg : kNaN},
+      {"b", s.sigmoid_fitted ? s.sigmoid.b_per_s : kNaN},
+      {"T", s.sigmoid_fitted ? s.sigmoid.T_s : kNaN},
       {"p_max_kg_m_s", s.p_max_kg_m_s},
       {"t_end_peak_s", s.t_end_peak_s},
       {"momentum_conservation_error", s.momentum_conservation_error},
@@ -453,13 +477,11 @@ void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorRes
       {"v_p_max_m_s", s.v_p_max_m_s},
       {"grid_area_m2", s.grid.area_m2},
       {"grid_mass_kg", s.grid.mass_kg},
-      {"sigmoid_M_kg", s.sigmoid_fitted ? s.sigmoid.M_kg : kNaN},
-      {"sigmoid_b_per_s", s.sigmoid_fitted ? s.sigmoid.b_per_s : kNaN},
-      {"sigmoid_T_s", s.sigmoid_fitted ? s.sigmoid.T_s : kNaN},
       {"sigmoid_se_M_kg", s.sigmoid_fitted ? s.sigmoid.se_M_kg : kNaN},
       {"sigmoid_se_b_per_s", s.sigmoid_fitted ? s.sigmoid.se_b_per_s : kNaN},
       {"sigmoid_se_T_s", s.sigmoid_fitted ? s.sigmoid.se_T_s : kNaN}};
   for (const auto& [name, value] : attrs) out.SetAttribute("momentum", name, value);
+  out.SetAttribute("momentum", "t_e_found", s.t_end_found ? "yes" : "no (max soil velocity)");
 }
 
 }  // namespace impactdic

@@ -184,19 +184,23 @@ TEST(Momentum, WritesHdf5Groups) {
   const std::string path = dir.File("out.h5");
   {
     H5Writer out(path);
+    WriteSensor(out, sensor);  // As the pipeline does; WriteAnalysis replaces the group.
     WriteAnalysis(out, a, sensor);
     out.Commit();
   }
   H5Reader in(path);
   Dims dims;
-  const std::vector<double> v = in.ReadDouble("kinematics/vel_y_mm_s", &dims);
+  const std::vector<double> v = in.ReadDouble("kinematics/vy_mm_s", &dims);
   EXPECT_EQ(dims, (Dims{c.frames, 50}));
-  const std::vector<double> p = in.ReadDouble("momentum/p_gran_kg_m_s");
+  const std::vector<double> p = in.ReadDouble("momentum/p_gran");
   ASSERT_EQ(p.size(), c.frames);
   EXPECT_DOUBLE_EQ(p[70], a.momentum.p_gran_kg_m_s[70]);
-  EXPECT_NEAR(in.ReadNumberAttribute("momentum", "p_max_kg_m_s"), c.PMax(), 1e-9);
-  EXPECT_EQ(in.ReadStringAttribute("momentum/p_gran_kg_m_s", "units"), "kg m/s");
+  EXPECT_NEAR(in.ReadNumberAttribute("momentum", "p_max"), c.PMax(), 1e-9);
+  EXPECT_EQ(in.ReadStringAttribute("momentum/p_gran", "units"), "N s");
   EXPECT_TRUE(in.Exists("sensor/velocity_m_s"));
+  EXPECT_NEAR(in.ReadNumberAttribute("momentum", "t_e"), c.tau_e, 1 / c.fps + 1e-12);
+  const std::vector<double> t_after = in.ReadDouble("momentum/t_s");
+  EXPECT_NEAR(t_after[50], c.offset + 50 / c.fps - c.t_impact, 1e-12);
   const std::string json = a.momentum.summary.ToJson().Dump(0);
   EXPECT_EQ(json.find("{\"p_max_kg_m_s\":"), 0u) << json;
   for (const char* key : {"t_end_peak_s", "momentum_conservation_error", "added_mass_max_kg",

@@ -132,7 +132,16 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
                                  double fps, double frame_time_offset_s, const SensorResult& sensor,
                                  const MomentumOptions& options);
 
-// Writes /kinematics, /sensor and /momentum groups (datasets with units and descriptions).
+// Write the /sensor group, and the /kinematics, /sensor and /momentum groups, with units and
+// descriptions on every dataset (names follow render/results_layout.h where it has them):
+//   /sensor: t_s (since impact), time_daq_s, decel_g (= accel_g - 1), accel_g, accel_down_m_s2,
+//            velocity_m_s, penetration_m, force/<name>; summary numbers as attributes.
+//   /kinematics: time_s, frame_time_daq_s, x_mm, y_mm [N]; ux_mm, uy_mm, vx_mm_s, vy_mm_s,
+//            ax_mm_s2, ay_mm_s2 [F x N] (y down; attribute vy_positive = "down").
+//   /momentum: t_s (since impact), time_daq_s, v_pounder_m_s, v_sand_m_s, a_sand_m_s2, p_pounder,
+//            p_gran, p_total [N s], m_add_kg, valid_subsets [F]; added_mass_daq/{t_s, m_add_kg};
+//            grid_subset_ids; attributes p_max, t_e, M, b, T and the summary numbers.
+// Each replaces the groups it writes if they exist, so calling both is harmless.
 void WriteSensor(H5Writer& out, const SensorResult& sensor);
 void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor);
 
