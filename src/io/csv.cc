@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -78,6 +79,14 @@ const std::vector<double>& CsvTable::Column(const std::string& name) const {
       .WithFile(path);
 }
 
+const std::vector<std::string>& CsvTable::TextColumn(const std::string& name) const {
+  for (std::size_t i = 0; i < text_names.size(); ++i)
+    if (text_names[i] == name) return text_columns[i];
+  throw Error(ErrorKind::kFileFormat, "column '" + name + "'", "missing",
+              "a header with a '" + name + "' column")
+      .WithFile(path);
+}
+
 CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   std::ifstream in(path);
   if (!in) {
@@ -88,6 +97,8 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   std::string line;
   int line_no = 0;
   bool have_header = false;
+  std::vector<bool> is_text;
+  std::size_t header_cells = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -102,27 +113,41 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
               .WithFile(path, line_no);
         }
       }
-      table.names = cells;
-      table.columns.assign(cells.size(), {});
+      for (const auto& c : cells) {
+        const bool text = std::find(options.text_columns.begin(), options.text_columns.end(), c) !=
+                          options.text_columns.end();
+        is_text.push_back(text);
+        (text ? table.text_names : table.names).push_back(c);
+      }
+      header_cells = cells.size();
+      table.columns.assign(table.names.size(), {});
+      table.text_columns.assign(table.text_names.size(), {});
       have_header = true;
       continue;
     }
-    if (cells.size() != table.names.size()) {
+    if (cells.size() != header_cells) {
       throw Error(ErrorKind::kFileFormat, "row", fmt::format("{} cells", cells.size()),
-                  fmt::format("{} cells as in the header", table.names.size()))
+                  fmt::format("{} cells as in the header", header_cells))
           .WithFile(path, line_no);
     }
-    for (std::size_t c = 0; c < cells.size(); ++c) {
+    std::size_t numeric = 0, text = 0;
+    for (std::size_t cell = 0; cell < cells.size(); ++cell) {
+      if (is_text[cell]) {
+        table.text_columns[text++].push_back(cells[cell]);
+        continue;
+      }
+      const std::size_t c = numeric++;
       double value;
-      if (!ParseNumber(cells[c], &value)) {
-        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'", "'" + cells[c] + "'",
-                    "a number")
-            .WithFile(path, line_no, static_cast<int>(c + 1));
+      if (!ParseNumber(cells[cell], &value)) {
+        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
+                    "'" + cells[cell] + "'", "a number")
+            .WithFile(path, line_no, static_cast<int>(cell + 1));
       }
       if (!std::isfinite(value) && !options.allow_non_finite) {
         throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
-                    cells[c].empty() ? "an empty cell" : "'" + cells[c] + "'", "a finite number")
-            .WithFile(path, line_no, static_cast<int>(c + 1));
+                    cells[cell].empty() ? "an empty cell" : "'" + cells[cell] + "'",
+                    "a finite number")
+            .WithFile(path, line_no, static_cast<int>(cell + 1));
       }
       table.columns[c].push_back(value);
     }
@@ -134,8 +159,12 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   for (const auto& required : options.required_columns) table.Column(required);
   if (!options.increasing_column.empty()) {
     const auto& t = table.Column(options.increasing_column);
+    // Its position in the file (1-based), counting text columns too.
     std::size_t col = 0;
-    while (table.names[col] != options.increasing_column) ++col;
+    for (std::size_t i = 0, numeric = 0; i < is_text.size(); ++i) {
+      if (is_text[i]) continue;
+      if (table.names[numeric++] == options.increasing_column) col = i;
+    }
     // Reconstruct line numbers: data rows follow the header in order, skipping comments/blank
     // lines; re-scan to report the exact line.
     for (std::size_t i = 1; i < t.size(); ++i) {

@@ -87,3 +87,24 @@ TEST(Csv, WriteThenReadRoundTrip) {
 
 }  // namespace
 }  // namespace impactdic
+
+namespace impactdic {
+namespace {
+
+TEST(Csv, TextColumnsAreKeptAsText) {
+  TestDir dir;
+  CsvReadOptions opts;
+  opts.text_columns = {"scene"};
+  opts.increasing_column = "t";
+  const CsvTable t = ReadCsv(dir.Write("h.csv", "scene,t,a\nt01,0,1\nt02,1,2\n"), opts);
+  EXPECT_EQ(t.names, (std::vector<std::string>{"t", "a"}));
+  EXPECT_EQ(t.TextColumn("scene")[1], "t02");
+  EXPECT_EQ(t.Column("a")[1], 2);
+  const std::string msg = ReadError(dir.Write("i.csv", "scene,t,a\nx,1,1\ny,0,1\n"), opts);
+  EXPECT_NE(msg.find("i.csv:3:2"), std::string::npos) << msg;
+  const std::string bad = ReadError(dir.Write("j.csv", "scene,t,a\nx,0,oops\n"), opts);
+  EXPECT_NE(bad.find("j.csv:2:3"), std::string::npos) << bad;
+}
+
+}  // namespace
+}  // namespace impactdic

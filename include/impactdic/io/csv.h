@@ -21,11 +21,15 @@ struct CsvTable {
   std::string path;                          // Where it was read from (for messages).
   std::vector<std::string> names;            // Column names, in file order.
   std::vector<std::vector<double>> columns;  // columns[c][row].
+  // Columns read as text (CsvReadOptions::text_columns), not in `names`.
+  std::vector<std::string> text_names;
+  std::vector<std::vector<std::string>> text_columns;
 
   std::size_t rows() const { return columns.empty() ? 0 : columns[0].size(); }
   bool Has(const std::string& name) const;
   // Error kFileFormat naming the file and the missing column (with the available ones).
   const std::vector<double>& Column(const std::string& name) const;
+  const std::vector<std::string>& TextColumn(const std::string& name) const;
 };
 
 struct CsvReadOptions {
@@ -35,6 +39,8 @@ struct CsvReadOptions {
   bool allow_non_finite = false;
   // If not empty: this column must be strictly increasing (a time axis).
   std::string increasing_column;
+  // Columns kept as text (e.g. a scene name); absent ones are ignored.
+  std::vector<std::string> text_columns;
   // Lines starting with this character are skipped (before and after the header).
   char comment = '#';
 };
