@@ -1,10 +1,9 @@
 #include "impactdic/render/animation.h"
 
-#include <opencv2/videoio.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/videoio.hpp>
 #include <optional>
 
 #include "impactdic/core/error.h"
@@ -51,7 +50,8 @@ std::string AnimationSummary::BriefReport() const {
                 size.height, fps);
   std::string text = buf;
   if (fell_back) text += "; fell back to MJPG AVI because " + fallback_reason;
-  if (png_frames > 0) text += "; " + std::to_string(png_frames) + " PNG frames in " + png_frames_dir;
+  if (png_frames > 0)
+    text += "; " + std::to_string(png_frames) + " PNG frames in " + png_frames_dir;
   return text;
 }
 
@@ -181,7 +181,8 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
       std::error_code ec;
       fs::rename(temp, final_path, ec);
       if (ec) {
-        throw Error(ErrorKind::kIo, final_path, "cannot rename the temporary video: " + ec.message(),
+        throw Error(ErrorKind::kIo, final_path,
+                    "cannot rename the temporary video: " + ec.message(),
                     "a writable output location");
       }
       cleanup.path.clear();
@@ -191,7 +192,8 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
       summary.frames_read_back = result.read_back;
       if (attempt.codec == "MJPG" && options.codec == VideoCodec::kAuto) {
         summary.fell_back = true;
-        summary.fallback_reason = h264_failures.empty() ? "no H.264 fourcc was tried" : h264_failures;
+        summary.fallback_reason =
+            h264_failures.empty() ? "no H.264 fourcc was tried" : h264_failures;
         LogWarning("animation: H.264 did not work ({}); wrote Motion-JPEG AVI {} instead",
                    summary.fallback_reason, final_path);
       }

@@ -27,7 +27,8 @@ void CheckSameLength(const std::vector<double>& t, const std::vector<double>& y,
 }
 
 void AddSeries(Plot* plot, const std::vector<double>& t_ms, const std::vector<double>& y,
-               const std::string& label, const char* color, SeriesStyle style = SeriesStyle::kLines) {
+               const std::string& label, const char* color,
+               SeriesStyle style = SeriesStyle::kLines) {
   if (y.empty()) return;
   PlotSeries s;
   s.x = t_ms;
@@ -42,11 +43,12 @@ void AddTeMarker(Plot* plot, double t_e_s) {
   if (!std::isfinite(t_e_s)) return;
   plot->markers.push_back({.orientation = MarkerOrientation::kVertical,
                            .value = 1e3 * t_e_s,
-                           .label = "t_e = " + [&] {
-                             char buf[32];
-                             std::snprintf(buf, sizeof buf, "%.2f ms", 1e3 * t_e_s);
-                             return std::string(buf);
-                           }(),
+                           .label = "t_e = " +
+                                    [&] {
+                                      char buf[32];
+                                      std::snprintf(buf, sizeof buf, "%.2f ms", 1e3 * t_e_s);
+                                      return std::string(buf);
+                                    }(),
                            .color = kGrey});
 }
 
@@ -61,7 +63,7 @@ Plot MakeMomentumPlot(const MomentumFigureData& d) {
   plot.x_label = "time since impact t [ms]";
   plot.y_label = "momentum p [N s]";
   plot.enhanced_text = true;
-  plot.legend = LegendPosition::kBottomRight;
+  plot.legend = LegendPosition::kBelow;
   const auto t_ms = ToMs(d.t_s);
   AddSeries(&plot, t_ms, d.p_pounder_Ns, "pounder p_p = m_p v_p", kBlue);
   AddSeries(&plot, t_ms, d.p_gran_Ns, "granular p_{gran}", kGreen, SeriesStyle::kDashed);
@@ -108,7 +110,7 @@ PlotSummary PlotDeceleration(const DecelerationFigureData& data, const std::stri
   return RenderPlot(MakeDecelerationPlot(data), png_path, options);
 }
 
-double SigmoidAddedMass(double t_s, double M_kg, double b_per_s, double T_s) {
+double AddedMassSigmoidCurve(double t_s, double M_kg, double b_per_s, double T_s) {
   // M / (1 + e^{-x}) with x = b (t - T): for x < 0 use M e^{x} / (1 + e^{x}) so that no
   // exponential of a large positive number is formed.
   const double x = b_per_s * (t_s - T_s);
@@ -152,7 +154,7 @@ Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
     for (int i = 0; i < kSamples; ++i) {
       const double t = t0 + (t1 - t0) * i / (kSamples - 1);
       fit.x.push_back(1e3 * t);
-      fit.y.push_back(SigmoidAddedMass(t, d.sigmoid_M_kg, d.sigmoid_b_per_s, d.sigmoid_T_s));
+      fit.y.push_back(AddedMassSigmoidCurve(t, d.sigmoid_M_kg, d.sigmoid_b_per_s, d.sigmoid_T_s));
     }
     char buf[128];
     std::snprintf(buf, sizeof buf, "fit: M = %.3g kg, b = %.4g 1/s, T = %.3g ms", d.sigmoid_M_kg,

@@ -51,6 +51,7 @@ const char* ToString(LegendPosition position) {
     case LegendPosition::kBottomRight: return "bottom_right";
     case LegendPosition::kBottomLeft: return "bottom_left";
     case LegendPosition::kOutsideRight: return "outside_right";
+    case LegendPosition::kBelow: return "below";
     case LegendPosition::kNone: return "none";
   }
   return "?";
@@ -85,9 +86,12 @@ constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
 std::string Quote(const std::string& text) {
   std::string out = "'";
   for (char c : text) {
-    if (c == '\'') out += "''";
-    else if (c == '\n') out += ' ';
-    else out += c;
+    if (c == '\'')
+      out += "''";
+    else if (c == '\n')
+      out += ' ';
+    else
+      out += c;
   }
   return out + "'";
 }
@@ -207,6 +211,7 @@ const char* KeyPlacement(LegendPosition p) {
     case LegendPosition::kBottomRight: return "inside bottom right";
     case LegendPosition::kBottomLeft: return "inside bottom left";
     case LegendPosition::kOutsideRight: return "outside right top";
+    case LegendPosition::kBelow: return "outside bottom center horizontal maxrows 1";
     case LegendPosition::kNone: return "";
   }
   return "";
@@ -220,16 +225,19 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
   const std::string font = options.font + "," + std::to_string(options.font_size_pt);
   g << "set encoding utf8\n";
   g << "set terminal " << terminal << " size " << options.width_px << "," << options.height_px
-    << (plot.enhanced_text ? " enhanced" : " noenhanced") << " font " << Quote(font);
+    << " enhanced font " << Quote(font);
   if (terminal == "pngcairo") g << " linewidth 1.0 rounded";
   g << " background '#ffffff'\n";
   g << "set output " << Quote(output_path) << "\n";
+  // Enhanced text is on for the terminal (tick formats like 10^{%L}); texts given by the caller
+  // are printed literally unless plot.enhanced_text.
+  const std::string lit = plot.enhanced_text ? "" : " noenhanced";
   if (!plot.title.empty()) {
     g << "set title " << Quote(plot.title) << " font "
-      << Quote("," + std::to_string(options.font_size_pt + 3)) << "\n";
+      << Quote("," + std::to_string(options.font_size_pt + 3)) << lit << "\n";
   }
-  g << "set xlabel " << Quote(plot.x_label) << "\n";
-  g << "set ylabel " << Quote(plot.y_label) << "\n";
+  g << "set xlabel " << Quote(plot.x_label) << lit << "\n";
+  g << "set ylabel " << Quote(plot.y_label) << lit << "\n";
   g << "set border 3 lw 1.5 lc rgb '#303030'\n";
   g << "set grid xtics ytics mxtics mytics lw 1 lc rgb '#e0e0e0', lw 0.5 lc rgb '#f0f0f0'\n";
   g << "set tics out nomirror\n";
@@ -239,14 +247,17 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
   if (any_y2) {
     g << "set border 11 lw 1.5 lc rgb '#303030'\n";
     g << "set y2tics out\nset my2tics\n";
-    g << "set y2label " << Quote(plot.y2_label) << "\n";
+    g << "set y2label " << Quote(plot.y2_label) << lit << "\n";
   }
-  if (plot.log_x) g << "set logscale x 10\nset format x '%g'\n";
-  if (plot.log_y) g << "set logscale y 10\nset format y '%g'\n";
-  if (plot.log_y2 && any_y2) g << "set logscale y2 10\n";
+  if (plot.log_x) g << "set logscale x 10\nset format x '10^{%L}'\n";
+  if (plot.log_y) g << "set logscale y 10\nset format y '10^{%L}'\n";
+  if (plot.log_y2 && any_y2) g << "set logscale y2 10\nset format y2 '10^{%L}'\n";
   g << RangeCommand(plot, 0, plot.x_min, plot.x_max);
   g << RangeCommand(plot, 1, plot.y_min, plot.y_max);
   if (any_y2) g << RangeCommand(plot, 2, NAN, NAN);
+  // Head room above the data (autoscale then extends to the next tic).
+  if (!plot.log_y) g << "set offsets 0, 0, graph 0.05, 0\n";
+  if (plot.legend == LegendPosition::kBelow) g << "set bmargin 6\n";
   if (plot.legend == LegendPosition::kNone) {
     g << "set key off\n";
   } else {
@@ -263,7 +274,7 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
         << ", graph 1 nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
       if (!m.label.empty()) {
         g << "set label " << Quote(m.label) << " at first " << v
-          << ", graph 0.96 offset character 0.6,0 left front textcolor rgb " << Quote(color)
+          << ", graph 0.04 offset character 0.6,0 left front textcolor rgb " << Quote(color) << lit
           << "\n";
       }
     } else {
@@ -271,8 +282,8 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
       g << "set arrow " << arrow++ << " from graph 0, " << sys << " " << v << " to graph 1, " << sys
         << " " << v << " nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
       if (!m.label.empty()) {
-        g << "set label " << Quote(m.label) << " at graph 0.02, " << sys << " " << v
-          << " offset 0,character 0.7 left front textcolor rgb " << Quote(color) << "\n";
+        g << "set label " << Quote(m.label) << " at graph 0.98, " << sys << " " << v
+          << " offset 0,character 0.7 right front textcolor rgb " << Quote(color) << lit << "\n";
       }
     }
   }
@@ -295,15 +306,13 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
       case SeriesStyle::kDashed:
         elements << " with lines lw " << Number(s.line_width) << " dt (8,5)";
         break;
-      case SeriesStyle::kPoints:
-        elements << " with points pt 7 ps 1.1";
-        break;
+      case SeriesStyle::kPoints: elements << " with points pt 7 ps 1.1"; break;
       case SeriesStyle::kLinesPoints:
         elements << " with linespoints lw " << Number(s.line_width) << " pt 7 ps 1.1";
         break;
     }
     elements << " lc rgb " << Quote(color);
-    elements << (s.label.empty() ? " notitle" : " title " + Quote(s.label));
+    elements << (s.label.empty() ? " notitle" : " title " + Quote(s.label) + lit);
   }
   if (index > 0) {
     g << "plot " << elements.str() << "\n";
@@ -333,8 +342,8 @@ std::string DetectPngTerminal(const std::string& binary) {
     terminal = "png";
   } else {
     throw Error(ErrorKind::kIo, "gnuplot '" + binary + "' offers no PNG terminal (exit code " +
-                                    std::to_string(result.exit_code) + "); it printed: " +
-                                    result.output.substr(0, 2000));
+                                    std::to_string(result.exit_code) +
+                                    "); it printed: " + result.output.substr(0, 2000));
   }
   cache[binary] = terminal;
   return terminal;
@@ -353,14 +362,15 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
   options.Check();
   for (std::size_t i = 0; i < plot.series.size(); ++i) {
     const auto& s = plot.series[i];
-    CheckValue(s.x.size() == s.y.size(), "plot series " + std::to_string(i) + " ('" + s.label + "')",
-               std::to_string(s.x.size()) + " x values and " + std::to_string(s.y.size()) +
-                   " y values",
-               "as many x as y values");
+    CheckValue(
+        s.x.size() == s.y.size(), "plot series " + std::to_string(i) + " ('" + s.label + "')",
+        std::to_string(s.x.size()) + " x values and " + std::to_string(s.y.size()) + " y values",
+        "as many x as y values");
     CheckValue(s.line_width > 0, "plot series line_width", Number(s.line_width), "> 0");
   }
-  const bool any_points = std::any_of(plot.series.begin(), plot.series.end(),
-                                      [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
+  const bool any_points =
+      std::any_of(plot.series.begin(), plot.series.end(),
+                  [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
   const bool any_marker = std::any_of(plot.markers.begin(), plot.markers.end(),
                                       [&](const PlotMarker& m) { return MarkerDrawable(m, plot); });
   if (!any_points && !any_marker) {
@@ -378,9 +388,9 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
   TempFile data(".dat");
   TempFile script(".gp");
   summary.points = WriteData(plot, data.path());
-  summary.series = static_cast<int>(std::count_if(
-      plot.series.begin(), plot.series.end(),
-      [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); }));
+  summary.series = static_cast<int>(
+      std::count_if(plot.series.begin(), plot.series.end(),
+                    [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); }));
 
   const std::string temp_png = render_internal::TempSiblingPath(png_path, ".png");
   struct Cleanup {
@@ -396,7 +406,8 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
   {
     std::ofstream out(script.path());
     out << GnuplotScript(plot, options, summary.terminal, data.path(), temp_png);
-    if (!out) throw Error(ErrorKind::kIo, "gnuplot script", "write failed", "").WithFile(script.path());
+    if (!out)
+      throw Error(ErrorKind::kIo, "gnuplot script", "write failed", "").WithFile(script.path());
   }
   const auto result = RunProcess(summary.gnuplot_binary, {script.path()});
   if (!result.started) {

@@ -99,8 +99,9 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   const bool fixed = dx.size() == 1 && dx[0] == n;
   const bool moving = dx.size() == 2 && dx[0] == f && dx[1] == n;
   if (!fixed && !moving) {
-    ShapeError(r, L::kDicX, file, dx, "[subsets] or [frames x subsets] matching " +
-                                          std::string(L::kVx) + " " + Dims2Text(dvx));
+    ShapeError(
+        r, L::kDicX, file, dx,
+        "[subsets] or [frames x subsets] matching " + std::string(L::kVx) + " " + Dims2Text(dvx));
   }
   if (dy != dx) ShapeError(r, L::kDicY, file, dy, "the shape of " + std::string(L::kDicX));
   seq.num_subsets = n;
@@ -152,7 +153,8 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
     integral = integral && std::isfinite(p) && p >= 0 && p == std::floor(p);
   }
   double bit_depth = NumberAttribute(r, L::kFramesGroup, L::kBitDepthAttr);
-  if (std::isnan(bit_depth) && integral) bit_depth = max_value <= 255.f ? 8 : max_value <= 65535.f ? 16 : 0;
+  if (std::isnan(bit_depth) && integral)
+    bit_depth = max_value <= 255.f ? 8 : max_value <= 65535.f ? 16 : 0;
   const int rows = static_cast<int>(di[1]), cols = static_cast<int>(di[2]);
   const std::size_t per_frame = di[1] * di[2];
   for (std::size_t i = 0; i < f; ++i) {
@@ -203,18 +205,16 @@ RenderResultsSummary RenderResults(const std::string& results_path,
 
   // What the file has.
   const bool has_momentum_t = reader.Exists(L::kMomentumT);
-  const bool has_momentum = has_momentum_t && (reader.Exists(L::kPPounder) ||
-                                               reader.Exists(L::kPGran) ||
-                                               reader.Exists(L::kPTotal));
+  const bool has_momentum =
+      has_momentum_t &&
+      (reader.Exists(L::kPPounder) || reader.Exists(L::kPGran) || reader.Exists(L::kPTotal));
   const bool has_sensor = reader.Exists(L::kSensorT) && reader.Exists(L::kSensorDecel);
   const bool has_model = reader.Exists(L::kModelT) && reader.Exists(L::kModelDecel);
   const bool has_madd = has_momentum_t && reader.Exists(L::kMAdd);
   const bool has_field = reader.Exists(L::kTimeMs) && reader.Exists(L::kDicX) &&
-                         reader.Exists(L::kDicY) && reader.Exists(L::kVx) &&
-                         reader.Exists(L::kVy);
+                         reader.Exists(L::kDicY) && reader.Exists(L::kVx) && reader.Exists(L::kVy);
   if (!has_momentum && !has_sensor && !has_model && !has_madd && !has_field) {
-    throw Error(ErrorKind::kFileFormat, "results file",
-                "none of the datasets render draws from",
+    throw Error(ErrorKind::kFileFormat, "results file", "none of the datasets render draws from",
                 std::string("at least one of: ") + L::kMomentumT + " with " + L::kPPounder + "/" +
                     L::kPGran + "/" + L::kPTotal + "; " + L::kSensorT + " + " + L::kSensorDecel +
                     "; " + L::kModelT + " + " + L::kModelDecel + "; " + L::kMAdd + "; " +
@@ -257,8 +257,7 @@ RenderResultsSummary RenderResults(const std::string& results_path,
                   L::kModelDecel);
         }
         d.t_e_s = t_e_s;
-        summary.written.push_back(
-            PlotDeceleration(d, out(L::kDecelerationPng), options.plot).path);
+        summary.written.push_back(PlotDeceleration(d, out(L::kDecelerationPng), options.plot).path);
       } else {
         skip(L::kDecelerationPng, std::string("neither ") + L::kSensorDecel + " nor " +
                                       L::kModelDecel + " (with their t_s)");
@@ -314,9 +313,10 @@ RenderResultsSummary RenderResults(const std::string& results_path,
                 }
                 if (count > 0 && sum / count > best) best = sum / count, frame = i;
               }
-              LogInfo("render: no {} attribute on {}; the snapshot shows the frame of the largest "
-                      "mean speed ({})",
-                      L::kTeAttr, L::kMomentumGroup, frame);
+              LogInfo(
+                  "render: no {} attribute on {}; the snapshot shows the frame of the largest "
+                  "mean speed ({})",
+                  L::kTeAttr, L::kMomentumGroup, frame);
               title = "Velocity field at the largest mean speed";
             }
             RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng),

@@ -98,10 +98,9 @@ ProcessResult RunProcess(const std::string& program, const std::vector<std::stri
 
   pid_t pid = 0;
   const bool has_slash = program.find('/') != std::string::npos;
-  const int rc = has_slash ? posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(),
-                                         environ)
-                           : posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(),
-                                          environ);
+  const int rc = has_slash
+                     ? posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ)
+                     : posix_spawnp(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) {
     result.start_errno = rc;

@@ -8,10 +8,10 @@
 namespace impactdic::render_internal {
 
 struct ProcessResult {
-  bool started = false;   // false: the program could not be executed at all
-  int start_errno = 0;    // errno of the failed start
-  int exit_code = -1;     // exit status; -1 if killed by a signal
-  std::string output;     // stdout and stderr together
+  bool started = false;  // false: the program could not be executed at all
+  int start_errno = 0;   // errno of the failed start
+  int exit_code = -1;    // exit status; -1 if killed by a signal
+  std::string output;    // stdout and stderr together
 };
 
 // Runs `program` (a path, or a name looked up in PATH) with `arguments`, stdin from /dev/null.

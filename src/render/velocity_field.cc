@@ -1,10 +1,9 @@
 #include "impactdic/render/velocity_field.h"
 
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <opencv2/imgproc.hpp>
 #include <unordered_map>
 
 #include "impactdic/core/error.h"
@@ -74,8 +73,8 @@ const char* ToString(VelocityDisplayUnit unit) {
 }
 
 VelocityDisplayUnit VelocityDisplayUnitFromString(const std::string& text) {
-  for (auto u : {VelocityDisplayUnit::kAuto, VelocityDisplayUnit::kMmPerS,
-                 VelocityDisplayUnit::kMPerS}) {
+  for (auto u :
+       {VelocityDisplayUnit::kAuto, VelocityDisplayUnit::kMmPerS, VelocityDisplayUnit::kMPerS}) {
     if (text == ToString(u)) return u;
   }
   throw Error(ErrorKind::kInvalidValue, "velocity unit", text, "one of auto, mm/s, m/s");
@@ -115,8 +114,8 @@ void VelocityOverlayOptions::Check() const {
              "VelocityOverlayOptions.max_speed_mm_s", Fmt("%g", max_speed_mm_s),
              "> 0, or NaN for automatic");
   CheckValue(arrow_spacing_display_px >= 4 && arrow_spacing_display_px <= 500,
-             "VelocityOverlayOptions.arrow_spacing_display_px",
-             Fmt("%g", arrow_spacing_display_px), "4..500");
+             "VelocityOverlayOptions.arrow_spacing_display_px", Fmt("%g", arrow_spacing_display_px),
+             "4..500");
   CheckValue(min_width_px >= 160 && min_width_px <= 8000, "VelocityOverlayOptions.min_width_px",
              std::to_string(min_width_px), "160..8000");
   CheckValue(max_width_px >= min_width_px && max_width_px <= 8000,
@@ -233,20 +232,49 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
   int widest = 0, baseline = 0;
   const double tick_step = NiceStep(color_max_mm_s_ * unit_factor_, 5);
   for (double v = 0; v <= color_max_mm_s_ * unit_factor_ * (1 + 1e-9); v += tick_step) {
-    widest = std::max(widest,
-                      cv::getTextSize(TickLabel(v, tick_step), kFont, text_scale_, thick, &baseline)
-                          .width);
+    widest = std::max(
+        widest,
+        cv::getTextSize(TickLabel(v, tick_step), kFont, text_scale_, thick, &baseline).width);
   }
   const int title_w =
       cv::getTextSize("[" + unit_label_ + "]", kFont, text_scale_, thick, &baseline).width;
   const int bar_w = int(std::lround(28 * text_scale_ / 0.7));
   panel_width_ = std::max(title_w + int(30 * text_scale_), bar_w + widest + int(60 * text_scale_));
-  canvas_size_ = cv::Size(RoundUp8(display_size_.width + panel_width_), RoundUp8(display_size_.height));
+  canvas_size_ =
+      cv::Size(RoundUp8(display_size_.width + panel_width_), RoundUp8(display_size_.height));
   panel_width_ = canvas_size_.width - display_size_.width;
 
-  // Arrow scale: the colour-scale top gets 1.3 arrow spacings.
-  const double arrow_spacing = std::max(options_.arrow_spacing_display_px, spacing_px_ * scale_);
-  arrow_px_per_mm_s_ = 1.3 * arrow_spacing / color_max_mm_s_;
+  // Arrows: every k-th subset along each grid direction, k chosen so that arrows are at least
+  // arrow_spacing_display_px apart; cells of k x k grid spacings anchored at the grid's corner so
+  // that a regular grid is thinned regularly. The selection uses frame 0, so the same subsets
+  // carry arrows in every frame. The colour-scale top gets an arrow one cell long.
+  {
+    const double g = spacing_px_ * scale_;
+    const double k = std::max(1.0, std::ceil(options_.arrow_spacing_display_px / g - 1e-9));
+    const double cell = k * g;
+    arrow_px_per_mm_s_ = cell / color_max_mm_s_;
+    double min_x = HUGE_VAL, min_y = HUGE_VAL;
+    for (std::size_t s = 0; s < n; ++s) {
+      if (std::isfinite(seq_.x(0, s)) && std::isfinite(seq_.y(0, s))) {
+        min_x = std::min(min_x, seq_.x(0, s) * scale_);
+        min_y = std::min(min_y, seq_.y(0, s) * scale_);
+      }
+    }
+    const double ox = min_x - 0.5 * g, oy = min_y - 0.5 * g;
+    std::unordered_map<long long, std::pair<std::size_t, double>> chosen;
+    for (std::size_t s = 0; s < n; ++s) {
+      const double xd = seq_.x(0, s) * scale_, yd = seq_.y(0, s) * scale_;
+      if (!std::isfinite(xd) || !std::isfinite(yd)) continue;
+      const long long cx = static_cast<long long>(std::floor((xd - ox) / cell));
+      const long long cy = static_cast<long long>(std::floor((yd - oy) / cell));
+      const double d = std::hypot(xd - (ox + (cx + 0.5) * cell), yd - (oy + (cy + 0.5) * cell));
+      const long long key = cy * 1000003LL + cx;
+      auto it = chosen.find(key);
+      if (it == chosen.end() || d < it->second.second - 1e-9) chosen[key] = {s, d};
+    }
+    for (const auto& entry : chosen) arrow_subsets_.push_back(entry.second.first);
+    std::sort(arrow_subsets_.begin(), arrow_subsets_.end());  // deterministic drawing order
+  }
 
   // Grey contrast for 16-bit and float frames, from frame 0.
   if (seq_.frames[0].type() != CV_8UC1) {
@@ -292,8 +320,7 @@ void VelocityFieldRenderer::DrawField(std::size_t frame, cv::Mat* display) const
   cv::Mat far_from_data(gh, gw, CV_8U, cv::Scalar(255));
   int valid = 0;
   for (std::size_t s = 0; s < n; ++s) {
-    const double speed =
-        std::hypot(seq_.vx_mm_s[frame * n + s], seq_.vy_mm_s[frame * n + s]);
+    const double speed = std::hypot(seq_.vx_mm_s[frame * n + s], seq_.vy_mm_s[frame * n + s]);
     const double gx = seq_.x(frame, s) / cell - 0.5, gy = seq_.y(frame, s) / cell - 0.5;
     if (!std::isfinite(speed) || !std::isfinite(gx) || !std::isfinite(gy)) continue;
     if (gx < -1 || gy < -1 || gx > gw || gy > gh) continue;
@@ -334,7 +361,8 @@ void VelocityFieldRenderer::DrawField(std::size_t frame, cv::Mat* display) const
   }
   // To display resolution: cell (i, j) covers image pixels [j*cell, (j+1)*cell).
   cv::Mat value_d, alpha_d;
-  const cv::Size covered(int(std::lround(gw * cell * scale_)), int(std::lround(gh * cell * scale_)));
+  const cv::Size covered(int(std::lround(gw * cell * scale_)),
+                         int(std::lround(gh * cell * scale_)));
   cv::resize(value, value_d, covered, 0, 0, cv::INTER_LINEAR);
   cv::resize(alpha, alpha_d, covered, 0, 0, cv::INTER_LINEAR);
   const float to_index = float(255.0 / color_max_mm_s_);
@@ -357,33 +385,15 @@ void VelocityFieldRenderer::DrawField(std::size_t frame, cv::Mat* display) const
 
 void VelocityFieldRenderer::DrawArrows(std::size_t frame, cv::Mat* display) const {
   const std::size_t n = seq_.num_subsets;
-  const double spacing = std::max(options_.arrow_spacing_display_px, spacing_px_ * scale_);
-  // Keep in each spacing x spacing cell the subset nearest to the cell centre.
-  std::unordered_map<long long, std::pair<std::size_t, double>> chosen;
-  for (std::size_t s = 0; s < n; ++s) {
-    const double vx = seq_.vx_mm_s[frame * n + s], vy = seq_.vy_mm_s[frame * n + s];
-    const double xd = seq_.x(frame, s) * scale_, yd = seq_.y(frame, s) * scale_;
-    if (!std::isfinite(vx) || !std::isfinite(vy) || !std::isfinite(xd) || !std::isfinite(yd)) {
-      continue;
-    }
-    if (xd < 0 || yd < 0 || xd >= display->cols || yd >= display->rows) continue;
-    const long long cx = static_cast<long long>(std::floor(xd / spacing));
-    const long long cy = static_cast<long long>(std::floor(yd / spacing));
-    const double d = std::hypot(xd - (cx + 0.5) * spacing, yd - (cy + 0.5) * spacing);
-    const long long key = cy * 1000003LL + cx;
-    auto it = chosen.find(key);
-    if (it == chosen.end() || d < it->second.second) chosen[key] = {s, d};
-  }
-  std::vector<std::size_t> order;
-  for (const auto& [key, value] : chosen) order.push_back(value.first);
-  std::sort(order.begin(), order.end());  // deterministic drawing order
   const int thick = std::max(1, int(std::lround(text_scale_ * 1.6)));
   const double sign = seq_.vy_positive_down ? 1.0 : -1.0;
-  for (std::size_t s : order) {
+  for (std::size_t s : arrow_subsets_) {
     const double vx = seq_.vx_mm_s[frame * n + s], vy = sign * seq_.vy_mm_s[frame * n + s];
     const double len = std::hypot(vx, vy) * arrow_px_per_mm_s_;
-    if (len < 2.0) continue;
     const cv::Point2d p0(seq_.x(frame, s) * scale_, seq_.y(frame, s) * scale_);
+    // NaN velocity or position: no arrow (the comparisons are false for NaN).
+    if (!(len >= 2.0) || !std::isfinite(p0.x) || !std::isfinite(p0.y)) continue;
+    if (std::abs(p0.x) > 1e6 || std::abs(p0.y) > 1e6 || len > 1e6) continue;
     const cv::Point2d p1 = p0 + cv::Point2d(vx, vy) * arrow_px_per_mm_s_;
     const double tip = std::min(0.4, 9.0 * text_scale_ / 0.7 / len);
     constexpr int kShift = 4;  // sub-pixel endpoints
@@ -404,12 +414,12 @@ void VelocityFieldRenderer::DrawDecorations(std::size_t frame, cv::Mat* canvas) 
   // Time stamp, top left.
   {
     const double t = seq_.time_ms[frame];
-    const std::string text =
-        std::isfinite(t) ? "t = " + Fmt(std::abs(t) >= 100 ? "%.1f" : "%.2f", t) + " ms"
-                         : "frame " + std::to_string(frame);
+    const std::string text = std::isfinite(t)
+                                 ? "t = " + Fmt(std::abs(t) >= 100 ? "%.1f" : "%.2f", t) + " ms"
+                                 : "frame " + std::to_string(frame);
     const cv::Size sz = cv::getTextSize(text, kFont, ts * 1.15, thick, &baseline);
-    ShadeRect(&display, cv::Rect(pad / 2, pad / 2, sz.width + 2 * pad, sz.height + 2 * pad),
-              kBlack, 0.55);
+    ShadeRect(&display, cv::Rect(pad / 2, pad / 2, sz.width + 2 * pad, sz.height + 2 * pad), kBlack,
+              0.55);
     cv::putText(display, text, cv::Point(pad / 2 + pad, pad / 2 + pad + sz.height), kFont,
                 ts * 1.15, kWhite, thick, cv::LINE_AA);
   }
@@ -444,8 +454,8 @@ void VelocityFieldRenderer::DrawDecorations(std::size_t frame, cv::Mat* canvas) 
     ShadeRect(&display, cv::Rect(x0, y0, box_w, box_h), kBlack, 0.55);
     const int bar_x = x0 + (box_w - len) / 2, bar_y = y0 + 2 * pad + sz.height;
     cv::rectangle(display, cv::Rect(bar_x, bar_y, len, bar_h), kWhite, cv::FILLED);
-    cv::putText(display, text, cv::Point(x0 + (box_w - sz.width) / 2, y0 + pad + sz.height),
-                kFont, ts, kWhite, thick, cv::LINE_AA);
+    cv::putText(display, text, cv::Point(x0 + (box_w - sz.width) / 2, y0 + pad + sz.height), kFont,
+                ts, kWhite, thick, cv::LINE_AA);
   }
   // Reference arrow, bottom right.
   if (options_.arrows) {
@@ -457,8 +467,8 @@ void VelocityFieldRenderer::DrawDecorations(std::size_t frame, cv::Mat* canvas) 
     const int box_h = sz.height + 4 * pad;
     const int x0 = display.cols - box_w - pad / 2, y0 = display.rows - box_h - pad / 2;
     ShadeRect(&display, cv::Rect(x0, y0, box_w, box_h), kBlack, 0.55);
-    cv::putText(display, text, cv::Point(x0 + (box_w - sz.width) / 2, y0 + pad + sz.height),
-                kFont, ts, kWhite, thick, cv::LINE_AA);
+    cv::putText(display, text, cv::Point(x0 + (box_w - sz.width) / 2, y0 + pad + sz.height), kFont,
+                ts, kWhite, thick, cv::LINE_AA);
     const int ay = y0 + 2 * pad + sz.height + pad / 2;
     const int ax = x0 + (box_w - len) / 2;
     const int athick = std::max(1, int(std::lround(ts * 1.6)));
@@ -467,8 +477,7 @@ void VelocityFieldRenderer::DrawDecorations(std::size_t frame, cv::Mat* canvas) 
   }
 
   // Colour bar panel on the right.
-  cv::Mat panel =
-      (*canvas)(cv::Rect(display_size_.width, 0, panel_width_, canvas_size_.height));
+  cv::Mat panel = (*canvas)(cv::Rect(display_size_.width, 0, panel_width_, canvas_size_.height));
   panel.setTo(kPanelColor);
   const double top_display = color_max_mm_s_ * unit_factor_;
   const std::string title1 = "|v|";
@@ -488,9 +497,11 @@ void VelocityFieldRenderer::DrawDecorations(std::size_t frame, cv::Mat* canvas) 
   for (int y = 0; y <= bar_h; ++y) {
     const int idx = std::clamp(int(std::lround(255.0 * (bar_h - y) / bar_h)), 0, 255);
     const cv::Vec3b c = lut_.at<cv::Vec3b>(idx);
-    cv::line(panel, {bar_x, bar_top + y}, {bar_x + bar_w, bar_top + y}, cv::Scalar(c[0], c[1], c[2]));
+    cv::line(panel, {bar_x, bar_top + y}, {bar_x + bar_w, bar_top + y},
+             cv::Scalar(c[0], c[1], c[2]));
   }
-  cv::rectangle(panel, cv::Rect(bar_x, bar_top, bar_w + 1, bar_h + 1), cv::Scalar(200, 200, 200), 1);
+  cv::rectangle(panel, cv::Rect(bar_x, bar_top, bar_w + 1, bar_h + 1), cv::Scalar(200, 200, 200),
+                1);
   const double step = NiceStep(top_display, 5);
   const int tick_len = std::max(4, int(std::lround(8 * ts / 0.7)));
   for (int k = 0;; ++k) {
@@ -522,8 +533,9 @@ cv::Mat VelocityFieldRenderer::RenderFrame(std::size_t frame, const std::string&
   const int band = RoundUpEven(int(sz.height * 2.4));
   cv::Mat titled(canvas.rows + band, canvas.cols, CV_8UC3, kPanelColor);
   canvas.copyTo(titled(cv::Rect(0, band, canvas.cols, canvas.rows)));
-  cv::putText(titled, title, cv::Point(std::max(4, (titled.cols - sz.width) / 2), band / 2 + sz.height / 2),
-              kFont, text_scale_ * 1.2, kWhite, thick, cv::LINE_AA);
+  cv::putText(titled, title,
+              cv::Point(std::max(4, (titled.cols - sz.width) / 2), band / 2 + sz.height / 2), kFont,
+              text_scale_ * 1.2, kWhite, thick, cv::LINE_AA);
   return titled;
 }
 

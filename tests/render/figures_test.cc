@@ -22,7 +22,9 @@ MomentumFigureData SyntheticMomentum() {
   for (int i = 0; i <= 40; ++i) {
     const double t = i * 1.0 / 1600.0 * 0.25;
     const double pp = p_max * std::exp(-t / 3e-3);
-    const double pg = t <= t_e ? p_max - pp : (p_max - p_max * std::exp(-t_e / 3e-3)) * std::exp(-(t - t_e) / 2e-3);
+    const double pg = t <= t_e
+                          ? p_max - pp
+                          : (p_max - p_max * std::exp(-t_e / 3e-3)) * std::exp(-(t - t_e) / 2e-3);
     d.t_s.push_back(t);
     d.p_pounder_Ns.push_back(pp);
     d.p_gran_Ns.push_back(pg);
@@ -73,7 +75,7 @@ TEST(Figures, AddedMassPngWithFit) {
   for (int i = 0; i < 12; ++i) {
     const double t = i / 1600.0;
     d.t_s.push_back(t);
-    d.m_add_kg.push_back(SigmoidAddedMass(t, 12.0, 2500.0, 2e-3) + 0.3 * std::sin(i));
+    d.m_add_kg.push_back(AddedMassSigmoidCurve(t, 12.0, 2500.0, 2e-3) + 0.3 * std::sin(i));
   }
   const Plot plot = MakeAddedMassPlot(d);
   ASSERT_EQ(plot.series.size(), 2u);
@@ -84,11 +86,12 @@ TEST(Figures, AddedMassPngWithFit) {
 
 TEST(Figures, SigmoidHasNoOverflow) {
   // b |t - T| = 1e7: a naive 1 / (1 + exp(1e7)) overflows to inf in the exponential.
-  EXPECT_EQ(SigmoidAddedMass(-1.0, 5.0, 1e7, 0.0), 0.0);
-  EXPECT_EQ(SigmoidAddedMass(1.0, 5.0, 1e7, 0.0), 5.0);
-  EXPECT_DOUBLE_EQ(SigmoidAddedMass(0.0, 5.0, 1e7, 0.0), 2.5);
+  EXPECT_EQ(AddedMassSigmoidCurve(-1.0, 5.0, 1e7, 0.0), 0.0);
+  EXPECT_EQ(AddedMassSigmoidCurve(1.0, 5.0, 1e7, 0.0), 5.0);
+  EXPECT_DOUBLE_EQ(AddedMassSigmoidCurve(0.0, 5.0, 1e7, 0.0), 2.5);
   // Symmetry m(T + x) + m(T - x) = M, to rounding.
-  EXPECT_NEAR(SigmoidAddedMass(2e-3 + 4e-4, 5, 2500, 2e-3) + SigmoidAddedMass(2e-3 - 4e-4, 5, 2500, 2e-3),
+  EXPECT_NEAR(AddedMassSigmoidCurve(2e-3 + 4e-4, 5, 2500, 2e-3) +
+                  AddedMassSigmoidCurve(2e-3 - 4e-4, 5, 2500, 2e-3),
               5.0, 1e-14);
 }
 

@@ -28,8 +28,10 @@ class EnvGuard {
     if (had_) old_ = v;
   }
   ~EnvGuard() {
-    if (had_) setenv("IMPACTDIC_GNUPLOT", old_.c_str(), 1);
-    else unsetenv("IMPACTDIC_GNUPLOT");
+    if (had_)
+      setenv("IMPACTDIC_GNUPLOT", old_.c_str(), 1);
+    else
+      unsetenv("IMPACTDIC_GNUPLOT");
   }
 
  private:
@@ -144,7 +146,8 @@ TEST(Gnuplot, FailingGnuplotShowsItsStderrAndWritesNothing) {
   {
     std::ofstream out(fake);
     out << "#!/bin/sh\n"
-           "if [ \"$1\" = \"-e\" ]; then echo '   pngcairo  png terminal based on cairo'; exit 0; fi\n"
+           "if [ \"$1\" = \"-e\" ]; then echo '   pngcairo  png terminal based on cairo'; exit 0; "
+           "fi\n"
            "echo 'line 7: undefined variable: frobnicate' >&2\nexit 1\n";
   }
   chmod(fake.c_str(), 0755);

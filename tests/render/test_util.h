@@ -5,12 +5,12 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <string>
 #include <vector>
@@ -63,9 +63,8 @@ inline ::testing::AssertionResult IsPngOfSize(const std::string& path, int min_w
   const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (img.empty()) return ::testing::AssertionFailure() << path << " does not decode";
   if (img.cols < min_w || img.rows < min_h) {
-    return ::testing::AssertionFailure()
-           << path << " is " << img.cols << "x" << img.rows << ", expected >= " << min_w << "x"
-           << min_h;
+    return ::testing::AssertionFailure() << path << " is " << img.cols << "x" << img.rows
+                                         << ", expected >= " << min_w << "x" << min_h;
   }
   return ::testing::AssertionSuccess();
 }

@@ -12,9 +12,8 @@
 #ifndef IMPACTDIC_RENDER_ANIMATION_H_
 #define IMPACTDIC_RENDER_ANIMATION_H_
 
-#include <opencv2/core.hpp>
-
 #include <cstddef>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -31,7 +30,8 @@ const char* ToString(VideoCodec codec);  // "auto", "h264", "mjpg"
 VideoCodec VideoCodecFromString(const std::string& text);
 
 struct AnimationOptions {
-  double fps = 25.0;  // playback rate of the video [frames/s], (0, 240]; 1600 fps footage is slow motion
+  double fps =
+      25.0;  // playback rate of the video [frames/s], (0, 240]; 1600 fps footage is slow motion
   VideoCodec codec = VideoCodec::kAuto;
   // The H.264 fourccs tried in order (each 4 characters).
   std::vector<std::string> h264_fourccs = {"avc1", "H264", "X264"};
@@ -43,11 +43,11 @@ struct AnimationOptions {
 };
 
 struct AnimationSummary {
-  std::string path;       // the video written (.mp4 or .avi)
-  std::string codec;      // "H.264" or "MJPG"
-  std::string fourcc;     // the fourcc that worked, e.g. "avc1"
-  bool fell_back = false;        // MJPG AVI because H.264 did not work
-  std::string fallback_reason;   // why (empty if no fallback)
+  std::string path;                  // the video written (.mp4 or .avi)
+  std::string codec;                 // "H.264" or "MJPG"
+  std::string fourcc;                // the fourcc that worked, e.g. "avc1"
+  bool fell_back = false;            // MJPG AVI because H.264 did not work
+  std::string fallback_reason;       // why (empty if no fallback)
   std::size_t frames = 0;            // video frames written (= camera frames)
   std::size_t frames_read_back = 0;  // counted by reading the file back with cv::VideoCapture
   std::size_t png_frames = 0;

@@ -29,8 +29,8 @@ struct MomentumFigureData {
   std::vector<double> p_pounder_Ns;  // m_p v_p [N s]
   std::vector<double> p_gran_Ns;     // granular momentum [N s]
   std::vector<double> p_total_Ns;    // p_pounder + p_gran [N s]
-  double p_max_Ns = kFigureUnset;            // maximum pounder momentum (horizontal line); NaN = none
-  double t_e_s = kFigureUnset;               // end of the peak stage (vertical marker); NaN = none
+  double p_max_Ns = kFigureUnset;    // maximum pounder momentum (horizontal line); NaN = none
+  double t_e_s = kFigureUnset;       // end of the peak stage (vertical marker); NaN = none
 };
 Plot MakeMomentumPlot(const MomentumFigureData& data);
 PlotSummary PlotMomentum(const MomentumFigureData& data, const std::string& png_path,
@@ -60,7 +60,7 @@ struct AddedMassFigureData {
   double t_e_s = kFigureUnset;  // optional marker
 };
 // Eq. 5 evaluated without overflow for large b |t - T|.
-double SigmoidAddedMass(double t_s, double M_kg, double b_per_s, double T_s);
+double AddedMassSigmoidCurve(double t_s, double M_kg, double b_per_s, double T_s);
 Plot MakeAddedMassPlot(const AddedMassFigureData& data);
 PlotSummary PlotAddedMass(const AddedMassFigureData& data, const std::string& png_path,
                           const PlotOptions& options = {});

@@ -39,8 +39,8 @@ struct PlotSeries {
   std::vector<double> y;
   std::string label;  // legend entry; empty = not in the legend
   SeriesStyle style = SeriesStyle::kLines;
-  std::string color;        // "#rrggbb"; empty = the next colour of the palette
-  double line_width = 2.5;  // in gnuplot line-width units (>0)
+  std::string color;           // "#rrggbb"; empty = the next colour of the palette
+  double line_width = 2.5;     // in gnuplot line-width units (>0)
   bool second_y_axis = false;  // plotted against the right-hand y axis (Plot::y2_label)
 };
 
@@ -57,7 +57,15 @@ struct PlotMarker {
   bool second_y_axis = false;  // horizontal marker in the y2 coordinates
 };
 
-enum class LegendPosition { kTopRight, kTopLeft, kBottomRight, kBottomLeft, kOutsideRight, kNone };
+enum class LegendPosition {
+  kTopRight,
+  kTopLeft,
+  kBottomRight,
+  kBottomLeft,
+  kOutsideRight,
+  kBelow,  // under the plot, entries side by side
+  kNone,
+};
 const char* ToString(LegendPosition position);
 
 struct Plot {
@@ -82,8 +90,8 @@ struct Plot {
 };
 
 struct PlotOptions {
-  int width_px = 1200;   // PNG size, [320, 8000]
-  int height_px = 800;   // [240, 8000]
+  int width_px = 1200;    // PNG size, [320, 8000]
+  int height_px = 800;    // [240, 8000]
   int font_size_pt = 15;  // base font size, [6, 72]
   std::string font = "DejaVu Sans";
   // gnuplot binary; empty = environment variable IMPACTDIC_GNUPLOT, else "gnuplot" from PATH.
@@ -97,7 +105,7 @@ struct PlotSummary {
   std::string terminal;  // "pngcairo" or "png"
   std::string gnuplot_binary;
   int series = 0;
-  std::size_t points = 0;  // data points written
+  std::size_t points = 0;        // data points written
   std::string gnuplot_messages;  // what gnuplot printed (warnings) on success
   double wall_s = 0.0;
 };

@@ -21,10 +21,10 @@
 namespace impactdic {
 
 struct RenderResultsOptions {
-  std::string output_dir;   // folder for the outputs (created if missing); empty = the file's folder
-  bool figures = true;      // the gnuplot figures
-  bool snapshot = true;     // the velocity field at the end of the peak stage
-  bool animation = true;    // the velocity animation
+  std::string output_dir;  // folder for the outputs (created if missing); empty = the file's folder
+  bool figures = true;     // the gnuplot figures
+  bool snapshot = true;    // the velocity field at the end of the peak stage
+  bool animation = true;   // the velocity animation
   bool png_frames = false;  // also every animation frame as PNG (output_dir/velocity_frames)
   PlotOptions plot;
   AnimationOptions animation_options;  // png_frames_dir is set from png_frames

@@ -22,10 +22,9 @@
 #ifndef IMPACTDIC_RENDER_VELOCITY_FIELD_H_
 #define IMPACTDIC_RENDER_VELOCITY_FIELD_H_
 
-#include <opencv2/core.hpp>
-
 #include <cstddef>
 #include <limits>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -62,22 +61,22 @@ struct VelocityFieldSequence {
 };
 
 enum class VelocityDisplayUnit {
-  kAuto,     // m/s when the colour-scale top is >= 1000 mm/s, else mm/s
+  kAuto,  // m/s when the colour-scale top is >= 1000 mm/s, else mm/s
   kMmPerS,
   kMPerS,
 };
-const char* ToString(VelocityDisplayUnit unit);                 // "auto", "mm/s", "m/s"
+const char* ToString(VelocityDisplayUnit unit);  // "auto", "mm/s", "m/s"
 VelocityDisplayUnit VelocityDisplayUnitFromString(const std::string& text);
 
 struct VelocityOverlayOptions {
-  double opacity = 0.6;  // alpha of the colour map over the frame, [0, 1]
+  double opacity = 0.7;  // alpha of the colour map over the frame, [0, 1]
   // Top of the colour scale [mm/s]; NaN = the 99th percentile of all valid speeds of the
   // sequence (one scale for every frame, so colours are comparable over time).
   double max_speed_mm_s = std::numeric_limits<double>::quiet_NaN();
   VelocityDisplayUnit unit = VelocityDisplayUnit::kAuto;
   bool arrows = true;
   // Minimum distance between drawn arrows in display pixels, [4, 500]: denser grids are thinned.
-  double arrow_spacing_display_px = 26.0;
+  double arrow_spacing_display_px = 36.0;
   // Frames are scaled for display so that their width lies in [min_width_px, max_width_px].
   int min_width_px = 960;   // [160, 8000]
   int max_width_px = 1920;  // [min_width_px, 8000]
@@ -125,7 +124,8 @@ class VelocityFieldRenderer {
   std::string unit_label_ = "mm/s";
   double spacing_px_ = 20.0;
   double reference_speed_mm_s_ = 1.0;
-  double arrow_px_per_mm_s_ = 0.0;  // display px of arrow length per mm/s
+  double arrow_px_per_mm_s_ = 0.0;          // display px of arrow length per mm/s
+  std::vector<std::size_t> arrow_subsets_;  // subsets that carry an arrow
   std::size_t valid_speeds_ = 0;
   cv::Mat lut_;  // 256 x 1 BGR viridis
 };
