@@ -290,10 +290,15 @@ std::vector<BoardPose> CalibrationPoses(const SynthCamera& camera, const Checker
                "a board small enough to fit the image");
     const double tilt = uniform(15, 40) * deg, axis = uniform(0, 2 * std::numbers::pi);
     const double roll = uniform(-20, 20) * deg;
-    const double width_fraction = uniform(0.45, 0.75);
+    // Views cycle through the four image corners and the whole field, so that the lens
+    // distortion is sampled out to the corners (not only where a big centred board would be).
+    const int slot = static_cast<int>(poses.size()) % 5;
+    const double width_fraction = uniform(0.4, 0.65);
     const double z = board_w * camera.fx / (width_fraction * camera.width);
-    const double x0 = uniform(-0.25, 0.25) * camera.width / camera.fx;
-    const double y0 = uniform(-0.25, 0.25) * camera.height / camera.fy;
+    const double sx = slot == 4 ? uniform(-0.2, 0.2) : (slot % 2 ? 1 : -1) * uniform(0.15, 0.35);
+    const double sy = slot == 4 ? uniform(-0.2, 0.2) : (slot / 2 ? 1 : -1) * uniform(0.15, 0.35);
+    const double x0 = sx * camera.width / camera.fx;
+    const double y0 = sy * camera.height / camera.fy;
     cv::Matx33d r_tilt, r_roll;
     cv::Rodrigues(cv::Vec3d(std::cos(axis), std::sin(axis), 0) * tilt, r_tilt);
     cv::Rodrigues(cv::Vec3d(0, 0, roll), r_roll);

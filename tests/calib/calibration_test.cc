@@ -105,23 +105,48 @@ TEST_F(CalibrationFixture, RmsIsAtTheCornerNoiseLevel) {
 }
 
 // The estimated lens model undistorts the true corner positions to within 0.05 px of their true
-// pinhole positions (all corners of all views, i.e. the whole area the board covered).
+// pinhole positions, over all corners of all views (the area the boards covered, out to the image
+// corners). The undistorted image of the estimated camera uses K_est, the truth K_true: the two
+// differ by the global affine map K_est K_true^-1 (an intrinsics difference, tested above at
+// 0.5 %), which is removed by one least-squares affine fit over all corners before the 0.05 px
+// check. The raw difference (intrinsics error included) is held to 0.1 px.
 TEST_F(CalibrationFixture, UndistortedCornersWithinFiveHundredthsOfAPixel) {
-  double worst = 0, sq = 0;
-  std::size_t n = 0;
+  std::vector<cv::Point2d> estimated, truth;
   for (const BoardPose& pose : poses_) {
-    const auto distorted = ProjectCorners(camera_, board_, pose);
-    const auto truth = ProjectCornersPinhole(camera_, board_, pose);
-    const auto undistorted = calibration_.UndistortPixels(distorted);
-    for (std::size_t i = 0; i < truth.size(); ++i) {
-      const double e = cv::norm(undistorted[i] - truth[i]);
-      worst = std::max(worst, e);
-      sq += e * e;
-      ++n;
-    }
+    const auto undistorted = calibration_.UndistortPixels(ProjectCorners(camera_, board_, pose));
+    const auto pinhole = ProjectCornersPinhole(camera_, board_, pose);
+    estimated.insert(estimated.end(), undistorted.begin(), undistorted.end());
+    truth.insert(truth.end(), pinhole.begin(), pinhole.end());
   }
-  std::printf("undistorted corners: max error %.4f px, RMS %.4f px\n", worst, std::sqrt(sq / n));
+  const int n = static_cast<int>(truth.size());
+  cv::Mat a = cv::Mat::zeros(2 * n, 6, CV_64F), b(2 * n, 1, CV_64F), x;
+  for (int i = 0; i < n; ++i) {
+    a.at<double>(2 * i, 0) = estimated[i].x;
+    a.at<double>(2 * i, 1) = estimated[i].y;
+    a.at<double>(2 * i, 2) = 1;
+    a.at<double>(2 * i + 1, 3) = estimated[i].x;
+    a.at<double>(2 * i + 1, 4) = estimated[i].y;
+    a.at<double>(2 * i + 1, 5) = 1;
+    b.at<double>(2 * i) = truth[i].x;
+    b.at<double>(2 * i + 1) = truth[i].y;
+  }
+  ASSERT_TRUE(cv::solve(a, b, x, cv::DECOMP_SVD));
+  double worst_raw = 0, worst = 0, sq = 0;
+  for (int i = 0; i < n; ++i) {
+    worst_raw = std::max(worst_raw, cv::norm(estimated[i] - truth[i]));
+    const cv::Point2d aligned(
+        x.at<double>(0) * estimated[i].x + x.at<double>(1) * estimated[i].y + x.at<double>(2),
+        x.at<double>(3) * estimated[i].x + x.at<double>(4) * estimated[i].y + x.at<double>(5));
+    const double e = cv::norm(aligned - truth[i]);
+    worst = std::max(worst, e);
+    sq += e * e;
+  }
+  std::printf(
+      "undistorted corners: raw max error %.4f px; after the K_est/K_true affine: max "
+      "%.4f px, RMS %.4f px\n",
+      worst_raw, worst, std::sqrt(sq / n));
   EXPECT_LT(worst, 0.05);
+  EXPECT_LT(worst_raw, 0.1);
 }
 
 TEST_F(CalibrationFixture, PlaneScaleWithinTwoTenthsOfAPercent) {
@@ -330,6 +355,29 @@ TEST(Calibration, Detects16BitBoards) {
     e16 = std::max(e16, std::min(cv::norm(cv::Point2d((*c16)[i]) - truth[i]),
                                  cv::norm(cv::Point2d((*c16)[truth.size() - 1 - i]) - truth[i])));
   EXPECT_LT(e16, 0.1);
+}
+
+}  // namespace
+}  // namespace impactdic
+
+namespace impactdic {
+namespace {
+
+// The committed sample (calibration/camera.yaml, made from calibration/*.png by the calibrate
+// stage) matches the camera that rendered the images (SampleCamera, board on the panel at
+// 613.93 mm: 0.747786537 mm/px; see calibration/board.yaml).
+TEST(SampleCalibration, MatchesTheRenderedCamera) {
+  const CameraCalibration c = LoadCalibration(IMPACTDIC_SOURCE_DIR "/calibration/camera.yaml");
+  const SynthCamera truth = SampleCamera();
+  EXPECT_EQ(c.ImageSize(), cv::Size(640, 480));
+  EXPECT_NEAR(c.fx, truth.fx, 0.005 * truth.fx);
+  EXPECT_NEAR(c.fy, truth.fy, 0.005 * truth.fy);
+  EXPECT_NEAR(c.cx, truth.cx, 0.005 * truth.cx);
+  EXPECT_NEAR(c.cy, truth.cy, 0.005 * truth.cy);
+  EXPECT_LT(c.rms_px, 0.1);
+  EXPECT_GE(c.views.size(), 12u);
+  ASSERT_TRUE(c.plane);
+  EXPECT_NEAR(c.plane->mm_per_px, 0.747786537, 0.002 * 0.747786537);
 }
 
 }  // namespace

@@ -107,9 +107,10 @@ std::vector<cv::Point2d> ProjectCornersPinhole(const SynthCamera& camera,
                                                const CheckerboardSpec& board,
                                                const BoardPose& pose);
 
-// `count` varied, seeded poses (tilts of 15-40 degrees about random axes, in-plane rotations,
-// positions spread over the image) whose whole board including the margin stays inside the image
-// with a 6 px border. Deterministic for a given seed.
+// `count` varied, seeded poses (tilts of 15-40 degrees about random axes, in-plane rotations up
+// to 20 degrees, boards 40-65 % of the image width, cycling through the four image corners and
+// the centre) whose whole board including the margin stays inside the image with a 6 px border.
+// Deterministic for a given seed.
 std::vector<BoardPose> CalibrationPoses(const SynthCamera& camera, const CheckerboardSpec& board,
                                         int count, std::uint64_t seed);
 
