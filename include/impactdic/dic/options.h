@@ -1,0 +1,114 @@
+// Options of the correlation engine (SPEC section 3), nested by concern.
+//
+//   DicOptions options;
+//   options.grid.subset_size = 25;
+//   options.grid.step = 10;
+//   options.icgn.interpolation = Interpolation::kBiquintic;
+//   options.update.mode = ReferenceUpdate::kAuto;
+//   options.Check();  // Error naming the broken field.
+#ifndef IMPACTDIC_DIC_OPTIONS_H_
+#define IMPACTDIC_DIC_OPTIONS_H_
+
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "impactdic/dic/bspline.h"
+
+namespace impactdic {
+
+// Subset shape function: first order (affine: u, du/dx, du/dy, v, dv/dx, dv/dy; 6 parameters)
+// or second order (adds the 3 second derivatives of u and of v; 12 parameters).
+enum class ShapeFunction { kAffine, kQuadratic };
+const char* ToString(ShapeFunction shape);
+ShapeFunction ShapeFunctionFromString(const std::string& name);
+
+// When the reference image changes during a sequence (GeoPIV-RG's answer to random walk):
+// kFixed: always the first image; kIncremental: the previous frame; kEveryN: every N frames;
+// kAuto: keep the reference while every subset that is still tracked correlates at or above
+// UpdateOptions::auto_min_zncc; when one does not, switch to the last good frame and redo the
+// frame against it.
+enum class ReferenceUpdate { kFixed, kIncremental, kEveryN, kAuto };
+const char* ToString(ReferenceUpdate mode);
+// "fixed", "incremental", "auto", or "every:N" (N >= 1 is returned in *every_n).
+ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n);
+
+struct GridOptions {
+  int subset_size = 25;  // Subset side S [px], odd, >= 5.
+  int step = 10;         // Grid spacing [px], >= 1.
+  // Region of interest [px] in the first reference; subsets lie entirely inside it. An empty
+  // rectangle means the whole image.
+  cv::Rect roi;
+  // Optional mask (CV_8U, image size): a subset whose centre pixel is 0 is `masked`.
+  cv::Mat mask;
+  void Check() const;
+};
+
+struct InitialGuessOptions {
+  // Integer-pixel ZNCC search radius [px] around the predicted position, >= 1. The search runs
+  // at seed points and for subsets the propagation could not solve.
+  int search_radius_px = 40;
+  // Seeds lie on every `seed_spacing`-th grid node in x and y (plus the grid centre), >= 1.
+  int seed_spacing = 12;
+  // Minimum integer-pixel ZNCC for a search result to be used, in (-1, 1).
+  double min_search_zncc = 0.5;
+  void Check() const;
+};
+
+struct IcgnOptions {
+  Interpolation interpolation = Interpolation::kBicubic;
+  ShapeFunction shape = ShapeFunction::kAffine;
+  // Convergence: the increment of the warp moves every subset corner by < this [px], (0, 1].
+  double convergence_px = 1e-3;
+  int max_iterations = 20;  // Iteration cap, in [1, 200].
+  // A converged subset whose ZNCC is below this is `low_correlation` (failed), in [-1, 1).
+  double min_zncc = 0.8;
+  // Reference subsets whose intensity standard deviation is below this [grey levels of an 8-bit
+  // image; scaled by 257 for 16-bit] are `low_contrast`, >= 0.
+  double min_contrast = 4.0;
+  // Reference subsets with more than this fraction of pixels at 0 or full scale are
+  // `saturated`, in (0, 1].
+  double max_saturated_fraction = 0.2;
+  // Converged subsets whose displacement standard deviation, estimated from the residual and the
+  // inverse Hessian (least-squares covariance sigma_r^2 H^-1), exceeds this [px] are `uncertain`
+  // (failed), > 0.
+  double max_uncertainty_px = 0.025;
+  void Check() const;
+};
+
+struct UpdateOptions {
+  ReferenceUpdate mode = ReferenceUpdate::kAuto;
+  int every_n = 10;             // Frames per reference for kEveryN, >= 1.
+  double auto_min_zncc = 0.95;  // kAuto threshold, in (-1, 1].
+  void Check() const;
+};
+
+struct DicOptions {
+  GridOptions grid;
+  InitialGuessOptions init;
+  IcgnOptions icgn;
+  UpdateOptions update;
+  void Check() const;
+};
+
+// Per-subset outcome. Everything except kConverged has NaN displacement.
+enum class SubsetStatus {
+  kConverged = 0,        // IC-GN converged with ZNCC >= min_zncc.
+  kMaxIterations = 1,    // The iteration cap was reached.
+  kLowCorrelation = 2,   // Converged, but ZNCC < min_zncc (decorrelated, occluded).
+  kSingularHessian = 3,  // The reference subset has no usable gradients (featureless).
+  kOutOfImage = 4,       // The subset (in the reference or the warped one) leaves the image.
+  kMasked = 5,           // Excluded by the mask.
+  kLowContrast = 6,      // Reference subset standard deviation below min_contrast.
+  kSaturated = 7,        // Too many reference pixels at 0 or full scale.
+  kNotFound = 8,         // No initial guess (search failed, no solved neighbour).
+  kLost = 9,             // Failed in the frame that became the reference: no longer tracked.
+  kUncertain = 10,       // Converged, but the estimated standard deviation of the displacement
+                         // exceeds IcgnOptions::max_uncertainty_px (e.g. few features).
+};
+constexpr int kSubsetStatusCount = 11;
+const char* ToString(SubsetStatus status);
+SubsetStatus SubsetStatusFromString(const std::string& name);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_DIC_OPTIONS_H_

@@ -1,0 +1,291 @@
+#include "impactdic/dic/bspline.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "impactdic/core/error.h"
+
+namespace impactdic {
+namespace {
+
+// Poles and gain of the B-spline interpolation prefilter (Unser et al. 1993).
+struct Prefilter {
+  double poles[2];
+  int n_poles;
+  double gain;
+};
+
+Prefilter PrefilterFor(Interpolation kind) {
+  Prefilter p{};
+  if (kind == Interpolation::kBicubic) {
+    p.poles[0] = std::sqrt(3.0) - 2;
+    p.n_poles = 1;
+  } else {
+    p.poles[0] = std::sqrt(135.0 / 2 - std::sqrt(17745.0 / 4)) + std::sqrt(105.0 / 4) - 6.5;
+    p.poles[1] = std::sqrt(135.0 / 2 + std::sqrt(17745.0 / 4)) - std::sqrt(105.0 / 4) - 6.5;
+    p.n_poles = 2;
+  }
+  p.gain = 1;
+  for (int k = 0; k < p.n_poles; ++k) p.gain *= (1 - p.poles[k]) * (1 - 1 / p.poles[k]);
+  return p;
+}
+
+// Causal initial value for mirror boundary conditions.
+double InitialCausal(const double* c, int n, double z) {
+  const double tolerance = 1e-12;
+  const int horizon = static_cast<int>(std::ceil(std::log(tolerance) / std::log(std::abs(z))));
+  if (horizon < n) {
+    double zn = z, sum = c[0];
+    for (int k = 1; k < horizon; ++k) {
+      sum += zn * c[k];
+      zn *= z;
+    }
+    return sum;
+  }
+  double zn = z;
+  const double iz = 1 / z;
+  double z2n = std::pow(z, n - 1);
+  double sum = c[0] + z2n * c[n - 1];
+  z2n *= z2n * iz;
+  for (int k = 1; k <= n - 2; ++k) {
+    sum += (zn + z2n) * c[k];
+    zn *= z;
+    z2n *= iz;
+  }
+  return sum / (1 - zn * zn);
+}
+
+void FilterLine(double* c, int n, const Prefilter& p) {
+  if (n < 2) return;
+  for (int k = 0; k < n; ++k) c[k] *= p.gain;
+  for (int j = 0; j < p.n_poles; ++j) {
+    const double z = p.poles[j];
+    c[0] = InitialCausal(c, n, z);
+    for (int k = 1; k < n; ++k) c[k] += z * c[k - 1];
+    c[n - 1] = (z / (z * z - 1)) * (z * c[n - 2] + c[n - 1]);
+    for (int k = n - 2; k >= 0; --k) c[k] = z * (c[k + 1] - c[k]);
+  }
+}
+
+int Mirror(int i, int n) {
+  if (n == 1) return 0;
+  const int period = 2 * (n - 1);
+  i = std::abs(i) % period;
+  return i < n ? i : period - i;
+}
+
+// B-spline of degree 3 or 5 and its derivative at signed distance d.
+double Beta(int degree, double d) {
+  const double x = std::abs(d);
+  if (degree == 3) {
+    if (x < 1) return 2.0 / 3 - x * x + 0.5 * x * x * x;
+    if (x < 2) return (2 - x) * (2 - x) * (2 - x) / 6;
+    return 0;
+  }
+  const double x2 = x * x, x4 = x2 * x2;
+  if (x < 1) return (66 - 60 * x2 + 30 * x4 - 10 * x4 * x) / 120;
+  if (x < 2) return (51 + 75 * x - 210 * x2 + 150 * x2 * x - 45 * x4 + 5 * x4 * x) / 120;
+  if (x < 3) return std::pow(3 - x, 5) / 120;
+  return 0;
+}
+
+double BetaDerivative(int degree, double d) {
+  const double x = std::abs(d), sign = d < 0 ? -1 : 1;
+  double r = 0;
+  if (degree == 3) {
+    if (x < 1)
+      r = -2 * x + 1.5 * x * x;
+    else if (x < 2)
+      r = -0.5 * (2 - x) * (2 - x);
+  } else {
+    const double x2 = x * x;
+    if (x < 1)
+      r = (-120 * x + 120 * x2 * x - 50 * x2 * x2) / 120;
+    else if (x < 2)
+      r = (75 - 420 * x + 450 * x2 - 180 * x2 * x + 25 * x2 * x2) / 120;
+    else if (x < 3)
+      r = -5 * std::pow(3 - x, 4) / 120;
+  }
+  return sign * r;
+}
+
+}  // namespace
+
+const char* ToString(Interpolation interpolation) {
+  return interpolation == Interpolation::kBicubic ? "bicubic" : "biquintic";
+}
+
+Interpolation InterpolationFromString(const std::string& name) {
+  if (name == "bicubic") return Interpolation::kBicubic;
+  if (name == "biquintic") return Interpolation::kBiquintic;
+  throw Error(ErrorKind::kInvalidValue, "interpolation", name, "bicubic or biquintic");
+}
+
+void QuinticWeights(double t, double w[6]) {
+  for (int k = -2; k <= 3; ++k) w[k + 2] = Beta(5, t - k);
+}
+
+void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect region, int guard_px) {
+  CheckValue(!image.empty() && image.channels() == 1, "BsplineImage image",
+             image.empty() ? "empty image" : "multi-channel image", "a one-channel image");
+  const cv::Rect full(0, 0, image.cols, image.rows);
+  if (region.area() == 0) region = full;
+  region = cv::Rect(region.x - guard_px, region.y - guard_px, region.width + 2 * guard_px,
+                    region.height + 2 * guard_px) &
+           full;
+  CheckValue(region.width >= 8 && region.height >= 8, "BsplineImage region",
+             std::to_string(region.width) + "x" + std::to_string(region.height),
+             "a region of at least 8x8 px inside the image");
+  kind_ = kind;
+  region_ = region;
+  const Prefilter prefilter = PrefilterFor(kind);
+  const int w = region.width, h = region.height;
+  coefficients_.create(h, w, CV_32F);
+  cv::Mat source = image(region);
+
+  // Rows (in double), in parallel.
+  tbb::parallel_for(0, h, [&](int r) {
+    std::vector<double> line(w);
+    switch (source.depth()) {
+      case CV_8U:
+        for (int c = 0; c < w; ++c) line[c] = source.at<std::uint8_t>(r, c);
+        break;
+      case CV_16U:
+        for (int c = 0; c < w; ++c) line[c] = source.at<std::uint16_t>(r, c);
+        break;
+      case CV_32F:
+        for (int c = 0; c < w; ++c) line[c] = source.at<float>(r, c);
+        break;
+      default:
+        for (int c = 0; c < w; ++c) line[c] = source.at<double>(r, c);
+    }
+    FilterLine(line.data(), w, prefilter);
+    float* out = coefficients_.ptr<float>(r);
+    for (int c = 0; c < w; ++c) out[c] = static_cast<float>(line[c]);
+  });
+  // Columns, in strips of 32 columns (the inner loop runs along rows: contiguous, vectorised).
+  const int strip = 32;
+  tbb::parallel_for(0, (w + strip - 1) / strip, [&](int s) {
+    const int c0 = s * strip, c1 = std::min(w, c0 + strip), n = c1 - c0;
+    std::vector<double> buffer(static_cast<std::size_t>(h) * n);
+    for (int r = 0; r < h; ++r) {
+      const float* in = coefficients_.ptr<float>(r);
+      for (int c = 0; c < n; ++c) buffer[static_cast<std::size_t>(r) * n + c] = in[c0 + c];
+    }
+    std::vector<double> column(h);
+    for (int c = 0; c < n; ++c) {
+      for (int r = 0; r < h; ++r) column[r] = buffer[static_cast<std::size_t>(r) * n + c];
+      FilterLine(column.data(), h, prefilter);
+      for (int r = 0; r < h; ++r) buffer[static_cast<std::size_t>(r) * n + c] = column[r];
+    }
+    for (int r = 0; r < h; ++r) {
+      float* out = coefficients_.ptr<float>(r);
+      for (int c = 0; c < n; ++c)
+        out[c0 + c] = static_cast<float>(buffer[static_cast<std::size_t>(r) * n + c]);
+    }
+  });
+  // Evaluable domain: floor(x) - half_low >= 0 and floor(x) + half_high <= w - 1.
+  const int low = kind == Interpolation::kBicubic ? 1 : 2;
+  const int high = kind == Interpolation::kBicubic ? 2 : 3;
+  x_min_ = region.x + low;
+  x_max_ = region.x + w - high;  // floor(x) <= w - 1 - high  <=>  x < w - high.
+  y_min_ = region.y + low;
+  y_max_ = region.y + h - high;
+}
+
+double BsplineImage::Value(double x, double y) const {
+  double v, gx, gy;
+  ValueGradient(x, y, &v, &gx, &gy);
+  return v;
+}
+
+void BsplineImage::ValueGradient(double x, double y, double* value, double* gx, double* gy) const {
+  const int n = degree();
+  const int low = n == 3 ? 1 : 2, taps = n + 1;
+  const double lx = x - region_.x, ly = y - region_.y;
+  const int ix = static_cast<int>(std::floor(lx)), iy = static_cast<int>(std::floor(ly));
+  const double tx = lx - ix, ty = ly - iy;
+  double wx[6], wy[6], dx[6], dy[6];
+  for (int k = 0; k < taps; ++k) {
+    wx[k] = Beta(n, tx - (k - low));
+    wy[k] = Beta(n, ty - (k - low));
+    dx[k] = BetaDerivative(n, tx - (k - low));
+    dy[k] = BetaDerivative(n, ty - (k - low));
+  }
+  double v = 0, vx = 0, vy = 0;
+  for (int j = 0; j < taps; ++j) {
+    const float* row = coefficients_.ptr<float>(iy - low + j);
+    double s = 0, sd = 0;
+    for (int i = 0; i < taps; ++i) {
+      const double c = row[ix - low + i];
+      s += wx[i] * c;
+      sd += dx[i] * c;
+    }
+    v += wy[j] * s;
+    vx += wy[j] * sd;
+    vy += dy[j] * s;
+  }
+  *value = v;
+  *gx = vx;
+  *gy = vy;
+}
+
+void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
+  const int w = region_.width, h = region_.height;
+  const bool cubic = kind_ == Interpolation::kBicubic;
+  // Value and derivative weights of the spline at a node, offsets -2..2.
+  const double value_w[5] = {cubic ? 0 : 1.0 / 120, cubic ? 1.0 / 6 : 26.0 / 120,
+                             cubic ? 4.0 / 6 : 66.0 / 120, cubic ? 1.0 / 6 : 26.0 / 120,
+                             cubic ? 0 : 1.0 / 120};
+  const double deriv_w[5] = {cubic ? 0 : -1.0 / 24, cubic ? -0.5 : -10.0 / 24, 0,
+                             cubic ? 0.5 : 10.0 / 24, cubic ? 0 : 1.0 / 24};
+  cv::Mat value_x(h, w, CV_32F), deriv_x(h, w, CV_32F);
+  tbb::parallel_for(0, h, [&](int r) {
+    const float* c = coefficients_.ptr<float>(r);
+    float* vx = value_x.ptr<float>(r);
+    float* dx = deriv_x.ptr<float>(r);
+    for (int x = 0; x < w; ++x) {
+      double v = 0, d = 0;
+      if (x >= 2 && x < w - 2) {
+        for (int k = -2; k <= 2; ++k) {
+          v += value_w[k + 2] * c[x + k];
+          d += deriv_w[k + 2] * c[x + k];
+        }
+      } else {
+        for (int k = -2; k <= 2; ++k) {
+          const float cc = c[Mirror(x + k, w)];
+          v += value_w[k + 2] * cc;
+          d += deriv_w[k + 2] * cc;
+        }
+      }
+      vx[x] = static_cast<float>(v);
+      dx[x] = static_cast<float>(d);
+    }
+  });
+  gx->create(h, w, CV_32F);
+  gy->create(h, w, CV_32F);
+  tbb::parallel_for(0, h, [&](int r) {
+    float* ox = gx->ptr<float>(r);
+    float* oy = gy->ptr<float>(r);
+    for (int x = 0; x < w; ++x) {
+      ox[x] = 0;
+      oy[x] = 0;
+    }
+    for (int k = -2; k <= 2; ++k) {
+      if (value_w[k + 2] == 0 && deriv_w[k + 2] == 0) continue;
+      const int rr = Mirror(r + k, h);
+      const float* vx = value_x.ptr<float>(rr);
+      const float* dx = deriv_x.ptr<float>(rr);
+      const float a = static_cast<float>(value_w[k + 2]), b = static_cast<float>(deriv_w[k + 2]);
+      for (int x = 0; x < w; ++x) {
+        ox[x] += a * dx[x];
+        oy[x] += b * vx[x];
+      }
+    }
+  });
+}
+
+}  // namespace impactdic

@@ -1,0 +1,636 @@
+#include "impactdic/dic/correlator.h"
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "icgn.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/timer.h"
+
+namespace impactdic {
+
+using internal::DeformedImage;
+using internal::IcgnResult;
+using internal::Params;
+using internal::RefImages;
+using internal::Shape;
+using internal::SubsetRef;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr int kBorderPx = 4;
+
+bool Usable(SubsetStatus s) { return s == SubsetStatus::kConverged; }
+
+// Whether a status should make `auto` switch to a newer reference: the subset was trackable but
+// did not correlate well enough (not: masked, out of the image, featureless...).
+bool IsDecorrelation(SubsetStatus s) {
+  return s == SubsetStatus::kLowCorrelation || s == SubsetStatus::kMaxIterations ||
+         s == SubsetStatus::kNotFound || s == SubsetStatus::kUncertain;
+}
+
+struct Frame {
+  int index = 0;
+  cv::Mat raw;
+  cv::Mat image32;  // Float copy for the integer search (made on demand).
+  BsplineImage spline;
+  cv::Rect reach;
+  DeformedImage view;
+  const cv::Mat& Float() {
+    if (image32.empty()) raw.convertTo(image32, CV_32F);
+    return image32;
+  }
+};
+
+struct Reference {
+  int frame = 0;
+  cv::Mat image32;
+  RefImages images;
+  std::vector<SubsetRef> subsets;
+  std::vector<double> hinv;
+};
+
+struct Attempt {
+  IcgnResult r;
+  bool solved = false, searched = false, propagated = false;
+};
+
+}  // namespace
+
+double DicSummary::SubsetsPerSecond() const {
+  return seconds_total > 0 ? double(subsets) * frames / seconds_total : 0;
+}
+
+std::string DicSummary::BriefReport() const {
+  return fmt::format(
+      "{} subsets x {} frames: {:.2f}% valid, {:.2f} iterations/subset, {} reference updates, "
+      "{:.3f} s ({:.0f} subsets/s)",
+      subsets, frames, 100 * valid_fraction, mean_iterations, reference_updates, seconds_total,
+      SubsetsPerSecond());
+}
+
+std::string DicSummary::FullReport() const {
+  std::string s = BriefReport() + "\n";
+  s += fmt::format(
+      "  time: coefficients {:.3f} s, reference {:.3f} s, initial guess {:.3f} s ({} searches), "
+      "IC-GN {:.3f} s\n  status:",
+      seconds_coefficients, seconds_reference, seconds_initial_guess, searches, seconds_icgn);
+  for (int i = 0; i < kSubsetStatusCount; ++i) {
+    if (status_counts[i] > 0)
+      s += fmt::format(" {}={}", ToString(static_cast<SubsetStatus>(i)), status_counts[i]);
+  }
+  return s;
+}
+
+struct Correlator::Impl {
+  DicOptions options;
+  Shape shape;
+  int half = 12, size = 25;
+  int nx = 0, ny = 0;
+  cv::Size image_size;
+  int depth = CV_8U;
+  std::vector<cv::Point2d> initial;     // X0: centres in the first reference.
+  std::vector<char> active;             // Still tracked.
+  std::vector<SubsetStatus> permanent;  // Status of subsets no longer tracked.
+  Reference ref;
+  // Tracked point in the current reference image.
+  std::vector<cv::Point2d> ref_pos;
+  // Positions of the tracked points in the last two frames (NaN = unknown), and the last warp
+  // relative to the current reference.
+  std::vector<cv::Point2d> pos_last, pos_prev;
+  std::vector<Params> params_last;
+  std::vector<char> params_valid;
+  int last_index = 0;
+  std::unique_ptr<Frame> last_frame;  // For `auto`: the last good frame.
+  DicSummary summary;
+  long long iteration_sum = 0, converged_sum = 0;
+  tbb::enumerable_thread_specific<cv::Mat> scratch;
+
+  void BuildReference(int frame_index, const cv::Mat& raw, const BsplineImage* spline_in,
+                      const cv::Mat& image32, FrameResult* timing);
+  void MakeFrame(const cv::Mat& raw, int index, Frame* frame);
+  std::vector<Attempt> Solve(Frame& frame, FrameResult* out);
+  bool Search(const SubsetRef& s, Frame& frame, double gu, double gv, cv::Mat* scratch_mat,
+              Params* p0) const;
+  void CheckImage(const cv::Mat& image, const char* what) const;
+};
+
+void Correlator::Impl::CheckImage(const cv::Mat& image, const char* what) const {
+  CheckValue(!image.empty() && image.channels() == 1, what,
+             image.empty() ? "an empty image" : "a multi-channel image", "a one-channel image");
+  if (!image_size.empty()) {
+    CheckValue(image.size() == image_size, what,
+               std::to_string(image.cols) + "x" + std::to_string(image.rows),
+               "the reference size " + std::to_string(image_size.width) + "x" +
+                   std::to_string(image_size.height));
+  }
+}
+
+void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
+                                      const BsplineImage* spline_in, const cv::Mat& image32,
+                                      FrameResult* timing) {
+  WallTimer timer;
+  ref.frame = frame_index;
+  ref.image32 = image32;
+  // Region the reference subsets occupy (+2 px).
+  const int n = static_cast<int>(initial.size());
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (int i = 0; i < n; ++i) {
+    if (!active[i]) continue;
+    x0 = std::min(x0, ref_pos[i].x);
+    x1 = std::max(x1, ref_pos[i].x);
+    y0 = std::min(y0, ref_pos[i].y);
+    y1 = std::max(y1, ref_pos[i].y);
+  }
+  const cv::Rect full(0, 0, image_size.width, image_size.height);
+  cv::Rect region = full;
+  if (x0 <= x1) {
+    const int m = half + 3;
+    region = cv::Rect(cv::Point(static_cast<int>(std::floor(x0)) - m,
+                                static_cast<int>(std::floor(y0)) - m),
+                      cv::Point(static_cast<int>(std::ceil(x1)) + m + 1,
+                                static_cast<int>(std::ceil(y1)) + m + 1)) &
+             full;
+  }
+  BsplineImage local;
+  const BsplineImage* spline = spline_in;
+  WallTimer coef_timer;
+  if (!spline || (spline->region() & region) != region ||
+      spline->kind() != options.icgn.interpolation) {
+    local.Build(raw, options.icgn.interpolation, region);
+    spline = &local;
+  }
+  if (timing) timing->seconds_coefficients += coef_timer.ElapsedSeconds();
+  RefImages& im = ref.images;
+  im.region = spline->region();
+  spline->NodeGradients(&im.gx, &im.gy);
+  raw(im.region).convertTo(im.f, CV_32F);
+  im.full_scale = raw.depth() == CV_16U ? 65535.0 : raw.depth() == CV_8U ? 255.0 : 1e300;
+  ref.subsets.assign(n, SubsetRef{});
+  ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
+  tbb::parallel_for(0, n, [&](int i) {
+    SubsetRef& s = ref.subsets[i];
+    if (!active[i]) {
+      s.status = permanent[i];
+      return;
+    }
+    s.cx = static_cast<int>(std::lround(ref_pos[i].x));
+    s.cy = static_cast<int>(std::lround(ref_pos[i].y));
+    s.ox = ref_pos[i].x - s.cx;
+    s.oy = ref_pos[i].y - s.cy;
+    internal::PrepareSubset(shape, im, options.icgn, &s,
+                            &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n]);
+  });
+  params_valid.assign(n, 0);
+  if (timing) timing->seconds_reference += timer.ElapsedSeconds() - coef_timer.ElapsedSeconds();
+}
+
+void Correlator::Impl::MakeFrame(const cv::Mat& raw, int index, Frame* out) {
+  Frame& f = *out;
+  f.index = index;
+  f.raw = raw;
+  // Region the subsets can reach: their reference positions grown by the subset half size, the
+  // search radius and the largest displacement seen so far.
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (std::size_t i = 0; i < initial.size(); ++i) {
+    if (!active[i]) continue;
+    cv::Point2d p = ref_pos[i];
+    x0 = std::min(x0, p.x);
+    x1 = std::max(x1, p.x);
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+    if (!std::isnan(pos_last[i].x)) {
+      x0 = std::min(x0, pos_last[i].x);
+      x1 = std::max(x1, pos_last[i].x);
+      y0 = std::min(y0, pos_last[i].y);
+      y1 = std::max(y1, pos_last[i].y);
+    }
+  }
+  const cv::Rect full(0, 0, image_size.width, image_size.height);
+  cv::Rect reach = full;
+  if (x0 <= x1) {
+    const int m = half + options.init.search_radius_px + 2;
+    reach = cv::Rect(cv::Point(static_cast<int>(std::floor(x0)) - m,
+                               static_cast<int>(std::floor(y0)) - m),
+                     cv::Point(static_cast<int>(std::ceil(x1)) + m + 1,
+                               static_cast<int>(std::ceil(y1)) + m + 1)) &
+            full;
+  }
+  f.reach = reach;
+  f.spline.Build(raw, options.icgn.interpolation, reach);
+  f.view.spline = &f.spline;
+  f.view.x_min = std::max<double>(reach.x, f.spline.x_min());
+  f.view.y_min = std::max<double>(reach.y, f.spline.y_min());
+  f.view.x_max = std::min<double>(reach.x + reach.width - 1, f.spline.x_max());
+  f.view.y_max = std::min<double>(reach.y + reach.height - 1, f.spline.y_max());
+}
+
+bool Correlator::Impl::Search(const SubsetRef& s, Frame& frame, double gu, double gv,
+                              cv::Mat* result, Params* p0) const {
+  const int R = options.init.search_radius_px;
+  const cv::Rect full(0, 0, image_size.width, image_size.height);
+  const cv::Rect templ_rect(s.cx - half, s.cy - half, size, size);
+  if ((templ_rect & full) != templ_rect) return false;
+  const int wx = s.cx + static_cast<int>(std::lround(gu)),
+            wy = s.cy + static_cast<int>(std::lround(gv));
+  const cv::Rect window = cv::Rect(wx - half - R, wy - half - R, size + 2 * R, size + 2 * R) & full;
+  if (window.width < size || window.height < size) return false;
+  cv::matchTemplate(frame.image32(window), ref.image32(templ_rect), *result, cv::TM_CCOEFF_NORMED);
+  double best = -2;
+  cv::Point loc(-1, -1);
+  // Deterministic arg-max (first maximum in row-major order), ignoring non-finite scores.
+  for (int r = 0; r < result->rows; ++r) {
+    const float* row = result->ptr<float>(r);
+    for (int c = 0; c < result->cols; ++c) {
+      if (std::isfinite(row[c]) && row[c] > best) {
+        best = row[c];
+        loc = cv::Point(c, r);
+      }
+    }
+  }
+  if (loc.x < 0 || best < options.init.min_search_zncc) return false;
+  *p0 = Params{};
+  (*p0)[0] = window.x + loc.x + half - s.cx;
+  (*p0)[shape.nm] = window.y + loc.y + half - s.cy;
+  return true;
+}
+
+std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
+  const int n = static_cast<int>(initial.size());
+  std::vector<Attempt> at(n);
+  std::vector<char> usable(n, 0);
+  for (int i = 0; i < n; ++i) {
+    usable[i] = active[i] && Usable(ref.subsets[i].status);
+    at[i].r.status =
+        active[i] ? (usable[i] ? SubsetStatus::kNotFound : ref.subsets[i].status) : permanent[i];
+  }
+  const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
+  auto icgn = [&](int i, const Params& p0) {
+    return internal::RunIcgn(shape, ref.images, ref.subsets[i], &ref.hinv[i * nn], frame.view,
+                             options.icgn, p0);
+  };
+  // Prediction of the displacement of subset i's tracked point (relative to the reference).
+  auto predict = [&](int i, Params* p0) {
+    if (std::isnan(pos_last[i].x)) return false;
+    cv::Point2d pred = pos_last[i];
+    if (!std::isnan(pos_prev[i].x)) pred = 2 * pos_last[i] - pos_prev[i];
+    const SubsetRef& s = ref.subsets[i];
+    Params p = params_valid[i] ? params_last[i] : Params{};
+    double du, dv;
+    internal::Displacement(shape, p, s.ox, s.oy, &du, &dv);
+    const cv::Point2d d = pred - ref_pos[i];
+    p[0] += d.x - du;
+    p[shape.nm] += d.y - dv;
+    *p0 = p;
+    return true;
+  };
+
+  // 1. Prediction from previous increments, all subsets in parallel.
+  WallTimer timer;
+  std::vector<int> list;
+  for (int i = 0; i < n; ++i)
+    if (usable[i] && !std::isnan(pos_last[i].x)) list.push_back(i);
+  tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
+    const int i = list[k];
+    Params p0;
+    predict(i, &p0);
+    at[i].r = icgn(i, p0);
+    at[i].solved = at[i].r.status == SubsetStatus::kConverged;
+  });
+  out->seconds_icgn += timer.ElapsedSeconds();
+
+  // 2. Reliability-guided propagation in deterministic waves, with searches at seeds.
+  auto solved_neighbour = [&](int i) {
+    const int r = i / nx, c = i % nx;
+    int best = -1;
+    for (int dr = -1; dr <= 1; ++dr) {
+      for (int dc = -1; dc <= 1; ++dc) {
+        if (!dr && !dc) continue;
+        const int rr = r + dr, cc = c + dc;
+        if (rr < 0 || rr >= ny || cc < 0 || cc >= nx) continue;
+        const int j = rr * nx + cc;
+        if (!at[j].solved) continue;
+        if (best < 0 || at[j].r.zncc > at[best].r.zncc ||
+            (at[j].r.zncc == at[best].r.zncc && j < best))
+          best = j;
+      }
+    }
+    return best;
+  };
+  auto search_and_solve = [&](int i, const Params* guess) {
+    cv::Mat& result = scratch.local();
+    double gu = 0, gv = 0;
+    Params p0;
+    if (guess) {
+      gu = (*guess)[0];
+      gv = (*guess)[shape.nm];
+    } else if (predict(i, &p0)) {
+      gu = p0[0];
+      gv = p0[shape.nm];
+    }
+    at[i].searched = true;
+    if (!Search(ref.subsets[i], frame, gu, gv, &result, &p0)) {
+      if (!at[i].propagated) at[i].r.status = SubsetStatus::kNotFound;
+      return;
+    }
+    IcgnResult r = icgn(i, p0);
+    if (r.status == SubsetStatus::kConverged || !at[i].propagated) at[i].r = r;
+    at[i].solved = r.status == SubsetStatus::kConverged;
+  };
+  const int spacing = options.init.seed_spacing;
+  while (true) {
+    std::vector<int> frontier, best;
+    for (int i = 0; i < n; ++i) {
+      if (!usable[i] || at[i].solved || at[i].propagated) continue;
+      const int j = solved_neighbour(i);
+      if (j >= 0) {
+        frontier.push_back(i);
+        best.push_back(j);
+      }
+    }
+    if (!frontier.empty()) {
+      timer.Restart();
+      tbb::parallel_for(0, static_cast<int>(frontier.size()), [&](int k) {
+        const int i = frontier[k], j = best[k];
+        const SubsetRef& si = ref.subsets[i];
+        const SubsetRef& sj = ref.subsets[j];
+        at[i].propagated = true;
+        at[i].r = icgn(i, internal::Transfer(shape, at[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+        at[i].solved = at[i].r.status == SubsetStatus::kConverged;
+      });
+      out->seconds_icgn += timer.ElapsedSeconds();
+      // Subsets that failed from their neighbour get their own search around its guess.
+      std::vector<int> retry, from;
+      for (std::size_t k = 0; k < frontier.size(); ++k) {
+        const int i = frontier[k];
+        if (!at[i].solved && !at[i].searched && at[i].r.status != SubsetStatus::kOutOfImage) {
+          retry.push_back(i);
+          from.push_back(best[k]);
+        }
+      }
+      if (!retry.empty()) {
+        timer.Restart();
+        frame.Float();
+        tbb::parallel_for(0, static_cast<int>(retry.size()), [&](int k) {
+          const int i = retry[k], j = from[k];
+          const Params p0 =
+              internal::Transfer(shape, at[j].r.p, ref.subsets[i].cx - ref.subsets[j].cx,
+                                 ref.subsets[i].cy - ref.subsets[j].cy);
+          search_and_solve(i, &p0);
+        });
+        out->searches += static_cast<int>(retry.size());
+        out->seconds_initial_guess += timer.ElapsedSeconds();
+      }
+      continue;
+    }
+    std::vector<int> candidates, seeds;
+    for (int i = 0; i < n; ++i)
+      if (usable[i] && !at[i].solved && !at[i].searched) candidates.push_back(i);
+    if (candidates.empty()) break;
+    for (int i : candidates) {
+      const int r = i / nx, c = i % nx;
+      if ((r % spacing == spacing / 2 || r == ny / 2) &&
+          (c % spacing == spacing / 2 || c == nx / 2))
+        seeds.push_back(i);
+    }
+    if (seeds.empty()) seeds = candidates;
+    timer.Restart();
+    frame.Float();
+    tbb::parallel_for(0, static_cast<int>(seeds.size()),
+                      [&](int k) { search_and_solve(seeds[k], nullptr); });
+    out->searches += static_cast<int>(seeds.size());
+    out->seconds_initial_guess += timer.ElapsedSeconds();
+  }
+  return at;
+}
+
+Correlator::Correlator(const DicOptions& options) : impl_(std::make_unique<Impl>()) {
+  options.Check();
+  impl_->options = options;
+  impl_->half = options.grid.subset_size / 2;
+  impl_->size = options.grid.subset_size;
+  impl_->shape = internal::MakeShape(options.icgn.shape, impl_->half);
+}
+
+Correlator::~Correlator() = default;
+
+void Correlator::SetReference(const cv::Mat& image) {
+  Impl& m = *impl_;
+  m.image_size = cv::Size();
+  m.CheckImage(image, "reference image");
+  const GridOptions& g = m.options.grid;
+  CheckValue(
+      image.cols >= m.size && image.rows >= m.size, "subset size", std::to_string(m.size) + " px",
+      "at most the image size " + std::to_string(image.cols) + "x" + std::to_string(image.rows));
+  const cv::Rect image_rect(0, 0, image.cols, image.rows);
+  cv::Rect roi = g.roi.area() > 0 ? g.roi : image_rect;
+  CheckValue((roi & cv::Rect(0, 0, image.cols, image.rows)) == roi, "ROI",
+             fmt::format("x {}..{}, y {}..{}", roi.x, roi.x + roi.width, roi.y, roi.y + roi.height),
+             fmt::format("inside the image (0..{}, 0..{})", image.cols, image.rows));
+  CheckValue(roi.width >= m.size && roi.height >= m.size, "ROI",
+             fmt::format("{}x{} px", roi.width, roi.height),
+             fmt::format("at least one subset ({} px) wide and high", m.size));
+  CheckValue(g.mask.empty() || g.mask.size() == image.size(), "mask",
+             fmt::format("{}x{}", g.mask.cols, g.mask.rows), "the image size");
+  m.image_size = image.size();
+  m.depth = image.depth();
+  // Subsets keep kBorderPx from the image border: the interpolation support of a subset that
+  // moves by a pixel must stay inside the image.
+  const cv::Rect inner(kBorderPx, kBorderPx, image.cols - 2 * kBorderPx,
+                       image.rows - 2 * kBorderPx);
+  roi &= inner;
+  CheckValue(roi.width >= m.size && roi.height >= m.size, "ROI",
+             fmt::format("{}x{} px after keeping {} px from the image border", roi.width,
+                         roi.height, kBorderPx),
+             fmt::format("room for at least one subset ({} px)", m.size));
+  m.nx = (roi.width - m.size) / g.step + 1;
+  m.ny = (roi.height - m.size) / g.step + 1;
+  const int n = m.nx * m.ny;
+  m.initial.resize(n);
+  m.active.assign(n, 1);
+  m.permanent.assign(n, SubsetStatus::kConverged);
+  for (int r = 0; r < m.ny; ++r) {
+    for (int c = 0; c < m.nx; ++c) {
+      const int i = r * m.nx + c;
+      m.initial[i] = cv::Point2d(roi.x + m.half + c * g.step, roi.y + m.half + r * g.step);
+      if (!g.mask.empty() && g.mask.at<std::uint8_t>(static_cast<int>(m.initial[i].y),
+                                                     static_cast<int>(m.initial[i].x)) == 0) {
+        m.active[i] = 0;
+        m.permanent[i] = SubsetStatus::kMasked;
+      }
+    }
+  }
+  m.ref_pos = m.initial;
+  m.pos_last.assign(n, cv::Point2d(kNaN, kNaN));
+  m.pos_prev = m.pos_last;
+  m.params_last.assign(n, Params{});
+  m.params_valid.assign(n, 0);
+  m.last_index = 0;
+  m.summary = DicSummary{};
+  m.summary.subsets = n;
+  m.iteration_sum = m.converged_sum = 0;
+  FrameResult timing;
+  WallTimer timer;
+  cv::Mat image32;
+  image.convertTo(image32, CV_32F);
+  m.BuildReference(0, image, nullptr, image32, &timing);
+  m.summary.seconds_coefficients += timing.seconds_coefficients;
+  m.summary.seconds_reference += timing.seconds_reference;
+  m.summary.seconds_total += timer.ElapsedSeconds();
+  // The reference frame itself: every subset at zero displacement.
+  m.last_frame.reset();
+  for (int i = 0; i < n; ++i) {
+    if (m.active[i] && Usable(m.ref.subsets[i].status)) m.pos_last[i] = m.initial[i];
+  }
+  m.pos_last.swap(m.pos_prev);
+  m.pos_last.assign(n, cv::Point2d(kNaN, kNaN));
+  // pos_prev now holds frame 0; the first Correlate() has no velocity yet: keep pos_last empty
+  // so that it uses the seeds (pair mode) rather than a zero-displacement prediction.
+}
+
+FrameResult Correlator::Correlate(const cv::Mat& image) {
+  Impl& m = *impl_;
+  CheckValue(!m.initial.empty(), "Correlator", "no reference", "SetReference() first");
+  m.CheckImage(image, "deformed image");
+  WallTimer total;
+  FrameResult out;
+  out.frame = m.last_index + 1;
+  const int n = static_cast<int>(m.initial.size());
+  // First frame after the reference: positions at frame 0 are the prediction base only through
+  // the seeds; afterwards constant-velocity prediction.
+  WallTimer timer;
+  auto frame = std::make_unique<Frame>();
+  m.MakeFrame(image, out.frame, frame.get());
+  out.seconds_coefficients += timer.ElapsedSeconds();
+  std::vector<Attempt> at = m.Solve(*frame, &out);
+
+  const ReferenceUpdate mode = m.options.update.mode;
+  if (mode == ReferenceUpdate::kAuto && m.last_frame && m.last_frame->index > m.ref.frame) {
+    bool trigger = false;
+    for (int i = 0; i < n && !trigger; ++i) {
+      if (!m.active[i] || !Usable(m.ref.subsets[i].status)) continue;
+      trigger = IsDecorrelation(at[i].r.status) || (at[i].r.status == SubsetStatus::kConverged &&
+                                                    at[i].r.zncc < m.options.update.auto_min_zncc);
+    }
+    if (trigger) {
+      // Switch to the last good frame: its tracked positions become the new reference points.
+      for (int i = 0; i < n; ++i) {
+        if (!m.active[i]) continue;
+        if (std::isnan(m.pos_last[i].x)) {
+          m.active[i] = 0;
+          m.permanent[i] = SubsetStatus::kLost;
+        } else {
+          m.ref_pos[i] = m.pos_last[i];
+        }
+      }
+      Frame& last = *m.last_frame;
+      m.BuildReference(last.index, last.raw, &last.spline, last.Float(), &out);
+      ++m.summary.reference_updates;
+      out.reference_updated = true;
+      at = m.Solve(*frame, &out);
+    }
+  }
+  out.reference_frame = m.ref.frame;
+
+  // Results: tracked positions and accumulated displacements.
+  out.u_px.assign(n, kNaN);
+  out.v_px.assign(n, kNaN);
+  out.zncc.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.iterations.assign(n, 0);
+  out.sigma_px.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.status.resize(n);
+  std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
+  for (int i = 0; i < n; ++i) {
+    const IcgnResult& r = at[i].r;
+    out.status[i] = r.status;
+    out.iterations[i] = r.iterations;
+    if (r.iterations > 0) out.zncc[i] = r.zncc;
+    if (r.status != SubsetStatus::kConverged) {
+      m.params_valid[i] = 0;
+      continue;
+    }
+    const SubsetRef& s = m.ref.subsets[i];
+    double du, dv;
+    internal::Displacement(m.shape, r.p, s.ox, s.oy, &du, &dv);
+    pos[i] = m.ref_pos[i] + cv::Point2d(du, dv);
+    out.u_px[i] = pos[i].x - m.initial[i].x;
+    out.v_px[i] = pos[i].y - m.initial[i].y;
+    out.sigma_px[i] = r.sigma_px;
+    m.params_last[i] = r.p;
+    m.params_valid[i] = 1;
+    m.iteration_sum += r.iterations;
+    ++m.converged_sum;
+  }
+  m.pos_prev = m.pos_last;
+  m.pos_last = pos;
+  if (out.frame == 1) {
+    // No velocity from the reference frame on: a predicted increment needs two solved frames.
+    for (int i = 0; i < n; ++i) m.pos_prev[i] = m.initial[i];
+  }
+  m.last_index = out.frame;
+
+  // Scheduled updates: the frame just solved becomes the reference.
+  const bool scheduled =
+      (mode == ReferenceUpdate::kIncremental) ||
+      (mode == ReferenceUpdate::kEveryN && out.frame - m.ref.frame >= m.options.update.every_n);
+  if (scheduled) {
+    for (int i = 0; i < n; ++i) {
+      if (!m.active[i]) continue;
+      if (std::isnan(pos[i].x)) {
+        m.active[i] = 0;
+        m.permanent[i] = SubsetStatus::kLost;
+      } else {
+        m.ref_pos[i] = pos[i];
+      }
+    }
+    m.BuildReference(out.frame, image, &frame->spline, frame->Float(), &out);
+    ++m.summary.reference_updates;
+    m.last_frame.reset();
+  } else if (mode == ReferenceUpdate::kAuto) {
+    m.last_frame = std::move(frame);
+  }
+
+  out.seconds_total = total.ElapsedSeconds();
+  DicSummary& s = m.summary;
+  ++s.frames;
+  for (int i = 0; i < n; ++i) ++s.status_counts[static_cast<int>(out.status[i])];
+  s.valid_fraction =
+      double(s.status_counts[static_cast<int>(SubsetStatus::kConverged)]) / (double(n) * s.frames);
+  s.mean_iterations = m.converged_sum ? double(m.iteration_sum) / m.converged_sum : 0;
+  s.searches += out.searches;
+  s.seconds_coefficients += out.seconds_coefficients;
+  s.seconds_reference += out.seconds_reference;
+  s.seconds_initial_guess += out.seconds_initial_guess;
+  s.seconds_icgn += out.seconds_icgn;
+  s.seconds_total += out.seconds_total;
+  return out;
+}
+
+int Correlator::subsets() const { return static_cast<int>(impl_->initial.size()); }
+const std::vector<cv::Point2d>& Correlator::positions() const { return impl_->initial; }
+int Correlator::rows() const { return impl_->ny; }
+int Correlator::cols() const { return impl_->nx; }
+const DicSummary& Correlator::summary() const { return impl_->summary; }
+const DicOptions& Correlator::options() const { return impl_->options; }
+
+DicResult CorrelateSequence(const std::vector<cv::Mat>& images, const DicOptions& options) {
+  CheckValue(images.size() >= 2, "images", std::to_string(images.size()),
+             "a reference and at least one deformed image");
+  Correlator correlator(options);
+  correlator.SetReference(images[0]);
+  DicResult result;
+  result.positions = correlator.positions();
+  for (std::size_t k = 1; k < images.size(); ++k)
+    result.frames.push_back(correlator.Correlate(images[k]));
+  result.summary = correlator.summary();
+  return result;
+}
+
+}  // namespace impactdic

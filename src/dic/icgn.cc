@@ -1,0 +1,481 @@
+// IC-GN with the ZNSSD criterion (Pan, Li & Tong 2013, doi:10.1007/s11340-013-9717-6).
+//
+// With f the reference subset, g the warped deformed subset, J = grad f dW/dp the steepest-descent
+// images at the reference pixels and H = sum J^T J (constant per reference subset), one
+// Gauss-Newton step of min sum [(f(W(x; dp)) - f_m) / f_n - (g - g_m) / g_n]^2 is
+//   dp = -H^-1 sum J^T [(f - f_m) - (f_n / g_n) (g - g_m)],
+// followed by W(p) <- W(p) o W(dp)^-1. Expanding the sum,
+//   sum J^T [...] = sum J (f - f_m) - (f_n / g_n) (sum J g' - g'_m sum J),   g' = g - f_m,
+// where sum J (f - f_m) and sum J are per-subset constants: one pass over the pixels per
+// iteration accumulates sum g', sum g'^2, sum f g' and sum J g' (the J of a pixel is its gradient
+// times the shape monomials, so the per-row sums are combined with powers of eta after each row).
+#include "icgn.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace impactdic::internal {
+namespace {
+
+constexpr int kMonoPx[6] = {0, 1, 0, 2, 1, 0};
+constexpr int kMonoPy[6] = {0, 0, 1, 0, 1, 2};
+constexpr double kMonoC[6] = {1, 1, 1, 0.5, 1, 0.5};
+
+void Monomials(double xi, double eta, double m[6]) {
+  m[0] = 1;
+  m[1] = xi;
+  m[2] = eta;
+  m[3] = 0.5 * xi * xi;
+  m[4] = xi * eta;
+  m[5] = 0.5 * eta * eta;
+}
+
+// Cholesky inverse of a symmetric positive definite n x n matrix (row-major). Returns false if
+// a pivot is below 1e-10 of its diagonal entry (the subset's data cannot determine the warp).
+bool InvertSpd(const double* a, int n, double* inv) {
+  double l[144] = {};
+  for (int j = 0; j < n; ++j) {
+    double d = a[j * n + j];
+    for (int k = 0; k < j; ++k) d -= l[j * 12 + k] * l[j * 12 + k];
+    if (!(d > 1e-10 * a[j * n + j]) || !(a[j * n + j] > 0)) return false;
+    l[j * 12 + j] = std::sqrt(d);
+    for (int i = j + 1; i < n; ++i) {
+      double s = a[i * n + j];
+      for (int k = 0; k < j; ++k) s -= l[i * 12 + k] * l[j * 12 + k];
+      l[i * 12 + j] = s / l[j * 12 + j];
+    }
+  }
+  // inv = L^-T L^-1: solve for each unit vector.
+  for (int c = 0; c < n; ++c) {
+    double y[12];
+    for (int i = 0; i < n; ++i) {
+      double s = i == c ? 1 : 0;
+      for (int k = 0; k < i; ++k) s -= l[i * 12 + k] * y[k];
+      y[i] = s / l[i * 12 + i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      double s = y[i];
+      for (int k = i + 1; k < n; ++k) s -= l[k * 12 + i] * inv[k * n + c];
+      inv[i * n + c] = s / l[i * 12 + i];
+    }
+  }
+  return true;
+}
+
+inline void QuinticWeightsF(float t, float w[6]) {
+  const float s = 1 - t;
+  const float t2 = t * t, t4 = t2 * t2, t5 = t4 * t;
+  const float s2 = s * s, s4 = s2 * s2;
+  constexpr float k = 1.0f / 120;
+  w[0] = s4 * s * k;
+  w[5] = t5 * k;
+  // Distance 1 + t (mid piece) and 1 - t, 2 - t.
+  const float d1 = 1 + t, d1_2 = d1 * d1, d1_4 = d1_2 * d1_2;
+  w[1] = (51 + 75 * d1 - 210 * d1_2 + 150 * d1_2 * d1 - 45 * d1_4 + 5 * d1_4 * d1) * k;
+  w[2] = (66 - 60 * t2 + 30 * t4 - 10 * t5) * k;
+  const float s5 = s4 * s;
+  w[3] = (66 - 60 * s2 + 30 * s4 - 10 * s5) * k;
+  w[4] = 1 - w[0] - w[1] - w[2] - w[3] - w[5];
+}
+
+// One pass over the subset: accumulates the sums of the expansion above.
+struct Sums {
+  double sg = 0, sgg = 0, sfg = 0;
+  double a[2][3][3] = {};  // sum g' grad_a xi^p eta^q, a = x/y, p + q <= 2.
+};
+
+template <int kTaps, bool kQuad>
+void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
+                std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
+  const float fm = s.f_mean;
+  // Integer part of the translation moved into the centre, so local coordinates stay small.
+  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
+  const double u = p[0] - iu, v = p[nm] - iv;
+  const int ccx = dcx + iu, ccy = dcy + iv;
+  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const std::size_t rstride = ref.f.step1();
+  for (int j = 0; j < size; ++j) {
+    const double eta = j - h;
+    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
+    if constexpr (kQuad) {
+      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
+      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
+      ax2 = static_cast<float>(0.5 * p[3]);
+      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
+      ay1 = static_cast<float>(p[7] + p[10] * eta);
+      ay2 = static_cast<float>(0.5 * p[9]);
+    } else {
+      ax0 = static_cast<float>(u + p[2] * eta);
+      ax1 = static_cast<float>(1 + p[1]);
+      ay0 = static_cast<float>(eta + v + p[5] * eta);
+      ay1 = static_cast<float>(p[4]);
+    }
+    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
+    const float* fr = ref.f.ptr<float>() + roff;
+    const float* gxr = ref.gx.ptr<float>() + roff;
+    const float* gyr = ref.gy.ptr<float>() + roff;
+    float sg = 0, sgg = 0, sfg = 0, a0 = 0, a1 = 0, a2 = 0, b0 = 0, b1 = 0, b2 = 0;
+    for (int i = 0; i < size; ++i) {
+      const float xi = static_cast<float>(i - h);
+      float x, y;
+      if constexpr (kQuad) {
+        x = ax0 + xi * (ax1 + xi * ax2);
+        y = ay0 + xi * (ay1 + xi * ay2);
+      } else {
+        x = ax0 + xi * ax1;
+        y = ay0 + xi * ay1;
+      }
+      // floor() of small local coordinates without a library call.
+      const int ix = static_cast<int>(x + 1024.0f) - 1024;
+      const int iy = static_cast<int>(y + 1024.0f) - 1024;
+      const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
+      const float* c =
+          coef + static_cast<std::size_t>(ccy + iy - kLow) * stride + (ccx + ix - kLow);
+      float g = 0;
+      if constexpr (kTaps == 4) {
+        float wx[4], wy[4];
+        CubicWeights(tx, wx);
+        CubicWeights(ty, wy);
+        for (int r = 0; r < 4; ++r) {
+          const float* cr = c + r * stride;
+          g += wy[r] * (wx[0] * cr[0] + wx[1] * cr[1] + wx[2] * cr[2] + wx[3] * cr[3]);
+        }
+      } else {
+        float wx[6], wy[6];
+        QuinticWeightsF(tx, wx);
+        QuinticWeightsF(ty, wy);
+        for (int r = 0; r < 6; ++r) {
+          const float* cr = c + r * stride;
+          g += wy[r] * (wx[0] * cr[0] + wx[1] * cr[1] + wx[2] * cr[2] + wx[3] * cr[3] +
+                        wx[4] * cr[4] + wx[5] * cr[5]);
+        }
+      }
+      const float gp = g - fm;
+      sg += gp;
+      sgg += gp * gp;
+      sfg += fr[i] * gp;
+      const float a = gp * gxr[i], b = gp * gyr[i];
+      a0 += a;
+      a1 += a * xi;
+      b0 += b;
+      b1 += b * xi;
+      if constexpr (kQuad) {
+        a2 += a * xi * xi;
+        b2 += b * xi * xi;
+      }
+    }
+    out->sg += sg;
+    out->sgg += sgg;
+    out->sfg += sfg;
+    const double e2 = eta * eta;
+    out->a[0][0][0] += a0;
+    out->a[0][1][0] += a1;
+    out->a[0][0][1] += a0 * eta;
+    out->a[1][0][0] += b0;
+    out->a[1][1][0] += b1;
+    out->a[1][0][1] += b0 * eta;
+    if constexpr (kQuad) {
+      out->a[0][2][0] += a2;
+      out->a[0][1][1] += a1 * eta;
+      out->a[0][0][2] += a0 * e2;
+      out->a[1][2][0] += b2;
+      out->a[1][1][1] += b1 * eta;
+      out->a[1][0][2] += b0 * e2;
+    }
+  }
+  (void)nm;
+}
+
+}  // namespace
+
+Shape MakeShape(ShapeFunction kind, int half) {
+  Shape s;
+  s.kind = kind;
+  s.half = half;
+  s.nm = kind == ShapeFunction::kAffine ? 3 : 6;
+  s.n = 2 * s.nm;
+  if (kind == ShapeFunction::kQuadratic) {
+    // Normal equations of the 5x5 sample grid in coordinates scaled by 1/half, then unscaled.
+    double a[36] = {}, m[25][6];
+    for (int k = 0; k < 25; ++k) {
+      const double xi = (k % 5 - 2) * 0.5, eta = (k / 5 - 2) * 0.5;
+      Monomials(xi, eta, m[k]);
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) a[i * 6 + j] += m[k][i] * m[k][j];
+    }
+    double inv[36];
+    InvertSpd(a, 6, inv);
+    s.fit.assign(6 * 25, 0);
+    const double scale[6] = {
+        1, 1.0 / half, 1.0 / half, 1.0 / (half * half), 1.0 / (half * half), 1.0 / (half * half)};
+    for (int i = 0; i < 6; ++i)
+      for (int k = 0; k < 25; ++k) {
+        double v = 0;
+        for (int j = 0; j < 6; ++j) v += inv[i * 6 + j] * m[k][j];
+        s.fit[i * 25 + k] = v * scale[i];
+      }
+  }
+  return s;
+}
+
+void Displacement(const Shape& s, const Params& p, double xi, double eta, double* du, double* dv) {
+  double m[6];
+  Monomials(xi, eta, m);
+  double a = 0, b = 0;
+  for (int i = 0; i < s.nm; ++i) {
+    a += p[i] * m[i];
+    b += p[s.nm + i] * m[i];
+  }
+  *du = a;
+  *dv = b;
+}
+
+Params Transfer(const Shape& s, const Params& p, double ox, double oy) {
+  Params q = p;
+  Displacement(s, p, ox, oy, &q[0], &q[s.nm]);
+  if (s.kind == ShapeFunction::kQuadratic) {
+    for (int c = 0; c < 2; ++c) {
+      const int o = c * 6;
+      q[o + 1] = p[o + 1] + p[o + 3] * ox + p[o + 4] * oy;
+      q[o + 2] = p[o + 2] + p[o + 4] * ox + p[o + 5] * oy;
+    }
+  }
+  return q;
+}
+
+Params ComposeInverse(const Shape& s, const Params& p, const Params& dp) {
+  Params q{};
+  if (s.kind == ShapeFunction::kAffine) {
+    // 3x3 homogeneous matrices.
+    const double a = 1 + dp[1], b = dp[2], c = dp[4], d = 1 + dp[5];
+    const double det = a * d - b * c;
+    const double ia = d / det, ib = -b / det, ic = -c / det, id = a / det;
+    const double itx = -(ia * dp[0] + ib * dp[3]), ity = -(ic * dp[0] + id * dp[3]);
+    const double A = 1 + p[1], B = p[2], C = p[4], D = 1 + p[5];
+    q[1] = A * ia + B * ic - 1;
+    q[2] = A * ib + B * id;
+    q[0] = A * itx + B * ity + p[0];
+    q[4] = C * ia + D * ic;
+    q[5] = C * ib + D * id - 1;
+    q[3] = C * itx + D * ity + p[3];
+    return q;
+  }
+  const double h = s.half;
+  double tu[25], tv[25];
+  for (int k = 0; k < 25; ++k) {
+    const double xi = (k % 5 - 2) * 0.5 * h, eta = (k / 5 - 2) * 0.5 * h;
+    // Invert x = X + d_dp(X) by fixed-point iteration (|grad d_dp| << 1).
+    double X = xi, Y = eta;
+    for (int it = 0; it < 6; ++it) {
+      double du, dv;
+      Displacement(s, dp, X, Y, &du, &dv);
+      X = xi - du;
+      Y = eta - dv;
+    }
+    double du, dv;
+    Displacement(s, p, X, Y, &du, &dv);
+    tu[k] = X + du - xi;
+    tv[k] = Y + dv - eta;
+  }
+  for (int i = 0; i < 6; ++i) {
+    double a = 0, b = 0;
+    for (int k = 0; k < 25; ++k) {
+      a += s.fit[i * 25 + k] * tu[k];
+      b += s.fit[i * 25 + k] * tv[k];
+    }
+    q[i] = a;
+    q[6 + i] = b;
+  }
+  return q;
+}
+
+void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& options,
+                   SubsetRef* s, double* hinv) {
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
+  const cv::Rect box(s->cx - h, s->cy - h, size, size);
+  if ((box & ref.region) != box) {
+    s->status = SubsetStatus::kOutOfImage;
+    return;
+  }
+  const int rx = s->cx - ref.region.x - h, ry = s->cy - ref.region.y - h;
+  const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
+  double sum = 0;
+  int saturated = 0;
+  for (int j = 0; j < size; ++j) {
+    const float* f = ref.f.ptr<float>(ry + j) + rx;
+    for (int i = 0; i < size; ++i) {
+      sum += f[i];
+      saturated += (f[i] <= 0 || f[i] >= ref.full_scale) ? 1 : 0;
+    }
+  }
+  const double count = double(size) * size, mean = sum / count;
+  // Moments: gg[k][p][q] = sum g_a g_b xi^p eta^q (k: xx, xy, yy), gs[a][p][q] = sum g_a ...,
+  // gf[a][p][q] = sum g_a (f - mean) ...
+  double gg[3][5][5] = {}, gs[2][3][3] = {}, gf[2][3][3] = {}, ss = 0;
+  for (int j = 0; j < size; ++j) {
+    const double eta = j - h;
+    const float* f = ref.f.ptr<float>(ry + j) + rx;
+    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
+    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
+    double rg[3][5] = {}, rs[2][3] = {}, rf[2][3] = {};
+    for (int i = 0; i < size; ++i) {
+      const double xi = i - h, fd = f[i] - mean;
+      ss += fd * fd;
+      const double g[2] = {gx[i], gy[i]};
+      const double prod[3] = {g[0] * g[0], g[0] * g[1], g[1] * g[1]};
+      double xp = 1;
+      for (int p = 0; p <= pmax; ++p) {
+        for (int k = 0; k < 3; ++k) rg[k][p] += prod[k] * xp;
+        if (p <= 2) {
+          for (int a = 0; a < 2; ++a) {
+            rs[a][p] += g[a] * xp;
+            rf[a][p] += g[a] * fd * xp;
+          }
+        }
+        xp *= xi;
+      }
+    }
+    double ep = 1;
+    for (int q = 0; q <= pmax; ++q) {
+      for (int p = 0; p + q <= pmax; ++p) {
+        for (int k = 0; k < 3; ++k) gg[k][p][q] += rg[k][p] * ep;
+        if (p + q <= 2) {
+          for (int a = 0; a < 2; ++a) {
+            gs[a][p][q] += rs[a][p] * ep;
+            gf[a][p][q] += rf[a][p] * ep;
+          }
+        }
+      }
+      ep *= eta;
+    }
+  }
+  s->f_mean = static_cast<float>(mean);
+  s->f_norm = static_cast<float>(std::sqrt(ss));
+  if (saturated > options.max_saturated_fraction * count) {
+    s->status = SubsetStatus::kSaturated;
+    return;
+  }
+  double H[144];
+  for (int i = 0; i < n; ++i) {
+    const int ai = i / nm, mi = i % nm;
+    s->sum_j[i] = kMonoC[mi] * gs[ai][kMonoPx[mi]][kMonoPy[mi]];
+    s->sum_jf[i] = kMonoC[mi] * gf[ai][kMonoPx[mi]][kMonoPy[mi]];
+    for (int j = 0; j < n; ++j) {
+      const int aj = j / nm, mj = j % nm;
+      const int k = ai + aj;  // 0 xx, 1 xy, 2 yy.
+      H[i * n + j] =
+          kMonoC[mi] * kMonoC[mj] * gg[k][kMonoPx[mi] + kMonoPx[mj]][kMonoPy[mi] + kMonoPy[mj]];
+    }
+  }
+  // Featureless: RMS gradient below 0.01 grey levels (8-bit scale) per px in x or y, or a Hessian
+  // whose Cholesky factorisation breaks down (the data cannot determine some warp parameter).
+  const double min_gradient2 = count * std::pow(0.01 * ref.full_scale / 255.0, 2);
+  if (H[0] < min_gradient2 || H[nm * n + nm] < min_gradient2 || !InvertSpd(H, n, hinv)) {
+    s->status = SubsetStatus::kSingularHessian;
+    return;
+  }
+  const double contrast = std::sqrt(ss / count) * 255.0 / ref.full_scale;
+  if (contrast < options.min_contrast) {
+    s->status = SubsetStatus::kLowContrast;
+    return;
+  }
+  s->status = SubsetStatus::kConverged;
+}
+
+IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s, const double* hinv,
+                   const DeformedImage& def, const IcgnOptions& options, const Params& initial) {
+  IcgnResult result;
+  result.p = initial;
+  const int h = shape.half, n = shape.n, nm = shape.nm;
+  const double count = double(2 * h + 1) * (2 * h + 1);
+  const BsplineImage& spline = *def.spline;
+  const cv::Mat& coef = spline.coefficients();
+  const std::size_t stride = coef.step1();
+  const int dcx = s.cx - spline.region().x, dcy = s.cy - spline.region().y;
+  const bool quad = shape.kind == ShapeFunction::kQuadratic;
+  const bool cubic = spline.kind() == Interpolation::kBicubic;
+  Params& p = result.p;
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    result.iterations = it;
+    // The warped subset (corners, edge midpoints, 1 px margin) must stay in the valid region.
+    for (int k = 0; k < 9; ++k) {
+      if (k == 4) continue;
+      const double xi = (k % 3 - 1) * h, eta = (k / 3 - 1) * h;
+      double du, dv;
+      Displacement(shape, p, xi, eta, &du, &dv);
+      const double x = s.cx + xi + du, y = s.cy + eta + dv;
+      if (!(x - 1 >= def.x_min && x + 1 < def.x_max && y - 1 >= def.y_min && y + 1 < def.y_max)) {
+        result.status = SubsetStatus::kOutOfImage;
+        return result;
+      }
+    }
+    Sums sums;
+    if (cubic) {
+      if (quad)
+        Accumulate<4, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+      else
+        Accumulate<4, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+    } else {
+      if (quad)
+        Accumulate<6, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+      else
+        Accumulate<6, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+    }
+    const double gm = sums.sg / count;
+    const double gn2 = sums.sgg - count * gm * gm;
+    if (!(gn2 > 1e-9 * count) || !(s.f_norm > 0)) {
+      result.zncc = 0;
+      result.status = SubsetStatus::kLowCorrelation;
+      return result;
+    }
+    const double gn = std::sqrt(gn2);
+    result.zncc = static_cast<float>((sums.sfg - s.f_mean * sums.sg) / (s.f_norm * gn));
+    const double ratio = s.f_norm / gn;
+    double b[12];
+    for (int i = 0; i < n; ++i) {
+      const int a = i / nm, m = i % nm;
+      const double jg = kMonoC[m] * sums.a[a][kMonoPx[m]][kMonoPy[m]];
+      b[i] = s.sum_jf[i] - ratio * (jg - gm * s.sum_j[i]);
+    }
+    Params dp{};
+    for (int i = 0; i < n; ++i) {
+      double v = 0;
+      for (int j = 0; j < n; ++j) v -= hinv[i * n + j] * b[j];
+      dp[i] = v;
+    }
+    // Convergence measure: largest displacement of a subset corner under the increment.
+    double move = 0;
+    for (int k = 0; k < 4; ++k) {
+      double du, dv;
+      Displacement(shape, dp, (k & 1) ? h : -h, (k & 2) ? h : -h, &du, &dv);
+      move = std::max(move, std::hypot(du, dv));
+    }
+    if (!std::isfinite(move)) {
+      result.status = SubsetStatus::kSingularHessian;
+      return result;
+    }
+    p = ComposeInverse(shape, p, dp);
+    if (move < options.convergence_px) {
+      // Least-squares covariance of the parameters: sigma_r^2 H^-1 with the residual variance
+      // sigma_r^2 = sum r^2 / (N - n), sum r^2 = f_n^2 * 2 (1 - ZNCC) (r in reference grey levels).
+      const double r2 = double(s.f_norm) * s.f_norm * 2 * std::max(0.0, 1.0 - result.zncc);
+      const double var_r = r2 / (count - n);
+      result.sigma_px = static_cast<float>(std::sqrt(var_r * std::max(hinv[0], hinv[nm * n + nm])));
+      if (result.zncc < options.min_zncc) {
+        result.status = SubsetStatus::kLowCorrelation;
+      } else if (!(result.sigma_px <= options.max_uncertainty_px)) {
+        result.status = SubsetStatus::kUncertain;
+      } else {
+        result.status = SubsetStatus::kConverged;
+      }
+      return result;
+    }
+  }
+  result.status = SubsetStatus::kMaxIterations;
+  return result;
+}
+
+}  // namespace impactdic::internal

@@ -1,0 +1,81 @@
+// Internal: shape-function algebra and the IC-GN kernel of the correlator (see correlator.h).
+#ifndef IMPACTDIC_SRC_DIC_ICGN_H_
+#define IMPACTDIC_SRC_DIC_ICGN_H_
+
+#include <array>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "impactdic/dic/bspline.h"
+#include "impactdic/dic/options.h"
+
+namespace impactdic::internal {
+
+// Warp parameters: [u, ux, uy, (uxx, uxy, uyy,) v, vx, vy, (vxx, vxy, vyy)] with
+// u(xi, eta) = u + ux xi + uy eta + uxx xi^2 / 2 + uxy xi eta + uyy eta^2 / 2, (xi, eta) the
+// offset from the subset centre [px].
+using Params = std::array<double, 12>;
+
+struct Shape {
+  ShapeFunction kind = ShapeFunction::kAffine;
+  int nm = 3;  // Monomials per component.
+  int n = 6;   // Parameters.
+  int half = 12;
+  // Least-squares fit of quadratic parameters to displacements sampled on a 5x5 grid (quadratic
+  // warp composition); 6 x 25, row-major.
+  std::vector<double> fit;
+};
+Shape MakeShape(ShapeFunction kind, int half);
+
+// Displacement (du, dv) of the warp at (xi, eta).
+void Displacement(const Shape& s, const Params& p, double xi, double eta, double* du, double* dv);
+// The same warp expressed about a centre moved by (ox, oy).
+Params Transfer(const Shape& s, const Params& p, double ox, double oy);
+// W(p) o W(dp)^-1 (inverse-compositional update). Exact for affine warps; for quadratic warps
+// the composed map is fitted by a quadratic warp on a 5x5 grid (exact when dp = 0, so the
+// converged solution is unaffected).
+Params ComposeInverse(const Shape& s, const Params& p, const Params& dp);
+
+// Reference data of one subset (computed once per reference).
+struct SubsetRef {
+  int cx = 0, cy = 0;            // Integer centre in the reference image [px].
+  double ox = 0, oy = 0;         // Tracked material point = centre + (ox, oy).
+  float f_mean = 0, f_norm = 0;  // Mean and sqrt(sum (f - mean)^2) of the reference subset.
+  SubsetStatus status = SubsetStatus::kConverged;  // kConverged = usable.
+  double sum_j[12] = {};                           // sum of the steepest-descent images J.
+  double sum_jf[12] = {};                          // sum J (f - f_mean).
+};
+
+// Reference images over a region (CV_32F): intensities and gradients at integer pixels.
+struct RefImages {
+  cv::Rect region;
+  cv::Mat f, gx, gy;
+  double full_scale = 255;
+};
+
+// Computes the subset's reference data and its inverse Hessian (n x n, row-major, into hinv),
+// setting the status to kOutOfImage / kSaturated / kSingularHessian / kLowContrast if unusable.
+void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& options,
+                   SubsetRef* subset, double* hinv);
+
+struct IcgnResult {
+  Params p{};
+  float zncc = 0;
+  float sigma_px = 0;  // Estimated standard deviation of the centre displacement [px].
+  int iterations = 0;
+  SubsetStatus status = SubsetStatus::kNotFound;
+};
+
+// The deformed image's B-spline and the rectangle the warped subsets must stay in.
+struct DeformedImage {
+  const BsplineImage* spline = nullptr;
+  double x_min = 0, x_max = 0, y_min = 0, y_max = 0;
+};
+
+IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& subset,
+                   const double* hinv, const DeformedImage& def, const IcgnOptions& options,
+                   const Params& initial);
+
+}  // namespace impactdic::internal
+
+#endif  // IMPACTDIC_SRC_DIC_ICGN_H_

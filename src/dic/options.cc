@@ -1,0 +1,124 @@
+#include "impactdic/dic/options.h"
+
+#include <cmath>
+#include <string>
+
+#include "impactdic/core/error.h"
+
+namespace impactdic {
+namespace {
+
+const char* const kStatusNames[kSubsetStatusCount] = {
+    "converged",    "max_iterations", "low_correlation", "singular_hessian",
+    "out_of_image", "masked",         "low_contrast",    "saturated",
+    "not_found",    "lost",           "uncertain"};
+
+std::string Num(double v) { return std::to_string(v); }
+
+}  // namespace
+
+const char* ToString(ShapeFunction shape) {
+  return shape == ShapeFunction::kAffine ? "affine" : "quadratic";
+}
+
+ShapeFunction ShapeFunctionFromString(const std::string& name) {
+  if (name == "affine") return ShapeFunction::kAffine;
+  if (name == "quadratic") return ShapeFunction::kQuadratic;
+  throw Error(ErrorKind::kInvalidValue, "shape function", name, "affine or quadratic");
+}
+
+const char* ToString(ReferenceUpdate mode) {
+  switch (mode) {
+    case ReferenceUpdate::kFixed: return "fixed";
+    case ReferenceUpdate::kIncremental: return "incremental";
+    case ReferenceUpdate::kEveryN: return "every";
+    case ReferenceUpdate::kAuto: return "auto";
+  }
+  return "?";
+}
+
+ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n) {
+  const std::string expected = "fixed, incremental, auto or every:N (N >= 1)";
+  if (text == "fixed") return ReferenceUpdate::kFixed;
+  if (text == "incremental") return ReferenceUpdate::kIncremental;
+  if (text == "auto") return ReferenceUpdate::kAuto;
+  if (text.rfind("every:", 0) == 0) {
+    const std::string number = text.substr(6);
+    std::size_t used = 0;
+    int n = 0;
+    try {
+      n = std::stoi(number, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != number.size() || n < 1) {
+      throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
+    }
+    if (every_n) *every_n = n;
+    return ReferenceUpdate::kEveryN;
+  }
+  throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
+}
+
+const char* ToString(SubsetStatus status) {
+  const int i = static_cast<int>(status);
+  return i >= 0 && i < kSubsetStatusCount ? kStatusNames[i] : "?";
+}
+
+SubsetStatus SubsetStatusFromString(const std::string& name) {
+  for (int i = 0; i < kSubsetStatusCount; ++i) {
+    if (name == kStatusNames[i]) return static_cast<SubsetStatus>(i);
+  }
+  std::string all;
+  for (int i = 0; i < kSubsetStatusCount; ++i) all += std::string(i ? ", " : "") + kStatusNames[i];
+  throw Error(ErrorKind::kInvalidValue, "subset status", name, "one of " + all);
+}
+
+void GridOptions::Check() const {
+  CheckValue(subset_size >= 5 && subset_size % 2 == 1 && subset_size <= 201, "dic.grid.subset_size",
+             std::to_string(subset_size), "an odd integer in [5, 201]");
+  CheckValue(step >= 1, "dic.grid.step", std::to_string(step), "an integer >= 1");
+  CheckValue(roi.width >= 0 && roi.height >= 0 && roi.x >= 0 && roi.y >= 0, "dic.grid.roi",
+             "x=" + std::to_string(roi.x) + " y=" + std::to_string(roi.y) +
+                 " w=" + std::to_string(roi.width) + " h=" + std::to_string(roi.height),
+             "a rectangle with non-negative origin and size (empty = whole image)");
+  CheckValue(mask.empty() || (mask.type() == CV_8UC1), "dic.grid.mask", "a non-8-bit mask",
+             "an 8-bit one-channel mask (0 = excluded)");
+}
+
+void InitialGuessOptions::Check() const {
+  CheckValue(search_radius_px >= 1 && search_radius_px <= 2000, "dic.init.search_radius_px",
+             std::to_string(search_radius_px), "an integer in [1, 2000]");
+  CheckValue(seed_spacing >= 1, "dic.init.seed_spacing", std::to_string(seed_spacing), ">= 1");
+  CheckValue(min_search_zncc > -1 && min_search_zncc < 1, "dic.init.min_search_zncc",
+             Num(min_search_zncc), "in (-1, 1)");
+}
+
+void IcgnOptions::Check() const {
+  CheckValue(convergence_px > 0 && convergence_px <= 1, "dic.icgn.convergence_px",
+             Num(convergence_px), "in (0, 1] px");
+  CheckValue(max_iterations >= 1 && max_iterations <= 200, "dic.icgn.max_iterations",
+             std::to_string(max_iterations), "in [1, 200]");
+  CheckValue(min_zncc >= -1 && min_zncc < 1, "dic.icgn.min_zncc", Num(min_zncc), "in [-1, 1)");
+  CheckValue(min_contrast >= 0 && std::isfinite(min_contrast), "dic.icgn.min_contrast",
+             Num(min_contrast), ">= 0 grey levels");
+  CheckValue(max_uncertainty_px > 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
+             "> 0 px");
+  CheckValue(max_saturated_fraction > 0 && max_saturated_fraction <= 1,
+             "dic.icgn.max_saturated_fraction", Num(max_saturated_fraction), "in (0, 1]");
+}
+
+void UpdateOptions::Check() const {
+  CheckValue(every_n >= 1, "dic.update.every_n", std::to_string(every_n), ">= 1");
+  CheckValue(auto_min_zncc > -1 && auto_min_zncc <= 1, "dic.update.auto_min_zncc",
+             Num(auto_min_zncc), "in (-1, 1]");
+}
+
+void DicOptions::Check() const {
+  grid.Check();
+  init.Check();
+  icgn.Check();
+  update.Check();
+}
+
+}  // namespace impactdic
