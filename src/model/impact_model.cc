@@ -74,7 +74,7 @@ bool ImpactModelParameters::SingularEnd() const {
   return damping_exponent_n > 0 && Stiffness_N_m() > 0 && damping_factor_u > 1;
 }
 
-AddedMass SigmoidAddedMass(double M_kg, double b_per_s, double T_s, double t_s) {
+AddedMass AddedMassAt(double M_kg, double b_per_s, double T_s, double t_s) {
   // sigma(x) = 1 / (1 + e^-x) written with e^-|x| only (never overflows);
   // sigma (1 - sigma) = e^-|x| / (1 + e^-|x|)^2; 1 - 2 sigma = -tanh(x / 2).
   const double x = b_per_s * (t_s - T_s);
@@ -91,7 +91,7 @@ AddedMass SigmoidAddedMass(double M_kg, double b_per_s, double T_s, double t_s) 
 ImpactForces EvaluateImpactForces(const ImpactModelParameters& p, double M_kg, double t_s,
                                   double z_m, double v_m_s) {
   ImpactForces f;
-  f.added = SigmoidAddedMass(M_kg, p.sigmoid_rate_b_per_s, p.sigmoid_delay_T_s, t_s);
+  f.added = AddedMassAt(M_kg, p.sigmoid_rate_b_per_s, p.sigmoid_delay_T_s, t_s);
   const double m = p.pounder_mass_kg + f.added.m_add_kg;
   const double k = p.Stiffness_N_m();
   f.inertia_N = -f.added.dm_dt_kg_s * v_m_s;
@@ -245,9 +245,9 @@ struct PeakResult {
 };
 
 // The largest distinct interior local maximum of -dv/dt along the trajectory: sampled at 8
-// points per step, candidates are samples larger than both neighbours whose topographic
-// prominence exceeds 1e-3 of their value; each candidate is refined by golden-section search on
-// the dense output over its two neighbouring samples.
+// points per step, candidates are positive samples (a deceleration) larger than both neighbours
+// whose topographic prominence exceeds 1e-3 of their value; each candidate is refined by
+// golden-section search on the dense output over its two neighbouring samples.
 PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSolution& sol) {
   constexpr int kSub = 8;
   auto decel = [&](double u) {
@@ -269,7 +269,8 @@ PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSoluti
     for (int j = i - 1; j >= 0 && g[j] <= g[i]; --j) left_min = std::min(left_min, g[j]);
     for (int j = i + 1; j <= n && g[j] <= g[i]; ++j) right_min = std::min(right_min, g[j]);
     const double prominence = g[i] - std::max(left_min, right_min);
-    if (!(prominence > 1e-3 * std::abs(g[i]) + 1e-9)) continue;
+    // A peak of deceleration: positive, and distinct from the numerical ripple.
+    if (!(g[i] > 0.0) || !(prominence > 1e-3 * std::abs(g[i]) + 1e-9)) continue;
     // Golden-section search for the maximum in [u_{i-1}, u_{i+1}].
     const double r = (std::sqrt(5.0) - 1.0) / 2.0;
     double a = us[i - 1], b = us[i + 1];
@@ -360,7 +361,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
     if (!(a < 0.0)) return false;
     if (singular) return k * y[0] * u1 > 0.0;
     // Regular end: dv/dt at v = 0 must be negative for v to reach 0.
-    const double m = mp + SigmoidAddedMass(M, b, T, t).m_add_kg;
+    const double m = mp + AddedMassAt(M, b, T, t).m_add_kg;
     return m * g - k * y[0] < 0.0;
   };
 
@@ -430,7 +431,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
       QTerms r{};
       const double t = y[0], z = y[1];
       const double sv = std::max(s, 0.0);
-      const AddedMass am = SigmoidAddedMass(M, b, T, t);
+      const AddedMass am = AddedMassAt(M, b, T, t);
       const double m = mp + am.m_add_kg;
       if (singular) {
         r.v = std::pow(sv, 1.0 / n);
@@ -581,7 +582,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
     sum.v_t1_m_s = s1.v_m_s;
     sum.plateau_deceleration_g = s1.v_m_s / (sol.t_end_s - t1) / g_unit;
     sum.momentum_ratio =
-        SigmoidAddedMass(M, b, T, t1).m_add_kg * s1.v_m_s / (mp * p.impact_velocity_m_s);
+        AddedMassAt(M, b, T, t1).m_add_kg * s1.v_m_s / (mp * p.impact_velocity_m_s);
   } else if (sum.stopped) {
     sum.warnings.push_back(fmt::format(
         "the pounder stopped at t_end = {} s before t1 = T + 4/b = {} s: no plateau deceleration "
@@ -590,7 +591,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   }
   // Physical warnings.
   if (sum.stopped && singular) {
-    const double m_end = mp + SigmoidAddedMass(M, b, T, sol.t_end_s).m_add_kg;
+    const double m_end = mp + AddedMassAt(M, b, T, sol.t_end_s).m_add_kg;
     const double friction = k * sol.z_end_m, weight = m_end * g;
     if (friction < weight)
       sum.warnings.push_back(fmt::format(
@@ -736,7 +737,7 @@ ImpactSeries MakeImpactSeries(const ImpactModelParameters& params, const ImpactR
 ImpactState ExactConservedMomentum(const ImpactModelParameters& p, double t_s) {
   const double M = p.AddedMassMax_kg(), mp = p.pounder_mass_kg;
   const double b = p.sigmoid_rate_b_per_s, T = p.sigmoid_delay_T_s;
-  const double p0 = (mp + SigmoidAddedMass(M, b, T, 0.0).m_add_kg) * p.impact_velocity_m_s;
+  const double p0 = (mp + AddedMassAt(M, b, T, 0.0).m_add_kg) * p.impact_velocity_m_s;
   // int dt / (m_p + M sigma(b (t - T))) with x = b (t - T):
   //   (1/b) [ x / a + M / (a c) (x - ln(a e^x + c)) ],  a = m_p + M, c = m_p.
   const double a = mp + M, c = mp;
@@ -749,7 +750,7 @@ ImpactState ExactConservedMomentum(const ImpactModelParameters& p, double t_s) {
   ImpactState s;
   s.t_s = t_s;
   s.z_m = p0 * integral;
-  s.v_m_s = p0 / (mp + SigmoidAddedMass(M, b, T, t_s).m_add_kg);
+  s.v_m_s = p0 / (mp + AddedMassAt(M, b, T, t_s).m_add_kg);
   return s;
 }
 

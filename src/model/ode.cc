@@ -189,10 +189,18 @@ OdeResult Integrator::Run(double x0, const Vec2& y0, double x_end) {
     bool hits_landmark = false;
     while (next_landmark < landmarks.size() && (landmarks[next_landmark] - x) * dir <= hmin)
       ++next_landmark;
+    if (next_landmark == landmarks.size()) {
+      // Within round-off of x_end (a step landed a few ulps short of it): snap to it.
+      x = x_end;
+      result_.x = x;
+      result_.status = OdeStatus::kReachedEnd;
+      break;
+    }
     double x_target = x + dir * hs;
-    if (next_landmark < landmarks.size()) {
+    {
       const double dist = (landmarks[next_landmark] - x) * dir;
-      if (hs >= dist) {
+      // Stretch a step that would end just short of a landmark (never leave a sliver).
+      if (hs >= dist * (1.0 - 1e-6)) {
         hs = dist;
         hits_landmark = true;
         x_target = landmarks[next_landmark];

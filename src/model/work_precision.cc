@@ -202,9 +202,9 @@ std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& optio
   {
     const double M = momentum.AddedMassMax_kg(), mp = momentum.pounder_mass_kg;
     const double b = momentum.sigmoid_rate_b_per_s, T = momentum.sigmoid_delay_T_s;
-    const double p0 = (mp + SigmoidAddedMass(M, b, T, 0.0).m_add_kg) * momentum.impact_velocity_m_s;
+    const double p0 = (mp + AddedMassAt(M, b, T, 0.0).m_add_kg) * momentum.impact_velocity_m_s;
     auto decel = [&](double t) {
-      const AddedMass am = SigmoidAddedMass(M, b, T, t);
+      const AddedMass am = AddedMassAt(M, b, T, t);
       return p0 * am.dm_dt_kg_s / ((mp + am.m_add_kg) * (mp + am.m_add_kg));
     };
     double a = T - 5.0 / b, c = T + 5.0 / b;

@@ -35,7 +35,7 @@ double AddedMassMaxEq4(double pounder_mass_kg, double impact_velocity_m_s, doubl
 struct ImpactModelParameters {
   double pounder_mass_kg = 10.0;  // m_p, > 0.
   // v0, > 0 (m/s). Default: free fall from 0.7 m with g = 9.81.
-  double impact_velocity_m_s = 3.7059412839101261;
+  double impact_velocity_m_s = 3.7059411760037424;
   double width_m = 0.15;   // D, > 0 (m).
   double depth_m = 0.192;  // t_z, out-of-plane depth, > 0 (m); A = D t_z.
   // M = m_add,max (kg), >= 0; NaN: Eq. 4.
@@ -64,7 +64,7 @@ struct AddedMass {
   double dm_dt_kg_s = 0.0;     // M b sigma (1 - sigma)
   double d2m_dt2_kg_s2 = 0.0;  // M b^2 sigma (1 - sigma) (1 - 2 sigma)
 };
-AddedMass SigmoidAddedMass(double M_kg, double b_per_s, double T_s, double t_s);
+AddedMass AddedMassAt(double M_kg, double b_per_s, double T_s, double t_s);
 
 // Every term of Eq. 9 at (t, z, v). For v <= 0 the v^-n term uses max(|v|, 1e-300) (the model is
 // only meaningful for v > 0; this keeps trial stages finite).
