@@ -1,11 +1,66 @@
+// impactdic campaign SCENE.yaml... [-o OUTDIR] | --from-table CSV: many scenes, then the Eq. 4
+// power-law regression over their measured m_add,max (pipeline/campaign.h).
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/pipeline/campaign.h"
 
 namespace impactdic::cli {
 
 void RegisterCampaignCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("campaign", "campaign (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("campaign"); });
+  struct Args {
+    std::vector<std::string> scenes;
+    std::string table, output = "results/campaign", format = "text";
+    int threads = -1;
+    double confidence = 0.95;
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "campaign",
+      "Run many scenes and fit Eq. 4, m_add,max = c m_p^a v0^b A^g, with confidence intervals");
+  cmd->add_option("scenes", args->scenes, "Scene files (YAML)");
+  cmd->add_option("--from-table", args->table,
+                  "Fit Eq. 4 from a CSV with mass_kg, velocity_m_s, area_m2, added_mass_max_kg "
+                  "(e.g. a campaign.csv) instead of running scenes");
+  cmd->add_option("-o,--output", args->output, "Output folder (default results/campaign)");
+  cmd->add_option("--threads", args->threads, "Correlation threads (0 = all cores)");
+  cmd->add_option("--confidence", args->confidence,
+                  "Confidence level of the intervals (default 0.95)");
+  cmd->add_option("--format", args->format, "Report on stdout: text or json (the regression)");
+  cmd->callback([args] {
+    if (args->scenes.empty() == args->table.empty()) {
+      throw Error(ErrorKind::kInvalidValue, "scenes / --from-table",
+                  args->scenes.empty() ? "neither" : "both",
+                  "scene files or --from-table CSV, not both");
+    }
+    if (args->format != "text" && args->format != "json") {
+      throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
+    }
+    CampaignOptions options;
+    options.output_folder = args->output;
+    options.threads = args->threads;
+    options.confidence = args->confidence;
+    if (!(args->confidence > 0 && args->confidence < 1)) {
+      throw Error(ErrorKind::kInvalidValue, "--confidence", std::to_string(args->confidence),
+                  "a level in (0, 1)");
+    }
+    if (args->threads < -1) {
+      throw Error(ErrorKind::kInvalidValue, "--threads", std::to_string(args->threads),
+                  "0 (all cores) or more");
+    }
+    const CampaignSummary summary = args->table.empty()
+                                        ? RunCampaign(args->scenes, options)
+                                        : RegressCampaignTable(args->table, options);
+    if (args->format == "json") {
+      std::cout << summary.RegressionJson().Dump() << "\n";
+    } else {
+      std::cout << summary.FullReport();
+    }
+  });
 }
 
 }  // namespace impactdic::cli

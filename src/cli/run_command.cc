@@ -1,11 +1,54 @@
+// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N]: the whole pipeline on one
+// scene (pipeline/pipeline.h).
+#include <iostream>
+#include <string>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic::cli {
 
 void RegisterRunCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "run (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("run"); });
+  struct Args {
+    std::string scene, output;
+    bool png_frames = false;
+    int threads = -1;
+    std::string format = "text";
+  };
+  auto args = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "run",
+      "Run the stages a scene needs (calibration -> frames -> correlate -> kinematics -> "
+      "sensor -> momentum -> model -> outputs)");
+  cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
+  cmd->add_option("-o,--output", args->output,
+                  "Output folder (default: the scene's outputs.folder)");
+  cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG");
+  cmd->add_option("--threads", args->threads,
+                  "Correlation threads (0 = all cores; default: the scene's)");
+  cmd->add_option("--format", args->format, "Summary on stdout: text or json");
+  cmd->callback([args] {
+    if (args->threads < -1) {
+      throw Error(ErrorKind::kInvalidValue, "--threads", std::to_string(args->threads),
+                  "0 (all cores) or more");
+    }
+    if (args->format != "text" && args->format != "json") {
+      throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
+    }
+    const Scene scene = LoadScene(args->scene);
+    PipelineOptions options;
+    options.output_folder = args->output;
+    options.png_frames = args->png_frames;
+    options.threads = args->threads;
+    const PipelineSummary summary = RunScene(scene, options);
+    if (args->format == "json") {
+      std::cout << summary.figures.ToJson().Dump() << "\n";
+    } else {
+      std::cout << summary.FullReport();
+    }
+  });
 }
 
 }  // namespace impactdic::cli

@@ -1,0 +1,91 @@
+// The whole pipeline on one scene (SPEC section 2): calibration -> frames -> correlate ->
+// kinematics -> sensor -> momentum -> model -> outputs, skipping what the scene does not need and
+// saying so. `impactdic run SCENE.yaml` is a thin layer over RunScene().
+//
+//   Scene scene = LoadScene("sample_frames/scene.yaml");
+//   PipelineOptions options;
+//   options.output_folder = "results/sample";
+//   PipelineSummary s = RunScene(scene, options);
+//   std::cout << s.FullReport();
+//
+// Outputs (folder: options.output_folder, else the scene's outputs.folder), each written under a
+// temporary name and renamed when complete:
+//   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
+//   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
+//   momentum.png, deceleration.png, added_mass.png, velocity_field_te.png, velocity.mp4 (or .avi)
+#ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
+#define IMPACTDIC_PIPELINE_PIPELINE_H_
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "impactdic/io/json.h"
+#include "impactdic/io/scene.h"
+
+namespace impactdic {
+
+struct PipelineOptions {
+  std::string output_folder;  // Empty: the scene's outputs.folder. Created if missing.
+  bool png_frames = false;  // Also write the animation frames as PNG (or scene outputs.png_frames).
+  int threads = -1;         // Correlation threads; -1: the scene's dic.threads (0 = all cores).
+  void Check() const;
+};
+
+// What happened to one stage.
+struct StageReport {
+  std::string name;
+  bool ran = false;
+  std::string note;  // What it did, or why it was skipped.
+  double seconds = 0;
+};
+
+// The key figures of a scene (summary.json / summary.csv). NaN: not available.
+struct SceneFigures {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  double impact_velocity_m_s = kNaN;  // From the sensor (else the scene's v0).
+  double p_max_kg_m_s = kNaN;
+  double t_end_peak_s = kNaN;                 // After impact.
+  double momentum_conservation_error = kNaN;  // |p_tot(t_e) - p_max| / p_max
+  double added_mass_max_kg = kNaN;            // Measured, Eq. 3 at t_e.
+  double added_mass_eq4_kg = kNaN;            // Eq. 4 prediction.
+  double sigmoid_M_kg = kNaN, sigmoid_b_per_s = kNaN, sigmoid_T_s = kNaN;
+  double momentum_ratio_measured = kNaN;  // Eq. 11
+  double momentum_ratio_model = kNaN;
+  double v_sand_max_m_s = kNaN;
+  double peak_deceleration_measured_g = kNaN;
+  double peak_deceleration_model_g = kNaN;
+  double plateau_deceleration_measured_g = kNaN;  // Mean over [t1, t_stop], t1 = T + 4/b.
+  double plateau_deceleration_model_g = kNaN;
+  double crater_depth_measured_m = kNaN;  // Sensor: penetration where v returns to 0.
+  double crater_depth_model_m = kNaN;
+  double t_end_model_s = kNaN;
+  double dic_valid_fraction = kNaN;
+  double dic_subsets_per_s = kNaN;
+
+  JsonObject ToJson() const;
+  // Column names and values of summary.csv, in the same order.
+  std::vector<std::string> CsvNames() const;
+  std::vector<double> CsvValues() const;
+};
+
+struct PipelineSummary {
+  std::string scene_name;
+  std::string output_folder;
+  std::vector<StageReport> stages;
+  SceneFigures figures;
+  std::vector<std::string> outputs;  // Files written.
+  std::vector<std::string> warnings;
+  double seconds = 0;
+  std::string BriefReport() const;
+  std::string FullReport() const;
+};
+
+// Runs the scene. Throws Error for bad input (missing or truncated frames, sensor record not
+// covering the frames, unwritable output folder, ...) before anything that looks complete is
+// written.
+PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_PIPELINE_PIPELINE_H_

@@ -1,0 +1,164 @@
+#include "impactdic/pipeline/campaign.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/scene.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+namespace {
+
+// Fits Eq. 4 over the scenes with a usable m_add,max and writes campaign.csv and regression.json.
+void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options) {
+  std::vector<PowerLawSample> samples;
+  for (const auto& s : summary->scenes) {
+    if (std::isfinite(s.figures.added_mass_max_kg) && s.figures.added_mass_max_kg > 0) {
+      samples.push_back({s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg});
+    }
+  }
+  if (samples.size() >= 5) {
+    summary->fit = FitPowerLaw(samples, options.confidence);
+    summary->fitted = true;
+  } else {
+    summary->fit_note = fmt::format(
+        "{} of {} scenes have a measured m_add,max; the Eq. 4 regression needs at least 5",
+        samples.size(), summary->scenes.size());
+    LogWarning("campaign: {}", summary->fit_note);
+  }
+  std::error_code ec;
+  fs::create_directories(options.output_folder, ec);
+  const std::string csv = (fs::path(options.output_folder) / "campaign.csv").string();
+  std::vector<std::string> names = {"mass_kg", "velocity_m_s", "area_m2"};
+  for (const auto& n : SceneFigures{}.CsvNames()) names.push_back(n);
+  std::vector<std::vector<std::string>> rows;
+  names.insert(names.begin(), "scene");
+  for (const auto& s : summary->scenes) {
+    std::vector<std::string> row = {s.name, fmt::format("{:.10g}", s.mass_kg),
+                                    fmt::format("{:.10g}", s.velocity_m_s),
+                                    fmt::format("{:.10g}", s.area_m2)};
+    for (double v : s.figures.CsvValues())
+      row.push_back(std::isfinite(v) ? fmt::format("{:.10g}", v) : "nan");
+    rows.push_back(row);
+  }
+  WriteCsvRows(csv, names, rows);
+  summary->outputs.push_back(csv);
+  const std::string json = (fs::path(options.output_folder) / "regression.json").string();
+  WriteTextFileAtomic(json, summary->RegressionJson().Dump() + "\n");
+  summary->outputs.push_back(json);
+}
+
+}  // namespace
+
+void CampaignOptions::Check() const {
+  CheckValue(!output_folder.empty(), "output_folder", "an empty path", "a folder");
+  CheckValue(threads >= -1, "threads", std::to_string(threads), "-1, 0 (all cores) or more");
+  CheckValue(confidence > 0 && confidence < 1, "confidence", fmt::format("{}", confidence),
+             "a level in (0, 1)");
+}
+
+JsonObject CampaignSummary::RegressionJson() const {
+  JsonObject j;
+  j.Add("scenes", static_cast<int>(scenes.size()));
+  j.Add("fitted", fitted);
+  if (!fitted) {
+    j.Add("note", fit_note);
+    return j;
+  }
+  j.Add("c", fit.c).Add("a", fit.a).Add("b", fit.b).Add("g", fit.g);
+  j.Add("ci_c", std::vector<double>{fit.ci_c[0], fit.ci_c[1]});
+  j.Add("ci_a", std::vector<double>{fit.ci_a[0], fit.ci_a[1]});
+  j.Add("ci_b", std::vector<double>{fit.ci_b[0], fit.ci_b[1]});
+  j.Add("ci_g", std::vector<double>{fit.ci_g[0], fit.ci_g[1]});
+  j.Add("confidence", fit.confidence)
+      .Add("r_squared", fit.r_squared)
+      .Add("n", static_cast<int>(fit.n));
+  j.Add("residual_sd_log", fit.residual_sd);
+  j.Add("paper", JsonObject().Add("c", 425.0).Add("a", 0.1).Add("b", 0.2).Add("g", 1.3));
+  return j;
+}
+
+std::string CampaignSummary::FullReport() const {
+  std::string text = fmt::format("Campaign of {} scenes ({:.1f} s)\n", scenes.size(), seconds);
+  for (const auto& s : scenes) {
+    text +=
+        fmt::format("  {:<20} m_p {:6.2f} kg  v0 {:5.2f} m/s  A {:.4f} m^2  m_add,max {:.3f} kg\n",
+                    s.name, s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg);
+  }
+  if (fitted) {
+    text += "Eq. 4: " + fit.BriefReport() + "\n";
+  } else {
+    text += "Eq. 4: not fitted: " + fit_note + "\n";
+  }
+  for (const auto& o : outputs) text += "  " + o + "\n";
+  return text;
+}
+
+CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
+                            const CampaignOptions& options) {
+  options.Check();
+  if (scene_paths.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "scenes", "none", "at least one scene file");
+  }
+  // Load (and so validate) every scene before running any.
+  std::vector<Scene> scenes;
+  for (const auto& path : scene_paths) scenes.push_back(LoadScene(path));
+  WallTimer timer;
+  CampaignSummary summary;
+  for (const Scene& scene : scenes) {
+    PipelineOptions p;
+    p.output_folder = (fs::path(options.output_folder) / scene.name).string();
+    p.threads = options.threads;
+    LogInfo("campaign: scene {} -> {}", scene.name, p.output_folder);
+    const PipelineSummary run = RunScene(scene, p);
+    CampaignScene s;
+    s.name = scene.name;
+    s.mass_kg = scene.test.mass_kg;
+    s.velocity_m_s = std::isfinite(run.figures.impact_velocity_m_s)
+                         ? run.figures.impact_velocity_m_s
+                         : scene.test.ImpactVelocity();
+    s.area_m2 = scene.test.ContactArea();
+    s.figures = run.figures;
+    summary.scenes.push_back(s);
+  }
+  FitAndWrite(&summary, options);
+  summary.seconds = timer.ElapsedSeconds();
+  return summary;
+}
+
+CampaignSummary RegressCampaignTable(const std::string& csv_path, const CampaignOptions& options) {
+  options.Check();
+  CsvReadOptions read;
+  read.required_columns = {"mass_kg", "velocity_m_s", "area_m2", "added_mass_max_kg"};
+  read.allow_non_finite = true;  // A scene without a measurement has nan; it is left out.
+  read.text_columns = {"scene"};
+  const CsvTable table = ReadCsv(csv_path, read);
+  const bool named = !table.text_names.empty();
+  CampaignSummary summary;
+  for (std::size_t r = 0; r < table.rows(); ++r) {
+    CampaignScene s;
+    s.name = named ? table.TextColumn("scene")[r] : fmt::format("row {}", r + 1);
+    s.mass_kg = table.Column("mass_kg")[r];
+    s.velocity_m_s = table.Column("velocity_m_s")[r];
+    s.area_m2 = table.Column("area_m2")[r];
+    s.figures.added_mass_max_kg = table.Column("added_mass_max_kg")[r];
+    if (!(s.mass_kg > 0 && s.velocity_m_s > 0 && s.area_m2 > 0)) {
+      throw Error(ErrorKind::kFileFormat, "row of " + s.name,
+                  fmt::format("m_p {}, v0 {}, A {}", s.mass_kg, s.velocity_m_s, s.area_m2),
+                  "positive mass_kg, velocity_m_s and area_m2")
+          .WithFile(csv_path);
+    }
+    summary.scenes.push_back(s);
+  }
+  FitAndWrite(&summary, options);
+  return summary;
+}
+
+}  // namespace impactdic
