@@ -1,11 +1,97 @@
+// impactdic synth [SCENE_SPEC.yaml] [--preset small|full|tiny] -o DIR
+// Renders a synthetic impact scene (synth/impact_scene.h, docs/synth.md): frames, sensor CSV,
+// calibration images through the same lens (calibrated here with the calib module into
+// DIR/calibration/camera.yaml), the scene YAML that processes it and the ground truth HDF5.
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <iostream>
+#include <string>
+
 #include "commands.h"
+#include "impactdic/calib/calibration.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/synth/impact_scene.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct SynthArgs {
+  std::string spec_path;
+  std::string preset;
+  std::string output;
+  int frames = -1;
+  bool calibrate = true;
+};
+
+void RunSynth(const SynthArgs& args) {
+  // Validate everything before any work.
+  if (args.spec_path.empty() && args.preset.empty())
+    throw Error(ErrorKind::kInvalidValue, "SCENE_SPEC", "nothing",
+                "a scene spec YAML file or --preset small|full|tiny");
+  if (args.output.empty())
+    throw Error(ErrorKind::kInvalidValue, "-o", "nothing", "an output folder");
+  if (args.frames != -1 && args.frames < 3)
+    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(args.frames),
+                "a frame count >= 3 (or leave it out for the spec's value)");
+  if (!args.preset.empty() && !args.spec_path.empty())
+    throw Error(ErrorKind::kInvalidValue, "--preset", args.preset,
+                "no --preset together with a spec file (write `preset:` in the spec)");
+  ImpactSceneSpec spec =
+      args.spec_path.empty() ? ImpactScenePreset(args.preset) : LoadImpactSceneSpec(args.spec_path);
+  if (args.frames != -1) spec.frames = args.frames;
+  spec.Check();
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(args.output, ec) && !fs::is_directory(args.output, ec))
+    throw Error(ErrorKind::kInvalidValue, "-o", args.output, "a folder, not a file");
+
+  ImpactScene scene(spec);
+  LogInfo("model: {}", scene.model_run().summary.BriefReport());
+  LogInfo("scene: {} frames of {}x{} px, t_e = {:.4g} ms, m_grid = {:.4g} kg, ROI [{}, {}, {}, {}]",
+          scene.frame_count(), spec.width, spec.height, scene.momentum().t_e_s * 1e3,
+          scene.momentum().m_grid_kg, scene.dic_grid().roi[0], scene.dic_grid().roi[1],
+          scene.dic_grid().roi[2], scene.dic_grid().roi[3]);
+  ImpactSceneReport report = WriteImpactScene(scene, args.output);
+
+  // The scene points at calibration/camera.yaml: make it from the rendered images.
+  if (spec.render_calibration && spec.calibration_yaml.empty()) {
+    const fs::path dir = fs::path(args.output) / "calibration";
+    const std::string yaml = (dir / "camera.yaml").string();
+    if (args.calibrate) {
+      CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
+      CalibrationSummary summary;
+      CameraCalibration calibration = CalibrateFromFiles(
+          {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
+      SaveCalibration(calibration, yaml);
+      LogInfo("calibration: {}", summary.BriefReport());
+    } else {
+      LogWarning(
+          "--no-calibrate: the scene points at {} which does not exist yet; make it with "
+          "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
+          yaml, (dir / "plane.png").string(), (dir / "view_*.png").string(), yaml);
+    }
+  }
+  std::cout << report.BriefReport() << "\n";
+  std::cout << "scene: " << report.scene_yaml << "\n";
+}
+
+}  // namespace
 
 void RegisterSynthCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("synth", "synth (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("synth"); });
+  auto args = std::make_shared<SynthArgs>();
+  auto* cmd = app.add_subcommand(
+      "synth",
+      "Render a synthetic impact scene (frames, sensor CSV, calibration images, scene YAML, "
+      "ground truth HDF5) from a scene spec YAML (docs/synth.md)");
+  cmd->add_option("SCENE_SPEC", args->spec_path, "Scene spec YAML (keys in docs/synth.md)");
+  cmd->add_option("--preset", args->preset, "Use a preset instead of a spec: small, full, tiny");
+  cmd->add_option("-o,--output", args->output, "Output folder (created)")->required();
+  cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
+  cmd->add_flag("!--no-calibrate", args->calibrate,
+                "Do not calibrate the rendered checkerboard images");
+  cmd->callback([args] { RunSynth(*args); });
 }
 
 }  // namespace impactdic::cli
