@@ -1,11 +1,261 @@
+// impactdic analyze: the accelerometer record alone (--sensor CSV), or a scene's sensor,
+// kinematics and momentum stages from its correlation results (SCENE.yaml).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
 #include "commands.h"
+#include "impactdic/calib/calibration.h"
+#include "impactdic/core/error.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/json.h"
+#include "impactdic/io/scene.h"
+#include "impactdic/momentum/momentum.h"
+#include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/sensor/sensor.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct AnalyzeArgs {
+  std::string scene;
+  std::string sensor;
+  bool from_release = false;
+  std::optional<double> impact_velocity;
+  double cutoff = 1500;
+  std::string format = "text";
+  std::string time_column = "time_s";
+  std::string accel_column;
+  std::string accel_unit = "auto";
+  std::string exposure_column = "exposure";
+  std::string offset_reference = "free-fall";
+  std::optional<double> release_time;
+  double quiet_window = 0.005;
+  double impact_threshold = 5;
+  std::string output;
+  std::string results;
+};
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The sensor-only form: every option checked before the file is read.
+SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) {
+  if (a.from_release == a.impact_velocity.has_value()) {
+    throw Error(ErrorKind::kInvalidValue, "--from-release / --impact-velocity",
+                a.from_release ? "both given" : "neither given",
+                "exactly one: integrate from the release (v = 0) or from the impact with the "
+                "given impact velocity [m/s]");
+  }
+  if (a.impact_velocity && !(std::isfinite(*a.impact_velocity) && *a.impact_velocity > 0)) {
+    throw Error(ErrorKind::kInvalidValue, "--impact-velocity",
+                fmt::format("{}", *a.impact_velocity), "a finite impact velocity > 0 m/s");
+  }
+  if (!(std::isfinite(a.cutoff) && a.cutoff > 0)) {
+    throw Error(ErrorKind::kInvalidValue, "--cutoff", fmt::format("{}", a.cutoff),
+                "a cut-off frequency > 0 Hz (below the Nyquist frequency of the record)");
+  }
+  if (!(std::isfinite(a.quiet_window) && a.quiet_window > 0)) {
+    throw Error(ErrorKind::kInvalidValue, "--quiet-window", fmt::format("{}", a.quiet_window),
+                "> 0 s");
+  }
+  if (!(std::isfinite(a.impact_threshold) && a.impact_threshold > 1)) {
+    throw Error(ErrorKind::kInvalidValue, "--impact-threshold",
+                fmt::format("{}", a.impact_threshold), "> 1 g (above the rest reading)");
+  }
+  if (a.release_time && !std::isfinite(*a.release_time)) {
+    throw Error(ErrorKind::kInvalidValue, "--release-time", fmt::format("{}", *a.release_time),
+                "a finite time on the DAQ clock [s]");
+  }
+  if (a.release_time && !a.from_release) {
+    throw Error(ErrorKind::kInvalidValue, "--release-time", "without --from-release",
+                "--release-time only with --from-release");
+  }
+  if (!a.output.empty() && !EndsWith(a.output, ".h5") && !EndsWith(a.output, ".hdf5")) {
+    throw Error(ErrorKind::kInvalidValue, "--output", a.output, "an HDF5 file name (.h5, .hdf5)");
+  }
+  if (cmd.count("--results") > 0) {
+    throw Error(ErrorKind::kInvalidValue, "--results", "with --sensor",
+                "--results only with the SCENE.yaml form");
+  }
+  SensorOptions o;
+  o.columns.time = a.time_column;
+  o.columns.accel = a.accel_column;
+  try {
+    o.columns.accel_unit = AccelUnitFromString(a.accel_unit);
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, "--accel-unit", a.accel_unit, "auto, g or m/s^2");
+  }
+  try {
+    o.offset_reference = OffsetReferenceFromString(a.offset_reference);
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, "--offset-reference", a.offset_reference,
+                "free-fall, rest or none");
+  }
+  o.columns.exposure = a.exposure_column;
+  o.cutoff_hz = a.cutoff;
+  o.quiet_window_s = a.quiet_window;
+  o.impact_threshold_g = a.impact_threshold;
+  if (a.from_release) {
+    o.integrate_from = IntegrationStart::kRelease;
+    if (a.release_time) o.release_time_s = *a.release_time;
+  } else {
+    o.integrate_from = IntegrationStart::kImpact;
+    o.impact_velocity_m_s = *a.impact_velocity;
+  }
+  o.Check();
+  return o;
+}
+
+void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
+  if (!std::filesystem::exists(a.sensor)) {
+    throw Error(ErrorKind::kFileNotFound, "--sensor", a.sensor, "an existing DAQ CSV file")
+        .WithFile(a.sensor);
+  }
+  const SensorResult r = AnalyzeSensorCsv(a.sensor, o);
+  const SensorSummary& s = r.summary;
+  if (!a.output.empty()) {
+    H5Writer out(a.output);
+    WriteSensor(out, r);
+    out.Commit();
+  }
+  if (a.format == "json") {
+    JsonObject j;
+    // The contract's keys first, in this order; more keys after them.
+    j.Add("impact_time_s", s.impact_time_s)
+        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
+        .Add("final_penetration_m", s.final_penetration_m)
+        .Add("peak_deceleration_g", s.peak_deceleration_g)
+        .Add("t_peak_s", s.t_peak_s)
+        .Add("sample_rate_hz", s.sample_rate_hz)
+        .Add("warnings", s.warnings)
+        .Add("peak_time_daq_s", s.peak_time_s)
+        .Add("stop_time_s", s.stop_time_s)
+        .Add("stopped", s.stopped)
+        .Add("release_time_s", s.release_time_s)
+        .Add("offset_g", s.offset_g)
+        .Add("noise_g", s.noise_g)
+        .Add("cutoff_hz", s.cutoff_hz)
+        .Add("integrate_from", ToString(o.integrate_from))
+        .Add("offset_reference", ToString(o.offset_reference))
+        .Add("samples", static_cast<std::int64_t>(s.samples))
+        .Add("seconds", s.seconds);
+    std::cout << j.Dump() << "\n";
+  } else {
+    std::cout << "sensor record " << a.sensor << "\n"
+              << "integration from " << ToString(o.integrate_from) << ", offset from "
+              << ToString(o.offset_reference) << "\n"
+              << s.FullReport();
+  }
+}
+
+void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
+  for (const char* sensor_only :
+       {"--from-release", "--impact-velocity", "--cutoff", "--output", "--release-time",
+        "--accel-column", "--accel-unit", "--time-column", "--exposure-column",
+        "--offset-reference", "--quiet-window", "--impact-threshold"}) {
+    if (cmd.count(sensor_only) > 0) {
+      throw Error(ErrorKind::kInvalidValue, sensor_only, "with SCENE.yaml",
+                  "this option only with --sensor (the scene file sets the sensor options)");
+    }
+  }
+  if (!a.results.empty() && !EndsWith(a.results, ".h5") && !EndsWith(a.results, ".hdf5")) {
+    throw Error(ErrorKind::kInvalidValue, "--results", a.results, "an HDF5 file (.h5, .hdf5)");
+  }
+  const Scene scene = LoadScene(a.scene);
+  double mm_per_px = scene.inputs.mm_per_px;
+  if (!(mm_per_px > 0) && !scene.inputs.calibration.empty()) {
+    const CameraCalibration cal = LoadCalibration(scene.inputs.calibration);
+    if (!cal.plane) {
+      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px",
+                  "0 and the calibration has no plane scale",
+                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
+          .WithFile(scene.path);
+    }
+    mm_per_px = cal.plane->mm_per_px;
+  }
+  const std::string results =
+      a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
+                        : a.results;
+  const SceneAnalysisRun run = AnalyzeSceneResults(scene, results, mm_per_px);
+  const MomentumSummary& m = run.analysis.momentum.summary;
+  if (a.format == "json") {
+    JsonObject j = m.ToJson();
+    j.Add("impact_time_s", run.sensor.summary.impact_time_s)
+        .Add("impact_velocity_m_s", run.sensor.summary.impact_velocity_m_s)
+        .Add("final_penetration_m", run.sensor.summary.final_penetration_m)
+        .Add("results", results);
+    std::cout << j.Dump() << "\n";
+  } else {
+    std::cout << "scene " << scene.path << " -> " << results << "\n"
+              << run.sensor.summary.FullReport() << m.FullReport();
+  }
+}
+
+}  // namespace
 
 void RegisterAnalyzeCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("analyze", "analyze (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("analyze"); });
+  auto args = std::make_shared<AnalyzeArgs>();
+  auto* cmd = app.add_subcommand(
+      "analyze",
+      "Accelerometer analysis (--sensor CSV), or a scene's kinematics and momentum validation "
+      "from its correlation results (SCENE.yaml)");
+  cmd->add_option("SCENE", args->scene,
+                  "scene YAML: reads the correlation results and the sensor CSV, writes "
+                  "/sensor, /kinematics, /momentum into the results HDF5");
+  cmd->add_option("--sensor", args->sensor, "DAQ CSV (time_s, accel_g [, exposure, force*])");
+  cmd->add_flag("--from-release", args->from_release,
+                "integrate from the release (v = 0; the record starts at rest, or give "
+                "--release-time)");
+  cmd->add_option("--impact-velocity", args->impact_velocity,
+                  "integrate from the detected impact with this velocity [m/s]");
+  cmd->add_option("--cutoff", args->cutoff, "low-pass cut-off [Hz] (default 1500)");
+  cmd->add_option("--format", args->format, "output format: text or json (default text)");
+  cmd->add_option("--time-column", args->time_column, "time column [s] (default time_s)");
+  cmd->add_option("--accel-column", args->accel_column,
+                  "acceleration column (default: accel_g, else accel_m_s2)");
+  cmd->add_option("--accel-unit", args->accel_unit,
+                  "auto (from the column name), g or m/s^2 (default auto)");
+  cmd->add_option("--exposure-column", args->exposure_column,
+                  "camera exposure column (default exposure; ignored when absent)");
+  cmd->add_option("--offset-reference", args->offset_reference,
+                  "quiet window for the offset: free-fall (reads 0 g before the impact), rest "
+                  "(reads 1 g at the record start) or none (default free-fall)");
+  cmd->add_option("--release-time", args->release_time,
+                  "release time on the DAQ clock [s] (with --from-release, when the record does "
+                  "not start at rest)");
+  cmd->add_option("--quiet-window", args->quiet_window,
+                  "length of the offset/noise window [s] (default 0.005)");
+  cmd->add_option("--impact-threshold", args->impact_threshold,
+                  "reading [g] that is certainly the impact; the onset is found before it "
+                  "(default 5)");
+  cmd->add_option("--output", args->output, "also write the sensor series to this HDF5 file");
+  cmd->add_option("--results", args->results,
+                  "correlation results HDF5 of the scene (default <outputs.folder>/results.h5)");
+  cmd->callback([args, cmd] {
+    const AnalyzeArgs& a = *args;
+    if (a.format != "text" && a.format != "json") {
+      throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
+    }
+    if (a.scene.empty() == a.sensor.empty()) {
+      throw Error(ErrorKind::kInvalidValue, "SCENE / --sensor",
+                  a.scene.empty() ? "neither given" : "both given",
+                  "either a scene file (momentum analysis) or --sensor CSV (accelerometer only)");
+    }
+    if (!a.sensor.empty()) {
+      const SensorOptions o = ValidatedSensorOptions(a, *cmd);
+      RunSensorForm(a, o);
+    } else {
+      RunSceneForm(a, *cmd);
+    }
+  });
 }
 
 }  // namespace impactdic::cli

@@ -321,12 +321,14 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
 
 SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
                                  double fps, double frame_time_offset_s, const SensorResult& sensor,
-                                 const MomentumOptions& options) {
+                                 const MomentumOptions& options, std::size_t first_frame) {
   SceneAnalysis a;
   KinematicsOptions kopt;
   kopt.fps = fps;
   a.kinematics = ComputeKinematics(dic, mapping, kopt);
-  a.frame_time_s = FrameTimes(sensor, static_cast<int>(dic.frames), fps, frame_time_offset_s);
+  const std::vector<double> all =
+      FrameTimes(sensor, static_cast<int>(first_frame + dic.frames), fps, frame_time_offset_s);
+  a.frame_time_s.assign(all.begin() + static_cast<std::ptrdiff_t>(first_frame), all.end());
   a.momentum = AnalyzeMomentum(a.kinematics, a.frame_time_s, sensor, options);
   return a;
 }

@@ -122,7 +122,9 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
                                const SensorResult& sensor, const MomentumOptions& options);
 
 // The whole analysis of one scene from the correlation arrays: frame times from the sensor
-// (exposure edges, or frame_time_offset_s + k / fps), kinematics, momentum.
+// (exposure edges, or frame_time_offset_s + k / fps), kinematics, momentum. `first_frame` is the
+// index in the camera sequence of the first correlated frame (the frame times are those of frames
+// first_frame .. first_frame + dic.frames - 1).
 struct SceneAnalysis {
   KinematicsResult kinematics;
   std::vector<double> frame_time_s;
@@ -130,7 +132,7 @@ struct SceneAnalysis {
 };
 SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
                                  double fps, double frame_time_offset_s, const SensorResult& sensor,
-                                 const MomentumOptions& options);
+                                 const MomentumOptions& options, std::size_t first_frame = 0);
 
 // Write the /sensor group, and the /kinematics, /sensor and /momentum groups, with units and
 // descriptions on every dataset (names follow render/results_layout.h where it has them):
