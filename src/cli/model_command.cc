@@ -1,11 +1,331 @@
+// impactdic model: the added-mass impact model (Eq. 9, SPEC section 4) for one test, the
+// work-precision study of its solvers, or the paper's 27 combinations (Table 1).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/io/json.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/model/work_precision.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct ModelArgs {
+  std::optional<double> mass, height, velocity, width, added_mass;
+  double depth = 0.192;
+  double K = 50, n = 0.2, u = 1.9, T = 0.002, b = 2500, rho = 1550, g = 9.81;
+  double bed_height = 0.6;
+  std::optional<double> rtol, atol, t_max;
+  std::string solver = "auto";
+  std::string error_estimate = "companion";
+  bool ode45_defaults = false;
+  std::string format = "text";
+  std::string output;
+  bool work_precision = false;
+  std::string plot;
+  std::string wp_solvers = "dopri5,stiff,auto,ode45";
+  std::string wp_cases = "exact,default,table1";
+  bool table1 = false;
+};
+
+std::string Num(double v) { return fmt::format("{}", v); }
+
+std::vector<std::string> SplitList(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ','))
+    if (!item.empty()) out.push_back(item);
+  return out;
+}
+
+void RequirePositive(const std::optional<double>& v, const char* option, const char* what) {
+  if (v && !(std::isfinite(*v) && *v > 0))
+    throw Error(ErrorKind::kInvalidValue, option, Num(*v), what);
+}
+
+void RequireFinite(double v, bool ok, const char* option, const char* what) {
+  if (!std::isfinite(v) || !ok) throw Error(ErrorKind::kInvalidValue, option, Num(v), what);
+}
+
+bool EndsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// Validates everything before any work; returns the parameters (mass etc. only for a single run).
+ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
+  if (a.work_precision && a.table1)
+    throw Error(ErrorKind::kInvalidValue, "--work-precision", "together with --table1",
+                "one of --work-precision, --table1 or a single run");
+  if (single_run) {
+    if (!a.mass)
+      throw Error(ErrorKind::kInvalidValue, "--mass", "missing",
+                  "the pounder mass in kg (> 0) for a single run");
+    if (!a.width)
+      throw Error(ErrorKind::kInvalidValue, "--width", "missing",
+                  "the pounder width D in m (> 0) for a single run");
+    if (a.height && a.velocity)
+      throw Error(ErrorKind::kInvalidValue, "--height/--velocity", "both given",
+                  "exactly one of --height (drop height, m) or --velocity (impact velocity, m/s)");
+    if (!a.height && !a.velocity)
+      throw Error(ErrorKind::kInvalidValue, "--height/--velocity", "neither given",
+                  "exactly one of --height (drop height, m) or --velocity (impact velocity, m/s)");
+  } else {
+    for (const auto& [given, name] :
+         {std::pair{a.mass.has_value(), "--mass"}, std::pair{a.height.has_value(), "--height"},
+          std::pair{a.velocity.has_value(), "--velocity"},
+          std::pair{a.width.has_value(), "--width"},
+          std::pair{a.added_mass.has_value(), "--added-mass"}})
+      if (given)
+        throw Error(ErrorKind::kInvalidValue, name,
+                    a.table1 ? "with --table1" : "with --work-precision",
+                    "no per-test option: these runs use the paper's 27 combinations / fixed cases");
+  }
+  RequirePositive(a.mass, "--mass", "a pounder mass > 0 kg");
+  RequirePositive(a.height, "--height", "a drop height > 0 m");
+  RequirePositive(a.velocity, "--velocity", "an impact velocity > 0 m/s");
+  RequirePositive(a.width, "--width", "a pounder width > 0 m");
+  RequireFinite(a.depth, a.depth > 0, "--depth", "an out-of-plane depth t_z > 0 m");
+  if (a.added_mass && !(std::isfinite(*a.added_mass) && *a.added_mass >= 0))
+    throw Error(ErrorKind::kInvalidValue, "--added-mass", Num(*a.added_mass),
+                "an added mass M >= 0 kg");
+  RequireFinite(a.K, a.K >= 0, "--K", "K >= 0");
+  RequireFinite(a.n, a.n >= 0 && a.n <= 1, "--n", "n in [0, 1]");
+  RequireFinite(a.u, a.u >= 1, "--u", "u >= 1 (F_dyn must resist the motion)");
+  RequireFinite(a.T, a.T >= 0, "--T", "T >= 0 s");
+  RequireFinite(a.b, a.b > 0 && a.b <= 1e12, "--b", "b in (0, 1e12] 1/s");
+  RequireFinite(a.rho, a.rho > 0, "--rho", "a density > 0 kg/m^3");
+  RequireFinite(a.g, a.g >= 0, "--g", "g >= 0 m/s^2");
+  RequireFinite(a.bed_height, a.bed_height > 0, "--bed-height", "a bed height > 0 m");
+  if (a.height && a.g <= 0)
+    throw Error(ErrorKind::kInvalidValue, "--g", Num(a.g),
+                "g > 0 when the impact velocity comes from --height (v0 = sqrt(2 g h))");
+
+  ImpactModelParameters p;
+  if (a.mass) p.pounder_mass_kg = *a.mass;
+  if (a.width) p.width_m = *a.width;
+  p.depth_m = a.depth;
+  if (a.added_mass) p.added_mass_kg = *a.added_mass;
+  p.friction_K = a.K;
+  p.damping_exponent_n = a.n;
+  p.damping_factor_u = a.u;
+  p.sigmoid_delay_T_s = a.T;
+  p.sigmoid_rate_b_per_s = a.b;
+  p.density_kg_m3 = a.rho;
+  p.gravity_m_s2 = a.g;
+  p.bed_height_m = a.bed_height;
+  if (a.velocity) p.impact_velocity_m_s = *a.velocity;
+  if (a.height) p.impact_velocity_m_s = ImpactVelocityFromHeight(*a.height, a.g);
+  p.Check();
+  return p;
+}
+
+ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
+  ImpactSolverOptions o;
+  o.solver = ImpactSolverFromString(a.solver);
+  o.error_estimator = ErrorEstimatorFromString(a.error_estimate);
+  o.ode45_defaults = a.ode45_defaults;
+  if (a.ode45_defaults && o.solver == ImpactSolver::kStiff)
+    throw Error(ErrorKind::kInvalidValue, "--ode45-defaults", "with --solver stiff",
+                "--solver auto or dopri5 (ode45's rules belong to the Dormand-Prince pair)");
+  if (a.rtol) {
+    RequireFinite(*a.rtol, *a.rtol > 0, "--rtol", "a relative tolerance > 0 (1e-14 .. 0.1)");
+    RequireFinite(*a.rtol, *a.rtol >= 1e-14 && *a.rtol <= 0.1, "--rtol",
+                  "a relative tolerance in [1e-14, 0.1]");
+    o.rtol = *a.rtol;
+  }
+  if (a.atol) {
+    RequireFinite(*a.atol, *a.atol > 0, "--atol", "an absolute tolerance > 0");
+    o.atol = *a.atol;
+  }
+  if (a.t_max) {
+    RequireFinite(*a.t_max, *a.t_max > 0, "--t-max", "a time > 0 s");
+    o.t_max_s = *a.t_max;
+  }
+  o.Check();
+  return o;
+}
+
+void RunSingle(const ModelArgs& a) {
+  const ImpactModelParameters p = ValidatedParameters(a, /*single_run=*/true);
+  const ImpactSolverOptions o = ValidatedSolverOptions(a);
+  if (!a.output.empty() && !EndsWith(a.output, ".csv") && !EndsWith(a.output, ".h5") &&
+      !EndsWith(a.output, ".hdf5"))
+    throw Error(ErrorKind::kInvalidValue, "-o", a.output,
+                "a series file name ending in .csv, .h5 or .hdf5");
+  const ImpactRun run = SimulateImpact(p, o);
+  const ImpactSummary& s = run.summary;
+  for (const std::string& w : s.warnings) LogWarning("model: {}", w);
+  if (!a.output.empty()) {
+    WriteImpactSeries(a.output, p, run);
+    LogInfo("model: wrote the time series to {}", a.output);
+  }
+  if (a.format == "json") {
+    JsonObject j;
+    j.Add("t_end_s", s.t_end_s)
+        .Add("crater_depth_m", s.crater_depth_m)
+        .Add("relative_penetration", s.relative_penetration)
+        .Add("added_mass_max_kg", s.added_mass_max_kg)
+        .Add("peak_deceleration_g", s.peak_deceleration_g)
+        .Add("t_peak_s", s.t_peak_s)
+        .Add("plateau_deceleration_g", s.plateau_deceleration_g)
+        .Add("momentum_ratio", s.momentum_ratio)
+        .Add("solver", s.solver)
+        .Add("steps", static_cast<std::int64_t>(s.steps))
+        .Add("rejected_steps", static_cast<std::int64_t>(s.rejected_steps))
+        .Add("rhs_evals", static_cast<std::int64_t>(s.rhs_evals))
+        .Add("jacobian_evals", static_cast<std::int64_t>(s.jacobian_evals))
+        .Add("error_estimate", s.error_estimate)
+        .Add("wall_time_s", s.wall_time_s)
+        .Add("warnings", s.warnings)
+        .Add("solver_reason", s.solver_reason)
+        .Add("error_estimator", s.error_estimator)
+        .Add("error_estimate_local", s.error_estimate_local)
+        .Add("impact_velocity_m_s", p.impact_velocity_m_s)
+        .Add("rtol", o.EffectiveRtol())
+        .Add("atol", o.EffectiveAtol())
+        .Add("stopped", s.stopped);
+    std::cout << j.Dump() << "\n";
+  } else {
+    std::cout << fmt::format("impact model: m_p {} kg, v0 {:.6g} m/s, D {} m, t_z {} m\n",
+                             p.pounder_mass_kg, p.impact_velocity_m_s, p.width_m, p.depth_m);
+    std::cout << s.FullReport();
+  }
+}
+
+void RunWorkPrecisionCommand(const ModelArgs& a) {
+  ValidatedParameters(a, /*single_run=*/false);
+  WorkPrecisionOptions w;
+  w.solvers = SplitList(a.wp_solvers);
+  for (const std::string& s : w.solvers)
+    if (s != "dopri5" && s != "stiff" && s != "auto" && s != "ode45")
+      throw Error(ErrorKind::kInvalidValue, "--wp-solvers", s,
+                  "a comma-separated list of dopri5, stiff, auto, ode45");
+  w.exact_cases = w.default_case = w.table1 = false;
+  for (const std::string& c : SplitList(a.wp_cases)) {
+    if (c == "exact")
+      w.exact_cases = true;
+    else if (c == "default")
+      w.default_case = true;
+    else if (c == "table1")
+      w.table1 = true;
+    else
+      throw Error(ErrorKind::kInvalidValue, "--wp-cases", c,
+                  "a comma-separated list of exact, default, table1");
+  }
+  if (!a.output.empty() && !EndsWith(a.output, ".csv"))
+    throw Error(ErrorKind::kInvalidValue, "-o", a.output, "a table file name ending in .csv");
+  if (!a.plot.empty() && !EndsWith(a.plot, ".png"))
+    throw Error(ErrorKind::kInvalidValue, "--plot", a.plot, "a figure file name ending in .png");
+  const std::string plot_case = w.default_case  ? "default"
+                                : w.exact_cases ? "harmonic-exact"
+                                                : "table1-max";
+  if (!w.exact_cases && !w.default_case && !w.table1)
+    throw Error(ErrorKind::kInvalidValue, "--wp-cases", a.wp_cases, "at least one case");
+  const std::vector<WorkPrecisionRow> rows = RunWorkPrecision(w);
+  std::cout << FormatWorkPrecision(rows);
+  if (!a.output.empty()) {
+    WriteWorkPrecisionCsv(a.output, rows);
+    LogInfo("model: wrote the work-precision table to {}", a.output);
+  }
+  if (!a.plot.empty()) {
+    PlotWorkPrecision(a.plot, rows, plot_case);
+    LogInfo("model: wrote the work-precision figure ({}) to {}", plot_case, a.plot);
+  }
+}
+
+void RunTable1Command(const ModelArgs& a) {
+  const ImpactModelParameters base = ValidatedParameters(a, /*single_run=*/false);
+  const ImpactSolverOptions o = ValidatedSolverOptions(a);
+  if (!a.output.empty() && !EndsWith(a.output, ".csv"))
+    throw Error(ErrorKind::kInvalidValue, "-o", a.output, "a table file name ending in .csv");
+  const std::vector<Table1Row> rows = RunTable1(o, base);
+  std::cout << FormatTable1(rows);
+  for (const Table1Row& r : rows)
+    for (const std::string& w : r.summary.warnings)
+      LogWarning("model: m_p {} kg, h {} m, D {} m: {}", r.combination.pounder_mass_kg,
+                 r.combination.height_m, r.combination.width_m, w);
+  if (!a.output.empty()) {
+    WriteTable1Csv(a.output, rows);
+    LogInfo("model: wrote the Table 1 results to {}", a.output);
+  }
+}
+
+}  // namespace
 
 void RegisterModelCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("model", "model (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("model"); });
+  auto args = std::make_shared<ModelArgs>();
+  auto* cmd = app.add_subcommand(
+      "model",
+      "Simulate the added-mass impact model (Eq. 9): one test, the solvers' work-precision study "
+      "(--work-precision) or the paper's 27 combinations (--table1)");
+  cmd->add_option("--mass", args->mass, "pounder mass m_p [kg], > 0");
+  cmd->add_option("--height", args->height, "drop height h [m], > 0 (v0 = sqrt(2 g h))");
+  cmd->add_option("--velocity", args->velocity, "impact velocity v0 [m/s], > 0");
+  cmd->add_option("--width", args->width, "pounder width D [m], > 0");
+  cmd->add_option("--depth", args->depth, "out-of-plane depth t_z [m], > 0 (default 0.192)");
+  cmd->add_option("--added-mass", args->added_mass,
+                  "maximum added mass M [kg], >= 0 (default: Eq. 4)");
+  cmd->add_option("--K", args->K, "friction coefficient K, >= 0 (default 50)");
+  cmd->add_option("--n", args->n, "damping exponent n, [0, 1] (default 0.2)");
+  cmd->add_option("--u", args->u, "damping factor u, >= 1 (default 1.9)");
+  cmd->add_option("--T", args->T, "sigmoid delay T [s], >= 0 (default 0.002)");
+  cmd->add_option("--b", args->b, "sigmoid rate b [1/s], (0, 1e12] (default 2500)");
+  cmd->add_option("--rho", args->rho, "dry density rho_d [kg/m^3], > 0 (default 1550)");
+  cmd->add_option("--g", args->g, "gravity g [m/s^2], >= 0 (default 9.81)");
+  cmd->add_option("--bed-height", args->bed_height,
+                  "sand bed height [m] for the penetration warning (default 0.6)");
+  cmd->add_option("--solver", args->solver, "auto | dopri5 | stiff (default auto)");
+  cmd->add_option("--rtol", args->rtol, "relative tolerance, [1e-14, 0.1] (default 1e-6)");
+  cmd->add_option("--atol", args->atol, "absolute tolerance, > 0 (default 1e-3 * rtol)");
+  cmd->add_flag(
+      "--ode45-defaults", args->ode45_defaults,
+      "MATLAB ode45's rules and defaults (RelTol 1e-3, AbsTol 1e-6), the paper's setting");
+  cmd->add_option("--error-estimate", args->error_estimate,
+                  "companion (a run at rtol/10; default) | local (summed local estimates)");
+  cmd->add_option("--t-max", args->t_max,
+                  "give up if v has not reached 0 by then [s] (default 10)");
+  cmd->add_option("--format", args->format, "text | json (default text)");
+  cmd->add_option("-o,--output", args->output,
+                  "single run: time series SERIES.csv | SERIES.h5; --work-precision / --table1: "
+                  "TABLE.csv");
+  cmd->add_flag("--work-precision", args->work_precision,
+                "error vs cost of every solver at rtol 1e-3 .. 1e-12 on the exact cases, the "
+                "default case and the 27 combinations");
+  cmd->add_option("--plot", args->plot, "with --work-precision: FIGURE.png (gnuplot)");
+  cmd->add_option("--wp-solvers", args->wp_solvers,
+                  "with --work-precision: solvers (default dopri5,stiff,auto,ode45)");
+  cmd->add_option("--wp-cases", args->wp_cases,
+                  "with --work-precision: cases (default exact,default,table1)");
+  cmd->add_flag(
+      "--table1", args->table1,
+      "the paper's 27 combinations (m_p 7/10/13 kg, h 0.2/0.7/1.2 m, D 0.10/0.15/0.20 m)");
+  cmd->callback([args] {
+    const ModelArgs& a = *args;
+    if (a.format != "text" && a.format != "json")
+      throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
+    if (!a.plot.empty() && !a.work_precision)
+      throw Error(ErrorKind::kInvalidValue, "--plot", a.plot,
+                  "only together with --work-precision");
+    if (a.work_precision) {
+      RunWorkPrecisionCommand(a);
+    } else if (a.table1) {
+      RunTable1Command(a);
+    } else {
+      RunSingle(a);
+    }
+  });
 }
 
 }  // namespace impactdic::cli

@@ -13,6 +13,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/model/work_precision.h"
 
 namespace impactdic {
@@ -276,6 +277,17 @@ TEST(ImpactModel, SeriesHasEveryForceTermAndWritesCsv) {
   const CsvTable t = ReadCsv(path, ro);
   EXPECT_EQ(t.rows(), s.size());
   std::filesystem::remove(path);
+  // HDF5: the same columns with units, the summary as attributes of /model.
+  const std::string h5 =
+      (std::filesystem::temp_directory_path() / "impactdic_model_series_test.h5").string();
+  WriteImpactSeries(h5, p, run);
+  {
+    H5Reader in(h5);
+    EXPECT_EQ(in.ReadDouble("model/series/z_m"), s.z_m);
+    EXPECT_EQ(in.ReadStringAttribute("model/series/z_m", "units"), "m");
+    EXPECT_EQ(in.ReadNumberAttribute("model", "crater_depth_m"), run.summary.crater_depth_m);
+  }
+  std::filesystem::remove(h5);
 }
 
 // ---- Stiff and extreme cases of SPEC section 4. Bounds: at rtol 1e-6 Dormand-Prince / auto

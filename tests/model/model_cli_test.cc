@@ -1,0 +1,106 @@
+// The `impactdic model` command line: the JSON contract, the outputs and the exit codes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "../cli/cli_runner.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir() {
+  const fs::path dir = fs::temp_directory_path() / "impactdic_model_cli_test";
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(ModelCli, JsonHasEveryContractKey) {
+  const CliResult r = RunCli("model --mass 10 --height 0.7 --width 0.15 --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* key : {"t_end_s", "crater_depth_m", "relative_penetration", "added_mass_max_kg",
+                          "peak_deceleration_g", "t_peak_s", "plateau_deceleration_g",
+                          "momentum_ratio", "solver", "steps", "rejected_steps", "rhs_evals",
+                          "jacobian_evals", "error_estimate", "wall_time_s", "warnings"})
+    EXPECT_NE(r.output.find(std::string("\"") + key + "\":"), std::string::npos) << key;
+  EXPECT_NE(r.output.find("\"solver\": \"auto(dopri5)\""), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("\"warnings\": []"), std::string::npos) << r.output;
+}
+
+TEST(ModelCli, NoPeakIsNullInJsonWithAWarning) {
+  const CliResult r = RunCli("model --mass 10 --velocity 0.01 --width 0.15 --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"peak_deceleration_g\": null"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no distinct peak"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("stopped only by the v^-n damping term"), std::string::npos);
+}
+
+TEST(ModelCli, EveryOptionIsAcceptedAndSeriesAreWritten) {
+  const fs::path dir = TempDir();
+  const std::string csv = (dir / "series.csv").string(), h5 = (dir / "series.h5").string();
+  CliResult r = RunCli(
+      "model --mass 10 --velocity 3.7 --width 0.15 --depth 0.192 --added-mass 6.9 --K 50 --n 0.2 "
+      "--u 1.9 --T 0.002 --b 2500 --rho 1550 --g 9.81 --solver stiff --rtol 1e-7 --atol 1e-10 "
+      "-o " +
+      csv);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("rodas3"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(csv));
+  r = RunCli("model --mass 10 --height 0.7 --width 0.15 --ode45-defaults -o " + h5);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("ode45(dopri5)"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(h5));
+  fs::remove_all(dir);
+}
+
+TEST(ModelCli, Table1AndWorkPrecisionWriteTheirTables) {
+  const fs::path dir = TempDir();
+  const std::string t1 = (dir / "table1.csv").string(), wp = (dir / "wp.csv").string(),
+                    png = (dir / "wp.png").string();
+  CliResult r = RunCli("model --table1 --rtol 1e-6 -o " + t1);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(t1));
+  EXPECT_NE(r.output.find("13.0"), std::string::npos);
+  r = RunCli("model --work-precision --wp-cases exact --wp-solvers dopri5,stiff -o " + wp +
+             " --plot " + png);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("harmonic-exact"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(wp));
+  EXPECT_TRUE(fs::exists(png));
+  EXPECT_GT(fs::file_size(png), 1000u);
+  fs::remove_all(dir);
+}
+
+// (The remaining option checks are the library's Check(), tested in impact_model_test.cc; each
+// CLI start costs ~0.3 s of library loading, so only a representative set runs here.)
+TEST(ModelCli, BadInputFailsWithExitCode1AndNamesTheOption) {
+  struct Case {
+    std::string args, needle;
+  };
+  const std::vector<Case> cases = {
+      {"model --mass 0 --height 0.7 --width 0.15", "--mass"},
+      {"model --mass nan --height 0.7 --width 0.15", "--mass"},
+      {"model --mass 10 --height 0.7 --width 0", "--width"},
+      {"model --mass 10 --velocity -1 --width 0.15", "--velocity"},
+      {"model --mass 10 --height 0.7 --velocity 3 --width 0.15", "--height/--velocity"},
+      {"model --mass 10 --width 0.15", "--height/--velocity"},
+      {"model --mass 10 --height 0.7 --width 0.15 --rtol 0", "--rtol"},
+      {"model --mass 10 --height 0.7 --width 0.15 --rtol -1e-6", "--rtol"},
+      {"model --mass 10 --height 0.7 --width 0.15 --solver rk4", "solver"},
+      {"model --mass 10 --height 0.7 --width 0.15 -o out.txt", "-o"},
+      {"model --mass 10 --height 0.7 --width 0.15 --ode45-defaults --solver stiff",
+       "--ode45-defaults"},
+      {"model --table1 --mass 10", "--mass"},
+  };
+  for (const Case& c : cases) {
+    const CliResult r = RunCli(c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.needle), std::string::npos) << c.args << "\n" << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace impactdic
