@@ -1,0 +1,85 @@
+// Bad input to `impactdic run`: clear errors, non-zero exit, and no results that look complete.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <opencv2/core.hpp>
+
+#include "../cli/cli_runner.h"
+#include "../io/test_dir.h"
+#include "impactdic/core/error.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/pipeline.h"
+
+namespace impactdic {
+namespace {
+
+TEST(RunErrors, InvalidOptionsNameTheOptionAndValue) {
+  const CliResult threads = RunCli("run scene.yaml --threads -3");
+  EXPECT_EQ(threads.exit_code, 1);
+  EXPECT_NE(threads.output.find("--threads"), std::string::npos) << threads.output;
+  EXPECT_NE(threads.output.find("-3"), std::string::npos) << threads.output;
+  const CliResult format = RunCli("run scene.yaml --format xml");
+  EXPECT_EQ(format.exit_code, 1);
+  EXPECT_NE(format.output.find("--format"), std::string::npos) << format.output;
+  EXPECT_NE(format.output.find("text or json"), std::string::npos) << format.output;
+  const CliResult missing = RunCli("run /nonexistent/scene.yaml");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.output.find("/nonexistent/scene.yaml"), std::string::npos) << missing.output;
+}
+
+TEST(RunErrors, SceneWithMissingFramesFailsBeforeWritingResults) {
+  TestDir dir;
+  const std::string scene = dir.Write("scene.yaml", R"(
+inputs: {frames: frames/*.png, mm_per_px: 0.5}
+stages: [frames, correlate, kinematics, outputs]
+outputs: {folder: out}
+)");
+  const CliResult r = RunCli("run " + scene);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("frames"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/results.h5")));
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/summary.json")));
+}
+
+TEST(RunErrors, TruncatedFrameIsNamed) {
+  TestDir dir;
+  std::filesystem::create_directories(dir.path() / "frames");
+  cv::Mat image(64, 64, CV_8U);
+  cv::randu(image, 0, 255);
+  for (int k = 0; k < 4; ++k) WriteImage(dir.File("frames/f" + std::to_string(k) + ".png"), image);
+  dir.Write("frames/f4.png", "\x89PNG\r\n\x1a\n truncated");
+  const Scene scene = ParseScene(R"(
+inputs: {frames: frames, mm_per_px: 0.5}
+stages: [frames, correlate, kinematics, outputs]
+dic: {subset_size: 15, step: 8}
+outputs: {folder: out, figures: false, animation: false}
+)",
+                                 dir.File("scene.yaml"));
+  try {
+    RunScene(scene, PipelineOptions{});
+    FAIL() << "expected an error for the truncated frame";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("f4.png"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/results.h5")));
+}
+
+TEST(RunErrors, UnwritableOutputFolderIsReportedBeforeWork) {
+  // CI runs as root, who can write anywhere: a folder below a regular file cannot be created by
+  // anyone.
+  TestDir dir;
+  dir.Write("file", "x");
+  const Scene scene = ParseScene("inputs: {frames: nothing}\noutputs: {folder: file/out}\n",
+                                 dir.File("scene.yaml"));
+  try {
+    RunScene(scene, PipelineOptions{});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::kIo) << e.what();
+    EXPECT_NE(std::string(e.what()).find("file/out"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace impactdic
