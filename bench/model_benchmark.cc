@@ -22,7 +22,6 @@ void BM_DefaultSimulation(benchmark::State& state, const char* solver, double rt
   state.counters["rhs_evals"] = static_cast<double>(last.rhs_evals);
   state.counters["steps"] = static_cast<double>(last.steps);
   state.counters["jacobian_evals"] = static_cast<double>(last.jacobian_evals);
-  state.counters["crater_depth_m"] = last.crater_depth_m;
 }
 
 BENCHMARK_CAPTURE(BM_DefaultSimulation, auto_rtol_1em6, "auto", 1e-6)
