@@ -77,6 +77,7 @@ AccelUnit AccelUnitFromString(const std::string& text) {
 const char* ToString(OffsetReference reference) {
   switch (reference) {
     case OffsetReference::kFreeFall: return "free-fall";
+    case OffsetReference::kFreeFallWindow: return "free-fall-window";
     case OffsetReference::kRest: return "rest";
     case OffsetReference::kNone: return "none";
   }
@@ -86,10 +87,11 @@ const char* ToString(OffsetReference reference) {
 OffsetReference OffsetReferenceFromString(const std::string& text) {
   const std::string t = Lower(text);
   if (t == "free-fall" || t == "freefall" || t == "free_fall") return OffsetReference::kFreeFall;
+  if (t == "free-fall-window") return OffsetReference::kFreeFallWindow;
   if (t == "rest") return OffsetReference::kRest;
   if (t == "none") return OffsetReference::kNone;
   throw Error(ErrorKind::kInvalidValue, "offset_reference", "'" + text + "'",
-              "free-fall, rest or none");
+              "free-fall, free-fall-window, rest or none");
 }
 
 const char* ToString(IntegrationStart start) {
@@ -350,15 +352,48 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   }
   const std::size_t ff1 = ks - guard, ff0 = ff1 - w;
   const double first_mean = Mean(record.accel_g, 0, w);
-  switch (options.offset_reference) {
-    case OffsetReference::kFreeFall: s.offset_g = Mean(record.accel_g, ff0, ff1); break;
-    case OffsetReference::kRest: s.offset_g = first_mean - 1; break;
-    case OffsetReference::kNone: s.offset_g = 0; break;
+  const double window_level = Mean(record.accel_g, ff0, ff1);  // ~0 g + offset (free fall)
+  // The record starts at rest (reading ~1 g) when its first window reads ~1 g more than the free
+  // fall before the impact.
+  const bool starts_at_rest = std::abs(first_mean - window_level - 1) < 0.5;
+  // Release: the reading steps from the rest level (1 g) to free fall (0 g). The zero-phase
+  // filter's kernel is symmetric, so a step's instant is where the filtered reading crosses the
+  // midpoint between the two levels (interpolated between samples).
+  std::size_t kr = n;
+  if (starts_at_rest) {
+    const double mid = window_level + 0.5 * (first_mean - window_level);
+    std::size_t k = w;
+    while (k < ks && filtered_raw[k] > mid) ++k;
+    if (k > 0 && k < ks) {
+      const double f = (filtered_raw[k - 1] - mid) / (filtered_raw[k - 1] - filtered_raw[k]);
+      s.release_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
+      kr = k;
+    }
   }
+  std::size_t off0 = ff0, off1 = ff1;
+  switch (options.offset_reference) {
+    case OffsetReference::kFreeFall:
+      // The whole free fall (release + guard .. impact - guard) when the release is in the record:
+      // the offset's statistical error shrinks with the square root of its length.
+      if (kr < n && kr + guard + w < ff1) off0 = kr + guard;
+      s.offset_g = Mean(record.accel_g, off0, off1);
+      break;
+    case OffsetReference::kFreeFallWindow: s.offset_g = window_level; break;
+    case OffsetReference::kRest:
+      off0 = 0;
+      off1 = w;
+      s.offset_g = first_mean - 1;
+      break;
+    case OffsetReference::kNone:
+      off0 = off1 = 0;
+      s.offset_g = 0;
+      break;
+  }
+  s.offset_window_s = {off1 > off0 ? t[off0] : kNaN, off1 > off0 ? t[off1 - 1] : kNaN};
   s.noise_g = StdDev(record.accel_g, ff0, ff1);
   if (std::abs(s.offset_g) > 0.2)
     s.warnings.push_back(fmt::format("large accelerometer offset {:.3g} g", s.offset_g));
-  const double ff_level = Mean(record.accel_g, ff0, ff1) - s.offset_g;
+  const double ff_level = window_level - s.offset_g;
   if (std::abs(ff_level) > 0.1 + 5 * s.noise_g) {
     s.warnings.push_back(fmt::format(
         "the window before the impact reads {:.3g} g after offset correction, not 0 g (free fall)",
@@ -386,18 +421,6 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   const std::vector<double>& a = out.accel_down_m_s2;
   std::vector<double> v(n, 0.0), z(n, 0.0);
 
-  const bool starts_at_rest = std::abs(first_mean - s.offset_g - 1) < 0.5;
-  if (starts_at_rest) {
-    // Release: the reading steps from the rest level (1 g) to free fall (0 g). The zero-phase
-    // filter's kernel is symmetric, so a step's instant is where the filtered reading crosses the
-    // midpoint 0.5 g (interpolated between samples).
-    std::size_t kr = w;
-    while (kr < ki && acc[kr] > 0.5) ++kr;
-    if (kr > 0 && kr < ki) {
-      const double f = (acc[kr - 1] - 0.5) / (acc[kr - 1] - acc[kr]);
-      s.release_time_s = t[kr - 1] + std::clamp(f, 0.0, 1.0) * (t[kr] - t[kr - 1]);
-    }
-  }
   if (options.integrate_from == IntegrationStart::kRelease) {
     std::size_t i0 = 0;
     if (std::isfinite(options.release_time_s)) {
@@ -517,7 +540,8 @@ std::string SensorSummary::FullReport() const {
   r += fmt::format("sample rate           {:.1f} Hz ({} samples)\n", sample_rate_hz, samples);
   r += fmt::format("low-pass cut-off      {:.1f} Hz (zero-phase 1st-order Butterworth)\n",
                    cutoff_hz);
-  r += fmt::format("offset / noise        {:.5f} g / {:.5f} g\n", offset_g, noise_g);
+  r += fmt::format("offset / noise        {:.5f} g (from {:.6f} s to {:.6f} s) / {:.5f} g\n",
+                   offset_g, offset_window_s[0], offset_window_s[1], noise_g);
   r += fmt::format("release time          {:.6f} s\n", release_time_s);
   r += fmt::format("impact time           {:.6f} s (sample {})\n", impact_time_s, impact_index);
   r += fmt::format("impact velocity       {:.5f} m/s\n", impact_velocity_m_s);
