@@ -21,6 +21,7 @@
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
+#include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/results_layout.h"
@@ -90,23 +91,6 @@ DicOptions MakeDicOptions(const SceneDic& d) {
   o.icgn.convergence_px = d.convergence_px;
   o.init.search_radius_px = d.search_radius_px;
   o.update.mode = ReferenceUpdateFromString(d.reference_update, &o.update.every_n);
-  o.Check();
-  return o;
-}
-
-SensorOptions MakeSensorOptions(const Scene& scene) {
-  SensorOptions o;
-  o.columns.time = scene.sensor.time_column;
-  o.columns.accel = scene.sensor.accel_column;
-  o.columns.accel_unit = AccelUnitFromString(scene.sensor.accel_unit);
-  o.columns.exposure = scene.sensor.exposure_column;
-  o.g_m_s2 = scene.test.g_m_s2;
-  o.cutoff_hz = scene.sensor.cutoff_hz;
-  o.quiet_window_s = scene.sensor.quiet_window_s;
-  o.integrate_from = IntegrationStartFromString(scene.sensor.integrate_from);
-  if (o.integrate_from == IntegrationStart::kImpact) {
-    o.impact_velocity_m_s = scene.test.ImpactVelocity();
-  }
   o.Check();
   return o;
 }
@@ -293,7 +277,7 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   std::optional<SensorResult> sensor;
   if (!scene.inputs.sensor.empty() && scene.HasStage("sensor")) {
     WallTimer t;
-    sensor = AnalyzeSensorCsv(scene.inputs.sensor, MakeSensorOptions(scene));
+    sensor = AnalyzeSensorCsv(scene.inputs.sensor, SensorOptionsFromScene(scene));
     for (const auto& w : sensor->summary.warnings) summary.warnings.push_back("sensor: " + w);
     stages.Ran("sensor", sensor->summary.BriefReport(), t);
     fig.impact_velocity_m_s = sensor->summary.impact_velocity_m_s;
@@ -441,24 +425,7 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
     mapping.mm_per_px = mm_per_px;
     if (sensor && scene.HasStage("momentum")) {
       WallTimer t;
-      MomentumOptions m;
-      m.pounder_mass_kg = scene.test.mass_kg;
-      m.pounder_width_m = scene.test.width_m;
-      m.depth_m = scene.test.depth_m;
-      m.density_kg_m3 = scene.test.density_kg_m3;
-      m.grid_cols = scene.momentum.grid_cols;
-      m.grid_rows = scene.momentum.grid_rows;
-      m.rect_mm = scene.momentum.rect_mm;
-      if (scene.momentum.pounder_center_x_px && scene.momentum.surface_y_px) {
-        const double half_width_px = 0.5e3 * scene.test.width_m / mm_per_px;
-        m.footprint.x_left_mm = (*scene.momentum.pounder_center_x_px - half_width_px) * mm_per_px;
-        m.footprint.x_right_mm = (*scene.momentum.pounder_center_x_px + half_width_px) * mm_per_px;
-        m.footprint.bottom_y_mm = *scene.momentum.surface_y_px * mm_per_px;
-      } else if (!m.rect_mm) {
-        summary.warnings.push_back(
-            "momentum: no momentum.pounder_center_x_px / surface_y_px in the scene: the grid is "
-            "centred on the correlated region, below its top row");
-      }
+      const MomentumOptions m = MomentumOptionsFromScene(scene, mm_per_px);
       // Frame times on the DAQ clock of the analysed frames (exposure edges, or the scene's offset
       // + k / fps when the record has no exposure channel).
       KinematicsOptions k;
