@@ -1,11 +1,131 @@
+// impactdic calibrate --board COLSxROWS --square SIZE_MM [--plane IMAGE] IMAGES... -o OUT.yaml
+// Checkerboard calibration (calib module): prints the RMS, intrinsics, distortion and plane
+// scale, and writes the calibration YAML (keys in docs/calibration.md).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "impactdic/calib/calibration.h"
+#include "impactdic/core/error.h"
+#include "impactdic/io/json.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct CalibrateArgs {
+  std::string board;
+  double square_mm = 0;
+  std::string plane;
+  std::vector<std::string> images;
+  std::string output;
+  std::string format = "text";
+  double max_rms_px = 1.0;
+  int min_views = 6;
+  bool fix_k3 = false;
+};
+
+void PrintText(const CameraCalibration& c, const CalibrationSummary& s, const std::string& out) {
+  std::cout << fmt::format("images: {} used, {} rejected (of {})\n", s.images_used,
+                           s.images_rejected, s.images_total);
+  for (const RejectedView& r : c.rejected)
+    std::cout << fmt::format("  rejected {}: {}\n", r.image, r.reason);
+  std::cout << fmt::format("reprojection RMS: {:.4f} px (worst view {} {:.4f} px)\n", c.rms_px,
+                           s.worst_view, s.worst_view_rms_px);
+  std::cout << fmt::format(
+      "intrinsics: fx {:.4f}  fy {:.4f}  cx {:.4f}  cy {:.4f} [px], image {}x{}\n", c.fx, c.fy,
+      c.cx, c.cy, c.image_width, c.image_height);
+  std::cout << fmt::format("distortion: k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}\n",
+                           c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
+  if (c.plane)
+    std::cout << fmt::format("scale: {:.6f} +- {:.6f} mm/px (plane view {})\n", c.plane->mm_per_px,
+                             c.plane->mm_per_px_uncertainty, c.plane->image);
+  else
+    std::cout << "scale: none (give --plane IMAGE, a view of the board lying on the panel)\n";
+  std::cout << "written: " << out << "\n";
+}
+
+void PrintJson(const CameraCalibration& c, const CalibrationSummary& s, const std::string& out) {
+  JsonObject j;
+  j.Add("rms_px", c.rms_px)
+      .Add("fx", c.fx)
+      .Add("fy", c.fy)
+      .Add("cx", c.cx)
+      .Add("cy", c.cy)
+      .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()));
+  if (c.plane) {
+    j.Add("mm_per_px", c.plane->mm_per_px);
+    j.Add("mm_per_px_uncertainty", c.plane->mm_per_px_uncertainty);
+  } else {
+    j.AddNull("mm_per_px");
+    j.AddNull("mm_per_px_uncertainty");
+  }
+  std::vector<std::string> rejected;
+  for (const RejectedView& r : c.rejected) rejected.push_back(r.image);
+  j.Add("images_used", s.images_used)
+      .Add("images_rejected", s.images_rejected)
+      .Add("rejected_images", rejected)
+      .Add("image_width", c.image_width)
+      .Add("image_height", c.image_height)
+      .Add("output", out);
+  std::cout << j.Dump() << "\n";
+}
+
+}  // namespace
 
 void RegisterCalibrateCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("calibrate", "calibrate (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("calibrate"); });
+  auto args = std::make_shared<CalibrateArgs>();
+  auto* cmd = app.add_subcommand(
+      "calibrate",
+      "Lens calibration from checkerboard images: intrinsics, Brown-Conrady distortion "
+      "(k1 k2 p1 p2 k3), reprojection RMS and, with --plane, the mm-per-pixel scale of the panel");
+  cmd->add_option("--board", args->board,
+                  "Board size COLSxROWS counting INNER corners (9x6 for a board of 10x7 squares)")
+      ->required();
+  cmd->add_option("--square", args->square_mm, "Square side [mm], > 0")->required();
+  cmd->add_option("--plane", args->plane,
+                  "Image of the board lying on the panel (measurement plane) for the mm/px scale");
+  cmd->add_option("-o,--output", args->output, "Calibration YAML to write")->required();
+  cmd->add_option("--format", args->format, "Output format: text or json")->capture_default_str();
+  cmd->add_option("--max-rms", args->max_rms_px,
+                  "Refuse a calibration whose reprojection RMS exceeds this [px], > 0")
+      ->capture_default_str();
+  cmd->add_option("--min-views", args->min_views,
+                  "Fewest images in which the board must be found, >= 3")
+      ->capture_default_str();
+  cmd->add_flag("--fix-k3", args->fix_k3, "Hold k3 = 0 (fewer views or mild distortion)");
+  cmd->add_option("images", args->images,
+                  "Checkerboard images (files, folders or glob patterns), all the same size");
+  cmd->callback([args] {
+    // Validate every option before any work.
+    CalibrationOptions options;
+    options.board = ParseBoard(args->board, args->square_mm, "--board");
+    CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
+               "text or json");
+    CheckValue(args->max_rms_px > 0 && std::isfinite(args->max_rms_px), "--max-rms",
+               fmt::format("{}", args->max_rms_px), "a number > 0 px");
+    CheckValue(args->min_views >= 3, "--min-views", std::to_string(args->min_views), ">= 3");
+    CheckValue(
+        !args->images.empty(), "IMAGES", "no calibration images",
+        fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));
+    CheckValue(!args->output.empty(), "-o", "an empty name", "the calibration YAML to write");
+    options.max_rms_px = args->max_rms_px;
+    options.min_views = args->min_views;
+    options.fix_k3 = args->fix_k3;
+
+    CalibrationSummary summary;
+    const CameraCalibration calibration =
+        CalibrateFromFiles(args->images, args->plane, options, &summary);
+    SaveCalibration(calibration, args->output);
+    if (args->format == "json")
+      PrintJson(calibration, summary, args->output);
+    else
+      PrintText(calibration, summary, args->output);
+  });
 }
 
 }  // namespace impactdic::cli

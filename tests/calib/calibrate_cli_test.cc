@@ -1,0 +1,89 @@
+// The `impactdic calibrate` command: exit codes, messages and outputs (through the built binary).
+#include <gtest/gtest.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "../cli/cli_runner.h"
+#include "impactdic/calib/calibration.h"
+
+namespace impactdic {
+namespace {
+
+const std::string kSource = IMPACTDIC_SOURCE_DIR;
+const std::string kViews = "'" + kSource + "/calibration/view_*.png'";
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(CalibrateCli, JsonOutputWithPlaneScale) {
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_camera.yaml";
+  const CliResult r = RunCli("calibrate --board 9x6 --square 25 --plane " + kSource +
+                             "/calibration/plane.png " + kViews + " -o " + out + " --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* key : {"\"rms_px\"", "\"fx\"", "\"fy\"", "\"cx\"", "\"cy\"", "\"dist\"",
+                          "\"mm_per_px\"", "\"images_used\": 12", "\"images_rejected\": 0"})
+    EXPECT_TRUE(Contains(r.output, key)) << key << "\n" << r.output;
+  EXPECT_FALSE(Contains(r.output, "\"mm_per_px\": null")) << r.output;
+  const CameraCalibration c = LoadCalibration(out);
+  ASSERT_TRUE(c.plane);
+  EXPECT_NEAR(c.plane->mm_per_px, 0.747786537, 0.002 * 0.747786537);
+  EXPECT_EQ(c.views.size(), 12u);
+}
+
+TEST(CalibrateCli, TextOutputWithoutPlaneHasNoScale) {
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_camera2.yaml";
+  CliResult r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* part : {"reprojection RMS", "intrinsics: fx", "distortion: k1", "scale: none"})
+    EXPECT_TRUE(Contains(r.output, part)) << part << "\n" << r.output;
+  r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out + " --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(Contains(r.output, "\"mm_per_px\": null")) << r.output;
+}
+
+TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_bad.yaml";
+  struct Case {
+    std::string args, message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"--board 9-6 --square 25 " + kViews + " -o " + out, "--board"},
+           {"--board 9x6 --square 0 " + kViews + " -o " + out, "--square"},
+           {"--board 9x6 --square 25 -o " + out, "IMAGES"},
+           {"--board 9x6 --square 25 " + kViews + " -o " + out + " --format xml", "--format"},
+           {"--board 9x6 --square 25 " + kViews, "-o"},
+           {"--board 9x6 --square 25 /no/such/image.png -o " + out, "/no/such/image.png"},
+       }) {
+    const CliResult r = RunCli("calibrate " + c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+    EXPECT_TRUE(Contains(r.output, c.message)) << c.args << "\n" << r.output;
+  }
+}
+
+TEST(CalibrateCli, ImagesWithoutTheBoardAreAClearError) {
+  const std::string dir = ::testing::TempDir();
+  std::string images;
+  for (int k = 0; k < 6; ++k) {
+    const std::string path = dir + "/impactdic_blank_" + std::to_string(k) + ".png";
+    ASSERT_TRUE(cv::imwrite(path, cv::Mat(480, 640, CV_8U, cv::Scalar(90 + k))));
+    images += " " + path;
+  }
+  const CliResult r =
+      RunCli("calibrate --board 9x6 --square 25" + images + " -o " + dir + "/impactdic_x.yaml");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_TRUE(Contains(r.output, "no board found in any of the 6 calibration images")) << r.output;
+  // A plane view of another size than the calibration images.
+  const std::string small = dir + "/impactdic_small_plane.png";
+  ASSERT_TRUE(cv::imwrite(small, cv::Mat(240, 320, CV_8U, cv::Scalar(90))));
+  const CliResult p = RunCli("calibrate --board 9x6 --square 25 --plane " + small + " " + kViews +
+                             " -o " + dir + "/impactdic_y.yaml");
+  EXPECT_EQ(p.exit_code, 1) << p.output;
+  EXPECT_TRUE(Contains(p.output, "has size 320x240 but the calibration was made for 640x480"))
+      << p.output;
+}
+
+}  // namespace
+}  // namespace impactdic
