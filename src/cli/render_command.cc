@@ -1,11 +1,69 @@
+// impactdic render RESULTS.h5 [-o OUTDIR] [--png-frames] [--codec auto|h264|mjpg] [--fps F]
+#include <filesystem>
+#include <iostream>
+#include <string>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/render/render_results.h"
 
 namespace impactdic::cli {
 
 void RegisterRenderCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("render", "render (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("render"); });
+  auto* cmd = app.add_subcommand(
+      "render",
+      "Re-render the figures (PNG, gnuplot) and the velocity animation (MP4 H.264, else MJPG AVI) "
+      "from a results file");
+  struct Args {
+    std::string results;
+    std::string output_dir;
+    bool png_frames = false;
+    bool no_animation = false;
+    bool no_figures = false;
+    std::string codec = "auto";
+    double fps = 25.0;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("RESULTS", args->results, "results.h5 written by `impactdic run`")->required();
+  cmd->add_option("-o,--output", args->output_dir,
+                  "output folder (created if missing; default: the folder of RESULTS)");
+  cmd->add_flag("--png-frames", args->png_frames,
+                "also write every animation frame as PNG (OUTDIR/velocity_frames)");
+  cmd->add_flag("--no-animation", args->no_animation, "skip the animation");
+  cmd->add_flag("--no-figures", args->no_figures, "skip the gnuplot figures");
+  cmd->add_option("--codec", args->codec,
+                  "video codec: auto (H.264 MP4, else MJPG AVI), h264 (or fail), mjpg")
+      ->capture_default_str();
+  cmd->add_option("--fps", args->fps, "playback frame rate of the animation [1/s], (0, 240]")
+      ->capture_default_str();
+  cmd->callback([args] {
+    // Validate every option before any work.
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(args->results, ec)) {
+      throw Error(ErrorKind::kFileNotFound, "RESULTS", args->results,
+                  "an existing results .h5 file");
+    }
+    RenderResultsOptions options;
+    try {
+      options.animation_options.codec = VideoCodecFromString(args->codec);
+    } catch (const Error&) {
+      throw Error(ErrorKind::kInvalidValue, "--codec", args->codec, "auto, h264 or mjpg");
+    }
+    if (!(args->fps > 0 && args->fps <= 240)) {
+      throw Error(ErrorKind::kInvalidValue, "--fps", std::to_string(args->fps), "(0, 240]");
+    }
+    if (args->no_animation && args->png_frames) {
+      throw Error(ErrorKind::kInvalidValue, "--png-frames", "given with --no-animation",
+                  "--png-frames only together with the animation");
+    }
+    options.animation_options.fps = args->fps;
+    options.output_dir = args->output_dir;
+    options.png_frames = args->png_frames;
+    options.animation = !args->no_animation;
+    options.figures = !args->no_figures;
+    const RenderResultsSummary summary = RenderResults(args->results, options);
+    std::cout << summary.FullReport();
+  });
 }
 
 }  // namespace impactdic::cli

@@ -19,6 +19,7 @@ namespace L = results_layout;
 void RenderResultsOptions::Check() const {
   plot.Check();
   animation_options.Check();
+  snapshot_overlay.Check();
 }
 
 std::string RenderResultsSummary::BriefReport() const {
@@ -320,7 +321,7 @@ RenderResultsSummary RenderResults(const std::string& results_path,
               title = "Velocity field at the largest mean speed";
             }
             RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng),
-                                   options.animation_options.overlay, title);
+                                   options.snapshot_overlay, title);
             summary.written.push_back(out(L::kVelocitySnapshotPng));
           }
           if (options.animation) {

@@ -27,7 +27,8 @@ struct RenderResultsOptions {
   bool animation = true;   // the velocity animation
   bool png_frames = false;  // also every animation frame as PNG (output_dir/velocity_frames)
   PlotOptions plot;
-  AnimationOptions animation_options;  // png_frames_dir is set from png_frames
+  AnimationOptions animation_options;       // png_frames_dir is set from png_frames
+  VelocityOverlayOptions snapshot_overlay;  // the velocity-field figure at t_e
 
   void Check() const;
 };
