@@ -97,7 +97,7 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     o.offset_reference = OffsetReferenceFromString(a.offset_reference);
   } catch (const Error&) {
     throw Error(ErrorKind::kInvalidValue, "--offset-reference", a.offset_reference,
-                "free-fall, rest or none");
+                "free-fall, free-fall-window, rest or none");
   }
   o.columns.exposure = a.exposure_column;
   o.cutoff_hz = a.cutoff;
@@ -226,8 +226,9 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--exposure-column", args->exposure_column,
                   "camera exposure column (default exposure; ignored when absent)");
   cmd->add_option("--offset-reference", args->offset_reference,
-                  "quiet window for the offset: free-fall (reads 0 g before the impact), rest "
-                  "(reads 1 g at the record start) or none (default free-fall)");
+                  "what reads a known level: free-fall (the whole free fall reads 0 g), "
+                  "free-fall-window (the quiet window before the impact reads 0 g), rest (the "
+                  "record start reads 1 g) or none (default free-fall)");
   cmd->add_option("--release-time", args->release_time,
                   "release time on the DAQ clock [s] (with --from-release, when the record does "
                   "not start at rest)");

@@ -1,12 +1,17 @@
 #include "impactdic/momentum/momentum.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <functional>
 
+#include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
@@ -253,6 +258,94 @@ TEST(Momentum, SensorNotCoveringTheFramesIsAnError) {
   const std::string msg = ErrorText(
       [&] { AnalyzeCorrelation(MakeCorrelation(c), map, c.fps, c.offset, sensor, Options(c)); });
   EXPECT_NE(msg.find("does not cover the frames"), std::string::npos) << msg;
+}
+
+// The accelerometer record of the chain's pounder: rest (1 g) until the release, free fall (0 g)
+// until the impact (v = v0 there), then 1 - a_down / g with a_down = dv_p/dt of the chain.
+std::vector<std::vector<double>> ChainRecord(const Chain& c) {
+  std::vector<double> t, a;
+  const double t_release = c.t_impact - c.v0 / 9.81;
+  for (int i = 0; i / c.fs < c.t_impact + c.TauStop() + 0.02; ++i) {
+    const double ti = i / c.fs, tau = ti - c.t_impact;
+    double a_down = 0;
+    if (ti >= t_release && tau < 0) {
+      a_down = 9.81;
+    } else if (tau >= 0 && tau <= c.tau_e) {
+      const double s = c.S(tau), m = c.Madd(tau);
+      a_down = -c.PMax() * c.M * c.b * s * (1 - s) / ((c.mp + m) * (c.mp + m));
+    } else if (tau > c.tau_e && tau <= c.TauStop()) {
+      a_down = -c.d;
+    }
+    t.push_back(ti);
+    a.push_back(1 - a_down / 9.81);
+  }
+  return {t, a};
+}
+
+// `impactdic analyze SCENE.yaml` end to end: correlation results (HDF5, as the dic stage writes
+// them), the sensor CSV and the scene file -> /momentum in the same HDF5 and the JSON summary.
+TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
+  Chain c;
+  c.t_impact = 0.02 + c.v0 / 9.81;
+  c.offset = c.t_impact - 0.005;
+  TestDir dir;
+  const auto rec = ChainRecord(c);
+  WriteCsv(dir.File("daq.csv"), {"time_s", "accel_g"}, rec, 12);
+  const CorrelationSeries dic = MakeCorrelation(c);
+  std::filesystem::create_directories(dir.path() / "results");
+  const std::string results = dir.File("results/results.h5");
+  {
+    H5Writer out(results);
+    const Dims fn{dic.frames, dic.subsets};
+    out.Write("dic/x_px", dic.x_px, "px", "subset centre x");
+    out.Write("dic/y_px", dic.y_px, "px", "subset centre y");
+    out.Write("dic/u_px", dic.u_px, fn, "px", "displacement x");
+    out.Write("dic/v_px", dic.v_px, fn, "px", "displacement y");
+    std::vector<std::int32_t> status(dic.u_px.size(), 0);
+    for (std::size_t i = 0; i < status.size(); ++i)
+      if (std::isnan(dic.v_px[i])) status[i] = 3;
+    out.Write("dic/status", status, fn, "1", "0 = converged");
+    out.Commit();
+  }
+  const double density = c.Ms() / (12 * 25e-6 * 0.192);
+  const std::string scene =
+      dir.Write("scene.yaml",
+                fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
+                            "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
+                            "  density_kg_m3: {:.17g}\nsensor:\n  frame_time_offset_s: {:.17g}\n"
+                            "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
+                            "outputs:\n  folder: results\n",
+                            c.fps, c.scale, c.mp, density, c.offset));
+  const CliResult r = RunCli("-q analyze " + scene + " --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string keys[] = {"p_max_kg_m_s",      "t_end_peak_s",    "momentum_conservation_error",
+                              "added_mass_max_kg", "sigmoid_b_per_s", "sigmoid_T_s",
+                              "momentum_ratio",    "v_sand_max_m_s"};
+  std::size_t last = 0;
+  for (const auto& k : keys) {
+    const auto pos = r.output.find("\"" + k + "\":");
+    ASSERT_NE(pos, std::string::npos) << k << "\n" << r.output;
+    EXPECT_GT(pos, last) << k;
+    last = pos;
+  }
+  auto number = [&](const std::string& key) {
+    const auto pos = r.output.find("\"" + key + "\":");
+    return std::strtod(r.output.c_str() + pos + key.size() + 3, nullptr);
+  };
+  // The sensor route adds the filter and integration errors of the record (~0.1 %) to the chain.
+  EXPECT_NEAR(number("p_max_kg_m_s"), c.PMax(), 0.005 * c.PMax());
+  EXPECT_NEAR(number("t_end_peak_s"), c.tau_e, 1 / c.fps + 1e-9);
+  EXPECT_LT(number("momentum_conservation_error"), 0.01);
+  EXPECT_NEAR(number("added_mass_max_kg"), c.Ms(), 0.02 * c.Ms());
+  H5Reader in(results);
+  EXPECT_TRUE(in.Exists("dic/u_px"));  // The correlation results are kept.
+  EXPECT_EQ(in.ReadDouble("momentum/p_gran").size(), c.frames);
+  EXPECT_TRUE(in.Exists("sensor/velocity_m_s"));
+  EXPECT_TRUE(in.Exists("kinematics/vy_mm_s"));
+  // Sensor-only options are refused with the scene form.
+  const CliResult bad = RunCli("analyze " + scene + " --cutoff 1000");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("only with --sensor"), std::string::npos) << bad.output;
 }
 
 }  // namespace
