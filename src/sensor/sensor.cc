@@ -380,6 +380,15 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
       break;
     case OffsetReference::kFreeFallWindow: s.offset_g = window_level; break;
     case OffsetReference::kRest:
+      if (!starts_at_rest) {
+        throw Error(ErrorKind::kInvalidValue, "offset_reference = rest",
+                    fmt::format("a record whose first {} s read {:.3g} g, {:.3g} g above the free "
+                                "fall before the impact",
+                                options.quiet_window_s, first_mean, first_mean - window_level),
+                    "a record starting with the pounder at rest (1 g above free fall), or the "
+                    "free-fall offset reference")
+            .WithFile(record.path);
+      }
       off0 = 0;
       off1 = w;
       s.offset_g = first_mean - 1;

@@ -143,6 +143,10 @@ TEST(Sensor, RecordStartingInFreeFallNeedsReleaseTime) {
   const std::string msg = ErrorText([&] { ProcessSensor(raw, opt); });
   EXPECT_NE(msg.find("not at rest"), std::string::npos) << msg;
   EXPECT_NE(msg.find("release time"), std::string::npos) << msg;
+  opt.offset_reference = OffsetReference::kRest;
+  const std::string rest_msg = ErrorText([&] { ProcessSensor(raw, opt); });
+  EXPECT_NE(rest_msg.find("offset_reference = rest"), std::string::npos) << rest_msg;
+  opt.offset_reference = OffsetReference::kFreeFall;
   opt.release_time_s = m.t_release;
   const SensorResult r = ProcessSensor(raw, opt);
   EXPECT_NEAR(r.summary.impact_velocity_m_s, m.v0, 0.005 * m.v0);
