@@ -102,6 +102,17 @@ Plot MakeDecelerationPlot(const DecelerationFigureData& d) {
                           .label = "",
                           .color = "#a0a0a0"});
   AddTeMarker(&plot, d.t_e_s);
+  // The accelerometer record usually starts long before the impact: show the model's time span
+  // (the impact) with 10 % margins when there is a model.
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (double t : d.model_t_s) {
+    if (std::isfinite(t)) lo = std::min(lo, t), hi = std::max(hi, t);
+  }
+  if (hi > lo) {
+    const double margin = 0.1 * (hi - lo);
+    plot.x_min = 1e3 * (lo - margin);
+    plot.x_max = 1e3 * (hi + margin);
+  }
   return plot;
 }
 

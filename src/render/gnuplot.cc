@@ -274,7 +274,7 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
         << ", graph 1 nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
       if (!m.label.empty()) {
         g << "set label " << Quote(m.label) << " at first " << v
-          << ", graph 0.04 offset character 0.6,0 left front textcolor rgb " << Quote(color) << lit
+          << ", graph 0.97 offset character 0.6,0 left front textcolor rgb " << Quote(color) << lit
           << "\n";
       }
     } else {

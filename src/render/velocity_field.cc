@@ -217,7 +217,7 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
                       (options_.unit == VelocityDisplayUnit::kAuto && color_max_mm_s_ >= 1000.0);
   unit_factor_ = metres ? 1e-3 : 1.0;
   unit_label_ = metres ? "m/s" : "mm/s";
-  reference_speed_mm_s_ = NiceFloor(0.5 * color_max_mm_s_ * unit_factor_) / unit_factor_;
+  reference_speed_mm_s_ = NiceFloor(0.8 * color_max_mm_s_ * unit_factor_) / unit_factor_;
 
   // Display size.
   scale_ = 1.0;

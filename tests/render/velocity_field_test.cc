@@ -49,7 +49,7 @@ TEST(VelocityField, ColourScaleIsNiceAndUnitsFollowTheRange) {
   VelocityFieldRenderer r(seq, o);
   EXPECT_DOUBLE_EQ(r.color_max_mm_s(), 800.0);  // rounded up to a multiple of the tick step 200
   EXPECT_EQ(r.unit_label(), "mm/s");
-  EXPECT_DOUBLE_EQ(r.reference_speed_mm_s(), 200.0);  // largest 1-2-5 value <= half the top
+  EXPECT_DOUBLE_EQ(r.reference_speed_mm_s(), 500.0);  // largest 1-2-5 value <= 0.8 x top
   o.max_speed_mm_s = 2600.0;
   VelocityFieldRenderer r2(seq, o);
   EXPECT_EQ(r2.unit_label(), "m/s");
