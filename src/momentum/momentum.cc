@@ -278,11 +278,39 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
   }
   s.end_frame = ke;
   s.t_end_peak_daq_s = frame_time_s[ke];
-  s.t_end_peak_s = frame_time_s[ke] - ss.impact_time_s;
-  s.momentum_conservation_error = std::abs(r.p_total_kg_m_s[ke] - s.p_max_kg_m_s) / s.p_max_kg_m_s;
+  double p_total_te = r.p_total_kg_m_s[ke];
+  // Sub-frame t_e. Velocities at the frames are central differences, which smear the end of the
+  // peak stage over +-1 frame, while m_add(t) changes fast there; displacements are not smeared.
+  // The gap D(t) = z_p(t) - w_sand(t) (pounder penetration minus the grid's mean displacement)
+  // grows while v_p > v_sand and is constant once they move together; its growth rate
+  // v_p - v_sand closes about linearly, so D_e - D(t) ~ c (t_e - t)^2 just before t_e. From the
+  // two frames before ke: sqrt(D_e - D) is linear in t and its zero is t_e (kept in
+  // [t_{ke-1}, t_ke]).
+  if (s.t_end_found && ke >= ki + 2 && sensor.penetration_m.size() == t.size() &&
+      kin.disp_y_mm.size() == nf * ns) {
+    auto gap = [&](std::size_t k) {
+      const double w = 1e-3 * MeanOverSubsets(kin.disp_y_mm, ns, k, s.grid.subset_ids);
+      const double z =
+          SampleSeries(t, sensor.penetration_m, {frame_time_s[k]}, "pounder penetration")[0];
+      return z - w;
+    };
+    const double d_e = gap(ke), d1 = gap(ke - 1), d2 = gap(ke - 2);
+    const double s1 = std::sqrt(std::max(d_e - d1, 0.0)), s2 = std::sqrt(std::max(d_e - d2, 0.0));
+    if (std::isfinite(s1) && std::isfinite(s2) && s2 > s1 && s1 > 0) {
+      const double t1 = frame_time_s[ke - 1], t2 = frame_time_s[ke - 2];
+      const double t_zero = t1 + s1 * (t1 - t2) / (s2 - s1);
+      s.t_end_peak_daq_s = std::clamp(t_zero, t1, frame_time_s[ke]);
+      const double w = (s.t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
+      p_total_te = r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
+    }
+  }
+  s.t_end_peak_s = s.t_end_peak_daq_s - ss.impact_time_s;
+  s.momentum_conservation_error = std::abs(p_total_te - s.p_max_kg_m_s) / s.p_max_kg_m_s;
   for (std::size_t k = ki; k <= ke; ++k)
     if (r.v_pounder_m_s[k] > 0) r.added_mass_kg[k] = s.p_max_kg_m_s / r.v_pounder_m_s[k] - mp;
-  s.added_mass_max_kg = r.added_mass_kg[ke];
+  // m_add,max = m_add(t_e) with the pounder velocity at t_e from the DAQ-rate record.
+  const double v_te = SampleSeries(t, v, {s.t_end_peak_daq_s}, "pounder velocity at t_e")[0];
+  s.added_mass_max_kg = v_te > 0 ? s.p_max_kg_m_s / v_te - mp : r.added_mass_kg[ke];
   s.momentum_ratio = s.added_mass_max_kg * s.v_sand_max_m_s / (mp * s.v_p_max_m_s);
   if (s.momentum_conservation_error > 0.1) {
     s.warnings.push_back(fmt::format("momentum is not conserved to 10 % at t_e (error {:.1f} %)",

@@ -12,10 +12,12 @@ namespace impactdic {
 
 class TestDir {
  public:
-  TestDir() {
+  // Named after the running test; `name` is needed where no test runs (SetUpTestSuite).
+  explicit TestDir(const std::string& name = "") {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            (std::string("impactdic_") + info->test_suite_name() + "_" + info->name());
+    const std::string stem =
+        !name.empty() ? name : std::string(info->test_suite_name()) + "_" + info->name();
+    path_ = std::filesystem::temp_directory_path() / ("impactdic_" + stem);
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

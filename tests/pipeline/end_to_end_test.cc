@@ -1,0 +1,152 @@
+// End to end: `impactdic synth` renders a small impact scene with known truth, `impactdic run`
+// processes it, and the results are compared with the truth (issue 7's tolerances).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+
+#include "../cli/cli_runner.h"
+#include "../io/test_dir.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/render/animation.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A small scene: 320x240 px at 1.5 mm/px, ideal lens (the lens path is covered by the calib and
+// preprocess tests and by the committed sample), the sensor record running 50 ms past the last
+// frame so that it contains the stop (crater depth).
+constexpr const char* kSpec = R"(
+preset: small
+name: e2e
+camera: {lens: ideal, width: 320, height: 240, mm_per_px: 1.5}
+frames: {count: 14, before_impact: 2, supersampling: 2}
+sensor: {tail_s: 0.05}
+calibration: {render: false}
+dic: {subset_size: 21, step: 12}
+)";
+
+class EndToEnd : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TestDir("EndToEnd");
+    const std::string spec = dir_->Write("spec.yaml", kSpec);
+    const CliResult synth = RunCli("synth " + spec + " -o " + dir_->File("scene"));
+    ASSERT_EQ(synth.exit_code, 0) << synth.output;
+    const CliResult run =
+        RunCli("run " + dir_->File("scene/scene.yaml") + " -o " + dir_->File("out"));
+    ASSERT_EQ(run.exit_code, 0) << run.output;
+    run_output_ = new std::string(run.output);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    delete run_output_;
+  }
+  static TestDir* dir_;
+  static std::string* run_output_;
+};
+TestDir* EndToEnd::dir_ = nullptr;
+std::string* EndToEnd::run_output_ = nullptr;
+
+TEST_F(EndToEnd, SoilDisplacementMatchesTruth) {
+  H5Reader results(dir_->File("out/results.h5"));
+  H5Reader truth(dir_->File("scene/truth.h5"));
+  Dims rd, td;
+  const auto x = results.ReadDouble("/dic/x_px");
+  const auto y = results.ReadDouble("/dic/y_px");
+  const auto u = results.ReadDouble("/dic/u_px", &rd);
+  const auto v = results.ReadDouble("/dic/v_px");
+  const auto frame_index = results.ReadDouble("/time/frame_index");
+  const auto gx = truth.ReadDouble("/soil/grid_x_px");
+  const auto gy = truth.ReadDouble("/soil/grid_y_px");
+  const auto tu = truth.ReadDouble("/soil/u_px", &td);
+  const auto tv = truth.ReadDouble("/soil/v_px");
+  const auto occluded = truth.ReadDouble("/soil/occluded");
+  const std::size_t F = rd[0], N = rd[1], T = gx.size();
+  ASSERT_EQ(td[0] * T, tu.size());
+  double sum_sq = 0;
+  std::size_t count = 0, matched = 0;
+  for (std::size_t i = 0; i < N; ++i) {
+    // The same subset in the truth grid (same ROI and step: positions agree to rounding).
+    std::size_t j = T;
+    for (std::size_t k = 0; k < T; ++k)
+      if (std::abs(gx[k] - x[i]) < 0.5 && std::abs(gy[k] - y[i]) < 0.5) j = k;
+    if (j == T) continue;
+    ++matched;
+    const std::size_t ref = static_cast<std::size_t>(frame_index[0]);
+    for (std::size_t f = 1; f < F; ++f) {
+      const std::size_t tf = static_cast<std::size_t>(frame_index[f]);
+      if (!std::isfinite(u[f * N + i]) || occluded[tf * T + j] != 0) continue;
+      const double du = u[f * N + i] - (tu[tf * T + j] - tu[ref * T + j]);
+      const double dv = v[f * N + i] - (tv[tf * T + j] - tv[ref * T + j]);
+      sum_sq += du * du + dv * dv;
+      ++count;
+    }
+  }
+  ASSERT_GT(matched, N * 9 / 10) << "the correlated grid does not match the truth grid";
+  ASSERT_GT(count, (F - 1) * N * 8 / 10);
+  const double rms = std::sqrt(sum_sq / (2.0 * count));
+  EXPECT_LE(rms, 0.05) << "displacement RMS error per component [px] over " << count << " samples";
+}
+
+TEST_F(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
+  H5Reader results(dir_->File("out/results.h5"));
+  H5Reader truth(dir_->File("scene/truth.h5"));
+  const double t_e = truth.ReadDouble("/momentum/t_e_s")[0];
+  const double m_add_max = truth.ReadDouble("/momentum/m_add_max_kg")[0];
+  const double conservation = truth.ReadDouble("/momentum/conservation_error")[0];
+  const double crater = truth.ReadDouble("/pounder/crater_depth_m")[0];
+  // Granular momentum over the peak stage, at the analysed frames: within 5 % of its value at
+  // the end of the peak stage (where it is largest; early on it is near zero, so a relative
+  // error per frame would be meaningless).
+  const auto t_frames = truth.ReadDouble("/frames/time_s");
+  const auto p_truth = truth.ReadDouble("/momentum/p_gran_Ns");
+  const auto frame_index = results.ReadDouble("/time/frame_index");
+  const auto p_gran = results.ReadDouble("/momentum/p_gran");
+  ASSERT_EQ(p_gran.size(), frame_index.size());
+  double p_te = 0;
+  for (std::size_t k = 0; k < t_frames.size(); ++k)
+    if (t_frames[k] <= t_e) p_te = p_truth[k];
+  ASSERT_GT(p_te, 0);
+  int compared = 0;
+  for (std::size_t f = 0; f < frame_index.size(); ++f) {
+    const auto k = static_cast<std::size_t>(frame_index[f]);
+    if (t_frames[k] < 0 || t_frames[k] > t_e || !std::isfinite(p_gran[f])) continue;
+    EXPECT_NEAR(p_gran[f], p_truth[k], 0.05 * p_te) << "frame " << k << " t = " << t_frames[k];
+    ++compared;
+  }
+  EXPECT_GE(compared, 3);
+  EXPECT_NEAR(results.ReadNumberAttribute("/summary", "momentum_conservation_error"), conservation,
+              0.02);
+  EXPECT_NEAR(results.ReadNumberAttribute("/summary", "added_mass_max_kg"), m_add_max,
+              0.05 * m_add_max);
+  EXPECT_NEAR(results.ReadNumberAttribute("/summary", "crater_depth_measured_m"), crater,
+              0.01 * crater);
+}
+
+TEST_F(EndToEnd, FiguresAndAnimationAreComplete) {
+  H5Reader results(dir_->File("out/results.h5"));
+  const std::size_t analysed = results.ReadDouble("/time/frame_index").size();
+  std::string video = dir_->File("out/velocity.mp4");
+  if (!fs::exists(video)) video = dir_->File("out/velocity.avi");
+  ASSERT_TRUE(fs::exists(video)) << *run_output_;
+  EXPECT_EQ(CountVideoFrames(video), analysed);
+  for (const char* name :
+       {"momentum.png", "deceleration.png", "added_mass.png", "velocity_field_te.png"}) {
+    const cv::Mat png = cv::imread(dir_->File(std::string("out/") + name), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(png.empty()) << name << " is not a readable PNG";
+    EXPECT_GE(png.cols, 640) << name;
+    EXPECT_GE(png.rows, 400) << name;
+  }
+  EXPECT_TRUE(fs::exists(dir_->File("out/summary.json")));
+  EXPECT_TRUE(fs::exists(dir_->File("out/summary.csv")));
+  // Nothing temporary is left behind.
+  for (const auto& entry : fs::directory_iterator(dir_->File("out")))
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+}  // namespace
+}  // namespace impactdic
