@@ -281,7 +281,6 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
     for (const auto& w : sensor->summary.warnings) summary.warnings.push_back("sensor: " + w);
     stages.Ran("sensor", sensor->summary.BriefReport(), t);
     fig.impact_velocity_m_s = sensor->summary.impact_velocity_m_s;
-    fig.peak_deceleration_measured_g = sensor->summary.peak_deceleration_g;
     fig.crater_depth_measured_m = sensor->summary.final_penetration_m;
   } else {
     stages.Skipped("sensor", scene.inputs.sensor.empty() ? "no sensor CSV in the scene"
@@ -458,6 +457,23 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   } else {
     stages.Skipped("kinematics", dic ? "not among the scene's stages" : "no correlation results");
     if (!analysis) stages.Skipped("momentum", "no kinematics");
+  }
+
+  // Measured peak deceleration: the largest filtered deceleration of the PEAK STAGE, i.e. between
+  // the impact and t_e (measured; without momentum results, T + 4/b of the scene's model). The
+  // record's global maximum can be the stop, where -dv/dt grows like v^-n (SPEC section 4).
+  if (sensor) {
+    const double t_i = sensor->summary.impact_time_s;
+    const double t_end_peak = std::isfinite(fig.t_end_peak_s)
+                                  ? fig.t_end_peak_s
+                                  : scene.model.T_s + 4 / scene.model.b_per_s;
+    double peak = kNaN;
+    for (std::size_t i = 0; i < sensor->time_s.size(); ++i) {
+      const double dt = sensor->time_s[i] - t_i;
+      if (dt >= 0 && dt <= t_end_peak && !(sensor->accel_g[i] - 1 <= peak))
+        peak = sensor->accel_g[i] - 1;
+    }
+    fig.peak_deceleration_measured_g = peak;
   }
 
   // --- model ---------------------------------------------------------------------------------

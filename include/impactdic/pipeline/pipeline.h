@@ -53,7 +53,7 @@ struct SceneFigures {
   double momentum_ratio_measured = kNaN;  // Eq. 11
   double momentum_ratio_model = kNaN;
   double v_sand_max_m_s = kNaN;
-  double peak_deceleration_measured_g = kNaN;
+  double peak_deceleration_measured_g = kNaN;  // Largest of the peak stage (impact..t_e).
   double peak_deceleration_model_g = kNaN;
   double plateau_deceleration_measured_g = kNaN;  // Mean over [t1, t_stop], t1 = T + 4/b.
   double plateau_deceleration_model_g = kNaN;
