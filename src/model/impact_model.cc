@@ -361,8 +361,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
     if (!(a < 0.0)) return false;
     if (singular) return k * y[0] * u1 > 0.0;
     // Regular end: dv/dt at v = 0 must be negative for v to reach 0.
-    const double m = mp + AddedMassAt(M, b, T, t).m_add_kg;
-    return m * g - k * y[0] < 0.0;
+    return EvaluateImpactForces(p, M, t, y[0], 0.0).dv_dt_m_s2 < 0.0;
   };
 
   OdeOptions to;
