@@ -68,7 +68,7 @@ TEST(CalibrateCli, ImagesWithoutTheBoardAreAClearError) {
   std::string images;
   for (int k = 0; k < 6; ++k) {
     const std::string path = dir + "/impactdic_blank_" + std::to_string(k) + ".png";
-    ASSERT_TRUE(cv::imwrite(path, cv::Mat(480, 640, CV_8U, cv::Scalar(90 + k))));
+    ASSERT_TRUE(cv::imwrite(path, cv::Mat(120, 160, CV_8U, cv::Scalar(90 + k))));
     images += " " + path;
   }
   const CliResult r =
