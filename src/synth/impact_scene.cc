@@ -397,7 +397,7 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
       core_depth_mm_ = std::max(0.3 * D_mm, needed_mm);
     }
     cone_depth_mm_ = spec_.soil.cone_depth_mm > 0 ? spec_.soil.cone_depth_mm : D_mm / 2;
-    decay_mm_ = spec_.soil.decay_length_mm > 0 ? spec_.soil.decay_length_mm : D_mm;
+    decay_mm_ = spec_.soil.decay_length_mm > 0 ? spec_.soil.decay_length_mm : 1.5 * D_mm;
   }
 
   // Frames.

@@ -342,7 +342,7 @@ std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibra
   o << "preprocess:\n  gaussian:\n    enabled: false\n  clahe:\n    enabled: false\n";
   o << fmt::format("dic:\n  subset_size: {}\n  step: {}\n  roi: [{}, {}, {}, {}]\n", s.subset_size,
                    s.step, grid.roi[0], grid.roi[1], grid.roi[2], grid.roi[3]);
-  o << "  interpolation: bicubic\n  shape: affine\n  reference_update: incremental\n"
+  o << "  interpolation: bicubic\n  shape: affine\n  reference_update: auto\n"
        "  min_zncc: 0.8\n  max_iterations: 30\n  convergence_px: 0.001\n  search_radius_px: 12\n";
   o << "sensor:\n  time_column: time_s\n  accel_column: accel_g\n  accel_unit: g\n"
        "  exposure_column: exposure\n  cutoff_hz: 1500\n  integrate_from: release\n"

@@ -66,12 +66,14 @@ enum class SceneAddedMass {
 const char* ToString(SceneAddedMass mode);
 
 struct SceneSoilOptions {
-  double core_depth_mm = 0;        // Depth of the rigid core below the surface [mm], >= 0; 0 = auto
-                                   // (0.3 D, at least the default momentum grid plus one step).
-  double cone_depth_mm = 0;        // Core bottom to cone apex [mm], >= 0; 0 = D / 2 (45 degrees).
-  double decay_length_mm = 0;      // L of f = exp(-(dist / L)^2) [mm], >= 0; 0 = D.
-  double wave_speed_m_s = 65;      // c, > 0 (paper section 3.3).
-  double wave_amplitude_mm = 1.0;  // A0 [mm], >= 0 (0 = no wave).
+  double core_depth_mm = 0;  // Depth of the rigid core below the surface [mm], >= 0; 0 = auto
+                             // (0.3 D, at least the default momentum grid plus one step).
+  double cone_depth_mm = 0;  // Core bottom to cone apex [mm], >= 0; 0 = D / 2 (45 degrees).
+  // L of f = exp(-(dist / L)^2) [mm], >= 0; 0 = 1.5 D. An affine DIC subset's centre is
+  // biased by ~ u'' <x^2> / 2 ~ W S^2 / (12 L^2): a long decay keeps that small.
+  double decay_length_mm = 0;
+  double wave_speed_m_s = 65;         // c, > 0 (paper section 3.3).
+  double wave_amplitude_mm = 1.0;     // A0 [mm], >= 0 (0 = no wave).
   double wave_decay_length_mm = 180;  // lambda [mm], > 0 (~4 % left at the 0.6 m bed bottom).
   double wave_rise_time_s = 1e-3;     // tau [s], > 0.
   void Check() const;
