@@ -84,7 +84,9 @@ AddedMass AddedMassAt(double M_kg, double b_per_s, double T_s, double t_s) {
   AddedMass out;
   out.m_add_kg = M_kg * sigma;
   out.dm_dt_kg_s = M_kg * b_per_s * s1s;
-  out.d2m_dt2_kg_s2 = -M_kg * b_per_s * b_per_s * s1s * std::tanh(0.5 * x);
+  // tanh(x / 2) = sign(x) (1 - e^-|x|) / (1 + e^-|x|), from the same exponential.
+  const double tanh_half = (x >= 0 ? 1.0 : -1.0) * (1.0 - e) / (1.0 + e);
+  out.d2m_dt2_kg_s2 = -M_kg * b_per_s * b_per_s * s1s * tanh_half;
   return out;
 }
 
@@ -244,24 +246,28 @@ struct PeakResult {
   double t = kNaN;
 };
 
-// The largest distinct interior local maximum of -dv/dt along the trajectory: sampled at 8
-// points per step, candidates are positive samples (a deceleration) larger than both neighbours
-// whose topographic prominence exceeds 1e-3 of their value; each candidate is refined by
+// The largest distinct interior local maximum of -dv/dt along the trajectory: sampled at 4
+// points per time-phase step and 2 per end-phase step (-dv/dt grows monotonically there),
+// candidates are positive samples (a deceleration) larger than both neighbours whose
+// topographic prominence exceeds 1e-3 of their value; each candidate is refined by
 // golden-section search on the dense output over its two neighbouring samples.
 PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSolution& sol) {
-  constexpr int kSub = 8;
   auto decel = [&](double u) {
     const ImpactState s = sol.AtCoordinate(u);
     if (s.v_m_s <= 0.0) return kInf;
     return -EvaluateImpactForces(p, M, s.t_s, s.z_m, s.v_m_s).dv_dt_m_s2;
   };
-  const int n = static_cast<int>(sol.CoordinateEnd() * kSub);
+  std::vector<double> us;
+  for (std::size_t i = 0; i < sol.time_steps.size(); ++i)
+    for (int j = 0; j < 4; ++j) us.push_back(static_cast<double>(i) + 0.25 * j);
+  const double n_time = static_cast<double>(sol.time_steps.size());
+  for (std::size_t i = 0; i < sol.end_steps.size(); ++i)
+    for (int j = 0; j < 2; ++j) us.push_back(n_time + static_cast<double>(i) + 0.5 * j);
+  us.push_back(sol.CoordinateEnd());
+  const int n = static_cast<int>(us.size()) - 1;
   if (n < 3) return {};
-  std::vector<double> us(n + 1), g(n + 1);
-  for (int i = 0; i <= n; ++i) {
-    us[i] = static_cast<double>(i) / kSub;
-    g[i] = decel(us[i]);
-  }
+  std::vector<double> g(n + 1);
+  for (int i = 0; i <= n; ++i) g[i] = decel(us[i]);
   PeakResult best;
   for (int i = 1; i < n; ++i) {
     if (!(g[i] > g[i - 1] && g[i] >= g[i + 1])) continue;
@@ -276,7 +282,7 @@ PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSoluti
     double a = us[i - 1], b = us[i + 1];
     double c = b - r * (b - a), d = a + r * (b - a);
     double gc = decel(c), gd = decel(d);
-    for (int it = 0; it < 200 && b - a > 1e-13 * std::max(1.0, std::abs(b)); ++it) {
+    for (int it = 0; it < 200 && b - a > 1e-10 * std::max(1.0, std::abs(b)); ++it) {
       if (gc > gd) {
         b = d;
         d = c;
