@@ -1,11 +1,140 @@
+// impactdic correlate: subset DIC of an image sequence (library: impactdic/dic/dic_io.h).
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/dic/dic_io.h"
+#include "impactdic/io/image_io.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct CorrelateArgs {
+  std::string reference;
+  std::vector<std::string> deformed;
+  std::string frames;
+  int subset = 25;
+  int step = 10;
+  std::string roi;
+  std::string interp = "bicubic";
+  std::string shape = "affine";
+  std::string update = "auto";
+  int threads = 0;
+  int search_radius = 40;
+  double min_zncc = 0.8;
+  std::string output;
+};
+
+cv::Rect ParseRoi(const std::string& text) {
+  std::vector<int> v;
+  std::stringstream ss(text);
+  std::string item;
+  bool ok = true;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      v.push_back(std::stoi(item, &used));
+      ok = ok && used == item.size();
+    } catch (const std::exception&) {
+      ok = false;
+    }
+  }
+  CheckValue(ok && v.size() == 4, "--roi", text, "X0,Y0,X1,Y1 (four integers, pixels)");
+  CheckValue(v[0] >= 0 && v[1] >= 0 && v[2] > v[0] && v[3] > v[1], "--roi", text,
+             "0 <= X0 < X1 and 0 <= Y0 < Y1");
+  return cv::Rect(cv::Point(v[0], v[1]), cv::Point(v[2], v[3]));
+}
+
+void Run(const CorrelateArgs& a) {
+  // Validate every option before any work.
+  const bool pair = !a.reference.empty() || !a.deformed.empty();
+  if (pair == !a.frames.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "input",
+                pair ? "both --reference/--deformed and --frames" : "none",
+                "either --reference REF --deformed DEF [DEF ...] or --frames GLOB");
+  }
+  if (pair) {
+    CheckValue(!a.reference.empty(), "--reference", "missing", "the reference image");
+    CheckValue(!a.deformed.empty(), "--deformed", "missing", "at least one deformed image");
+  }
+  DicOptions options;
+  CheckValue(a.subset >= 5 && a.subset % 2 == 1, "--subset", std::to_string(a.subset),
+             "an odd integer >= 5 [px]");
+  CheckValue(a.step >= 1, "--step", std::to_string(a.step), "an integer >= 1 [px]");
+  CheckValue(a.threads >= 0, "--threads", std::to_string(a.threads),
+             "0 (all cores) or a positive number");
+  options.grid.subset_size = a.subset;
+  options.grid.step = a.step;
+  if (!a.roi.empty()) options.grid.roi = ParseRoi(a.roi);
+  options.icgn.interpolation = InterpolationFromString(a.interp);
+  options.icgn.shape = ShapeFunctionFromString(a.shape);
+  options.update.mode = ReferenceUpdateFromString(a.update, &options.update.every_n);
+  options.init.search_radius_px = a.search_radius;
+  options.icgn.min_zncc = a.min_zncc;
+  options.Check();
+  CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
+  {
+    std::string ext = std::filesystem::path(a.output).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
+    CheckValue(ext == ".csv" || ext == ".h5" || ext == ".hdf5", "-o/--output", a.output,
+               "a file ending in .csv or .h5");
+  }
+  std::vector<std::string> paths;
+  if (pair) {
+    paths.push_back(a.reference);
+    paths.insert(paths.end(), a.deformed.begin(), a.deformed.end());
+  } else {
+    paths = ListFrames(a.frames);
+    CheckValue(paths.size() >= 2, "--frames",
+               a.frames + " (" + std::to_string(paths.size()) + " image)",
+               "at least two images (the first is the reference)");
+  }
+  std::unique_ptr<tbb::global_control> threads;
+  if (a.threads > 0) {
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    static_cast<std::size_t>(a.threads));
+  }
+  const DicResult result = CorrelateFiles(paths, options);
+  WriteDicResult(a.output, result, options);
+  LogInfo("correlate: {}", result.summary.FullReport());
+  LogInfo("correlate: wrote {}", a.output);
+  if (!result.summary.IsUsable()) {
+    LogWarning("correlate: only {:.1f}% of the subset results are valid",
+               100 * result.summary.valid_fraction);
+  }
+}
+
+}  // namespace
 
 void RegisterCorrelateCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand("correlate", "correlate (not implemented yet)");
-  cmd->allow_extras();
-  cmd->callback([] { NotImplemented("correlate"); });
+  auto args = std::make_shared<CorrelateArgs>();
+  auto* cmd = app.add_subcommand(
+      "correlate", "correlate: subset DIC (IC-GN, B-spline, reference updating) of a sequence");
+  cmd->add_option("--reference", args->reference, "Reference image (first frame)");
+  cmd->add_option("--deformed", args->deformed, "Deformed image(s), in order");
+  cmd->add_option("--frames", args->frames,
+                  "Folder or glob of frames (sorted; the first is the reference)");
+  cmd->add_option("--subset", args->subset, "Subset size [px], odd (default 25)");
+  cmd->add_option("--step", args->step, "Grid step [px] (default 10)");
+  cmd->add_option("--roi", args->roi, "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
+  cmd->add_option("--interp", args->interp, "bicubic | biquintic (default bicubic)");
+  cmd->add_option("--shape", args->shape, "affine | quadratic (default affine)");
+  cmd->add_option("--reference-update", args->update,
+                  "fixed | incremental | every:N | auto (default auto)");
+  cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores (default 0)");
+  cmd->add_option("--search-radius", args->search_radius,
+                  "Integer search radius [px] (default 40)");
+  cmd->add_option("--min-zncc", args->min_zncc, "ZNCC below which a subset fails (default 0.8)");
+  cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace impactdic::cli

@@ -1,0 +1,30 @@
+// Running the correlator on image files and writing its results (the `correlate` stage).
+//
+//   DicResult r = CorrelateFiles({"f0.tif", "f1.tif", "f2.tif"}, options);
+//   WriteDicResult("out.h5", r, options);   // or .csv
+#ifndef IMPACTDIC_DIC_DIC_IO_H_
+#define IMPACTDIC_DIC_DIC_IO_H_
+
+#include <string>
+#include <vector>
+
+#include "impactdic/dic/correlator.h"
+
+namespace impactdic {
+
+// Reads every image first (Error naming the file if missing/corrupt; Error if the sizes differ),
+// then correlates paths[1..] against paths[0] frame by frame, with a progress bar.
+DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
+
+// Writes the result by extension:
+// .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status (one row per frame and subset;
+//       frame = 1-based index of the deformed image, x,y = subset centre in the first reference,
+//       u,v = accumulated displacement [px], x right, y down; status by name; NaN as "nan").
+// .h5:  /dic/x_px, /dic/y_px (subsets), /dic/u_px, v_px, zncc, sigma_px (frames x subsets),
+//       /dic/iterations, /dic/status (int32, frames x subsets; the attribute `codes` lists
+//       code=name), /dic/reference_frame (frames), attributes with the options.
+void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_DIC_DIC_IO_H_

@@ -1,0 +1,132 @@
+#include "impactdic/dic/dic_io.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/image_io.h"
+
+namespace impactdic {
+namespace {
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string Number(double v) {
+  if (std::isnan(v)) return "nan";
+  return fmt::format("{:.6f}", v);
+}
+
+}  // namespace
+
+DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options) {
+  options.Check();
+  CheckValue(paths.size() >= 2, "images", std::to_string(paths.size()) + " image(s)",
+             "a reference and at least one deformed image");
+  std::vector<cv::Mat> images;
+  images.reserve(paths.size());
+  for (const auto& p : paths) images.push_back(ReadGreyImage(p));
+  CheckSameSize(images, paths);
+  Correlator correlator(options);
+  correlator.SetReference(images[0]);
+  DicResult result;
+  result.positions = correlator.positions();
+  ProgressBar bar("correlate", paths.size() - 1);
+  for (std::size_t k = 1; k < images.size(); ++k) {
+    result.frames.push_back(correlator.Correlate(images[k]));
+    images[k - 1].release();
+    bar.Advance();
+  }
+  bar.Finish();
+  result.summary = correlator.summary();
+  return result;
+}
+
+void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options) {
+  const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  const std::size_t n = result.positions.size(), frames = result.frames.size();
+  if (ext == ".csv") {
+    std::vector<std::vector<std::string>> rows;
+    rows.reserve(n * frames);
+    for (std::size_t k = 0; k < frames; ++k) {
+      const FrameResult& f = result.frames[k];
+      for (std::size_t i = 0; i < n; ++i) {
+        rows.push_back({std::to_string(f.frame), Number(result.positions[i].x),
+                        Number(result.positions[i].y), Number(f.u_px[i]), Number(f.v_px[i]),
+                        Number(f.zncc[i]), std::to_string(f.iterations[i]), ToString(f.status[i])});
+      }
+    }
+    WriteCsvRows(path, {"frame", "x_px", "y_px", "u_px", "v_px", "zncc", "iterations", "status"},
+                 rows);
+    return;
+  }
+  if (ext != ".h5" && ext != ".hdf5") {
+    throw Error(ErrorKind::kInvalidValue, "output", path, "a file ending in .csv or .h5");
+  }
+  H5Writer out(path);
+  std::vector<double> x(n), y(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    x[i] = result.positions[i].x;
+    y[i] = result.positions[i].y;
+  }
+  out.Write("dic/x_px", x, "px", "subset centre x in the first reference image (right)");
+  out.Write("dic/y_px", y, "px", "subset centre y in the first reference image (down)");
+  std::vector<double> u(n * frames), v(n * frames);
+  std::vector<float> zncc(n * frames), sigma(n * frames);
+  std::vector<std::int32_t> iterations(n * frames), status(n * frames);
+  std::vector<std::int32_t> reference(frames), frame_index(frames);
+  for (std::size_t k = 0; k < frames; ++k) {
+    const FrameResult& f = result.frames[k];
+    reference[k] = f.reference_frame;
+    frame_index[k] = f.frame;
+    for (std::size_t i = 0; i < n; ++i) {
+      u[k * n + i] = f.u_px[i];
+      v[k * n + i] = f.v_px[i];
+      zncc[k * n + i] = f.zncc[i];
+      sigma[k * n + i] = f.sigma_px.empty() ? NAN : f.sigma_px[i];
+      iterations[k * n + i] = f.iterations[i];
+      status[k * n + i] = static_cast<std::int32_t>(f.status[i]);
+    }
+  }
+  const Dims dims{frames, n};
+  out.Write("dic/u_px", u, dims, "px",
+            "accumulated displacement x (right) of the subset centre since the first reference, "
+            "NaN if the subset failed");
+  out.Write("dic/v_px", v, dims, "px",
+            "accumulated displacement y (down) of the subset centre since the first reference, "
+            "NaN if the subset failed");
+  out.Write("dic/zncc", zncc, dims, "1", "zero-normalised cross-correlation of the subset");
+  out.Write("dic/sigma_px", sigma, dims, "px",
+            "estimated standard deviation of the displacement increment (least squares)");
+  out.Write("dic/iterations", iterations, dims, "1", "IC-GN iterations");
+  out.Write("dic/status", status, dims, "1", "subset status code (see attribute codes)");
+  out.Write("dic/frame", frame_index, Dims{frames}, "1", "index of the deformed image (1-based)");
+  out.Write("dic/reference_frame", reference, Dims{frames}, "1",
+            "index of the reference image each frame was correlated against (0 = first)");
+  std::string codes;
+  for (int s = 0; s < kSubsetStatusCount; ++s)
+    codes += fmt::format("{}{}={}", s ? "," : "", s, ToString(static_cast<SubsetStatus>(s)));
+  out.SetAttribute("dic/status", "codes", codes);
+  out.SetAttribute("dic", "interpolation", ToString(options.icgn.interpolation));
+  out.SetAttribute("dic", "shape_function", ToString(options.icgn.shape));
+  out.SetAttribute("dic", "reference_update",
+                   options.update.mode == ReferenceUpdate::kEveryN
+                       ? fmt::format("every:{}", options.update.every_n)
+                       : std::string(ToString(options.update.mode)));
+  out.SetAttribute("dic", "subset_size_px", options.grid.subset_size);
+  out.SetAttribute("dic", "step_px", options.grid.step);
+  out.SetAttribute("dic", "valid_fraction", result.summary.valid_fraction);
+  out.SetAttribute("dic", "mean_iterations", result.summary.mean_iterations);
+  out.SetAttribute("dic", "reference_updates", result.summary.reference_updates);
+  out.Commit();
+}
+
+}  // namespace impactdic

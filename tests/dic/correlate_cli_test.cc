@@ -1,0 +1,111 @@
+// `impactdic correlate` through the binary: outputs and clear errors for bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "../cli/cli_runner.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/synth/speckle.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+class CorrelateCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / "impactdic_correlate_cli_test";
+    fs::create_directories(dir_);
+    SpeckleOptions speckle;
+    speckle.blob_radius_px = 2.0;
+    SpecklePattern pattern(speckle, 120, 100);
+    RenderOptions render;
+    render.noise_sigma = 2;
+    render.supersampling = 2;
+    WriteImage(Path("ref.png"), RenderImage(pattern, 120, 100, ZeroField(), render));
+    render.noise_seed = 8;
+    WriteImage(Path("def1.png"), RenderImage(pattern, 120, 100, Translation(0.4, -0.3), render));
+    render.noise_seed = 9;
+    WriteImage(Path("def2.png"), RenderImage(pattern, 120, 100, Translation(0.8, -0.6), render));
+    WriteImage(Path("small.png"), RenderImage(pattern, 80, 100, ZeroField(), render));
+    std::ofstream(Path("corrupt.png")) << "this is not a PNG file";
+  }
+  static std::string Path(const std::string& name) { return (dir_ / name).string(); }
+  static std::string Pair() {
+    return "correlate --reference " + Path("ref.png") + " --deformed " + Path("def1.png") + " " +
+           Path("def2.png");
+  }
+  static void ExpectError(const std::string& args, const std::string& needle) {
+    const CliResult r = RunCli(args);
+    EXPECT_NE(r.exit_code, 0) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(needle), std::string::npos) << args << "\n" << r.output;
+  }
+  static fs::path dir_;
+};
+fs::path CorrelateCli::dir_;
+
+TEST_F(CorrelateCli, WritesTheCsvContract) {
+  const std::string out = Path("out.csv");
+  const CliResult r = RunCli(Pair() + " --subset 25 --step 10 -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("subsets"), std::string::npos) << r.output;  // Summary on stderr.
+  std::ifstream in(out);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "frame,x_px,y_px,u_px,v_px,zncc,iterations,status");
+  int rows = 0, converged = 0;
+  std::string line;
+  while (std::getline(in, line)) {
+    ++rows;
+    converged += line.find(",converged") != std::string::npos;
+  }
+  // (120 - 8 - 25) / 10 + 1 = 9 columns, (100 - 8 - 25) / 10 + 1 = 7 rows, 2 frames.
+  EXPECT_EQ(rows, 2 * 9 * 7);
+  EXPECT_GT(converged, rows / 2);
+}
+
+TEST_F(CorrelateCli, WritesHdf5WithFramesAndStatusCodes) {
+  const std::string out = Path("out.h5");
+  const CliResult r = RunCli("correlate --frames '" + Path("def*.png") +
+                             "' --interp biquintic --shape quadratic --reference-update every:1 "
+                             "--threads 2 --roi 10,10,110,90 -o " +
+                             out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  H5Reader h5(out);
+  Dims dims;
+  h5.ReadDouble("dic/u_px", &dims);
+  ASSERT_EQ(dims.size(), 2u);
+  EXPECT_EQ(dims[0], 1u);  // def1 is the reference, def2 the only deformed frame.
+  EXPECT_EQ(dims[1], h5.Dimensions("dic/x_px")[0]);
+  EXPECT_NE(h5.ReadStringAttribute("dic/status", "codes").find("0=converged"), std::string::npos);
+}
+
+TEST_F(CorrelateCli, BadInputGivesClearErrors) {
+  ExpectError("correlate --reference " + Path("missing.png") + " --deformed " + Path("def1.png") +
+                  " -o " + Path("x.csv"),
+              "missing.png");
+  ExpectError("correlate --reference " + Path("ref.png") + " --deformed " + Path("corrupt.png") +
+                  " -o " + Path("x.csv"),
+              "corrupt.png");
+  ExpectError("correlate --reference " + Path("ref.png") + " --deformed " + Path("small.png") +
+                  " -o " + Path("x.csv"),
+              "small.png");
+  ExpectError(Pair() + " --subset 24 -o " + Path("x.csv"), "--subset");
+  ExpectError(Pair() + " --subset 151 -o " + Path("x.csv"), "subset");
+  ExpectError(Pair() + " --roi 50,50,300,90 -o " + Path("x.csv"), "ROI");
+  ExpectError(Pair() + " --roi 5,5,2 -o " + Path("x.csv"), "--roi");
+  ExpectError(Pair() + " --interp bilinear -o " + Path("x.csv"), "bilinear");
+  ExpectError(Pair() + " --shape cubic -o " + Path("x.csv"), "cubic");
+  ExpectError(Pair() + " --reference-update every:0 -o " + Path("x.csv"), "every:0");
+  ExpectError(Pair() + " --threads -1 -o " + Path("x.csv"), "--threads");
+  ExpectError(Pair() + " -o " + Path("x.txt"), ".csv or .h5");
+  ExpectError("correlate -o " + Path("x.csv"), "--frames");
+}
+
+}  // namespace
+}  // namespace impactdic
