@@ -91,6 +91,31 @@ CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_
     s.valid.resize(status.size());
     for (std::size_t i = 0; i < status.size(); ++i) s.valid[i] = status[i] == 0 ? 1 : 0;
   }
+  // The dic stage writes one row per DEFORMED image (/dic/frame: 1-based image index, the
+  // reference image being 0). Prepend the reference row (zero displacement) so row k is frame k.
+  if (in.Exists("dic/frame")) {
+    const std::vector<std::int32_t> index = in.ReadInt("dic/frame");
+    for (std::size_t k = 0; k < index.size(); ++k) {
+      if (index.size() != s.frames || index[k] != index[0] + static_cast<std::int32_t>(k)) {
+        throw Error(ErrorKind::kFileFormat, "/dic/frame",
+                    fmt::format("{} indices starting {}, not consecutive or not one per row",
+                                index.size(), index.empty() ? -1 : index[0]),
+                    "consecutive image indices, one per row of /dic/u_px")
+            .WithFile(h5_path);
+      }
+    }
+    if (!index.empty() && index[0] == 1) {
+      const std::size_t n = s.subsets;
+      s.u_px.insert(s.u_px.begin(), n, 0.0);
+      s.v_px.insert(s.v_px.begin(), n, 0.0);
+      if (!s.valid.empty()) s.valid.insert(s.valid.begin(), n, std::uint8_t{1});
+      ++s.frames;
+    } else if (!index.empty() && index[0] != 0) {
+      throw Error(ErrorKind::kFileFormat, "/dic/frame", fmt::format("first index {}", index[0]),
+                  "0 (reference row included) or 1 (first deformed image)")
+          .WithFile(h5_path);
+    }
+  }
   if (first_frame) {
     *first_frame = in.HasAttribute("dic", "first_frame")
                        ? std::lround(in.ReadNumberAttribute("dic", "first_frame"))

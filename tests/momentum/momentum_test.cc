@@ -296,15 +296,21 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   const std::string results = dir.File("results/results.h5");
   {
     H5Writer out(results);
-    const Dims fn{dic.frames, dic.subsets};
+    // As the dic stage writes them: one row per deformed image (frames 1..F-1), /dic/frame.
+    const std::size_t n = dic.subsets, rows = dic.frames - 1;
+    const Dims fn{rows, n};
+    const std::vector<double> u(dic.u_px.begin() + n, dic.u_px.end());
+    const std::vector<double> v(dic.v_px.begin() + n, dic.v_px.end());
     out.Write("dic/x_px", dic.x_px, "px", "subset centre x");
     out.Write("dic/y_px", dic.y_px, "px", "subset centre y");
-    out.Write("dic/u_px", dic.u_px, fn, "px", "displacement x");
-    out.Write("dic/v_px", dic.v_px, fn, "px", "displacement y");
-    std::vector<std::int32_t> status(dic.u_px.size(), 0);
+    out.Write("dic/u_px", u, fn, "px", "displacement x");
+    out.Write("dic/v_px", v, fn, "px", "displacement y");
+    std::vector<std::int32_t> status(u.size(), 0), frame(rows);
     for (std::size_t i = 0; i < status.size(); ++i)
-      if (std::isnan(dic.v_px[i])) status[i] = 3;
+      if (std::isnan(v[i])) status[i] = 3;
+    for (std::size_t k = 0; k < rows; ++k) frame[k] = static_cast<std::int32_t>(k + 1);
     out.Write("dic/status", status, fn, "1", "0 = converged");
+    out.Write("dic/frame", frame, Dims{rows}, "1", "deformed image index (1-based)");
     out.Commit();
   }
   const double density = c.Ms() / (12 * 25e-6 * 0.192);

@@ -7,6 +7,9 @@
 //   /dic/u_px, /dic/v_px   displacement since the reference frame, [F x N] (or [F x R x C])
 //   /dic/status            optional, same shape as u_px, 0 = converged (dic SubsetStatus);
 //                          anything else, or a non-finite displacement, is invalid.
+//   /dic/frame             optional, image index of each row. When it starts at 1 (the dic
+//                          stage's rows are the deformed images only), a zero-displacement row
+//                          for the reference image (frame 0) is prepended.
 //   Optional number attribute "first_frame" of /dic: index of the first correlated frame in the
 //   camera sequence (default: the scene's dic.first_frame).
 //
