@@ -167,7 +167,8 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
     local.Build(raw, options.icgn.interpolation, region);
     spline = &local;
   }
-  if (timing) timing->seconds_coefficients += coef_timer.ElapsedSeconds();
+  const double coef_seconds = coef_timer.ElapsedSeconds();
+  if (timing) timing->seconds_coefficients += coef_seconds;
   RefImages& im = ref.images;
   im.region = spline->region();
   spline->NodeGradients(&im.gx, &im.gy);
@@ -189,7 +190,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
                             &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n]);
   });
   params_valid.assign(n, 0);
-  if (timing) timing->seconds_reference += timer.ElapsedSeconds() - coef_timer.ElapsedSeconds();
+  if (timing) timing->seconds_reference += timer.ElapsedSeconds() - coef_seconds;
 }
 
 void Correlator::Impl::MakeFrame(const cv::Mat& raw, int index, Frame* out) {
