@@ -195,7 +195,8 @@ void WorkPrecision(const std::string& plot) {
       std::to_string(g_threads) +
       " threads)'; set ylabel 'random error sqrt(sd_u^2+sd_v^2) [px]'; set key outside; "
       "titles='bicubic-affine bicubic-quadratic biquintic-affine biquintic-quadratic'; "
-      "plot for [i=0:3] '" + data +
+      "plot for [i=0:3] '" +
+      data +
       "' index i using 3:4 with linespoints title word(titles, i+1), for [i=0:3] '' index i "
       "using 3:4:(sprintf('%d',\\$2)) with labels offset 1,0.5 notitle";
   const std::string command = "gnuplot -e \"" + script + "\" 2>/dev/null";
