@@ -26,16 +26,24 @@ function(impactdic_add_module)
   impactdic_target_defaults(${target})
 endfunction()
 
-# impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow])
+# impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow]
+#                    [WHOLE])
+# Each test case is its own CTest test (run in parallel processes), unless WHOLE: then the program
+# is one CTest test, for suites whose expensive shared fixture must run once.
 function(impactdic_add_test)
-  cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "WHOLE" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${ARG_NAME} ${ARG_SOURCES})
   target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${ARG_NAME} PRIVATE
       IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
       IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
   impactdic_target_defaults(${ARG_NAME})
-  gtest_discover_tests(${ARG_NAME} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  if(ARG_WHOLE)
+    add_test(NAME ${ARG_NAME} COMMAND ${ARG_NAME})
+    set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}")
+  else()
+    gtest_discover_tests(${ARG_NAME} DISCOVERY_TIMEOUT 60 PROPERTIES LABELS "${ARG_LABELS}")
+  endif()
 endfunction()
 
 # impactdic_add_benchmark(NAME dic_benchmark SOURCES dic_benchmark.cc DEPS impactdic::dic)

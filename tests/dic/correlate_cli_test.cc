@@ -1,5 +1,6 @@
 // `impactdic correlate` through the binary: outputs and clear errors for bad input.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -19,7 +20,7 @@ namespace fs = std::filesystem;
 class CorrelateCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / "impactdic_correlate_cli_test";
+    dir_ = fs::temp_directory_path() / ("impactdic_correlate_cli_test_" + std::to_string(getpid()));
     fs::create_directories(dir_);
     SpeckleOptions speckle;
     speckle.blob_radius_px = 2.0;

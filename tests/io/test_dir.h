@@ -1,8 +1,10 @@
-// A fresh temporary folder per test, removed afterwards.
+// A fresh temporary folder per test (and per process: CTest runs tests in parallel processes),
+// removed afterwards.
 #ifndef IMPACTDIC_TESTS_IO_TEST_DIR_H_
 #define IMPACTDIC_TESTS_IO_TEST_DIR_H_
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -17,7 +19,8 @@ class TestDir {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     const std::string stem =
         !name.empty() ? name : std::string(info->test_suite_name()) + "_" + info->name();
-    path_ = std::filesystem::temp_directory_path() / ("impactdic_" + stem);
+    path_ = std::filesystem::temp_directory_path() /
+            ("impactdic_" + stem + "_" + std::to_string(getpid()));
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

@@ -3,6 +3,7 @@
 #include "impactdic/model/impact_model.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -266,8 +267,9 @@ TEST(ImpactModel, SeriesHasEveryForceTermAndWritesCsv) {
                 s.inertia_N[i] + s.dynamic_N[i] + s.friction_N[i] + s.gravity_N[i],
                 1e-9 * (std::abs(m * s.dv_dt_m_s2[i]) + 1));
   }
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "impactdic_model_series_test.csv").string();
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("impactdic_model_series_test_" + std::to_string(getpid()) + ".csv"))
+                               .string();
   WriteImpactSeries(path, p, run);
   CsvReadOptions ro;
   ro.allow_non_finite = true;
@@ -278,8 +280,9 @@ TEST(ImpactModel, SeriesHasEveryForceTermAndWritesCsv) {
   EXPECT_EQ(t.rows(), s.size());
   std::filesystem::remove(path);
   // HDF5: the same columns with units, the summary as attributes of /model.
-  const std::string h5 =
-      (std::filesystem::temp_directory_path() / "impactdic_model_series_test.h5").string();
+  const std::string h5 = (std::filesystem::temp_directory_path() /
+                          ("impactdic_model_series_test_" + std::to_string(getpid()) + ".h5"))
+                             .string();
   WriteImpactSeries(h5, p, run);
   {
     H5Reader in(h5);

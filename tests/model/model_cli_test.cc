@@ -1,5 +1,6 @@
 // The `impactdic model` command line: the JSON contract, the outputs and the exit codes.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <string>
@@ -13,7 +14,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path TempDir() {
-  const fs::path dir = fs::temp_directory_path() / "impactdic_model_cli_test";
+  const fs::path dir =
+      fs::temp_directory_path() / ("impactdic_model_cli_test_" + std::to_string(getpid()));
   fs::create_directories(dir);
   return dir;
 }
