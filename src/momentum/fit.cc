@@ -9,6 +9,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/model/impact_model.h"
 
 namespace impactdic {
 namespace {
@@ -73,13 +74,6 @@ double StudentTQuantile(double p, double dof) {
   return 0.5 * (lo + hi);
 }
 
-double Sigmoid(double t_s, double M_kg, double b_per_s, double T_s) {
-  const double x = b_per_s * (t_s - T_s);
-  if (x >= 0) return M_kg / (1 + std::exp(-x));
-  const double e = std::exp(x);
-  return M_kg * e / (1 + e);
-}
-
 void SigmoidFitOptions::Check() const {
   CheckValue(max_iterations >= 1, "sigmoid.max_iterations", fmt::format("{}", max_iterations),
              ">= 1");
@@ -139,7 +133,7 @@ SigmoidFit FitSigmoid(const std::vector<double>& t_s, const std::vector<double>&
     if (jac) jac->resize(static_cast<Eigen::Index>(n), 3);
     for (std::size_t i = 0; i < n; ++i) {
       const auto ii = static_cast<Eigen::Index>(i);
-      const double s = Sigmoid(t[i], 1.0, q[1], q[2]);
+      const double s = AddedMassAt(1.0, q[1], q[2], t[i]).m_add_kg;  // Eq. 5 with M = 1
       (*r)[ii] = y[i] - q[0] * s;
       if (jac) {  // Jacobian of the model (the residual's is its negative).
         const double ds = s * (1 - s);

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "impactdic/core/error.h"
+#include "impactdic/model/impact_model.h"
 
 namespace impactdic {
 namespace {
@@ -121,15 +122,6 @@ PlotSummary PlotDeceleration(const DecelerationFigureData& data, const std::stri
   return RenderPlot(MakeDecelerationPlot(data), png_path, options);
 }
 
-double AddedMassSigmoidCurve(double t_s, double M_kg, double b_per_s, double T_s) {
-  // M / (1 + e^{-x}) with x = b (t - T): for x < 0 use M e^{x} / (1 + e^{x}) so that no
-  // exponential of a large positive number is formed.
-  const double x = b_per_s * (t_s - T_s);
-  if (x >= 0) return M_kg / (1.0 + std::exp(-x));
-  const double e = std::exp(x);
-  return M_kg * e / (1.0 + e);
-}
-
 Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
   CheckSameLength(d.t_s, d.m_add_kg, "added-mass figure m_add_kg");
   Plot plot;
@@ -165,7 +157,7 @@ Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
     for (int i = 0; i < kSamples; ++i) {
       const double t = t0 + (t1 - t0) * i / (kSamples - 1);
       fit.x.push_back(1e3 * t);
-      fit.y.push_back(AddedMassSigmoidCurve(t, d.sigmoid_M_kg, d.sigmoid_b_per_s, d.sigmoid_T_s));
+      fit.y.push_back(AddedMassAt(d.sigmoid_M_kg, d.sigmoid_b_per_s, d.sigmoid_T_s, t).m_add_kg);
     }
     char buf[128];
     std::snprintf(buf, sizeof buf, "fit: M = %.3g kg, b = %.4g 1/s, T = %.3g ms", d.sigmoid_M_kg,

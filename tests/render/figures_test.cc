@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "impactdic/core/error.h"
+#include "impactdic/model/impact_model.h"
 #include "test_util.h"
 
 namespace impactdic {
@@ -75,24 +76,13 @@ TEST(Figures, AddedMassPngWithFit) {
   for (int i = 0; i < 12; ++i) {
     const double t = i / 1600.0;
     d.t_s.push_back(t);
-    d.m_add_kg.push_back(AddedMassSigmoidCurve(t, 12.0, 2500.0, 2e-3) + 0.3 * std::sin(i));
+    d.m_add_kg.push_back(AddedMassAt(12.0, 2500.0, 2e-3, t).m_add_kg + 0.3 * std::sin(i));
   }
   const Plot plot = MakeAddedMassPlot(d);
   ASSERT_EQ(plot.series.size(), 2u);
   EXPECT_EQ(plot.series[1].x.size(), 400u);
   PlotAddedMass(d, dir / "madd.png");
   EXPECT_TRUE(IsPngOfSize(dir / "madd.png", 640, 480));
-}
-
-TEST(Figures, SigmoidHasNoOverflow) {
-  // b |t - T| = 1e7: a naive 1 / (1 + exp(1e7)) overflows to inf in the exponential.
-  EXPECT_EQ(AddedMassSigmoidCurve(-1.0, 5.0, 1e7, 0.0), 0.0);
-  EXPECT_EQ(AddedMassSigmoidCurve(1.0, 5.0, 1e7, 0.0), 5.0);
-  EXPECT_DOUBLE_EQ(AddedMassSigmoidCurve(0.0, 5.0, 1e7, 0.0), 2.5);
-  // Symmetry m(T + x) + m(T - x) = M, to rounding.
-  EXPECT_NEAR(AddedMassSigmoidCurve(2e-3 + 4e-4, 5, 2500, 2e-3) +
-                  AddedMassSigmoidCurve(2e-3 - 4e-4, 5, 2500, 2e-3),
-              5.0, 1e-14);
 }
 
 TEST(Figures, GenericLogLogPng) {

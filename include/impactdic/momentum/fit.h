@@ -22,9 +22,6 @@ double RegularizedIncompleteBeta(double a, double b, double x);
 double StudentTCdf(double t, double dof);
 double StudentTQuantile(double p, double dof);
 
-// Eq. 5: m_add(t) = M / (1 + exp(-b (t - T))), evaluated without overflow for large b |t - T|.
-double Sigmoid(double t_s, double M_kg, double b_per_s, double T_s);
-
 struct SigmoidFitOptions {
   int max_iterations = 200;       // Levenberg-Marquardt iterations, >= 1.
   double step_tolerance = 1e-10;  // Stop when every relative parameter step is below this, > 0.

@@ -59,8 +59,6 @@ struct AddedMassFigureData {
   double sigmoid_T_s = kFigureUnset;
   double t_e_s = kFigureUnset;  // optional marker
 };
-// Eq. 5 evaluated without overflow for large b |t - T|.
-double AddedMassSigmoidCurve(double t_s, double M_kg, double b_per_s, double T_s);
 Plot MakeAddedMassPlot(const AddedMassFigureData& data);
 PlotSummary PlotAddedMass(const AddedMassFigureData& data, const std::string& png_path,
                           const PlotOptions& options = {});
