@@ -113,6 +113,19 @@ Plot MakeDecelerationPlot(const DecelerationFigureData& d) {
     const double margin = 0.1 * (hi - lo);
     plot.x_min = 1e3 * (lo - margin);
     plot.x_max = 1e3 * (hi + margin);
+    // The model's deceleration grows without bound as v -> 0 at its stop (the v^-n term): scale
+    // the y axis to the measured record in view and to the model before its last 10 %, so that
+    // the end spike is clipped instead of flattening the peak and the plateau.
+    double top = 0.0;
+    for (std::size_t i = 0; i < d.measured_t_s.size(); ++i) {
+      const double t = d.measured_t_s[i], a = d.measured_decel_g[i];
+      if (t >= lo - margin && t <= hi + margin && std::isfinite(a)) top = std::max(top, a);
+    }
+    for (std::size_t i = 0; i < d.model_t_s.size(); ++i) {
+      const double t = d.model_t_s[i], a = d.model_decel_g[i];
+      if (t <= lo + 0.9 * (hi - lo) && std::isfinite(a)) top = std::max(top, a);
+    }
+    if (top > 0) plot.y_max = 1.15 * top;
   }
   return plot;
 }

@@ -67,6 +67,23 @@ TEST(Figures, DecelerationPng) {
   EXPECT_TRUE(IsPngOfSize(dir / "decel.png", 640, 480));
 }
 
+TEST(Figures, DecelerationAxisIgnoresTheModelsSingularEnd) {
+  // The model's -dv/dt grows like v^-n as v -> 0 at its stop: the last samples may be huge. The
+  // y axis follows the peak (80 g) and the measured record, not the end spike (1e4 g).
+  DecelerationFigureData d;
+  for (int i = 0; i <= 100; ++i) {
+    const double t = i * 1e-4;
+    const double g = 80.0 * std::exp(-std::pow((t - 1.5e-3) / 0.5e-3, 2)) + 10.0;
+    d.model_t_s.push_back(t);
+    d.model_decel_g.push_back(i == 100 ? 1e4 : g);
+    d.measured_t_s.push_back(t);
+    d.measured_decel_g.push_back(g + 5.0);
+  }
+  const Plot plot = MakeDecelerationPlot(d);
+  EXPECT_NEAR(plot.y_max, 1.15 * 95.0, 1e-9);
+  EXPECT_NEAR(plot.x_max, 11.0, 1e-9);
+}
+
 TEST(Figures, AddedMassPngWithFit) {
   ScratchDir dir("fig");
   AddedMassFigureData d;
