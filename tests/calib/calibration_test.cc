@@ -27,7 +27,7 @@ void ExpectErrorContaining(F&& f, const std::string& text) {
 
 BoardSpec ToBoardSpec(const CheckerboardSpec& c) { return {c.cols, c.rows, c.square_mm}; }
 
-// 14 rendered views of the sample camera (640x480, k1 = -0.08, k2 = 0.05, p1, p2 != 0), noise
+// 20 rendered views of the sample camera (640x480, k1 = -0.08, k2 = 0.05, p1, p2 != 0), noise
 // sigma = 1 grey level, 8-bit, calibrated once for the suite.
 struct RenderedCalibration {
   SynthCamera camera_;
@@ -43,7 +43,7 @@ const RenderedCalibration& Rendered() {
   static const RenderedCalibration data = [] {
     RenderedCalibration d;
     d.camera_ = SampleCamera();
-    d.poses_ = CalibrationPoses(d.camera_, d.board_, /*count=*/14, /*seed=*/21);
+    d.poses_ = CalibrationPoses(d.camera_, d.board_, /*count=*/20, /*seed=*/21);
     CheckerboardRenderOptions render;
     render.noise_sigma = 1.0;
     for (std::size_t k = 0; k < d.poses_.size(); ++k) {
@@ -62,7 +62,7 @@ const RenderedCalibration& Rendered() {
 void CheckIntrinsicsWithinHalfPercent() {
   const RenderedCalibration& d = Rendered();
   const CameraCalibration& c = d.calibration_;
-  EXPECT_EQ(d.summary_.images_used, 14);
+  EXPECT_EQ(d.summary_.images_used, 20);
   EXPECT_EQ(c.image_width, 640);
   EXPECT_EQ(c.image_height, 480);
   // Done-when tolerance: 0.5 % (measured errors are ~0.05 %).
@@ -74,7 +74,7 @@ void CheckIntrinsicsWithinHalfPercent() {
               d.camera_.fx, c.fy, d.camera_.fy, c.cx, d.camera_.cx, c.cy, d.camera_.cy, c.rms_px);
   std::printf("dist %.5f %.5f %.6f %.6f %.5f\n", c.dist[0], c.dist[1], c.dist[2], c.dist[3],
               c.dist[4]);
-  ASSERT_EQ(c.views.size(), 14u);
+  ASSERT_EQ(c.views.size(), 20u);
   for (const ViewRecord& v : c.views) EXPECT_LT(v.rms_px, 0.1) << v.image;
 }
 
@@ -113,10 +113,9 @@ void CheckRmsIsAtTheCornerNoiseLevel() {
 
 // The estimated lens model undistorts the true corner positions to within 0.05 px of their true
 // pinhole positions, over all corners of all views (the area the boards covered, out to the image
-// corners). The undistorted image of the estimated camera uses K_est, the truth K_true: the two
-// differ by the global affine map K_est K_true^-1 (an intrinsics difference, tested above at
-// 0.5 %), which is removed by one least-squares affine fit over all corners before the 0.05 px
-// check. The raw difference (intrinsics error included) is held to 0.1 px.
+// corners), as they are: the intrinsics error included. For information it also reports the
+// residual after removing the global affine map K_est K_true^-1 (the intrinsics difference), i.e.
+// the error of the distortion model alone.
 void CheckUndistortedCornersWithinFiveHundredthsOfAPixel() {
   const RenderedCalibration& d = Rendered();
   std::vector<cv::Point2d> estimated, truth;
@@ -154,8 +153,8 @@ void CheckUndistortedCornersWithinFiveHundredthsOfAPixel() {
       "undistorted corners: raw max error %.4f px; after the K_est/K_true affine: max "
       "%.4f px, RMS %.4f px\n",
       worst_raw, worst, std::sqrt(sq / n));
-  EXPECT_LT(worst, 0.05);
-  EXPECT_LT(worst_raw, 0.1);
+  EXPECT_LT(worst_raw, 0.05);
+  EXPECT_LT(worst, worst_raw + 1e-12);
 }
 
 void CheckPlaneScaleWithinTwoTenthsOfAPercent() {
@@ -178,7 +177,7 @@ void CheckPlaneScaleWithinTwoTenthsOfAPercent() {
   EXPECT_LT(scale.residual_rms_mm, 0.05 * truth * 2);
 }
 
-// One test (one process under ctest) for the accuracy checks on the 14 rendered views, so the
+// One test (one process under ctest) for the accuracy checks on the 20 rendered views, so the
 // views are rendered and calibrated once.
 TEST(Calibration, RecoversTheRenderedCamera) {
   {
