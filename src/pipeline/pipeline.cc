@@ -306,7 +306,13 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
     }
     std::string skipped_note;
     if (sensor) {
-      frame_times_all = FrameTimes(*sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s);
+      try {
+        frame_times_all =
+            FrameTimes(*sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s);
+      } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
+        if (e.file().empty()) e.WithFile(scene.inputs.sensor);
+        throw;
+      }
       if (scene.dic.first_frame == 0) {
         // The reference is the last frame exposed before the impact: nothing earlier moves.
         const double t_impact = sensor->summary.impact_time_s;

@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
@@ -79,6 +81,31 @@ TEST(RunErrors, UnwritableOutputFolderIsReportedBeforeWork) {
     EXPECT_EQ(e.kind(), ErrorKind::kIo) << e.what();
     EXPECT_NE(std::string(e.what()).find("file/out"), std::string::npos) << e.what();
   }
+}
+
+TEST(RunErrors, SensorRecordEndingBeforeTheLastFrameIsNamed) {
+  // A tiny synthetic scene whose DAQ record is cut just before the last frame's exposure pulse.
+  TestDir dir;
+  const CliResult synth = RunCli("synth --preset tiny --no-calibrate -o " + dir.File("scene"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  std::ifstream in(dir.File("scene/sensor.csv"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  auto exposure = [&](std::size_t i) { return lines[i].substr(lines[i].rfind(',') + 1); };
+  std::size_t last_edge = 0;
+  for (std::size_t i = 2; i < lines.size(); ++i)
+    if (exposure(i) != "0" && exposure(i - 1) == "0") last_edge = i;
+  ASSERT_GT(last_edge, 10u);
+  std::ofstream out(dir.File("scene/sensor.csv"), std::ios::trunc);
+  for (std::size_t i = 0; i + 5 < last_edge; ++i) out << lines[i] << "\n";
+  out.close();
+
+  const CliResult r = RunCli("run " + dir.File("scene/scene.yaml") + " -o " + dir.File("out"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("sensor.csv"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("does not cover the frames"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/results.h5")));
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out/summary.json")));
 }
 
 }  // namespace
