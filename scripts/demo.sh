@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 bash scripts/install_deps.sh
-cmake --preset release -DIMPACTDIC_BUILD_TESTS=OFF
+cmake --preset release
 cmake --build --preset release -j "$(nproc)" --target impactdic
 ./build/release/src/cli/impactdic run sample_frames/scene.yaml -o results/sample
 echo "Outputs are in $(pwd)/results/sample"

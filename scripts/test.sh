@@ -8,11 +8,11 @@ bash scripts/install_deps.sh
 
 jobs=$(nproc)
 echo "== Release build (warnings are errors) =="
-cmake --preset release -DIMPACTDIC_WERROR=ON
+cmake --preset release -DIMPACTDIC_WERROR=ON -DIMPACTDIC_BUILD_TESTS=ON
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
 
 echo "== AddressSanitizer + UBSan build =="
-cmake --preset asan -DIMPACTDIC_WERROR=ON
+cmake --preset asan -DIMPACTDIC_WERROR=ON -DIMPACTDIC_BUILD_TESTS=ON
 cmake --build --preset asan -j "$jobs"
 ctest --preset asan -j "$jobs"
