@@ -12,7 +12,10 @@
 #include "icgn.h"
 
 #include <algorithm>
-#if defined(__SSE2__)
+#if defined(__AVX2__) && defined(__FMA__)
+#define IMPACTDIC_DIC_AVX2 1
+#include <immintrin.h>
+#elif defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 #include <cmath>
@@ -217,6 +220,213 @@ void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, co
     }
   }
   (void)nm;
+}
+
+#if IMPACTDIC_DIC_AVX2
+// The same pass, 8 pixels of a subset row at a time (AVX2 + FMA, one pixel per lane). The B-spline
+// weights of the 8 pixels are evaluated lane-wise. Along a row the sample positions advance by
+// about one pixel per pixel, so in the usual ("regular") case the tap (r, k) of the 8 pixels is 8
+// consecutive coefficients: one unaligned load per tap. When a block straddles a change of the
+// integer row, or its integer columns do not advance by exactly one, the taps are gathered
+// instead; both paths evaluate the same expression in the same order. A row is covered by blocks
+// starting at 0, 8, ...; the last block is moved back to end at the row end, its lanes that the
+// previous block already covered are masked out (so nothing outside the subset is read). The
+// per-lane sums run over the whole subset (float) and are reduced once at the end.
+inline __m256 Splat(float v) { return _mm256_set1_ps(v); }
+
+// Sum of the 8 lanes, in a fixed order.
+inline double HorizontalSum(__m256 v) {
+  const __m128 q = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
+  const __m128 d = _mm_add_ps(q, _mm_movehl_ps(q, q));
+  return _mm_cvtss_f32(_mm_add_ss(d, _mm_shuffle_ps(d, d, 1)));
+}
+
+template <int kTaps>
+inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
+  if constexpr (kTaps == 4) {
+    // Cubic B-spline weights as cubic polynomials of t (Horner).
+    w[0] = _mm256_fmadd_ps(
+        _mm256_fmadd_ps(_mm256_fmadd_ps(Splat(-1.0f / 6), t, Splat(0.5f)), t, Splat(-0.5f)), t,
+        Splat(1.0f / 6));
+    w[1] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_fmadd_ps(Splat(0.5f), t, Splat(-1.0f)), t), t,
+                           Splat(4.0f / 6));
+    w[2] = _mm256_fmadd_ps(
+        _mm256_fmadd_ps(_mm256_fmadd_ps(Splat(-0.5f), t, Splat(0.5f)), t, Splat(0.5f)), t,
+        Splat(1.0f / 6));
+    w[3] = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(t, t), t), Splat(1.0f / 6));
+  } else {
+    // Quintic B-spline weights as quintic polynomials of t (Horner), coefficients of
+    // b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2), b5(t - 3) times 120.
+    static constexpr float kC[6][6] = {
+        {1, -5, 10, -10, 5, -1},     // (1 - t)^5
+        {26, -50, 20, 20, -20, 5},   // b5(1 + t)
+        {66, 0, -60, 0, 30, -10},    // b5(t)
+        {26, 50, 20, -20, -20, 10},  // b5(1 - t)
+        {1, 5, 10, 10, 5, -5},       // b5(2 - t)
+        {0, 0, 0, 0, 0, 1},          // t^5
+    };
+    for (int k = 0; k < 6; ++k) {
+      __m256 v = Splat(kC[k][5] / 120);
+      for (int d = 4; d >= 0; --d) v = _mm256_fmadd_ps(v, t, Splat(kC[k][d] / 120));
+      w[k] = v;
+    }
+  }
+}
+
+template <int kTaps, bool kQuad>
+void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
+                    std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
+  const __m256 fm = Splat(s.f_mean);
+  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
+  const double u = p[0] - iu, v = p[nm] - iv;
+  // Coefficients around the (shifted) subset centre; tap offsets are relative to it.
+  const float* centre =
+      coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
+      (dcx + iu);
+  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const std::size_t rstride = ref.f.step1();
+  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const int blocks = (size + 7) / 8;
+  const int istride = static_cast<int>(stride);
+  __m256 sg = _mm256_setzero_ps(), sgg = sg, sfg = sg;
+  // a[p][q]: sum g' gx xi^p eta^q; b: the same with gy.
+  __m256 a00 = sg, a10 = sg, a01 = sg, b00 = sg, b10 = sg, b01 = sg;
+  __m256 a20 = sg, a11 = sg, a02 = sg, b20 = sg, b11 = sg, b02 = sg;
+  for (int j = 0; j < size; ++j) {
+    const double eta = j - h;
+    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
+    if constexpr (kQuad) {
+      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
+      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
+      ax2 = static_cast<float>(0.5 * p[3]);
+      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
+      ay1 = static_cast<float>(p[7] + p[10] * eta);
+      ay2 = static_cast<float>(0.5 * p[9]);
+    } else {
+      ax0 = static_cast<float>(u + p[2] * eta);
+      ax1 = static_cast<float>(1 + p[1]);
+      ay0 = static_cast<float>(eta + v + p[5] * eta);
+      ay1 = static_cast<float>(p[4]);
+    }
+    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
+    const float* fr = ref.f.ptr<float>() + roff;
+    const float* gxr = ref.gx.ptr<float>() + roff;
+    const float* gyr = ref.gy.ptr<float>() + roff;
+    __m256 ra00 = _mm256_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
+           rb20 = ra00;
+    for (int b = 0; b < blocks; ++b) {
+      const int i0 = std::min(8 * b, size - 8);
+      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
+      const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
+      __m256 x, y;
+      if constexpr (kQuad) {
+        x = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ax2), Splat(ax1)), xi, Splat(ax0));
+        y = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ay2), Splat(ay1)), xi, Splat(ay0));
+      } else {
+        x = _mm256_fmadd_ps(xi, Splat(ax1), Splat(ax0));
+        y = _mm256_fmadd_ps(xi, Splat(ay1), Splat(ay0));
+      }
+      const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
+      const __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
+      const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
+      const int ix0 = _mm256_cvtsi256_si32(ix), iy0 = _mm256_cvtsi256_si32(iy);
+      const __m256i expect_x = _mm256_add_epi32(_mm256_set1_epi32(ix0), lane_i);
+      const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(ix, expect_x),
+                                            _mm256_cmpeq_epi32(iy, _mm256_set1_epi32(iy0)));
+      const bool regular = _mm256_movemask_epi8(same) == -1;
+      __m256 wx[kTaps], wy[kTaps];
+      WeightsAvx2<kTaps>(tx, wx);
+      WeightsAvx2<kTaps>(ty, wy);
+      __m256 g = _mm256_setzero_ps();
+      if (regular) {
+        const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
+        for (int r = 0; r < kTaps; ++r) {
+          const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
+          __m256 rs = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
+          for (int k = 1; k < kTaps; ++k) rs = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), rs);
+          g = _mm256_fmadd_ps(wy[r], rs, g);
+        }
+      } else {
+        const __m256i off0 =
+            _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(iy, _mm256_set1_epi32(kLow)),
+                                                _mm256_set1_epi32(istride)),
+                             _mm256_sub_epi32(ix, _mm256_set1_epi32(kLow)));
+        for (int r = 0; r < kTaps; ++r) {
+          const __m256i offr = _mm256_add_epi32(off0, _mm256_set1_epi32(r * istride));
+          __m256 rs = _mm256_mul_ps(wx[0], _mm256_i32gather_ps(centre, offr, 4));
+          for (int k = 1; k < kTaps; ++k)
+            rs = _mm256_fmadd_ps(
+                wx[k], _mm256_i32gather_ps(centre, _mm256_add_epi32(offr, _mm256_set1_epi32(k)), 4),
+                rs);
+          g = _mm256_fmadd_ps(wy[r], rs, g);
+        }
+      }
+      const __m256 gp = _mm256_and_ps(_mm256_sub_ps(g, fm), keep);
+      sg = _mm256_add_ps(sg, gp);
+      sgg = _mm256_fmadd_ps(gp, gp, sgg);
+      sfg = _mm256_fmadd_ps(_mm256_loadu_ps(fr + i0), gp, sfg);
+      const __m256 a = _mm256_mul_ps(gp, _mm256_loadu_ps(gxr + i0));
+      const __m256 bb = _mm256_mul_ps(gp, _mm256_loadu_ps(gyr + i0));
+      ra00 = _mm256_add_ps(ra00, a);
+      ra10 = _mm256_fmadd_ps(a, xi, ra10);
+      rb00 = _mm256_add_ps(rb00, bb);
+      rb10 = _mm256_fmadd_ps(bb, xi, rb10);
+      if constexpr (kQuad) {
+        ra20 = _mm256_fmadd_ps(_mm256_mul_ps(a, xi), xi, ra20);
+        rb20 = _mm256_fmadd_ps(_mm256_mul_ps(bb, xi), xi, rb20);
+      }
+    }
+    const __m256 e = Splat(static_cast<float>(eta));
+    a00 = _mm256_add_ps(a00, ra00);
+    a10 = _mm256_add_ps(a10, ra10);
+    a01 = _mm256_fmadd_ps(ra00, e, a01);
+    b00 = _mm256_add_ps(b00, rb00);
+    b10 = _mm256_add_ps(b10, rb10);
+    b01 = _mm256_fmadd_ps(rb00, e, b01);
+    if constexpr (kQuad) {
+      const __m256 e2 = Splat(static_cast<float>(eta * eta));
+      a20 = _mm256_add_ps(a20, ra20);
+      a11 = _mm256_fmadd_ps(ra10, e, a11);
+      a02 = _mm256_fmadd_ps(ra00, e2, a02);
+      b20 = _mm256_add_ps(b20, rb20);
+      b11 = _mm256_fmadd_ps(rb10, e, b11);
+      b02 = _mm256_fmadd_ps(rb00, e2, b02);
+    }
+  }
+  out->sg = HorizontalSum(sg);
+  out->sgg = HorizontalSum(sgg);
+  out->sfg = HorizontalSum(sfg);
+  out->a[0][0][0] = HorizontalSum(a00);
+  out->a[0][1][0] = HorizontalSum(a10);
+  out->a[0][0][1] = HorizontalSum(a01);
+  out->a[1][0][0] = HorizontalSum(b00);
+  out->a[1][1][0] = HorizontalSum(b10);
+  out->a[1][0][1] = HorizontalSum(b01);
+  if constexpr (kQuad) {
+    out->a[0][2][0] = HorizontalSum(a20);
+    out->a[0][1][1] = HorizontalSum(a11);
+    out->a[0][0][2] = HorizontalSum(a02);
+    out->a[1][2][0] = HorizontalSum(b20);
+    out->a[1][1][1] = HorizontalSum(b11);
+    out->a[1][0][2] = HorizontalSum(b02);
+  }
+}
+#endif  // IMPACTDIC_DIC_AVX2
+
+// Dispatches to the vectorised pass where it is compiled in and the subset is at least 8 px wide.
+template <int kTaps, bool kQuad>
+void AccumulateBest(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
+                    std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
+#if IMPACTDIC_DIC_AVX2
+  if (2 * shape.half + 1 >= 8) {
+    AccumulateAvx2<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
+    return;
+  }
+#endif
+  Accumulate<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
 }
 
 }  // namespace
@@ -445,14 +655,14 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
     Sums sums;
     if (cubic) {
       if (quad)
-        Accumulate<4, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+        AccumulateBest<4, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
       else
-        Accumulate<4, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+        AccumulateBest<4, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
     } else {
       if (quad)
-        Accumulate<6, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+        AccumulateBest<6, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
       else
-        Accumulate<6, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
+        AccumulateBest<6, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
     }
     const double gm = sums.sg / count;
     const double gn2 = sums.sgg - count * gm * gm;
