@@ -10,46 +10,15 @@
 #include <numbers>
 
 #include "impactdic/core/error.h"
+#include "random.h"
 
 namespace impactdic {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::uint64_t Mix(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-// Deterministic normal deviates (SplitMix64 stream + Box-Muller): portable across libraries.
-class NormalStream {
- public:
-  explicit NormalStream(std::uint64_t seed) : state_(Mix(seed)) {}
-  double Uniform() {
-    state_ += 0x9E3779B97F4A7C15ull;
-    return (Mix(state_) >> 11) * (1.0 / 9007199254740992.0);
-  }
-  double Next() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    double u1 = Uniform();
-    while (u1 <= 0) u1 = Uniform();
-    const double u2 = Uniform();
-    const double r = std::sqrt(-2 * std::log(u1));
-    spare_ = r * std::sin(2 * std::numbers::pi * u2);
-    has_spare_ = true;
-    return r * std::cos(2 * std::numbers::pi * u2);
-  }
-
- private:
-  std::uint64_t state_;
-  bool has_spare_ = false;
-  double spare_ = 0;
-};
+using synth_detail::Rng;
+using synth_detail::SplitMix64;
 
 // C2 smooth step: 0 for x <= 0, 1 for x >= 1, x^3 (10 - 15 x + 6 x^2) between; and derivative.
 double SmoothStep(double x) {
@@ -648,7 +617,7 @@ cv::Mat ImpactScene::RenderWithField(const DisplacementField& field, double poun
   cv::Mat image(h, w, spec_.bits == 8 ? CV_8U : CV_16U);
   const std::size_t stride = static_cast<std::size_t>(w) + 1;
   tbb::parallel_for(0, h, [&](int r) {
-    NormalStream noise(Mix(noise_seed) ^ (0x100000001B3ull * static_cast<std::uint64_t>(r + 1)));
+    Rng noise(SplitMix64(noise_seed) ^ (0x100000001B3ull * static_cast<std::uint64_t>(r + 1)));
     for (int c = 0; c < w; ++c) {
       const cv::Point2d& c00 = corner_map_[r * stride + c];
       const cv::Point2d& c10 = corner_map_[r * stride + c + 1];
@@ -678,7 +647,7 @@ cv::Mat ImpactScene::RenderWithField(const DisplacementField& field, double poun
         }
       }
       double value = sum / (ss * ss) * full;
-      if (with_noise && spec_.noise_sigma > 0) value += spec_.noise_sigma * noise.Next();
+      if (with_noise && spec_.noise_sigma > 0) value += spec_.noise_sigma * noise.Normal();
       value = std::clamp(std::round(value), 0.0, full);
       if (spec_.bits == 8) {
         image.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(value);
@@ -711,7 +680,7 @@ ImpactScene::SensorRecord ImpactScene::MakeSensorRecord() const {
   tbb::parallel_for(std::size_t{0}, n + 1, [&](std::size_t i) {
     v_half[i] = Pounder(daq_origin_s_ + (static_cast<double>(i) - 0.5) * dt).v_m_s;
   });
-  NormalStream noise(Mix(spec_.seed) ^ 0x5EB50Bull);
+  Rng noise(SplitMix64(spec_.seed) ^ 0x5EB50Bull);
   rec.time_s.resize(n);
   rec.accel_g.resize(n);
   rec.accel_true_g.resize(n);
@@ -721,7 +690,7 @@ ImpactScene::SensorRecord ImpactScene::MakeSensorRecord() const {
     const double t = daq_origin_s_ + daq;
     rec.time_s[i] = daq;
     rec.accel_true_g[i] = 1 - (v_half[i + 1] - v_half[i]) / (g * dt);
-    rec.accel_g[i] = rec.accel_true_g[i] + so.offset_g + so.noise_g * noise.Next();
+    rec.accel_g[i] = rec.accel_true_g[i] + so.offset_g + so.noise_g * noise.Normal();
     const double k = std::floor((t - FrameTime(0)) * spec_.fps + 1e-9);
     double e = 0;
     if (k >= 0 && k < frame_count_) {

@@ -17,46 +17,12 @@
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "random.h"
 
 namespace impactdic {
 namespace {
 
-std::uint64_t SplitMix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-
-// A small deterministic generator (xoshiro-like quality is not needed: SplitMix64 stream).
-class Rng {
- public:
-  explicit Rng(std::uint64_t seed) : state_(SplitMix64(seed)) {}
-  std::uint64_t Next() {
-    state_ += 0x9E3779B97F4A7C15ull;
-    return SplitMix64(state_);
-  }
-  double Uniform() { return (Next() >> 11) * (1.0 / 9007199254740992.0); }  // [0, 1)
-  // Standard normal by Box-Muller (portable, unlike std::normal_distribution).
-  double Normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    double u1 = Uniform();
-    while (u1 <= 0) u1 = Uniform();
-    const double u2 = Uniform();
-    const double r = std::sqrt(-2 * std::log(u1));
-    spare_ = r * std::sin(2 * std::numbers::pi * u2);
-    has_spare_ = true;
-    return r * std::cos(2 * std::numbers::pi * u2);
-  }
-
- private:
-  std::uint64_t state_;
-  bool has_spare_ = false;
-  double spare_ = 0;
-};
+using synth_detail::Rng;
 
 }  // namespace
 
