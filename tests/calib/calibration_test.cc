@@ -8,22 +8,12 @@
 #include <fstream>
 #include <opencv2/imgproc.hpp>
 
+#include "../core/expect_error.h"
 #include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {
 namespace {
-
-// Expects `f` to throw impactdic::Error whose message contains `text`.
-template <typename F>
-void ExpectErrorContaining(F&& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no error; expected one containing '" << text << "'";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
 
 BoardSpec ToBoardSpec(const CheckerboardSpec& c) { return {c.cols, c.rows, c.square_mm}; }
 

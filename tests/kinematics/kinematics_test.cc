@@ -6,19 +6,11 @@
 #include <functional>
 #include <numbers>
 
+#include "../core/expect_error.h"
 #include "impactdic/core/error.h"
 
 namespace impactdic {
 namespace {
-
-std::string ErrorText(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
 
 // Quadratic motion: both stencils (interior and one-sided ends) are exact; tolerance is rounding.
 TEST(Differences, ExactForQuadraticMotion) {

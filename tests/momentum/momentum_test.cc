@@ -9,6 +9,7 @@
 #include <functional>
 
 #include "../cli/cli_runner.h"
+#include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
@@ -16,15 +17,6 @@
 
 namespace impactdic {
 namespace {
-
-std::string ErrorText(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
 
 // A synthetic impact where momentum is conserved exactly through the peak stage:
 //   m(tau) = M (s(tau) - s(0)), s = 1 / (1 + exp(-b (tau - T))), tau = t - t_impact;

@@ -4,21 +4,12 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "../core/expect_error.h"
 #include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {
 namespace {
-
-template <typename F>
-void ExpectErrorContaining(F&& f, const std::string& text) {
-  try {
-    f();
-    ADD_FAILURE() << "no error; expected one containing '" << text << "'";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
-  }
-}
 
 // A seeded, textured test frame (uniform noise smoothed to speckle-like grain), 8 or 16 bit.
 cv::Mat TestFrame(int depth, cv::Size size = {160, 120}) {

@@ -8,6 +8,7 @@
 #include <functional>
 #include <string>
 
+#include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "synthetic_record.h"
@@ -31,15 +32,6 @@ PulseMotion Motion() {
 
 SyntheticRecord Record(const PulseMotion& m, double offset_g, double noise_g, unsigned seed) {
   return MakeRecord(m, kFs, m.t_impact() + 0.05, offset_g, noise_g, seed);
-}
-
-std::string ErrorText(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 // The accelerometer record of a known motion with offset (0.05 g) and noise (0.05 g rms, seeded,
