@@ -15,8 +15,11 @@
 #if defined(__AVX2__) && defined(__FMA__)
 #define IMPACTDIC_DIC_AVX2 1
 #include <immintrin.h>
-#elif defined(__SSE2__)
+#else
+#define IMPACTDIC_DIC_AVX2 0
+#if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
 #endif
 #include <cmath>
 #include <limits>
@@ -416,6 +419,122 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
 }
 #endif  // IMPACTDIC_DIC_AVX2
 
+#if IMPACTDIC_DIC_AVX2
+// Sum of the intensities and count of saturated pixels of the subset whose top-left pixel is
+// (rx, ry) in the reference images, 8 pixels at a time (blocks as in AccumulateAvx2).
+void IntensitySumAvx2(const RefImages& ref, int rx, int ry, int size, double* sum, int* saturated) {
+  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 zero = _mm256_setzero_ps(), full = Splat(static_cast<float>(ref.full_scale));
+  const int blocks = (size + 7) / 8;
+  __m256 total = zero, sat = zero;
+  for (int j = 0; j < size; ++j) {
+    const float* f = ref.f.ptr<float>(ry + j) + rx;
+    for (int b = 0; b < blocks; ++b) {
+      const int i0 = std::min(8 * b, size - 8);
+      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
+      const __m256 v = _mm256_loadu_ps(f + i0);
+      total = _mm256_add_ps(total, _mm256_and_ps(v, keep));
+      const __m256 out =
+          _mm256_or_ps(_mm256_cmp_ps(v, zero, _CMP_LE_OQ), _mm256_cmp_ps(v, full, _CMP_GE_OQ));
+      sat = _mm256_add_ps(sat, _mm256_and_ps(_mm256_and_ps(out, keep), Splat(1.0f)));
+    }
+  }
+  // Per lane at most size * ceil(size / 8) values: exact in float for 8-bit images.
+  alignas(32) float lanes[8];
+  _mm256_store_ps(lanes, total);
+  double s = 0;
+  for (float l : lanes) s += l;
+  *sum = s;
+  *saturated = static_cast<int>(HorizontalSum(sat));
+}
+
+// The moments of PrepareSubset (gg[k][p][q] for p + q <= kPmax, gs and gf for p + q <= kPmax / 2,
+// ss), 8 pixels at a time: per-lane float sums of a row weighted by powers of xi, folded into the
+// per-lane subset sums with powers of eta at the end of each row, reduced once at the end.
+template <int kPmax>
+void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double gg[3][5][5],
+                 double gs[2][3][3], double gf[2][3][3], double* ss) {
+  constexpr int kPs = kPmax / 2;
+  const int size = 2 * h + 1;
+  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256 zero = _mm256_setzero_ps(), m = Splat(mean);
+  const int blocks = (size + 7) / 8;
+  __m256 GG[3][kPmax + 1][kPmax + 1], GS[2][kPs + 1][kPs + 1], GF[2][kPs + 1][kPs + 1];
+  __m256 SS = zero;
+  for (auto& a : GG)
+    for (auto& b : a)
+      for (auto& c : b) c = zero;
+  for (int a = 0; a < 2; ++a)
+    for (int p = 0; p <= kPs; ++p)
+      for (int q = 0; q <= kPs; ++q) GS[a][p][q] = GF[a][p][q] = zero;
+  for (int j = 0; j < size; ++j) {
+    const float* f = ref.f.ptr<float>(ry + j) + rx;
+    const float* gxr = ref.gx.ptr<float>(ry + j) + rx;
+    const float* gyr = ref.gy.ptr<float>(ry + j) + rx;
+    __m256 rg[3][kPmax + 1], rs[2][kPs + 1], rf[2][kPs + 1];
+    for (auto& a : rg)
+      for (auto& b : a) b = zero;
+    for (int a = 0; a < 2; ++a)
+      for (int p = 0; p <= kPs; ++p) rs[a][p] = rf[a][p] = zero;
+    for (int b = 0; b < blocks; ++b) {
+      const int i0 = std::min(8 * b, size - 8);
+      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
+      const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
+      const __m256 fd = _mm256_and_ps(_mm256_sub_ps(_mm256_loadu_ps(f + i0), m), keep);
+      const __m256 g[2] = {_mm256_and_ps(_mm256_loadu_ps(gxr + i0), keep),
+                           _mm256_and_ps(_mm256_loadu_ps(gyr + i0), keep)};
+      SS = _mm256_fmadd_ps(fd, fd, SS);
+      __m256 prod[3] = {_mm256_mul_ps(g[0], g[0]), _mm256_mul_ps(g[0], g[1]),
+                        _mm256_mul_ps(g[1], g[1])};
+      __m256 lin[2] = {g[0], g[1]}, lf[2] = {_mm256_mul_ps(g[0], fd), _mm256_mul_ps(g[1], fd)};
+      for (int p = 0; p <= kPmax; ++p) {
+        for (int k = 0; k < 3; ++k) {
+          rg[k][p] = _mm256_add_ps(rg[k][p], prod[k]);
+          if (p < kPmax) prod[k] = _mm256_mul_ps(prod[k], xi);
+        }
+        if (p <= kPs) {
+          for (int a = 0; a < 2; ++a) {
+            rs[a][p] = _mm256_add_ps(rs[a][p], lin[a]);
+            rf[a][p] = _mm256_add_ps(rf[a][p], lf[a]);
+            if (p < kPs) {
+              lin[a] = _mm256_mul_ps(lin[a], xi);
+              lf[a] = _mm256_mul_ps(lf[a], xi);
+            }
+          }
+        }
+      }
+    }
+    const float eta = static_cast<float>(j - h);
+    float ep = 1;
+    for (int q = 0; q <= kPmax; ++q) {
+      const __m256 e = Splat(ep);
+      for (int p = 0; p + q <= kPmax; ++p) {
+        for (int k = 0; k < 3; ++k) GG[k][p][q] = _mm256_fmadd_ps(rg[k][p], e, GG[k][p][q]);
+        if (p + q <= kPs) {
+          for (int a = 0; a < 2; ++a) {
+            GS[a][p][q] = _mm256_fmadd_ps(rs[a][p], e, GS[a][p][q]);
+            GF[a][p][q] = _mm256_fmadd_ps(rf[a][p], e, GF[a][p][q]);
+          }
+        }
+      }
+      ep *= eta;
+    }
+  }
+  for (int q = 0; q <= kPmax; ++q) {
+    for (int p = 0; p + q <= kPmax; ++p) {
+      for (int k = 0; k < 3; ++k) gg[k][p][q] = HorizontalSum(GG[k][p][q]);
+      if (p + q <= kPs) {
+        for (int a = 0; a < 2; ++a) {
+          gs[a][p][q] = HorizontalSum(GS[a][p][q]);
+          gf[a][p][q] = HorizontalSum(GF[a][p][q]);
+        }
+      }
+    }
+  }
+  *ss = HorizontalSum(SS);
+}
+#endif  // IMPACTDIC_DIC_AVX2
+
 // Dispatches to the vectorised pass where it is compiled in and the subset is at least 8 px wide.
 template <int kTaps, bool kQuad>
 void AccumulateBest(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
@@ -542,54 +661,70 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
   }
   const int rx = s->cx - ref.region.x - h, ry = s->cy - ref.region.y - h;
   const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
+  const bool vector = size >= 8;
   double sum = 0;
   int saturated = 0;
-  for (int j = 0; j < size; ++j) {
-    const float* f = ref.f.ptr<float>(ry + j) + rx;
-    for (int i = 0; i < size; ++i) {
-      sum += f[i];
-      saturated += (f[i] <= 0 || f[i] >= ref.full_scale) ? 1 : 0;
+#if IMPACTDIC_DIC_AVX2
+  if (vector) IntensitySumAvx2(ref, rx, ry, size, &sum, &saturated);
+#endif
+  if (!IMPACTDIC_DIC_AVX2 || !vector) {
+    for (int j = 0; j < size; ++j) {
+      const float* f = ref.f.ptr<float>(ry + j) + rx;
+      for (int i = 0; i < size; ++i) {
+        sum += f[i];
+        saturated += (f[i] <= 0 || f[i] >= ref.full_scale) ? 1 : 0;
+      }
     }
   }
   const double count = double(size) * size, mean = sum / count;
   // Moments: gg[k][p][q] = sum g_a g_b xi^p eta^q (k: xx, xy, yy), gs[a][p][q] = sum g_a ...,
   // gf[a][p][q] = sum g_a (f - mean) ...
   double gg[3][5][5] = {}, gs[2][3][3] = {}, gf[2][3][3] = {}, ss = 0;
-  for (int j = 0; j < size; ++j) {
-    const double eta = j - h;
-    const float* f = ref.f.ptr<float>(ry + j) + rx;
-    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
-    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
-    double rg[3][5] = {}, rs[2][3] = {}, rf[2][3] = {};
-    for (int i = 0; i < size; ++i) {
-      const double xi = i - h, fd = f[i] - mean;
-      ss += fd * fd;
-      const double g[2] = {gx[i], gy[i]};
-      const double prod[3] = {g[0] * g[0], g[0] * g[1], g[1] * g[1]};
-      double xp = 1;
-      for (int p = 0; p <= pmax; ++p) {
-        for (int k = 0; k < 3; ++k) rg[k][p] += prod[k] * xp;
-        if (p <= 2) {
-          for (int a = 0; a < 2; ++a) {
-            rs[a][p] += g[a] * xp;
-            rf[a][p] += g[a] * fd * xp;
+#if IMPACTDIC_DIC_AVX2
+  if (vector) {
+    if (pmax == 2)
+      MomentsAvx2<2>(ref, rx, ry, h, static_cast<float>(mean), gg, gs, gf, &ss);
+    else
+      MomentsAvx2<4>(ref, rx, ry, h, static_cast<float>(mean), gg, gs, gf, &ss);
+  }
+#endif
+  if (!IMPACTDIC_DIC_AVX2 || !vector) {
+    for (int j = 0; j < size; ++j) {
+      const double eta = j - h;
+      const float* f = ref.f.ptr<float>(ry + j) + rx;
+      const float* gx = ref.gx.ptr<float>(ry + j) + rx;
+      const float* gy = ref.gy.ptr<float>(ry + j) + rx;
+      double rg[3][5] = {}, rs[2][3] = {}, rf[2][3] = {};
+      for (int i = 0; i < size; ++i) {
+        const double xi = i - h, fd = f[i] - mean;
+        ss += fd * fd;
+        const double g[2] = {gx[i], gy[i]};
+        const double prod[3] = {g[0] * g[0], g[0] * g[1], g[1] * g[1]};
+        double xp = 1;
+        for (int p = 0; p <= pmax; ++p) {
+          for (int k = 0; k < 3; ++k) rg[k][p] += prod[k] * xp;
+          if (p <= 2) {
+            for (int a = 0; a < 2; ++a) {
+              rs[a][p] += g[a] * xp;
+              rf[a][p] += g[a] * fd * xp;
+            }
           }
-        }
-        xp *= xi;
-      }
-    }
-    double ep = 1;
-    for (int q = 0; q <= pmax; ++q) {
-      for (int p = 0; p + q <= pmax; ++p) {
-        for (int k = 0; k < 3; ++k) gg[k][p][q] += rg[k][p] * ep;
-        if (p + q <= 2) {
-          for (int a = 0; a < 2; ++a) {
-            gs[a][p][q] += rs[a][p] * ep;
-            gf[a][p][q] += rf[a][p] * ep;
-          }
+          xp *= xi;
         }
       }
-      ep *= eta;
+      double ep = 1;
+      for (int q = 0; q <= pmax; ++q) {
+        for (int p = 0; p + q <= pmax; ++p) {
+          for (int k = 0; k < 3; ++k) gg[k][p][q] += rg[k][p] * ep;
+          if (p + q <= 2) {
+            for (int a = 0; a < 2; ++a) {
+              gs[a][p][q] += rs[a][p] * ep;
+              gf[a][p][q] += rf[a][p] * ep;
+            }
+          }
+        }
+        ep *= eta;
+      }
     }
   }
   s->f_mean = static_cast<float>(mean);
