@@ -233,8 +233,9 @@ void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, co
 // integer row, or its integer columns do not advance by exactly one, the taps are gathered
 // instead; both paths evaluate the same expression in the same order. A row is covered by blocks
 // starting at 0, 8, ...; the last block is moved back to end at the row end, its lanes that the
-// previous block already covered are masked out (so nothing outside the subset is read). The
-// per-lane sums run over the whole subset (float) and are reduced once at the end.
+// previous block already covered are masked out (so nothing outside the subset is read); when it
+// adds only 1 or 2 pixels, those are interpolated one by one. The per-lane sums run over the whole
+// subset (float) and are reduced once at the end.
 inline __m256 Splat(float v) { return _mm256_set1_ps(v); }
 
 // Sum of the 8 lanes, in a fixed order.
@@ -274,6 +275,42 @@ inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
       w[k] = v;
     }
   }
+}
+
+// Sum over the kTaps rows of the per-row tap sums weighted by wy, as a shallow tree.
+template <int kTaps>
+inline __m256 CombineRows(const __m256 wy[kTaps], const __m256 rs[kTaps]) {
+  __m256 e0 = _mm256_mul_ps(wy[0], rs[0]), e1 = _mm256_mul_ps(wy[1], rs[1]);
+  for (int r = 2; r < kTaps; r += 2) {
+    e0 = _mm256_fmadd_ps(wy[r], rs[r], e0);
+    e1 = _mm256_fmadd_ps(wy[r + 1], rs[r + 1], e1);
+  }
+  return _mm256_add_ps(e0, e1);
+}
+
+// The B-spline at one local position (x, y) relative to `centre` (scalar).
+template <int kTaps>
+inline float SampleScalar(const float* centre, int stride, float x, float y) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const float fx = std::floor(x), fy = std::floor(y);
+  float wx[6], wy[6];
+  if constexpr (kTaps == 4) {
+    CubicWeights(x - fx, wx);
+    CubicWeights(y - fy, wy);
+  } else {
+    QuinticWeightsF(x - fx, wx);
+    QuinticWeightsF(y - fy, wy);
+  }
+  const float* c = centre + static_cast<std::ptrdiff_t>(static_cast<int>(fy) - kLow) * stride +
+                   (static_cast<int>(fx) - kLow);
+  float g = 0;
+  for (int r = 0; r < kTaps; ++r) {
+    const float* cr = c + static_cast<std::ptrdiff_t>(r) * stride;
+    float row = 0;
+    for (int k = 0; k < kTaps; ++k) row += wx[k] * cr[k];
+    g += wy[r] * row;
+  }
+  return g;
 }
 
 template <int kTaps, bool kQuad>
@@ -321,50 +358,75 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
     __m256 ra00 = _mm256_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
            rb20 = ra00;
     for (int b = 0; b < blocks; ++b) {
-      const int i0 = std::min(8 * b, size - 8);
+      const int i0 = std::min(8 * b, size - 8), fresh = size - 8 * b;
       const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
       const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
-      __m256 x, y;
-      if constexpr (kQuad) {
-        x = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ax2), Splat(ax1)), xi, Splat(ax0));
-        y = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ay2), Splat(ay1)), xi, Splat(ay0));
-      } else {
-        x = _mm256_fmadd_ps(xi, Splat(ax1), Splat(ax0));
-        y = _mm256_fmadd_ps(xi, Splat(ay1), Splat(ay0));
-      }
-      const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
-      const __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
-      const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
-      const int ix0 = _mm256_cvtsi256_si32(ix), iy0 = _mm256_cvtsi256_si32(iy);
-      const __m256i expect_x = _mm256_add_epi32(_mm256_set1_epi32(ix0), lane_i);
-      const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(ix, expect_x),
-                                            _mm256_cmpeq_epi32(iy, _mm256_set1_epi32(iy0)));
-      const bool regular = _mm256_movemask_epi8(same) == -1;
-      __m256 wx[kTaps], wy[kTaps];
-      WeightsAvx2<kTaps>(tx, wx);
-      WeightsAvx2<kTaps>(ty, wy);
-      __m256 g = _mm256_setzero_ps();
-      if (regular) {
-        const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
-        for (int r = 0; r < kTaps; ++r) {
-          const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
-          __m256 rs = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
-          for (int k = 1; k < kTaps; ++k) rs = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), rs);
-          g = _mm256_fmadd_ps(wy[r], rs, g);
+      __m256 g;
+      if (fresh <= 2) {
+        // A row end of 1 or 2 pixels (e.g. subset 25 = 3 x 8 + 1): per pixel, not a block.
+        alignas(32) float gl[8] = {};
+        for (int l = 8 - fresh; l < 8; ++l) {
+          const float xs = static_cast<float>(i0 + l - h);
+          const float px = kQuad ? ax0 + xs * (ax1 + xs * ax2) : ax0 + xs * ax1;
+          const float py = kQuad ? ay0 + xs * (ay1 + xs * ay2) : ay0 + xs * ay1;
+          gl[l] = SampleScalar<kTaps>(centre, istride, px, py);
         }
+        g = _mm256_load_ps(gl);
       } else {
-        const __m256i off0 =
-            _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(iy, _mm256_set1_epi32(kLow)),
-                                                _mm256_set1_epi32(istride)),
-                             _mm256_sub_epi32(ix, _mm256_set1_epi32(kLow)));
-        for (int r = 0; r < kTaps; ++r) {
-          const __m256i offr = _mm256_add_epi32(off0, _mm256_set1_epi32(r * istride));
-          __m256 rs = _mm256_mul_ps(wx[0], _mm256_i32gather_ps(centre, offr, 4));
-          for (int k = 1; k < kTaps; ++k)
-            rs = _mm256_fmadd_ps(
-                wx[k], _mm256_i32gather_ps(centre, _mm256_add_epi32(offr, _mm256_set1_epi32(k)), 4),
-                rs);
-          g = _mm256_fmadd_ps(wy[r], rs, g);
+        __m256 x, y;
+        if constexpr (kQuad) {
+          x = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ax2), Splat(ax1)), xi, Splat(ax0));
+          y = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ay2), Splat(ay1)), xi, Splat(ay0));
+        } else {
+          x = _mm256_fmadd_ps(xi, Splat(ax1), Splat(ax0));
+          y = _mm256_fmadd_ps(xi, Splat(ay1), Splat(ay0));
+        }
+        const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
+        const __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
+        const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
+        const int ix0 = _mm256_cvtsi256_si32(ix), iy0 = _mm256_cvtsi256_si32(iy);
+        const __m256i expect_x = _mm256_add_epi32(_mm256_set1_epi32(ix0), lane_i);
+        const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(ix, expect_x),
+                                              _mm256_cmpeq_epi32(iy, _mm256_set1_epi32(iy0)));
+        const bool regular = _mm256_movemask_epi8(same) == -1;
+        __m256 wx[kTaps], wy[kTaps];
+        WeightsAvx2<kTaps>(tx, wx);
+        WeightsAvx2<kTaps>(ty, wy);
+        if (regular) {
+          const float* c0 =
+              centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
+          __m256 rs[kTaps];
+          for (int r = 0; r < kTaps; ++r) {
+            const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
+            __m256 e0 = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
+            __m256 e1 = _mm256_mul_ps(wx[1], _mm256_loadu_ps(cr + 1));
+            for (int k = 2; k < kTaps; k += 2) {
+              e0 = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), e0);
+              e1 = _mm256_fmadd_ps(wx[k + 1], _mm256_loadu_ps(cr + k + 1), e1);
+            }
+            rs[r] = _mm256_add_ps(e0, e1);
+          }
+          g = CombineRows<kTaps>(wy, rs);
+        } else {
+          const __m256i off0 =
+              _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(iy, _mm256_set1_epi32(kLow)),
+                                                  _mm256_set1_epi32(istride)),
+                               _mm256_sub_epi32(ix, _mm256_set1_epi32(kLow)));
+          __m256 rs[kTaps];
+          for (int r = 0; r < kTaps; ++r) {
+            const __m256i offr = _mm256_add_epi32(off0, _mm256_set1_epi32(r * istride));
+            auto tap = [&](int k) {
+              return _mm256_i32gather_ps(centre, _mm256_add_epi32(offr, _mm256_set1_epi32(k)), 4);
+            };
+            __m256 e0 = _mm256_mul_ps(wx[0], tap(0));
+            __m256 e1 = _mm256_mul_ps(wx[1], tap(1));
+            for (int k = 2; k < kTaps; k += 2) {
+              e0 = _mm256_fmadd_ps(wx[k], tap(k), e0);
+              e1 = _mm256_fmadd_ps(wx[k + 1], tap(k + 1), e1);
+            }
+            rs[r] = _mm256_add_ps(e0, e1);
+          }
+          g = CombineRows<kTaps>(wy, rs);
         }
       }
       const __m256 gp = _mm256_and_ps(_mm256_sub_ps(g, fm), keep);
