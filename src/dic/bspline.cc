@@ -33,40 +33,60 @@ Prefilter PrefilterFor(Interpolation kind) {
   return p;
 }
 
-// Causal initial value for mirror boundary conditions.
-double InitialCausal(const double* c, int n, double z) {
+// The prefilter (gain, then per pole a causal and an anti-causal first-order recursion with the
+// mirror-boundary initial values) on kLanes interleaved lines at once: c[k * kLanes + l] is
+// sample k of line l; the recursions run along k and are vectorised across the lines.
+constexpr int kLanes = 8;
+
+// Causal initial values for mirror boundary conditions (Unser et al. 1993).
+void InitialCausalLanes(const double* c, int n, double z, double* out) {
   const double tolerance = 1e-12;
   const int horizon = static_cast<int>(std::ceil(std::log(tolerance) / std::log(std::abs(z))));
   if (horizon < n) {
-    double zn = z, sum = c[0];
+    double sum[kLanes];
+    for (int l = 0; l < kLanes; ++l) sum[l] = c[l];
+    double zn = z;
     for (int k = 1; k < horizon; ++k) {
-      sum += zn * c[k];
+      for (int l = 0; l < kLanes; ++l) sum[l] += zn * c[k * kLanes + l];
       zn *= z;
     }
-    return sum;
+    for (int l = 0; l < kLanes; ++l) out[l] = sum[l];
+    return;
   }
   double zn = z;
   const double iz = 1 / z;
   double z2n = std::pow(z, n - 1);
-  double sum = c[0] + z2n * c[n - 1];
+  double sum[kLanes];
+  for (int l = 0; l < kLanes; ++l) sum[l] = c[l] + z2n * c[(n - 1) * kLanes + l];
   z2n *= z2n * iz;
   for (int k = 1; k <= n - 2; ++k) {
-    sum += (zn + z2n) * c[k];
+    for (int l = 0; l < kLanes; ++l) sum[l] += (zn + z2n) * c[k * kLanes + l];
     zn *= z;
     z2n *= iz;
   }
-  return sum / (1 - zn * zn);
+  for (int l = 0; l < kLanes; ++l) out[l] = sum[l] / (1 - zn * zn);
 }
 
-void FilterLine(double* c, int n, const Prefilter& p) {
+void FilterLines(double* c, int n, const Prefilter& p) {
   if (n < 2) return;
-  for (int k = 0; k < n; ++k) c[k] *= p.gain;
+  for (int k = 0; k < n * kLanes; ++k) c[k] *= p.gain;
   for (int j = 0; j < p.n_poles; ++j) {
     const double z = p.poles[j];
-    c[0] = InitialCausal(c, n, z);
-    for (int k = 1; k < n; ++k) c[k] += z * c[k - 1];
-    c[n - 1] = (z / (z * z - 1)) * (z * c[n - 2] + c[n - 1]);
-    for (int k = n - 2; k >= 0; --k) c[k] = z * (c[k + 1] - c[k]);
+    double first[kLanes];
+    InitialCausalLanes(c, n, z, first);
+    for (int l = 0; l < kLanes; ++l) c[l] = first[l];
+    for (int k = 1; k < n; ++k) {
+      double* ck = c + k * kLanes;
+      const double* prev = ck - kLanes;
+      for (int l = 0; l < kLanes; ++l) ck[l] += z * prev[l];
+    }
+    double* last = c + (n - 1) * kLanes;
+    for (int l = 0; l < kLanes; ++l) last[l] = (z / (z * z - 1)) * (z * last[l - kLanes] + last[l]);
+    for (int k = n - 2; k >= 0; --k) {
+      double* ck = c + k * kLanes;
+      const double* next = ck + kLanes;
+      for (int l = 0; l < kLanes; ++l) ck[l] = z * (next[l] - ck[l]);
+    }
   }
 }
 
@@ -146,45 +166,53 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   coefficients_.create(h, w, CV_32F);
   cv::Mat source = image(region);
 
-  // Rows (in double), in parallel.
-  tbb::parallel_for(0, h, [&](int r) {
-    std::vector<double> line(w);
+  // Rows (in double), kLanes rows at a time (interleaved), groups in parallel.
+  auto read_row = [&](int r, double* out, int lane) {
     switch (source.depth()) {
-      case CV_8U:
-        for (int c = 0; c < w; ++c) line[c] = source.at<std::uint8_t>(r, c);
+      case CV_8U: {
+        const std::uint8_t* in = source.ptr<std::uint8_t>(r);
+        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
         break;
-      case CV_16U:
-        for (int c = 0; c < w; ++c) line[c] = source.at<std::uint16_t>(r, c);
+      }
+      case CV_16U: {
+        const std::uint16_t* in = source.ptr<std::uint16_t>(r);
+        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
         break;
-      case CV_32F:
-        for (int c = 0; c < w; ++c) line[c] = source.at<float>(r, c);
+      }
+      case CV_32F: {
+        const float* in = source.ptr<float>(r);
+        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
         break;
-      default:
-        for (int c = 0; c < w; ++c) line[c] = source.at<double>(r, c);
+      }
+      default: {
+        const double* in = source.ptr<double>(r);
+        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
+      }
     }
-    FilterLine(line.data(), w, prefilter);
-    float* out = coefficients_.ptr<float>(r);
-    for (int c = 0; c < w; ++c) out[c] = static_cast<float>(line[c]);
+  };
+  tbb::parallel_for(0, (h + kLanes - 1) / kLanes, [&](int group) {
+    const int r0 = group * kLanes, lanes = std::min(kLanes, h - r0);
+    std::vector<double> buffer(static_cast<std::size_t>(w) * kLanes, 0.0);
+    for (int l = 0; l < lanes; ++l) read_row(r0 + l, buffer.data(), l);
+    FilterLines(buffer.data(), w, prefilter);
+    for (int l = 0; l < lanes; ++l) {
+      float* out = coefficients_.ptr<float>(r0 + l);
+      for (int c = 0; c < w; ++c) out[c] = static_cast<float>(buffer[c * kLanes + l]);
+    }
   });
-  // Columns, in strips of 32 columns (the inner loop runs along rows: contiguous, vectorised).
-  const int strip = 32;
-  tbb::parallel_for(0, (w + strip - 1) / strip, [&](int s) {
-    const int c0 = s * strip, c1 = std::min(w, c0 + strip), n = c1 - c0;
-    std::vector<double> buffer(static_cast<std::size_t>(h) * n);
+  // Columns, kLanes adjacent columns at a time (contiguous in each row), groups in parallel.
+  tbb::parallel_for(0, (w + kLanes - 1) / kLanes, [&](int group) {
+    const int c0 = group * kLanes, lanes = std::min(kLanes, w - c0);
+    std::vector<double> buffer(static_cast<std::size_t>(h) * kLanes, 0.0);
     for (int r = 0; r < h; ++r) {
-      const float* in = coefficients_.ptr<float>(r);
-      for (int c = 0; c < n; ++c) buffer[static_cast<std::size_t>(r) * n + c] = in[c0 + c];
+      const float* in = coefficients_.ptr<float>(r) + c0;
+      for (int l = 0; l < lanes; ++l) buffer[static_cast<std::size_t>(r) * kLanes + l] = in[l];
     }
-    std::vector<double> column(h);
-    for (int c = 0; c < n; ++c) {
-      for (int r = 0; r < h; ++r) column[r] = buffer[static_cast<std::size_t>(r) * n + c];
-      FilterLine(column.data(), h, prefilter);
-      for (int r = 0; r < h; ++r) buffer[static_cast<std::size_t>(r) * n + c] = column[r];
-    }
+    FilterLines(buffer.data(), h, prefilter);
     for (int r = 0; r < h; ++r) {
-      float* out = coefficients_.ptr<float>(r);
-      for (int c = 0; c < n; ++c)
-        out[c0 + c] = static_cast<float>(buffer[static_cast<std::size_t>(r) * n + c]);
+      float* out = coefficients_.ptr<float>(r) + c0;
+      for (int l = 0; l < lanes; ++l)
+        out[l] = static_cast<float>(buffer[static_cast<std::size_t>(r) * kLanes + l]);
     }
   });
   // Evaluable domain: floor(x) - half_low >= 0 and floor(x) + half_high <= w - 1.
