@@ -48,7 +48,7 @@ struct InitialGuessOptions {
   // at seed points and for subsets the propagation could not solve.
   int search_radius_px = 40;
   // Seeds lie on every `seed_spacing`-th grid node in x and y (plus the grid centre), >= 1.
-  int seed_spacing = 12;
+  int seed_spacing = 24;
   // Minimum integer-pixel ZNCC for a search result to be used, in (-1, 1).
   double min_search_zncc = 0.5;
   void Check() const;
