@@ -265,53 +265,47 @@ void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
   const int w = region_.width, h = region_.height;
   const bool cubic = kind_ == Interpolation::kBicubic;
   // Value and derivative weights of the spline at a node, offsets -2..2.
-  const double value_w[5] = {cubic ? 0 : 1.0 / 120, cubic ? 1.0 / 6 : 26.0 / 120,
-                             cubic ? 4.0 / 6 : 66.0 / 120, cubic ? 1.0 / 6 : 26.0 / 120,
-                             cubic ? 0 : 1.0 / 120};
-  const double deriv_w[5] = {cubic ? 0 : -1.0 / 24, cubic ? -0.5 : -10.0 / 24, 0,
-                             cubic ? 0.5 : 10.0 / 24, cubic ? 0 : 1.0 / 24};
-  cv::Mat value_x(h, w, CV_32F), deriv_x(h, w, CV_32F);
-  tbb::parallel_for(0, h, [&](int r) {
-    const float* c = coefficients_.ptr<float>(r);
-    float* vx = value_x.ptr<float>(r);
-    float* dx = deriv_x.ptr<float>(r);
-    for (int x = 0; x < w; ++x) {
-      double v = 0, d = 0;
-      if (x >= 2 && x < w - 2) {
-        for (int k = -2; k <= 2; ++k) {
-          v += value_w[k + 2] * c[x + k];
-          d += deriv_w[k + 2] * c[x + k];
-        }
-      } else {
-        for (int k = -2; k <= 2; ++k) {
-          const float cc = c[Mirror(x + k, w)];
-          v += value_w[k + 2] * cc;
-          d += deriv_w[k + 2] * cc;
-        }
-      }
-      vx[x] = static_cast<float>(v);
-      dx[x] = static_cast<float>(d);
-    }
-  });
+  const float value_w[5] = {cubic ? 0.0f : 1.0f / 120, cubic ? 1.0f / 6 : 26.0f / 120,
+                            cubic ? 4.0f / 6 : 66.0f / 120, cubic ? 1.0f / 6 : 26.0f / 120,
+                            cubic ? 0.0f : 1.0f / 120};
+  const float deriv_w[5] = {cubic ? 0.0f : -1.0f / 24, cubic ? -0.5f : -10.0f / 24, 0,
+                            cubic ? 0.5f : 10.0f / 24, cubic ? 0.0f : 1.0f / 24};
+  const int reach = cubic ? 1 : 2;  // Taps -reach..reach are non-zero.
   gx->create(h, w, CV_32F);
   gy->create(h, w, CV_32F);
+  // Separable: gx = value filter along y of the derivative filter along x, gy the transpose.
+  // Per output row, the rows r - reach..r + reach (mirrored at the region border) are first
+  // combined along y (value and derivative weights), then filtered along x.
   tbb::parallel_for(0, h, [&](int r) {
+    std::vector<float> vy(static_cast<std::size_t>(w) + 4), dy(static_cast<std::size_t>(w) + 4);
+    float* v = vy.data() + 2;
+    float* d = dy.data() + 2;
+    for (int x = 0; x < w; ++x) v[x] = d[x] = 0;
+    for (int k = -reach; k <= reach; ++k) {
+      const float* c = coefficients_.ptr<float>(Mirror(r + k, h));
+      const float a = value_w[k + 2], b = deriv_w[k + 2];
+      for (int x = 0; x < w; ++x) {
+        v[x] += a * c[x];
+        d[x] += b * c[x];
+      }
+    }
+    // Mirrored padding for the filter along x.
+    for (int k = 1; k <= 2; ++k) {
+      v[-k] = v[Mirror(-k, w)];
+      d[-k] = d[Mirror(-k, w)];
+      v[w - 1 + k] = v[Mirror(w - 1 + k, w)];
+      d[w - 1 + k] = d[Mirror(w - 1 + k, w)];
+    }
     float* ox = gx->ptr<float>(r);
     float* oy = gy->ptr<float>(r);
     for (int x = 0; x < w; ++x) {
-      ox[x] = 0;
-      oy[x] = 0;
-    }
-    for (int k = -2; k <= 2; ++k) {
-      if (value_w[k + 2] == 0 && deriv_w[k + 2] == 0) continue;
-      const int rr = Mirror(r + k, h);
-      const float* vx = value_x.ptr<float>(rr);
-      const float* dx = deriv_x.ptr<float>(rr);
-      const float a = static_cast<float>(value_w[k + 2]), b = static_cast<float>(deriv_w[k + 2]);
-      for (int x = 0; x < w; ++x) {
-        ox[x] += a * dx[x];
-        oy[x] += b * vx[x];
+      float sx = 0, sy = 0;
+      for (int k = -reach; k <= reach; ++k) {
+        sx += deriv_w[k + 2] * v[x + k];
+        sy += value_w[k + 2] * d[x + k];
       }
+      ox[x] = sx;
+      oy[x] = sy;
     }
   });
 }
