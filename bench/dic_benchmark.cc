@@ -13,7 +13,10 @@
 // subset 21/25/31/41 on the pair, and plots error against time with gnuplot.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -106,18 +109,22 @@ void SetCounters(benchmark::State& state, const DicSummary& s, const FrameResult
   state.counters["t_icgn"] = f.seconds_icgn;
 }
 
-// The whole job for a pair, including image loading.
+// The whole job for a pair, including image loading. The deformed image is decoded while the
+// reference is decoded and precomputed (two tasks; the precomputation's parallel loops use both
+// threads once the decoding is done).
 void BM_FramePair(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, g_threads);
   const DicOptions options = BenchOptions();
+  double best = 1e300;
   for (auto _ : state) {
     WallTimer timer;
-    const cv::Mat ref = ReadGreyImage(FramePath(0));
-    const cv::Mat def = ReadGreyImage(FramePath(1));
     Correlator correlator(options);
-    correlator.SetReference(ref);
+    cv::Mat def;
+    tbb::parallel_invoke([&] { def = ReadGreyImage(FramePath(1)); },
+                         [&] { correlator.SetReference(ReadGreyImage(FramePath(0))); });
     const FrameResult f = correlator.Correlate(def);
     const double seconds = timer.ElapsedSeconds();
+    best = std::min(best, seconds);
     state.SetIterationTime(seconds);
     FrameResult timing = f;
     timing.seconds_coefficients +=
@@ -125,15 +132,19 @@ void BM_FramePair(benchmark::State& state) {
     timing.seconds_reference = correlator.summary().seconds_reference;
     SetCounters(state, correlator.summary(), timing, kU, kV, seconds);
   }
+  state.counters["best_s"] = best;
+  state.counters["best_subsets_per_s"] = state.counters["subsets"] / best;
 }
 
-// One frame of a sequence (load + correlate), after the sequence has started.
+// One frame of a sequence (load + correlate), after the sequence has started. The next frame is
+// decoded while the current one is correlated.
 void BM_SequenceFrame(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, g_threads);
   DicOptions options = BenchOptions();
   options.update.mode = ReferenceUpdate::kFixed;
   std::vector<std::string> paths;
   for (int k = 0; k < kSequenceFrames; ++k) paths.push_back(FramePath(k));
+  double best = 1e300;
   for (auto _ : state) {
     state.PauseTiming();
     auto correlator = std::make_unique<Correlator>(options);
@@ -141,18 +152,25 @@ void BM_SequenceFrame(benchmark::State& state) {
     correlator->Correlate(ReadGreyImage(paths[1]));
     correlator->Correlate(ReadGreyImage(paths[2]));
     state.ResumeTiming();
-    double seconds = 0;
+    WallTimer timer;
     FrameResult f;
+    cv::Mat current = ReadGreyImage(paths[3]), next;
     int k = 3;
     for (; k < kSequenceFrames; ++k) {
-      WallTimer timer;
-      f = correlator->Correlate(ReadGreyImage(paths[k]));
-      seconds += timer.ElapsedSeconds();
+      tbb::task_group prefetch;
+      if (k + 1 < kSequenceFrames) prefetch.run([&] { next = ReadGreyImage(paths[k + 1]); });
+      f = correlator->Correlate(current);
+      prefetch.wait();
+      current = next;
     }
+    const double seconds = timer.ElapsedSeconds();
     const int frames = kSequenceFrames - 3;
+    best = std::min(best, seconds / frames);
     state.SetIterationTime(seconds / frames);
     SetCounters(state, correlator->summary(), f, (k - 1) * kU, (k - 1) * kV, seconds / frames);
   }
+  state.counters["best_s"] = best;
+  state.counters["best_subsets_per_s"] = state.counters["subsets"] / best;
 }
 
 void WorkPrecision(const std::string& plot) {

@@ -279,10 +279,26 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
                              options.icgn, p0);
   };
   // Prediction of the displacement of subset i's tracked point (relative to the reference).
+  // The velocity (last increment) is averaged over the subset and its solved grid neighbours: the
+  // increments of neighbouring subsets share the motion but not all of the noise, so the mean is
+  // a better prediction (fewer IC-GN iterations) wherever the motion is smooth over 3x3 subsets.
   auto predict = [&](int i, Params* p0) {
     if (std::isnan(pos_last[i].x)) return false;
     cv::Point2d pred = pos_last[i];
-    if (!std::isnan(pos_prev[i].x)) pred = 2 * pos_last[i] - pos_prev[i];
+    if (!std::isnan(pos_prev[i].x)) {
+      const int r = i / nx, c = i % nx;
+      cv::Point2d velocity(0, 0);
+      int count = 0;
+      for (int rr = std::max(0, r - 1); rr <= std::min(ny - 1, r + 1); ++rr) {
+        for (int cc = std::max(0, c - 1); cc <= std::min(nx - 1, c + 1); ++cc) {
+          const int j = rr * nx + cc;
+          if (std::isnan(pos_last[j].x) || std::isnan(pos_prev[j].x)) continue;
+          velocity += pos_last[j] - pos_prev[j];
+          ++count;
+        }
+      }
+      pred += velocity / count;
+    }
     const SubsetRef& s = ref.subsets[i];
     Params p = params_valid[i] ? params_last[i] : Params{};
     double du, dv;
@@ -400,7 +416,9 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
       }
       std::vector<int> candidates, seeds;
       for (int i = 0; i < n; ++i)
-        if (usable[i] && !at[i].solved && !at[i].searched && on_lattice(i, stride))
+        // Not those whose guess from a solved neighbour left the image: nothing to search for.
+        if (usable[i] && !at[i].solved && !at[i].searched && on_lattice(i, stride) &&
+            !(at[i].propagated && at[i].r.status == SubsetStatus::kOutOfImage))
           candidates.push_back(i);
       if (candidates.empty()) break;
       for (int i : candidates) {
