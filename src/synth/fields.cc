@@ -60,6 +60,20 @@ DisplacementField Quadratic(double a, double b, double c, double cx, double cy) 
           }};
 }
 
+DisplacementField ExponentialCompression(double surface_strain, double decay_length_px,
+                                         double y_surface_px, double y_fixed_px) {
+  CheckValue(decay_length_px > 0, "ExponentialCompression.decay_length_px",
+             std::to_string(decay_length_px), "> 0");
+  const double e0 = surface_strain, L = decay_length_px;
+  const double v_fixed = e0 * L * std::exp(-(y_fixed_px - y_surface_px) / L);
+  return {[=](double, double Y) {
+            return cv::Vec2d(0, e0 * L * std::exp(-(Y - y_surface_px) / L) - v_fixed);
+          },
+          [=](double, double Y) {
+            return cv::Vec4d(0, 0, 0, -e0 * std::exp(-(Y - y_surface_px) / L));
+          }};
+}
+
 DisplacementField Sum(const std::vector<DisplacementField>& fields) {
   return {[=](double X, double Y) {
             cv::Vec2d s(0, 0);

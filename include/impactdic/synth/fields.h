@@ -30,6 +30,16 @@ DisplacementField Sinusoidal(double amp_u_px, double amp_v_px, double wavelength
 // Quadratic field: u = a * (X - cx)^2 + b * (Y - cy)^2, v = c * (X - cx) * (Y - cy) [px].
 DisplacementField Quadratic(double a, double b, double c, double cx, double cy);
 
+// Vertical compression whose strain decays exponentially with depth, as under a load applied at
+// the surface y = y_surface_px (y down). Compressive engineering strain
+//   e(Y) = surface_strain * exp(-(Y - y_surface_px) / L),  L = decay_length_px > 0,
+// i.e. dv/dY = -e(Y) and u = 0; the material at y = y_fixed_px does not move:
+//   v(Y) = surface_strain * L * (exp(-(Y - y_surface_px) / L) - exp(-(y_fixed_px - y_surface_px)
+//          / L)).
+// The mean strain between the surface and y_fixed is v(y_surface) / (y_fixed - y_surface).
+DisplacementField ExponentialCompression(double surface_strain, double decay_length_px,
+                                         double y_surface_px, double y_fixed_px);
+
 // Sum of fields (u = sum of u_i), e.g. a rigid translation plus a strain.
 DisplacementField Sum(const std::vector<DisplacementField>& fields);
 
