@@ -277,15 +277,12 @@ inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
   }
 }
 
-// Sum over the kTaps rows of the per-row tap sums weighted by wy, as a shallow tree.
+// Sum over the kTaps rows of the per-row tap sums weighted by wy.
 template <int kTaps>
 inline __m256 CombineRows(const __m256 wy[kTaps], const __m256 rs[kTaps]) {
-  __m256 e0 = _mm256_mul_ps(wy[0], rs[0]), e1 = _mm256_mul_ps(wy[1], rs[1]);
-  for (int r = 2; r < kTaps; r += 2) {
-    e0 = _mm256_fmadd_ps(wy[r], rs[r], e0);
-    e1 = _mm256_fmadd_ps(wy[r + 1], rs[r + 1], e1);
-  }
-  return _mm256_add_ps(e0, e1);
+  __m256 g = _mm256_mul_ps(wy[0], rs[0]);
+  for (int r = 1; r < kTaps; ++r) g = _mm256_fmadd_ps(wy[r], rs[r], g);
+  return g;
 }
 
 // The B-spline at one local position (x, y) relative to `centre` (scalar).
@@ -359,7 +356,6 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
            rb20 = ra00;
     for (int b = 0; b < blocks; ++b) {
       const int i0 = std::min(8 * b, size - 8), fresh = size - 8 * b;
-      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
       const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
       __m256 g;
       if (fresh <= 2) {
@@ -398,13 +394,9 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
           __m256 rs[kTaps];
           for (int r = 0; r < kTaps; ++r) {
             const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
-            __m256 e0 = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
-            __m256 e1 = _mm256_mul_ps(wx[1], _mm256_loadu_ps(cr + 1));
-            for (int k = 2; k < kTaps; k += 2) {
-              e0 = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), e0);
-              e1 = _mm256_fmadd_ps(wx[k + 1], _mm256_loadu_ps(cr + k + 1), e1);
-            }
-            rs[r] = _mm256_add_ps(e0, e1);
+            rs[r] = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
+            for (int k = 1; k < kTaps; ++k)
+              rs[r] = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), rs[r]);
           }
           g = CombineRows<kTaps>(wy, rs);
         } else {
@@ -418,18 +410,17 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
             auto tap = [&](int k) {
               return _mm256_i32gather_ps(centre, _mm256_add_epi32(offr, _mm256_set1_epi32(k)), 4);
             };
-            __m256 e0 = _mm256_mul_ps(wx[0], tap(0));
-            __m256 e1 = _mm256_mul_ps(wx[1], tap(1));
-            for (int k = 2; k < kTaps; k += 2) {
-              e0 = _mm256_fmadd_ps(wx[k], tap(k), e0);
-              e1 = _mm256_fmadd_ps(wx[k + 1], tap(k + 1), e1);
-            }
-            rs[r] = _mm256_add_ps(e0, e1);
+            rs[r] = _mm256_mul_ps(wx[0], tap(0));
+            for (int k = 1; k < kTaps; ++k) rs[r] = _mm256_fmadd_ps(wx[k], tap(k), rs[r]);
           }
           g = CombineRows<kTaps>(wy, rs);
         }
       }
-      const __m256 gp = _mm256_and_ps(_mm256_sub_ps(g, fm), keep);
+      __m256 gp = _mm256_sub_ps(g, fm);
+      if (i0 != 8 * b) {  // Mask the lanes of the previous block.
+        gp = _mm256_and_ps(gp,
+                           _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ));
+      }
       sg = _mm256_add_ps(sg, gp);
       sgg = _mm256_fmadd_ps(gp, gp, sgg);
       sfg = _mm256_fmadd_ps(_mm256_loadu_ps(fr + i0), gp, sfg);
@@ -888,7 +879,7 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
     for (int k = 0; k < 4; ++k) {
       double du, dv;
       Displacement(shape, dp, (k & 1) ? h : -h, (k & 2) ? h : -h, &du, &dv);
-      move = std::max(move, std::hypot(du, dv));
+      move = std::max(move, std::sqrt(du * du + dv * dv));
     }
     if (!std::isfinite(move)) {
       result.status = SubsetStatus::kSingularHessian;
