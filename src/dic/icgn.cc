@@ -27,6 +27,9 @@
 namespace impactdic::internal {
 namespace {
 
+// Longest subset row of the vectorised reference moments, in blocks of 8 pixels.
+constexpr int kMaxBlocks = 32;
+
 constexpr int kMonoPx[6] = {0, 1, 0, 2, 1, 0};
 constexpr int kMonoPy[6] = {0, 0, 1, 0, 1, 2};
 constexpr double kMonoC[6] = {1, 1, 1, 0.5, 1, 0.5};
@@ -514,6 +517,17 @@ void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double
   const int blocks = (size + 7) / 8;
   __m256 GG[3][kPmax + 1][kPmax + 1], GS[2][kPs + 1][kPs + 1], GF[2][kPs + 1][kPs + 1];
   __m256 SS = zero;
+  // Powers of xi of the lanes of each block (the same for every row), and the mask of the last
+  // block's lanes that the previous block did not cover.
+  __m256 xi_pow[kMaxBlocks][kPmax + 1];
+  for (int b = 0; b < blocks; ++b) {
+    const int i0 = std::min(8 * b, size - 8);
+    const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
+    xi_pow[b][0] = Splat(1);
+    for (int p = 1; p <= kPmax; ++p) xi_pow[b][p] = _mm256_mul_ps(xi_pow[b][p - 1], xi);
+  }
+  const __m256 keep_last =
+      _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * (blocks - 1) - (size - 8))), _CMP_GE_OQ);
   for (auto& a : GG)
     for (auto& b : a)
       for (auto& c : b) c = zero;
@@ -531,29 +545,28 @@ void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double
       for (int p = 0; p <= kPs; ++p) rs[a][p] = rf[a][p] = zero;
     for (int b = 0; b < blocks; ++b) {
       const int i0 = std::min(8 * b, size - 8);
-      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
-      const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
-      const __m256 fd = _mm256_and_ps(_mm256_sub_ps(_mm256_loadu_ps(f + i0), m), keep);
-      const __m256 g[2] = {_mm256_and_ps(_mm256_loadu_ps(gxr + i0), keep),
-                           _mm256_and_ps(_mm256_loadu_ps(gyr + i0), keep)};
+      __m256 fd = _mm256_sub_ps(_mm256_loadu_ps(f + i0), m);
+      __m256 g[2] = {_mm256_loadu_ps(gxr + i0), _mm256_loadu_ps(gyr + i0)};
+      if (i0 != 8 * b) {  // Mask the lanes of the previous block.
+        fd = _mm256_and_ps(fd, keep_last);
+        g[0] = _mm256_and_ps(g[0], keep_last);
+        g[1] = _mm256_and_ps(g[1], keep_last);
+      }
+      const __m256* xp = xi_pow[b];
       SS = _mm256_fmadd_ps(fd, fd, SS);
-      __m256 prod[3] = {_mm256_mul_ps(g[0], g[0]), _mm256_mul_ps(g[0], g[1]),
-                        _mm256_mul_ps(g[1], g[1])};
-      __m256 lin[2] = {g[0], g[1]}, lf[2] = {_mm256_mul_ps(g[0], fd), _mm256_mul_ps(g[1], fd)};
-      for (int p = 0; p <= kPmax; ++p) {
-        for (int k = 0; k < 3; ++k) {
-          rg[k][p] = _mm256_add_ps(rg[k][p], prod[k]);
-          if (p < kPmax) prod[k] = _mm256_mul_ps(prod[k], xi);
-        }
-        if (p <= kPs) {
-          for (int a = 0; a < 2; ++a) {
-            rs[a][p] = _mm256_add_ps(rs[a][p], lin[a]);
-            rf[a][p] = _mm256_add_ps(rf[a][p], lf[a]);
-            if (p < kPs) {
-              lin[a] = _mm256_mul_ps(lin[a], xi);
-              lf[a] = _mm256_mul_ps(lf[a], xi);
-            }
-          }
+      const __m256 prod[3] = {_mm256_mul_ps(g[0], g[0]), _mm256_mul_ps(g[0], g[1]),
+                              _mm256_mul_ps(g[1], g[1])};
+      const __m256 lf[2] = {_mm256_mul_ps(g[0], fd), _mm256_mul_ps(g[1], fd)};
+      for (int k = 0; k < 3; ++k) {
+        rg[k][0] = _mm256_add_ps(rg[k][0], prod[k]);
+        for (int p = 1; p <= kPmax; ++p) rg[k][p] = _mm256_fmadd_ps(prod[k], xp[p], rg[k][p]);
+      }
+      for (int a = 0; a < 2; ++a) {
+        rs[a][0] = _mm256_add_ps(rs[a][0], g[a]);
+        rf[a][0] = _mm256_add_ps(rf[a][0], lf[a]);
+        for (int p = 1; p <= kPs; ++p) {
+          rs[a][p] = _mm256_fmadd_ps(g[a], xp[p], rs[a][p]);
+          rf[a][p] = _mm256_fmadd_ps(lf[a], xp[p], rf[a][p]);
         }
       }
     }
@@ -714,7 +727,7 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
   }
   const int rx = s->cx - ref.region.x - h, ry = s->cy - ref.region.y - h;
   const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
-  const bool vector = size >= 8;
+  const bool vector = size >= 8 && size <= 8 * kMaxBlocks;
   double sum = 0;
   int saturated = 0;
 #if IMPACTDIC_DIC_AVX2
