@@ -248,19 +248,23 @@ inline double HorizontalSum(__m256 v) {
   return _mm_cvtss_f32(_mm_add_ss(d, _mm_shuffle_ps(d, d, 1)));
 }
 
+// Scale of the weights of WeightsAvx2 (per axis): the interpolated value is the weighted sum
+// divided by kWeightScale^2.
+template <int kTaps>
+constexpr float kWeightScale = kTaps == 4 ? 6.0f : 1.0f;
+
 template <int kTaps>
 inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
   if constexpr (kTaps == 4) {
-    // Cubic B-spline weights as cubic polynomials of t (Horner).
-    w[0] = _mm256_fmadd_ps(
-        _mm256_fmadd_ps(_mm256_fmadd_ps(Splat(-1.0f / 6), t, Splat(0.5f)), t, Splat(-0.5f)), t,
-        Splat(1.0f / 6));
-    w[1] = _mm256_fmadd_ps(_mm256_mul_ps(_mm256_fmadd_ps(Splat(0.5f), t, Splat(-1.0f)), t), t,
-                           Splat(4.0f / 6));
-    w[2] = _mm256_fmadd_ps(
-        _mm256_fmadd_ps(_mm256_fmadd_ps(Splat(-0.5f), t, Splat(0.5f)), t, Splat(0.5f)), t,
-        Splat(1.0f / 6));
-    w[3] = _mm256_mul_ps(_mm256_mul_ps(_mm256_mul_ps(t, t), t), Splat(1.0f / 6));
+    // 6 x the cubic B-spline weights (the caller divides by 36 at the end): t^3, (1 - t)^3,
+    // 4 - 6 t^2 + 3 t^3 and the same of 1 - t.
+    const __m256 s = _mm256_sub_ps(Splat(1), t);
+    const __m256 t2 = _mm256_mul_ps(t, t), s2 = _mm256_mul_ps(s, s);
+    const __m256 t3 = _mm256_mul_ps(t2, t), s3 = _mm256_mul_ps(s2, s);
+    w[0] = s3;
+    w[1] = _mm256_fmadd_ps(t3, Splat(3), _mm256_fnmadd_ps(t2, Splat(6), Splat(4)));
+    w[2] = _mm256_fmadd_ps(s3, Splat(3), _mm256_fnmadd_ps(s2, Splat(6), Splat(4)));
+    w[3] = t3;
   } else {
     // Quintic B-spline weights as quintic polynomials of t (Horner), coefficients of
     // b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2), b5(t - 3) times 120.
@@ -331,6 +335,7 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
   const __m256i lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const int blocks = (size + 7) / 8;
   const int istride = static_cast<int>(stride);
+  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
   __m256 sg = _mm256_setzero_ps(), sgg = sg, sfg = sg;
   // a[p][q]: sum g' gx xi^p eta^q; b: the same with gy.
   __m256 a00 = sg, a10 = sg, a01 = sg, b00 = sg, b10 = sg, b01 = sg;
@@ -368,7 +373,7 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
           const float xs = static_cast<float>(i0 + l - h);
           const float px = kQuad ? ax0 + xs * (ax1 + xs * ax2) : ax0 + xs * ax1;
           const float py = kQuad ? ay0 + xs * (ay1 + xs * ay2) : ay0 + xs * ay1;
-          gl[l] = SampleScalar<kTaps>(centre, istride, px, py);
+          gl[l] = SampleScalar<kTaps>(centre, istride, px, py) * kScale2;
         }
         g = _mm256_load_ps(gl);
       } else {
@@ -419,7 +424,7 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
           g = CombineRows<kTaps>(wy, rs);
         }
       }
-      __m256 gp = _mm256_sub_ps(g, fm);
+      __m256 gp = _mm256_fmsub_ps(g, Splat(1 / kScale2), fm);
       if (i0 != 8 * b) {  // Mask the lanes of the previous block.
         gp = _mm256_and_ps(gp,
                            _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ));
