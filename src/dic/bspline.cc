@@ -298,14 +298,17 @@ void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
     }
     float* ox = gx->ptr<float>(r);
     float* oy = gy->ptr<float>(r);
-    for (int x = 0; x < w; ++x) {
-      float sx = 0, sy = 0;
-      for (int k = -reach; k <= reach; ++k) {
-        sx += deriv_w[k + 2] * v[x + k];
-        sy += value_w[k + 2] * d[x + k];
+    if (cubic) {
+      for (int x = 0; x < w; ++x) {
+        ox[x] = deriv_w[3] * (v[x + 1] - v[x - 1]);
+        oy[x] = value_w[1] * (d[x - 1] + d[x + 1]) + value_w[2] * d[x];
       }
-      ox[x] = sx;
-      oy[x] = sy;
+    } else {
+      for (int x = 0; x < w; ++x) {
+        ox[x] = deriv_w[3] * (v[x + 1] - v[x - 1]) + deriv_w[4] * (v[x + 2] - v[x - 2]);
+        oy[x] = value_w[0] * (d[x - 2] + d[x + 2]) + value_w[1] * (d[x - 1] + d[x + 1]) +
+                value_w[2] * d[x];
+      }
     }
   });
 }

@@ -366,6 +366,48 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
     if (r.status == SubsetStatus::kConverged || !at[i].propagated) at[i].r = r;
     at[i].solved = r.status == SubsetStatus::kConverged;
   };
+  // Guess for subset i from solved neighbours `from`: per displacement component, the affine
+  // field a + g . (x - x_i) fitted by least squares to the neighbours' displacements at their
+  // centres and to their gradients. The gradients are weighted by the variance of the subset
+  // coordinate, (S^2 - 1) / 12, the ratio of the noise variances of a subset's displacement and
+  // of its gradient. Second-order terms (quadratic shape) are averaged.
+  const double gradient_weight = (double(size) * size - 1) / 12;
+  auto FitGuess = [&](const SubsetRef& si, const int* from, int count,
+                      const std::vector<Attempt>& solved) {
+    Params p0{};
+    for (int comp = 0; comp < 2; ++comp) {
+      const int o = comp * shape.nm;
+      double a[3][3] = {}, rhs[3] = {};
+      for (int k = 0; k < count; ++k) {
+        const Params& pj = solved[from[k]].r.p;
+        const double d[3] = {1, double(ref.subsets[from[k]].cx - si.cx),
+                             double(ref.subsets[from[k]].cy - si.cy)};
+        for (int row = 0; row < 3; ++row) {
+          for (int col = 0; col < 3; ++col) a[row][col] += d[row] * d[col];
+          rhs[row] += d[row] * pj[o];
+        }
+        for (int q = 1; q < 3; ++q) {
+          a[q][q] += gradient_weight;
+          rhs[q] += gradient_weight * pj[o + q];
+        }
+        for (int q = 3; q < shape.nm; ++q) p0[o + q] += pj[o + q] / count;
+      }
+      // Solve the 3x3 system (symmetric positive definite: gradient rows always present).
+      for (int col = 0; col < 3; ++col) {
+        for (int row = col + 1; row < 3; ++row) {
+          const double f = a[row][col] / a[col][col];
+          for (int k = col; k < 3; ++k) a[row][k] -= f * a[col][k];
+          rhs[row] -= f * rhs[col];
+        }
+      }
+      for (int row = 2; row >= 0; --row) {
+        double v = rhs[row];
+        for (int k = row + 1; k < 3; ++k) v -= a[row][k] * p0[o + k];
+        p0[o + row] = v / a[row][row];
+      }
+    }
+    return p0;
+  };
   auto propagate = [&](int stride) {
     const int spacing = std::max(1, options.init.seed_spacing / stride);
     const int lattice_nx = (nx + stride - 1) / stride, lattice_ny = (ny + stride - 1) / stride;
@@ -386,7 +428,23 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
           const SubsetRef& si = ref.subsets[i];
           const SubsetRef& sj = ref.subsets[j];
           at[i].propagated = true;
-          at[i].r = icgn(i, internal::Transfer(shape, at[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+          if (stride == 1) {
+            at[i].r = icgn(i, internal::Transfer(shape, at[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+          } else {
+            // On the coarse lattice the neighbours are far apart: fit all solved ones.
+            std::array<int, 8> from;
+            int count = 0;
+            const int r = i / nx, c = i % nx;
+            for (int dr = -stride; dr <= stride; dr += stride) {
+              for (int dc = -stride; dc <= stride; dc += stride) {
+                const int rr = r + dr, cc = c + dc;
+                if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx &&
+                    at[rr * nx + cc].solved)
+                  from[count++] = rr * nx + cc;
+              }
+            }
+            at[i].r = icgn(i, FitGuess(si, from.data(), count, at));
+          }
           at[i].solved = at[i].r.status == SubsetStatus::kConverged;
         });
         out->seconds_icgn += timer.ElapsedSeconds();
@@ -442,48 +500,6 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
   // edge), re-expressed about its own centre: for a smooth field this guess is more accurate than
   // one neighbour's warp (the neighbours' errors average out), so IC-GN needs fewer iterations.
   constexpr int kCoarse = 2;
-  // Guess for subset i from solved neighbours `from`: per displacement component, the affine
-  // field a + g . (x - x_i) fitted by least squares to the neighbours' displacements at their
-  // centres and to their gradients. The gradients are weighted by the variance of the subset
-  // coordinate, (S^2 - 1) / 12, the ratio of the noise variances of a subset's displacement and
-  // of its gradient. Second-order terms (quadratic shape) are averaged.
-  const double gradient_weight = (double(size) * size - 1) / 12;
-  auto FitGuess = [&](const SubsetRef& si, const int* from, int count,
-                      const std::vector<Attempt>& solved) {
-    Params p0{};
-    for (int comp = 0; comp < 2; ++comp) {
-      const int o = comp * shape.nm;
-      double a[3][3] = {}, rhs[3] = {};
-      for (int k = 0; k < count; ++k) {
-        const Params& pj = solved[from[k]].r.p;
-        const double d[3] = {1, double(ref.subsets[from[k]].cx - si.cx),
-                             double(ref.subsets[from[k]].cy - si.cy)};
-        for (int row = 0; row < 3; ++row) {
-          for (int col = 0; col < 3; ++col) a[row][col] += d[row] * d[col];
-          rhs[row] += d[row] * pj[o];
-        }
-        for (int q = 1; q < 3; ++q) {
-          a[q][q] += gradient_weight;
-          rhs[q] += gradient_weight * pj[o + q];
-        }
-        for (int q = 3; q < shape.nm; ++q) p0[o + q] += pj[o + q] / count;
-      }
-      // Solve the 3x3 system (symmetric positive definite: gradient rows always present).
-      for (int col = 0; col < 3; ++col) {
-        for (int row = col + 1; row < 3; ++row) {
-          const double f = a[row][col] / a[col][col];
-          for (int k = col; k < 3; ++k) a[row][k] -= f * a[col][k];
-          rhs[row] -= f * rhs[col];
-        }
-      }
-      for (int row = 2; row >= 0; --row) {
-        double v = rhs[row];
-        for (int k = row + 1; k < 3; ++k) v -= a[row][k] * p0[o + k];
-        p0[o + row] = v / a[row][row];
-      }
-    }
-    return p0;
-  };
   if (nx > kCoarse && ny > kCoarse) {
     propagate(kCoarse);
     std::vector<int> fill;

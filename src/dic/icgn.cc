@@ -481,44 +481,21 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
 #endif  // IMPACTDIC_DIC_AVX2
 
 #if IMPACTDIC_DIC_AVX2
-// Sum of the intensities and count of saturated pixels of the subset whose top-left pixel is
-// (rx, ry) in the reference images, 8 pixels at a time (blocks as in AccumulateAvx2).
-void IntensitySumAvx2(const RefImages& ref, int rx, int ry, int size, double* sum, int* saturated) {
-  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256 zero = _mm256_setzero_ps(), full = Splat(static_cast<float>(ref.full_scale));
-  const int blocks = (size + 7) / 8;
-  __m256 total = zero, sat = zero;
-  for (int j = 0; j < size; ++j) {
-    const float* f = ref.f.ptr<float>(ry + j) + rx;
-    for (int b = 0; b < blocks; ++b) {
-      const int i0 = std::min(8 * b, size - 8);
-      const __m256 keep = _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
-      const __m256 v = _mm256_loadu_ps(f + i0);
-      total = _mm256_add_ps(total, _mm256_and_ps(v, keep));
-      const __m256 out =
-          _mm256_or_ps(_mm256_cmp_ps(v, zero, _CMP_LE_OQ), _mm256_cmp_ps(v, full, _CMP_GE_OQ));
-      sat = _mm256_add_ps(sat, _mm256_and_ps(_mm256_and_ps(out, keep), Splat(1.0f)));
-    }
-  }
-  // Per lane at most size * ceil(size / 8) values: exact in float for 8-bit images.
-  alignas(32) float lanes[8];
-  _mm256_store_ps(lanes, total);
-  double s = 0;
-  for (float l : lanes) s += l;
-  *sum = s;
-  *saturated = static_cast<int>(HorizontalSum(sat));
-}
-
 // The moments of PrepareSubset (gg[k][p][q] for p + q <= kPmax, gs and gf for p + q <= kPmax / 2,
 // ss), 8 pixels at a time: per-lane float sums of a row weighted by powers of xi, folded into the
 // per-lane subset sums with powers of eta at the end of each row, reduced once at the end.
 template <int kPmax>
-void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double gg[3][5][5],
-                 double gs[2][3][3], double gf[2][3][3], double* ss) {
+void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, double* mean, int* saturated,
+                 double gg[3][5][5], double gs[2][3][3], double gf[2][3][3], double* ss) {
   constexpr int kPs = kPmax / 2;
   const int size = 2 * h + 1;
   const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256 zero = _mm256_setzero_ps(), m = Splat(mean);
+  // Intensities are taken relative to the centre pixel K (one pass: the mean is not known yet);
+  // the moments about the mean follow at the end.
+  const float shift = ref.f.ptr<float>(ry + h)[rx + h];
+  const __m256 zero = _mm256_setzero_ps(), m = Splat(shift);
+  const __m256 full = Splat(static_cast<float>(ref.full_scale)), one = Splat(1);
+  __m256 SF = zero, SAT = zero;
   const int blocks = (size + 7) / 8;
   __m256 GG[3][kPmax + 1][kPmax + 1], GS[2][kPs + 1][kPs + 1], GF[2][kPs + 1][kPs + 1];
   __m256 SS = zero;
@@ -550,13 +527,20 @@ void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double
       for (int p = 0; p <= kPs; ++p) rs[a][p] = rf[a][p] = zero;
     for (int b = 0; b < blocks; ++b) {
       const int i0 = std::min(8 * b, size - 8);
-      __m256 fd = _mm256_sub_ps(_mm256_loadu_ps(f + i0), m);
+      __m256 fd = _mm256_sub_ps(_mm256_loadu_ps(f + i0), m);  // f - K.
       __m256 g[2] = {_mm256_loadu_ps(gxr + i0), _mm256_loadu_ps(gyr + i0)};
+      const __m256 raw = _mm256_loadu_ps(f + i0);
+      __m256 sat = _mm256_and_ps(
+          _mm256_or_ps(_mm256_cmp_ps(raw, zero, _CMP_LE_OQ), _mm256_cmp_ps(raw, full, _CMP_GE_OQ)),
+          one);
       if (i0 != 8 * b) {  // Mask the lanes of the previous block.
         fd = _mm256_and_ps(fd, keep_last);
         g[0] = _mm256_and_ps(g[0], keep_last);
         g[1] = _mm256_and_ps(g[1], keep_last);
+        sat = _mm256_and_ps(sat, keep_last);
       }
+      SF = _mm256_add_ps(SF, fd);
+      SAT = _mm256_add_ps(SAT, sat);
       const __m256* xp = xi_pow[b];
       SS = _mm256_fmadd_ps(fd, fd, SS);
       const __m256 prod[3] = {_mm256_mul_ps(g[0], g[0]), _mm256_mul_ps(g[0], g[1]),
@@ -602,7 +586,15 @@ void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, float mean, double
       }
     }
   }
-  *ss = HorizontalSum(SS);
+  // About the mean: sum g (f - mean) = sum g (f - K) - (mean - K) sum g, and
+  // sum (f - mean)^2 = sum (f - K)^2 - N (mean - K)^2.
+  const double count = double(size) * size, offset = HorizontalSum(SF) / count;
+  *mean = shift + offset;
+  *saturated = static_cast<int>(HorizontalSum(SAT));
+  for (int a = 0; a < 2; ++a)
+    for (int p = 0; p <= kPs; ++p)
+      for (int q = 0; p + q <= kPs; ++q) gf[a][p][q] -= offset * gs[a][p][q];
+  *ss = std::max(0.0, HorizontalSum(SS) - count * offset * offset);
 }
 #endif  // IMPACTDIC_DIC_AVX2
 
@@ -733,12 +725,22 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
   const int rx = s->cx - ref.region.x - h, ry = s->cy - ref.region.y - h;
   const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
   const bool vector = size >= 8 && size <= 8 * kMaxBlocks;
-  double sum = 0;
+  const double count = double(size) * size;
+  double mean = 0;
   int saturated = 0;
+  // Moments: gg[k][p][q] = sum g_a g_b xi^p eta^q (k: xx, xy, yy), gs[a][p][q] = sum g_a ...,
+  // gf[a][p][q] = sum g_a (f - mean) ...
+  double gg[3][5][5] = {}, gs[2][3][3] = {}, gf[2][3][3] = {}, ss = 0;
 #if IMPACTDIC_DIC_AVX2
-  if (vector) IntensitySumAvx2(ref, rx, ry, size, &sum, &saturated);
+  if (vector) {
+    if (pmax == 2)
+      MomentsAvx2<2>(ref, rx, ry, h, &mean, &saturated, gg, gs, gf, &ss);
+    else
+      MomentsAvx2<4>(ref, rx, ry, h, &mean, &saturated, gg, gs, gf, &ss);
+  }
 #endif
   if (!IMPACTDIC_DIC_AVX2 || !vector) {
+    double sum = 0;
     for (int j = 0; j < size; ++j) {
       const float* f = ref.f.ptr<float>(ry + j) + rx;
       for (int i = 0; i < size; ++i) {
@@ -746,19 +748,8 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
         saturated += (f[i] <= 0 || f[i] >= ref.full_scale) ? 1 : 0;
       }
     }
+    mean = sum / count;
   }
-  const double count = double(size) * size, mean = sum / count;
-  // Moments: gg[k][p][q] = sum g_a g_b xi^p eta^q (k: xx, xy, yy), gs[a][p][q] = sum g_a ...,
-  // gf[a][p][q] = sum g_a (f - mean) ...
-  double gg[3][5][5] = {}, gs[2][3][3] = {}, gf[2][3][3] = {}, ss = 0;
-#if IMPACTDIC_DIC_AVX2
-  if (vector) {
-    if (pmax == 2)
-      MomentsAvx2<2>(ref, rx, ry, h, static_cast<float>(mean), gg, gs, gf, &ss);
-    else
-      MomentsAvx2<4>(ref, rx, ry, h, static_cast<float>(mean), gg, gs, gf, &ss);
-  }
-#endif
   if (!IMPACTDIC_DIC_AVX2 || !vector) {
     for (int j = 0; j < size; ++j) {
       const double eta = j - h;
