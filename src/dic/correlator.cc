@@ -412,13 +412,28 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
     const int spacing = std::max(1, options.init.seed_spacing / stride);
     const int lattice_nx = (nx + stride - 1) / stride, lattice_ny = (ny + stride - 1) / stride;
     while (true) {
-      std::vector<int> frontier, best;
+      // Solved neighbours are listed before the wave runs (the wave changes `at`).
+      std::vector<int> frontier, best, neighbour_count;
+      std::vector<std::array<int, 8>> neighbours;
       for (int i = 0; i < n; ++i) {
         if (!usable[i] || at[i].solved || at[i].propagated || !on_lattice(i, stride)) continue;
         const int j = solved_neighbour(i, stride);
-        if (j >= 0) {
-          frontier.push_back(i);
-          best.push_back(j);
+        if (j < 0) continue;
+        frontier.push_back(i);
+        best.push_back(j);
+        if (stride > 1) {
+          std::array<int, 8> from;
+          int count = 0;
+          const int r = i / nx, c = i % nx;
+          for (int dr = -stride; dr <= stride; dr += stride) {
+            for (int dc = -stride; dc <= stride; dc += stride) {
+              const int rr = r + dr, cc = c + dc;
+              if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx && at[rr * nx + cc].solved)
+                from[count++] = rr * nx + cc;
+            }
+          }
+          neighbours.push_back(from);
+          neighbour_count.push_back(count);
         }
       }
       if (!frontier.empty()) {
@@ -432,18 +447,7 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
             at[i].r = icgn(i, internal::Transfer(shape, at[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
           } else {
             // On the coarse lattice the neighbours are far apart: fit all solved ones.
-            std::array<int, 8> from;
-            int count = 0;
-            const int r = i / nx, c = i % nx;
-            for (int dr = -stride; dr <= stride; dr += stride) {
-              for (int dc = -stride; dc <= stride; dc += stride) {
-                const int rr = r + dr, cc = c + dc;
-                if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx &&
-                    at[rr * nx + cc].solved)
-                  from[count++] = rr * nx + cc;
-              }
-            }
-            at[i].r = icgn(i, FitGuess(si, from.data(), count, at));
+            at[i].r = icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k], at));
           }
           at[i].solved = at[i].r.status == SubsetStatus::kConverged;
         });
