@@ -15,7 +15,15 @@
 #if defined(__AVX2__) && defined(__FMA__)
 #define IMPACTDIC_DIC_AVX2 1
 #include <immintrin.h>
+// The IC-GN pass uses 16-lane AVX-512 where available (unless IMPACTDIC_DIC_NO_AVX512 is defined,
+// to test the 8-lane path on such machines).
+#if defined(__AVX512F__) && !defined(IMPACTDIC_DIC_NO_AVX512)
+#define IMPACTDIC_DIC_AVX512 1
 #else
+#define IMPACTDIC_DIC_AVX512 0
+#endif
+#else
+#define IMPACTDIC_DIC_AVX512 0
 #define IMPACTDIC_DIC_AVX2 0
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -248,6 +256,17 @@ inline double HorizontalSum(__m256 v) {
   return _mm_cvtss_f32(_mm_add_ss(d, _mm_shuffle_ps(d, d, 1)));
 }
 
+// 120 x the quintic B-spline weights b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2),
+// b5(t - 3) as polynomials of t: coefficients of 1, t, ..., t^5.
+constexpr float kQuinticC[6][6] = {
+    {1, -5, 10, -10, 5, -1},     // (1 - t)^5
+    {26, -50, 20, 20, -20, 5},   // b5(1 + t)
+    {66, 0, -60, 0, 30, -10},    // b5(t)
+    {26, 50, 20, -20, -20, 10},  // b5(1 - t)
+    {1, 5, 10, 10, 5, -5},       // b5(2 - t)
+    {0, 0, 0, 0, 0, 1},          // t^5
+};
+
 // Scale of the weights of WeightsAvx2 (per axis): the interpolated value is the weighted sum
 // divided by kWeightScale^2.
 template <int kTaps>
@@ -268,17 +287,9 @@ inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
   } else {
     // Quintic B-spline weights as quintic polynomials of t (Horner), coefficients of
     // b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2), b5(t - 3) times 120.
-    static constexpr float kC[6][6] = {
-        {1, -5, 10, -10, 5, -1},     // (1 - t)^5
-        {26, -50, 20, 20, -20, 5},   // b5(1 + t)
-        {66, 0, -60, 0, 30, -10},    // b5(t)
-        {26, 50, 20, -20, -20, 10},  // b5(1 - t)
-        {1, 5, 10, 10, 5, -5},       // b5(2 - t)
-        {0, 0, 0, 0, 0, 1},          // t^5
-    };
     for (int k = 0; k < 6; ++k) {
-      __m256 v = Splat(kC[k][5] / 120);
-      for (int d = 4; d >= 0; --d) v = _mm256_fmadd_ps(v, t, Splat(kC[k][d] / 120));
+      __m256 v = Splat(kQuinticC[k][5] / 120);
+      for (int d = 4; d >= 0; --d) v = _mm256_fmadd_ps(v, t, Splat(kQuinticC[k][d] / 120));
       w[k] = v;
     }
   }
@@ -598,11 +609,200 @@ void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, double* mean, int*
 }
 #endif  // IMPACTDIC_DIC_AVX2
 
+#if IMPACTDIC_DIC_AVX512
+// The IC-GN pass 16 pixels at a time (AVX-512): as AccumulateAvx2, with blocks of 16 lanes
+// starting at 0, 16, ... and the lanes past the row end masked (masked loads read nothing
+// there), so a row of 25 pixels takes two blocks.
+inline __m512 Splat16(float v) { return _mm512_set1_ps(v); }
+// All lanes (the zero-masking forms of some intrinsics avoid a GCC 12 false
+// -Wmaybe-uninitialized in the unmasked ones).
+constexpr __mmask16 kAll = 0xFFFF;
+
+// Sum of the 16 lanes, in a fixed order.
+inline double Sum16(__m512 v) {
+  alignas(64) float lanes[16];
+  _mm512_store_ps(lanes, v);
+  float s = 0;
+  for (float l : lanes) s += l;
+  return s;
+}
+
+template <int kTaps>
+inline void WeightsAvx512(__m512 t, __m512 w[kTaps]) {
+  if constexpr (kTaps == 4) {
+    const __m512 s = _mm512_sub_ps(Splat16(1), t);
+    const __m512 t2 = _mm512_mul_ps(t, t), s2 = _mm512_mul_ps(s, s);
+    const __m512 t3 = _mm512_mul_ps(t2, t), s3 = _mm512_mul_ps(s2, s);
+    w[0] = s3;
+    w[1] = _mm512_fmadd_ps(t3, Splat16(3), _mm512_fnmadd_ps(t2, Splat16(6), Splat16(4)));
+    w[2] = _mm512_fmadd_ps(s3, Splat16(3), _mm512_fnmadd_ps(s2, Splat16(6), Splat16(4)));
+    w[3] = t3;
+  } else {
+    for (int k = 0; k < 6; ++k) {
+      __m512 v = Splat16(kQuinticC[k][5] / 120);
+      for (int d = 4; d >= 0; --d) v = _mm512_fmadd_ps(v, t, Splat16(kQuinticC[k][d] / 120));
+      w[k] = v;
+    }
+  }
+}
+
+template <int kTaps, bool kQuad>
+void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                      const float* coef, std::size_t stride, int dcx, int dcy, const Params& p,
+                      Sums* out) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
+  const __m512 fm = Splat16(s.f_mean);
+  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
+  const double u = p[0] - iu, v = p[nm] - iv;
+  const float* centre =
+      coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
+      (dcx + iu);
+  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const std::size_t rstride = ref.f.step1();
+  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const int blocks = (size + 15) / 16;
+  const int istride = static_cast<int>(stride);
+  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
+  __m512 sg = _mm512_setzero_ps(), sgg = sg, sfg = sg;
+  __m512 a00 = sg, a10 = sg, a01 = sg, b00 = sg, b10 = sg, b01 = sg;
+  __m512 a20 = sg, a11 = sg, a02 = sg, b20 = sg, b11 = sg, b02 = sg;
+  for (int j = 0; j < size; ++j) {
+    const double eta = j - h;
+    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
+    if constexpr (kQuad) {
+      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
+      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
+      ax2 = static_cast<float>(0.5 * p[3]);
+      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
+      ay1 = static_cast<float>(p[7] + p[10] * eta);
+      ay2 = static_cast<float>(0.5 * p[9]);
+    } else {
+      ax0 = static_cast<float>(u + p[2] * eta);
+      ax1 = static_cast<float>(1 + p[1]);
+      ay0 = static_cast<float>(eta + v + p[5] * eta);
+      ay1 = static_cast<float>(p[4]);
+    }
+    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
+    const float* fr = ref.f.ptr<float>() + roff;
+    const float* gxr = ref.gx.ptr<float>() + roff;
+    const float* gyr = ref.gy.ptr<float>() + roff;
+    __m512 ra00 = _mm512_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
+           rb20 = ra00;
+    for (int b = 0; b < blocks; ++b) {
+      const int i0 = 16 * b, valid = std::min(16, size - i0);
+      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
+      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
+      __m512 x, y;
+      if constexpr (kQuad) {
+        x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, Splat16(ax2), Splat16(ax1)), xi, Splat16(ax0));
+        y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, Splat16(ay2), Splat16(ay1)), xi, Splat16(ay0));
+      } else {
+        x = _mm512_fmadd_ps(xi, Splat16(ax1), Splat16(ax0));
+        y = _mm512_fmadd_ps(xi, Splat16(ay1), Splat16(ay0));
+      }
+      const __m512 fx =
+          _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+      const __m512 fy =
+          _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+      const __m512 tx = _mm512_sub_ps(x, fx), ty = _mm512_sub_ps(y, fy);
+      const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx),
+                    iy = _mm512_maskz_cvttps_epi32(kAll, fy);
+      const int ix0 = _mm512_cvtsi512_si32(ix), iy0 = _mm512_cvtsi512_si32(iy);
+      const __mmask16 off =
+          _mm512_mask_cmpneq_epi32_mask(m, ix, _mm512_add_epi32(_mm512_set1_epi32(ix0), lane_i)) |
+          _mm512_mask_cmpneq_epi32_mask(m, iy, _mm512_set1_epi32(iy0));
+      __m512 wx[kTaps], wy[kTaps], rs[kTaps];
+      WeightsAvx512<kTaps>(tx, wx);
+      WeightsAvx512<kTaps>(ty, wy);
+      if (off == 0) {
+        const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
+        for (int r = 0; r < kTaps; ++r) {
+          const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
+          rs[r] = _mm512_mul_ps(wx[0], _mm512_maskz_loadu_ps(m, cr));
+          for (int k = 1; k < kTaps; ++k)
+            rs[r] = _mm512_fmadd_ps(wx[k], _mm512_maskz_loadu_ps(m, cr + k), rs[r]);
+        }
+      } else {
+        const __m512i off0 =
+            _mm512_add_epi32(_mm512_mullo_epi32(_mm512_sub_epi32(iy, _mm512_set1_epi32(kLow)),
+                                                _mm512_set1_epi32(istride)),
+                             _mm512_sub_epi32(ix, _mm512_set1_epi32(kLow)));
+        for (int r = 0; r < kTaps; ++r) {
+          const __m512i offr = _mm512_add_epi32(off0, _mm512_set1_epi32(r * istride));
+          auto tap = [&](int k) {
+            return _mm512_mask_i32gather_ps(
+                _mm512_setzero_ps(), m, _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
+          };
+          rs[r] = _mm512_mul_ps(wx[0], tap(0));
+          for (int k = 1; k < kTaps; ++k) rs[r] = _mm512_fmadd_ps(wx[k], tap(k), rs[r]);
+        }
+      }
+      __m512 g = _mm512_mul_ps(wy[0], rs[0]);
+      for (int r = 1; r < kTaps; ++r) g = _mm512_fmadd_ps(wy[r], rs[r], g);
+      const __m512 gp = _mm512_maskz_fmsub_ps(m, g, Splat16(1 / kScale2), fm);
+      sg = _mm512_add_ps(sg, gp);
+      sgg = _mm512_fmadd_ps(gp, gp, sgg);
+      sfg = _mm512_fmadd_ps(_mm512_maskz_loadu_ps(m, fr + i0), gp, sfg);
+      const __m512 a = _mm512_mul_ps(gp, _mm512_maskz_loadu_ps(m, gxr + i0));
+      const __m512 bb = _mm512_mul_ps(gp, _mm512_maskz_loadu_ps(m, gyr + i0));
+      ra00 = _mm512_add_ps(ra00, a);
+      ra10 = _mm512_fmadd_ps(a, xi, ra10);
+      rb00 = _mm512_add_ps(rb00, bb);
+      rb10 = _mm512_fmadd_ps(bb, xi, rb10);
+      if constexpr (kQuad) {
+        ra20 = _mm512_fmadd_ps(_mm512_mul_ps(a, xi), xi, ra20);
+        rb20 = _mm512_fmadd_ps(_mm512_mul_ps(bb, xi), xi, rb20);
+      }
+    }
+    const __m512 e = Splat16(static_cast<float>(eta));
+    a00 = _mm512_add_ps(a00, ra00);
+    a10 = _mm512_add_ps(a10, ra10);
+    a01 = _mm512_fmadd_ps(ra00, e, a01);
+    b00 = _mm512_add_ps(b00, rb00);
+    b10 = _mm512_add_ps(b10, rb10);
+    b01 = _mm512_fmadd_ps(rb00, e, b01);
+    if constexpr (kQuad) {
+      const __m512 e2 = Splat16(static_cast<float>(eta * eta));
+      a20 = _mm512_add_ps(a20, ra20);
+      a11 = _mm512_fmadd_ps(ra10, e, a11);
+      a02 = _mm512_fmadd_ps(ra00, e2, a02);
+      b20 = _mm512_add_ps(b20, rb20);
+      b11 = _mm512_fmadd_ps(rb10, e, b11);
+      b02 = _mm512_fmadd_ps(rb00, e2, b02);
+    }
+  }
+  out->sg = Sum16(sg);
+  out->sgg = Sum16(sgg);
+  out->sfg = Sum16(sfg);
+  out->a[0][0][0] = Sum16(a00);
+  out->a[0][1][0] = Sum16(a10);
+  out->a[0][0][1] = Sum16(a01);
+  out->a[1][0][0] = Sum16(b00);
+  out->a[1][1][0] = Sum16(b10);
+  out->a[1][0][1] = Sum16(b01);
+  if constexpr (kQuad) {
+    out->a[0][2][0] = Sum16(a20);
+    out->a[0][1][1] = Sum16(a11);
+    out->a[0][0][2] = Sum16(a02);
+    out->a[1][2][0] = Sum16(b20);
+    out->a[1][1][1] = Sum16(b11);
+    out->a[1][0][2] = Sum16(b02);
+  }
+}
+#endif  // IMPACTDIC_DIC_AVX512
+
 // Dispatches to the vectorised pass where it is compiled in and the subset is at least 8 px wide.
 template <int kTaps, bool kQuad>
 void AccumulateBest(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
                     std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
-#if IMPACTDIC_DIC_AVX2
+#if IMPACTDIC_DIC_AVX512
+  if (2 * shape.half + 1 >= 8) {
+    AccumulateAvx512<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
+    return;
+  }
+#elif IMPACTDIC_DIC_AVX2
   if (2 * shape.half + 1 >= 8) {
     AccumulateAvx2<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
     return;
