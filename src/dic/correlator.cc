@@ -40,12 +40,19 @@ bool IsDecorrelation(SubsetStatus s) {
 struct Frame {
   int index = 0;
   cv::Mat raw;
-  cv::Mat image32;  // Float copy for the integer search (made on demand).
+  // The image for the integer search: the 8-bit image itself, else a float copy (made on
+  // demand; cv::matchTemplate takes 8-bit or float images).
+  cv::Mat image32;
   BsplineImage spline;
   cv::Rect reach;
   DeformedImage view;
   const cv::Mat& Float() {
-    if (image32.empty()) raw.convertTo(image32, CV_32F);
+    if (image32.empty()) {
+      if (raw.depth() == CV_8U || raw.depth() == CV_32F)
+        image32 = raw;
+      else
+        raw.convertTo(image32, CV_32F);
+    }
     return image32;
   }
 };
@@ -605,8 +612,8 @@ void Correlator::SetReference(const cv::Mat& image) {
   m.iteration_sum = m.converged_sum = 0;
   FrameResult timing;
   WallTimer timer;
-  cv::Mat image32;
-  image.convertTo(image32, CV_32F);
+  cv::Mat image32 = image;
+  if (image.depth() != CV_8U && image.depth() != CV_32F) image.convertTo(image32, CV_32F);
   m.BuildReference(0, image, nullptr, image32, &timing);
   m.summary.seconds_coefficients += timing.seconds_coefficients;
   m.summary.seconds_reference += timing.seconds_reference;
