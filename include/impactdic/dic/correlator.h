@@ -18,10 +18,16 @@
 //     digital image correlation for image deformation measurement", Appl. Opt. 48 (2009) 1535,
 //     doi:10.1364/AO.48.001535) from seed points found by an integer-pixel ZNCC search
 //     (cv::matchTemplate, FFT based for large windows). The propagation runs in waves: in each
-//     wave, every unsolved subset next to a solved one starts from the warp of its best solved
-//     neighbour (highest ZNCC, ties to the lowest index), transferred to its own centre; the
-//     subsets of one wave are solved in parallel and committed together, so the result does not
-//     depend on the thread count. A subset that fails from its neighbour gets its own search.
+//     wave, every unsolved subset next to a solved one starts from its solved neighbours' warps;
+//     the subsets of one wave are solved in parallel and committed together, so the result does
+//     not depend on the thread count. The waves first cover the lattice of every second subset
+//     (start: a least-squares affine fit to the solved lattice neighbours' displacements and
+//     gradients); every other subset then starts from the same fit to its solved lattice
+//     neighbours (2 or 4, symmetric about it), which is closer to its solution than one
+//     neighbour's warp, so IC-GN needs fewer iterations. What is left is solved by waves over all
+//     subsets from the best solved neighbour (highest ZNCC, ties to the lowest index),
+//     transferred to its own centre. A subset that fails from its neighbour gets its own search.
+//     In a sequence the prediction uses the last increment averaged over 3x3 subsets.
 //  3. IC-GN (Baker & Matthews, "Lucas-Kanade 20 years on", IJCV 56 (2004) 221,
 //     doi:10.1023/B:VISI.0000011205.11775.fd; Pan, Li & Tong, "Fast, robust and accurate digital
 //     image correlation calculation without redundant computations", Exp. Mech. 53 (2013) 1277,
