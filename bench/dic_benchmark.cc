@@ -13,7 +13,6 @@
 // subset 21/25/31/41 on the pair, and plots error against time with gnuplot.
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -27,6 +26,7 @@
 
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/dic_io.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/synth/fields.h"
 #include "impactdic/synth/speckle.h"
@@ -109,28 +109,23 @@ void SetCounters(benchmark::State& state, const DicSummary& s, const FrameResult
   state.counters["t_icgn"] = f.seconds_icgn;
 }
 
-// The whole job for a pair, including image loading. The deformed image is decoded while the
-// reference is decoded and precomputed (two tasks; the precomputation's parallel loops use both
-// threads once the decoding is done).
+// The whole job for a pair, including image loading, as `impactdic correlate` runs it
+// (CorrelateFiles: the deformed image is decoded while the reference is decoded and
+// precomputed).
 void BM_FramePair(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, g_threads);
   const DicOptions options = BenchOptions();
   double best = 1e300;
   for (auto _ : state) {
     WallTimer timer;
-    Correlator correlator(options);
-    cv::Mat def;
-    tbb::parallel_invoke([&] { def = ReadGreyImage(FramePath(1)); },
-                         [&] { correlator.SetReference(ReadGreyImage(FramePath(0))); });
-    const FrameResult f = correlator.Correlate(def);
+    const DicResult result = CorrelateFiles({FramePath(0), FramePath(1)}, options);
     const double seconds = timer.ElapsedSeconds();
     best = std::min(best, seconds);
     state.SetIterationTime(seconds);
-    FrameResult timing = f;
-    timing.seconds_coefficients +=
-        correlator.summary().seconds_coefficients - f.seconds_coefficients;
-    timing.seconds_reference = correlator.summary().seconds_reference;
-    SetCounters(state, correlator.summary(), timing, kU, kV, seconds);
+    FrameResult timing = result.frames.front();
+    timing.seconds_coefficients = result.summary.seconds_coefficients;
+    timing.seconds_reference = result.summary.seconds_reference;
+    SetCounters(state, result.summary, timing, kU, kV, seconds);
   }
   state.counters["best_s"] = best;
   state.counters["best_subsets_per_s"] = state.counters["subsets"] / best;

@@ -1,6 +1,8 @@
 #include "impactdic/dic/dic_io.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_invoke.h>
+#include <tbb/task_group.h>
 
 #include <cmath>
 #include <filesystem>
@@ -31,18 +33,44 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   options.Check();
   CheckValue(paths.size() >= 2, "images", std::to_string(paths.size()) + " image(s)",
              "a reference and at least one deformed image");
-  std::vector<cv::Mat> images;
-  images.reserve(paths.size());
-  for (const auto& p : paths) images.push_back(ReadGreyImage(p));
-  CheckSameSize(images, paths);
+  // A missing file is reported before any work; a corrupt one when it is decoded.
+  for (const auto& p : paths) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(p, ec)) {
+      throw Error(ErrorKind::kFileNotFound, "image", "", "an existing image file").WithFile(p);
+    }
+  }
+  // The reference is decoded and precomputed while the first deformed image is decoded; every
+  // later image is decoded while the one before it is correlated. At most three images are
+  // held, whatever the length of the sequence.
   Correlator correlator(options);
-  correlator.SetReference(images[0]);
+  cv::Mat reference, current;
+  tbb::parallel_invoke([&] { current = ReadGreyImage(paths[1]); },
+                       [&] {
+                         reference = ReadGreyImage(paths[0]);
+                         correlator.SetReference(reference);
+                       });
+  CheckSameSize({reference, current}, {paths[0], paths[1]});
   DicResult result;
   result.positions = correlator.positions();
   ProgressBar bar("correlate", paths.size() - 1);
-  for (std::size_t k = 1; k < images.size(); ++k) {
-    result.frames.push_back(correlator.Correlate(images[k]));
-    images[k - 1].release();
+  for (std::size_t k = 1; k < paths.size(); ++k) {
+    cv::Mat next;
+    tbb::task_group prefetch;
+    if (k + 1 < paths.size()) prefetch.run([&] { next = ReadGreyImage(paths[k + 1]); });
+    try {
+      result.frames.push_back(correlator.Correlate(current));
+    } catch (...) {
+      prefetch.cancel();
+      try {
+        prefetch.wait();
+      } catch (...) {  // The correlation error is the one to report.
+      }
+      throw;
+    }
+    prefetch.wait();  // Rethrows a decoding error naming the file.
+    if (k + 1 < paths.size()) CheckSameSize({reference, next}, {paths[0], paths[k + 1]});
+    current = next;
     bar.Advance();
   }
   bar.Finish();

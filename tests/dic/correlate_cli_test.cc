@@ -108,5 +108,18 @@ TEST_F(CorrelateCli, BadInputGivesClearErrors) {
   ExpectError("correlate -o " + Path("x.csv"), "--frames");
 }
 
+// Images are decoded while the previous frame is correlated: a bad image late in the sequence
+// still stops the run with its name, and no output file is left behind.
+TEST_F(CorrelateCli, BadImageLateInTheSequenceIsNamedAndNothingIsWritten) {
+  const std::string out = Path("late.h5");
+  for (const char* bad : {"corrupt.png", "small.png", "missing.png"}) {
+    ExpectError(Pair() + " " + Path("def1.png") + " " + Path(bad) + " -o " + out, bad);
+    EXPECT_FALSE(fs::exists(out)) << bad;
+  }
+  const CliResult ok = RunCli(Pair() + " " + Path("def1.png") + " -o " + out);
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_TRUE(fs::exists(out));
+}
+
 }  // namespace
 }  // namespace impactdic

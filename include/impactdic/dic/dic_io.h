@@ -12,8 +12,10 @@
 
 namespace impactdic {
 
-// Reads every image first (Error naming the file if missing/corrupt; Error if the sizes differ),
-// then correlates paths[1..] against paths[0] frame by frame, with a progress bar.
+// Correlates paths[1..] against paths[0] frame by frame, with a progress bar. Missing files are
+// reported (Error naming the file) before any work; each image is decoded while the previous
+// one is correlated (Error naming the file if it is corrupt or its size or depth differs from
+// the first image's), so at most three images are in memory.
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
 
 // Writes the result by extension:
