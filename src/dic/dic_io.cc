@@ -34,12 +34,7 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   CheckValue(paths.size() >= 2, "images", std::to_string(paths.size()) + " image(s)",
              "a reference and at least one deformed image");
   // A missing file is reported before any work; a corrupt one when it is decoded.
-  for (const auto& p : paths) {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(p, ec)) {
-      throw Error(ErrorKind::kFileNotFound, "image", "", "an existing image file").WithFile(p);
-    }
-  }
+  for (const auto& p : paths) CheckImageFileExists(p);
   // The reference is decoded and precomputed while the first deformed image is decoded; every
   // later image is decoded while the one before it is correlated. At most three images are
   // held, whatever the length of the sequence.

@@ -28,11 +28,15 @@ bool IsImageFile(const fs::path& p) {
 
 }  // namespace
 
-cv::Mat ReadGreyImage(const std::string& path) {
+void CheckImageFileExists(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
     throw Error(ErrorKind::kFileNotFound, "image", "", "an existing image file").WithFile(path);
   }
+}
+
+cv::Mat ReadGreyImage(const std::string& path) {
+  CheckImageFileExists(path);
   cv::Mat image = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   if (image.empty()) {
     throw Error(ErrorKind::kFileFormat, "image",

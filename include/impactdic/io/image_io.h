@@ -9,6 +9,10 @@
 
 namespace impactdic {
 
+// Error kFileNotFound naming the file unless `path` is an existing regular file (a cheap check
+// before a long job; ReadGreyImage does it too).
+void CheckImageFileExists(const std::string& path);
+
 // Reads one image as single-channel 8- or 16-bit (colour images are converted to grey).
 // Error kFileNotFound when missing, kFileFormat when OpenCV cannot decode it (corrupt/truncated).
 cv::Mat ReadGreyImage(const std::string& path);
