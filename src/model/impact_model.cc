@@ -633,8 +633,9 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   } else {
     sum.solver = "auto(dopri5)";
     sum.solver_reason = fmt::format(
-        "no stiffness detected (largest h|lambda| = {:.3g} <= 3.25): the step limit {} s near "
-        "the sigmoid keeps Dormand-Prince stable",
+        "no stiffness detected (Hairer's test: h|lambda| > 3.25 on fewer than 15 accepted "
+        "Dormand-Prince steps in a row; largest h|lambda| {:.3g}): the step limit {} s near the "
+        "sigmoid keeps Dormand-Prince stable",
         max_h_lambda, Num(h_window));
   }
   sum.wall_time_s = timer.ElapsedSeconds();

@@ -171,6 +171,7 @@ OdeResult Integrator::Run(double x0, const Vec2& y0, double x_end) {
 
   double facold = 1e-4;  // PI controller memory (Hairer's DOPRI5).
   bool last_rejected = false;
+  int domain_exits = 0;       // Consecutive trial steps that left the domain.
   int iasti = 0, nonsti = 0;  // Stiffness test counters (Hairer's DOPRI5).
   Mat2 jac{};
   Vec2 dfdx{};
@@ -313,9 +314,17 @@ OdeResult Integrator::Run(double x0, const Vec2& y0, double x_end) {
 
     if (!ok) {
       // Outside the domain or non-finite: reject with a strong reduction.
+      // A trial step can leave the domain because the solution does (the slope at the step's
+      // start already carries it out) or because the step is too long for what lies ahead (a
+      // later stage met a steep rise of the right-hand side, e.g. a sigmoid with a huge rate,
+      // while the slope at the start stays inside): the latter is retried with shorter steps.
       if (opt_.stop_on_domain_exit && domain_violation) {
-        result_.status = OdeStatus::kLeftDomain;
-        break;
+        Vec2 euler;
+        for (int i = 0; i < 2; ++i) euler[i] = y[i] + hsigned * f[i];
+        if (!InDomain(x_target, euler) || ++domain_exits > opt_.domain_exit_retries) {
+          result_.status = OdeStatus::kLeftDomain;
+          break;
+        }
       }
       ++result_.rejected_steps;
       h = 0.25 * hs;
@@ -341,6 +350,7 @@ OdeResult Integrator::Run(double x0, const Vec2& y0, double x_end) {
 
     // Accepted.
     ++result_.steps;
+    domain_exits = 0;
     step.y1 = ynew;
     step.f1 = fnew;
     step.local_error = local;

@@ -310,6 +310,14 @@ std::vector<Extreme> ExtremeCases() {
   e = {"b=1e7", d};
   e.p.sigmoid_rate_b_per_s = 1e7;
   out.push_back(e);
+  // Far steeper than the paper's b: a trial step towards the window must not be mistaken for
+  // the end of the motion (it used to end the time phase early and cost 1e5..2e6 steps).
+  e = {"b=1e8", d};
+  e.p.sigmoid_rate_b_per_s = 1e8;
+  out.push_back(e);
+  e = {"b=1e10", d};
+  e.p.sigmoid_rate_b_per_s = 1e10;
+  out.push_back(e);
   e = {"v0=0.01", d};
   e.p.impact_velocity_m_s = 0.01;
   out.push_back(e);
@@ -349,14 +357,14 @@ TEST(ImpactModelExtreme, WarningsNameWhatHappened) {
     return SimulateImpact(p, SolverSetting("auto", 1e-6)).summary;
   };
   // v0 = 0.01 m/s: friction below the weight at the stop, and no deceleration peak.
-  const ImpactSummary slow = run(cases[2].p);
+  const ImpactSummary slow = run(cases[4].p);
   EXPECT_TRUE(HasWarning(slow, "stopped only by the v^-n damping term")) << slow.FullReport();
   EXPECT_TRUE(HasWarning(slow, "no distinct peak"));
   EXPECT_TRUE(std::isnan(slow.peak_deceleration_g));
   // D = 0.001 m: 1.2 m deep, beyond the 0.6 m bed.
-  EXPECT_TRUE(HasWarning(run(cases[3].p), "beyond the bed height"));
+  EXPECT_TRUE(HasWarning(run(cases[5].p), "beyond the bed height"));
   // m_p = 1000 kg from 18 m: beyond the bed.
-  const ImpactSummary heavy = run(cases[5].p);
+  const ImpactSummary heavy = run(cases[7].p);
   EXPECT_GT(heavy.crater_depth_m, 0.6);
   EXPECT_TRUE(HasWarning(heavy, "beyond the bed height"));
   // The default case has none.
@@ -368,7 +376,7 @@ TEST(ImpactModelExtreme, SteepSigmoidIsResolvedCheaplyAndConverges) {
   p5.sigmoid_rate_b_per_s = 1e5;
   p7.sigmoid_rate_b_per_s = 1e7;
   const ImpactSummary s5 = SimulateImpact(p5, SolverSetting("auto", 1e-8)).summary;
-  for (const char* name : {"stiff", "auto"}) {
+  for (const char* name : {"stiff", "auto", "dopri5"}) {
     const ImpactSummary s7 = SimulateImpact(p7, SolverSetting(name, 1e-8)).summary;
     EXPECT_LT(Rel(s7.crater_depth_m, s5.crater_depth_m), 1e-3) << name;
     // Never stepped over: the peak of ~3.9e5 g is seen (it only exists for ~1e-6 s).
@@ -377,6 +385,15 @@ TEST(ImpactModelExtreme, SteepSigmoidIsResolvedCheaplyAndConverges) {
     const ImpactSummary s_default =
         SimulateImpact(ImpactModelParameters{}, SolverSetting(name, 1e-8)).summary;
     EXPECT_LT(s7.steps, 2 * s_default.steps + 100) << name;
+    // The same up to b = 1e12 (a step in m_add lasting 1e-11 s).
+    for (double b : {1e8, 1e10, 1e12}) {
+      ImpactModelParameters pb;
+      pb.sigmoid_rate_b_per_s = b;
+      const ImpactSummary sb = SimulateImpact(pb, SolverSetting(name, 1e-8)).summary;
+      EXPECT_LT(Rel(sb.crater_depth_m, s5.crater_depth_m), 1e-3) << name << " b=" << b;
+      EXPECT_LT(sb.steps, 2 * s_default.steps + 200) << name << " b=" << b;
+      EXPECT_TRUE(sb.warnings.empty()) << name << " b=" << b << ": " << sb.FullReport();
+    }
   }
 }
 

@@ -168,6 +168,24 @@ TEST(Ode, DomainExitStopsAtTheLastAcceptedPoint) {
   EXPECT_EQ(r.status, OdeStatus::kLeftDomain);
   EXPECT_GT(r.y[0], 0.0);
   EXPECT_LT(r.x, 1.0);
+  // The slope at the step's start carries it out: no retries.
+  EXPECT_EQ(r.rejected_steps, 0);
+}
+
+TEST(Ode, ATooLongTrialStepLeavingTheDomainIsRetriedNotTakenAsTheExit) {
+  // y' = -100 only for x > 0.95 (a steep drop ahead), 0 before: a long step from x = 0 samples
+  // the drop and leaves y > 0, although the solution stays inside until x = 0.96.
+  OdeSystem sys;
+  sys.rhs = [](double x, const Vec2&) { return Vec2{x > 0.95 ? -100.0 : 0.0, 0.0}; };
+  sys.in_domain = [](double, const Vec2& y) { return y[0] > 0.0; };
+  OdeOptions o;
+  o.stop_on_domain_exit = true;
+  o.initial_step = 2.0;
+  o.landmarks = {0.95};
+  const OdeResult r = IntegrateOde(sys, 0.0, {1.0, 0.0}, 5.0, o);
+  EXPECT_EQ(r.status, OdeStatus::kLeftDomain);
+  EXPECT_GE(r.x, 0.95);
+  EXPECT_LT(r.x, 0.96);
 }
 
 }  // namespace

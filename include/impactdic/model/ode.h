@@ -68,9 +68,12 @@ struct OdeOptions {
   long max_steps = 2000000;  // Accepted + rejected steps.
   // Called after every accepted step; returning true ends the integration there.
   std::function<bool(double x, const Vec2& y, const Vec2& f)> stop_after_step;
-  // If true, a trial state outside the domain ends the integration at the last accepted point
-  // (status kLeftDomain); otherwise the step is rejected and retried with a quarter of the size.
+  // A trial state outside the domain is rejected and retried with a quarter of the step. If
+  // stop_on_domain_exit, the integration ends at the last accepted point (status kLeftDomain)
+  // when the slope at the step's start carries the solution out too (y + h f outside), or
+  // after domain_exit_retries consecutive retries (a step too long for a steep rise ahead).
   bool stop_on_domain_exit = false;
+  int domain_exit_retries = 3;
 };
 
 enum class OdeStatus {
