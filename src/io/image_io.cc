@@ -1,5 +1,6 @@
 #include "impactdic/io/image_io.h"
 
+#include <fmt/format.h>
 #include <fnmatch.h>
 
 #include <algorithm>
@@ -26,7 +27,88 @@ bool IsImageFile(const fs::path& p) {
   return std::any_of(std::begin(kExt), std::end(kExt), [&](const char* e) { return ext == e; });
 }
 
+// Orders names as a person would: runs of digits compare by value ("f_9" < "f_10").
+bool NaturalLess(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (std::isdigit(static_cast<unsigned char>(a[i])) &&
+        std::isdigit(static_cast<unsigned char>(b[j]))) {
+      std::size_t i1 = i, j1 = j;
+      while (i1 < a.size() && a[i1] == '0') ++i1;
+      while (j1 < b.size() && b[j1] == '0') ++j1;
+      std::size_t i2 = i1, j2 = j1;
+      while (i2 < a.size() && std::isdigit(static_cast<unsigned char>(a[i2]))) ++i2;
+      while (j2 < b.size() && std::isdigit(static_cast<unsigned char>(b[j2]))) ++j2;
+      if (i2 - i1 != j2 - j1) return i2 - i1 < j2 - j1;
+      const int c = a.compare(i1, i2 - i1, b, j1, j2 - j1);
+      if (c != 0) return c < 0;
+      if (i2 - i != j2 - j) return i2 - i < j2 - j;  // "07" before "007": fewer zeros first
+      i = i2;
+      j = j2;
+    } else {
+      if (a[i] != b[j]) return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+// Splits a file name's stem at its last run of digits: prefix, number, suffix. False if the
+// stem has no digits.
+bool SplitFrameNumber(const std::string& path, std::string* prefix, long long* number,
+                      std::string* suffix) {
+  const std::string name = fs::path(path).filename().string();
+  const std::size_t dot = name.rfind('.');
+  const std::string stem = dot == std::string::npos ? name : name.substr(0, dot);
+  std::size_t end = stem.size();
+  while (end > 0 && !std::isdigit(static_cast<unsigned char>(stem[end - 1]))) --end;
+  if (end == 0) return false;
+  std::size_t begin = end;
+  while (begin > 0 && std::isdigit(static_cast<unsigned char>(stem[begin - 1]))) --begin;
+  if (end - begin > 15) return false;
+  *prefix = stem.substr(0, begin);
+  *number = std::stoll(stem.substr(begin, end - begin));
+  *suffix = name.substr(end);
+  return true;
+}
+
 }  // namespace
+
+void CheckFrameNumbering(const std::vector<std::string>& files) {
+  if (files.size() < 3) return;
+  std::vector<long long> numbers;
+  std::string prefix0, suffix0;
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    std::string prefix, suffix;
+    long long number = 0;
+    if (!SplitFrameNumber(files[k], &prefix, &number, &suffix)) return;
+    if (k == 0) {
+      prefix0 = prefix;
+      suffix0 = suffix;
+    } else if (prefix != prefix0 || suffix != suffix0) {
+      return;  // Not one numbered series: nothing to check.
+    }
+    numbers.push_back(number);
+  }
+  const long long step = numbers[1] - numbers[0];
+  for (std::size_t k = 1; k < numbers.size(); ++k) {
+    const long long d = numbers[k] - numbers[k - 1];
+    if (d == step && step > 0) continue;
+    const long long missing = step > 0 && d > step && d % step == 0 ? d / step - 1 : 0;
+    throw Error(ErrorKind::kInvalidValue, "frames",
+                fmt::format("the numbering jumps from {} to {} ({})",
+                            fs::path(files[k - 1]).filename().string(),
+                            fs::path(files[k]).filename().string(),
+                            missing > 0 ? fmt::format("{} frame(s) missing", missing)
+                                        : fmt::format("step {} after step {}", d, step)),
+                fmt::format("consecutively numbered frames (step {}): the frame times are "
+                            "counted from the first frame, so a missing frame shifts all later "
+                            "ones",
+                            step))
+        .WithFile(files[k]);
+  }
+}
 
 void CheckImageFileExists(const std::string& path) {
   std::error_code ec;
@@ -114,7 +196,7 @@ std::vector<std::string> ListFrames(const std::string& source) {
                 "at least one .tif/.png/.bmp/.jpg frame")
         .WithFile(source);
   }
-  std::sort(files.begin(), files.end());
+  std::sort(files.begin(), files.end(), NaturalLess);
   return files;
 }
 

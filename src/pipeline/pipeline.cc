@@ -23,6 +23,7 @@
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/preprocess/preprocess.h"
+#include "impactdic/render/gnuplot.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/results_layout.h"
 #include "impactdic/sensor/sensor.h"
@@ -73,6 +74,7 @@ FrameSource OpenFrames(const std::string& source) {
     frames.video = ReadVideoFrames(source);
   } else {
     frames.files = ListFrames(source);
+    CheckFrameNumbering(frames.files);
   }
   return frames;
 }
@@ -231,8 +233,9 @@ std::string PipelineSummary::FullReport() const {
   return text;
 }
 
-PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
-  options.Check();
+namespace {
+
+PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   WallTimer total;
   PipelineSummary summary;
   summary.scene_name = scene.name;
@@ -241,7 +244,11 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   StageLog stages(&summary);
   SceneFigures& fig = summary.figures;
   const bool want_outputs = scene.HasStage("outputs");
-  if (want_outputs) PrepareOutputFolder(summary.output_folder);
+  if (want_outputs) {
+    PrepareOutputFolder(summary.output_folder);
+    // Figures need gnuplot: find out now, not after the whole run.
+    if (scene.outputs.figures) DetectPngTerminal(ResolveGnuplotBinary(PlotOptions{}));
+  }
 
   // --- calibration ---------------------------------------------------------------------------
   std::optional<CameraCalibration> calibration;
@@ -312,6 +319,18 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
       } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
         if (e.file().empty()) e.WithFile(scene.inputs.sensor);
         throw;
+      }
+      if (!sensor->exposure.empty()) {
+        const std::size_t edges = ExposureRisingEdges(sensor->time_s, sensor->exposure).size();
+        if (edges > static_cast<std::size_t>(n)) {
+          const std::string w = fmt::format(
+              "{} exposure edges in {} for {} frames: frame k is timed by edge k, the last {} "
+              "edge(s) are unused; if frames are missing from the sequence, every later frame "
+              "time is wrong",
+              edges, scene.inputs.sensor, n, edges - static_cast<std::size_t>(n));
+          LogWarning("{}", w);
+          summary.warnings.push_back("sensor: " + w);
+        }
       }
       if (scene.dic.first_frame == 0) {
         // The reference is the last frame exposed before the impact: nothing earlier moves.
@@ -630,16 +649,6 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
     out.Commit();
     summary.outputs.push_back(results_path);
   }
-  const std::string json_path = (folder / "summary.json").string();
-  WriteTextFileAtomic(json_path, fig.ToJson().Dump() + "\n");
-  summary.outputs.push_back(json_path);
-  if (scene.outputs.csv) {
-    const std::string csv_path = (folder / "summary.csv").string();
-    std::vector<std::vector<double>> columns;
-    for (double v : fig.CsvValues()) columns.push_back({v});
-    WriteCsv(csv_path, fig.CsvNames(), columns);
-    summary.outputs.push_back(csv_path);
-  }
   if (scene.outputs.figures || scene.outputs.animation) {
     RenderResultsOptions r;
     r.output_dir = summary.output_folder;
@@ -651,6 +660,17 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
     for (const auto& w : rendered.written) summary.outputs.push_back(w);
     for (const auto& s : rendered.skipped) summary.warnings.push_back("render: " + s);
   }
+  // The summary files come last: they are what says a run finished.
+  const std::string json_path = (folder / "summary.json").string();
+  WriteTextFileAtomic(json_path, fig.ToJson().Dump() + "\n");
+  summary.outputs.push_back(json_path);
+  if (scene.outputs.csv) {
+    const std::string csv_path = (folder / "summary.csv").string();
+    std::vector<std::vector<double>> columns;
+    for (double v : fig.CsvValues()) columns.push_back({v});
+    WriteCsv(csv_path, fig.CsvNames(), columns);
+    summary.outputs.push_back(csv_path);
+  }
   if (!scene.outputs.hdf5) {
     std::error_code ec;
     fs::remove(results_path, ec);
@@ -661,6 +681,24 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
              fmt::format("{} files in {}", summary.outputs.size(), summary.output_folder), t_out);
   summary.seconds = total.ElapsedSeconds();
   return summary;
+}
+
+}  // namespace
+
+PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
+  options.Check();
+  const std::string folder =
+      options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
+  std::error_code ec;
+  const bool existed = fs::exists(folder, ec);
+  try {
+    return RunStages(scene, options);
+  } catch (...) {
+    // A failed run leaves no empty output folder behind (files already complete stay).
+    if (!existed && fs::is_directory(folder, ec) && fs::is_empty(folder, ec))
+      fs::remove(folder, ec);
+    throw;
+  }
 }
 
 }  // namespace impactdic

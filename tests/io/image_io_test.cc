@@ -28,6 +28,40 @@ TEST(ImageIo, Reads8And16BitAndListsFramesSorted) {
   EXPECT_EQ(ListFrames(dir.path().string()).size(), 3u);
 }
 
+TEST(ImageIo, FramesSortNaturallyAndGapsInTheNumberingAreNamed) {
+  TestDir dir;
+  const cv::Mat a(8, 8, CV_8U, cv::Scalar(1));
+  for (const char* name : {"f_10.png", "f_9.png", "f_8.png", "f_100.png"})
+    WriteImage(dir.File(name), a);
+  const auto files = ListFrames(dir.File("f_*.png"));
+  ASSERT_EQ(files.size(), 4u);
+  EXPECT_NE(files[0].find("f_8.png"), std::string::npos);
+  EXPECT_NE(files[1].find("f_9.png"), std::string::npos);
+  EXPECT_NE(files[2].find("f_10.png"), std::string::npos);
+  EXPECT_NE(files[3].find("f_100.png"), std::string::npos);
+  // f_8, 9, 10, 100: a gap of 89 frames after f_10.
+  try {
+    CheckFrameNumbering(files);
+    FAIL() << "expected a numbering gap";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("f_100.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("89 frame(s) missing"), std::string::npos) << e.what();
+  }
+  try {
+    CheckFrameNumbering({"d/frame_0001.png", "d/frame_0002.png", "d/frame_0004.png"});
+    FAIL() << "expected a numbering gap";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_0002.png to frame_0004.png"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("1 frame(s) missing"), std::string::npos);
+  }
+  // A constant step, names that are not one numbered series, or too few names: no error.
+  EXPECT_NO_THROW(CheckFrameNumbering({"img_10.tif", "img_12.tif", "img_14.tif"}));
+  EXPECT_NO_THROW(CheckFrameNumbering({"a.png", "b.png", "c.png"}));
+  EXPECT_NO_THROW(CheckFrameNumbering({"a1.png", "b5.png", "c9.png"}));
+  EXPECT_NO_THROW(CheckFrameNumbering({"f_1.png", "f_7.png"}));
+}
+
 TEST(ImageIo, ClearErrorsForMissingCorruptAndMixedSizes) {
   TestDir dir;
   try {

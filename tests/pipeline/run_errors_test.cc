@@ -1,6 +1,7 @@
 // Bad input to `impactdic run`: clear errors, non-zero exit, and no results that look complete.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
@@ -67,6 +68,52 @@ outputs: {folder: out, figures: false, animation: false}
   EXPECT_FALSE(std::filesystem::exists(dir.File("out/results.h5")));
 }
 
+// Good 64x64 frames f0..f4 (f2 left out if `gap`) and a scene that correlates them.
+Scene SmallFrameScene(const TestDir& dir, bool gap, bool figures) {
+  std::filesystem::create_directories(dir.path() / "frames");
+  cv::Mat image(64, 64, CV_8U);
+  cv::randu(image, 0, 255);
+  for (int k = 0; k < 5; ++k)
+    if (!(gap && k == 2)) WriteImage(dir.File("frames/f" + std::to_string(k) + ".png"), image);
+  return ParseScene(std::string(R"(
+inputs: {frames: frames, mm_per_px: 0.5}
+stages: [frames, correlate, kinematics, outputs]
+dic: {subset_size: 15, step: 8}
+outputs: {folder: out, animation: false, figures: )") +
+                        (figures ? "true" : "false") + "}\n",
+                    dir.File("scene.yaml"));
+}
+
+TEST(RunErrors, MissingFrameInTheSequenceIsNamedAndNoFolderIsLeft) {
+  TestDir dir;
+  try {
+    RunScene(SmallFrameScene(dir, true, false), PipelineOptions{});
+    FAIL() << "expected an error for the missing frame f2";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("f1.png to f3.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("1 frame(s) missing"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
+}
+
+TEST(RunErrors, MissingGnuplotIsReportedBeforeWork) {
+  TestDir dir;
+  const Scene scene = SmallFrameScene(dir, false, true);
+  setenv("IMPACTDIC_GNUPLOT", "/nonexistent/gnuplot", 1);
+  try {
+    RunScene(scene, PipelineOptions{});
+    FAIL() << "expected an error for the missing gnuplot";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/gnuplot"), std::string::npos) << e.what();
+  }
+  unsetenv("IMPACTDIC_GNUPLOT");
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
+  // The same scene runs once gnuplot is found.
+  const PipelineSummary ok = RunScene(scene, PipelineOptions{});
+  EXPECT_TRUE(std::filesystem::exists(dir.File("out/summary.json")));
+  EXPECT_GT(ok.outputs.size(), 2u);
+}
+
 TEST(RunErrors, UnwritableOutputFolderIsReportedBeforeWork) {
   // CI runs as root, who can write anywhere: a folder below a regular file cannot be created by
   // anyone.
@@ -106,6 +153,19 @@ TEST(RunErrors, SensorRecordEndingBeforeTheLastFrameIsNamed) {
   EXPECT_NE(r.output.find("does not cover the frames"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(dir.File("out/results.h5")));
   EXPECT_FALSE(std::filesystem::exists(dir.File("out/summary.json")));
+}
+
+TEST(RunErrors, MoreExposureEdgesThanFramesIsAWarning) {
+  // The last frame file of a tiny synthetic scene removed: its exposure edge has no frame.
+  TestDir dir;
+  const CliResult synth = RunCli("synth --preset tiny --no-calibrate -o " + dir.File("scene"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const auto frames = ListFrames(dir.File("scene/frames"));
+  ASSERT_GT(frames.size(), 5u);
+  std::filesystem::remove(frames.back());
+  const CliResult r = RunCli("run " + dir.File("scene/scene.yaml") + " -o " + dir.File("out"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("edge(s) are unused"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -21,8 +21,15 @@ cv::Mat ReadGreyImage(const std::string& path);
 void WriteImage(const std::string& path, const cv::Mat& image);
 
 // Expands a frames source into a sorted list of image files: a folder (all image files in it), a
-// glob pattern ("frames/img_*.tif") or a single file. Error if nothing matches.
+// glob pattern ("frames/img_*.tif") or a single file. Error if nothing matches. Names are
+// sorted naturally: runs of digits by value, so unpadded "f_9.png" comes before "f_10.png".
 std::vector<std::string> ListFrames(const std::string& source);
+
+// For a numbered image series (names that differ only in their last run of digits): Error
+// naming the file after a gap ("frame_0024.png to frame_0026.png: 1 frame(s) missing") unless
+// the numbers advance by a constant step. Names that are not one numbered series are not
+// checked.
+void CheckFrameNumbering(const std::vector<std::string>& files);
 
 // True if `path` names a video container OpenCV should read (.mp4, .avi, .mov, .mkv).
 bool IsVideoFile(const std::string& path);
