@@ -12,6 +12,8 @@
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/image_io.h"
 #include "impactdic/io/json.h"
 
 namespace impactdic::cli {
@@ -113,6 +115,8 @@ void RegisterCalibrateCommand(CLI::App& app) {
         !args->images.empty(), "IMAGES", "no calibration images",
         fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));
     CheckValue(!args->output.empty(), "-o", "an empty name", "the calibration YAML to write");
+    CheckOutputLocation(args->output);
+    if (!args->plane.empty()) CheckImageFileExists(args->plane);
     options.max_rms_px = args->max_rms_px;
     options.min_views = args->min_views;
     options.fix_k3 = args->fix_k3;

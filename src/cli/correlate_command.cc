@@ -12,6 +12,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 
 namespace impactdic::cli {
@@ -87,6 +88,7 @@ void Run(const CorrelateArgs& a) {
     CheckValue(ext == ".csv" || ext == ".h5" || ext == ".hdf5", "-o/--output", a.output,
                "a file ending in .csv or .h5");
   }
+  CheckOutputLocation(a.output);
   std::vector<std::string> paths;
   if (pair) {
     paths.push_back(a.reference);

@@ -13,6 +13,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/json.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/model/work_precision.h"
@@ -164,6 +165,7 @@ void RunSingle(const ModelArgs& a) {
       !EndsWith(a.output, ".hdf5"))
     throw Error(ErrorKind::kInvalidValue, "-o", a.output,
                 "a series file name ending in .csv, .h5 or .hdf5");
+  if (!a.output.empty()) CheckOutputLocation(a.output);
   const ImpactRun run = SimulateImpact(p, o);
   const ImpactSummary& s = run.summary;
   for (const std::string& w : s.warnings) LogWarning("model: {}", w);
@@ -233,6 +235,8 @@ void RunWorkPrecisionCommand(const ModelArgs& a) {
                                                 : "table1-max";
   if (!w.exact_cases && !w.default_case && !w.table1)
     throw Error(ErrorKind::kInvalidValue, "--wp-cases", a.wp_cases, "at least one case");
+  if (!a.output.empty()) CheckOutputLocation(a.output);
+  if (!a.plot.empty()) CheckOutputLocation(a.plot);
   const std::vector<WorkPrecisionRow> rows = RunWorkPrecision(w);
   std::cout << FormatWorkPrecision(rows);
   if (!a.output.empty()) {

@@ -51,6 +51,8 @@ void AtomicFile::Commit() {
   committed_ = true;
 }
 
+void CheckOutputLocation(const std::string& path) { const AtomicFile probe(path); }
+
 void WriteTextFileAtomic(const std::string& path, const std::string& text) {
   AtomicFile file(path);
   {

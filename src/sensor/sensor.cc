@@ -309,7 +309,8 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
                                               : static_cast<double>(n - 1) /
                                                     (record.time_s.back() - record.time_s.front());
   if (!(options.cutoff_hz < 0.5 * fs)) {
-    throw Error(ErrorKind::kInvalidValue, "cutoff_hz", fmt::format("{} Hz", options.cutoff_hz),
+    throw Error(ErrorKind::kInvalidValue, "sensor.cutoff_hz (--cutoff)",
+                fmt::format("{} Hz", options.cutoff_hz),
                 fmt::format("below the Nyquist frequency {} Hz of this record", 0.5 * fs));
   }
   const double g = options.g_m_s2;

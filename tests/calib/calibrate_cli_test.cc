@@ -56,10 +56,16 @@ TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
            {"--board 9x6 --square 25 " + kViews + " -o " + out + " --format xml", "--format"},
            {"--board 9x6 --square 25 " + kViews, "-o"},
            {"--board 9x6 --square 25 /no/such/image.png -o " + out, "/no/such/image.png"},
+           {"--board 9x6 --square 25 --plane /no/such/plane.png " + kViews + " -o " + out,
+            "/no/such/plane.png"},
+           {"--board 9x6 --square 25 " + kViews + " -o /no/such/folder/out.yaml",
+            "/no/such/folder"},
        }) {
     const CliResult r = RunCli("calibrate " + c.args);
     EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
     EXPECT_TRUE(Contains(r.output, c.message)) << c.args << "\n" << r.output;
+    // Refused before any work: no calibration was computed.
+    EXPECT_FALSE(Contains(r.output, "images used")) << c.args << "\n" << r.output;
   }
 }
 

@@ -105,6 +105,7 @@ TEST_F(CorrelateCli, BadInputGivesClearErrors) {
   ExpectError(Pair() + " --reference-update every:0 -o " + Path("x.csv"), "every:0");
   ExpectError(Pair() + " --threads -1 -o " + Path("x.csv"), "--threads");
   ExpectError(Pair() + " -o " + Path("x.txt"), ".csv or .h5");
+  ExpectError(Pair() + " -o /no/such/folder/x.csv", "/no/such/folder");
   ExpectError("correlate -o " + Path("x.csv"), "--frames");
 }
 

@@ -84,7 +84,7 @@ TEST_F(AnalyzeCli, OptionsValidatedFirst) {
       {"--sensor " + csv_ + " --from-release --impact-velocity 3", "both given"},
       {"--sensor " + csv_ + " --impact-velocity -2", "--impact-velocity"},
       {"--sensor " + csv_ + " --from-release --cutoff 0", "--cutoff"},
-      {"--sensor " + csv_ + " --from-release --cutoff 20000", "cutoff_hz"},
+      {"--sensor " + csv_ + " --from-release --cutoff 20000", "--cutoff"},
       {"--sensor " + csv_ + " --from-release --format yaml", "--format"},
       {"--sensor " + csv_ + " --from-release --accel-unit furlong", "--accel-unit"},
       {"--sensor " + csv_ + " --from-release --offset-reference sky", "--offset-reference"},

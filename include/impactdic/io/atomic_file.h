@@ -30,6 +30,10 @@ class AtomicFile {
   bool committed_ = false;
 };
 
+// What AtomicFile(path) checks, without writing anything: Error kIo naming `path` unless its
+// folder exists and is writable. For commands that check their outputs before any work.
+void CheckOutputLocation(const std::string& path);
+
 // Writes `text` to `path` atomically.
 void WriteTextFileAtomic(const std::string& path, const std::string& text);
 
