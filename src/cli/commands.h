@@ -5,7 +5,6 @@
 #define IMPACTDIC_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
-
 #include <string>
 
 namespace impactdic::cli {
@@ -19,9 +18,6 @@ void RegisterModelCommand(CLI::App& app);
 void RegisterRenderCommand(CLI::App& app);
 void RegisterCampaignCommand(CLI::App& app);
 void RegisterVersionCommand(CLI::App& app);
-
-// Throws Error(kNotImplemented) for a subcommand whose stage does not exist yet (exit status 2).
-[[noreturn]] void NotImplemented(const std::string& subcommand);
 
 }  // namespace impactdic::cli
 

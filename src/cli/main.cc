@@ -9,14 +9,31 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 
-namespace impactdic::cli {
+namespace {
 
-[[noreturn]] void NotImplemented(const std::string& subcommand) {
-  throw Error(ErrorKind::kNotImplemented,
-              "impactdic " + subcommand + ": not implemented yet (this stage does not exist yet)");
+// CLI11 says "Could not convert: --mass = abc"; add what the option takes ("a number").
+std::string ConversionMessage(const CLI::App& app, const CLI::ConversionError& e) {
+  std::string message = e.what();
+  const std::string head = "Could not convert: ";
+  const std::size_t eq = message.find(" = ");
+  if (message.rfind(head, 0) != 0 || eq == std::string::npos) return message;
+  const std::string name = message.substr(head.size(), eq - head.size());
+  std::string type;
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    if (const CLI::Option* option = sub->get_option_no_throw(name)) {
+      type = option->get_type_name();
+      break;
+    }
+  }
+  const std::string what = type == "INT"     ? "an integer"
+                           : type == "UINT"  ? "a non-negative integer"
+                           : type == "FLOAT" ? "a number"
+                                             : "a value of type " + type;
+  return "invalid value for " + name + " (got '" + message.substr(eq + 3) + "'); expected " +
+         (type.empty() ? std::string("a value of the option's type") : what);
 }
 
-}  // namespace impactdic::cli
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace impactdic;
@@ -65,6 +82,10 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
+  } catch (const CLI::ConversionError& e) {
+    std::cerr << "impactdic: error: " << ConversionMessage(app, e) << "\n";
+    std::cerr << "Run with --help for the allowed options.\n";
+    return 1;
   } catch (const CLI::ParseError& e) {
     std::cerr << "impactdic: error: " << e.what() << "\n";
     if (e.get_exit_code() == 0) return 0;

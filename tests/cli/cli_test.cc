@@ -26,6 +26,17 @@ TEST(Cli, EverySubcommandHasHelp) {
   }
 }
 
+TEST(Cli, ANonNumberForANumericOptionSaysWhatIsExpected) {
+  const CliResult mass = RunCli("model --mass abc --height 0.7 --width 0.15");
+  EXPECT_EQ(mass.exit_code, 1);
+  EXPECT_NE(mass.output.find("--mass (got 'abc'); expected a number"), std::string::npos)
+      << mass.output;
+  const CliResult subset = RunCli("correlate --subset 2.5 --frames x -o y.csv");
+  EXPECT_EQ(subset.exit_code, 1);
+  EXPECT_NE(subset.output.find("--subset (got '2.5'); expected an integer"), std::string::npos)
+      << subset.output;
+}
+
 TEST(Cli, UnknownSubcommandFails) {
   const CliResult r = RunCli("frobnicate");
   EXPECT_NE(r.exit_code, 0);
