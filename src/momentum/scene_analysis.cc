@@ -144,9 +144,18 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   run.sensor = AnalyzeSensorCsv(scene.inputs.sensor, sopt);
   PanelMapping mapping;
   mapping.mm_per_px = mm_per_px;
-  run.analysis =
-      AnalyzeCorrelation(dic, mapping, scene.inputs.fps, scene.sensor.frame_time_offset_s,
-                         run.sensor, mopt, static_cast<std::size_t>(first));
+  try {
+    run.analysis =
+        AnalyzeCorrelation(dic, mapping, scene.inputs.fps, scene.sensor.frame_time_offset_s,
+                           run.sensor, mopt, static_cast<std::size_t>(first));
+  } catch (Error& e) {
+    // Name the file to fix: the DAQ record for frame timing, else the scene's settings.
+    if (e.file().empty()) {
+      const bool timing = e.where() == "exposure channel" || e.where() == "frame times";
+      e.WithFile(timing ? scene.inputs.sensor : scene.path);
+    }
+    throw;
+  }
   H5Writer out(results_path, H5Writer::Mode::kUpdate);
   WriteAnalysis(out, run.analysis, run.sensor);
   out.SetAttribute("kinematics", "mm_per_px", mm_per_px);

@@ -12,6 +12,7 @@
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 
@@ -344,6 +345,14 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   const CliResult bad = RunCli("analyze " + scene + " --cutoff 1000");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.output.find("only with --sensor"), std::string::npos) << bad.output;
+  // A grid outside the correlated region: the error names the scene file that places it.
+  std::string text = ReadTextFile(scene);
+  text.replace(text.find("pounder_center_x_px: 145"), 24, "pounder_center_x_px: 9000");
+  const std::string far = dir.Write("far.yaml", text);
+  const CliResult outside = RunCli("analyze " + far + " --format json");
+  EXPECT_EQ(outside.exit_code, 1) << outside.output;
+  EXPECT_NE(outside.output.find("far.yaml"), std::string::npos) << outside.output;
+  EXPECT_NE(outside.output.find("momentum grid"), std::string::npos) << outside.output;
 }
 
 }  // namespace
