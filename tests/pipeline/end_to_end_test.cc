@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
@@ -88,8 +89,12 @@ TEST_F(EndToEnd, SoilDisplacementMatchesTruth) {
   }
   ASSERT_GT(matched, N * 9 / 10) << "the correlated grid does not match the truth grid";
   ASSERT_GT(count, (F - 1) * N * 8 / 10);
-  const double rms = std::sqrt(sum_sq / (2.0 * count));
-  EXPECT_LE(rms, 0.05) << "displacement RMS error per component [px] over " << count << " samples";
+  // RMS of the displacement error vector (as in the dic tests; per component it is 1/sqrt(2) of
+  // this).
+  const double rms = std::sqrt(sum_sq / count);
+  std::printf("soil displacement: RMS error %.4f px over %zu valid samples of %zu subsets\n", rms,
+              count, matched);
+  EXPECT_LE(rms, 0.05) << "displacement RMS error [px] over " << count << " samples";
 }
 
 TEST_F(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
