@@ -134,12 +134,12 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   out.Write("dic/frame", frame_index, Dims{frames}, "1", "index of the deformed image (1-based)");
   out.Write("dic/reference_frame", reference, Dims{frames}, "1",
             "index of the reference image each frame was correlated against (0 = first)");
-  std::string codes;
-  for (int s = 0; s < kSubsetStatusCount; ++s)
-    codes += fmt::format("{}{}={}", s ? "," : "", s, ToString(static_cast<SubsetStatus>(s)));
-  out.SetAttribute("dic/status", "codes", codes);
+  // The same attributes under the names `impactdic run` uses (status_names, shape).
+  out.SetAttribute("dic/status", "codes", SubsetStatusCodes());
+  out.SetAttribute("dic/status", "status_names", SubsetStatusCodes());
   out.SetAttribute("dic", "interpolation", ToString(options.icgn.interpolation));
   out.SetAttribute("dic", "shape_function", ToString(options.icgn.shape));
+  out.SetAttribute("dic", "shape", ToString(options.icgn.shape));
   out.SetAttribute("dic", "reference_update",
                    options.update.mode == ReferenceUpdate::kEveryN
                        ? fmt::format("every:{}", options.update.every_n)

@@ -1,5 +1,7 @@
 #include "impactdic/dic/options.h"
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <string>
 
@@ -58,6 +60,13 @@ ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n)
     return ReferenceUpdate::kEveryN;
   }
   throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
+}
+
+std::string SubsetStatusCodes() {
+  std::string codes;
+  for (int s = 0; s < kSubsetStatusCount; ++s)
+    codes += fmt::format("{}{}={}", s ? "," : "", s, ToString(static_cast<SubsetStatus>(s)));
+  return codes;
 }
 
 const char* ToString(SubsetStatus status) {

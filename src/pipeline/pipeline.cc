@@ -584,10 +584,10 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       out.Write("/dic/status", status, {F, N}, "1",
                 "subset status code (see attribute status_names)");
       out.Write("/dic/iterations", iterations, {F, N}, "1", "IC-GN iterations");
-      std::string names;
-      for (int s = 0; s < kSubsetStatusCount; ++s)
-        names += fmt::format("{}{}={}", s ? "," : "", s, ToString(static_cast<SubsetStatus>(s)));
-      out.SetAttribute("/dic/status", "status_names", names);
+      // The same attributes under the names `impactdic correlate` uses (codes, shape_function).
+      out.SetAttribute("/dic/status", "status_names", SubsetStatusCodes());
+      out.SetAttribute("/dic/status", "codes", SubsetStatusCodes());
+      out.SetAttribute("/dic", "shape_function", scene.dic.shape);
       out.SetAttribute("/dic", "subset_size_px", scene.dic.subset_size);
       out.SetAttribute("/dic", "step_px", scene.dic.step);
       out.SetAttribute("/dic", "interpolation", scene.dic.interpolation);

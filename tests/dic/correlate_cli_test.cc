@@ -84,6 +84,10 @@ TEST_F(CorrelateCli, WritesHdf5WithFramesAndStatusCodes) {
   EXPECT_EQ(dims[0], 1u);  // def1 is the reference, def2 the only deformed frame.
   EXPECT_EQ(dims[1], h5.Dimensions("dic/x_px")[0]);
   EXPECT_NE(h5.ReadStringAttribute("dic/status", "codes").find("0=converged"), std::string::npos);
+  // The names `impactdic run` uses too, with the same content.
+  EXPECT_EQ(h5.ReadStringAttribute("dic/status", "status_names"),
+            h5.ReadStringAttribute("dic/status", "codes"));
+  EXPECT_EQ(h5.ReadStringAttribute("dic", "shape"), "quadratic");  // --shape quadratic above
 }
 
 TEST_F(CorrelateCli, BadInputGivesClearErrors) {

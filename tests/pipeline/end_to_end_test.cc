@@ -130,6 +130,9 @@ TEST_F(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
               0.05 * m_add_max);
   EXPECT_NEAR(results.ReadNumberAttribute("/summary", "crater_depth_measured_m"), crater,
               0.01 * crater);
+  // Status codes under both names (run's status_names, correlate's codes).
+  EXPECT_EQ(results.ReadStringAttribute("/dic/status", "status_names"),
+            results.ReadStringAttribute("/dic/status", "codes"));
 }
 
 TEST_F(EndToEnd, FiguresAndAnimationAreComplete) {

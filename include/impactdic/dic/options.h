@@ -107,6 +107,8 @@ enum class SubsetStatus {
 };
 constexpr int kSubsetStatusCount = 11;
 const char* ToString(SubsetStatus status);
+// "0=converged,1=max_iterations,...": every status code with its name (HDF5 attributes).
+std::string SubsetStatusCodes();
 SubsetStatus SubsetStatusFromString(const std::string& name);
 
 }  // namespace impactdic
