@@ -20,8 +20,9 @@ void RegisterRunCommand(CLI::App& app) {
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "run",
-      "Run the stages a scene needs (calibration -> frames -> correlate -> kinematics -> "
-      "sensor -> momentum -> model -> outputs)");
+      "Run the stages a scene needs (calibration -> sensor -> frames -> correlate -> "
+      "kinematics -> momentum -> model -> outputs; the sensor comes first because its impact "
+      "time decides the first frame to correlate)");
   cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
   cmd->add_option("-o,--output", args->output,
                   "Output folder (default: the scene's outputs.folder)");

@@ -409,6 +409,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
 
   // --- kinematics + momentum -----------------------------------------------------------------
   std::optional<SceneAnalysis> analysis;
+  std::optional<KinematicsResult> kinematics_only;  // Kinematics without momentum (no sensor).
   CorrelationSeries series;
   if (dic) {
     const std::size_t F = dic->frames.size() + 1, N = dic->positions.size();
@@ -476,6 +477,12 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       stages.Ran("kinematics", analysis->kinematics.summary.BriefReport(), t);
       stages.Ran("momentum", ms.BriefReport(), t);
     } else {
+      // The fields alone (frame times k / fps).
+      WallTimer t;
+      KinematicsOptions k;
+      k.fps = scene.inputs.fps;
+      kinematics_only = ComputeKinematics(series, mapping, k);
+      stages.Ran("kinematics", kinematics_only->summary.BriefReport(), t);
       stages.Skipped("momentum", sensor ? "not among the scene's stages"
                                         : "needs the sensor record (pounder velocity)");
     }
@@ -615,13 +622,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     if (analysis) WriteAnalysis(out, *analysis, *sensor);
     if (analysis) {
       out.SetAttribute(layout::kKinematicsGroup, layout::kMmPerPxAttr, mm_per_px);
-    } else if (dic && mm_per_px > 0) {
-      // Kinematics without momentum (no sensor): the fields alone.
-      PanelMapping mapping;
-      mapping.mm_per_px = mm_per_px;
-      KinematicsOptions k;
-      k.fps = scene.inputs.fps;
-      const KinematicsResult kin = ComputeKinematics(series, mapping, k);
+    } else if (kinematics_only) {
+      const KinematicsResult& kin = *kinematics_only;
       const Dims fn{kin.frames, kin.subsets};
       out.Write(layout::kVx, kin.vel_x_mm_s, fn, "mm/s", "subset velocity x (right)");
       out.Write(layout::kVy, kin.vel_y_mm_s, fn, "mm/s", "subset velocity y (down)");

@@ -10,6 +10,7 @@
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/scene.h"
 #include "impactdic/pipeline/pipeline.h"
@@ -108,10 +109,20 @@ TEST(RunErrors, MissingGnuplotIsReportedBeforeWork) {
   }
   unsetenv("IMPACTDIC_GNUPLOT");
   EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
-  // The same scene runs once gnuplot is found.
+  // The same scene runs once gnuplot is found. Without a sensor record the kinematics stage
+  // still runs (frame times k / fps) and says so; momentum is skipped with the reason.
   const PipelineSummary ok = RunScene(scene, PipelineOptions{});
   EXPECT_TRUE(std::filesystem::exists(dir.File("out/summary.json")));
   EXPECT_GT(ok.outputs.size(), 2u);
+  bool kinematics_ran = false, momentum_skipped = false;
+  for (const StageReport& s : ok.stages) {
+    kinematics_ran = kinematics_ran || (s.name == "kinematics" && s.ran);
+    momentum_skipped = momentum_skipped || (s.name == "momentum" && !s.ran &&
+                                            s.note.find("sensor") != std::string::npos);
+  }
+  EXPECT_TRUE(kinematics_ran);
+  EXPECT_TRUE(momentum_skipped);
+  EXPECT_TRUE(H5Reader(dir.File("out/results.h5")).Exists("/kinematics/vy_mm_s"));
 }
 
 TEST(RunErrors, UnwritableOutputFolderIsReportedBeforeWork) {
