@@ -369,6 +369,12 @@ TEST(ImpactModelExtreme, WarningsNameWhatHappened) {
   EXPECT_TRUE(HasWarning(heavy, "beyond the bed height"));
   // The default case has none.
   EXPECT_TRUE(run(ImpactModelParameters{}).warnings.empty());
+  // A step budget too small to reach the stop: "tolerance not met", no crater depth.
+  ImpactSolverOptions starved = SolverSetting("auto", 1e-10);
+  starved.max_steps = 20;
+  const ImpactSummary cut = SimulateImpact(ImpactModelParameters{}, starved).summary;
+  EXPECT_TRUE(HasWarning(cut, "tolerance not met")) << cut.FullReport();
+  EXPECT_FALSE(std::isfinite(cut.crater_depth_m) && cut.stopped) << cut.FullReport();
 }
 
 TEST(ImpactModelExtreme, SteepSigmoidIsResolvedCheaplyAndConverges) {

@@ -156,6 +156,31 @@ TEST(Ode, AutoSwitchesToRodas3OnAStiffProblem) {
   EXPECT_NEAR(auto_run.y[1], std::sin(2.0), 1e-4);  // y1 ~ sin x after the 1e-4 transient
 }
 
+TEST(Ode, Ode45ModeFollowsMatlabsInitialStepAndGrowthRules) {
+  // y' = (1, 2), y(0) = (1, 1) on [0, 10], RelTol 1e-3, AbsTol 1e-6, MaxStep 0.1 * 10 (ode45's
+  // defaults). MATLAB's rule: threshold = AbsTol / RelTol = 1e-3,
+  // rh = max|f ./ max(|y|, threshold)| / (0.8 RelTol^(1/5)) = 2 / (0.8 * 1e-3^0.2), and since
+  // min(MaxStep, |tspan|) * rh > 1 the first step is 1 / rh. The step is exact (err = 0), so the
+  // next one is 5 times longer, capped by MaxStep.
+  OdeSystem sys;
+  sys.rhs = [](double, const Vec2&) { return Vec2{1.0, 2.0}; };
+  OdeOptions o;
+  o.method = OdeMethod::kOde45;
+  o.rtol = 1e-3;
+  o.atol = 1e-6;
+  o.max_step = 1.0;
+  std::vector<OdeStep> steps;
+  const OdeResult r = IntegrateOde(sys, 0.0, {1.0, 1.0}, 10.0, o, &steps);
+  ASSERT_EQ(r.status, OdeStatus::kReachedEnd);
+  ASSERT_GE(steps.size(), 3u);
+  const double h0 = 0.8 * std::pow(1e-3, 0.2) / 2.0;
+  EXPECT_NEAR(steps[0].h, h0, 1e-15);
+  EXPECT_NEAR(steps[1].h, std::min(5 * h0, 1.0), 1e-15);
+  EXPECT_NEAR(steps[2].h, 1.0, 1e-15);
+  EXPECT_EQ(r.rejected_steps, 0);
+  EXPECT_NEAR(r.y[1], 21.0, 1e-12);
+}
+
 TEST(Ode, DomainExitStopsAtTheLastAcceptedPoint) {
   // y' = -1: leaves y > 0 at x = 1.
   OdeSystem sys;
