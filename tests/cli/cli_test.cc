@@ -3,6 +3,8 @@
 
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <regex>
 #include <string>
 
 #include "cli_runner.h"
@@ -15,6 +17,11 @@ TEST(Cli, VersionPrintsVersionAndRevision) {
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.output.find("impactdic 0."), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("git "), std::string::npos) << r.output;
+  // Built from a git checkout, the revision is a commit hash (not "unknown").
+  if (std::filesystem::exists(std::string(IMPACTDIC_SOURCE_DIR) + "/.git")) {
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("\\(git [0-9a-f]{7,}(-dirty)?\\)")))
+        << r.output;
+  }
 }
 
 TEST(Cli, EverySubcommandHasHelp) {

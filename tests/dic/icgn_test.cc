@@ -115,6 +115,26 @@ TEST(Icgn, AffineRecoversUniformStrainAndRotation) {
   }
 }
 
+TEST(Icgn, ZnssdIgnoresABrightnessAndContrastChange) {
+  // The deformed image 30 % darker with an offset (I' = 0.7 I + 0.1, e.g. the lighting changed):
+  // ZNSSD is invariant to it, so the shift is found as well as without the change.
+  Scene scene(300, 300, /*noise_sigma=*/2);
+  const cv::Mat ref = scene.Render(ZeroField(), 1);
+  const DisplacementField shift = Translation(0.35, -0.45);
+  DicOptions options;
+  const DicResult same = CorrelatePair(ref, scene.Render(shift, 2), options);
+  scene.render.gain = 0.7;
+  scene.render.offset = 0.1;
+  const DicResult changed = CorrelatePair(ref, scene.Render(shift, 2), options);
+  const ErrorStats a = Errors(same.positions, same.frames[0], shift);
+  const ErrorStats b = Errors(changed.positions, changed.frames[0], shift);
+  EXPECT_EQ(b.valid, static_cast<int>(changed.positions.size()));
+  EXPECT_LE(std::abs(b.bias_u), 0.002);
+  EXPECT_LE(std::abs(b.bias_v), 0.002);
+  // The same noise on a 0.7x signal: the error grows by at most ~1/0.7.
+  EXPECT_LE(b.rms, a.rms / 0.7 * 1.1) << a.rms;
+}
+
 TEST(Icgn, QuadraticShapeBeatsAffineOnAQuadraticField) {
   Scene scene(300, 300, /*noise_sigma=*/1);
   const cv::Mat ref = scene.Render(ZeroField(), 1);
