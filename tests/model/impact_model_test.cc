@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -304,20 +305,18 @@ struct Extreme {
 std::vector<Extreme> ExtremeCases() {
   std::vector<Extreme> out;
   ImpactModelParameters d;
-  Extreme e{"b=1e5", d};
-  e.p.sigmoid_rate_b_per_s = 1e5;
-  out.push_back(e);
-  e = {"b=1e7", d};
-  e.p.sigmoid_rate_b_per_s = 1e7;
-  out.push_back(e);
-  // Far steeper than the paper's b: a trial step towards the window must not be mistaken for
-  // the end of the motion (it used to end the time phase early and cost 1e5..2e6 steps).
-  e = {"b=1e8", d};
-  e.p.sigmoid_rate_b_per_s = 1e8;
-  out.push_back(e);
-  e = {"b=1e10", d};
-  e.p.sigmoid_rate_b_per_s = 1e10;
-  out.push_back(e);
+  // b far steeper than the paper's: from 1e8 on, a trial step towards the window must not be
+  // mistaken for the end of the motion (it used to end the time phase early and cost 1e5..2e6
+  // steps).
+  Extreme e{"", d};
+  for (const auto& [name, b] : {std::pair<const char*, double>{"b=1e5", 1e5},
+                                {"b=1e7", 1e7},
+                                {"b=1e8", 1e8},
+                                {"b=1e10", 1e10}}) {
+    e = {name, d};
+    e.p.sigmoid_rate_b_per_s = b;
+    out.push_back(e);
+  }
   e = {"v0=0.01", d};
   e.p.impact_velocity_m_s = 0.01;
   out.push_back(e);
