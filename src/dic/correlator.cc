@@ -37,6 +37,11 @@ bool IsDecorrelation(SubsetStatus s) {
          s == SubsetStatus::kNotFound || s == SubsetStatus::kUncertain;
 }
 
+// Whether a result is good enough for `auto`: converged with ZNCC >= UpdateOptions::auto_min_zncc.
+bool PassesAuto(const IcgnResult& r, double min_zncc) {
+  return r.status == SubsetStatus::kConverged && r.zncc >= min_zncc;
+}
+
 struct Frame {
   int index = 0;
   cv::Mat raw;
@@ -125,6 +130,13 @@ struct Correlator::Impl {
                       const cv::Mat& image32, FrameResult* timing);
   void MakeFrame(const cv::Mat& raw, int index, Frame* frame);
   std::vector<Attempt> Solve(Frame& frame, FrameResult* out);
+  std::vector<char> RescuedByLastFrame(const std::vector<int>& which,
+                                       const std::vector<Attempt>& at, const Frame& frame,
+                                       FrameResult* out);
+  void Lose(int i) {
+    active[i] = 0;
+    permanent[i] = SubsetStatus::kLost;
+  }
   bool Search(const SubsetRef& s, Frame& frame, double gu, double gv, cv::Mat* scratch_mat,
               Params* p0) const;
   void CheckImage(const cv::Mat& image, const char* what) const;
@@ -545,6 +557,68 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
   return at;
 }
 
+// For `auto`: whether the subsets `which` (failed or below auto_min_zncc against the current
+// reference) would pass against the candidate reference, the last frame, i.e. converge with
+// ZNCC >= auto_min_zncc. Only these subsets are prepared, each centred on the pixel nearest to its
+// tracked point in the last frame as BuildReference would, with its intensities and the node
+// gradients of the last frame's spline over the subset alone (so the test costs a few subsets,
+// not a reference). IC-GN starts from the result against the current reference if it converged,
+// else from the constant-velocity prediction. Subsets not tracked in the last frame cannot pass.
+std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& which,
+                                                       const std::vector<Attempt>& at,
+                                                       const Frame& frame, FrameResult* out) {
+  WallTimer timer;
+  const Frame& last = *last_frame;
+  std::vector<char> rescued(which.size(), 0);
+  tbb::parallel_for(0, static_cast<int>(which.size()), [&](int k) {
+    const int i = which[k];
+    if (std::isnan(pos_last[i].x)) return;
+    SubsetRef s;
+    s.cx = static_cast<int>(std::lround(pos_last[i].x));
+    s.cy = static_cast<int>(std::lround(pos_last[i].y));
+    s.ox = pos_last[i].x - s.cx;
+    s.oy = pos_last[i].y - s.cy;
+    RefImages im;
+    im.region = cv::Rect(s.cx - half, s.cy - half, size, size);
+    if (!last.spline.Inside(im.region.x, im.region.y) ||
+        !last.spline.Inside(im.region.x + size - 1, im.region.y + size - 1))
+      return;
+    last.raw(im.region).convertTo(im.f, CV_32F);
+    im.full_scale = last.raw.depth() == CV_16U  ? 65535.0
+                    : last.raw.depth() == CV_8U ? 255.0
+                                                : 1e300;
+    im.gx.create(size, size, CV_32F);
+    im.gy.create(size, size, CV_32F);
+    for (int r = 0; r < size; ++r) {
+      for (int c = 0; c < size; ++c) {
+        double value, gx, gy;
+        last.spline.ValueGradient(im.region.x + c, im.region.y + r, &value, &gx, &gy);
+        im.gx.at<float>(r, c) = static_cast<float>(gx);
+        im.gy.at<float>(r, c) = static_cast<float>(gy);
+      }
+    }
+    std::array<double, 12 * 12> hinv;  // At most 12 warp parameters (quadratic).
+    internal::PrepareSubset(shape, im, options.icgn, &s, hinv.data());
+    if (!Usable(s.status)) return;
+    // Guess: the displacement from the tracked point in the last frame to its expected position.
+    cv::Point2d expected = pos_last[i];
+    if (at[i].r.status == SubsetStatus::kConverged) {
+      double du, dv;
+      internal::Displacement(shape, at[i].r.p, ref.subsets[i].ox, ref.subsets[i].oy, &du, &dv);
+      expected = ref_pos[i] + cv::Point2d(du, dv);
+    } else if (!std::isnan(pos_prev[i].x)) {
+      expected += pos_last[i] - pos_prev[i];
+    }
+    Params p0{};
+    p0[0] = expected.x - pos_last[i].x;
+    p0[shape.nm] = expected.y - pos_last[i].y;
+    const IcgnResult r = internal::RunIcgn(shape, im, s, hinv.data(), frame.view, options.icgn, p0);
+    rescued[k] = PassesAuto(r, options.update.auto_min_zncc);
+  });
+  out->seconds_reference += timer.ElapsedSeconds();
+  return rescued;
+}
+
 Correlator::Correlator(const DicOptions& options) : impl_(std::make_unique<Impl>()) {
   options.Check();
   impl_->options = options;
@@ -647,28 +721,41 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
 
   const ReferenceUpdate mode = m.options.update.mode;
   if (mode == ReferenceUpdate::kAuto && m.last_frame && m.last_frame->index > m.ref.frame) {
-    bool trigger = false;
-    for (int i = 0; i < n && !trigger; ++i) {
+    // Subsets that were trackable but decorrelated.
+    const double min_zncc = m.options.update.auto_min_zncc;
+    std::vector<int> triggers;
+    for (int i = 0; i < n; ++i) {
       if (!m.active[i] || !Usable(m.ref.subsets[i].status)) continue;
-      trigger = IsDecorrelation(at[i].r.status) || (at[i].r.status == SubsetStatus::kConverged &&
-                                                    at[i].r.zncc < m.options.update.auto_min_zncc);
+      if (IsDecorrelation(at[i].r.status) ||
+          (at[i].r.status == SubsetStatus::kConverged && at[i].r.zncc < min_zncc))
+        triggers.push_back(i);
     }
-    if (trigger) {
-      // Switch to the last good frame: its tracked positions become the new reference points.
-      for (int i = 0; i < n; ++i) {
-        if (!m.active[i]) continue;
-        if (std::isnan(m.pos_last[i].x)) {
-          m.active[i] = 0;
-          m.permanent[i] = SubsetStatus::kLost;
-        } else {
-          m.ref_pos[i] = m.pos_last[i];
+    // The update is made only if it rescues a triggering subset: one that passes against the last
+    // frame as reference. Subsets covered by an object entering the view fail against both.
+    if (!triggers.empty()) {
+      const std::vector<char> rescued = m.RescuedByLastFrame(triggers, at, *frame, &out);
+      if (std::find(rescued.begin(), rescued.end(), 1) != rescued.end()) {
+        // Switch to the last good frame: its tracked positions become the new reference points.
+        for (int i = 0; i < n; ++i) {
+          if (!m.active[i]) continue;
+          if (std::isnan(m.pos_last[i].x))
+            m.Lose(i);
+          else
+            m.ref_pos[i] = m.pos_last[i];
         }
+        Frame& last = *m.last_frame;
+        m.BuildReference(last.index, last.raw, &last.spline, last.Float(), &out);
+        ++m.summary.reference_updates;
+        out.reference_updated = true;
+        at = m.Solve(*frame, &out);
       }
-      Frame& last = *m.last_frame;
-      m.BuildReference(last.index, last.raw, &last.spline, last.Float(), &out);
-      ++m.summary.reference_updates;
-      out.reference_updated = true;
-      at = m.Solve(*frame, &out);
+      // Triggering subsets that failed against both references are occluded or lost: no longer
+      // tracked (status `lost`, NaN, from the next frame on), so they trigger nothing more.
+      // Those that converged with a low ZNCC keep their results and stay tracked: they can
+      // trigger again, but an update is made only when it rescues one.
+      for (int i : triggers) {
+        if (m.active[i] && IsDecorrelation(at[i].r.status)) m.Lose(i);
+      }
     }
   }
   out.reference_frame = m.ref.frame;

@@ -38,7 +38,10 @@
 //  4. Reference updating (UpdateOptions). A new reference's subsets are centred on the nearest
 //     pixel to the tracked material points, and the displacement of the tracked point (not of the
 //     pixel centre) is read from the subset's warp, so the same material points are followed
-//     through every update and their displacements compose exactly.
+//     through every update and their displacements compose exactly. `auto` switches to the last
+//     frame only if that rescues a subset that decorrelated (it passes against the last frame,
+//     tested on those subsets alone); subsets that fail against both references (covered by an
+//     object entering the view) are marked `lost` and trigger nothing more.
 #ifndef IMPACTDIC_DIC_CORRELATOR_H_
 #define IMPACTDIC_DIC_CORRELATOR_H_
 
