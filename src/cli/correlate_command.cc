@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
@@ -104,10 +105,16 @@ void Run(const CorrelateArgs& a) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     static_cast<std::size_t>(a.threads));
   }
+  WallTimer wall;
   const DicResult result = CorrelateFiles(paths, options);
   WriteDicResult(a.output, result, options);
+  const double seconds = wall.ElapsedSeconds();
   LogInfo("correlate: {}", result.summary.FullReport());
-  LogInfo("correlate: wrote {}", a.output);
+  LogInfo(
+      "correlate: wrote {}; wall time {:.3f} s with reading the images and writing the "
+      "results ({:.0f} POIs/s)",
+      a.output, seconds,
+      double(result.summary.subsets) * result.summary.frames / std::max(seconds, 1e-9));
   if (!result.summary.IsUsable()) {
     LogWarning("correlate: only {:.1f}% of the subset results are valid",
                100 * result.summary.valid_fraction);

@@ -54,7 +54,11 @@ TEST_F(CorrelateCli, WritesTheCsvContract) {
   const std::string out = Path("out.csv");
   const CliResult r = RunCli(Pair() + " --subset 25 --step 10 -o " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("subsets"), std::string::npos) << r.output;  // Summary on stderr.
+  // Summary on stderr: subsets, valid fraction, mean iterations, reference updates, wall time,
+  // POIs per second.
+  for (const char* item : {"63 subsets x 2 frames", "% valid", "iterations/subset",
+                           "reference updates", "wall time", "POIs/s"})
+    EXPECT_NE(r.output.find(item), std::string::npos) << item << "\n" << r.output;
   std::ifstream in(out);
   std::string header;
   std::getline(in, header);
