@@ -1,11 +1,15 @@
 // End to end: `impactdic synth` renders a small impact scene with known truth, `impactdic run`
-// processes it, and the results are compared with the truth (issue 7's tolerances).
+// processes it, and the results are compared with the truth (issue 7's tolerances); the same
+// for the committed sample (sample_frames/, the README's first command) and its committed truth.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <string>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
@@ -30,31 +34,64 @@ calibration: {render: false}
 dic: {subset_size: 21, step: 12}
 )";
 
-class EndToEnd : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = new TestDir("EndToEnd");
-    const std::string spec = dir_->Write("spec.yaml", kSpec);
-    const CliResult synth = RunCli("synth " + spec + " -o " + dir_->File("scene"));
-    ASSERT_EQ(synth.exit_code, 0) << synth.output;
-    const CliResult run =
-        RunCli("run " + dir_->File("scene/scene.yaml") + " -o " + dir_->File("out"));
-    ASSERT_EQ(run.exit_code, 0) << run.output;
-    run_output_ = new std::string(run.output);
-  }
-  static void TearDownTestSuite() {
-    delete dir_;
-    delete run_output_;
-  }
-  static TestDir* dir_;
-  static std::string* run_output_;
-};
-TestDir* EndToEnd::dir_ = nullptr;
-std::string* EndToEnd::run_output_ = nullptr;
+// What the tests compare: the generated scene above, or the committed sample (the scene the
+// README's first command runs; its truth is committed with it).
+enum class Source { kGenerated, kCommittedSample };
 
-TEST_F(EndToEnd, SoilDisplacementMatchesTruth) {
-  H5Reader results(dir_->File("out/results.h5"));
-  H5Reader truth(dir_->File("scene/truth.h5"));
+struct Prepared {
+  std::unique_ptr<TestDir> dir;  // Holds the outputs (and the generated scene).
+  std::string truth;             // truth.h5 of the scene.
+  std::string run_output;        // What `impactdic run` printed.
+  bool ok = false;
+  std::string Out(const std::string& name) const { return dir->File("out/" + name); }
+};
+
+// Renders (for kGenerated) and runs each scene once per process; every test of it reads the
+// results.
+const Prepared& Prepare(Source source) {
+  static std::map<Source, Prepared> cache;
+  if (auto it = cache.find(source); it != cache.end()) return it->second;
+  Prepared p;
+  const bool generated = source == Source::kGenerated;
+  p.dir = std::make_unique<TestDir>(generated ? "EndToEnd" : "EndToEndSample");
+  std::string scene;
+  if (generated) {
+    const std::string spec = p.dir->Write("spec.yaml", kSpec);
+    const CliResult synth = RunCli("synth " + spec + " -o " + p.dir->File("scene"));
+    p.run_output = synth.output;
+    scene = p.dir->File("scene/scene.yaml");
+    p.truth = p.dir->File("scene/truth.h5");
+    if (synth.exit_code != 0) return cache.emplace(source, std::move(p)).first->second;
+  } else {
+    scene = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/scene.yaml";
+    p.truth = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/truth.h5";
+  }
+  const CliResult run = RunCli("run " + scene + " -o " + p.dir->File("out"));
+  p.run_output += run.output;
+  p.ok = run.exit_code == 0;
+  return cache.emplace(source, std::move(p)).first->second;
+}
+
+class EndToEnd : public ::testing::TestWithParam<Source> {
+ protected:
+  void SetUp() override {
+    p_ = &Prepare(GetParam());
+    ASSERT_TRUE(p_->ok) << p_->run_output;
+  }
+  const Prepared* p_ = nullptr;
+};
+
+std::string SourceName(const ::testing::TestParamInfo<Source>& param) {
+  return param.param == Source::kGenerated ? "GeneratedScene" : "CommittedSample";
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, EndToEnd,
+                         ::testing::Values(Source::kGenerated, Source::kCommittedSample),
+                         SourceName);
+
+TEST_P(EndToEnd, SoilDisplacementMatchesTruth) {
+  H5Reader results(p_->Out("results.h5"));
+  H5Reader truth(p_->truth);
   Dims rd, td;
   const auto x = results.ReadDouble("/dic/x_px");
   const auto y = results.ReadDouble("/dic/y_px");
@@ -97,9 +134,9 @@ TEST_F(EndToEnd, SoilDisplacementMatchesTruth) {
   EXPECT_LE(rms, 0.05) << "displacement RMS error [px] over " << count << " samples";
 }
 
-TEST_F(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
-  H5Reader results(dir_->File("out/results.h5"));
-  H5Reader truth(dir_->File("scene/truth.h5"));
+TEST_P(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
+  H5Reader results(p_->Out("results.h5"));
+  H5Reader truth(p_->truth);
   const double t_e = truth.ReadDouble("/momentum/t_e_s")[0];
   const double m_add_max = truth.ReadDouble("/momentum/m_add_max_kg")[0];
   const double conservation = truth.ReadDouble("/momentum/conservation_error")[0];
@@ -135,24 +172,24 @@ TEST_F(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
             results.ReadStringAttribute("/dic/status", "codes"));
 }
 
-TEST_F(EndToEnd, FiguresAndAnimationAreComplete) {
-  H5Reader results(dir_->File("out/results.h5"));
+TEST_P(EndToEnd, FiguresAndAnimationAreComplete) {
+  H5Reader results(p_->Out("results.h5"));
   const std::size_t analysed = results.ReadDouble("/time/frame_index").size();
-  std::string video = dir_->File("out/velocity.mp4");
-  if (!fs::exists(video)) video = dir_->File("out/velocity.avi");
-  ASSERT_TRUE(fs::exists(video)) << *run_output_;
+  std::string video = p_->Out("velocity.mp4");
+  if (!fs::exists(video)) video = p_->Out("velocity.avi");
+  ASSERT_TRUE(fs::exists(video)) << p_->run_output;
   EXPECT_EQ(CountVideoFrames(video), analysed);
   for (const char* name :
        {"momentum.png", "deceleration.png", "added_mass.png", "velocity_field_te.png"}) {
-    const cv::Mat png = cv::imread(dir_->File(std::string("out/") + name), cv::IMREAD_UNCHANGED);
+    const cv::Mat png = cv::imread(p_->Out(name), cv::IMREAD_UNCHANGED);
     ASSERT_FALSE(png.empty()) << name << " is not a readable PNG";
     EXPECT_GE(png.cols, 640) << name;
     EXPECT_GE(png.rows, 400) << name;
   }
-  EXPECT_TRUE(fs::exists(dir_->File("out/summary.json")));
-  EXPECT_TRUE(fs::exists(dir_->File("out/summary.csv")));
+  EXPECT_TRUE(fs::exists(p_->Out("summary.json")));
+  EXPECT_TRUE(fs::exists(p_->Out("summary.csv")));
   // Nothing temporary is left behind.
-  for (const auto& entry : fs::directory_iterator(dir_->File("out")))
+  for (const auto& entry : fs::directory_iterator(p_->dir->File("out")))
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
