@@ -203,6 +203,18 @@ void H5Writer::Write(const std::string& path, const std::vector<std::int32_t>& d
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_INT32,
                H5::PredType::STD_I32LE, units, description);
 }
+void H5Writer::Write(const std::string& path, const std::vector<std::uint8_t>& data,
+                     const Dims& dims, const std::string& units, const std::string& description) {
+  CreateGroup(ParentOf(path));
+  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT8,
+               H5::PredType::STD_U8LE, units, description);
+}
+void H5Writer::Write(const std::string& path, const std::vector<std::uint16_t>& data,
+                     const Dims& dims, const std::string& units, const std::string& description) {
+  CreateGroup(ParentOf(path));
+  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT16,
+               H5::PredType::STD_U16LE, units, description);
+}
 void H5Writer::Write(const std::string& path, const std::vector<double>& data,
                      const std::string& units, const std::string& description) {
   Write(path, data, Dims{data.size()}, units, description);

@@ -606,15 +606,23 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       // The analysed frames, for `impactdic render` (animation).
       const std::size_t R = static_cast<std::size_t>(frames[0].rows),
                         C = static_cast<std::size_t>(frames[0].cols);
-      std::vector<std::int32_t> pixels(F * R * C);
-      for (std::size_t f = 0; f < F; ++f) {
-        cv::Mat as_int;
-        frames[f].convertTo(as_int, CV_32S);
-        std::copy(as_int.ptr<std::int32_t>(0), as_int.ptr<std::int32_t>(0) + R * C,
-                  pixels.begin() + f * R * C);
-      }
-      out.Write(layout::kFrameImages, pixels, {F, R, C}, "grey level",
-                "analysed camera frames after preprocessing");
+      // Stored with the frames' own depth (8 or 16 bit).
+      auto write_frames = [&](auto sample) {
+        using T = decltype(sample);
+        std::vector<T> pixels(F * R * C);
+        for (std::size_t f = 0; f < F; ++f) {
+          const cv::Mat& m = frames[f];
+          for (std::size_t y = 0; y < R; ++y)
+            std::copy(m.ptr<T>(static_cast<int>(y)), m.ptr<T>(static_cast<int>(y)) + C,
+                      pixels.begin() + (f * R + y) * C);
+        }
+        out.Write(layout::kFrameImages, pixels, {F, R, C}, "grey level",
+                  "analysed camera frames after preprocessing");
+      };
+      if (frames[0].depth() == CV_16U)
+        write_frames(std::uint16_t{});
+      else
+        write_frames(std::uint8_t{});
       out.SetAttribute(layout::kFramesGroup, layout::kBitDepthAttr,
                        frames[0].depth() == CV_16U ? 16.0 : 8.0);
     }

@@ -56,6 +56,33 @@ TEST(Hdf5Store, RoundTripOfValuesUnitsAttributesAndProvenance) {
   EXPECT_EQ(members.size(), 2u);
 }
 
+TEST(Hdf5Store, UnsignedImagesAreStoredWithTheirDepthAndReadConverted) {
+  TestDir dir;
+  const std::string path = dir.File("frames.h5");
+  const std::vector<std::uint8_t> grey8 = {0, 1, 127, 255, 200, 3};
+  const std::vector<std::uint16_t> grey16 = {0, 1, 4095, 65535, 40000, 7};
+  {
+    H5Writer out(path);
+    out.Write("frames/u8", grey8, {2, 3}, "grey level", "8-bit");
+    out.Write("frames/u16", grey16, {3, 2}, "grey level", "16-bit");
+    out.Commit();
+  }
+  H5Reader in(path);
+  Dims dims;
+  const auto a = in.ReadFloat("frames/u8", &dims);
+  EXPECT_EQ(dims, (Dims{2, 3}));
+  const auto b = in.ReadInt("frames/u16", &dims);
+  EXPECT_EQ(dims, (Dims{3, 2}));
+  for (std::size_t i = 0; i < grey8.size(); ++i) {
+    EXPECT_EQ(a[i], static_cast<float>(grey8[i]));
+    EXPECT_EQ(b[i], static_cast<std::int32_t>(grey16[i]));
+  }
+  // Stored as 1 and 2 bytes per value (not converted to a wider type on disk).
+  H5::H5File file(path, H5F_ACC_RDONLY);
+  EXPECT_EQ(file.openDataSet("frames/u8").getDataType().getSize(), 1u);
+  EXPECT_EQ(file.openDataSet("frames/u16").getDataType().getSize(), 2u);
+}
+
 TEST(Hdf5Store, LargeDatasetsAreChunkedAndCompressed) {
   TestDir dir;
   const std::string path = dir.File("big.h5");

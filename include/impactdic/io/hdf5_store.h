@@ -54,6 +54,11 @@ class H5Writer {
              const std::string& units, const std::string& description);
   void Write(const std::string& path, const std::vector<std::int32_t>& data, const Dims& dims,
              const std::string& units, const std::string& description);
+  // Unsigned 8/16-bit (images); ReadInt/ReadFloat/ReadDouble read them converted.
+  void Write(const std::string& path, const std::vector<std::uint8_t>& data, const Dims& dims,
+             const std::string& units, const std::string& description);
+  void Write(const std::string& path, const std::vector<std::uint16_t>& data, const Dims& dims,
+             const std::string& units, const std::string& description);
   // 1-D convenience.
   void Write(const std::string& path, const std::vector<double>& data, const std::string& units,
              const std::string& description);
