@@ -602,7 +602,14 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
     if (!Usable(s.status)) return;
     // Guess: the displacement from the tracked point in the last frame to its expected position.
     cv::Point2d expected = pos_last[i];
-    if (at[i].r.status == SubsetStatus::kConverged) {
+    // The result against the current reference is the best guess when IC-GN reached a solution
+    // that only failed the quality checks (decorrelated, uncertain).
+    const SubsetStatus st = at[i].r.status;
+    const bool solved = st == SubsetStatus::kConverged ||
+                        ((st == SubsetStatus::kLowCorrelation || st == SubsetStatus::kUncertain) &&
+                         at[i].r.iterations > 0 && std::isfinite(at[i].r.p[0]) &&
+                         std::isfinite(at[i].r.p[shape.nm]));
+    if (solved) {
       double du, dv;
       internal::Displacement(shape, at[i].r.p, ref.subsets[i].ox, ref.subsets[i].oy, &du, &dv);
       expected = ref_pos[i] + cv::Point2d(du, dv);
@@ -749,13 +756,10 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
         out.reference_updated = true;
         at = m.Solve(*frame, &out);
       }
-      // Triggering subsets that failed against both references are occluded or lost: no longer
-      // tracked (status `lost`, NaN, from the next frame on), so they trigger nothing more.
-      // Those that converged with a low ZNCC keep their results and stay tracked: they can
-      // trigger again, but an update is made only when it rescues one.
-      for (int i : triggers) {
-        if (m.active[i] && IsDecorrelation(at[i].r.status)) m.Lose(i);
-      }
+      // Triggering subsets that failed against both references (covered by an object, or a
+      // bad frame) stay tracked against the kept reference: NaN in this frame, and found again
+      // when they reappear, as with `fixed`. While they stay failed their rescue test costs
+      // nothing (no position in the last frame).
     }
   }
   out.reference_frame = m.ref.frame;
@@ -805,8 +809,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
     for (int i = 0; i < n; ++i) {
       if (!m.active[i]) continue;
       if (std::isnan(pos[i].x)) {
-        m.active[i] = 0;
-        m.permanent[i] = SubsetStatus::kLost;
+        m.Lose(i);
       } else {
         m.ref_pos[i] = pos[i];
       }

@@ -41,7 +41,8 @@
 //     through every update and their displacements compose exactly. `auto` switches to the last
 //     frame only if that rescues a subset that decorrelated (it passes against the last frame,
 //     tested on those subsets alone); subsets that fail against both references (covered by an
-//     object entering the view) are marked `lost` and trigger nothing more.
+//     object entering the view, a blurred frame) keep the reference and are found again when
+//     they reappear.
 #ifndef IMPACTDIC_DIC_CORRELATOR_H_
 #define IMPACTDIC_DIC_CORRELATOR_H_
 

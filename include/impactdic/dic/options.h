@@ -27,8 +27,8 @@ ShapeFunction ShapeFunctionFromString(const std::string& name);
 // kAuto: keep the reference while every subset that is still tracked correlates at or above
 // UpdateOptions::auto_min_zncc; when one does not, switch to the last good frame and redo the
 // frame against it, but only if that rescues one of the subsets that failed (tested on those
-// subsets alone); subsets that fail against both references (e.g. covered by the pounder) are
-// marked lost and no longer trigger updates.
+// subsets alone); subsets that fail against both references (e.g. covered by the pounder) keep
+// the reference and are found again when they reappear.
 enum class ReferenceUpdate { kFixed, kIncremental, kEveryN, kAuto };
 const char* ToString(ReferenceUpdate mode);
 // "fixed", "incremental", "auto", or "every:N" (N >= 1 is returned in *every_n).
