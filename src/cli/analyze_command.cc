@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
 #include "impactdic/io/scene.h"
@@ -81,6 +82,7 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
   if (!a.output.empty() && !EndsWith(a.output, ".h5") && !EndsWith(a.output, ".hdf5")) {
     throw Error(ErrorKind::kInvalidValue, "--output", a.output, "an HDF5 file name (.h5, .hdf5)");
   }
+  if (!a.output.empty()) CheckOutputLocation(a.output);
   if (cmd.count("--results") > 0) {
     throw Error(ErrorKind::kInvalidValue, "--results", "with --sensor",
                 "--results only with the SCENE.yaml form");

@@ -4,6 +4,7 @@
 #include <exception>
 #include <iostream>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
@@ -19,7 +20,11 @@ std::string ConversionMessage(const CLI::App& app, const CLI::ConversionError& e
   if (message.rfind(head, 0) != 0 || eq == std::string::npos) return message;
   const std::string name = message.substr(head.size(), eq - head.size());
   std::string type;
-  for (const CLI::App* sub : app.get_subcommands({})) {
+  // The subcommand being parsed first (an option name can mean different things in two).
+  std::vector<const CLI::App*> subs;
+  for (const CLI::App* sub : app.get_subcommands()) subs.push_back(sub);
+  for (const CLI::App* sub : app.get_subcommands({})) subs.push_back(sub);
+  for (const CLI::App* sub : subs) {
     if (const CLI::Option* option = sub->get_option_no_throw(name)) {
       type = option->get_type_name();
       break;

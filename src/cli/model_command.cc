@@ -254,6 +254,7 @@ void RunTable1Command(const ModelArgs& a) {
   const ImpactSolverOptions o = ValidatedSolverOptions(a);
   if (!a.output.empty() && !EndsWith(a.output, ".csv"))
     throw Error(ErrorKind::kInvalidValue, "-o", a.output, "a table file name ending in .csv");
+  if (!a.output.empty()) CheckOutputLocation(a.output);
   const std::vector<Table1Row> rows = RunTable1(o, base);
   std::cout << FormatTable1(rows);
   for (const Table1Row& r : rows)

@@ -5,6 +5,7 @@
 #include <tbb/task_group.h>
 
 #include <cmath>
+#include <exception>
 #include <filesystem>
 
 #include "impactdic/core/error.h"
@@ -36,15 +37,30 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   // A missing file is reported before any work; a corrupt one when it is decoded.
   for (const auto& p : paths) CheckImageFileExists(p);
   // The reference is decoded and precomputed while the first deformed image is decoded; every
-  // later image is decoded while the one before it is correlated. At most three images are
-  // held, whatever the length of the sequence.
+  // later image is decoded while the one before it is correlated. Besides what the correlator
+  // keeps (its reference and, with `auto`, the last frame), at most two images are held,
+  // whatever the length of the sequence.
   Correlator correlator(options);
   cv::Mat reference, current;
-  tbb::parallel_invoke([&] { current = ReadGreyImage(paths[1]); },
-                       [&] {
-                         reference = ReadGreyImage(paths[0]);
-                         correlator.SetReference(reference);
-                       });
+  std::exception_ptr reference_error, deformed_error;  // Reported in this order (deterministic).
+  tbb::parallel_invoke(
+      [&] {
+        try {
+          current = ReadGreyImage(paths[1]);
+        } catch (...) {
+          deformed_error = std::current_exception();
+        }
+      },
+      [&] {
+        try {
+          reference = ReadGreyImage(paths[0]);
+          correlator.SetReference(reference);
+        } catch (...) {
+          reference_error = std::current_exception();
+        }
+      });
+  if (reference_error) std::rethrow_exception(reference_error);
+  if (deformed_error) std::rethrow_exception(deformed_error);
   CheckSameSize({reference, current}, {paths[0], paths[1]});
   DicResult result;
   result.positions = correlator.positions();
@@ -52,7 +68,8 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   for (std::size_t k = 1; k < paths.size(); ++k) {
     cv::Mat next;
     tbb::task_group prefetch;
-    if (k + 1 < paths.size()) prefetch.run([&] { next = ReadGreyImage(paths[k + 1]); });
+    if (k + 1 < paths.size())
+      prefetch.run([&next, &paths, k] { next = ReadGreyImage(paths[k + 1]); });
     try {
       result.frames.push_back(correlator.Correlate(current));
     } catch (...) {

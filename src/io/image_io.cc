@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -82,7 +83,8 @@ void CheckFrameNumbering(const std::vector<std::string>& files) {
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::string prefix, suffix;
     long long number = 0;
-    if (!SplitFrameNumber(files[k], &prefix, &number, &suffix)) return;
+    // More than 9 digits: a timestamp, not a frame counter; its steps need not be constant.
+    if (!SplitFrameNumber(files[k], &prefix, &number, &suffix) || number > 999999999) return;
     if (k == 0) {
       prefix0 = prefix;
       suffix0 = suffix;
@@ -91,21 +93,33 @@ void CheckFrameNumbering(const std::vector<std::string>& files) {
     }
     numbers.push_back(number);
   }
-  const long long step = numbers[1] - numbers[0];
+  // The series' step: the most common difference between neighbours (the smallest on a tie).
+  std::map<long long, int> counts;
+  for (std::size_t k = 1; k < numbers.size(); ++k) ++counts[numbers[k] - numbers[k - 1]];
+  long long step = 0;
+  int best = 0;
+  for (const auto& [d, c] : counts) {
+    if (d > 0 && c > best) {
+      step = d;
+      best = c;
+    }
+  }
+  if (step == 0) step = 1;
   for (std::size_t k = 1; k < numbers.size(); ++k) {
     const long long d = numbers[k] - numbers[k - 1];
-    if (d == step && step > 0) continue;
-    const long long missing = step > 0 && d > step && d % step == 0 ? d / step - 1 : 0;
-    throw Error(ErrorKind::kInvalidValue, "frames",
-                fmt::format("the numbering jumps from {} to {} ({})",
-                            fs::path(files[k - 1]).filename().string(),
-                            fs::path(files[k]).filename().string(),
-                            missing > 0 ? fmt::format("{} frame(s) missing", missing)
-                                        : fmt::format("step {} after step {}", d, step)),
-                fmt::format("consecutively numbered frames (step {}): the frame times are "
-                            "counted from the first frame, so a missing frame shifts all later "
-                            "ones",
-                            step))
+    if (d == step) continue;
+    const long long missing = d > step && d % step == 0 ? d / step - 1 : 0;
+    throw Error(
+        ErrorKind::kInvalidValue, "frames",
+        fmt::format("the numbering jumps from {} to {} ({})",
+                    fs::path(files[k - 1]).filename().string(),
+                    fs::path(files[k]).filename().string(),
+                    missing > 0 ? fmt::format("{} frame(s) missing", missing)
+                                : fmt::format("step {} where the series steps by {}", d, step)),
+        fmt::format("consecutively numbered frames (step {}): the frame times are "
+                    "counted from the first frame, so a missing frame shifts all later "
+                    "ones",
+                    step))
         .WithFile(files[k]);
   }
 }

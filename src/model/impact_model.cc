@@ -633,9 +633,9 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   } else {
     sum.solver = "auto(dopri5)";
     sum.solver_reason = fmt::format(
-        "no stiffness detected (Hairer's test: h|lambda| > 3.25 on fewer than 15 accepted "
-        "Dormand-Prince steps in a row; largest h|lambda| {:.3g}): the step limit {} s near the "
-        "sigmoid keeps Dormand-Prince stable",
+        "no stiffness detected (Hairer's test did not fire: it needs h|lambda| > 3.25 on 15 "
+        "accepted Dormand-Prince steps without 6 below it; largest h|lambda| {:.3g}): the step "
+        "limit {} s near the sigmoid keeps Dormand-Prince stable",
         max_h_lambda, Num(h_window));
   }
   sum.wall_time_s = timer.ElapsedSeconds();

@@ -149,10 +149,11 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
         AnalyzeCorrelation(dic, mapping, scene.inputs.fps, scene.sensor.frame_time_offset_s,
                            run.sensor, mopt, static_cast<std::size_t>(first));
   } catch (Error& e) {
-    // Name the file to fix: the DAQ record for frame timing, else the scene's settings.
+    // Name the file to fix: the DAQ record when its exposure channel times the frames, else the
+    // scene's settings (fps, frame_time_offset_s, the grid).
     if (e.file().empty()) {
       const bool timing = e.where() == "exposure channel" || e.where() == "frame times";
-      e.WithFile(timing ? scene.inputs.sensor : scene.path);
+      e.WithFile(timing && !run.sensor.exposure.empty() ? scene.inputs.sensor : scene.path);
     }
     throw;
   }

@@ -55,6 +55,18 @@ TEST(ImageIo, FramesSortNaturallyAndGapsInTheNumberingAreNamed) {
         << e.what();
     EXPECT_NE(std::string(e.what()).find("1 frame(s) missing"), std::string::npos);
   }
+  // The gap is blamed where it is, also when it comes first.
+  try {
+    CheckFrameNumbering({"f_1.png", "f_3.png", "f_4.png", "f_5.png", "f_6.png"});
+    FAIL() << "expected a numbering gap";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("f_1.png to f_3.png (1 frame(s) missing)"),
+              std::string::npos)
+        << e.what();
+  }
+  // Timestamps (more than 9 digits) are not frame counters: not checked.
+  EXPECT_NO_THROW(
+      CheckFrameNumbering({"t_1700000000001.png", "t_1700000000003.png", "t_1700000000006.png"}));
   // A constant step, names that are not one numbered series, or too few names: no error.
   EXPECT_NO_THROW(CheckFrameNumbering({"img_10.tif", "img_12.tif", "img_14.tif"}));
   EXPECT_NO_THROW(CheckFrameNumbering({"a.png", "b.png", "c.png"}));

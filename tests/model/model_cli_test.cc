@@ -98,6 +98,7 @@ TEST(ModelCli, BadInputFailsWithExitCode1AndNamesTheOption) {
       {"model --table1 --mass 10", "--mass"},
       {"model --mass 10 --height 0.7 --width 0.15 -o /no/such/folder/s.csv", "/no/such/folder"},
       {"model --work-precision --plot /no/such/folder/wp.png", "/no/such/folder"},
+      {"model --table1 -o /no/such/folder/t1.csv", "/no/such/folder"},
   };
   for (const Case& c : cases) {
     const CliResult r = RunCli(c.args);

@@ -100,14 +100,24 @@ TEST(RunErrors, MissingFrameInTheSequenceIsNamedAndNoFolderIsLeft) {
 TEST(RunErrors, MissingGnuplotIsReportedBeforeWork) {
   TestDir dir;
   const Scene scene = SmallFrameScene(dir, false, true);
-  setenv("IMPACTDIC_GNUPLOT", "/nonexistent/gnuplot", 1);
-  try {
-    RunScene(scene, PipelineOptions{});
-    FAIL() << "expected an error for the missing gnuplot";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("/nonexistent/gnuplot"), std::string::npos) << e.what();
+  {
+    // Set for this block only, also when an assertion leaves it early.
+    struct EnvGuard {
+      EnvGuard() { setenv("IMPACTDIC_GNUPLOT", "/nonexistent/gnuplot", 1); }
+      ~EnvGuard() { unsetenv("IMPACTDIC_GNUPLOT"); }
+    } guard;
+    EXPECT_THROW(
+        {
+          try {
+            RunScene(scene, PipelineOptions{});
+          } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("/nonexistent/gnuplot"), std::string::npos)
+                << e.what();
+            throw;
+          }
+        },
+        Error);
   }
-  unsetenv("IMPACTDIC_GNUPLOT");
   EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
   // The same scene runs once gnuplot is found. Without a sensor record the kinematics stage
   // still runs (frame times k / fps) and says so; momentum is skipped with the reason.

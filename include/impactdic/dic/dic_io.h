@@ -15,7 +15,9 @@ namespace impactdic {
 // Correlates paths[1..] against paths[0] frame by frame, with a progress bar. Missing files are
 // reported (Error naming the file) before any work; each image is decoded while the previous
 // one is correlated (Error naming the file if it is corrupt or its size or depth differs from
-// the first image's), so at most three images are in memory.
+// the first image's), so besides the correlator's reference (and last frame, with `auto`) at
+// most two images are in memory. If both the reference and the first deformed image are bad,
+// the reference is named.
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
 
 // Writes the result by extension:

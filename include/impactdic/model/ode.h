@@ -71,7 +71,7 @@ struct OdeOptions {
   // A trial state outside the domain is rejected and retried with a quarter of the step. If
   // stop_on_domain_exit, the integration ends at the last accepted point (status kLeftDomain)
   // when the slope at the step's start carries the solution out too (y + h f outside), or
-  // after domain_exit_retries consecutive retries (a step too long for a steep rise ahead).
+  // after domain_exit_retries retries that left the domain since the last accepted step.
   bool stop_on_domain_exit = false;
   int domain_exit_retries = 3;
 };
