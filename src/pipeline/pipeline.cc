@@ -699,14 +699,26 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   options.Check();
   const std::string folder =
       options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
+  // The highest folder of the output path that does not exist yet (the run may create it and
+  // its children).
   std::error_code ec;
-  const bool existed = fs::exists(folder, ec);
+  fs::path created;
+  for (fs::path p = fs::absolute(folder, ec).lexically_normal(); !p.empty() && !fs::exists(p, ec);
+       p = p.parent_path()) {
+    created = p;
+    if (p == p.parent_path()) break;
+  }
   try {
     return RunStages(scene, options);
   } catch (...) {
-    // A failed run leaves no empty output folder behind (files already complete stay).
-    if (!existed && fs::is_directory(folder, ec) && fs::is_empty(folder, ec))
-      fs::remove(folder, ec);
+    // A failed run leaves no empty folders behind (files already complete stay).
+    if (!created.empty() && fs::is_directory(created, ec)) {
+      bool has_files = false;
+      for (auto it = fs::recursive_directory_iterator(created, ec);
+           !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
+        has_files = has_files || !it->is_directory();
+      if (!has_files && !ec) fs::remove_all(created, ec);
+    }
     throw;
   }
 }

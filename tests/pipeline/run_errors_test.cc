@@ -87,14 +87,20 @@ outputs: {folder: out, animation: false, figures: )") +
 
 TEST(RunErrors, MissingFrameInTheSequenceIsNamedAndNoFolderIsLeft) {
   TestDir dir;
+  const Scene scene = SmallFrameScene(dir, true, false);
   try {
-    RunScene(SmallFrameScene(dir, true, false), PipelineOptions{});
+    RunScene(scene, PipelineOptions{});
     FAIL() << "expected an error for the missing frame f2";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("f1.png to f3.png"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("1 frame(s) missing"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
+  // Nor the nested folders of an output path that did not exist.
+  PipelineOptions nested;
+  nested.output_folder = dir.File("new/a/b");
+  EXPECT_THROW(RunScene(scene, nested), Error);
+  EXPECT_FALSE(std::filesystem::exists(dir.File("new")));
 }
 
 TEST(RunErrors, MissingGnuplotIsReportedBeforeWork) {
