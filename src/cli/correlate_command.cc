@@ -26,6 +26,7 @@ struct CorrelateArgs {
   int subset = 25;
   int step = 10;
   std::string roi;
+  std::string mask;
   std::string interp = "bicubic";
   std::string shape = "affine";
   std::string update = "auto";
@@ -76,6 +77,7 @@ void Run(const CorrelateArgs& a) {
   options.grid.subset_size = a.subset;
   options.grid.step = a.step;
   if (!a.roi.empty()) options.grid.roi = ParseRoi(a.roi);
+  if (!a.mask.empty()) options.grid.mask = ReadGreyImage(a.mask) != 0;
   options.icgn.interpolation = InterpolationFromString(a.interp);
   options.icgn.shape = ShapeFunctionFromString(a.shape);
   options.update.mode = ReferenceUpdateFromString(a.update, &options.update.every_n);
@@ -106,7 +108,13 @@ void Run(const CorrelateArgs& a) {
                                                     static_cast<std::size_t>(a.threads));
   }
   WallTimer wall;
-  const DicResult result = CorrelateFiles(paths, options);
+  DicResult result;
+  try {
+    result = CorrelateFiles(paths, options);
+  } catch (Error& e) {
+    if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
+    throw;
+  }
   WriteDicResult(a.output, result, options);
   const double seconds = wall.ElapsedSeconds();
   LogInfo("correlate: {}", result.summary.FullReport());
@@ -134,6 +142,9 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--subset", args->subset, "Subset size [px], odd (default 25)");
   cmd->add_option("--step", args->step, "Grid step [px] (default 10)");
   cmd->add_option("--roi", args->roi, "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
+  cmd->add_option("--mask", args->mask,
+                  "Mask image of the reference's size: subsets are correlated only where their "
+                  "centre pixel is non-zero (status `masked` elsewhere)");
   cmd->add_option("--interp", args->interp, "bicubic | biquintic (default bicubic)");
   cmd->add_option("--shape", args->shape, "affine | quadratic (default affine)");
   cmd->add_option("--reference-update", args->update,

@@ -361,6 +361,30 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
                                      d.roi[0], d.roi[1], d.roi[2], d.roi[3]));
     }
   }
+  {
+    YAML::Node n = dic.Get("roi_polygon");
+    if (n.IsDefined() && !n.IsNull()) {
+      std::vector<std::array<double, 2>> vertices;
+      bool ok = n.IsSequence() && n.size() >= 3;
+      for (std::size_t i = 0; ok && i < n.size(); ++i) {
+        std::array<double, 2> v{};
+        ok = n[i].IsSequence() && n[i].size() == 2 && n[i][0].IsScalar() && n[i][1].IsScalar() &&
+             YAML::convert<double>::decode(n[i][0], v[0]) &&
+             YAML::convert<double>::decode(n[i][1], v[1]) && std::isfinite(v[0]) &&
+             std::isfinite(v[1]) && v[0] >= 0 && v[1] >= 0;
+        vertices.push_back(v);
+      }
+      if (ok) {
+        d.roi_polygon = vertices;
+      } else {
+        problems.Add(n, "dic.roi_polygon",
+                     fmt::format("got {}; expected a list of at least 3 vertices [x, y] in "
+                                 "pixels (>= 0)",
+                                 Describe(n)));
+      }
+    }
+  }
+  dic.Path("mask", &d.mask, folder);
   dic.Choice("interpolation", &d.interpolation, {"bicubic", "biquintic"});
   dic.Choice("shape", &d.shape, {"affine", "quadratic"});
   {

@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <opencv2/imgproc.hpp>
 #include <optional>
+#include <vector>
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
@@ -79,12 +81,56 @@ FrameSource OpenFrames(const std::string& source) {
   return frames;
 }
 
+std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& vertices) {
+  std::vector<cv::Point> points;
+  for (const auto& v : vertices)
+    points.emplace_back(static_cast<int>(std::lround(v[0])), static_cast<int>(std::lround(v[1])));
+  return points;
+}
+
+// The correlator's mask from the scene's polygon and mask image (empty if neither is given):
+// non-zero where subsets may be centred.
+cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
+  const SceneDic& d = scene.dic;
+  cv::Mat mask;
+  if (!d.mask.empty()) {
+    const cv::Mat image = ReadGreyImage(d.mask);
+    if (image.size() != frame_size) {
+      throw Error(ErrorKind::kInvalidValue, "dic.mask",
+                  fmt::format("a {}x{} image", image.cols, image.rows),
+                  fmt::format("a mask of the frames' size {}x{} (non-zero = correlate)",
+                              frame_size.width, frame_size.height))
+          .WithFile(d.mask);
+    }
+    mask = image != 0;
+  }
+  if (!d.roi_polygon.empty()) {
+    cv::Mat inside = cv::Mat::zeros(frame_size, CV_8U);
+    cv::fillPoly(inside, std::vector<std::vector<cv::Point>>{PolygonPoints(d.roi_polygon)},
+                 cv::Scalar(255));
+    if (cv::countNonZero(inside) == 0) {
+      throw Error(
+          ErrorKind::kInvalidValue, "dic.roi_polygon", "a polygon outside the frames",
+          fmt::format("vertices inside the {}x{} frames", frame_size.width, frame_size.height))
+          .WithFile(scene.path);
+    }
+    mask = mask.empty() ? inside : (mask & inside);
+  }
+  return mask;
+}
+
 DicOptions MakeDicOptions(const SceneDic& d) {
   DicOptions o;
   o.grid.subset_size = d.subset_size;
   o.grid.step = d.step;
   if (d.roi[2] > d.roi[0] && d.roi[3] > d.roi[1]) {
     o.grid.roi = cv::Rect(d.roi[0], d.roi[1], d.roi[2] - d.roi[0], d.roi[3] - d.roi[1]);
+  }
+  if (!d.roi_polygon.empty()) {
+    // The grid covers the polygon's bounding box (within `roi`); SceneMask leaves out the
+    // subsets whose centre is outside the polygon.
+    const cv::Rect box = cv::boundingRect(PolygonPoints(d.roi_polygon));
+    o.grid.roi = o.grid.roi.area() > 0 ? (o.grid.roi & box) : box;
   }
   o.icgn.interpolation = InterpolationFromString(d.interpolation);
   o.icgn.shape = ShapeFunctionFromString(d.shape);
@@ -390,6 +436,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   if (need_frames) {
     WallTimer t;
     DicOptions dic_options = MakeDicOptions(scene.dic);
+    dic_options.grid.mask = SceneMask(scene, frames[0].size());
     const int threads = options.threads >= 0 ? options.threads : scene.dic.threads;
     std::optional<tbb::global_control> limit;
     if (threads > 0)

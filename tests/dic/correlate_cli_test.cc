@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -115,6 +116,42 @@ TEST_F(CorrelateCli, BadInputGivesClearErrors) {
   ExpectError(Pair() + " -o " + Path("x.txt"), ".csv or .h5");
   ExpectError(Pair() + " -o /no/such/folder/x.csv", "/no/such/folder");
   ExpectError("correlate -o " + Path("x.csv"), "--frames");
+}
+
+TEST_F(CorrelateCli, MaskLimitsTheSubsetsAndAWrongSizedMaskIsNamed) {
+  // 120x100 images; the mask opens only the right half (x >= 60).
+  cv::Mat mask(100, 120, CV_8U, cv::Scalar(0));
+  mask(cv::Rect(60, 0, 60, 100)).setTo(255);
+  WriteImage(Path("mask.png"), mask);
+  WriteImage(Path("mask_small.png"), cv::Mat(50, 60, CV_8U, cv::Scalar(255)));
+  const std::string out = Path("masked.csv");
+  const CliResult r =
+      RunCli(Pair() + " --subset 25 --step 10 --mask " + Path("mask.png") + " -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CsvReadOptions read;
+  read.allow_non_finite = true;
+  read.text_columns = {"status"};
+  const CsvTable t = ReadCsv(out, read);
+  const std::vector<double>& xs = t.Column("x_px");
+  const std::vector<double>& us = t.Column("u_px");
+  const std::vector<std::string>& statuses = t.TextColumn("status");
+  int masked = 0, correlated = 0;
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    const double x = xs[i];
+    const std::string& status = statuses[i];
+    if (x < 60) {
+      EXPECT_EQ(status, "masked") << "x = " << x;
+      EXPECT_TRUE(std::isnan(us[i]));
+      ++masked;
+    } else {
+      EXPECT_EQ(status, "converged") << "x = " << x;
+      ++correlated;
+    }
+  }
+  EXPECT_GT(masked, 0);
+  EXPECT_GT(correlated, 0);
+  ExpectError(Pair() + " --mask " + Path("mask_small.png") + " -o " + out, "mask_small.png");
+  ExpectError(Pair() + " --mask " + Path("no_mask.png") + " -o " + out, "no_mask.png");
 }
 
 // Images are decoded while the previous frame is correlated: a bad image late in the sequence

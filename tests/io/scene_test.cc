@@ -38,6 +38,8 @@ dic:
   subset_size: 31
   reference_update: every:5
   roi: [10, 20, 300, 200]
+  roi_polygon: [[20, 30], [280, 30], [150, 190.5]]
+  mask: masks/soil.png
 )");
   const Scene s = LoadScene(path);
   EXPECT_EQ(s.name, "test-a");
@@ -54,6 +56,9 @@ dic:
   EXPECT_EQ(s.dic.step, 10);
   EXPECT_EQ(s.dic.reference_update, "every:5");
   EXPECT_EQ(s.dic.roi[2], 300);
+  ASSERT_EQ(s.dic.roi_polygon.size(), 3u);
+  EXPECT_DOUBLE_EQ(s.dic.roi_polygon[2][1], 190.5);
+  EXPECT_EQ(s.dic.mask, (dir.path() / "sub/masks/soil.png").string());
   EXPECT_DOUBLE_EQ(s.model.K, 50);
   EXPECT_DOUBLE_EQ(s.model.b_per_s, 2500);
   EXPECT_DOUBLE_EQ(s.sensor.cutoff_hz, 1500);
@@ -89,6 +94,7 @@ dic:
   interpolation: bicubik
   reference_update: every:0
   roi: [1, 2, 3]
+  roi_polygon: [[0, 0], [5, -1]]
 model:
   n: 1.5
 outputs:
@@ -102,12 +108,13 @@ stages: [correlate, momentun]
         "dic.subset_size: got '24'; expected an odd subset size >= 5",
         "dic.interpolation: got 'bicubik'; expected one of bicubic, biquintic (did you mean "
         "'bicubic'?)",
-        "dic.reference_update: got 'every:0'", "dic.roi: got a list of 3", "model.n: got '1.5'",
-        "outputs.figures: got 'maybe'; expected true or false",
+        "dic.reference_update: got 'every:0'", "dic.roi: got a list of 3",
+        "dic.roi_polygon: got a list of 2; expected a list of at least 3 vertices",
+        "model.n: got '1.5'", "outputs.figures: got 'maybe'; expected true or false",
         "unknown stage 'momentun' (did you mean 'momentum'?)"}) {
     EXPECT_NE(msg.find(expected), std::string::npos) << "missing: " << expected << "\nin:\n" << msg;
   }
-  EXPECT_NE(msg.find("10 problems"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("11 problems"), std::string::npos) << msg;
   // Line numbers are given: the subset_size is on line 9 of the text.
   EXPECT_NE(msg.find("scene.yaml:9: dic.subset_size"), std::string::npos) << msg;
 }

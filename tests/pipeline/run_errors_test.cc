@@ -10,6 +10,7 @@
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/scene.h"
@@ -139,6 +140,60 @@ TEST(RunErrors, MissingGnuplotIsReportedBeforeWork) {
   EXPECT_TRUE(kinematics_ran);
   EXPECT_TRUE(momentum_skipped);
   EXPECT_TRUE(H5Reader(dir.File("out/results.h5")).Exists("/kinematics/vy_mm_s"));
+}
+
+// The scene's polygon and mask image limit the correlated subsets (status `masked` elsewhere);
+// a mask of the wrong size is named.
+TEST(RunRegion, PolygonAndMaskLimitTheCorrelatedSubsets) {
+  TestDir dir;
+  SmallFrameScene(dir, false, false);  // Writes frames f0..f4 (64x64).
+  cv::Mat mask(64, 64, CV_8U, cv::Scalar(255));
+  mask(cv::Rect(0, 0, 32, 64)).setTo(0);  // Only x >= 32.
+  WriteImage(dir.File("mask.png"), mask);
+  WriteImage(dir.File("small_mask.png"), cv::Mat(32, 32, CV_8U, cv::Scalar(255)));
+  auto scene = [&](const std::string& region) {
+    return ParseScene(R"(
+inputs: {frames: frames, mm_per_px: 0.5}
+stages: [frames, correlate, kinematics, outputs]
+dic: {subset_size: 15, step: 8, )" +
+                          region +
+                          R"(}
+outputs: {folder: out, animation: false, figures: false}
+)",
+                      dir.File("scene.yaml"));
+  };
+  // Upper-left triangle x + y <= 63, then the right half by the mask image.
+  for (const std::string& region :
+       {std::string("roi_polygon: [[0, 0], [63, 0], [0, 63]]"), std::string("mask: mask.png")}) {
+    RunScene(scene(region), PipelineOptions{});
+    H5Reader h5(dir.File("out/results.h5"));
+    const auto x = h5.ReadDouble("/dic/x_px"), y = h5.ReadDouble("/dic/y_px");
+    Dims dims;
+    const auto status = h5.ReadInt("/dic/status", &dims);
+    const std::size_t n = x.size();
+    int inside = 0, outside = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool in = region[0] == 'r' ? x[i] + y[i] <= 62 : x[i] >= 33;
+      const bool out = region[0] == 'r' ? x[i] + y[i] >= 64 : x[i] <= 31;
+      const int s = status[(dims[0] - 1) * n + i];  // Last frame.
+      if (in) {
+        EXPECT_EQ(s, static_cast<int>(SubsetStatus::kConverged)) << region << " " << i;
+        ++inside;
+      } else if (out) {
+        EXPECT_EQ(s, static_cast<int>(SubsetStatus::kMasked)) << region << " " << i;
+        ++outside;
+      }
+    }
+    EXPECT_GT(inside, 0) << region;
+    EXPECT_GT(outside, 0) << region;
+  }
+  try {
+    RunScene(scene("mask: small_mask.png"), PipelineOptions{});
+    FAIL() << "expected an error for the mask size";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("small_mask.png"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("64x64"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RunErrors, UnwritableOutputFolderIsReportedBeforeWork) {

@@ -58,6 +58,12 @@ struct SceneDic {
   int step = 10;         // Grid step [px], >= 1.
   // Region of interest x0, y0, x1, y1 [px] in the first frame; all zero = whole image less margins.
   std::array<int, 4> roi{0, 0, 0, 0};
+  // Optional polygon region of interest [[x, y], ...] [px] (>= 3 vertices): only subsets whose
+  // centre lies inside it are correlated (the grid covers its bounding box, within `roi` if set).
+  std::vector<std::array<double, 2>> roi_polygon;
+  // Optional mask image (same size as the frames after preprocessing): only subsets whose centre
+  // pixel is non-zero are correlated. Resolved against the scene file's folder.
+  std::string mask;
   std::string interpolation = "bicubic";  // bicubic | biquintic
   std::string shape = "affine";           // affine | quadratic
   std::string reference_update = "auto";  // fixed | incremental | every:N | auto
