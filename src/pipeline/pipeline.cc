@@ -130,6 +130,10 @@ DicOptions MakeDicOptions(const SceneDic& d) {
     // The grid covers the polygon's bounding box (within `roi`); SceneMask leaves out the
     // subsets whose centre is outside the polygon.
     const cv::Rect box = cv::boundingRect(PolygonPoints(d.roi_polygon));
+    if (o.grid.roi.area() > 0 && (o.grid.roi & box).area() == 0) {
+      throw Error(ErrorKind::kInvalidValue, "dic.roi_polygon", "a polygon outside dic.roi",
+                  "a polygon that overlaps dic.roi (or no dic.roi)");
+    }
     o.grid.roi = o.grid.roi.area() > 0 ? (o.grid.roi & box) : box;
   }
   o.icgn.interpolation = InterpolationFromString(d.interpolation);

@@ -187,6 +187,9 @@ outputs: {folder: out, animation: false, figures: false}
     EXPECT_GT(inside, 0) << region;
     EXPECT_GT(outside, 0) << region;
   }
+  EXPECT_THROW(RunScene(scene("roi: [0, 0, 20, 20], roi_polygon: [[40, 40], [60, 40], [60, 60]]"),
+                        PipelineOptions{}),
+               Error);
   try {
     RunScene(scene("mask: small_mask.png"), PipelineOptions{});
     FAIL() << "expected an error for the mask size";
