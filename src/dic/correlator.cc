@@ -37,6 +37,22 @@ bool IsDecorrelation(SubsetStatus s) {
          s == SubsetStatus::kNotFound || s == SubsetStatus::kUncertain;
 }
 
+// A reference subset centred on the pixel nearest to the material point `pos` (the offset is
+// kept, so the displacement of `pos` itself is read from the warp).
+SubsetRef CentredSubset(cv::Point2d pos) {
+  SubsetRef s;
+  s.cx = static_cast<int>(std::lround(pos.x));
+  s.cy = static_cast<int>(std::lround(pos.y));
+  s.ox = pos.x - s.cx;
+  s.oy = pos.y - s.cy;
+  return s;
+}
+
+// The saturation level of an image's depth (none for float images).
+double FullScale(const cv::Mat& raw) {
+  return raw.depth() == CV_16U ? 65535.0 : raw.depth() == CV_8U ? 255.0 : 1e300;
+}
+
 // Whether a result is good enough for `auto`: converged with ZNCC >= UpdateOptions::auto_min_zncc.
 bool PassesAuto(const IcgnResult& r, double min_zncc) {
   return r.status == SubsetStatus::kConverged && r.zncc >= min_zncc;
@@ -193,7 +209,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   im.region = spline->region();
   spline->NodeGradients(&im.gx, &im.gy);
   raw(im.region).convertTo(im.f, CV_32F);
-  im.full_scale = raw.depth() == CV_16U ? 65535.0 : raw.depth() == CV_8U ? 255.0 : 1e300;
+  im.full_scale = FullScale(raw);
   ref.subsets.assign(n, SubsetRef{});
   ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
@@ -202,10 +218,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
       s.status = permanent[i];
       return;
     }
-    s.cx = static_cast<int>(std::lround(ref_pos[i].x));
-    s.cy = static_cast<int>(std::lround(ref_pos[i].y));
-    s.ox = ref_pos[i].x - s.cx;
-    s.oy = ref_pos[i].y - s.cy;
+    s = CentredSubset(ref_pos[i]);
     internal::PrepareSubset(shape, im, options.icgn, &s,
                             &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n]);
   });
@@ -573,20 +586,14 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
   tbb::parallel_for(0, static_cast<int>(which.size()), [&](int k) {
     const int i = which[k];
     if (std::isnan(pos_last[i].x)) return;
-    SubsetRef s;
-    s.cx = static_cast<int>(std::lround(pos_last[i].x));
-    s.cy = static_cast<int>(std::lround(pos_last[i].y));
-    s.ox = pos_last[i].x - s.cx;
-    s.oy = pos_last[i].y - s.cy;
+    SubsetRef s = CentredSubset(pos_last[i]);
     RefImages im;
     im.region = cv::Rect(s.cx - half, s.cy - half, size, size);
     if (!last.spline.Inside(im.region.x, im.region.y) ||
         !last.spline.Inside(im.region.x + size - 1, im.region.y + size - 1))
       return;
     last.raw(im.region).convertTo(im.f, CV_32F);
-    im.full_scale = last.raw.depth() == CV_16U  ? 65535.0
-                    : last.raw.depth() == CV_8U ? 255.0
-                                                : 1e300;
+    im.full_scale = FullScale(last.raw);
     im.gx.create(size, size, CV_32F);
     im.gy.create(size, size, CV_32F);
     for (int r = 0; r < size; ++r) {

@@ -363,24 +363,22 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     }
     std::string skipped_note;
     if (sensor) {
+      std::size_t edges = 0;  // Exposure edges in the record.
       try {
         frame_times_all =
-            FrameTimes(*sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s);
+            FrameTimes(*sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s, &edges);
       } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
         if (e.file().empty()) e.WithFile(scene.inputs.sensor);
         throw;
       }
-      if (!sensor->exposure.empty()) {
-        const std::size_t edges = ExposureRisingEdges(sensor->time_s, sensor->exposure).size();
-        if (edges > static_cast<std::size_t>(n)) {
-          const std::string w = fmt::format(
-              "{} exposure edges in {} for {} frames: frame k is timed by edge k, the last {} "
-              "edge(s) are unused; if frames are missing from the sequence, every later frame "
-              "time is wrong",
-              edges, scene.inputs.sensor, n, edges - static_cast<std::size_t>(n));
-          LogWarning("{}", w);
-          summary.warnings.push_back("sensor: " + w);
-        }
+      if (edges > static_cast<std::size_t>(n)) {
+        const std::string w = fmt::format(
+            "{} exposure edges in {} for {} frames: frame k is timed by edge k, the last {} "
+            "edge(s) are unused; if frames are missing from the sequence, every later frame "
+            "time is wrong",
+            edges, scene.inputs.sensor, n, edges - static_cast<std::size_t>(n));
+        LogWarning("{}", w);
+        summary.warnings.push_back("sensor: " + w);
       }
       if (scene.dic.first_frame == 0) {
         // The reference is the last frame exposed before the impact: nothing earlier moves.

@@ -583,11 +583,13 @@ std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
 }
 
 std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
-                               double offset_s) {
+                               double offset_s, std::size_t* edges_found) {
   CheckValue(n_frames >= 1, "n_frames", fmt::format("{}", n_frames), ">= 1");
   std::vector<double> times;
+  if (edges_found) *edges_found = 0;
   if (!result.exposure.empty()) {
     times = ExposureRisingEdges(result.time_s, result.exposure);
+    if (edges_found) *edges_found = times.size();
     if (times.size() < static_cast<std::size_t>(n_frames)) {
       throw Error(ErrorKind::kInvalidValue, "exposure channel",
                   fmt::format("{} rising edges", times.size()),

@@ -176,9 +176,10 @@ std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
 
 // Times of frames 0..n_frames-1 on the DAQ clock: the exposure rising edges when the record has
 // an exposure channel, else offset_s + k / fps. Error (kInvalidValue) if there are fewer edges
-// than frames or a frame lies outside the sensor record.
+// than frames or a frame lies outside the sensor record. `edges_found` (optional) receives the
+// number of exposure edges in the record (0 without an exposure channel).
 std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
-                               double offset_s);
+                               double offset_s, std::size_t* edges_found = nullptr);
 
 // Linear interpolation of series(time) at the query times; Error naming `what` when a query lies
 // outside [time.front(), time.back()].
