@@ -79,10 +79,7 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     throw Error(ErrorKind::kInvalidValue, "--release-time", "without --from-release",
                 "--release-time only with --from-release");
   }
-  if (!a.output.empty() && !EndsWith(a.output, ".h5") && !EndsWith(a.output, ".hdf5")) {
-    throw Error(ErrorKind::kInvalidValue, "--output", a.output, "an HDF5 file name (.h5, .hdf5)");
-  }
-  if (!a.output.empty()) CheckOutputLocation(a.output);
+  if (!a.output.empty()) CheckOutputLocation(a.output, {"--output", {".h5", ".hdf5"}, {a.sensor}});
   if (cmd.count("--results") > 0) {
     throw Error(ErrorKind::kInvalidValue, "--results", "with --sensor",
                 "--results only with the SCENE.yaml form");
@@ -124,7 +121,8 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
   const SensorResult r = AnalyzeSensorCsv(a.sensor, o);
   const SensorSummary& s = r.summary;
   if (!a.output.empty()) {
-    H5Writer out(a.output);
+    // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.
+    H5Writer out(a.output, /*owned_groups=*/{"/sensor"});
     WriteSensor(out, r);
     out.Commit();
   }

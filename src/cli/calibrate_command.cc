@@ -91,7 +91,9 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->add_option("--square", args->square_mm, "Square side [mm], > 0")->required();
   cmd->add_option("--plane", args->plane,
                   "Image of the board lying on the panel (measurement plane) for the mm/px scale");
-  cmd->add_option("-o,--output", args->output, "Calibration YAML to write")->required();
+  cmd->add_option("-o,--output", args->output,
+                  "Calibration YAML to write (.yaml or .yml; never one of the images)")
+      ->required();
   cmd->add_option("--format", args->format, "Output format: text or json")->capture_default_str();
   cmd->add_option("--max-rms", args->max_rms_px,
                   "Refuse a calibration whose reprojection RMS exceeds this [px], > 0")
@@ -115,8 +117,14 @@ void RegisterCalibrateCommand(CLI::App& app) {
         !args->images.empty(), "IMAGES", "no calibration images",
         fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));
     CheckValue(!args->output.empty(), "-o", "an empty name", "the calibration YAML to write");
-    CheckOutputLocation(args->output);
     if (!args->plane.empty()) CheckImageFileExists(args->plane);
+    // The calibration is YAML; an image name (-o calcopy/view_00.png) would overwrite an input.
+    std::vector<std::string> inputs = {args->plane};
+    for (const std::string& source : args->images) {
+      const std::vector<std::string> listed = ListFrames(source);
+      inputs.insert(inputs.end(), listed.begin(), listed.end());
+    }
+    CheckOutputLocation(args->output, {"-o", {".yaml", ".yml"}, inputs});
     options.max_rms_px = args->max_rms_px;
     options.min_views = args->min_views;
     options.fix_k3 = args->fix_k3;

@@ -85,13 +85,6 @@ void Run(const CorrelateArgs& a) {
   options.icgn.min_zncc = a.min_zncc;
   options.Check();
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
-  {
-    std::string ext = std::filesystem::path(a.output).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), ::tolower);
-    CheckValue(ext == ".csv" || ext == ".h5" || ext == ".hdf5", "-o/--output", a.output,
-               "a file ending in .csv or .h5");
-  }
-  CheckOutputLocation(a.output);
   std::vector<std::string> paths;
   if (pair) {
     paths.push_back(a.reference);
@@ -102,6 +95,9 @@ void Run(const CorrelateArgs& a) {
                a.frames + " (" + std::to_string(paths.size()) + " image)",
                "at least two images (the first is the reference)");
   }
+  std::vector<std::string> inputs = paths;
+  inputs.push_back(a.mask);
+  CheckOutputLocation(a.output, {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs});
   std::unique_ptr<tbb::global_control> threads;
   if (a.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -59,11 +59,6 @@ void RequireFinite(double v, bool ok, const char* option, const char* what) {
   if (!std::isfinite(v) || !ok) throw Error(ErrorKind::kInvalidValue, option, Num(v), what);
 }
 
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
 // Validates everything before any work; returns the parameters (mass etc. only for a single run).
 ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
   if (a.work_precision && a.table1)
@@ -161,11 +156,7 @@ ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
 void RunSingle(const ModelArgs& a) {
   const ImpactModelParameters p = ValidatedParameters(a, /*single_run=*/true);
   const ImpactSolverOptions o = ValidatedSolverOptions(a);
-  if (!a.output.empty() && !EndsWith(a.output, ".csv") && !EndsWith(a.output, ".h5") &&
-      !EndsWith(a.output, ".hdf5"))
-    throw Error(ErrorKind::kInvalidValue, "-o", a.output,
-                "a series file name ending in .csv, .h5 or .hdf5");
-  if (!a.output.empty()) CheckOutputLocation(a.output);
+  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv", ".h5", ".hdf5"}, {}});
   const ImpactRun run = SimulateImpact(p, o);
   const ImpactSummary& s = run.summary;
   for (const std::string& w : s.warnings) LogWarning("model: {}", w);
@@ -226,17 +217,13 @@ void RunWorkPrecisionCommand(const ModelArgs& a) {
       throw Error(ErrorKind::kInvalidValue, "--wp-cases", c,
                   "a comma-separated list of exact, default, table1");
   }
-  if (!a.output.empty() && !EndsWith(a.output, ".csv"))
-    throw Error(ErrorKind::kInvalidValue, "-o", a.output, "a table file name ending in .csv");
-  if (!a.plot.empty() && !EndsWith(a.plot, ".png"))
-    throw Error(ErrorKind::kInvalidValue, "--plot", a.plot, "a figure file name ending in .png");
   const std::string plot_case = w.default_case  ? "default"
                                 : w.exact_cases ? "harmonic-exact"
                                                 : "table1-max";
   if (!w.exact_cases && !w.default_case && !w.table1)
     throw Error(ErrorKind::kInvalidValue, "--wp-cases", a.wp_cases, "at least one case");
-  if (!a.output.empty()) CheckOutputLocation(a.output);
-  if (!a.plot.empty()) CheckOutputLocation(a.plot);
+  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv"}, {}});
+  if (!a.plot.empty()) CheckOutputLocation(a.plot, {"--plot", {".png"}, {}});
   const std::vector<WorkPrecisionRow> rows = RunWorkPrecision(w);
   std::cout << FormatWorkPrecision(rows);
   if (!a.output.empty()) {
@@ -252,9 +239,7 @@ void RunWorkPrecisionCommand(const ModelArgs& a) {
 void RunTable1Command(const ModelArgs& a) {
   const ImpactModelParameters base = ValidatedParameters(a, /*single_run=*/false);
   const ImpactSolverOptions o = ValidatedSolverOptions(a);
-  if (!a.output.empty() && !EndsWith(a.output, ".csv"))
-    throw Error(ErrorKind::kInvalidValue, "-o", a.output, "a table file name ending in .csv");
-  if (!a.output.empty()) CheckOutputLocation(a.output);
+  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv"}, {}});
   const std::vector<Table1Row> rows = RunTable1(o, base);
   std::cout << FormatTable1(rows);
   for (const Table1Row& r : rows)

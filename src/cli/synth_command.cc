@@ -12,6 +12,7 @@
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic::cli {
@@ -46,6 +47,9 @@ void RunSynth(const SynthArgs& args) {
   std::error_code ec;
   if (fs::exists(args.output, ec) && !fs::is_directory(args.output, ec))
     throw Error(ErrorKind::kInvalidValue, "-o", args.output, "a folder, not a file");
+  // The files synth replaces in DIR must not include the spec it reads.
+  for (const char* name : {"scene.yaml", "spec.yaml", "sensor.csv", "truth.h5"})
+    CheckNotAnInput((fs::path(args.output) / name).string(), "-o", {args.spec_path});
 
   ImpactScene scene(spec);
   LogInfo("model: {}", scene.model_run().summary.BriefReport());

@@ -111,7 +111,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   if (ext != ".h5" && ext != ".hdf5") {
     throw Error(ErrorKind::kInvalidValue, "output", path, "a file ending in .csv or .h5");
   }
-  H5Writer out(path);
+  H5Writer out(path, /*owned_groups=*/{"/dic"});  // Other groups of an existing file stay.
   std::vector<double> x(n), y(n);
   for (std::size_t i = 0; i < n; ++i) {
     x[i] = result.positions[i].x;

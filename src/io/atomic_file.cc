@@ -1,7 +1,11 @@
 #include "impactdic/io/atomic_file.h"
 
+#include <fcntl.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -11,6 +15,7 @@
 #include <system_error>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -53,17 +58,104 @@ void AtomicFile::Commit() {
 
 void CheckOutputLocation(const std::string& path) { const AtomicFile probe(path); }
 
-void WriteTextFileAtomic(const std::string& path, const std::string& text) {
-  AtomicFile file(path);
-  {
-    std::ofstream out(file.temp_path(), std::ios::binary);
-    out << text;
-    out.flush();
-    if (!out) {
-      throw Error(ErrorKind::kIo, path, std::string("write failed: ") + std::strerror(errno), "");
+void CheckNotAnInput(const std::string& output, const std::string& option,
+                     const std::vector<std::string>& inputs) {
+  std::error_code ec;
+  if (!fs::exists(output, ec)) return;  // Every input exists: a new file is none of them.
+  for (const std::string& input : inputs) {
+    if (!input.empty() && fs::equivalent(output, input, ec)) {
+      throw Error(ErrorKind::kInvalidValue, option,
+                  output + (input == output ? "" : " (the same file as " + input + ")") +
+                      ", which is one of the inputs",
+                  "an output that is not an input (it would be overwritten)");
     }
   }
+}
+
+void CheckOutputLocation(const std::string& path, const OutputRules& rules) {
+  std::string ext = fs::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (!rules.extensions.empty() &&
+      std::find(rules.extensions.begin(), rules.extensions.end(), ext) == rules.extensions.end()) {
+    std::string allowed;
+    for (const std::string& e : rules.extensions) allowed += (allowed.empty() ? "" : ", ") + e;
+    throw Error(ErrorKind::kInvalidValue, rules.option, path, "a file name ending in " + allowed);
+  }
+  CheckOutputLocation(path);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) return;  // Every input exists: a new file is none of them.
+  if (fs::is_directory(path, ec)) {
+    throw Error(ErrorKind::kInvalidValue, rules.option, path + " (a folder)", "a file name");
+  }
+  CheckNotAnInput(path, rules.option, rules.inputs);
+  if (ext == ".h5" || ext == ".hdf5") {
+    try {
+      const H5Reader existing(path);
+    } catch (const Error&) {
+      throw Error(ErrorKind::kInvalidValue, rules.option,
+                  path + ", an existing file that is not HDF5 (it is kept)",
+                  "a new file name, or an HDF5 file to write the command's groups into");
+    }
+  }
+}
+
+Error WriteError(const std::string& path, int error_number) {
+  if (error_number == ENOSPC || error_number == EDQUOT) {
+    fs::path folder = fs::path(path).parent_path();
+    if (folder.empty()) folder = ".";
+    return Error(ErrorKind::kIo,
+                 std::string("cannot write: ") +
+                     (error_number == ENOSPC ? "no space left on device"
+                                             : "disk quota exceeded (no space left for you)") +
+                     "; free space in " + folder.string() + " or choose another output folder")
+        .WithFile(path);
+  }
+  std::string reason = std::strerror(error_number);
+  if (!reason.empty()) reason[0] = static_cast<char>(std::tolower(reason[0]));
+  return Error(ErrorKind::kIo, "cannot write: " + reason).WithFile(path);
+}
+
+bool DiskFull(const std::string& path) {
+  fs::path folder = fs::path(path).parent_path();
+  if (folder.empty()) folder = ".";
+  struct statvfs info {};
+  if (statvfs(folder.c_str(), &info) != 0) return false;
+  // root may also write into the blocks reserved for it.
+  return (geteuid() == 0 ? info.f_bfree : info.f_bavail) == 0;
+}
+
+namespace {
+
+// Writes all of `data` to `fd`, retrying short writes and EINTR; the errno of a failure.
+int WriteAll(int fd, const char* data, std::size_t size) {
+  while (size > 0) {
+    const ssize_t n = write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      return errno;
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void WriteFileAtomic(const std::string& path, const void* data, std::size_t size) {
+  AtomicFile file(path);
+  const int fd = open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw WriteError(path, errno);
+  int error = WriteAll(fd, static_cast<const char*>(data), size);
+  // A file system may only report a full disk when the data reaches it (fsync) or at close.
+  if (error == 0 && fsync(fd) != 0 && errno != EINVAL && errno != EROFS) error = errno;
+  if (close(fd) != 0 && error == 0 && errno != EINTR) error = errno;
+  if (error != 0) throw WriteError(path, error);  // ~AtomicFile removes the temporary file.
   file.Commit();
+}
+
+void WriteTextFileAtomic(const std::string& path, const std::string& text) {
+  WriteFileAtomic(path, text.data(), text.size());
 }
 
 std::string ReadTextFile(const std::string& path) {

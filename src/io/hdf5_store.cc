@@ -74,8 +74,16 @@ auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltyp
 
 }  // namespace
 
+// The file is built in memory by HDF5's core driver (no backing store) and written to the disk
+// by WriteFileAtomic on Commit(). So HDF5 never writes to the disk itself: in HDF5 1.10 a close
+// whose final flush fails (a full disk) frees the file but leaves its id registered, and the next
+// close of that id, or the library's own clean-up at exit, reads freed memory (the segfault of
+// issue 11); the C++ objects' destructors also printed "H5Dclose failed" lines. Disk errors now
+// come only from our own checked writes, as one Error naming the file.
+constexpr std::size_t kCoreIncrement = std::size_t{4} << 20;  // growth step of the image [bytes]
+
 struct H5Writer::Impl {
-  std::unique_ptr<AtomicFile> atomic;
+  std::string final_path;
   H5::H5File file;
   bool open = false;
 };
@@ -84,25 +92,33 @@ H5Writer::H5Writer(const std::string& final_path) : H5Writer(final_path, Mode::k
 
 H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_unique<Impl>()) {
   H5::Exception::dontPrint();
+  impl_->final_path = final_path;
   if (mode == Mode::kUpdate) {
     H5Reader check(final_path);  // Error if missing or not HDF5.
   }
-  impl_->atomic = std::make_unique<AtomicFile>(final_path);
-  if (mode == Mode::kUpdate) {
-    std::error_code ec;
-    std::filesystem::copy_file(final_path, impl_->atomic->temp_path(),
-                               std::filesystem::copy_options::overwrite_existing, ec);
-    if (ec) {
-      throw Error(ErrorKind::kIo, "copy for update", ec.message(),
-                  "a readable file and writable folder")
-          .WithFile(final_path);
-    }
-  }
+  CheckOutputLocation(final_path);
   Guard(final_path, "open", [&] {
-    impl_->file = H5::H5File(impl_->atomic->temp_path(),
-                             mode == Mode::kUpdate ? H5F_ACC_RDWR : H5F_ACC_TRUNC);
+    H5::FileAccPropList access;
+    access.setCore(kCoreIncrement, /*backing_store=*/false);
+    // kUpdate reads the existing file into memory; it is never written through this handle.
+    impl_->file = H5::H5File(final_path, mode == Mode::kUpdate ? H5F_ACC_RDWR : H5F_ACC_TRUNC,
+                             H5::FileCreatPropList::DEFAULT, access);
     impl_->open = true;
   });
+}
+
+namespace {
+
+H5Writer::Mode ModeForExisting(const std::string& path) {
+  std::error_code ec;
+  return std::filesystem::exists(path, ec) ? H5Writer::Mode::kUpdate : H5Writer::Mode::kCreate;
+}
+
+}  // namespace
+
+H5Writer::H5Writer(const std::string& final_path, const std::vector<std::string>& owned_groups)
+    : H5Writer(final_path, ModeForExisting(final_path)) {
+  for (const std::string& group : owned_groups) Remove(group);
 }
 
 void H5Writer::Remove(const std::string& path) {
@@ -117,17 +133,17 @@ void H5Writer::Remove(const std::string& path) {
   });
 }
 
+// Closing an in-memory file cannot fail on the disk; nothing was written unless Commit() ran.
 H5Writer::~H5Writer() {
   if (impl_->open) {
     try {
       impl_->file.close();
-    } catch (...) {
+    } catch (const H5::Exception&) {
     }
   }
-  // The AtomicFile deletes the temporary file unless Commit() ran.
 }
 
-const std::string& H5Writer::final_path() const { return impl_->atomic->final_path(); }
+const std::string& H5Writer::final_path() const { return impl_->final_path; }
 
 void H5Writer::CreateGroup(const std::string& path) {
   Guard(final_path(), "group " + path, [&] {
@@ -271,14 +287,27 @@ void H5Writer::WriteProvenance(const std::string& scene_yaml_text) {
   SetAttribute("/provenance", "git_revision", GitRevision());
 }
 
-void H5Writer::Commit() {
+std::vector<char> H5Writer::CloseToImage() {
+  std::vector<char> image;
   Guard(final_path(), "close", [&] {
     impl_->file.flush(H5F_SCOPE_GLOBAL);
-    impl_->file.close();
+    const ssize_t bytes = H5Fget_file_image(impl_->file.getId(), nullptr, 0);
+    if (bytes < 0) throw H5::FileIException("H5Fget_file_image", "cannot size the file image");
+    image.resize(static_cast<std::size_t>(bytes));
+    if (H5Fget_file_image(impl_->file.getId(), image.data(), image.size()) != bytes)
+      throw H5::FileIException("H5Fget_file_image", "cannot copy the file image");
+    impl_->file.close();  // Frees the in-memory file before the copy is used.
     impl_->open = false;
   });
-  impl_->atomic->Commit();
+  return image;
 }
+
+void H5Writer::Commit() {
+  const std::vector<char> image = CloseToImage();
+  WriteFileAtomic(final_path(), image.data(), image.size());
+}
+
+std::vector<char> H5Writer::CommitToMemory() { return CloseToImage(); }
 
 struct H5Reader::Impl {
   std::string path;
@@ -298,6 +327,23 @@ H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
     throw Error(ErrorKind::kFileFormat, "HDF5 file",
                 "a file HDF5 cannot open (" + e.getDetailMsg() + ")", "an HDF5 file")
         .WithFile(path);
+  }
+}
+
+H5Reader::H5Reader(const std::string& name, const std::vector<char>& image)
+    : impl_(std::make_unique<Impl>()) {
+  H5::Exception::dontPrint();
+  impl_->path = name;
+  try {
+    H5::FileAccPropList access;
+    access.setCore(kCoreIncrement, /*backing_store=*/false);
+    if (H5Pset_file_image(access.getId(), const_cast<char*>(image.data()), image.size()) < 0)
+      throw H5::PropListIException("H5Pset_file_image", "cannot use the file image");
+    impl_->file = H5::H5File(name, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, access);
+  } catch (const H5::Exception& e) {
+    throw Error(ErrorKind::kFileFormat, "HDF5 file image",
+                "bytes HDF5 cannot open (" + e.getDetailMsg() + ")", "an HDF5 file image")
+        .WithFile(name);
   }
 }
 

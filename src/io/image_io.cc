@@ -4,7 +4,9 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -154,25 +156,39 @@ cv::Mat ReadGreyImage(const std::string& path) {
 }
 
 void WriteImage(const std::string& path, const cv::Mat& image) {
-  AtomicFile file(path);
-  // OpenCV picks the encoder from the extension, so the temporary name keeps it.
-  const std::string temp = file.temp_path() + fs::path(path).extension().string();
+  // Encoded in memory (OpenCV picks the encoder from the extension) and written with our checked
+  // writes: libpng's own file writing reports a full disk only as "libpng error: Write Error".
+  const std::string ext = fs::path(path).extension().string();
+  std::vector<uchar> bytes;
   bool ok = false;
   try {
-    ok = cv::imwrite(temp, image);
-  } catch (const cv::Exception& e) {
+    ok = !ext.empty() && cv::imencode(ext, image, bytes);
+  } catch (const cv::Exception&) {
     ok = false;
   }
   if (!ok) {
-    std::error_code ec;
-    fs::remove(temp, ec);
-    throw Error(ErrorKind::kIo, "image", "OpenCV could not write it",
-                "a writable path with an image extension")
+    throw Error(ErrorKind::kIo, "image", "OpenCV could not encode it",
+                "an image extension (.png, .tif, ...)")
         .WithFile(path);
   }
-  std::error_code ec;
-  fs::rename(temp, file.temp_path(), ec);
-  file.Commit();
+  WriteFileAtomic(path, bytes.data(), bytes.size());
+}
+
+bool IsCompletePng(const std::string& path) {
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  // The IEND chunk: length 0, type "IEND", CRC ae 42 60 82.
+  static constexpr unsigned char kEnd[12] = {0,   0,   0,    0,    'I',  'E',
+                                             'N', 'D', 0xae, 0x42, 0x60, 0x82};
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return false;
+  const std::streamoff size = in.tellg();
+  if (size < 8 + 12) return false;
+  unsigned char head[8] = {}, tail[12] = {};
+  in.seekg(0);
+  in.read(reinterpret_cast<char*>(head), 8);
+  in.seekg(size - 12);
+  in.read(reinterpret_cast<char*>(tail), 12);
+  return in.good() && std::memcmp(head, kSignature, 8) == 0 && std::memcmp(tail, kEnd, 12) == 0;
 }
 
 std::vector<std::string> ListFrames(const std::string& source) {

@@ -1,4 +1,5 @@
 // Writing the model's time series (CSV or HDF5).
+#include <cctype>
 #include <string>
 #include <vector>
 
@@ -10,9 +11,13 @@
 namespace impactdic {
 namespace {
 
+// Case-insensitive, as the CLI's check of -o (CheckOutputLocation).
 bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  if (s.size() < suffix.size()) return false;
+  for (std::size_t i = 0; i < suffix.size(); ++i)
+    if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i])
+      return false;
+  return true;
 }
 
 }  // namespace
@@ -44,7 +49,7 @@ void WriteImpactSeries(const std::string& path, const ImpactModelParameters& par
                                          "F_dyn = -k z (u - 1) / v^n (Eq. 8; NaN at v = 0)",
                                          "F_fr = -k z (Eq. 7)",
                                          "F_g = (m_p + m_add) g"};
-  H5Writer out(path);
+  H5Writer out(path, /*owned_groups=*/{"/model"});  // Other groups of an existing file stay.
   for (std::size_t i = 0; i < names.size(); ++i)
     out.Write("model/series/" + names[i], columns[i], units[i], what[i]);
   const ImpactSummary& sum = run.summary;

@@ -194,6 +194,29 @@ void PrepareOutputFolder(const std::string& folder) {
   fs::remove(fs::path(folder) / ".impactdic-write-test", ec);
 }
 
+// The output folder must not hold an input: run replaces the files it wrote there before
+// (results.h5, summary.*, figures, video), so a scene, frame, sensor or calibration file in it
+// could be overwritten or taken for an output. Error kInvalidValue naming the option and both.
+void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder,
+                                   const std::string& option) {
+  std::error_code ec;
+  const fs::path out = fs::weakly_canonical(fs::absolute(folder, ec), ec);
+  // A glob's folder is the input (its files may be written later); a video or a folder is itself.
+  std::string frames = scene.inputs.frames;
+  if (frames.find_first_of("*?[") != std::string::npos)
+    frames = fs::path(frames).parent_path().string();
+  for (const std::string& input : {scene.path, frames, scene.inputs.calibration,
+                                   scene.inputs.sensor, scene.inputs.truth, scene.dic.mask}) {
+    if (input.empty()) continue;
+    const fs::path in = fs::weakly_canonical(fs::absolute(input, ec), ec);
+    const auto [out_end, in_it] = std::mismatch(out.begin(), out.end(), in.begin(), in.end());
+    if (out_end != out.end()) continue;  // `in` is not `out` or below it.
+    throw Error(ErrorKind::kInvalidValue, option, folder + ", which holds the input " + input,
+                "an output folder apart from the inputs (run replaces what it wrote there)")
+        .WithFile(scene.path);
+  }
+}
+
 }  // namespace
 
 void PipelineOptions::Check() const {
@@ -594,6 +617,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   WallTimer t_out;
   const fs::path folder(summary.output_folder);
   const std::string results_path = (folder / "results.h5").string();
+  // Without outputs.hdf5 the renderer reads the results from memory: results.h5 is not written.
+  std::vector<char> results_in_memory;
   if (scene.outputs.hdf5 || scene.outputs.figures || scene.outputs.animation) {
     H5Writer out(results_path);
     out.WriteProvenance(scene.yaml_text);
@@ -705,8 +730,12 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     out.CreateGroup("/summary");
     for (std::size_t i = 0; i < names.size(); ++i)
       out.SetAttribute("/summary", names[i], values[i]);
-    out.Commit();
-    summary.outputs.push_back(results_path);
+    if (scene.outputs.hdf5) {
+      out.Commit();
+      summary.outputs.push_back(results_path);
+    } else {
+      results_in_memory = out.CommitToMemory();
+    }
   }
   if (scene.outputs.figures || scene.outputs.animation) {
     RenderResultsOptions r;
@@ -715,7 +744,11 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     r.snapshot = scene.outputs.figures;
     r.animation = scene.outputs.animation;
     r.png_frames = options.png_frames || scene.outputs.png_frames;
-    const RenderResultsSummary rendered = RenderResults(results_path, r);
+    const RenderResultsSummary rendered =
+        scene.outputs.hdf5
+            ? RenderResults(results_path, r)
+            : RenderResults(H5Reader(results_path + " (in memory)", results_in_memory),
+                            results_path, r);
     for (const auto& w : rendered.written) summary.outputs.push_back(w);
     for (const auto& s : rendered.skipped) summary.warnings.push_back("render: " + s);
   }
@@ -730,11 +763,9 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     WriteCsv(csv_path, fig.CsvNames(), columns);
     summary.outputs.push_back(csv_path);
   }
-  if (!scene.outputs.hdf5) {
+  if (!scene.outputs.hdf5) {  // A results.h5 of an earlier run would not match this one.
     std::error_code ec;
-    fs::remove(results_path, ec);
-    summary.outputs.erase(std::remove(summary.outputs.begin(), summary.outputs.end(), results_path),
-                          summary.outputs.end());
+    fs::remove(folder / "results.h5", ec);
   }
   stages.Ran("outputs",
              fmt::format("{} files in {}", summary.outputs.size(), summary.output_folder), t_out);
@@ -748,6 +779,8 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   options.Check();
   const std::string folder =
       options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
+  CheckOutputFolderHoldsNoInput(scene, folder,
+                                options.output_folder.empty() ? "outputs.folder" : "-o");
   // The highest folder of the output path that does not exist yet (the run may create it and
   // its children).
   std::error_code ec;

@@ -1,5 +1,6 @@
 #include "impactdic/render/animation.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 #include "subprocess.h"
 
@@ -169,6 +171,9 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
         png_done = true;
         WallTimer t;
         writer.release();
+        // The writer does not report failed writes: a disk with no block left after it means
+        // the video is cut short, and every other codec would fail alike.
+        if (DiskFull(temp)) throw WriteError(final_path, ENOSPC);
         result.read_back = CountVideoFrames(temp);
         encode_s += t.ElapsedSeconds();
         if (result.read_back != frames) {

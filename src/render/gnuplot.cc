@@ -14,6 +14,8 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/image_io.h"
 #include "subprocess.h"
 
 namespace impactdic {
@@ -153,7 +155,7 @@ std::size_t WriteData(const Plot& plot, const std::string& path) {
     }
   }
   out.flush();
-  if (!out) throw Error(ErrorKind::kIo, "gnuplot data file", "write failed", "").WithFile(path);
+  if (!out) throw WriteError(path, errno != 0 ? errno : EIO);
   return points;
 }
 
@@ -419,7 +421,9 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
                                     result.output.substr(0, 4000));
   }
   std::error_code ec;
-  if (!fs::is_regular_file(temp_png, ec) || !HasPngSignature(temp_png)) {
+  // gnuplot exits 0 even when its writes failed; a full disk leaves a truncated PNG.
+  if (!fs::is_regular_file(temp_png, ec) || !IsCompletePng(temp_png)) {
+    if (DiskFull(temp_png)) throw WriteError(png_path, ENOSPC);
     throw Error(ErrorKind::kIo, "gnuplot exited normally but wrote no valid PNG for '" + png_path +
                                     "'; gnuplot said:\n" + result.output.substr(0, 4000));
   }

@@ -175,9 +175,15 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
 
 RenderResultsSummary RenderResults(const std::string& results_path,
                                    const RenderResultsOptions& options) {
-  WallTimer wall;
   options.Check();
   const H5Reader reader(results_path);
+  return RenderResults(reader, results_path, options);
+}
+
+RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& results_path,
+                                   const RenderResultsOptions& options) {
+  WallTimer wall;
+  options.Check();
   RenderResultsSummary summary;
 
   // Output folder.

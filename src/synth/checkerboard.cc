@@ -5,15 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/image_io.h"
 
 namespace impactdic {
 namespace {
@@ -352,9 +353,7 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
 
   CalibrationSet set;
   set.poses = CalibrationPoses(camera, board, options.views, options.seed);
-  auto write = [](const std::string& path, const cv::Mat& image) {
-    if (!cv::imwrite(path, image)) throw Error(ErrorKind::kIo, "cannot write image " + path);
-  };
+  auto write = [](const std::string& path, const cv::Mat& image) { WriteImage(path, image); };
   for (int k = 0; k < options.views; ++k) {
     CheckerboardRenderOptions render = options.render;
     render.seed = options.render.seed + 1000003ULL * (k + 1);
@@ -371,7 +370,7 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
   write(set.plane_path, RenderCheckerboard(camera, board, set.plane_pose, options.render));
 
   set.board_path = (fs::path(out_dir) / "board.yaml").string();
-  std::ofstream yaml(set.board_path);
+  std::ostringstream yaml;
   yaml << "# Checkerboard definition (impactdic calibrate --board COLSxROWS --square SQUARE_MM).\n"
        << "# cols x rows count INNER corners; a 9x6 board has 10x7 squares.\n"
        << fmt::format("cols: {}\nrows: {}\nsquare_mm: {}\nmargin_squares: {}\n", board.cols,
@@ -387,7 +386,7 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
                       options.render.noise_sigma, options.render.bits)
        << fmt::format("  plane_distance_mm: {}\n  plane_mm_per_px: {:.9g}\n", distance,
                       set.plane_mm_per_px);
-  if (!yaml) throw Error(ErrorKind::kIo, "cannot write " + set.board_path);
+  WriteTextFileAtomic(set.board_path, yaml.str());
   return set;
 }
 

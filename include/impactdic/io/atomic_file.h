@@ -7,7 +7,11 @@
 #ifndef IMPACTDIC_IO_ATOMIC_FILE_H_
 #define IMPACTDIC_IO_ATOMIC_FILE_H_
 
+#include <cstddef>
 #include <string>
+#include <vector>
+
+#include "impactdic/core/error.h"
 
 namespace impactdic {
 
@@ -34,8 +38,42 @@ class AtomicFile {
 // folder exists and is writable. For commands that check their outputs before any work.
 void CheckOutputLocation(const std::string& path);
 
-// Writes `text` to `path` atomically.
+// What a command promises about one output file, checked before any work.
+struct OutputRules {
+  std::string option;                   // the option naming the output ("-o"), for the messages
+  std::vector<std::string> extensions;  // allowed endings, lower case with the dot; empty = any
+  std::vector<std::string> inputs;      // files the command reads: the output is none of them
+};
+
+// Error kInvalidValue naming `option` and `output` if `output` is one of `inputs` (the same
+// file under any name: std::filesystem::equivalent). A missing output is none of them.
+void CheckNotAnInput(const std::string& output, const std::string& option,
+                     const std::vector<std::string>& inputs);
+
+// CheckOutputLocation(path), then the rules, each an Error kInvalidValue naming the option and
+// the path: the extension (case-insensitive) is one of rules.extensions; the output is not one
+// of rules.inputs (the same file under any name: std::filesystem::equivalent); an existing
+// .h5/.hdf5 output is an HDF5 file (its other groups will be kept, see H5Writer), never a file
+// of another kind that writing would destroy.
+void CheckOutputLocation(const std::string& path, const OutputRules& rules);
+
+// Writes `size` bytes to `path` atomically: a temporary sibling is written with checked POSIX
+// writes, synced to the disk and renamed. Any failure (a full disk, a quota, an I/O error) throws
+// WriteError(path, errno) and removes the temporary file; an existing file of that name is kept.
+void WriteFileAtomic(const std::string& path, const void* data, std::size_t size);
+
+// Writes `text` to `path` atomically (WriteFileAtomic).
 void WriteTextFileAtomic(const std::string& path, const std::string& text);
+
+// The one message for a failed write of `path` with the system's error number: Error kIo naming
+// the file, e.g. "out/results.h5: cannot write: no space left on device; free space there or
+// choose another output folder". For writers that get errno from elsewhere (a helper program).
+Error WriteError(const std::string& path, int error_number);
+
+// True when the file system holding `path` has no block left for this process (root may use
+// the reserved blocks): how a failed write of a helper program or library that does not report
+// its errors (gnuplot, the video writer) is told apart from other failures.
+bool DiskFull(const std::string& path);
 
 // Reads a whole text file; Error kFileNotFound / kIo naming the file.
 std::string ReadTextFile(const std::string& path);

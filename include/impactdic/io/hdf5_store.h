@@ -4,8 +4,11 @@
 // attributes), so h5py, MATLAB's h5read/h5readatt and HDFView open them without conversion.
 // (MATLAB shows the dimensions reversed, as for every row-major file.)
 //
-// Writing goes to a temporary file in the same folder; Commit() closes and renames it. A writer
-// destroyed without Commit() deletes the temporary file: an interrupted run leaves no final file.
+// A writer builds the file in memory (HDF5's core driver) and Commit() writes it in one go with
+// WriteFileAtomic (atomic_file.h): a temporary sibling, renamed over the final name only when
+// complete. A writer destroyed without Commit() writes nothing; a full disk is one Error kIo
+// naming the file ("no space left on device") with no temporary file left. The price: the whole
+// file is held in memory until Commit() (briefly twice while it is copied out).
 //
 //   H5Writer out("run/results.h5");
 //   out.WriteProvenance(scene_yaml_text);
@@ -31,12 +34,19 @@ using Dims = std::vector<std::size_t>;
 
 class H5Writer {
  public:
-  // Starts a new file; an existing file of that name is replaced on Commit().
+  // Starts a new file; an existing file of that name is replaced on Commit(). Error kIo unless
+  // the folder of `final_path` exists and is writable.
   explicit H5Writer(const std::string& final_path);
-  // kUpdate: starts from a copy of the existing file at final_path (Error if it is missing or not
-  // HDF5), so groups can be added or replaced; the original stays untouched until Commit().
+  // kUpdate: starts from the existing file at final_path, read into memory (Error if it is missing
+  // or not HDF5), so groups can be added or replaced; the original stays untouched until Commit()
+  // replaces it.
   enum class Mode { kCreate, kUpdate };
   H5Writer(const std::string& final_path, Mode mode);
+  // For a command that owns only `owned_groups` of a file it may share with others (correlate -o
+  // owns /dic): a new file when final_path does not exist, else kUpdate with those groups removed,
+  // so everything else in the file is kept. An existing file that is not HDF5 is an Error
+  // kFileFormat naming it, and is never replaced.
+  H5Writer(const std::string& final_path, const std::vector<std::string>& owned_groups);
   ~H5Writer();
   H5Writer(const H5Writer&) = delete;
   H5Writer& operator=(const H5Writer&) = delete;
@@ -72,11 +82,16 @@ class H5Writer {
   // `/provenance/scene_yaml` (the scene text, as a string attribute `text` of that group).
   void WriteProvenance(const std::string& scene_yaml_text);
 
-  // Closes the file and renames it to its final name.
+  // Writes the file under its final name (atomically); Error kIo naming it if that fails.
   void Commit();
+  // Closes the file and returns its bytes instead of writing them, for a reader in the same
+  // process (H5Reader(name, image)): nothing is written to the disk.
+  std::vector<char> CommitToMemory();
   const std::string& final_path() const;
 
  private:
+  std::vector<char> CloseToImage();
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -84,6 +99,9 @@ class H5Writer {
 class H5Reader {
  public:
   explicit H5Reader(const std::string& path);
+  // Reads a file held in memory (H5Writer::CommitToMemory; the bytes are copied); `name` stands
+  // for the file in messages.
+  H5Reader(const std::string& name, const std::vector<char>& image);
   ~H5Reader();
   H5Reader(const H5Reader&) = delete;
   H5Reader& operator=(const H5Reader&) = delete;

@@ -20,6 +20,10 @@ cv::Mat ReadGreyImage(const std::string& path);
 // Writes an 8/16-bit image atomically (format from the extension).
 void WriteImage(const std::string& path, const cv::Mat& image);
 
+// True when `path` is a whole PNG file: the signature at the start and the IEND chunk at the end.
+// How the output of a helper program (gnuplot) that may stop writing on a full disk is checked.
+bool IsCompletePng(const std::string& path);
+
 // Expands a frames source into a sorted list of image files: a folder (all image files in it), a
 // glob pattern ("frames/img_*.tif") or a single file. Error if nothing matches. Names are
 // sorted naturally: runs of digits by value, so unpadded "f_9.png" comes before "f_10.png".

@@ -55,6 +55,11 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool req
 RenderResultsSummary RenderResults(const std::string& results_path,
                                    const RenderResultsOptions& options = {});
 
+// The same from an open reader (a file held in memory: H5Writer::CommitToMemory); `results_path`
+// names it in messages and its folder is the default output folder.
+RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& results_path,
+                                   const RenderResultsOptions& options);
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_RENDER_RENDER_RESULTS_H_
