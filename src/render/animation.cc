@@ -2,8 +2,11 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/videoio.hpp>
 #include <optional>
 
@@ -88,6 +91,45 @@ struct AttemptResult {
 
 int Fourcc(const std::string& f) { return cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]); }
 
+std::uint64_t BigEndian(const unsigned char* p, int bytes) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < bytes; ++i) v = (v << 8) | p[i];
+  return v;
+}
+
+// Whether the container of a written video is whole, judged from its structure alone (reading it
+// back through FFmpeg prints FFmpeg's complaints about a cut-short file): MP4, top-level boxes
+// that end exactly at the end of the file and include the index ("moov", written last); AVI,
+// the RIFF size (patched at the end) matching the file size.
+bool ContainerComplete(const std::string& path, const std::string& container) {
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return false;
+  const std::uint64_t size = static_cast<std::uint64_t>(in.tellg());
+  unsigned char head[16] = {};
+  if (container == ".avi") {
+    in.seekg(0);
+    in.read(reinterpret_cast<char*>(head), 8);
+    const std::uint64_t riff = head[4] | head[5] << 8 | head[6] << 16 |
+                               static_cast<std::uint64_t>(head[7]) << 24;
+    return in.good() && std::memcmp(head, "RIFF", 4) == 0 && riff + 8 == size;
+  }
+  bool has_index = false;
+  std::uint64_t at = 0;
+  while (at + 8 <= size) {
+    in.seekg(static_cast<std::streamoff>(at));
+    in.read(reinterpret_cast<char*>(head), 16);
+    if (in.gcount() < 8) return false;
+    in.clear();
+    std::uint64_t box = BigEndian(head, 4);
+    if (box == 1) box = BigEndian(head + 8, 8);  // 64-bit size
+    if (box == 0) box = size - at;               // to the end of the file
+    if (box < 8) return false;
+    has_index = has_index || std::memcmp(head + 4, "moov", 4) == 0;
+    at += box;
+  }
+  return has_index && at == size;
+}
+
 }  // namespace
 
 AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
@@ -171,9 +213,10 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
         png_done = true;
         WallTimer t;
         writer.release();
-        // The writer does not report failed writes: a disk with no block left after it means
-        // the video is cut short, and every other codec would fail alike.
-        if (DiskFull(temp)) throw WriteError(final_path, ENOSPC);
+        // The writer does not report failed writes: a video cut short on a disk with no block
+        // left failed for want of space, and every other codec would fail alike.
+        if (DiskFull(temp) && !ContainerComplete(temp, attempt.container))
+          throw WriteError(final_path, ENOSPC);
         result.read_back = CountVideoFrames(temp);
         encode_s += t.ElapsedSeconds();
         if (result.read_back != frames) {
