@@ -3,8 +3,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/videoio.hpp>
@@ -109,8 +109,8 @@ bool ContainerComplete(const std::string& path, const std::string& container) {
   if (container == ".avi") {
     in.seekg(0);
     in.read(reinterpret_cast<char*>(head), 8);
-    const std::uint64_t riff = head[4] | head[5] << 8 | head[6] << 16 |
-                               static_cast<std::uint64_t>(head[7]) << 24;
+    const std::uint64_t riff =
+        head[4] | head[5] << 8 | head[6] << 16 | static_cast<std::uint64_t>(head[7]) << 24;
     return in.good() && std::memcmp(head, "RIFF", 4) == 0 && riff + 8 == size;
   }
   bool has_index = false;

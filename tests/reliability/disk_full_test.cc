@@ -23,8 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-#define MOUNT_OR_SKIP(disk, size_bytes)                                         \
-  std::string why_not;                                                          \
+#define MOUNT_OR_SKIP(disk, size_bytes)                                           \
+  std::string why_not;                                                            \
   const std::unique_ptr<SmallDisk> disk = SmallDisk::Mount(size_bytes, &why_not); \
   if (!disk) GTEST_SKIP() << "disk-full tests skipped: " << why_not
 
@@ -63,9 +63,9 @@ std::vector<Written> FilesInWriteOrder(const fs::path& folder) {
   std::vector<std::pair<fs::file_time_type, Written>> found;
   for (const auto& e : fs::recursive_directory_iterator(folder))
     if (e.is_regular_file())
-      found.push_back({e.last_write_time(),
-                       {fs::relative(e.path(), folder).string(),
-                        static_cast<std::size_t>(e.file_size())}});
+      found.push_back(
+          {e.last_write_time(),
+           {fs::relative(e.path(), folder).string(), static_cast<std::size_t>(e.file_size())}});
   std::sort(found.begin(), found.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Written> files;
@@ -148,9 +148,9 @@ TEST_F(DiskFull, CorrelateHdf5AndCsv) {
   const std::string frames = Scene("frames/");
   for (const char* name : {"dic.h5", "dic.csv"}) {
     SCOPED_TRACE(name);
-    const CliResult r = RunCli("-q correlate --reference " + frames + "frame_0000.png --deformed " +
-                               frames + "frame_0004.png --subset 21 --step 20 -o " +
-                               disk->File(name));
+    const CliResult r =
+        RunCli("-q correlate --reference " + frames + "frame_0000.png --deformed " + frames +
+               "frame_0004.png --subset 21 --step 20 -o " + disk->File(name));
     ExpectOneCleanNoSpaceError(r, disk->File(name), *disk);
     EXPECT_FALSE(fs::exists(disk->File(name)));
   }
@@ -192,8 +192,8 @@ TEST_F(DiskFull, RunRunsOutOfSpaceAtEachOutput) {
   // summary.json and summary.csv: the disk runs out at each in turn.
   std::vector<std::string> names;
   for (const Written& w : *run_files_) names.push_back(w.name);
-  for (const char* expected : {"results.h5", "momentum.png", "velocity_field_te.png",
-                               "summary.json", "summary.csv"})
+  for (const char* expected :
+       {"results.h5", "momentum.png", "velocity_field_te.png", "summary.json", "summary.csv"})
     ASSERT_NE(std::find(names.begin(), names.end(), expected), names.end()) << expected;
   for (std::size_t i = 0; i < run_files_->size(); ++i) {
     const std::string& name = (*run_files_)[i].name;
@@ -226,8 +226,7 @@ TEST_F(DiskFull, RunWithoutHdf5NeedsNoRoomForResultsH5) {
   ASSERT_GT(h5->size, 4 * SmallDisk::kPage);  // So the slack below cannot hold it.
   MOUNT_OR_SKIP(disk, room + kTwoMb);
   ASSERT_TRUE(disk->LeaveFree(room + 2 * SmallDisk::kPage));
-  const CliResult r =
-      RunCli("-q run " + Scene("scene_no_hdf5.yaml") + " -o " + disk->File("out"));
+  const CliResult r = RunCli("-q run " + Scene("scene_no_hdf5.yaml") + " -o " + disk->File("out"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_FALSE(fs::exists(disk->File("out/results.h5")));
   EXPECT_TRUE(fs::exists(disk->File("out/momentum.png")));

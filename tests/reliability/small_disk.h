@@ -77,7 +77,8 @@ class SmallDisk {
     if (free_now < free_bytes) return false;
     std::ofstream out(filler, std::ios::binary);
     const std::vector<char> zeros(kPage, 0);
-    for (std::size_t n = (free_now - free_bytes) / kPage; n > 0; --n) out.write(zeros.data(), kPage);
+    for (std::size_t n = (free_now - free_bytes) / kPage; n > 0; --n)
+      out.write(zeros.data(), kPage);
     out.close();
     return FreeBytes() == free_bytes;
   }
