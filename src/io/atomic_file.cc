@@ -77,8 +77,12 @@ void CheckOutputLocation(const std::string& path, const OutputRules& rules) {
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (!rules.extensions.empty() &&
       std::find(rules.extensions.begin(), rules.extensions.end(), ext) == rules.extensions.end()) {
-    std::string allowed;
-    for (const std::string& e : rules.extensions) allowed += (allowed.empty() ? "" : ", ") + e;
+    std::string allowed;  // ".csv, .h5 or .hdf5"
+    for (std::size_t i = 0; i < rules.extensions.size(); ++i)
+      allowed += (i == 0                             ? ""
+                  : i + 1 == rules.extensions.size() ? " or "
+                                                     : ", ") +
+                 rules.extensions[i];
     throw Error(ErrorKind::kInvalidValue, rules.option, path, "a file name ending in " + allowed);
   }
   CheckOutputLocation(path);

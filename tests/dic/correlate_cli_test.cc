@@ -113,7 +113,7 @@ TEST_F(CorrelateCli, BadInputGivesClearErrors) {
   ExpectError(Pair() + " --shape cubic -o " + Path("x.csv"), "cubic");
   ExpectError(Pair() + " --reference-update every:0 -o " + Path("x.csv"), "every:0");
   ExpectError(Pair() + " --threads -1 -o " + Path("x.csv"), "--threads");
-  ExpectError(Pair() + " -o " + Path("x.txt"), ".csv or .h5");
+  ExpectError(Pair() + " -o " + Path("x.txt"), ".csv, .h5 or .hdf5");
   ExpectError(Pair() + " -o /no/such/folder/x.csv", "/no/such/folder");
   ExpectError("correlate -o " + Path("x.csv"), "--frames");
 }
