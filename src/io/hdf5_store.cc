@@ -1,7 +1,9 @@
 #include "impactdic/io/hdf5_store.h"
 
 #include <H5Cpp.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -82,6 +84,12 @@ auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltyp
 // come only from our own checked writes, as one Error naming the file.
 constexpr std::size_t kCoreIncrement = std::size_t{4} << 20;  // growth step of the image [bytes]
 
+// A name no file has, for a file image held in memory.
+std::string ImageName(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  return path + " (in memory " + std::to_string(getpid()) + "-" + std::to_string(counter++) + ")";
+}
+
 struct H5Writer::Impl {
   std::string final_path;
   H5::H5File file;
@@ -97,11 +105,20 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_u
     H5Reader check(final_path);  // Error if missing or not HDF5.
   }
   CheckOutputLocation(final_path);
+  // kUpdate starts from the existing file's bytes: HDF5 never opens the original, so readers of
+  // it (another process rendering it) are not locked out and it stays as it is until Commit().
+  std::string existing;
+  if (mode == Mode::kUpdate) existing = ReadTextFile(final_path);
   Guard(final_path, "open", [&] {
     H5::FileAccPropList access;
     access.setCore(kCoreIncrement, /*backing_store=*/false);
-    // kUpdate reads the existing file into memory; it is never written through this handle.
-    impl_->file = H5::H5File(final_path, mode == Mode::kUpdate ? H5F_ACC_RDWR : H5F_ACC_TRUNC,
+    if (mode == Mode::kUpdate &&
+        H5Pset_file_image(access.getId(), existing.data(), existing.size()) < 0)
+      throw H5::PropListIException("H5Pset_file_image", "cannot use the file's bytes");
+    // An image must not be opened under the name of a file that exists (the core driver would
+    // open that file instead); the name is only HDF5's, our messages name final_path.
+    impl_->file = H5::H5File(mode == Mode::kUpdate ? ImageName(final_path) : final_path,
+                             mode == Mode::kUpdate ? H5F_ACC_RDWR : H5F_ACC_TRUNC,
                              H5::FileCreatPropList::DEFAULT, access);
     impl_->open = true;
   });
@@ -339,7 +356,8 @@ H5Reader::H5Reader(const std::string& name, const std::vector<char>& image)
     access.setCore(kCoreIncrement, /*backing_store=*/false);
     if (H5Pset_file_image(access.getId(), const_cast<char*>(image.data()), image.size()) < 0)
       throw H5::PropListIException("H5Pset_file_image", "cannot use the file image");
-    impl_->file = H5::H5File(name, H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, access);
+    impl_->file =
+        H5::H5File(ImageName(name), H5F_ACC_RDONLY, H5::FileCreatPropList::DEFAULT, access);
   } catch (const H5::Exception& e) {
     throw Error(ErrorKind::kFileFormat, "HDF5 file image",
                 "bytes HDF5 cannot open (" + e.getDetailMsg() + ")", "an HDF5 file image")

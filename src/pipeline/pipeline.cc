@@ -747,8 +747,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     const RenderResultsSummary rendered =
         scene.outputs.hdf5
             ? RenderResults(results_path, r)
-            : RenderResults(H5Reader(results_path + " (in memory)", results_in_memory),
-                            results_path, r);
+            : RenderResults(H5Reader(results_path, results_in_memory), results_path, r);
     for (const auto& w : rendered.written) summary.outputs.push_back(w);
     for (const auto& s : rendered.skipped) summary.warnings.push_back("render: " + s);
   }
