@@ -6,11 +6,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <system_error>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
+#include "impactdic/io/output_generation.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -28,10 +29,11 @@ AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_pat
     throw Error(ErrorKind::kIo, final_path_,
                 "output folder " + folder.string() + " is not writable", "a writable folder");
   }
-  std::random_device rd;
-  std::ostringstream name;
-  name << "." << final_fs.filename().string() << ".tmp-" << getpid() << "-" << std::hex << rd();
-  temp_path_ = (folder / name.str()).string();
+  RemoveStaleTemporaries(folder.string());
+  std::string name = ".";  // (Appended, not "." + ...: GCC 12 warns wrongly on that.)
+  name.append(final_fs.filename().string()).append(".tmp-").append(TemporaryTag());
+  temp_path_ = (folder / name).string();
+  interrupt_guard_ = std::make_unique<RemoveOnInterrupt>(temp_path_);
 }
 
 AtomicFile::~AtomicFile() {
@@ -49,6 +51,7 @@ void AtomicFile::Commit() {
                 "a writable output location");
   }
   committed_ = true;
+  interrupt_guard_->Release();
 }
 
 void CheckOutputLocation(const std::string& path) { const AtomicFile probe(path); }

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
@@ -136,6 +137,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
         fs::remove(path, ec);
       }
     } cleanup{temp};
+    const RemoveOnInterrupt video_on_interrupt(temp);
 
     AttemptResult result;
     {
