@@ -31,7 +31,11 @@ std::map<std::uint64_t, std::string>& Registry() {
   static std::map<std::uint64_t, std::string> paths;
   return paths;
 }
-std::uint64_t g_next_id = 1;  // Guarded by RegistryMutex().
+std::uint64_t g_next_id = 1;             // Guarded by RegistryMutex().
+std::vector<std::string>& Completed() {  // Guarded by RegistryMutex().
+  static std::vector<std::string> paths;
+  return paths;
+}
 
 std::mutex& DeferMutex() {
   static std::mutex m;
@@ -81,10 +85,11 @@ bool RemoveWithRetries(const std::string& path) {
   const int signal_number = byte;
   // A swap in progress ends first; then nothing swaps any more (the lock is never released).
   DeferMutex().lock();
-  std::vector<std::string> paths;
+  std::vector<std::string> paths, completed;
   {
     std::lock_guard<std::mutex> lock(RegistryMutex());
     for (auto it = Registry().rbegin(); it != Registry().rend(); ++it) paths.push_back(it->second);
+    completed = Completed();
   }
   std::size_t removed = 0;
   std::string left;
@@ -98,9 +103,14 @@ bool RemoveWithRetries(const std::string& path) {
                      : signal_number == SIGTERM ? "SIGTERM"
                      : signal_number == SIGHUP  ? "SIGHUP"
                                                 : "a signal";
+  std::string state = "the output folders hold their earlier contents";
+  if (!completed.empty()) {
+    std::string list;
+    for (const auto& c : completed) list += (list.empty() ? "" : ", ") + c;
+    state += ", except " + list + ", whose new outputs were complete and stay";
+  }
   WriteStderr("\nimpactdic: interrupted by " + std::string(name) + ": removed " +
-              std::to_string(removed) +
-              " temporary output(s); earlier results were left as they were" + left + "\n");
+              std::to_string(removed) + " temporary output(s); " + state + left + "\n");
   _exit(128 + signal_number);
 }
 
@@ -143,6 +153,16 @@ void RemoveOnInterrupt::Release() {
   std::lock_guard<std::mutex> lock(RegistryMutex());
   Registry().erase(id_);
   id_ = 0;
+}
+
+void NoteOutputsComplete(const std::string& path) {
+  std::lock_guard<std::mutex> lock(RegistryMutex());
+  for (const auto& [id, temporary] : Registry()) {
+    if (path.size() > temporary.size() && path.compare(0, temporary.size(), temporary) == 0 &&
+        path[temporary.size()] == '/')
+      return;
+  }
+  Completed().push_back(path);
 }
 
 DeferInterrupts::DeferInterrupts() { DeferMutex().lock(); }

@@ -362,6 +362,7 @@ void OutputGeneration::Commit() {
       }
     }
     SwapIn(had_previous);
+    NoteOutputsComplete(folder_);
   }
   committed_ = true;
   // The previous generation, if any, is under the staging name.

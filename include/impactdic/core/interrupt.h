@@ -60,6 +60,12 @@ class DeferInterrupts {
   DeferInterrupts& operator=(const DeferInterrupts&) = delete;
 };
 
+// Records that the outputs at `path` are complete and in place (a generation swapped in), so that
+// an interruption's message can say which output folders hold new outputs. Ignored for a path
+// inside a registered temporary (e.g. a campaign's scene folder inside the campaign's staging
+// folder). Never waits (may be called inside a DeferInterrupts block).
+void NoteOutputsComplete(const std::string& path);
+
 // "<pid>-<16 hex digits>": the part of a temporary name that says which process made it.
 std::string TemporaryTag();
 
