@@ -12,6 +12,7 @@
 #include <map>
 #include <mutex>
 #include <random>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -119,8 +120,13 @@ bool RemoveWithRetries(const std::string& path) {
 void InstallInterruptCleanup() {
   static std::once_flag once;
   std::call_once(once, [] {
-    if (pipe2(g_pipe, O_CLOEXEC) != 0) return;  // No handler: signals keep their default action.
-    std::thread(CleanupAfterSignal, g_pipe[0]).detach();
+    // Without the pipe or the thread, signals keep their default action.
+    if (pipe2(g_pipe, O_CLOEXEC) != 0) return;
+    try {
+      std::thread(CleanupAfterSignal, g_pipe[0]).detach();
+    } catch (const std::system_error&) {
+      return;
+    }
     for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) {
       struct sigaction old {};
       if (sigaction(signal_number, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) continue;

@@ -209,15 +209,17 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
   const fs::path parent = dest.parent_path();
   fs::create_directories(parent, ec);
   if (ec || !fs::is_directory(parent)) {
-    throw Error(ErrorKind::kIo, "output folder", ec ? ec.message() : "not a folder",
+    throw Error(ErrorKind::kIo, "output folder",
+                "cannot create " + parent.string() + ": " +
+                    (ec ? ec.message() : std::string("not a folder")),
                 "a folder that can be created")
-        .WithFile(parent.string());
+        .WithFile(folder);
   }
   if (access(parent.c_str(), W_OK) != 0) {
-    throw Error(ErrorKind::kIo, "output folder", "not writable",
-                "a writable folder (the new outputs are made beside " + dest.filename().string() +
-                    " and renamed)")
-        .WithFile(parent.string());
+    throw Error(ErrorKind::kIo, "output folder", parent.string() + " is not writable",
+                "a writable parent folder (the new outputs are made beside the output folder and "
+                "renamed)")
+        .WithFile(folder);
   }
   RemoveStaleTemporaries(parent.string());
   if (fs::is_directory(dest, ec)) {
@@ -351,6 +353,11 @@ void OutputGeneration::Commit() {
   if (committed_) return;
   std::error_code ec;
   const bool had_previous = fs::is_directory(destination_, ec);
+  // A shell whose current folder is the destination (or inside it) keeps seeing the removed
+  // previous generation until it changes folder again.
+  const std::string cwd = fs::current_path(ec).string();
+  const bool replaces_cwd =
+      had_previous && !ec && (cwd == destination_ || cwd.rfind(destination_ + "/", 0) == 0);
   if (had_previous && options_.keep_other_entries) CarryOverPrevious();
   WriteMarker();
   {
@@ -368,6 +375,12 @@ void OutputGeneration::Commit() {
   // The previous generation, if any, is under the staging name.
   fs::remove_all(staging_, ec);
   staging_guard_->Release();
+  if (replaces_cwd) {
+    LogWarning(
+        "{} was replaced by its new outputs; a shell inside it still sees the old, removed "
+        "folder: run `cd {}` there",
+        folder_, destination_);
+  }
 }
 
 }  // namespace impactdic
