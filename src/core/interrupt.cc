@@ -7,7 +7,6 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
-#include <cstring>
 #include <filesystem>
 #include <map>
 #include <mutex>
@@ -191,17 +190,15 @@ std::string TemporaryTag() {
 
 long TemporaryTagPid(std::string_view name, std::string_view prefix) {
   if (name.size() <= prefix.size() || name.substr(0, prefix.size()) != prefix) return 0;
-  std::string_view rest = name.substr(prefix.size());
+  const std::string_view rest = name.substr(prefix.size());
   long pid = 0;
   std::size_t i = 0;
-  for (; i < rest.size() && rest[i] >= '0' && rest[i] <= '9' && i < 10; ++i)
+  for (; i < rest.size() && i < 10 && rest[i] >= '0' && rest[i] <= '9'; ++i)
     pid = pid * 10 + (rest[i] - '0');
-  if (i == 0 || i >= rest.size() || rest[i] != '-' || pid <= 0) return 0;
-  const std::size_t hex_start = ++i;
-  for (; i < rest.size() && std::strchr("0123456789abcdef", rest[i]) != nullptr && rest[i] != '\0';
-       ++i) {
-  }
-  return i > hex_start ? pid : 0;
+  if (i == 0 || i + 1 >= rest.size() || rest[i] != '-' || pid <= 0) return 0;
+  const char next = rest[i + 1];  // At least one hex digit after the dash.
+  const bool hex = (next >= '0' && next <= '9') || (next >= 'a' && next <= 'f');
+  return hex ? pid : 0;
 }
 
 bool ProcessIsGone(long pid) {

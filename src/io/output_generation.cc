@@ -222,6 +222,7 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
         .WithFile(folder);
   }
   RemoveStaleTemporaries(parent.string());
+  RemoveStaleSystemTemporaries();
   if (fs::is_directory(dest, ec)) {
     const std::vector<std::string> foreign = ForeignEntries();
     if (!foreign.empty()) {

@@ -58,7 +58,8 @@ struct OutputGenerationOptions {
 class OutputGeneration {
  public:
   // Creates the parent folders if needed, removes stale temporaries of dead processes beside the
-  // destination, checks that the destination may be replaced and makes the staging folder.
+  // destination and in TMPDIR, checks that the destination may be replaced and makes the staging
+  // folder.
   // Error kInvalidValue for a destination that is a file or holds entries impactdic did not
   // write (named), kIo for a parent folder that cannot be created or written.
   OutputGeneration(const std::string& folder, OutputGenerationOptions options);
