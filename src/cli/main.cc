@@ -1,5 +1,7 @@
 // impactdic: command-line entry point. Parses the global options, dispatches to a subcommand and
-// turns every error into one message on stderr and a non-zero exit code.
+// turns every error into one message on stderr and a non-zero exit code. SIGINT, SIGTERM and
+// SIGHUP remove the temporaries of the outputs in progress and exit with 128 + signal
+// (core/interrupt.h).
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
@@ -8,6 +10,7 @@
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 
 namespace {
@@ -38,9 +41,7 @@ std::string ConversionMessage(const CLI::App& app, const CLI::ConversionError& e
          (type.empty() ? std::string("a value of the option's type") : what);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
+int Main(int argc, char** argv) {
   using namespace impactdic;
   CLI::App app{
       "impactdic: DIC of pounder impacts on sand, momentum validation and the added-mass impact "
@@ -97,12 +98,25 @@ int main(int argc, char** argv) {
     std::cerr << "Run with --help for the allowed options.\n";
     return 1;
   } catch (const Error& e) {
+    WaitIfInterrupted();  // Not an error of its own: the interruption's message comes instead.
     std::cerr << "impactdic: " << (e.kind() == ErrorKind::kNotImplemented ? "" : "error: ")
               << e.what() << "\n";
     return ExitCode(e.kind());
   } catch (const std::exception& e) {
+    WaitIfInterrupted();
     std::cerr << "impactdic: error: " << e.what() << "\n";
     return 1;
   }
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  impactdic::InstallInterruptCleanup();
+  const int exit_code = Main(argc, argv);
+  // An error caused by a signal (a write that failed as the cleanup removed its folder) must not
+  // race the cleanup: the cleanup thread ends the process with 128 + signal.
+  impactdic::WaitIfInterrupted();
+  return exit_code;
 }

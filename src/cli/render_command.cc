@@ -26,7 +26,9 @@ void RegisterRenderCommand(CLI::App& app) {
   auto args = std::make_shared<Args>();
   cmd->add_option("RESULTS", args->results, "results.h5 written by `impactdic run`")->required();
   cmd->add_option("-o,--output", args->output_dir,
-                  "output folder (created if missing; default: the folder of RESULTS)");
+                  "output folder (created if missing; default: the folder of RESULTS). The "
+                  "figures and animation replace the earlier ones together when all are drawn; "
+                  "the folder's other files (results.h5, summaries) stay");
   cmd->add_flag("--png-frames", args->png_frames,
                 "also write every animation frame as PNG (OUTDIR/velocity_frames)");
   cmd->add_flag("--no-animation", args->no_animation, "skip the animation");

@@ -13,6 +13,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic::cli {
@@ -50,6 +51,14 @@ void RunSynth(const SynthArgs& args) {
   // The files synth replaces in DIR must not include the spec it reads.
   for (const char* name : {"scene.yaml", "spec.yaml", "sensor.csv", "truth.h5"})
     CheckNotAnInput((fs::path(args.output) / name).string(), "-o", {args.spec_path});
+  // The folder's files are one generation (io/output_generation.h): made in a staging folder and
+  // swapped in when complete, replacing an earlier scene (and the runs nested in it) whole.
+  OutputGenerationOptions generation_options;
+  generation_options.command = "impactdic synth";
+  for (const char* name : kImpactSceneOutputNames) generation_options.own_names.emplace_back(name);
+  generation_options.known_names = {"results"};  // The scene's outputs.folder, run by an older
+                                                 // impactdic (newer runs leave a marker in it).
+  OutputGeneration generation(args.output, generation_options);
 
   ImpactScene scene(spec);
   LogInfo("model: {}", scene.model_run().summary.BriefReport());
@@ -57,11 +66,11 @@ void RunSynth(const SynthArgs& args) {
           scene.frame_count(), spec.width, spec.height, scene.momentum().t_e_s * 1e3,
           scene.momentum().m_grid_kg, scene.dic_grid().roi[0], scene.dic_grid().roi[1],
           scene.dic_grid().roi[2], scene.dic_grid().roi[3]);
-  ImpactSceneReport report = WriteImpactScene(scene, args.output);
+  ImpactSceneReport report = WriteImpactScene(scene, generation.staging_folder());
 
   // The scene points at calibration/camera.yaml: make it from the rendered images.
   if (spec.render_calibration && spec.calibration_yaml.empty()) {
-    const fs::path dir = fs::path(args.output) / "calibration";
+    const fs::path dir = fs::path(generation.staging_folder()) / "calibration";
     const std::string yaml = (dir / "camera.yaml").string();
     if (args.calibrate) {
       CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
@@ -71,12 +80,19 @@ void RunSynth(const SynthArgs& args) {
       SaveCalibration(calibration, yaml);
       LogInfo("calibration: {}", summary.BriefReport());
     } else {
+      const fs::path final_dir = fs::path(args.output) / "calibration";
+      const std::string final_yaml = (final_dir / "camera.yaml").string();
       LogWarning(
           "--no-calibrate: the scene points at {} which does not exist yet; make it with "
           "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
-          yaml, (dir / "plane.png").string(), (dir / "view_*.png").string(), yaml);
+          final_yaml, (final_dir / "plane.png").string(), (final_dir / "view_*.png").string(),
+          final_yaml);
     }
   }
+  generation.Commit();
+  for (std::string* path : {&report.out_dir, &report.scene_yaml, &report.truth_h5,
+                            &report.sensor_csv, &report.spec_yaml, &report.calibration_dir})
+    *path = generation.FinalPath(*path);
   std::cout << report.BriefReport() << "\n";
   std::cout << "scene: " << report.scene_yaml << "\n";
 }
@@ -91,7 +107,9 @@ void RegisterSynthCommand(CLI::App& app) {
       "ground truth HDF5) from a scene spec YAML (docs/synth.md)");
   cmd->add_option("SCENE_SPEC", args->spec_path, "Scene spec YAML (keys in docs/synth.md)");
   cmd->add_option("--preset", args->preset, "Use a preset instead of a spec: small, full, tiny");
-  cmd->add_option("-o,--output", args->output, "Output folder (created)")->required();
+  cmd->add_option("-o,--output", args->output,
+                  "Output folder (created; an earlier scene in it is replaced when complete)")
+      ->required();
   cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");

@@ -10,12 +10,13 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 #include <system_error>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/output_generation.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -33,10 +34,11 @@ AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_pat
     throw Error(ErrorKind::kIo, final_path_,
                 "output folder " + folder.string() + " is not writable", "a writable folder");
   }
-  std::random_device rd;
-  std::ostringstream name;
-  name << "." << final_fs.filename().string() << ".tmp-" << getpid() << "-" << std::hex << rd();
-  temp_path_ = (folder / name.str()).string();
+  RemoveStaleTemporaries(folder.string());
+  std::string name = ".";  // (Appended, not "." + ...: GCC 12 warns wrongly on that.)
+  name.append(final_fs.filename().string()).append(".tmp-").append(TemporaryTag());
+  temp_path_ = (folder / name).string();
+  interrupt_guard_ = std::make_unique<RemoveOnInterrupt>(temp_path_);
 }
 
 AtomicFile::~AtomicFile() {
@@ -54,6 +56,7 @@ void AtomicFile::Commit() {
                 "a writable output location");
   }
   committed_ = true;
+  interrupt_guard_->Release();
 }
 
 void CheckOutputLocation(const std::string& path) { const AtomicFile probe(path); }
@@ -103,7 +106,8 @@ void CheckOutputLocation(const std::string& path, const OutputRules& rules) {
   }
 }
 
-Error WriteError(const std::string& path, int error_number) {
+Error WriteError(const std::string& written_path, int error_number) {
+  const std::string path = OutputPathForMessages(written_path);
   if (error_number == ENOSPC || error_number == EDQUOT) {
     fs::path folder = fs::path(path).parent_path();
     if (folder.empty()) folder = ".";

@@ -10,14 +10,33 @@
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/io/scene.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
 namespace {
 
-// Fits Eq. 4 over the scenes with a usable m_add,max and writes campaign.csv and regression.json.
-void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options) {
+constexpr const char* kCampaignCsv = "campaign.csv";
+constexpr const char* kRegressionJson = "regression.json";
+
+// A campaign's outputs are one generation of its folder (io/output_generation.h). From scenes it
+// replaces the whole folder; from a table (`scene_names` empty) it redoes campaign.csv and
+// regression.json and keeps the rest (the scene folders of an earlier campaign).
+OutputGenerationOptions CampaignGenerationOptions(const std::vector<Scene>& scenes,
+                                                  bool from_table) {
+  OutputGenerationOptions o;
+  o.command = from_table ? "impactdic campaign --from-table" : "impactdic campaign";
+  o.own_names = {kCampaignCsv, kRegressionJson};
+  for (const Scene& scene : scenes) o.own_names.push_back(scene.name);
+  o.keep_other_entries = from_table;
+  return o;
+}
+
+// Fits Eq. 4 over the scenes with a usable m_add,max and writes campaign.csv and regression.json
+// into `folder` (the staging folder of the campaign's generation).
+void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
+                 const std::string& folder) {
   std::vector<PowerLawSample> samples;
   for (const auto& s : summary->scenes) {
     if (std::isfinite(s.figures.added_mass_max_kg) && s.figures.added_mass_max_kg > 0) {
@@ -33,9 +52,7 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options) {
         samples.size(), summary->scenes.size());
     LogWarning("campaign: {}", summary->fit_note);
   }
-  std::error_code ec;
-  fs::create_directories(options.output_folder, ec);
-  const std::string csv = (fs::path(options.output_folder) / "campaign.csv").string();
+  const std::string csv = (fs::path(folder) / kCampaignCsv).string();
   std::vector<std::string> names = {"mass_kg", "velocity_m_s", "area_m2"};
   for (const auto& n : SceneFigures{}.CsvNames()) names.push_back(n);
   std::vector<std::vector<std::string>> rows;
@@ -50,7 +67,7 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options) {
   }
   WriteCsvRows(csv, names, rows);
   summary->outputs.push_back(csv);
-  const std::string json = (fs::path(options.output_folder) / "regression.json").string();
+  const std::string json = (fs::path(folder) / kRegressionJson).string();
   WriteTextFileAtomic(json, summary->RegressionJson().Dump() + "\n");
   summary->outputs.push_back(json);
 }
@@ -112,11 +129,14 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
   for (const auto& path : scene_paths) scenes.push_back(LoadScene(path));
   WallTimer timer;
   CampaignSummary summary;
+  OutputGeneration generation(options.output_folder,
+                              CampaignGenerationOptions(scenes, /*from_table=*/false));
   for (const Scene& scene : scenes) {
     PipelineOptions p;
-    p.output_folder = (fs::path(options.output_folder) / scene.name).string();
+    p.output_folder = generation.Path(scene.name);
     p.threads = options.threads;
-    LogInfo("campaign: scene {} -> {}", scene.name, p.output_folder);
+    LogInfo("campaign: scene {} -> {}", scene.name,
+            (fs::path(options.output_folder) / scene.name).string());
     const PipelineSummary run = RunScene(scene, p);
     CampaignScene s;
     s.name = scene.name;
@@ -128,7 +148,9 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
     s.figures = run.figures;
     summary.scenes.push_back(s);
   }
-  FitAndWrite(&summary, options);
+  FitAndWrite(&summary, options, generation.staging_folder());
+  generation.Commit();
+  for (auto& o : summary.outputs) o = generation.FinalPath(o);
   summary.seconds = timer.ElapsedSeconds();
   return summary;
 }
@@ -157,7 +179,11 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
     }
     summary.scenes.push_back(s);
   }
-  FitAndWrite(&summary, options);
+  OutputGeneration generation(options.output_folder,
+                              CampaignGenerationOptions({}, /*from_table=*/true));
+  FitAndWrite(&summary, options, generation.staging_folder());
+  generation.Commit();
+  for (auto& o : summary.outputs) o = generation.FinalPath(o);
   return summary;
 }
 

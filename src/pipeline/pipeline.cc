@@ -20,6 +20,7 @@
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
@@ -180,18 +181,14 @@ double MeasuredPlateau(const SensorResult& sensor, double t1_after_impact_s, dou
 
 std::vector<float> ToFloat(const std::vector<double>& v) { return {v.begin(), v.end()}; }
 
-// Checks that the output folder exists (creating it) and is writable, before any work.
-void PrepareOutputFolder(const std::string& folder) {
-  std::error_code ec;
-  fs::create_directories(folder, ec);
-  if (ec || !fs::is_directory(folder)) {
-    throw Error(ErrorKind::kIo, "output folder", ec ? ec.message() : "not a folder",
-                "a folder that can be created")
-        .WithFile(folder);
-  }
-  // AtomicFile checks writability; a probe file proves it.
-  WriteTextFileAtomic((fs::path(folder) / ".impactdic-write-test").string(), "ok\n");
-  fs::remove(fs::path(folder) / ".impactdic-write-test", ec);
+// A run's outputs are one generation of its output folder (io/output_generation.h): written into
+// a staging folder beside it and swapped in when all are complete.
+OutputGenerationOptions RunGenerationOptions() {
+  OutputGenerationOptions o;
+  o.command = "impactdic run";
+  for (const char* name : layout::kRunOnlyOutputNames) o.own_names.emplace_back(name);
+  for (const char* name : layout::kRenderOutputNames) o.own_names.emplace_back(name);
+  return o;
 }
 
 // The output folder must not hold an input: run replaces the files it wrote there before
@@ -317,8 +314,9 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   StageLog stages(&summary);
   SceneFigures& fig = summary.figures;
   const bool want_outputs = scene.HasStage("outputs");
+  std::optional<OutputGeneration> generation;  // Removed again unless committed at the end.
   if (want_outputs) {
-    PrepareOutputFolder(summary.output_folder);
+    generation.emplace(summary.output_folder, RunGenerationOptions());
     // Figures need gnuplot: find out now, not after the whole run.
     if (scene.outputs.figures) DetectPngTerminal(ResolveGnuplotBinary(PlotOptions{}));
   }
@@ -615,8 +613,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     return summary;
   }
   WallTimer t_out;
-  const fs::path folder(summary.output_folder);
-  const std::string results_path = (folder / "results.h5").string();
+  const fs::path folder(generation->staging_folder());
+  const std::string results_path = (folder / layout::kResultsFile).string();
   // Without outputs.hdf5 the renderer reads the results from memory: results.h5 is not written.
   std::vector<char> results_in_memory;
   if (scene.outputs.hdf5 || scene.outputs.figures || scene.outputs.animation) {
@@ -739,7 +737,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   }
   if (scene.outputs.figures || scene.outputs.animation) {
     RenderResultsOptions r;
-    r.output_dir = summary.output_folder;
+    r.output_dir = generation->staging_folder();
+    r.new_generation = false;  // Part of the run's generation.
     r.figures = scene.outputs.figures;
     r.snapshot = scene.outputs.figures;
     r.animation = scene.outputs.animation;
@@ -751,21 +750,19 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     for (const auto& w : rendered.written) summary.outputs.push_back(w);
     for (const auto& s : rendered.skipped) summary.warnings.push_back("render: " + s);
   }
-  // The summary files come last: they are what says a run finished.
-  const std::string json_path = (folder / "summary.json").string();
+  const std::string json_path = (folder / layout::kSummaryJson).string();
   WriteTextFileAtomic(json_path, fig.ToJson().Dump() + "\n");
   summary.outputs.push_back(json_path);
   if (scene.outputs.csv) {
-    const std::string csv_path = (folder / "summary.csv").string();
+    const std::string csv_path = (folder / layout::kSummaryCsv).string();
     std::vector<std::vector<double>> columns;
     for (double v : fig.CsvValues()) columns.push_back({v});
     WriteCsv(csv_path, fig.CsvNames(), columns);
     summary.outputs.push_back(csv_path);
   }
-  if (!scene.outputs.hdf5) {  // A results.h5 of an earlier run would not match this one.
-    std::error_code ec;
-    fs::remove(folder / "results.h5", ec);
-  }
+  // All complete: swap the new generation in (the previous one stays until this succeeds).
+  generation->Commit();
+  for (auto& o : summary.outputs) o = generation->FinalPath(o);
   stages.Ran("outputs",
              fmt::format("{} files in {}", summary.outputs.size(), summary.output_folder), t_out);
   summary.seconds = total.ElapsedSeconds();

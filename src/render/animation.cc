@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
@@ -180,6 +181,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
         fs::remove(path, ec);
       }
     } cleanup{temp};
+    const RemoveOnInterrupt video_on_interrupt(temp);
 
     AttemptResult result;
     {

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
@@ -405,6 +406,7 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
       }
     }
   } cleanup{temp_png};
+  const RemoveOnInterrupt png_on_interrupt(temp_png);
   {
     std::ofstream out(script.path());
     out << GnuplotScript(plot, options, summary.terminal, data.path(), temp_png);

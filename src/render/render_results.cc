@@ -10,6 +10,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/render/results_layout.h"
 
 namespace impactdic {
@@ -173,6 +174,37 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   return seq;
 }
 
+namespace {
+
+// The figures of a results file drawn into a folder holding another results file would not match
+// it: refuse (the folder of RESULTS itself, or one without a results file, is fine).
+void RefuseOtherResults(const std::string& out_dir, const std::string& results_path) {
+  const fs::path other = fs::path(out_dir) / L::kResultsFile;
+  std::error_code ec;
+  if (!fs::exists(other, ec) || fs::equivalent(other, results_path, ec)) return;
+  throw Error(ErrorKind::kInvalidValue, "output folder",
+              "a folder holding another results file (" + other.string() + ")",
+              "the folder of " + results_path +
+                  " or one without a results.h5 (the figures would not match it)")
+      .WithFile(out_dir);
+}
+
+// A render's outputs are one generation of the folder; it keeps the other entries of the previous
+// generation (a run's results.h5 and summaries) and replaces every figure and animation.
+OutputGenerationOptions RenderGenerationOptions() {
+  OutputGenerationOptions o;
+  o.command = "impactdic render";
+  for (const char* name : L::kRenderOutputNames) o.own_names.emplace_back(name);
+  for (const char* name : L::kRunOnlyOutputNames) o.known_names.emplace_back(name);
+  o.keep_other_entries = true;
+  return o;
+}
+
+void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
+                const RenderResultsOptions& options, RenderResultsSummary& summary);
+
+}  // namespace
+
 RenderResultsSummary RenderResults(const std::string& results_path,
                                    const RenderResultsOptions& options) {
   options.Check();
@@ -185,14 +217,19 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
   WallTimer wall;
   options.Check();
   RenderResultsSummary summary;
-
-  // Output folder.
   std::string out_dir = options.output_dir;
   if (out_dir.empty()) {
     out_dir = fs::path(results_path).parent_path().string();
     if (out_dir.empty()) out_dir = ".";
   }
-  {
+  if (options.new_generation) {
+    RefuseOtherResults(out_dir, results_path);
+    OutputGeneration generation(out_dir, RenderGenerationOptions());
+    RenderInto(reader, results_path, generation.staging_folder(), options, summary);
+    generation.Commit();
+    for (auto& w : summary.written) w = generation.FinalPath(w);
+    summary.animation.path = generation.FinalPath(summary.animation.path);
+  } else {
     std::error_code ec;
     fs::create_directories(out_dir, ec);
     if (!fs::is_directory(out_dir, ec)) {
@@ -203,7 +240,17 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
       throw Error(ErrorKind::kIo, "output folder", out_dir + " is not writable",
                   "a writable folder");
     }
+    RenderInto(reader, results_path, out_dir, options, summary);
   }
+  summary.wall_s = wall.ElapsedSeconds();
+  LogInfo("{}", summary.BriefReport());
+  return summary;
+}
+
+namespace {
+
+void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
+                const RenderResultsOptions& options, RenderResultsSummary& summary) {
   auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
   auto skip = [&](const std::string& output, const std::string& reason) {
     LogInfo("render: skipping {}: {}", output, reason);
@@ -344,9 +391,8 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
     if (e.file().empty() && e.kind() == ErrorKind::kFileFormat) e.WithFile(results_path);
     throw;
   }
-  summary.wall_s = wall.ElapsedSeconds();
-  LogInfo("{}", summary.BriefReport());
-  return summary;
 }
+
+}  // namespace
 
 }  // namespace impactdic

@@ -10,41 +10,33 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/output_generation.h"
 
 extern char** environ;
 
 namespace impactdic::render_internal {
 namespace fs = std::filesystem;
 
-namespace {
-
-std::string RandomTag() {
-  std::random_device rd;
-  std::ostringstream tag;
-  tag << getpid() << "-" << std::hex << rd() << rd();
-  return tag.str();
-}
-
-}  // namespace
-
 TempFile::TempFile(const std::string& suffix) {
+  RemoveStaleSystemTemporaries();
   std::error_code ec;
   fs::path folder = fs::temp_directory_path(ec);
   if (ec) folder = "/tmp";
   for (int attempt = 0; attempt < 16; ++attempt) {
     std::string name = "impactdic-";
-    name.append(RandomTag()).append(suffix);
+    name.append(TemporaryTag()).append(suffix);
     const std::string candidate = (folder / name).string();
+    interrupt_guard_.emplace(candidate);
     const int fd = open(candidate.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
     if (fd >= 0) {
       close(fd);
       path_ = candidate;
       return;
     }
+    interrupt_guard_.reset();
   }
   throw Error(ErrorKind::kIo, "temporary file", "cannot create one in " + folder.string(),
               "a writable temporary folder (TMPDIR)");
@@ -60,7 +52,7 @@ std::string TempSiblingPath(const std::string& final_path, const std::string& ex
   fs::path folder = final_fs.parent_path();
   if (folder.empty()) folder = ".";
   std::string name = ".";
-  name.append(final_fs.stem().string()).append(".tmp-").append(RandomTag()).append(extension);
+  name.append(final_fs.stem().string()).append(".tmp-").append(TemporaryTag()).append(extension);
   return (folder / name).string();
 }
 

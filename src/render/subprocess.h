@@ -2,8 +2,11 @@
 #ifndef IMPACTDIC_SRC_RENDER_SUBPROCESS_H_
 #define IMPACTDIC_SRC_RENDER_SUBPROCESS_H_
 
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "impactdic/core/interrupt.h"
 
 namespace impactdic::render_internal {
 
@@ -17,8 +20,10 @@ struct ProcessResult {
 // Runs `program` (a path, or a name looked up in PATH) with `arguments`, stdin from /dev/null.
 ProcessResult RunProcess(const std::string& program, const std::vector<std::string>& arguments);
 
-// A file in the system temporary folder, created empty with a unique name and deleted by the
-// destructor.
+// A file in the system temporary folder, created empty with a unique name
+// "impactdic-<pid>-<hex><suffix>" and deleted by the destructor (or by the interrupt cleanup, see
+// core/interrupt.h). The first one a process makes removes those of dead processes
+// (RemoveStaleSystemTemporaries), e.g. what a SIGKILL during a gnuplot figure left.
 class TempFile {
  public:
   explicit TempFile(const std::string& suffix);
@@ -29,10 +34,12 @@ class TempFile {
 
  private:
   std::string path_;
+  std::optional<RemoveOnInterrupt> interrupt_guard_;
 };
 
-// A unique temporary path in the folder of `final_path`, ending in `extension` (e.g. ".mp4"), so
-// programs that choose the format from the extension still work; nothing is created.
+// A unique temporary path ".<stem>.tmp-<pid>-<hex><extension>" in the folder of `final_path`
+// (extension e.g. ".mp4", so programs that choose the format from the extension still work);
+// nothing is created. The caller registers it with RemoveOnInterrupt while it exists.
 std::string TempSiblingPath(const std::string& final_path, const std::string& extension);
 
 // Throws Error kIo unless the folder that will hold `final_path` exists and is writable.

@@ -4,16 +4,23 @@
 //   AtomicFile out("results/summary.json");
 //   WriteStuff(out.temp_path());
 //   out.Commit();            // rename(temp, final); without it the destructor deletes temp
+//
+// The temporary is named ".<name>.tmp-<pid>-<hex>": SIGINT/SIGTERM remove it (core/interrupt.h),
+// and the first AtomicFile a process makes in a folder removes those of dead processes there
+// (RemoveStaleTemporaries in io/output_generation.h), e.g. what a SIGKILL left.
 #ifndef IMPACTDIC_IO_ATOMIC_FILE_H_
 #define IMPACTDIC_IO_ATOMIC_FILE_H_
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "impactdic/core/error.h"
 
 namespace impactdic {
+
+class RemoveOnInterrupt;
 
 class AtomicFile {
  public:
@@ -32,6 +39,7 @@ class AtomicFile {
  private:
   std::string final_path_, temp_path_;
   bool committed_ = false;
+  std::unique_ptr<RemoveOnInterrupt> interrupt_guard_;
 };
 
 // What AtomicFile(path) checks, without writing anything: Error kIo naming `path` unless its

@@ -8,7 +8,10 @@
 //   CampaignSummary s = RunCampaign({"t01.yaml", "t02.yaml", ...}, options);
 //
 // Outputs: <output_folder>/<scene name>/ (each scene's pipeline outputs), campaign.csv (one row per
-// scene: name, m_p, v0, A and the key figures), regression.json (the fit).
+// scene: name, m_p, v0, A and the key figures), regression.json (the fit). They are one generation
+// of the folder (io/output_generation.h): a failed or interrupted campaign leaves the previous one
+// as it was. RegressCampaignTable redoes campaign.csv and regression.json and keeps the folder's
+// other entries.
 #ifndef IMPACTDIC_PIPELINE_CAMPAIGN_H_
 #define IMPACTDIC_PIPELINE_CAMPAIGN_H_
 
@@ -22,7 +25,7 @@
 namespace impactdic {
 
 struct CampaignOptions {
-  std::string output_folder = "results/campaign";  // Created if missing.
+  std::string output_folder = "results/campaign";  // Created (replaced) at the end.
   int threads = -1;                                // As PipelineOptions::threads.
   double confidence = 0.95;                        // Of the regression intervals, in (0, 1).
   void Check() const;

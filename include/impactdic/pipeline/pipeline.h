@@ -8,8 +8,10 @@
 //   PipelineSummary s = RunScene(scene, options);
 //   std::cout << s.FullReport();
 //
-// Outputs (folder: options.output_folder, else the scene's outputs.folder), each written under a
-// temporary name and renamed when complete:
+// Outputs (folder: options.output_folder, else the scene's outputs.folder), one generation
+// (io/output_generation.h): written into a staging folder beside it and swapped in only when all
+// are complete, so the folder never holds files of two runs; a failed or interrupted run leaves the
+// previous outputs as they were. The folder must be new, empty or one impactdic wrote. Files:
 //   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
 //   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
 //   momentum.png, deceleration.png, added_mass.png, velocity_field_te.png, velocity.mp4 (or .avi)
@@ -26,7 +28,7 @@
 namespace impactdic {
 
 struct PipelineOptions {
-  std::string output_folder;  // Empty: the scene's outputs.folder. Created if missing.
+  std::string output_folder;  // Empty: the scene's outputs.folder. Created (replaced) at the end.
   bool png_frames = false;  // Also write the animation frames as PNG (or scene outputs.png_frames).
   int threads = -1;         // Correlation threads; -1: the scene's dic.threads (0 = all cores).
   void Check() const;

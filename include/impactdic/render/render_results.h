@@ -26,6 +26,12 @@ struct RenderResultsOptions {
   bool snapshot = true;    // the velocity field at the end of the peak stage
   bool animation = true;   // the velocity animation
   bool png_frames = false;  // also every animation frame as PNG (output_dir/velocity_frames)
+  // true: the outputs are one new generation of output_dir (io/output_generation.h): drawn into a
+  // staging folder and swapped in together, keeping the folder's other entries (results.h5,
+  // summaries) and replacing every earlier figure and animation; output_dir must be new, empty or
+  // written by impactdic, and hold no results.h5 other than the one rendered. false: straight into
+  // output_dir (for a caller that stages the folder itself, as `impactdic run` does).
+  bool new_generation = true;
   PlotOptions plot;
   AnimationOptions animation_options;       // png_frames_dir is set from png_frames
   VelocityOverlayOptions snapshot_overlay;  // the velocity-field figure at t_e
@@ -51,7 +57,9 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool req
 
 // Renders everything the file has data for. Errors: kFileNotFound / kFileFormat for a missing or
 // unreadable file, kFileFormat when the file has none of the data any output needs (naming what
-// was looked for) or inconsistent shapes, kIo for an output folder that cannot be written.
+// was looked for) or inconsistent shapes, kIo for an output folder that cannot be written,
+// kInvalidValue for one holding files impactdic did not write or another results.h5. On an error
+// the output folder is as it was.
 RenderResultsSummary RenderResults(const std::string& results_path,
                                    const RenderResultsOptions& options = {});
 

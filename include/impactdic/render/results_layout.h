@@ -4,6 +4,8 @@
 #ifndef IMPACTDIC_RENDER_RESULTS_LAYOUT_H_
 #define IMPACTDIC_RENDER_RESULTS_LAYOUT_H_
 
+#include <array>
+
 namespace impactdic::results_layout {
 
 // Time of every analysed frame since impact [ms], [F].
@@ -61,8 +63,20 @@ inline constexpr const char* kMomentumPng = "momentum.png";
 inline constexpr const char* kDecelerationPng = "deceleration.png";
 inline constexpr const char* kAddedMassPng = "added_mass.png";
 inline constexpr const char* kVelocitySnapshotPng = "velocity_field_te.png";
-inline constexpr const char* kAnimationName = "velocity.mp4";  // .avi on MJPG fallback
+inline constexpr const char* kAnimationName = "velocity.mp4";
+inline constexpr const char* kAnimationAviName = "velocity.avi";  // The MJPG fallback.
 inline constexpr const char* kPngFramesDir = "velocity_frames";
+// Everything RenderResults may write into its output folder (one generation, replaced together).
+inline constexpr std::array<const char*, 7> kRenderOutputNames = {
+    kMomentumPng,   kDecelerationPng,  kAddedMassPng, kVelocitySnapshotPng,
+    kAnimationName, kAnimationAviName, kPngFramesDir};
+
+// The other files of a run's output folder (`impactdic run`, pipeline/pipeline.h).
+inline constexpr const char* kResultsFile = "results.h5";
+inline constexpr const char* kSummaryJson = "summary.json";
+inline constexpr const char* kSummaryCsv = "summary.csv";
+inline constexpr std::array<const char*, 3> kRunOnlyOutputNames = {kResultsFile, kSummaryJson,
+                                                                   kSummaryCsv};
 
 }  // namespace impactdic::results_layout
 

@@ -288,6 +288,11 @@ struct ImpactSceneReport {
   std::string BriefReport() const;
 };
 
+// The entries WriteImpactScene (and `impactdic synth`, which adds calibration/camera.yaml) writes
+// into its folder.
+inline constexpr std::array<const char*, 6> kImpactSceneOutputNames = {
+    "frames", "calibration", "sensor.csv", "spec.yaml", "truth.h5", "scene.yaml"};
+
 // Writes the scene into out_dir: frames/frame_NNNN.png, sensor.csv, truth.h5, scene.yaml,
 // spec.yaml (the spec used, all keys) and, if spec.render_calibration, calibration/ (views,
 // plane view, board.yaml). The scene YAML points at spec.calibration_yaml if set, else at

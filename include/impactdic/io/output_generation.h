@@ -1,0 +1,119 @@
+// One command's outputs in a folder are one generation: whatever happens to a run (an error,
+// SIGINT, SIGTERM, SIGKILL), the folder holds either all files of the previous generation or all
+// files of the new one, never a mix. Used by every command that writes a set of files into a
+// folder (run, render, synth -o DIR, campaign -o DIR).
+//
+//   OutputGenerationOptions o;
+//   o.command = "impactdic run";
+//   o.own_names = {"results.h5", "summary.json"};
+//   OutputGeneration out("results/t10", o);   // checks the folder, makes
+//   results/.t10.tmp-<pid>-<hex>/ WriteResults(out.Path("results.h5"));      // everything goes
+//   into that staging folder out.Commit();                              // swaps it in; without
+//   Commit the destructor removes it
+//
+// The swap: the staging folder and the destination are exchanged in one atomic step
+// (renameat2 RENAME_EXCHANGE), then the previous generation (now under the staging name) is
+// removed. Where the file system cannot exchange, the destination is renamed to
+// ".<name>.bak-<pid>-<hex>", the staging folder renamed in and the backup removed; if the second
+// rename fails the backup is renamed back, and after a SIGKILL between the two renames the next
+// process writing there renames it back (RemoveStaleTemporaries). SIGINT/SIGTERM during the swap
+// wait for it to end (core/interrupt.h).
+//
+// Ownership: the tool replaces only folders it wrote. The destination may be missing or empty, or
+// hold only what impactdic writes: entries listed in its marker file `.impactdic-output` (written
+// last into every generation), the command's own names (folders of an older impactdic, which wrote
+// no marker), folders holding a marker (nested outputs, e.g. a run's results inside a synth
+// folder, or a campaign's scene folders) and impactdic temporaries. Anything else (a user's file)
+// makes the command fail before any work, naming the entries; nothing is deleted.
+#ifndef IMPACTDIC_IO_OUTPUT_GENERATION_H_
+#define IMPACTDIC_IO_OUTPUT_GENERATION_H_
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "impactdic/core/interrupt.h"
+
+namespace impactdic {
+
+// The marker file in every generation: what wrote it and when, and the entries it holds.
+inline constexpr const char* kOutputMarkerName = ".impactdic-output";
+
+struct OutputGenerationOptions {
+  std::string command;  // What writes the folder, e.g. "impactdic run" (recorded in the marker).
+  // The top-level entries this command writes (file or folder names).
+  std::vector<std::string> own_names;
+  // More names that count as impactdic's in a folder without a marker (e.g. render into a run's
+  // folder written by an older impactdic: results.h5, summary.json).
+  std::vector<std::string> known_names;
+  // false: the new generation is exactly what the command wrote; the previous one goes whole.
+  // true: it also keeps the previous generation's entries that are not among own_names (as hard
+  // links, else copies), for commands that redo part of a folder (render, campaign --from-table).
+  bool keep_other_entries = false;
+  // false: swap by two renames and a backup even where the file system can exchange atomically
+  // (what file systems without RENAME_EXCHANGE get; tests use it to cover that path).
+  bool atomic_exchange = true;
+};
+
+class OutputGeneration {
+ public:
+  // Creates the parent folders if needed, removes stale temporaries of dead processes beside the
+  // destination and in TMPDIR, checks that the destination may be replaced and makes the staging
+  // folder.
+  // Error kInvalidValue for a destination that is a file or holds entries impactdic did not
+  // write (named), kIo for a parent folder that cannot be created or written.
+  OutputGeneration(const std::string& folder, OutputGenerationOptions options);
+  // Without Commit(): removes the staging folder; the previous generation stays as it was.
+  ~OutputGeneration();
+  OutputGeneration(const OutputGeneration&) = delete;
+  OutputGeneration& operator=(const OutputGeneration&) = delete;
+
+  const std::string& folder() const { return folder_; }           // The destination, as given.
+  const std::string& staging_folder() const { return staging_; }  // Where the outputs go.
+  std::string Path(const std::string& name) const;                // staging_folder()/name
+  // A path inside the staging folder as it is named once committed (other paths unchanged).
+  std::string FinalPath(const std::string& path) const;
+
+  // Writes the marker, then swaps the new generation in and removes the previous one. Error kIo
+  // (the previous generation intact) if the swap fails or foreign entries appeared meanwhile.
+  void Commit();
+  bool committed() const { return committed_; }
+
+ private:
+  std::vector<std::string> ForeignEntries() const;
+  void CarryOverPrevious() const;
+  void WriteMarker() const;
+  void SwapIn(bool had_previous);
+
+  std::string folder_;       // As given (for messages and FinalPath).
+  std::string destination_;  // Absolute.
+  std::string staging_;      // Absolute: <parent>/.<name>.tmp-<pid>-<hex>
+  OutputGenerationOptions options_;
+  std::optional<RemoveOnInterrupt> staging_guard_;
+  bool committed_ = false;
+};
+
+// A path inside the staging folder of a generation alive in this process, named as it will be
+// once committed (nested generations too); other paths unchanged. Error messages name files so:
+// the user looks for DIR/truth.h5, not for the staging folder that is gone by then.
+std::string OutputPathForMessages(std::string path);
+
+// Removes, in `folder`, the temporaries of processes that no longer exist (ProcessIsGone):
+// entries named ".<name>.tmp-<pid>-<hex>..." (AtomicFile, staging folders, files being rendered),
+// and a backup ".<name>.bak-<pid>-<hex>" of an interrupted swap, which is renamed back to <name>
+// if that is missing (the previous generation returns) and removed otherwise. Done once per folder
+// and process; never fails (what cannot be removed stays). Returns the entries it removed or
+// restored.
+std::vector<std::string> RemoveStaleTemporaries(const std::string& folder);
+
+// The same for the system temporary folder (TMPDIR, else /tmp): files "impactdic-<pid>-<hex>..."
+// (gnuplot scripts, data and logs) of processes that no longer exist.
+std::vector<std::string> RemoveStaleSystemTemporaries();
+
+// True for the name of an impactdic temporary (".<name>.tmp-<pid>-<hex>...",
+// ".<name>.bak-<pid>-<hex>"), whoever made it.
+bool IsTemporaryName(const std::string& name);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_IO_OUTPUT_GENERATION_H_
