@@ -11,6 +11,7 @@
 #include <system_error>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -67,13 +68,7 @@ void WriteTextFileAtomic(const std::string& path, const std::string& text) {
 }
 
 std::string ReadTextFile(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(ErrorKind::kFileNotFound, path, "", "an existing file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(ErrorKind::kIo, path, "cannot open for reading", "a readable file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return ReadInputFile(path, "a text file", kMaxTextFileBytes);
 }
 
 }  // namespace impactdic

@@ -37,7 +37,8 @@ void CheckOutputLocation(const std::string& path);
 // Writes `text` to `path` atomically.
 void WriteTextFileAtomic(const std::string& path, const std::string& text);
 
-// Reads a whole text file; Error kFileNotFound / kIo naming the file.
+// Reads a whole text file (io/input_file.h: a regular file of at most kMaxTextFileBytes); Error
+// naming the file otherwise.
 std::string ReadTextFile(const std::string& path);
 
 }  // namespace impactdic
