@@ -41,8 +41,7 @@ void CheckImage(const cv::Mat& image, const std::string& name) {
 void BoardSpec::Check() const {
   CheckValue(cols >= 2, "board.cols", std::to_string(cols), ">= 2 inner corners");
   CheckValue(rows >= 2, "board.rows", std::to_string(rows), ">= 2 inner corners");
-  CheckValue(square_mm > 0 && std::isfinite(square_mm), "board.square_mm",
-             fmt::format("{}", square_mm), "a square size > 0 mm");
+  CheckRange(square_mm, kSquareRange, "board.square_mm", "a square size");
 }
 
 std::vector<cv::Point3f> BoardSpec::ObjectPoints() const {
@@ -66,8 +65,7 @@ BoardSpec ParseBoard(const std::string& text, double square_mm, const std::strin
   CheckValue(board.cols >= 2 && board.rows >= 2, where, "'" + text + "'",
              "at least 2x2 inner corners");
   board.square_mm = square_mm;
-  CheckValue(square_mm > 0 && std::isfinite(square_mm), "--square", fmt::format("{}", square_mm),
-             "a square size > 0 mm");
+  CheckRange(square_mm, BoardSpec::kSquareRange, "--square", "a square size");
   return board;
 }
 

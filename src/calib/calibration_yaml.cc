@@ -8,6 +8,7 @@
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/yaml.h"
 
 namespace impactdic {
 namespace {
@@ -99,16 +100,10 @@ void SaveCalibration(const CameraCalibration& c, const std::string& path) {
 }
 
 CameraCalibration LoadCalibration(const std::string& path) {
-  const std::string text = ReadTextFile(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw Error(ErrorKind::kFileFormat, "", e.msg, "valid YAML")
-        .WithFile(path, e.mark.line + 1, e.mark.column + 1);
-  }
+  constexpr const char* kWhat = "a calibration file (YAML written by `impactdic calibrate`)";
+  const YAML::Node root = LoadYamlFile(path, kWhat);
   if (!root.IsMap())
-    throw Error(ErrorKind::kFileFormat, "", "not a YAML map", "a calibration file").WithFile(path);
+    throw Error(ErrorKind::kFileFormat, "", "not a YAML map", kWhat).WithFile(path);
   CheckKeys(root,
             {"format", "image_width", "image_height", "board", "fx", "fy", "cx", "cy", "dist",
              "rms_px", "views", "rejected", "plane"},

@@ -130,8 +130,10 @@ Undistorter::Undistorter(const CameraCalibration& calibration, const UndistortOp
   CheckValue(size_.width > 0 && size_.height > 0, "calibration image size",
              fmt::format("{}x{}", size_.width, size_.height), "a calibrated image size");
   const cv::Rect roi = ClampRoi(options.roi, size_);
-  CheckValue(!roi.empty(), "undistort.roi", "a rectangle outside the frame",
-             "a rectangle inside the frame");
+  CheckValue(!roi.empty(), "undistort.roi",
+             fmt::format("{}x{} px at ({}, {}), outside the frame", options.roi.width,
+                         options.roi.height, options.roi.x, options.roi.y),
+             fmt::format("a rectangle that overlaps the {}x{} frame", size_.width, size_.height));
   if (calibration.HasDistortion()) {
     ComputeMaps(calibration, &map_x_, &map_y_);
     max_shift_px_ = MaxShift(map_x_, map_y_, roi);

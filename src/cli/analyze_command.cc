@@ -12,6 +12,7 @@
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
@@ -55,10 +56,8 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
                 "exactly one: integrate from the release (v = 0) or from the impact with the "
                 "given impact velocity [m/s]");
   }
-  if (a.impact_velocity && !(std::isfinite(*a.impact_velocity) && *a.impact_velocity > 0)) {
-    throw Error(ErrorKind::kInvalidValue, "--impact-velocity",
-                fmt::format("{}", *a.impact_velocity), "a finite impact velocity > 0 m/s");
-  }
+  if (a.impact_velocity)
+    CheckRange(*a.impact_velocity, kImpactVelocityRange, "--impact-velocity", "an impact velocity");
   if (!(std::isfinite(a.cutoff) && a.cutoff > 0)) {
     throw Error(ErrorKind::kInvalidValue, "--cutoff", fmt::format("{}", a.cutoff),
                 "a cut-off frequency > 0 Hz (below the Nyquist frequency of the record)");

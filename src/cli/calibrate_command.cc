@@ -88,7 +88,8 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->add_option("--board", args->board,
                   "Board size COLSxROWS counting INNER corners (9x6 for a board of 10x7 squares)")
       ->required();
-  cmd->add_option("--square", args->square_mm, "Square side [mm], > 0")->required();
+  cmd->add_option("--square", args->square_mm, "Square side, in " + BoardSpec::kSquareRange.Text())
+      ->required();
   cmd->add_option("--plane", args->plane,
                   "Image of the board lying on the panel (measurement plane) for the mm/px scale");
   cmd->add_option("-o,--output", args->output,

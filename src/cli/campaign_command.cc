@@ -2,11 +2,13 @@
 // power-law regression over their measured m_add,max (pipeline/campaign.h).
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/pipeline/campaign.h"
 
 namespace impactdic::cli {
@@ -15,7 +17,7 @@ void RegisterCampaignCommand(CLI::App& app) {
   struct Args {
     std::vector<std::string> scenes;
     std::string table, output = "results/campaign", format = "text";
-    int threads = -1;
+    std::optional<int> threads;  // Unset: each scene's dic.threads.
     double confidence = 0.95;
   };
   auto args = std::make_shared<Args>();
@@ -27,7 +29,9 @@ void RegisterCampaignCommand(CLI::App& app) {
                   "Fit Eq. 4 from a CSV with mass_kg, velocity_m_s, area_m2, added_mass_max_kg "
                   "(e.g. a campaign.csv) instead of running scenes");
   cmd->add_option("-o,--output", args->output, "Output folder (default results/campaign)");
-  cmd->add_option("--threads", args->threads, "Correlation threads (0 = all cores)");
+  cmd->add_option("--threads", args->threads,
+                  std::string("Correlation threads: ") + kThreadCountExpected +
+                      " (default: each scene's dic.threads)");
   cmd->add_option("--confidence", args->confidence,
                   "Confidence level of the intervals (default 0.95)");
   cmd->add_option("--format", args->format, "Report on stdout: text or json (the regression)");
@@ -40,17 +44,14 @@ void RegisterCampaignCommand(CLI::App& app) {
     if (args->format != "text" && args->format != "json") {
       throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
     }
+    if (args->threads) CheckThreadCount(*args->threads, "--threads");
     CampaignOptions options;
     options.output_folder = args->output;
-    options.threads = args->threads;
+    options.threads = args->threads.value_or(-1);
     options.confidence = args->confidence;
     if (!(args->confidence > 0 && args->confidence < 1)) {
       throw Error(ErrorKind::kInvalidValue, "--confidence", std::to_string(args->confidence),
                   "a level in (0, 1)");
-    }
-    if (args->threads < -1) {
-      throw Error(ErrorKind::kInvalidValue, "--threads", std::to_string(args->threads),
-                  "0 (all cores) or more");
     }
     const CampaignSummary summary = args->table.empty()
                                         ? RunCampaign(args->scenes, options)

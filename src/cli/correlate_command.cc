@@ -11,6 +11,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/io/atomic_file.h"
@@ -72,8 +73,7 @@ void Run(const CorrelateArgs& a) {
   CheckValue(a.subset >= 5 && a.subset % 2 == 1, "--subset", std::to_string(a.subset),
              "an odd integer >= 5 [px]");
   CheckValue(a.step >= 1, "--step", std::to_string(a.step), "an integer >= 1 [px]");
-  CheckValue(a.threads >= 0, "--threads", std::to_string(a.threads),
-             "0 (all cores) or a positive number");
+  CheckThreadCount(a.threads, "--threads");
   options.grid.subset_size = a.subset;
   options.grid.step = a.step;
   if (!a.roi.empty()) options.grid.roi = ParseRoi(a.roi);
@@ -90,7 +90,7 @@ void Run(const CorrelateArgs& a) {
     paths.push_back(a.reference);
     paths.insert(paths.end(), a.deformed.begin(), a.deformed.end());
   } else {
-    paths = ListFrames(a.frames);
+    paths = ListFrameSequence(a.frames);  // A gap in the numbering is an error, as in `run`.
     CheckValue(paths.size() >= 2, "--frames",
                a.frames + " (" + std::to_string(paths.size()) + " image)",
                "at least two images (the first is the reference)");
@@ -145,7 +145,8 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--shape", args->shape, "affine | quadratic (default affine)");
   cmd->add_option("--reference-update", args->update,
                   "fixed | incremental | every:N | auto (default auto)");
-  cmd->add_option("--threads", args->threads, "Worker threads, 0 = all cores (default 0)");
+  cmd->add_option("--threads", args->threads,
+                  std::string("Worker threads: ") + kThreadCountExpected + " (default 0)");
   cmd->add_option("--search-radius", args->search_radius,
                   "Integer search radius [px] (default 40)");
   cmd->add_option("--min-zncc", args->min_zncc, "ZNCC below which a subset fails (default 0.8)");

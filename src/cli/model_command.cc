@@ -13,6 +13,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/json.h"
 #include "impactdic/model/impact_model.h"
@@ -88,22 +89,22 @@ ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
                     a.table1 ? "with --table1" : "with --work-precision",
                     "no per-test option: these runs use the paper's 27 combinations / fixed cases");
   }
-  RequirePositive(a.mass, "--mass", "a pounder mass > 0 kg");
+  // The physical ranges shared with scene files (core/range.h).
+  if (a.mass) CheckRange(*a.mass, kPounderMassRange, "--mass", "a pounder mass");
   RequirePositive(a.height, "--height", "a drop height > 0 m");
-  RequirePositive(a.velocity, "--velocity", "an impact velocity > 0 m/s");
-  RequirePositive(a.width, "--width", "a pounder width > 0 m");
-  RequireFinite(a.depth, a.depth > 0, "--depth", "an out-of-plane depth t_z > 0 m");
-  if (a.added_mass && !(std::isfinite(*a.added_mass) && *a.added_mass >= 0))
-    throw Error(ErrorKind::kInvalidValue, "--added-mass", Num(*a.added_mass),
-                "an added mass M >= 0 kg");
+  if (a.height) CheckRange(*a.height, kDropHeightRange, "--height", "a drop height");
+  if (a.velocity) CheckRange(*a.velocity, kImpactVelocityRange, "--velocity", "an impact velocity");
+  if (a.width) CheckRange(*a.width, kPounderSizeRange, "--width", "a pounder width D");
+  CheckRange(a.depth, kPounderSizeRange, "--depth", "an out-of-plane depth t_z");
+  if (a.added_mass) CheckRange(*a.added_mass, kAddedMassRange, "--added-mass", "an added mass M");
   RequireFinite(a.K, a.K >= 0, "--K", "K >= 0");
   RequireFinite(a.n, a.n >= 0 && a.n <= 1, "--n", "n in [0, 1]");
   RequireFinite(a.u, a.u >= 1, "--u", "u >= 1 (F_dyn must resist the motion)");
   RequireFinite(a.T, a.T >= 0, "--T", "T >= 0 s");
   RequireFinite(a.b, a.b > 0 && a.b <= 1e12, "--b", "b in (0, 1e12] 1/s");
-  RequireFinite(a.rho, a.rho > 0, "--rho", "a density > 0 kg/m^3");
-  RequireFinite(a.g, a.g >= 0, "--g", "g >= 0 m/s^2");
-  RequireFinite(a.bed_height, a.bed_height > 0, "--bed-height", "a bed height > 0 m");
+  CheckRange(a.rho, kSoilDensityRange, "--rho", "a dry density");
+  CheckRange(a.g, kGravityRange, "--g", "a gravitational acceleration");
+  CheckRange(a.bed_height, kBedHeightRange, "--bed-height", "a bed height");
   if (a.height && a.g <= 0)
     throw Error(ErrorKind::kInvalidValue, "--g", Num(a.g),
                 "g > 0 when the impact velocity comes from --height (v0 = sqrt(2 g h))");
@@ -260,22 +261,27 @@ void RegisterModelCommand(CLI::App& app) {
       "model",
       "Simulate the added-mass impact model (Eq. 9): one test, the solvers' work-precision study "
       "(--work-precision) or the paper's 27 combinations (--table1)");
-  cmd->add_option("--mass", args->mass, "pounder mass m_p [kg], > 0");
-  cmd->add_option("--height", args->height, "drop height h [m], > 0 (v0 = sqrt(2 g h))");
-  cmd->add_option("--velocity", args->velocity, "impact velocity v0 [m/s], > 0");
-  cmd->add_option("--width", args->width, "pounder width D [m], > 0");
-  cmd->add_option("--depth", args->depth, "out-of-plane depth t_z [m], > 0 (default 0.192)");
+  cmd->add_option("--mass", args->mass, "pounder mass m_p, in " + kPounderMassRange.Text());
+  cmd->add_option("--height", args->height,
+                  "drop height h, > 0 and in " + kDropHeightRange.Text() + " (v0 = sqrt(2 g h))");
+  cmd->add_option("--velocity", args->velocity,
+                  "impact velocity v0, in " + kImpactVelocityRange.Text());
+  cmd->add_option("--width", args->width, "pounder width D, in " + kPounderSizeRange.Text());
+  cmd->add_option("--depth", args->depth,
+                  "out-of-plane depth t_z, in " + kPounderSizeRange.Text() + " (default 0.192)");
   cmd->add_option("--added-mass", args->added_mass,
-                  "maximum added mass M [kg], >= 0 (default: Eq. 4)");
+                  "maximum added mass M, in " + kAddedMassRange.Text() + " (default: Eq. 4)");
   cmd->add_option("--K", args->K, "friction coefficient K, >= 0 (default 50)");
   cmd->add_option("--n", args->n, "damping exponent n, [0, 1] (default 0.2)");
   cmd->add_option("--u", args->u, "damping factor u, >= 1 (default 1.9)");
   cmd->add_option("--T", args->T, "sigmoid delay T [s], >= 0 (default 0.002)");
   cmd->add_option("--b", args->b, "sigmoid rate b [1/s], (0, 1e12] (default 2500)");
-  cmd->add_option("--rho", args->rho, "dry density rho_d [kg/m^3], > 0 (default 1550)");
-  cmd->add_option("--g", args->g, "gravity g [m/s^2], >= 0 (default 9.81)");
+  cmd->add_option("--rho", args->rho,
+                  "dry density rho_d, in " + kSoilDensityRange.Text() + " (default 1550)");
+  cmd->add_option("--g", args->g, "gravity g, in " + kGravityRange.Text() + " (default 9.81)");
   cmd->add_option("--bed-height", args->bed_height,
-                  "sand bed height [m] for the penetration warning (default 0.6)");
+                  "sand bed height for the penetration warning, in " + kBedHeightRange.Text() +
+                      " (default 0.6)");
   cmd->add_option("--solver", args->solver, "auto | dopri5 | stiff (default auto)");
   cmd->add_option("--rtol", args->rtol, "relative tolerance, [1e-14, 0.1] (default 1e-6)");
   cmd->add_option("--atol", args->atol, "absolute tolerance, > 0 (default 1e-3 * rtol)");

@@ -5,6 +5,8 @@
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
+#include "impactdic/render/animation.h"
 #include "impactdic/render/render_results.h"
 
 namespace impactdic::cli {
@@ -36,7 +38,8 @@ void RegisterRenderCommand(CLI::App& app) {
   cmd->add_option("--codec", args->codec,
                   "video codec: auto (H.264 MP4, else MJPG AVI), h264 (or fail), mjpg")
       ->capture_default_str();
-  cmd->add_option("--fps", args->fps, "playback frame rate of the animation [1/s], (0, 240]")
+  cmd->add_option("--fps", args->fps,
+                  "playback frame rate of the animation, in " + AnimationOptions::kFpsRange.Text())
       ->capture_default_str();
   cmd->callback([args] {
     // Validate every option before any work.
@@ -51,9 +54,7 @@ void RegisterRenderCommand(CLI::App& app) {
     } catch (const Error&) {
       throw Error(ErrorKind::kInvalidValue, "--codec", args->codec, "auto, h264 or mjpg");
     }
-    if (!(args->fps > 0 && args->fps <= 240)) {
-      throw Error(ErrorKind::kInvalidValue, "--fps", std::to_string(args->fps), "(0, 240]");
-    }
+    CheckRange(args->fps, AnimationOptions::kFpsRange, "--fps", "a playback frame rate");
     if (args->no_animation && args->png_frames) {
       throw Error(ErrorKind::kInvalidValue, "--png-frames", "given with --no-animation",
                   "--png-frames only together with the animation");

@@ -1,10 +1,12 @@
 // impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N]: the whole pipeline on one
 // scene (pipeline/pipeline.h).
 #include <iostream>
+#include <optional>
 #include <string>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/io/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
@@ -14,7 +16,7 @@ void RegisterRunCommand(CLI::App& app) {
   struct Args {
     std::string scene, output;
     bool png_frames = false;
-    int threads = -1;
+    std::optional<int> threads;  // Unset: the scene's dic.threads.
     std::string format = "text";
   };
   auto args = std::make_shared<Args>();
@@ -28,13 +30,11 @@ void RegisterRunCommand(CLI::App& app) {
                   "Output folder (default: the scene's outputs.folder)");
   cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG");
   cmd->add_option("--threads", args->threads,
-                  "Correlation threads (0 = all cores; default: the scene's)");
+                  std::string("Correlation threads: ") + kThreadCountExpected +
+                      " (default: the scene's dic.threads)");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
   cmd->callback([args] {
-    if (args->threads < -1) {
-      throw Error(ErrorKind::kInvalidValue, "--threads", std::to_string(args->threads),
-                  "0 (all cores) or more");
-    }
+    if (args->threads) CheckThreadCount(*args->threads, "--threads");
     if (args->format != "text" && args->format != "json") {
       throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
     }
@@ -42,7 +42,7 @@ void RegisterRunCommand(CLI::App& app) {
     PipelineOptions options;
     options.output_folder = args->output;
     options.png_frames = args->png_frames;
-    options.threads = args->threads;
+    options.threads = args->threads.value_or(-1);
     const PipelineSummary summary = RunScene(scene, options);
     if (args->format == "json") {
       std::cout << summary.figures.ToJson().Dump() << "\n";

@@ -28,6 +28,13 @@ std::string Number(double v) {
   return fmt::format("{:.6f}", v);
 }
 
+// The frame number of image `index` (0 = the first reference): from its file name when the
+// names are one numbered series, else the index itself.
+long long FrameLabel(const DicResult& result, int index) {
+  const auto k = static_cast<std::size_t>(index);
+  return k < result.frame_numbers.size() ? result.frame_numbers[k] : index;
+}
+
 }  // namespace
 
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options) {
@@ -41,19 +48,28 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   // keeps (its reference and, with `auto`, the last frame), at most two images are held,
   // whatever the length of the sequence.
   Correlator correlator(options);
+  DicResult result;
+  result.frame_numbers = FrameNumbers(paths);
+  // Colour layout of each file as decoded: read in parallel, compared in file order.
+  SequenceColourCheck colour;
+  std::vector<int> channels(paths.size(), 1);
+  auto check_colour = [&](std::size_t k) {
+    const std::string warning = colour.Check(paths[k], channels[k]);
+    if (!warning.empty()) result.warnings.push_back(warning);
+  };
   cv::Mat reference, current;
   std::exception_ptr reference_error, deformed_error;  // Reported in this order (deterministic).
   tbb::parallel_invoke(
       [&] {
         try {
-          current = ReadGreyImage(paths[1]);
+          current = ReadGreyImage(paths[1], &channels[1]);
         } catch (...) {
           deformed_error = std::current_exception();
         }
       },
       [&] {
         try {
-          reference = ReadGreyImage(paths[0]);
+          reference = ReadGreyImage(paths[0], &channels[0]);
           correlator.SetReference(reference);
         } catch (...) {
           reference_error = std::current_exception();
@@ -62,14 +78,16 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   if (reference_error) std::rethrow_exception(reference_error);
   if (deformed_error) std::rethrow_exception(deformed_error);
   CheckSameSize({reference, current}, {paths[0], paths[1]});
-  DicResult result;
+  check_colour(0);
+  check_colour(1);
   result.positions = correlator.positions();
   ProgressBar bar("correlate", paths.size() - 1);
   for (std::size_t k = 1; k < paths.size(); ++k) {
     cv::Mat next;
     tbb::task_group prefetch;
     if (k + 1 < paths.size())
-      prefetch.run([&next, &paths, k] { next = ReadGreyImage(paths[k + 1]); });
+      prefetch.run(
+          [&next, &paths, &channels, k] { next = ReadGreyImage(paths[k + 1], &channels[k + 1]); });
     try {
       result.frames.push_back(correlator.Correlate(current));
     } catch (...) {
@@ -81,7 +99,10 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
       throw;
     }
     prefetch.wait();  // Rethrows a decoding error naming the file.
-    if (k + 1 < paths.size()) CheckSameSize({reference, next}, {paths[0], paths[k + 1]});
+    if (k + 1 < paths.size()) {
+      CheckSameSize({reference, next}, {paths[0], paths[k + 1]});
+      check_colour(k + 1);
+    }
     current = next;
     bar.Advance();
   }
@@ -98,10 +119,11 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
     rows.reserve(n * frames);
     for (std::size_t k = 0; k < frames; ++k) {
       const FrameResult& f = result.frames[k];
+      const std::string frame = std::to_string(FrameLabel(result, f.frame));
       for (std::size_t i = 0; i < n; ++i) {
-        rows.push_back({std::to_string(f.frame), Number(result.positions[i].x),
-                        Number(result.positions[i].y), Number(f.u_px[i]), Number(f.v_px[i]),
-                        Number(f.zncc[i]), std::to_string(f.iterations[i]), ToString(f.status[i])});
+        rows.push_back({frame, Number(result.positions[i].x), Number(result.positions[i].y),
+                        Number(f.u_px[i]), Number(f.v_px[i]), Number(f.zncc[i]),
+                        std::to_string(f.iterations[i]), ToString(f.status[i])});
       }
     }
     WriteCsvRows(path, {"frame", "x_px", "y_px", "u_px", "v_px", "zncc", "iterations", "status"},
@@ -123,10 +145,12 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   std::vector<float> zncc(n * frames), sigma(n * frames);
   std::vector<std::int32_t> iterations(n * frames), status(n * frames);
   std::vector<std::int32_t> reference(frames), frame_index(frames);
+  std::vector<double> frame_number(frames);
   for (std::size_t k = 0; k < frames; ++k) {
     const FrameResult& f = result.frames[k];
     reference[k] = f.reference_frame;
     frame_index[k] = f.frame;
+    frame_number[k] = static_cast<double>(FrameLabel(result, f.frame));
     for (std::size_t i = 0; i < n; ++i) {
       u[k * n + i] = f.u_px[i];
       v[k * n + i] = f.v_px[i];
@@ -149,6 +173,9 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   out.Write("dic/iterations", iterations, dims, "1", "IC-GN iterations");
   out.Write("dic/status", status, dims, "1", "subset status code (see attribute codes)");
   out.Write("dic/frame", frame_index, Dims{frames}, "1", "index of the deformed image (1-based)");
+  out.Write("dic/frame_number", frame_number, "1",
+            "frame number of the deformed image from its file name (its 1-based index when the "
+            "names are not one numbered series), as the CSV's frame column");
   out.Write("dic/reference_frame", reference, Dims{frames}, "1",
             "index of the reference image each frame was correlated against (0 = first)");
   // The same attributes under the names `impactdic run` uses (status_names, shape).

@@ -16,6 +16,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/input_file.h"
 #include "impactdic/io/output_generation.h"
 
 namespace impactdic {
@@ -167,13 +168,7 @@ void WriteTextFileAtomic(const std::string& path, const std::string& text) {
 }
 
 std::string ReadTextFile(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw Error(ErrorKind::kFileNotFound, path, "", "an existing file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(ErrorKind::kIo, path, "cannot open for reading", "a readable file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return ReadInputFile(path, "a text file", kMaxTextFileBytes);
 }
 
 }  // namespace impactdic

@@ -10,6 +10,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace {
@@ -63,6 +64,44 @@ bool ParseNumber(const std::string& cell, double* value) {
   return ec == std::errc() && ptr == end;
 }
 
+constexpr const char* kCsvWhat = "a CSV file (comma-separated, '.' as decimal point)";
+// Excel's "CSV UTF-8" starts with this byte order mark: skipped.
+const std::string kUtf8Bom = "\xEF\xBB\xBF";
+
+// Refuses what is not UTF-8/ASCII text before it is parsed line by line: binary files (an image
+// given as the sensor record) and UTF-16 text (Excel's "Unicode text"). Leaves `in` at the start.
+void CheckCsvEncoding(std::ifstream* in, const std::string& path) {
+  std::string head(4096, '\0');
+  in->read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in->gcount()));
+  in->clear();
+  in->seekg(0);
+  if (head.rfind("\xFF\xFE", 0) == 0 || head.rfind("\xFE\xFF", 0) == 0) {
+    throw Error(ErrorKind::kFileFormat, "", "UTF-16 text",
+                std::string(kCsvWhat) + " in UTF-8 or ASCII (save it as \"CSV UTF-8\")")
+        .WithFile(path);
+  }
+  const std::string binary = BinaryFileKind(head);
+  if (!binary.empty()) throw Error(ErrorKind::kFileFormat, "", binary, kCsvWhat).WithFile(path);
+}
+
+// The header row decides the separator: a single "column" holding ';' or tabs is a file written
+// with another separator (Excel in many locales writes "1,5;2,5"). We read only commas: with ';'
+// the decimal separator is often ',' too, and guessing would silently misread numbers.
+void CheckSeparator(const std::vector<std::string>& header_cells, const std::string& line,
+                    const std::string& path, int line_no) {
+  if (header_cells.size() != 1) return;
+  const char* name = line.find(';') != std::string::npos    ? "semicolons (';')"
+                     : line.find('\t') != std::string::npos ? "tabs"
+                                                            : nullptr;
+  if (name == nullptr) return;
+  throw Error(ErrorKind::kFileFormat, "header",
+              fmt::format("'{}', columns separated by {}", line, name),
+              "comma-separated columns with '.' as decimal point (e.g. time_s,accel_g); "
+              "re-export the file with ',' as the list separator")
+      .WithFile(path, line_no);
+}
+
 }  // namespace
 
 bool CsvTable::Has(const std::string& name) const {
@@ -88,10 +127,10 @@ const std::vector<std::string>& CsvTable::TextColumn(const std::string& name) co
 }
 
 CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
-  std::ifstream in(path);
-  if (!in) {
-    throw Error(ErrorKind::kFileNotFound, "", "", "a readable CSV file").WithFile(path);
-  }
+  CheckInputFile(path, kCsvWhat, kMaxCsvFileBytes);
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::kIo, "", "cannot open it for reading", kCsvWhat).WithFile(path);
+  CheckCsvEncoding(&in, path);
   CsvTable table;
   table.path = path;
   std::string line;
@@ -103,8 +142,10 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (Trim(line).empty() || line[0] == options.comment) continue;
+    if (line_no == 1 && line.rfind(kUtf8Bom, 0) == 0) line.erase(0, kUtf8Bom.size());
     std::vector<std::string> cells = SplitCells(line);
     if (!have_header) {
+      CheckSeparator(cells, line, path, line_no);
       for (const auto& c : cells) {
         double dummy;
         if (c.empty() || ParseNumber(c, &dummy)) {

@@ -4,16 +4,21 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -76,25 +81,183 @@ bool SplitFrameNumber(const std::string& path, std::string* prefix, long long* n
   return true;
 }
 
+constexpr const char* kImageWhat = "an 8- or 16-bit TIFF/PNG/BMP/JPEG image";
+
+std::uint32_t BigEndian32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) |
+         std::uint32_t{p[3]};
+}
+
+// Image dimensions from the file header, without decoding. Knows PNG, TIFF, BMP and JPEG (the
+// camera formats); false for anything else, which OpenCV then decodes under its own limits.
+class HeaderReader {
+ public:
+  explicit HeaderReader(const std::string& bytes)
+      : p_(reinterpret_cast<const unsigned char*>(bytes.data())), n_(bytes.size()) {}
+
+  bool Size(long long* width, long long* height) const {
+    if (n_ >= 24 && std::memcmp(p_, "\x89PNG\r\n\x1a\n", 8) == 0 &&
+        std::memcmp(p_ + 12, "IHDR", 4) == 0) {
+      *width = BigEndian32(p_ + 16);
+      *height = BigEndian32(p_ + 20);
+      return true;
+    }
+    if (n_ >= 26 && p_[0] == 'B' && p_[1] == 'M') {
+      // Signed; a negative height means rows stored top-down.
+      *width = std::llabs(static_cast<long long>(static_cast<std::int32_t>(Little(18, 4))));
+      *height = std::llabs(static_cast<long long>(static_cast<std::int32_t>(Little(22, 4))));
+      return true;
+    }
+    if (n_ >= 8 && ((p_[0] == 'I' && p_[1] == 'I') || (p_[0] == 'M' && p_[1] == 'M')))
+      return TiffSize(width, height);
+    if (n_ >= 4 && p_[0] == 0xFF && p_[1] == 0xD8) return JpegSize(width, height);
+    return false;
+  }
+
+ private:
+  std::uint64_t Read(std::size_t at, int bytes, bool little) const {
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) {
+      const std::uint64_t b = p_[at + static_cast<std::size_t>(i)];
+      v |= little ? b << (8 * i) : b << (8 * (bytes - 1 - i));
+    }
+    return v;
+  }
+  std::uint64_t Little(std::size_t at, int bytes) const { return Read(at, bytes, true); }
+
+  // The first image file directory's ImageWidth (256) and ImageLength (257) tags.
+  bool TiffSize(long long* width, long long* height) const {
+    const bool le = p_[0] == 'I';
+    if (Read(2, 2, le) != 42) return false;  // BigTIFF (43) and others: left to OpenCV.
+    const std::uint64_t ifd = Read(4, 4, le);
+    if (ifd + 2 > n_) return false;
+    const std::uint64_t entries = Read(ifd, 2, le);
+    bool w = false, h = false;
+    for (std::uint64_t e = 0; e < entries && ifd + 2 + 12 * (e + 1) <= n_; ++e) {
+      const std::size_t at = ifd + 2 + 12 * e;
+      const std::uint64_t tag = Read(at, 2, le), type = Read(at + 2, 2, le);
+      if (tag != 256 && tag != 257) continue;
+      const auto value =
+          static_cast<long long>(type == 3 ? Read(at + 8, 2, le) : Read(at + 8, 4, le));
+      if (tag == 256) {
+        *width = value;
+        w = true;
+      } else {
+        *height = value;
+        h = true;
+      }
+    }
+    return w && h;
+  }
+
+  // The first start-of-frame marker (SOF0..SOF15 except DHT, JPG and DAC).
+  bool JpegSize(long long* width, long long* height) const {
+    std::size_t at = 2;
+    while (at + 9 <= n_) {
+      if (p_[at] != 0xFF) return false;
+      const unsigned char marker = p_[at + 1];
+      if (marker == 0xFF) {
+        ++at;
+        continue;
+      }
+      const auto length = static_cast<std::size_t>(Read(at + 2, 2, false));
+      if (marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC) {
+        *height = static_cast<long long>(Read(at + 5, 2, false));
+        *width = static_cast<long long>(Read(at + 7, 2, false));
+        return true;
+      }
+      at += 2 + length;
+    }
+    return false;
+  }
+
+  const unsigned char* p_;
+  std::size_t n_;
+};
+
+// CRC-32 of PNG chunks (ISO 3309, as zlib's crc32), sliced by 8 bytes.
+class Crc32 {
+ public:
+  Crc32() {
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = c & 1 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      table_[0][i] = c;
+    }
+    for (std::uint32_t i = 0; i < 256; ++i)
+      for (int t = 1; t < 8; ++t)
+        table_[t][i] = (table_[t - 1][i] >> 8) ^ table_[0][table_[t - 1][i] & 0xFF];
+  }
+  std::uint32_t operator()(const unsigned char* p, std::size_t n) const {
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (; n >= 8; n -= 8, p += 8) {
+      const std::uint32_t a = c ^ (std::uint32_t{p[0]} | std::uint32_t{p[1]} << 8 |
+                                   std::uint32_t{p[2]} << 16 | std::uint32_t{p[3]} << 24);
+      c = table_[7][a & 0xFF] ^ table_[6][(a >> 8) & 0xFF] ^ table_[5][(a >> 16) & 0xFF] ^
+          table_[4][a >> 24] ^ table_[3][p[4]] ^ table_[2][p[5]] ^ table_[1][p[6]] ^
+          table_[0][p[7]];
+    }
+    for (; n > 0; --n, ++p) c = table_[0][(c ^ *p) & 0xFF] ^ (c >> 8);
+    return c ^ 0xFFFFFFFFu;
+  }
+
+ private:
+  std::uint32_t table_[8][256];
+};
+
+// A PNG's chunk structure: every chunk complete with a correct CRC, up to IEND. libpng would
+// print "libpng error: ..." to stderr (through OpenCV, which keeps libpng's default handler) for
+// a truncated or corrupted file before our own message; checking first keeps the output to one
+// clear message. Returns "" when the structure is sound, else what is wrong.
+std::string PngStructureProblem(const std::string& bytes) {
+  static const Crc32 crc;
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
+  const std::size_t n = bytes.size();
+  std::size_t at = 8;
+  while (at + 8 <= n) {
+    const std::size_t length = BigEndian32(p + at);
+    const std::string type(bytes, at + 4, 4);
+    if (length > 0x7FFFFFFFu) return fmt::format("a corrupt chunk length at byte {}", at);
+    if (at + 12 + length > n) {
+      return fmt::format(
+          "a truncated PNG: the file ends at byte {}, inside its '{}' chunk, which ends at "
+          "byte {}",
+          n, type, at + 12 + length);
+    }
+    if (crc(p + at + 4, length + 4) != BigEndian32(p + at + 8 + length))
+      return fmt::format("a corrupt PNG: CRC error in its '{}' chunk at byte {}", type, at);
+    if (type == "IEND") return "";
+    at += 12 + length;
+  }
+  return fmt::format("a truncated PNG: the file ends at byte {} before its IEND chunk", n);
+}
+
 }  // namespace
 
-void CheckFrameNumbering(const std::vector<std::string>& files) {
-  if (files.size() < 3) return;
+std::vector<long long> FrameNumbers(const std::vector<std::string>& files) {
   std::vector<long long> numbers;
   std::string prefix0, suffix0;
   for (std::size_t k = 0; k < files.size(); ++k) {
     std::string prefix, suffix;
     long long number = 0;
-    // More than 9 digits: a timestamp, not a frame counter; its steps need not be constant.
-    if (!SplitFrameNumber(files[k], &prefix, &number, &suffix) || number > 999999999) return;
+    // More than 9 digits: a timestamp, not a frame counter.
+    if (!SplitFrameNumber(files[k], &prefix, &number, &suffix) || number > 999999999) return {};
     if (k == 0) {
       prefix0 = prefix;
       suffix0 = suffix;
     } else if (prefix != prefix0 || suffix != suffix0) {
-      return;  // Not one numbered series: nothing to check.
+      return {};  // Not one numbered series.
     }
     numbers.push_back(number);
   }
+  return numbers;
+}
+
+void CheckFrameNumbering(const std::vector<std::string>& files) {
+  if (files.size() < 3) return;
+  // Timestamps and names that are not one numbered series: nothing to check.
+  const std::vector<long long> numbers = FrameNumbers(files);
+  if (numbers.empty()) return;
   // The series' step: the most common difference between neighbours (the smallest on a tie).
   std::map<long long, int> counts;
   for (std::size_t k = 1; k < numbers.size(); ++k) ++counts[numbers[k] - numbers[k - 1]];
@@ -127,21 +290,41 @@ void CheckFrameNumbering(const std::vector<std::string>& files) {
 }
 
 void CheckImageFileExists(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    throw Error(ErrorKind::kFileNotFound, "image", "", "an existing image file").WithFile(path);
-  }
+  CheckInputFile(path, kImageWhat, kMaxImageFileBytes);
 }
 
-cv::Mat ReadGreyImage(const std::string& path) {
-  CheckImageFileExists(path);
-  cv::Mat image = cv::imread(path, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
-  if (image.empty()) {
-    throw Error(ErrorKind::kFileFormat, "image",
-                "a file OpenCV cannot decode (corrupt or truncated?)",
-                "an 8- or 16-bit TIFF/PNG/BMP/JPEG image")
+cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
+  const std::string bytes = ReadInputFile(path, kImageWhat, kMaxImageFileBytes);
+  long long width = 0, height = 0;
+  if (HeaderReader(bytes).Size(&width, &height) &&
+      (width < 1 || height < 1 || width > kMaxImageSidePx || height > kMaxImageSidePx ||
+       width * height > kMaxImagePixels)) {
+    throw Error(ErrorKind::kFileFormat, "image size",
+                fmt::format("{}x{} px in its header", width, height),
+                fmt::format("at most {} px a side and {} pixels in all (e.g. 16384x16384)",
+                            kMaxImageSidePx, kMaxImagePixels))
         .WithFile(path);
   }
+  if (bytes.rfind("\x89PNG", 0) == 0) {
+    const std::string problem = PngStructureProblem(bytes);
+    if (!problem.empty())
+      throw Error(ErrorKind::kFileFormat, "image", problem, "a complete PNG file").WithFile(path);
+  }
+  cv::Mat image;
+  try {
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
+    image = cv::imdecode(buffer, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+  } catch (const cv::Exception& e) {
+    throw Error(ErrorKind::kFileFormat, "image", "a file OpenCV cannot decode: " + e.err,
+                kImageWhat)
+        .WithFile(path);
+  }
+  if (image.empty()) {
+    throw Error(ErrorKind::kFileFormat, "image",
+                "a file OpenCV cannot decode (corrupt or truncated?)", kImageWhat)
+        .WithFile(path);
+  }
+  if (file_channels) *file_channels = image.channels();
   if (image.channels() == 3) {
     cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
   } else if (image.channels() == 4) {
@@ -153,6 +336,27 @@ cv::Mat ReadGreyImage(const std::string& path) {
         .WithFile(path);
   }
   return image;
+}
+
+std::string SequenceColourCheck::Check(const std::string& path, int file_channels) {
+  if (first_path_.empty()) {
+    first_path_ = path;
+    first_channels_ = file_channels;
+    return "";
+  }
+  if (file_channels == first_channels_) return "";
+  ++mismatches_;
+  if (mismatches_ > kListed) return "";
+  auto layout = [](int c) {
+    return c == 1 ? std::string("greyscale") : fmt::format("{}-channel colour", c);
+  };
+  std::string text =
+      fmt::format("{} is a {} image in a sequence whose first image {} is {}: converted to grey{}",
+                  path, layout(file_channels), first_path_, layout(first_channels_),
+                  file_channels > 1 ? " (0.299 R + 0.587 G + 0.114 B)" : "");
+  if (mismatches_ == kListed) text += "; further images that differ are not listed";
+  LogWarning("{}", text);
+  return text;
 }
 
 void WriteImage(const std::string& path, const cv::Mat& image) {
@@ -230,22 +434,29 @@ std::vector<std::string> ListFrames(const std::string& source) {
   return files;
 }
 
+std::vector<std::string> ListFrameSequence(const std::string& source) {
+  std::vector<std::string> files = ListFrames(source);
+  CheckFrameNumbering(files);
+  return files;
+}
+
 bool IsVideoFile(const std::string& path) {
   const std::string ext = Lower(fs::path(path).extension().string());
   return ext == ".mp4" || ext == ".avi" || ext == ".mov" || ext == ".mkv";
 }
 
-std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames) {
-  std::error_code ec;
-  if (!fs::is_regular_file(path, ec)) {
-    throw Error(ErrorKind::kFileNotFound, "video", "", "an existing video file").WithFile(path);
-  }
+std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames,
+                                     std::string* warning) {
+  CheckInputFile(path, "a video file OpenCV can decode (.mp4, .avi, ...)",
+                 std::numeric_limits<std::uintmax_t>::max());
   cv::VideoCapture capture(path);
   if (!capture.isOpened()) {
     throw Error(ErrorKind::kFileFormat, "video", "a file OpenCV cannot open",
                 "a video OpenCV can decode (.mp4, .avi, ...)")
         .WithFile(path);
   }
+  // The container's frame count (from its header or index; <= 0 when it does not say).
+  const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
   std::vector<cv::Mat> frames;
   cv::Mat frame;
   while ((max_frames <= 0 || static_cast<int>(frames.size()) < max_frames) && capture.read(frame)) {
@@ -260,6 +471,16 @@ std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames) {
   if (frames.empty()) {
     throw Error(ErrorKind::kFileFormat, "video", "no decodable frames", "at least one frame")
         .WithFile(path);
+  }
+  const auto wanted = static_cast<long long>(
+      max_frames > 0 ? std::min(declared, static_cast<double>(max_frames)) : declared);
+  if (declared > 0 && static_cast<long long>(frames.size()) < wanted) {
+    const std::string text = fmt::format(
+        "{}: decoded {} frames but the container declares {}: the video is truncated or "
+        "damaged; the sequence ends after frame {}",
+        path, frames.size(), static_cast<long long>(declared), frames.size() - 1);
+    LogWarning("{}", text);
+    if (warning) *warning = text;
   }
   return frames;
 }

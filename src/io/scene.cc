@@ -1,7 +1,6 @@
 #include "impactdic/io/scene.h"
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +9,10 @@
 #include <set>
 
 #include "impactdic/core/error.h"
-#include "impactdic/io/atomic_file.h"
+#include "impactdic/core/range.h"
+#include "impactdic/core/threads.h"
+#include "impactdic/io/input_file.h"
+#include "impactdic/io/yaml.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -67,6 +69,13 @@ class Section {
       return;
     }
     *out = value;
+  }
+
+  // A number in `range`; `what` names the quantity ("a pounder mass").
+  void Number(const char* key, double* out, const ValueRange& range, const char* what) {
+    const std::string expected = std::string(what) + " in " + range.Text();
+    Number(
+        key, out, [&range](double v) { return range.Contains(v); }, expected.c_str());
   }
 
   void OptionalNumber(const char* key, std::optional<double>* out,
@@ -186,6 +195,8 @@ class Section {
   std::set<std::string> known_;
 };
 
+constexpr const char* kSceneFileWhat = "a scene file (YAML)";
+
 bool Positive(double v) { return v > 0; }
 bool NonNegative(double v) { return v >= 0; }
 
@@ -247,7 +258,9 @@ std::string ClosestMatch(const std::string& word, const std::vector<std::string>
   return best_distance <= limit ? best : "";
 }
 
-Scene LoadScene(const std::string& path) { return ParseScene(ReadTextFile(path), path); }
+Scene LoadScene(const std::string& path) {
+  return ParseScene(ReadInputFile(path, kSceneFileWhat, kMaxTextFileBytes), path);
+}
 
 Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   Scene scene;
@@ -258,13 +271,7 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   scene.name = fs::path(path).stem().string();
   scene.outputs.folder = (fs::path(scene.folder) / "results").lexically_normal().string();
 
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    throw Error(ErrorKind::kFileFormat, "YAML", e.msg, "a valid YAML document")
-        .WithFile(path, e.mark.line + 1, e.mark.column + 1);
-  }
+  const YAML::Node root = LoadYaml(yaml_text, path, kSceneFileWhat);
   Problems problems{path, {}};
   Section top(root, "", &problems);
   const std::string& folder = scene.folder;
@@ -273,9 +280,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
 
   Section in = top.Sub("inputs");
   in.Path("frames", &scene.inputs.frames, folder);
-  in.Number("fps", &scene.inputs.fps, Positive, "a frame rate > 0 [1/s]");
+  in.Number("fps", &scene.inputs.fps, kCameraFpsRange, "a camera frame rate");
   in.Path("calibration", &scene.inputs.calibration, folder);
-  in.Number("mm_per_px", &scene.inputs.mm_per_px, Positive, "a scale > 0 [mm/px]");
+  in.Number("mm_per_px", &scene.inputs.mm_per_px, kMmPerPxRange, "an image scale");
   in.Path("sensor", &scene.inputs.sensor, folder);
   in.Path("truth", &scene.inputs.truth, folder);
   in.Finish();
@@ -286,15 +293,19 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
 
   Section t = top.Sub("test");
   SceneTest& test = scene.test;
-  t.Number("mass_kg", &test.mass_kg, Positive, "a pounder mass > 0 [kg]");
-  t.Number("drop_height_m", &test.drop_height_m, NonNegative, "a drop height >= 0 [m]");
-  t.OptionalNumber("impact_velocity_m_s", &test.impact_velocity_m_s, Positive,
-                   "an impact velocity > 0 [m/s]");
-  t.Number("width_m", &test.width_m, Positive, "a pounder width D > 0 [m]");
-  t.Number("depth_m", &test.depth_m, Positive, "an out-of-plane depth t_z > 0 [m]");
-  t.Number("density_kg_m3", &test.density_kg_m3, Positive, "a dry density > 0 [kg/m^3]");
-  t.Number("bed_height_m", &test.bed_height_m, Positive, "a bed height > 0 [m]");
-  t.Number("g_m_s2", &test.g_m_s2, Positive, "a gravitational acceleration > 0 [m/s^2]");
+  t.Number("mass_kg", &test.mass_kg, kPounderMassRange, "a pounder mass");
+  t.Number("drop_height_m", &test.drop_height_m, kDropHeightRange, "a drop height");
+  t.OptionalNumber(
+      "impact_velocity_m_s", &test.impact_velocity_m_s,
+      [](double v) { return kImpactVelocityRange.Contains(v); },
+      ("an impact velocity in " + kImpactVelocityRange.Text()).c_str());
+  t.Number("width_m", &test.width_m, kPounderSizeRange, "a pounder width D");
+  t.Number("depth_m", &test.depth_m, kPounderSizeRange, "an out-of-plane depth t_z");
+  t.Number("density_kg_m3", &test.density_kg_m3, kSoilDensityRange, "a dry density");
+  t.Number("bed_height_m", &test.bed_height_m, kBedHeightRange, "a bed height");
+  t.Number(
+      "g_m_s2", &test.g_m_s2, [](double v) { return v > 0 && kGravityRange.Contains(v); },
+      ("a gravitational acceleration > 0 in " + kGravityRange.Text()).c_str());
   t.Finish();
   if (!test.impact_velocity_m_s && test.drop_height_m <= 0) {
     problems.Add(root["test"], "test.drop_height_m",
@@ -408,8 +419,7 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   dic.Integer(
       "search_radius_px", &d.search_radius_px, [](int v) { return v >= 1; },
       "a search radius >= 1 [px]");
-  dic.Integer(
-      "threads", &d.threads, [](int v) { return v >= 0; }, "a thread count >= 0 (0 = all cores)");
+  dic.Integer("threads", &d.threads, IsValidThreadCount, kThreadCountExpected);
   dic.Integer(
       "first_frame", &d.first_frame, [](int v) { return v >= 0; }, "a frame index >= 0");
   dic.Integer(
@@ -456,7 +466,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
 
   Section mod = top.Sub("model");
   SceneModel& m = scene.model;
-  mod.OptionalNumber("added_mass_kg", &m.added_mass_kg, NonNegative, "an added mass M >= 0 [kg]");
+  mod.OptionalNumber(
+      "added_mass_kg", &m.added_mass_kg, [](double v) { return kAddedMassRange.Contains(v); },
+      ("an added mass M in " + kAddedMassRange.Text()).c_str());
   mod.Number("K", &m.K, NonNegative, "a friction coefficient K >= 0");
   mod.Number(
       "n", &m.n, [](double v) { return v >= 0 && v < 1; }, "a damping exponent n in [0, 1)");

@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
@@ -34,14 +35,15 @@ double AddedMassMaxEq4(double pounder_mass_kg, double impact_velocity_m_s, doubl
 }
 
 void ImpactModelParameters::Check() const {
-  Require(std::isfinite(pounder_mass_kg) && pounder_mass_kg > 0, "pounder_mass_kg", pounder_mass_kg,
-          "a finite mass > 0 kg");
-  Require(std::isfinite(impact_velocity_m_s) && impact_velocity_m_s > 0, "impact_velocity_m_s",
-          impact_velocity_m_s, "a finite velocity > 0 m/s");
-  Require(std::isfinite(width_m) && width_m > 0, "width_m", width_m, "a finite width > 0 m");
-  Require(std::isfinite(depth_m) && depth_m > 0, "depth_m", depth_m, "a finite depth > 0 m");
-  Require(std::isnan(added_mass_kg) || (std::isfinite(added_mass_kg) && added_mass_kg >= 0),
-          "added_mass_kg", added_mass_kg, "a finite mass >= 0 kg (or unset: Eq. 4)");
+  // The ranges of a drop test, shared with scene files and the CLI (core/range.h).
+  CheckRange(pounder_mass_kg, kPounderMassRange, "pounder_mass_kg", "a pounder mass");
+  CheckRange(impact_velocity_m_s, kImpactVelocityRange, "impact_velocity_m_s",
+             "an impact velocity");
+  CheckRange(width_m, kPounderSizeRange, "width_m", "a pounder width D");
+  CheckRange(depth_m, kPounderSizeRange, "depth_m", "an out-of-plane depth t_z");
+  if (!std::isnan(added_mass_kg))
+    CheckRange(added_mass_kg, kAddedMassRange, "added_mass_kg",
+               "an added mass M (or unset: Eq. 4)");
   Require(std::isfinite(friction_K) && friction_K >= 0, "friction_K", friction_K,
           "a finite K >= 0");
   Require(std::isfinite(damping_exponent_n) && damping_exponent_n >= 0 && damping_exponent_n <= 1,
@@ -53,12 +55,9 @@ void ImpactModelParameters::Check() const {
   Require(std::isfinite(sigmoid_rate_b_per_s) && sigmoid_rate_b_per_s > 0 &&
               sigmoid_rate_b_per_s <= 1e12,
           "sigmoid_rate_b_per_s", sigmoid_rate_b_per_s, "b in (0, 1e12] 1/s");
-  Require(std::isfinite(density_kg_m3) && density_kg_m3 > 0, "density_kg_m3", density_kg_m3,
-          "a finite density > 0 kg/m^3");
-  Require(std::isfinite(gravity_m_s2) && gravity_m_s2 >= 0, "gravity_m_s2", gravity_m_s2,
-          "a finite g >= 0 m/s^2");
-  Require(std::isfinite(bed_height_m) && bed_height_m > 0, "bed_height_m", bed_height_m,
-          "a finite bed height > 0 m");
+  CheckRange(density_kg_m3, kSoilDensityRange, "density_kg_m3", "a dry density");
+  CheckRange(gravity_m_s2, kGravityRange, "gravity_m_s2", "a gravitational acceleration");
+  CheckRange(bed_height_m, kBedHeightRange, "bed_height_m", "a bed height");
 }
 
 double ImpactModelParameters::AddedMassMax_kg() const {

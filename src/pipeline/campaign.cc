@@ -7,6 +7,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
@@ -76,7 +77,8 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
 
 void CampaignOptions::Check() const {
   CheckValue(!output_folder.empty(), "output_folder", "an empty path", "a folder");
-  CheckValue(threads >= -1, "threads", std::to_string(threads), "-1, 0 (all cores) or more");
+  CheckValue(threads == -1 || IsValidThreadCount(threads), "threads", std::to_string(threads),
+             std::string("-1 (each scene's dic.threads) or ") + kThreadCountExpected);
   CheckValue(confidence > 0 && confidence < 1, "confidence", fmt::format("{}", confidence),
              "a level in (0, 1)");
 }

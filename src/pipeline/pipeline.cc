@@ -14,6 +14,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/io/atomic_file.h"
@@ -57,29 +58,76 @@ class StageLog {
 
 // The frames of the scene: the sorted image files, or the frames of a video.
 struct FrameSource {
-  std::vector<std::string> files;  // Empty for a video.
-  std::vector<cv::Mat> video;      // Decoded video frames.
+  std::vector<std::string> files;     // Empty for a video.
+  std::vector<cv::Mat> video;         // Decoded video frames.
+  std::vector<std::string> warnings;  // A truncated video, a colour image in a grey sequence.
+  SequenceColourCheck colour;         // Image files, in the order read.
   int count() const {
     return files.empty() ? static_cast<int>(video.size()) : static_cast<int>(files.size());
   }
   std::string Name(int k) const {
     return files.empty() ? fmt::format("video frame {}", k) : files[static_cast<std::size_t>(k)];
   }
-  cv::Mat Read(int k) const {
-    return files.empty() ? video[static_cast<std::size_t>(k)]
-                         : ReadGreyImage(files[static_cast<std::size_t>(k)]);
+  cv::Mat Read(int k) {
+    if (files.empty()) return video[static_cast<std::size_t>(k)];
+    const std::string& path = files[static_cast<std::size_t>(k)];
+    int channels = 1;
+    cv::Mat image = ReadGreyImage(path, &channels);
+    const std::string warning = colour.Check(path, channels);
+    if (!warning.empty()) warnings.push_back(warning);
+    return image;
   }
 };
 
 FrameSource OpenFrames(const std::string& source) {
   FrameSource frames;
   if (IsVideoFile(source)) {
-    frames.video = ReadVideoFrames(source);
+    std::string warning;
+    frames.video = ReadVideoFrames(source, /*max_frames=*/0, &warning);
+    if (!warning.empty()) frames.warnings.push_back(warning);
   } else {
-    frames.files = ListFrames(source);
-    CheckFrameNumbering(frames.files);
+    frames.files = ListFrameSequence(source);  // A gap in the numbering is an error.
   }
   return frames;
+}
+
+// dic.first_frame and dic.last_frame against the n frames of the source: Error naming the key,
+// its value and the allowed range.
+void CheckFrameRange(const Scene& scene, int n) {
+  const int last = scene.dic.last_frame < 0 ? n - 1 : scene.dic.last_frame;
+  if (last >= n) {
+    throw Error(ErrorKind::kInvalidValue, "dic.last_frame", std::to_string(last),
+                fmt::format("< the number of frames ({}) in {}", n, scene.inputs.frames))
+        .WithFile(scene.path);
+  }
+  const int first = scene.dic.first_frame;
+  if (first > 0 && last - first < 2) {
+    throw Error(ErrorKind::kInvalidValue, "dic.first_frame", std::to_string(first),
+                fmt::format("a frame index <= {}: {} holds {} frames (0..{}){}, and at least 3 "
+                            "from dic.first_frame on are correlated",
+                            std::max(0, last - 2), scene.inputs.frames, n, n - 1,
+                            scene.dic.last_frame < 0
+                                ? ""
+                                : fmt::format(", dic.last_frame is {}", scene.dic.last_frame)))
+        .WithFile(scene.path);
+  }
+}
+
+// dic.roi against the frame size: the correlator needs it inside the frame. Error naming the key,
+// its value and the frame size.
+void CheckSceneRoi(const Scene& scene, cv::Size frame) {
+  const auto& r = scene.dic.roi;
+  if (!(r[2] > r[0] && r[3] > r[1])) return;  // Not set: the whole frame.
+  if (r[2] <= frame.width && r[3] <= frame.height) return;
+  throw Error(
+      ErrorKind::kInvalidValue, "dic.roi",
+      fmt::format("[{}, {}, {}, {}]{}", r[0], r[1], r[2], r[3],
+                  r[0] >= frame.width || r[1] >= frame.height ? ", entirely outside the frames"
+                                                              : ", partly outside the frames"),
+      fmt::format("a rectangle [x0, y0, x1, y1] inside the {}x{} frames (x1 <= {}, "
+                  "y1 <= {})",
+                  frame.width, frame.height, frame.width, frame.height))
+      .WithFile(scene.path);
 }
 
 std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& vertices) {
@@ -217,8 +265,8 @@ void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder
 }  // namespace
 
 void PipelineOptions::Check() const {
-  CheckValue(threads >= -1, "threads", std::to_string(threads),
-             "-1 (scene), 0 (all cores) or more");
+  CheckValue(threads == -1 || IsValidThreadCount(threads), "threads", std::to_string(threads),
+             std::string("-1 (the scene's dic.threads) or ") + kThreadCountExpected);
 }
 
 JsonObject SceneFigures::ToJson() const {
@@ -376,12 +424,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     WallTimer t;
     source = OpenFrames(scene.inputs.frames);
     const int n = source.count();
+    CheckFrameRange(scene, n);
     last = scene.dic.last_frame < 0 ? n - 1 : scene.dic.last_frame;
-    if (last >= n) {
-      throw Error(ErrorKind::kInvalidValue, "dic.last_frame", std::to_string(last),
-                  fmt::format("< the number of frames ({}) in {}", n, scene.inputs.frames))
-          .WithFile(scene.path);
-    }
     std::string skipped_note;
     if (sensor) {
       std::size_t edges = 0;  // Exposure edges in the record.
@@ -414,9 +458,10 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       }
     }
     if (last - first < 2) {
-      throw Error(ErrorKind::kInvalidValue, "frames",
-                  fmt::format("{} frames from {} to {}", last - first + 1, first, last),
-                  "at least 3 frames to correlate and differentiate")
+      throw Error(
+          ErrorKind::kInvalidValue, "frames",
+          fmt::format("{} frames from {} to {}", std::max(0, last - first + 1), first, last),
+          "at least 3 frames to correlate and differentiate")
           .WithFile(scene.inputs.frames);
     }
     PreprocessOptions pre_options;
@@ -434,6 +479,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     for (int k = first; k <= last; ++k) {
       cv::Mat image = source.Read(k);
       if (frames.empty()) {
+        CheckSceneRoi(scene, image.size());
         if (calibration) CheckFrameSize(*calibration, image.size(), source.Name(k));
         pre.emplace(pre_options, calibration ? &*calibration : nullptr, image.size());
       }
@@ -444,6 +490,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       bar.Advance();
     }
     bar.Finish();
+    for (const auto& w : source.warnings) summary.warnings.push_back("frames: " + w);
     preprocess_note = pre->summary().BriefReport();
     stages.Ran("frames",
                fmt::format("{} of {} frames ({}x{}, {}-bit){}; {}", frames.size(), n,

@@ -39,7 +39,7 @@ VideoCodec VideoCodecFromString(const std::string& text) {
 }
 
 void AnimationOptions::Check() const {
-  CheckValue(fps > 0 && fps <= 240, "AnimationOptions.fps", std::to_string(fps), "(0, 240]");
+  CheckRange(fps, kFpsRange, "AnimationOptions.fps", "a playback frame rate");
   for (const auto& f : h264_fourccs) {
     CheckValue(f.size() == 4, "AnimationOptions.h264_fourccs", "'" + f + "'",
                "four-character codes such as avc1");

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "random.h"
 
 namespace impactdic {
@@ -93,18 +94,22 @@ void ImpactSceneSpec::Check() const {
   auto pos = [&](double v, const char* where, const char* what) {
     CheckValue(v > 0 && std::isfinite(v), where, num(v), what);
   };
-  pos(pounder_mass_kg, "test.mass_kg", "a pounder mass > 0 [kg]");
+  // The ranges of a drop test, shared with scene files and `impactdic model` (core/range.h).
+  CheckRange(pounder_mass_kg, kPounderMassRange, "test.mass_kg", "a pounder mass");
   if (std::isnan(impact_velocity_m_s)) {
     pos(drop_height_m, "test.drop_height_m",
         "a drop height > 0 [m] (or give test.impact_velocity_m_s)");
+    CheckRange(drop_height_m, kDropHeightRange, "test.drop_height_m", "a drop height");
   } else {
-    pos(impact_velocity_m_s, "test.impact_velocity_m_s", "an impact velocity > 0 [m/s]");
+    CheckRange(impact_velocity_m_s, kImpactVelocityRange, "test.impact_velocity_m_s",
+               "an impact velocity");
   }
-  pos(width_m, "test.width_m", "a pounder width D > 0 [m]");
-  pos(depth_m, "test.depth_m", "an out-of-plane depth t_z > 0 [m]");
-  pos(density_kg_m3, "test.density_kg_m3", "a dry density > 0 [kg/m^3]");
-  pos(bed_height_m, "test.bed_height_m", "a bed height > 0 [m]");
+  CheckRange(width_m, kPounderSizeRange, "test.width_m", "a pounder width D");
+  CheckRange(depth_m, kPounderSizeRange, "test.depth_m", "an out-of-plane depth t_z");
+  CheckRange(density_kg_m3, kSoilDensityRange, "test.density_kg_m3", "a dry density");
+  CheckRange(bed_height_m, kBedHeightRange, "test.bed_height_m", "a bed height");
   pos(g_m_s2, "test.g_m_s2", "a gravitational acceleration > 0 [m/s^2]");
+  CheckRange(g_m_s2, kGravityRange, "test.g_m_s2", "a gravitational acceleration");
   if (added_mass == SceneAddedMass::kGiven)
     CheckValue(added_mass_kg >= 0 && std::isfinite(added_mass_kg), "model.added_mass",
                num(added_mass_kg), "grid, eq4 or an added mass >= 0 [kg]");
@@ -118,7 +123,7 @@ void ImpactSceneSpec::Check() const {
              "an image width in [64, 8192] px");
   CheckValue(height >= 48 && height <= 8192, "camera.height", std::to_string(height),
              "an image height in [48, 8192] px");
-  pos(mm_per_px, "camera.mm_per_px", "a panel scale > 0 [mm/px]");
+  CheckRange(mm_per_px, kMmPerPxRange, "camera.mm_per_px", "a panel scale");
   CheckValue(fps >= 100 && fps <= 1e6, "camera.fps", num(fps), "a frame rate in [100, 1e6] 1/s");
   CheckValue(surface_fraction >= 0.05 && surface_fraction <= 0.8, "camera.surface_fraction",
              num(surface_fraction), "a fraction of the image height in [0.05, 0.8]");

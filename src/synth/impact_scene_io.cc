@@ -16,12 +16,16 @@
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/input_file.h"
+#include "impactdic/io/yaml.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {
 namespace {
 
 namespace fs = std::filesystem;
+
+constexpr const char* kSpecFileWhat = "a synthetic scene spec (YAML)";
 
 // Reads one map of the spec, remembering which keys were asked for so unknown keys are errors.
 class SpecSection {
@@ -114,13 +118,7 @@ std::string Num(double v) { return fmt::format("{}", v); }
 }  // namespace
 
 ImpactSceneSpec ParseImpactSceneSpec(const std::string& yaml_text, const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw Error(ErrorKind::kFileFormat, "YAML", e.msg, "a valid YAML document")
-        .WithFile(path, e.mark.line + 1, e.mark.column + 1);
-  }
+  const YAML::Node root = LoadYaml(yaml_text, path, kSpecFileWhat);
   SpecSection top(root, "", path);
   ImpactSceneSpec spec;
   {
@@ -256,7 +254,7 @@ ImpactSceneSpec ParseImpactSceneSpec(const std::string& yaml_text, const std::st
 }
 
 ImpactSceneSpec LoadImpactSceneSpec(const std::string& path) {
-  return ParseImpactSceneSpec(ReadTextFile(path), path);
+  return ParseImpactSceneSpec(ReadInputFile(path, kSpecFileWhat, kMaxTextFileBytes), path);
 }
 
 std::string ImpactSceneSpecToYaml(const ImpactSceneSpec& s) {

@@ -103,9 +103,9 @@ stages: [correlate, momentun]
 )");
   EXPECT_NE(msg.find("/data/tests/scene.yaml"), std::string::npos) << msg;
   for (const char* expected :
-       {"inputs.fps: got '-3'; expected a frame rate > 0",
-        "test.mass_kg: got 'heavy'; expected a pounder mass > 0", "test.width_m: got '0'",
-        "dic.subset_size: got '24'; expected an odd subset size >= 5",
+       {"inputs.fps: got '-3'; expected a camera frame rate in [1, 1e+07] 1/s",
+        "test.mass_kg: got 'heavy'; expected a pounder mass in [0.01, 100000] kg",
+        "test.width_m: got '0'", "dic.subset_size: got '24'; expected an odd subset size >= 5",
         "dic.interpolation: got 'bicubik'; expected one of bicubic, biquintic (did you mean "
         "'bicubic'?)",
         "dic.reference_update: got 'every:0'", "dic.roi: got a list of 3",

@@ -29,13 +29,18 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/range.h"
+
 namespace impactdic {
 
 // A checkerboard with cols x rows INNER corners (9x6 for a board of 10x7 squares).
 struct BoardSpec {
   int cols = 9;           // Inner corners along the board's X axis, >= 2.
   int rows = 6;           // Inner corners along Y, >= 2.
-  double square_mm = 25;  // Side of one square [mm], > 0.
+  double square_mm = 25;  // Side of one square [mm], in kSquareRange.
+  // Printed boards from 0.01 mm (microscope targets) to 10 m squares; beyond, the corner
+  // coordinates (float) lose their meaning and OpenCV fails with an assertion.
+  static constexpr ValueRange kSquareRange{0.01, 1e4, "mm"};
   void Check() const;
   cv::Size PatternSize() const { return {cols, rows}; }
   // Corner (i, j) at (i * square_mm, j * square_mm, 0), row-major (j outer), Z = 0.
@@ -43,8 +48,8 @@ struct BoardSpec {
 };
 
 // Parses "COLSxROWS" (e.g. "9x6", inner corners) into a board with the given square size.
-// Error(kInvalidValue, where, text, ...) for anything else, for fewer than 2 corners a side, and
-// for square_mm <= 0.
+// Error(kInvalidValue, where, text, ...) for anything else and for fewer than 2 corners a side;
+// Error naming --square for a square_mm outside BoardSpec::kSquareRange.
 BoardSpec ParseBoard(const std::string& text, double square_mm,
                      const std::string& where = "--board");
 

@@ -123,6 +123,12 @@ struct DicResult {
   std::vector<cv::Point2d> positions;
   std::vector<FrameResult> frames;
   DicSummary summary;
+  // Image files only (CorrelateFiles): the frame number of every image, the first reference
+  // included, from the file names when they are one numbered series (io FrameNumbers, e.g. 12
+  // for frame_0012.png); empty otherwise. frames[k] is image frames[k].frame.
+  std::vector<long long> frame_numbers;
+  // What the caller should know (e.g. a colour image in a grey sequence), also logged.
+  std::vector<std::string> warnings;
 };
 
 // Correlates images[1..] with images[0] as the first reference.

@@ -17,16 +17,21 @@ namespace impactdic {
 // one is correlated (Error naming the file if it is corrupt or its size or depth differs from
 // the first image's), so besides the correlator's reference (and last frame, with `auto`) at
 // most two images are in memory. If both the reference and the first deformed image are bad,
-// the reference is named.
+// the reference is named. An image whose colour layout differs from the reference's (an RGB
+// frame in a grey sequence) is converted to grey with a warning naming it (DicResult::warnings).
+// The caller checks the numbering of a listed sequence (io ListFrameSequence).
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
 
 // Writes the result by extension:
 // .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status (one row per frame and subset;
-//       frame = 1-based index of the deformed image, x,y = subset centre in the first reference,
+//       frame = the deformed image's frame number from its file name (frame_0012.png -> 12) when
+//       the names are one numbered series, else its 1-based index; x,y = subset centre in the
+//       first reference,
 //       u,v = accumulated displacement [px], x right, y down; status by name; NaN as "nan").
 // .h5:  /dic/x_px, /dic/y_px (subsets), /dic/u_px, v_px, zncc, sigma_px (frames x subsets),
 //       /dic/iterations, /dic/status (int32, frames x subsets; the attribute `codes` lists
-//       code=name), /dic/reference_frame (frames), attributes with the options.
+//       code=name), /dic/frame (1-based index of the deformed image), /dic/frame_number (as the
+//       CSV's frame column), /dic/reference_frame (frames), attributes with the options.
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
 
 }  // namespace impactdic

@@ -83,7 +83,8 @@ Error WriteError(const std::string& path, int error_number);
 // its errors (gnuplot, the video writer) is told apart from other failures.
 bool DiskFull(const std::string& path);
 
-// Reads a whole text file; Error kFileNotFound / kIo naming the file.
+// Reads a whole text file (io/input_file.h: a regular file of at most kMaxTextFileBytes); Error
+// naming the file otherwise.
 std::string ReadTextFile(const std::string& path);
 
 }  // namespace impactdic

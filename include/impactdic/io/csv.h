@@ -1,8 +1,12 @@
 // A small numeric CSV reader/writer with clear errors.
 //
-// Reading: a header row of column names, then rows of numbers separated by commas. Errors name
-// the file, line and column: malformed numbers, NaN/inf where not allowed, missing columns,
-// ragged rows, non-monotonic time columns.
+// Reading: a header row of column names, then rows of numbers separated by commas, '.' as the
+// decimal point, UTF-8 or ASCII; a UTF-8 byte order mark (Excel's "CSV UTF-8") is skipped.
+// Errors name the file, line and column: malformed numbers, NaN/inf where not allowed, missing
+// columns, ragged rows, non-monotonic time columns. Files separated by ';' or tabs are refused
+// with a message saying commas are expected (';' usually comes with decimal commas, which we do
+// not guess at), as are UTF-16 text, binary files, non-regular files (folders, /dev/zero) and
+// files above kMaxCsvFileBytes (io/input_file.h).
 //
 //   CsvReadOptions opts;
 //   opts.required_columns = {"time_s", "accel_g"};

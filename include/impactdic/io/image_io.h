@@ -9,13 +9,37 @@
 
 namespace impactdic {
 
-// Error kFileNotFound naming the file unless `path` is an existing regular file (a cheap check
-// before a long job; ReadGreyImage does it too).
+// The largest image read: 32768 px a side and 2^28 pixels (16384 x 16384; a 1920x1440 frame has
+// 2.8 million). Checked in the file header (PNG, TIFF, BMP, JPEG) before anything is decoded,
+// so a header claiming 100000 x 100000 px is refused with its size instead of allocating 10 GB.
+inline constexpr long long kMaxImageSidePx = 32768;
+inline constexpr long long kMaxImagePixels = 1LL << 28;
+
+// Error naming the file unless `path` is an existing regular file of at most kMaxImageFileBytes
+// (io/input_file.h; a cheap check before a long job, ReadGreyImage does it too).
 void CheckImageFileExists(const std::string& path);
 
-// Reads one image as single-channel 8- or 16-bit (colour images are converted to grey).
-// Error kFileNotFound when missing, kFileFormat when OpenCV cannot decode it (corrupt/truncated).
-cv::Mat ReadGreyImage(const std::string& path);
+// Reads one image as single-channel 8- or 16-bit (colour images are converted to grey; the
+// channel count of the file as decoded, 1, 3 or 4, goes to `file_channels` if given).
+// Error kFileNotFound when missing; kFileFormat for a folder or device, a header beyond the size
+// limits above, a truncated or corrupt PNG (checked chunk by chunk before decoding, so libpng
+// prints nothing), or anything else OpenCV cannot decode.
+cv::Mat ReadGreyImage(const std::string& path, int* file_channels = nullptr);
+
+// Watches the colour layout of the images of one sequence, in order: the first image sets it,
+// and Check() returns (and logs) a warning naming an image whose layout differs, e.g. an RGB
+// frame in a greyscale sequence, which would otherwise be converted to grey silently. The first
+// kListed differing images are named; "" when the layout matches.
+class SequenceColourCheck {
+ public:
+  static constexpr int kListed = 3;
+  std::string Check(const std::string& path, int file_channels);
+
+ private:
+  std::string first_path_;
+  int first_channels_ = 0;
+  int mismatches_ = 0;
+};
 
 // Writes an 8/16-bit image atomically (format from the extension).
 void WriteImage(const std::string& path, const cv::Mat& image);
@@ -29,17 +53,30 @@ bool IsCompletePng(const std::string& path);
 // sorted naturally: runs of digits by value, so unpadded "f_9.png" comes before "f_10.png".
 std::vector<std::string> ListFrames(const std::string& source);
 
+// The numbers in the names of a numbered image series (names that differ only in their last run
+// of digits, at most 9 of them: "frame_0012.png" -> 12), one per file; empty when the names are
+// not one such series.
+std::vector<long long> FrameNumbers(const std::vector<std::string>& files);
+
 // For a numbered image series (names that differ only in their last run of digits): Error
 // naming the file after a gap ("frame_0024.png to frame_0026.png: 1 frame(s) missing") unless
 // the numbers advance by a constant step. Names that are not one numbered series are not
 // checked.
 void CheckFrameNumbering(const std::vector<std::string>& files);
 
+// The frames of one sequence: ListFrames, then CheckFrameNumbering (a gap is an error). Used by
+// `run` (inputs.frames) and `correlate --frames` alike.
+std::vector<std::string> ListFrameSequence(const std::string& source);
+
 // True if `path` names a video container OpenCV should read (.mp4, .avi, .mov, .mkv).
 bool IsVideoFile(const std::string& path);
 
-// Reads all frames of a video as greyscale (up to max_frames if > 0).
-std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames = 0);
+// Reads all frames of a video as greyscale (up to max_frames if > 0). When fewer frames decode
+// than the container declares (CAP_PROP_FRAME_COUNT), the video is truncated or damaged: the
+// frames read are kept (they are the start of the recording, correctly timed) and a warning with
+// both counts is logged and stored in `warning` if given.
+std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames = 0,
+                                     std::string* warning = nullptr);
 
 // Checks that all images have the same size and depth; Error naming the first file that differs.
 void CheckSameSize(const std::vector<cv::Mat>& images, const std::vector<std::string>& names);

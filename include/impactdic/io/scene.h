@@ -21,22 +21,24 @@ namespace impactdic {
 
 struct SceneInputs {
   std::string frames;       // Folder, glob ("frames/*.png") or video file; resolved path.
-  double fps = 1600;        // Camera frame rate [1/s], > 0.
+  double fps = 1600;        // Camera frame rate [1/s], kCameraFpsRange (core/range.h).
   std::string calibration;  // Calibration YAML (calib module); empty = none (scale from mm_per_px).
-  double mm_per_px = 0;  // Scale when there is no calibration file [mm/px]; 0 = from calibration.
-  std::string sensor;    // DAQ CSV; empty = no sensor stage.
-  std::string truth;     // Optional ground-truth HDF5 (synthetic scenes) for comparison.
+  // Scale when there is no calibration file [mm/px], kMmPerPxRange; 0 = from the calibration.
+  double mm_per_px = 0;
+  std::string sensor;  // DAQ CSV; empty = no sensor stage.
+  std::string truth;   // Optional ground-truth HDF5 (synthetic scenes) for comparison.
 };
 
 struct SceneTest {
-  double mass_kg = 10;         // Pounder mass m_p [kg], > 0.
-  double drop_height_m = 0.7;  // Drop height h [m], >= 0 (used if no impact velocity).
-  std::optional<double> impact_velocity_m_s;  // v0 [m/s] > 0; overrides sqrt(2 g h).
-  double width_m = 0.15;                      // Pounder width D [m], > 0.
-  double depth_m = 0.192;                     // Out-of-plane depth t_z [m], > 0.
-  double density_kg_m3 = 1550;                // Dry density rho_d [kg/m^3], > 0.
-  double bed_height_m = 0.6;                  // Sand bed height [m], > 0.
-  double g_m_s2 = 9.81;                       // Gravitational acceleration [m/s^2], > 0.
+  // Allowed ranges: core/range.h (the same for `impactdic model` and synthetic specs).
+  double mass_kg = 10;         // Pounder mass m_p [kg], kPounderMassRange.
+  double drop_height_m = 0.7;  // Drop height h [m], kDropHeightRange (used if no impact velocity).
+  std::optional<double> impact_velocity_m_s;  // v0 [m/s], kImpactVelocityRange; overrides h.
+  double width_m = 0.15;                      // Pounder width D [m], kPounderSizeRange.
+  double depth_m = 0.192;                     // Out-of-plane depth t_z [m], kPounderSizeRange.
+  double density_kg_m3 = 1550;                // Dry density rho_d [kg/m^3], kSoilDensityRange.
+  double bed_height_m = 0.6;                  // Sand bed height [m], kBedHeightRange.
+  double g_m_s2 = 9.81;  // Gravitational acceleration [m/s^2], > 0 and in kGravityRange.
 
   // v0 = impact_velocity_m_s if given, else sqrt(2 g h).
   double ImpactVelocity() const;
@@ -71,7 +73,7 @@ struct SceneDic {
   int max_iterations = 30;       // IC-GN iteration cap, >= 1.
   double convergence_px = 1e-3;  // IC-GN stop when the update moves no subset point more [px], > 0.
   int search_radius_px = 20;     // Integer-pixel initial-guess search radius [px], >= 1.
-  int threads = 0;               // 0 = all cores.
+  int threads = 0;               // 0 = all cores, N >= 1 = at most N (core/threads.h).
   int first_frame = 0;           // First frame to correlate (index in the sequence), >= 0.
   int last_frame = -1;           // Last frame (inclusive); -1 = the last frame.
 };
@@ -102,7 +104,7 @@ struct SceneMomentum {
 };
 
 struct SceneModel {
-  std::optional<double> added_mass_kg;  // M; default: Eq. 4 from m_p, v0, A.
+  std::optional<double> added_mass_kg;  // M [kg], kAddedMassRange; default: Eq. 4 from m_p, v0, A.
   double K = 50, n = 0.2, u = 1.9, T_s = 0.002, b_per_s = 2500;  // Table 2.
   std::string solver = "auto";                                   // auto | dopri5 | stiff
   double rtol = 1e-8, atol = 1e-12;

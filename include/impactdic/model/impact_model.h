@@ -33,21 +33,22 @@ double ImpactVelocityFromHeight(double height_m, double g_m_s2 = 9.81);
 double AddedMassMaxEq4(double pounder_mass_kg, double impact_velocity_m_s, double area_m2);
 
 struct ImpactModelParameters {
-  double pounder_mass_kg = 10.0;  // m_p, > 0.
-  // v0, > 0 (m/s). Default: free fall from 0.7 m with g = 9.81.
+  // The k...Range limits are in core/range.h (shared with scene files and the CLI).
+  double pounder_mass_kg = 10.0;  // m_p (kg), kPounderMassRange.
+  // v0 (m/s), kImpactVelocityRange. Default: free fall from 0.7 m with g = 9.81.
   double impact_velocity_m_s = 3.7059411760037424;
-  double width_m = 0.15;   // D, > 0 (m).
-  double depth_m = 0.192;  // t_z, out-of-plane depth, > 0 (m); A = D t_z.
-  // M = m_add,max (kg), >= 0; NaN: Eq. 4.
+  double width_m = 0.15;   // D (m), kPounderSizeRange.
+  double depth_m = 0.192;  // t_z, out-of-plane depth (m), kPounderSizeRange; A = D t_z.
+  // M = m_add,max (kg), kAddedMassRange; NaN: Eq. 4.
   double added_mass_kg = std::numeric_limits<double>::quiet_NaN();
   double friction_K = 50.0;              // K, >= 0 (dimensionless), Table 2.
   double damping_exponent_n = 0.2;       // n, in [0, 1], Table 2.
   double damping_factor_u = 1.9;         // u, >= 1 (F_dyn resists the motion), Table 2.
   double sigmoid_delay_T_s = 0.002;      // T, >= 0 (s), Table 2.
   double sigmoid_rate_b_per_s = 2500.0;  // b, in (0, 1e12] (1/s), Table 2.
-  double density_kg_m3 = 1550.0;         // rho_d, > 0.
-  double gravity_m_s2 = 9.81;            // g, >= 0.
-  double bed_height_m = 0.6;             // Only for the "beyond the bed" warning, > 0.
+  double density_kg_m3 = 1550.0;         // rho_d, kSoilDensityRange.
+  double gravity_m_s2 = 9.81;            // g, kGravityRange (0 for exact-solution checks).
+  double bed_height_m = 0.6;             // For the "beyond the bed" warning, kBedHeightRange.
 
   // Throws Error(kInvalidValue) naming the first broken field.
   void Check() const;

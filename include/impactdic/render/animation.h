@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/range.h"
 #include "impactdic/render/velocity_field.h"
 
 namespace impactdic {
@@ -30,8 +31,10 @@ const char* ToString(VideoCodec codec);  // "auto", "h264", "mjpg"
 VideoCodec VideoCodecFromString(const std::string& text);
 
 struct AnimationOptions {
-  double fps =
-      25.0;  // playback rate of the video [frames/s], (0, 240]; 1600 fps footage is slow motion
+  // Playback rate of the video [frames/s], in kFpsRange; 1600 fps footage is slow motion. Below
+  // 0.1 (10 s per frame) is no animation, and the encoders fail near 0.001.
+  double fps = 25.0;
+  static constexpr ValueRange kFpsRange{0.1, 240, "1/s"};
   VideoCodec codec = VideoCodec::kAuto;
   // The H.264 fourccs tried in order (each 4 characters).
   std::vector<std::string> h264_fourccs = {"avc1", "H264", "X264"};

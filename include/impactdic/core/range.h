@@ -1,0 +1,60 @@
+// Allowed ranges of physical inputs, defined once and shared by the scene file, the CLI options
+// and the library's Check() methods, so that a physically absurd value (a 1e308 kg pounder) is
+// refused up front with the allowed range instead of failing somewhere deep in a stage.
+//
+//   CheckRange(mass, kPounderMassRange, "--mass", "a pounder mass");
+//   // --mass: invalid value (got 1e+308); expected a pounder mass in [0.01, 1e+05] kg
+//
+// The ranges are generous: they hold every real drop test and the extreme cases the model must
+// run (SPEC section 4: m_p = 0.1 .. 1000 kg, 18 m drops, D = 0.001 m, v0 = 0.01 m/s).
+#ifndef IMPACTDIC_CORE_RANGE_H_
+#define IMPACTDIC_CORE_RANGE_H_
+
+#include <string>
+
+namespace impactdic {
+
+// The closed interval [min, max] in `unit`; NaN and infinities are never inside.
+struct ValueRange {
+  double min = 0;
+  double max = 0;
+  const char* unit = "";
+
+  bool Contains(double value) const { return value >= min && value <= max; }
+  // "[0.01, 1e+05] kg"
+  std::string Text() const;
+};
+
+// Error(kInvalidValue, where, value, what + " in " + range.Text()) unless range.Contains(value).
+void CheckRange(double value, const ValueRange& range, const std::string& where,
+                const std::string& what);
+
+// --- A drop test (scene `test.*`, `impactdic model`, synthetic scene specs) ----------------------
+// Pounder mass m_p: the paper's 7-13 kg, the model's extremes 0.1 and 1000 kg, up to 100 t
+// (heavy tamping in the field uses 10-40 t).
+inline constexpr ValueRange kPounderMassRange{0.01, 1e5, "kg"};
+// Drop height h: 0 (impact velocity given instead) up to 100 m (field tamping: <= 40 m).
+inline constexpr ValueRange kDropHeightRange{0, 100, "m"};
+// Impact velocity v0: the model's slow extreme 0.01 m/s, up to 100 m/s (a 500 m free fall).
+inline constexpr ValueRange kImpactVelocityRange{1e-3, 100, "m/s"};
+// Pounder width D and out-of-plane depth t_z: 0.1 mm (the model's extreme is 1 mm) to 10 m.
+inline constexpr ValueRange kPounderSizeRange{1e-4, 10, "m"};
+// Dry density of the soil rho_d (sand ~1550). Wide: synthetic checks choose rho_d to give a
+// grid a round mass (tests/momentum uses ~1.2e5).
+inline constexpr ValueRange kSoilDensityRange{1, 1e6, "kg/m^3"};
+// Height of the sand bed.
+inline constexpr ValueRange kBedHeightRange{1e-3, 100, "m"};
+// Gravitational acceleration (0 only for the model's exact-solution checks).
+inline constexpr ValueRange kGravityRange{0, 100, "m/s^2"};
+// Added mass M = m_add,max (given instead of Eq. 4).
+inline constexpr ValueRange kAddedMassRange{0, 1e6, "kg"};
+
+// --- The camera (scene `inputs.*`, synthetic scene specs) ----------------------------------------
+// Recording frame rate: 1/s up to 10 million frames per second (the fastest cameras).
+inline constexpr ValueRange kCameraFpsRange{1, 1e7, "1/s"};
+// Image scale on the panel: 0.1 um to 10 m per pixel.
+inline constexpr ValueRange kMmPerPxRange{1e-4, 1e4, "mm/px"};
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_CORE_RANGE_H_
