@@ -1,10 +1,12 @@
-// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N]: the whole pipeline on one
-// scene (pipeline/pipeline.h).
+// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N] [--allow-partial]: the whole
+// pipeline on one scene (pipeline/pipeline.h). A stage that produced nothing usable makes the run
+// fail (exit 1, no output written) unless --allow-partial.
 #include <iostream>
 #include <string>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/io/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
@@ -14,6 +16,7 @@ void RegisterRunCommand(CLI::App& app) {
   struct Args {
     std::string scene, output;
     bool png_frames = false;
+    bool allow_partial = false;
     int threads = -1;
     std::string format = "text";
   };
@@ -29,6 +32,10 @@ void RegisterRunCommand(CLI::App& app) {
   cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG");
   cmd->add_option("--threads", args->threads,
                   "Correlation threads (0 = all cores; default: the scene's)");
+  cmd->add_flag("--allow-partial", args->allow_partial,
+                "Write the outputs (exit 0) even when a stage produced nothing usable (no valid "
+                "subset, no measurable t_e, a model solve that did not stop): the figures that "
+                "depend on it are null, the reasons in summary.json's failures and warnings");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
   cmd->callback([args] {
     if (args->threads < -1) {
@@ -43,9 +50,12 @@ void RegisterRunCommand(CLI::App& app) {
     options.output_folder = args->output;
     options.png_frames = args->png_frames;
     options.threads = args->threads;
+    options.allow_partial = args->allow_partial;
     const PipelineSummary summary = RunScene(scene, options);
+    if (!summary.IsUsable())
+      LogWarning("run: partial results (--allow-partial): {}", summary.FailureText());
     if (args->format == "json") {
-      std::cout << summary.figures.ToJson().Dump() << "\n";
+      std::cout << summary.ToJson().Dump() << "\n";
     } else {
       std::cout << summary.FullReport();
     }

@@ -32,24 +32,43 @@ double ImpactVelocityFromHeight(double height_m, double g_m_s2 = 9.81);
 // Eq. 4: m_add,max = 425 m_p^0.1 v0^0.2 A^1.3 (kg; m_p in kg, v0 in m/s, A in m^2).
 double AddedMassMaxEq4(double pounder_mass_kg, double impact_velocity_m_s, double area_m2);
 
-struct ImpactModelParameters {
-  double pounder_mass_kg = 10.0;  // m_p, > 0.
-  // v0, > 0 (m/s). Default: free fall from 0.7 m with g = 9.81.
-  double impact_velocity_m_s = 3.7059411760037424;
-  double width_m = 0.15;   // D, > 0 (m).
-  double depth_m = 0.192;  // t_z, out-of-plane depth, > 0 (m); A = D t_z.
-  // M = m_add,max (kg), >= 0; NaN: Eq. 4.
-  double added_mass_kg = std::numeric_limits<double>::quiet_NaN();
-  double friction_K = 50.0;              // K, >= 0 (dimensionless), Table 2.
-  double damping_exponent_n = 0.2;       // n, in [0, 1], Table 2.
-  double damping_factor_u = 1.9;         // u, >= 1 (F_dyn resists the motion), Table 2.
-  double sigmoid_delay_T_s = 0.002;      // T, >= 0 (s), Table 2.
-  double sigmoid_rate_b_per_s = 2500.0;  // b, in (0, 1e12] (1/s), Table 2.
-  double density_kg_m3 = 1550.0;         // rho_d, > 0.
-  double gravity_m_s2 = 9.81;            // g, >= 0.
-  double bed_height_m = 0.6;             // Only for the "beyond the bed" warning, > 0.
+// The physically meaningful ranges of ImpactModelParameters (Check() refuses values outside them;
+// the `model` command names its options with them). Generous for dynamic compaction (pounders of
+// up to ~200 t dropped from up to ~40 m, i.e. v0 < 30 m/s) and for the SPEC's extreme cases
+// (m_p = 0.1 kg, D = 0.001 m, b = 1e12), and small enough that no force in Eq. 9 can overflow:
+// with every parameter inside, (m_p + M) g < 1.2e12 N and k = K rho_d g A <= 1e18 N/m.
+struct ImpactModelLimits {
+  static constexpr double kMaxMassKg = 1e6;            // m_p (1000 t).
+  static constexpr double kMaxVelocityMS = 1e3;        // v0.
+  static constexpr double kMaxLengthM = 100;           // D, t_z, bed height.
+  static constexpr double kMaxAddedMassKg = 1e9;       // M when given (Eq. 4 stays < 1.1e9 kg).
+  static constexpr double kMaxFrictionK = 1e6;         // K (Table 2: 50).
+  static constexpr double kMaxDampingFactorU = 1e3;    // u (Table 2: 1.9).
+  static constexpr double kMaxDensityKgM3 = 1e5;       // rho_d (sand: ~1550).
+  static constexpr double kMaxGravityMS2 = 1e3;        // g.
+  static constexpr double kMaxSigmoidDelayS = 1e3;     // T.
+  static constexpr double kMaxSigmoidRatePerS = 1e12;  // b.
+};
 
-  // Throws Error(kInvalidValue) naming the first broken field.
+struct ImpactModelParameters {
+  double pounder_mass_kg = 10.0;  // m_p, in (0, 1e6] kg.
+  // v0, in (0, 1e3] m/s. Default: free fall from 0.7 m with g = 9.81.
+  double impact_velocity_m_s = 3.7059411760037424;
+  double width_m = 0.15;   // D, in (0, 100] m.
+  double depth_m = 0.192;  // t_z, out-of-plane depth, in (0, 100] m; A = D t_z.
+  // M = m_add,max (kg), in [0, 1e9]; NaN: Eq. 4.
+  double added_mass_kg = std::numeric_limits<double>::quiet_NaN();
+  double friction_K = 50.0;              // K, in [0, 1e6] (dimensionless), Table 2.
+  double damping_exponent_n = 0.2;       // n, in [0, 1], Table 2.
+  double damping_factor_u = 1.9;         // u, in [1, 1e3] (F_dyn resists the motion), Table 2.
+  double sigmoid_delay_T_s = 0.002;      // T, in [0, 1e3] s, Table 2.
+  double sigmoid_rate_b_per_s = 2500.0;  // b, in (0, 1e12] (1/s), Table 2.
+  double density_kg_m3 = 1550.0;         // rho_d, in (0, 1e5] kg/m^3.
+  double gravity_m_s2 = 9.81;            // g, in [0, 1e3] m/s^2.
+  double bed_height_m = 0.6;             // Only for the "beyond the bed" warning, in (0, 100] m.
+
+  // Throws Error(kInvalidValue) naming the first broken field and its allowed range
+  // (ImpactModelLimits).
   void Check() const;
   double ContactArea_m2() const { return width_m * depth_m; }
   double AddedMassMax_kg() const;  // M: the given value or Eq. 4.
@@ -91,7 +110,12 @@ ImpactSolver ImpactSolverFromString(const std::string& name);
 // How a run estimates its own error (ImpactSummary::error_estimate).
 enum class ErrorEstimator {
   // A companion run at rtol / 10, atol / 10: error ~ |Q(tol) - Q(tol / 10)| / 0.9 (tolerance
-  // proportionality; a Richardson-type estimate of the global error). Costs one more run.
+  // proportionality; a Richardson-type estimate of the global error). Costs one more run. When
+  // atol exceeds rtol times the solution's smallest scale (crater depth, v0, t_end), atol alone
+  // governs the step control and tightening it tenfold may change nothing (atol = 1e300: both
+  // runs take the same steps, and the difference is 0 whatever the true error): the companion's
+  // atol is then rtol / 10 times that scale, so it is really ten times tighter, and a warning
+  // says so.
   kCompanion,
   // The local error estimates summed over the steps, weighted by the sensitivity of the result
   // (a velocity error at t moves the crater depth by ~ (t_end - t) times it). Free, but it bounds
@@ -166,6 +190,11 @@ struct ImpactSummary {
   double t1_s = std::numeric_limits<double>::quiet_NaN();            // T + 4 / b
   double v_t1_m_s = std::numeric_limits<double>::quiet_NaN();
   bool stopped = false;  // v reached 0 before t_max.
+  // Why the solve ended: "v = 0 reached" when stopped, else what stopped it (t_max reached,
+  // step size underflow, step budget, a non-finite right-hand side ...). Without a stop, t_end_s,
+  // the crater depth, the plateau deceleration and the momentum ratio are NaN.
+  std::string stop_reason;
+  double t_reached_s = std::numeric_limits<double>::quiet_NaN();  // Last time covered.
   // "dopri5", "rodas3", "auto(dopri5)", "auto(dopri5->rodas3)", "ode45(dopri5)".
   std::string solver;
   std::string solver_reason;
@@ -176,7 +205,9 @@ struct ImpactSummary {
   // error estimates, weighted by the sensitivity of the result to them (a velocity error at t
   // shifts the crater depth by ~ (t_end - t) times it), summed over the steps.
   // The estimate of `error_estimator` (see ErrorEstimator); both are always filled in when the
-  // companion run was made.
+  // companion run was made. Never 0 unless the true error is: at least the round-off of the
+  // steps (2 eps sqrt(steps)); +inf when the tolerance could not be met (step size underflow,
+  // step budget); NaN when the solve never started.
   double error_estimate = std::numeric_limits<double>::quiet_NaN();
   double error_estimate_local = std::numeric_limits<double>::quiet_NaN();
   double error_estimate_companion = std::numeric_limits<double>::quiet_NaN();
