@@ -218,11 +218,12 @@ void GridMomentum(const KinematicsResult& kin, const MomentumOptions& options, M
   }
   s.unmeasured_frames = unmeasured.size();
   if (!unmeasured.empty()) {
-    s.warnings.push_back(
-        fmt::format("{} of {} frames have fewer than {} of the {} momentum-grid subsets valid "
-                    "(momentum.min_valid_fraction = {}): p_gran is NaN there (frames {})",
-                    unmeasured.size(), nf, min_valid, grid, options.min_valid_fraction,
-                    IndexRanges(unmeasured)));
+    s.warnings.push_back(fmt::format(
+        "{} of {} frames have fewer than {} of the {} momentum-grid subsets valid "
+        "(momentum.min_valid_fraction = {}): p_gran is NaN there (frames {}, counted from "
+        "the first analysed frame)",
+        unmeasured.size(), nf, min_valid, grid, options.min_valid_fraction,
+        IndexRanges(unmeasured)));
   }
 }
 
