@@ -68,11 +68,11 @@ struct MomentumOptions {
   double velocity_match_tolerance = 0.05;  // Of v_p,max, in (0, 1].
   double sand_accel_tolerance = 0.05;      // Of the maximum soil acceleration, in [0, 1).
   // Per frame, the fraction of the grid's subsets that must be valid for p_gran to be measured
-  // there (else NaN), in (0, 1]; scene key momentum.min_valid_fraction. p_gran stands for the
-  // whole grid's mass through the mean over its valid subsets; the soil under the pounder's centre
-  // moves faster than under its edges (the punching cone), so a mean over a minority of the grid,
-  // which fails where the soil shears most, is biased. 0.5: at least half of the grid (6 of the
-  // default 6 x 2) -- see docs/analysis.md for what dropping subsets does to p_gran on the sample.
+  // there (else NaN), in (0, 1]; scene key momentum.min_valid_fraction (this is its default).
+  // p_gran stands for the whole grid's mass through the mean over its valid subsets, and subsets
+  // fail where the soil shears hardest or is covered, not at random: 0.5 asks for a majority of
+  // the grid (6 of the default 6 x 2). docs/analysis.md has what dropping subsets does on the
+  // sample.
   double min_valid_fraction = 0.5;
   bool fit_sigmoid = true;
   SigmoidFitOptions sigmoid;
