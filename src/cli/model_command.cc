@@ -60,6 +60,31 @@ void RequireFinite(double v, bool ok, const char* option, const char* what) {
   if (!std::isfinite(v) || !ok) throw Error(ErrorKind::kInvalidValue, option, Num(v), what);
 }
 
+// ImpactModelParameters::Check() (the allowed ranges are defined there), its errors naming the
+// command-line option instead of the library's field.
+void CheckNamingOptions(const ImpactModelParameters& p, const ModelArgs& a) {
+  try {
+    p.Check();
+  } catch (const Error& e) {
+    static const std::vector<std::pair<std::string, std::string>> kOptions = {
+        {"pounder_mass_kg", "--mass"},   {"width_m", "--width"},
+        {"depth_m", "--depth"},          {"added_mass_kg", "--added-mass"},
+        {"friction_K", "--K"},           {"damping_exponent_n", "--n"},
+        {"damping_factor_u", "--u"},     {"sigmoid_delay_T_s", "--T"},
+        {"sigmoid_rate_b_per_s", "--b"}, {"density_kg_m3", "--rho"},
+        {"gravity_m_s2", "--g"},         {"bed_height_m", "--bed-height"}};
+    std::string option = e.where();
+    for (const auto& [field, name] : kOptions)
+      if (e.where() == field) option = name;
+    if (e.where() == "impact_velocity_m_s")
+      option =
+          a.height ? fmt::format("--height (v0 = sqrt(2 g h) = {} m/s)", e.found()) : "--velocity";
+    throw Error(e.kind(), option,
+                a.height && e.where() == "impact_velocity_m_s" ? Num(*a.height) : e.found(),
+                e.expected());
+  }
+}
+
 // Validates everything before any work; returns the parameters (mass etc. only for a single run).
 ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
   if (a.work_precision && a.table1)
@@ -124,7 +149,7 @@ ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
   p.bed_height_m = a.bed_height;
   if (a.velocity) p.impact_velocity_m_s = *a.velocity;
   if (a.height) p.impact_velocity_m_s = ImpactVelocityFromHeight(*a.height, a.g);
-  p.Check();
+  CheckNamingOptions(p, a);
   return p;
 }
 
@@ -161,7 +186,9 @@ void RunSingle(const ModelArgs& a) {
   const ImpactRun run = SimulateImpact(p, o);
   const ImpactSummary& s = run.summary;
   for (const std::string& w : s.warnings) LogWarning("model: {}", w);
-  if (!a.output.empty()) {
+  // A solve that did not reach the end of motion writes no series (nothing that looks complete)
+  // but still prints its summary, then fails (below).
+  if (!a.output.empty() && s.IsUsable()) {
     WriteImpactSeries(a.output, p, run);
     LogInfo("model: wrote the time series to {}", a.output);
   }
@@ -189,12 +216,21 @@ void RunSingle(const ModelArgs& a) {
         .Add("impact_velocity_m_s", p.impact_velocity_m_s)
         .Add("rtol", o.EffectiveRtol())
         .Add("atol", o.EffectiveAtol())
-        .Add("stopped", s.stopped);
+        .Add("stopped", s.stopped)
+        .Add("stop_reason", s.stop_reason)
+        .Add("t_reached_s", s.t_reached_s);
     std::cout << j.Dump() << "\n";
   } else {
     std::cout << fmt::format("impact model: m_p {} kg, v0 {:.6g} m/s, D {} m, t_z {} m\n",
                              p.pounder_mass_kg, p.impact_velocity_m_s, p.width_m, p.depth_m);
     std::cout << s.FullReport();
+  }
+  std::cout.flush();
+  if (!s.IsUsable()) {
+    throw Error(
+        ErrorKind::kNumerical,
+        fmt::format("model: the solve did not reach the end of motion (v = 0): {}{}", s.stop_reason,
+                    a.output.empty() ? "" : "; the series " + a.output + " was not written"));
   }
 }
 

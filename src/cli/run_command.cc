@@ -1,11 +1,13 @@
-// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N]: the whole pipeline on one
-// scene (pipeline/pipeline.h).
+// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N] [--allow-partial]: the whole
+// pipeline on one scene (pipeline/pipeline.h). A stage that produced nothing usable makes the run
+// fail (exit 1, no output written) unless --allow-partial.
 #include <iostream>
 #include <optional>
 #include <string>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/io/scene.h"
 #include "impactdic/pipeline/pipeline.h"
@@ -17,6 +19,7 @@ void RegisterRunCommand(CLI::App& app) {
     std::string scene, output;
     bool png_frames = false;
     std::optional<int> threads;  // Unset: the scene's dic.threads.
+    bool allow_partial = false;
     std::string format = "text";
   };
   auto args = std::make_shared<Args>();
@@ -32,6 +35,10 @@ void RegisterRunCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads,
                   std::string("Correlation threads: ") + kThreadCountExpected +
                       " (default: the scene's dic.threads)");
+  cmd->add_flag("--allow-partial", args->allow_partial,
+                "Write the outputs (exit 0) even when a stage produced nothing usable (no valid "
+                "subset, no measurable t_e, a model solve that did not stop): the figures that "
+                "depend on it are null, the reasons in summary.json's failures and warnings");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
   cmd->callback([args] {
     if (args->threads) CheckThreadCount(*args->threads, "--threads");
@@ -43,9 +50,12 @@ void RegisterRunCommand(CLI::App& app) {
     options.output_folder = args->output;
     options.png_frames = args->png_frames;
     options.threads = args->threads.value_or(-1);
+    options.allow_partial = args->allow_partial;
     const PipelineSummary summary = RunScene(scene, options);
+    if (!summary.IsUsable())
+      LogWarning("run: partial results (--allow-partial): {}", summary.FailureText());
     if (args->format == "json") {
-      std::cout << summary.figures.ToJson().Dump() << "\n";
+      std::cout << summary.ToJson().Dump() << "\n";
     } else {
       std::cout << summary.FullReport();
     }

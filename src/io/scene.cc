@@ -462,6 +462,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
       mom.Problem("rect_mm", "expected x0 < x1 and y0 < y1");
     }
   }
+  mom.OptionalNumber(
+      "min_valid_fraction", &scene.momentum.min_valid_fraction,
+      [](double v) { return v > 0 && v <= 1; }, "a fraction of the grid's subsets in (0, 1]");
   mom.Finish();
 
   Section mod = top.Sub("model");

@@ -18,6 +18,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string Num(double v) { return fmt::format("{:.6g}", v); }
 
+// The relative round-off accumulated over `steps` steps: 2 eps sqrt(steps) (a random walk of one
+// rounding per step and component), the least error a result can honestly claim.
+double RoundOffFloor(long steps) {
+  return 2 * std::numeric_limits<double>::epsilon() * std::sqrt(static_cast<double>(steps) + 1);
+}
+
 // Names the field and the rule when `ok` is false.
 void Require(bool ok, const char* field, double value, const char* allowed) {
   CheckValue(ok, field, Num(value), allowed);
@@ -44,14 +50,12 @@ void ImpactModelParameters::Check() const {
   if (!std::isnan(added_mass_kg))
     CheckRange(added_mass_kg, kAddedMassRange, "added_mass_kg",
                "an added mass M (or unset: Eq. 4)");
-  Require(std::isfinite(friction_K) && friction_K >= 0, "friction_K", friction_K,
-          "a finite K >= 0");
+  CheckRange(friction_K, kFrictionKRange, "friction_K", "a friction coefficient K");
   Require(std::isfinite(damping_exponent_n) && damping_exponent_n >= 0 && damping_exponent_n <= 1,
           "damping_exponent_n", damping_exponent_n, "n in [0, 1]");
-  Require(std::isfinite(damping_factor_u) && damping_factor_u >= 1, "damping_factor_u",
-          damping_factor_u, "u >= 1 (F_dyn must resist the motion)");
-  Require(std::isfinite(sigmoid_delay_T_s) && sigmoid_delay_T_s >= 0, "sigmoid_delay_T_s",
-          sigmoid_delay_T_s, "T >= 0 s");
+  CheckRange(damping_factor_u, kDampingFactorURange, "damping_factor_u",
+             "a damping factor u (>= 1: F_dyn must resist the motion)");
+  CheckRange(sigmoid_delay_T_s, kSigmoidDelayRange, "sigmoid_delay_T_s", "a sigmoid delay T");
   Require(std::isfinite(sigmoid_rate_b_per_s) && sigmoid_rate_b_per_s > 0 &&
               sigmoid_rate_b_per_s <= 1e12,
           "sigmoid_rate_b_per_s", sigmoid_rate_b_per_s, "b in (0, 1e12] 1/s");
@@ -400,26 +404,34 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   bool do_end_phase = false;
   switch (r1.status) {
     case OdeStatus::kReachedEnd:
-      sum.warnings.push_back(
+      sum.stop_reason =
           fmt::format("v did not reach 0 by t_max = {} s (v = {} m/s, z = {} m): no crater depth",
-                      Num(options.t_max_s), Num(r1.y[1]), Num(r1.y[0])));
+                      Num(options.t_max_s), Num(r1.y[1]), Num(r1.y[0]));
+      sum.warnings.push_back(sum.stop_reason);
       break;
     case OdeStatus::kStoppedByCallback: do_end_phase = true; break;
     case OdeStatus::kLeftDomain:
       if (r1.f[1] < 0.0) {
         do_end_phase = true;
       } else {
-        sum.warnings.push_back(
-            fmt::format("a step would have made v <= 0 at t = {} s while dv/dt >= 0; stopped there",
-                        Num(r1.x)));
+        sum.stop_reason = fmt::format(
+            "a step would have made v <= 0 at t = {} s while dv/dt >= 0; stopped there", Num(r1.x));
+        sum.warnings.push_back(sum.stop_reason);
       }
       break;
     case OdeStatus::kStepSizeUnderflow:
     case OdeStatus::kMaxSteps:
       tolerance_trouble = true;
-      sum.warnings.push_back(fmt::format("tolerance not met: {} at t = {} s in the time phase",
-                                         ToString(r1.status), Num(r1.x)));
+      sum.stop_reason = fmt::format("tolerance not met: {} at t = {} s in the time phase",
+                                    ToString(r1.status), Num(r1.x));
+      sum.warnings.push_back(sum.stop_reason);
       if (r1.f[1] < 0.0 && r1.y[1] > 0.0) do_end_phase = true;
+      break;
+    case OdeStatus::kNonFiniteRhs:
+      sum.stop_reason = fmt::format(
+          "dv/dt is not finite at t = 0 (z = 0, v = {} m/s): the parameters overflow Eq. 9",
+          Num(r1.y[1]));
+      sum.warnings.push_back(sum.stop_reason);
       break;
   }
 
@@ -529,14 +541,18 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
       sol.v_end_m_s = 0.0;
     } else {
       tolerance_trouble = true;
-      sum.warnings.push_back(fmt::format(
+      sum.stop_reason = fmt::format(
           "tolerance not met: {} in the end phase at v = {} m/s (t = {} s); v = 0 not reached",
-          ToString(r2.status), Num(sol.v_end_m_s), Num(r2.y[0])));
+          ToString(r2.status), Num(sol.v_end_m_s), Num(r2.y[0]));
+      sum.warnings.push_back(sum.stop_reason);
     }
   }
 
   // ---- Summary.
-  sum.t_end_s = sol.t_end_s;
+  if (sum.stopped) sum.stop_reason = "v = 0 reached";
+  if (sum.stop_reason.empty()) sum.stop_reason = "v = 0 not reached";
+  sum.t_reached_s = sol.t_end_s;
+  sum.t_end_s = sum.stopped ? sol.t_end_s : kNaN;
   const double g_unit = g > 0 ? g : 9.81;
   if (sum.stopped) {
     sum.crater_depth_m = sol.z_end_m;
@@ -559,7 +575,8 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
     }
     const double zref = std::abs(sol.z_end_m), tref = std::abs(t_end);
     sum.error_estimate_local =
-        std::max(zref > 0 ? ez / zref : 0.0, tref > 0 && sum.stopped ? et / tref : 0.0);
+        std::max({zref > 0 ? ez / zref : 0.0, tref > 0 && sum.stopped ? et / tref : 0.0,
+                  RoundOffFloor(sum.steps)});
     sum.error_estimate = sum.error_estimate_local;
     sum.error_estimator = "local";
   }
@@ -567,10 +584,15 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   const PeakResult peak = FindPeak(p, M, sol);
   sum.peak_deceleration_g = peak.value / g_unit;
   sum.t_peak_s = peak.t;
-  if (std::isnan(peak.value))
+  if (std::isnan(peak.value) && !sol.time_steps.empty()) {
     sum.warnings.push_back(
-        "no distinct peak: -dv/dt has no interior local maximum on (0, t_end) (the pounder is "
-        "still accelerating during the peak stage); peak deceleration is NaN");
+        sum.stopped
+            ? "no distinct peak: -dv/dt has no interior local maximum on (0, t_end) (the pounder "
+              "is still accelerating during the peak stage); peak deceleration is NaN"
+            : fmt::format("no distinct peak: -dv/dt has no interior local maximum on the part "
+                          "solved, (0, {} s); peak deceleration is NaN",
+                          Num(sol.t_end_s)));
+  }
   // Plateau and momentum ratio at t1 = T + 4 / b.
   if (sum.stopped && t1 < sol.t_end_s) {
     ImpactState s1;
@@ -644,6 +666,28 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
 
 }  // namespace
 
+namespace {
+
+// The companion run's atol (ErrorEstimator::kCompanion): atol / 10, but at most rtol / 10 times
+// the solution's smallest scale (crater depth or depth reached, v0, t_end), so that the companion
+// is ten times tighter even where atol alone governed the primary run's steps (then a warning).
+double CompanionAtol(const ImpactModelParameters& p, const ImpactSolverOptions& options,
+                     const ImpactRun& primary, std::vector<std::string>* warnings) {
+  const double rtol = options.EffectiveRtol(), atol = options.EffectiveAtol();
+  double scale = p.impact_velocity_m_s;
+  for (double x : {std::abs(primary.solution.z_end_m), primary.solution.t_end_s})
+    if (x > 0 && std::isfinite(x)) scale = std::min(scale, x);
+  if (atol <= rtol * scale) return atol / 10.0;
+  warnings->push_back(fmt::format(
+      "atol {} exceeds rtol x the solution's smallest scale ({} x {} = {}): atol governs the step "
+      "control, so the error estimate's companion run uses atol {} (rtol / 10 x that scale) "
+      "instead of atol / 10",
+      Num(atol), Num(rtol), Num(scale), Num(rtol * scale), Num(rtol * scale / 10.0)));
+  return rtol * scale / 10.0;
+}
+
+}  // namespace
+
 ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolverOptions& options) {
   params.Check();
   options.Check();
@@ -651,10 +695,13 @@ ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolver
   ImpactRun run = SimulateOnce(params, options);
   ImpactSummary& sum = run.summary;
   const double rtol = options.EffectiveRtol();
-  if (options.error_estimator == ErrorEstimator::kCompanion) {
+  if (sum.steps == 0) {
+    // Nothing was integrated (e.g. a non-finite right-hand side at the start): no estimate.
+    sum.error_estimate = sum.error_estimate_local = kNaN;
+  } else if (options.error_estimator == ErrorEstimator::kCompanion) {
     ImpactSolverOptions tighter = options;
     tighter.rtol = rtol / 10.0;
-    tighter.atol = options.EffectiveAtol() / 10.0;
+    tighter.atol = CompanionAtol(params, options, run, &sum.warnings);
     const ImpactRun companion = SimulateOnce(params, tighter);
     sum.companion_rhs_evals = companion.summary.rhs_evals;
     auto rel = [](double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-300); };
@@ -667,8 +714,9 @@ ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolver
           rel(run.solution.z_end_m, companion.solution.z_end_m),
           rel(run.solution.v_end_m_s, companion.solution.v_end_m_s) * (sum.stopped ? 0.0 : 1.0));
     }
-    // Under tolerance proportionality err(tol) ~ C tol, so Q(tol) - Q(tol/10) ~ 0.9 err(tol).
-    sum.error_estimate_companion = diff / 0.9;
+    // Under tolerance proportionality err(tol) ~ C tol, so Q(tol) - Q(tol/10) ~ 0.9 err(tol);
+    // never below the round-off of the steps (the runs can agree to the last bit).
+    sum.error_estimate_companion = std::max(diff / 0.9, RoundOffFloor(sum.steps));
     if (std::isfinite(sum.error_estimate))  // not already infinite (tolerance trouble)
       sum.error_estimate = sum.error_estimate_companion;
     sum.error_estimator = "companion";
@@ -698,6 +746,9 @@ std::string ImpactSummary::BriefReport() const {
 
 std::string ImpactSummary::FullReport() const {
   std::string out;
+  if (!stopped)
+    out += fmt::format("NOT STOPPED            {} (reached t = {:.10g} s)\n", stop_reason,
+                       t_reached_s);
   out += fmt::format("t_end                  {:.10g} s\n", t_end_s);
   out += fmt::format("crater depth           {:.10g} m\n", crater_depth_m);
   out += fmt::format("relative penetration   {:.10g}\n", relative_penetration);

@@ -157,6 +157,10 @@ OdeResult Integrator::Run(double x0, const Vec2& y0, double x_end) {
   result_.x = x;
   result_.y = y;
   result_.f = f;
+  if (!Finite(f) || !Finite(y)) {
+    result_.status = OdeStatus::kNonFiniteRhs;
+    return result_;
+  }
   if (x == x_end) return result_;
 
   const double order = method == OdeMethod::kRodas3 ? 3.0 : 5.0;
@@ -457,6 +461,7 @@ const char* ToString(OdeStatus status) {
     case OdeStatus::kLeftDomain: return "left domain";
     case OdeStatus::kStepSizeUnderflow: return "step size underflow";
     case OdeStatus::kMaxSteps: return "maximum number of steps";
+    case OdeStatus::kNonFiniteRhs: return "non-finite right-hand side at the start";
   }
   return "?";
 }

@@ -56,6 +56,8 @@ void MomentumOptions::Check() const {
              "in (0, 1]");
   CheckValue(sand_accel_tolerance >= 0 && sand_accel_tolerance < 1, "momentum.sand_accel_tolerance",
              fmt::format("{}", sand_accel_tolerance), "in [0, 1)");
+  CheckValue(min_valid_fraction > 0 && min_valid_fraction <= 1, "momentum.min_valid_fraction",
+             fmt::format("{}", min_valid_fraction), "a fraction of the grid's subsets in (0, 1]");
   sigmoid.Check();
 }
 
@@ -171,11 +173,186 @@ MomentumGrid SelectMomentumGrid(const KinematicsResult& kin, const MomentumOptio
   return grid;
 }
 
+namespace {
+
+// "3-5, 9, 12-20" for sorted frame indices.
+std::string IndexRanges(const std::vector<std::size_t>& sorted) {
+  std::string out;
+  for (std::size_t i = 0; i < sorted.size();) {
+    std::size_t j = i;
+    while (j + 1 < sorted.size() && sorted[j + 1] == sorted[j] + 1) ++j;
+    out += (out.empty() ? "" : ", ") +
+           (j == i ? fmt::format("{}", sorted[i]) : fmt::format("{}-{}", sorted[i], sorted[j]));
+    i = j + 1;
+  }
+  return out;
+}
+
+// The grid means per frame (v_sand, a_sand, valid counts) and the momenta. A frame with fewer
+// valid grid subsets than options.min_valid_fraction asks for is unmeasured: v_sand, a_sand,
+// p_gran and p_tot are NaN there (a warning names them).
+void GridMomentum(const KinematicsResult& kin, const MomentumOptions& options, MomentumResult* r) {
+  MomentumSummary& s = r->summary;
+  const std::size_t nf = kin.frames, ns = kin.subsets, grid = s.grid.subset_ids.size();
+  const std::size_t min_valid = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::ceil(options.min_valid_fraction * grid - 1e-9)));
+  const double mp = options.pounder_mass_kg, ms = s.grid.mass_kg;
+  r->v_sand_m_s.resize(nf);
+  r->a_sand_m_s2.resize(nf);
+  r->valid_subsets.resize(nf);
+  r->p_pounder_kg_m_s.resize(nf);
+  r->p_gran_kg_m_s.resize(nf);
+  r->p_total_kg_m_s.resize(nf);
+  std::vector<std::size_t> unmeasured;
+  for (std::size_t k = 0; k < nf; ++k) {
+    std::size_t count = 0, count_a = 0;
+    const double v = 1e-3 * MeanOverSubsets(kin.vel_y_mm_s, ns, k, s.grid.subset_ids, &count);
+    const double a = 1e-3 * MeanOverSubsets(kin.acc_y_mm_s2, ns, k, s.grid.subset_ids, &count_a);
+    r->valid_subsets[k] = static_cast<double>(count);
+    r->v_sand_m_s[k] = count >= min_valid ? v : kNaN;
+    r->a_sand_m_s2[k] = count >= min_valid && count_a >= min_valid ? a : kNaN;
+    if (count < min_valid) unmeasured.push_back(k);
+    r->p_pounder_kg_m_s[k] = mp * r->v_pounder_m_s[k];
+    r->p_gran_kg_m_s[k] = ms * r->v_sand_m_s[k];
+    r->p_total_kg_m_s[k] = r->p_pounder_kg_m_s[k] + r->p_gran_kg_m_s[k];
+  }
+  s.unmeasured_frames = unmeasured.size();
+  if (!unmeasured.empty()) {
+    s.warnings.push_back(fmt::format(
+        "{} of {} frames have fewer than {} of the {} momentum-grid subsets valid "
+        "(momentum.min_valid_fraction = {}): p_gran is NaN there (frames {}, counted from "
+        "the first analysed frame)",
+        unmeasured.size(), nf, min_valid, grid, options.min_valid_fraction,
+        IndexRanges(unmeasured)));
+  }
+}
+
+// The frame of t_e in [ki, kend] (file comment; *criteria_met: both criteria, not the fallback),
+// or none (returns false, *problem says why).
+bool FindEndOfPeakStage(const MomentumResult& r, std::size_t ki, std::size_t kend,
+                        const MomentumOptions& options, std::size_t* ke_out, bool* criteria_met,
+                        std::string* problem) {
+  double a_max = 0;
+  bool any_measured = false;
+  for (std::size_t k = ki; k <= kend; ++k) {
+    if (std::isfinite(r.a_sand_m_s2[k])) a_max = std::max(a_max, r.a_sand_m_s2[k]);
+    any_measured = any_measured || std::isfinite(r.v_sand_m_s[k]);
+  }
+  if (!any_measured) {
+    *problem = fmt::format(
+        "no frame between the impact and the stop (frames {}-{}) has a measured p_gran (at least "
+        "momentum.min_valid_fraction = {} of the grid's subsets valid)",
+        ki, kend, options.min_valid_fraction);
+    return false;
+  }
+  const double tol_a = options.sand_accel_tolerance * a_max;
+  const double tol_v = options.velocity_match_tolerance * r.summary.v_p_max_m_s;
+  std::vector<bool> no_more_accel(kend + 2, true);
+  for (std::size_t k = kend + 1; k-- > ki;)
+    no_more_accel[k] = no_more_accel[k + 1] && !(r.a_sand_m_s2[k] > tol_a);
+  std::size_t ke = kend + 1;
+  for (std::size_t k = ki; k <= kend && ke > kend; ++k) {
+    if (no_more_accel[k] && std::isfinite(r.v_sand_m_s[k]) &&
+        std::abs(r.v_pounder_m_s[k] - r.v_sand_m_s[k]) <= tol_v)
+      ke = k;
+  }
+  *criteria_met = ke <= kend;
+  if (ke > kend) {
+    ke = ki;
+    for (std::size_t k = ki; k <= kend; ++k)
+      if (std::isfinite(r.v_sand_m_s[k]) && !(r.v_sand_m_s[k] <= r.v_sand_m_s[ke])) ke = k;
+  }
+  std::vector<std::size_t> gaps;
+  for (std::size_t k = ki; k <= ke; ++k)
+    if (!std::isfinite(r.v_sand_m_s[k])) gaps.push_back(k);
+  if (!gaps.empty()) {
+    *problem = fmt::format(
+        "frames {} between the impact (frame {}) and the candidate t_e (frame {}) have no measured "
+        "p_gran (fewer than momentum.min_valid_fraction = {} of the grid's subsets valid): t_e, "
+        "the first frame meeting its criteria, may lie among them",
+        IndexRanges(gaps), ki, ke, options.min_valid_fraction);
+    return false;
+  }
+  *ke_out = ke;
+  return true;
+}
+
+// Sub-frame t_e. Velocities at the frames are central differences, which smear the end of the
+// peak stage over +-1 frame, while m_add(t) changes fast there; displacements are not smeared.
+// The gap D(t) = z_p(t) - w_sand(t) (pounder penetration minus the grid's mean displacement)
+// grows while v_p > v_sand and is constant once they move together; its growth rate
+// v_p - v_sand closes about linearly, so D_e - D(t) ~ c (t_e - t)^2 just before t_e. From the
+// two frames before ke: sqrt(D_e - D) is linear in t and its zero is t_e (kept in
+// [t_{ke-1}, t_ke]). Returns p_tot at t_e (interpolated).
+double RefineEndOfPeakStage(const KinematicsResult& kin, const SensorResult& sensor,
+                            const MomentumResult& r, std::size_t ki, std::size_t ke,
+                            MomentumSummary* s) {
+  const std::vector<double>& t = sensor.time_s;
+  const std::vector<double>& frame_time_s = r.frame_time_s;
+  const std::size_t nf = kin.frames, ns = kin.subsets;
+  double p_total_te = r.p_total_kg_m_s[ke];
+  if (s->t_end_found && ke >= ki + 2 && sensor.penetration_m.size() == t.size() &&
+      kin.disp_y_mm.size() == nf * ns) {
+    auto gap = [&](std::size_t k) {
+      const double w = 1e-3 * MeanOverSubsets(kin.disp_y_mm, ns, k, s->grid.subset_ids);
+      const double z =
+          SampleSeries(t, sensor.penetration_m, {frame_time_s[k]}, "pounder penetration")[0];
+      return z - w;
+    };
+    const double d_e = gap(ke), d1 = gap(ke - 1), d2 = gap(ke - 2);
+    const double s1 = std::sqrt(std::max(d_e - d1, 0.0)), s2 = std::sqrt(std::max(d_e - d2, 0.0));
+    if (std::isfinite(s1) && std::isfinite(s2) && s2 > s1 && s1 > 0) {
+      const double t1 = frame_time_s[ke - 1], t2 = frame_time_s[ke - 2];
+      const double t_zero = t1 + s1 * (t1 - t2) / (s2 - s1);
+      s->t_end_peak_daq_s = std::clamp(t_zero, t1, frame_time_s[ke]);
+      const double w = (s->t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
+      p_total_te = r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
+    }
+  }
+  return p_total_te;
+}
+
+// Added mass at the DAQ rate from the impact to t_e, and the Eq. 5 fit.
+void AddedMassAndFit(const SensorResult& sensor, const MomentumOptions& options,
+                     MomentumResult* r) {
+  MomentumSummary& s = r->summary;
+  const SensorSummary& ss = sensor.summary;
+  const std::vector<double>& t = sensor.time_s;
+  const std::vector<double>& v = sensor.velocity_m_s;
+  const std::size_t n = t.size();
+  const double mp = options.pounder_mass_kg;
+  for (std::size_t i = std::min(ss.impact_index, n - 1); i < n && t[i] <= s.t_end_peak_daq_s; ++i) {
+    if (v[i] <= 0) continue;
+    r->added_mass_time_after_impact_s.push_back(t[i] - ss.impact_time_s);
+    r->added_mass_daq_kg.push_back(s.p_max_kg_m_s / v[i] - mp);
+  }
+  if (!options.fit_sigmoid) return;
+  std::size_t stride = 1;
+  if (ss.sample_rate_hz > 0 && ss.cutoff_hz > 0)
+    stride = std::max<std::size_t>(
+        1, static_cast<std::size_t>(std::lround(ss.sample_rate_hz / (2 * ss.cutoff_hz))));
+  if (r->added_mass_daq_kg.size() < 6 * stride) stride = 1;
+  std::vector<double> ft, fm;
+  for (std::size_t i = 0; i < r->added_mass_daq_kg.size(); i += stride) {
+    ft.push_back(r->added_mass_time_after_impact_s[i]);
+    fm.push_back(r->added_mass_daq_kg[i]);
+  }
+  try {
+    s.sigmoid = FitSigmoid(ft, fm, options.sigmoid);
+    s.sigmoid_fitted = true;
+    if (!s.sigmoid.converged) s.warnings.push_back("sigmoid fit: " + s.sigmoid.message);
+  } catch (const Error& e) {
+    s.warnings.push_back(std::string("sigmoid fit skipped: ") + e.what());
+  }
+}
+
+}  // namespace
+
 MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
                                const SensorResult& sensor, const MomentumOptions& options) {
   WallTimer timer;
   options.Check();
-  const std::size_t nf = kin.frames, ns = kin.subsets;
+  const std::size_t nf = kin.frames;
   CheckValue(frame_time_s.size() == nf, "frame times", fmt::format("{}", frame_time_s.size()),
              fmt::format("one per frame ({})", nf));
   const SensorSummary& ss = sensor.summary;
@@ -184,35 +361,13 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
   MomentumResult r;
   MomentumSummary& s = r.summary;
   s.grid = SelectMomentumGrid(kin, options);
-  const double mp = options.pounder_mass_kg, ms = s.grid.mass_kg;
+  const double mp = options.pounder_mass_kg;
 
   r.frame_time_s = frame_time_s;
   r.v_pounder_m_s = SampleSeries(sensor.time_s, sensor.velocity_m_s, frame_time_s,
                                  "pounder velocity at the frames");
-  r.v_sand_m_s.resize(nf);
-  r.a_sand_m_s2.resize(nf);
-  r.valid_subsets.resize(nf);
-  r.p_pounder_kg_m_s.resize(nf);
-  r.p_gran_kg_m_s.resize(nf);
-  r.p_total_kg_m_s.resize(nf);
   r.added_mass_kg.assign(nf, kNaN);
-  std::size_t empty_frames = 0;
-  for (std::size_t k = 0; k < nf; ++k) {
-    std::size_t count = 0;
-    r.v_sand_m_s[k] = 1e-3 * MeanOverSubsets(kin.vel_y_mm_s, ns, k, s.grid.subset_ids, &count);
-    r.a_sand_m_s2[k] = 1e-3 * MeanOverSubsets(kin.acc_y_mm_s2, ns, k, s.grid.subset_ids);
-    r.valid_subsets[k] = static_cast<double>(count);
-    if (count == 0) ++empty_frames;
-    r.p_pounder_kg_m_s[k] = mp * r.v_pounder_m_s[k];
-    r.p_gran_kg_m_s[k] = ms * r.v_sand_m_s[k];
-    r.p_total_kg_m_s[k] = r.p_pounder_kg_m_s[k] + r.p_gran_kg_m_s[k];
-  }
-  if (empty_frames > 0) {
-    s.warnings.push_back(
-        fmt::format("{} frames have no valid subset in the momentum grid "
-                    "(p_gran is NaN there)",
-                    empty_frames));
-  }
+  GridMomentum(kin, options, &r);
 
   // p_max at the DAQ rate between the impact and the stop.
   const std::vector<double>& t = sensor.time_s;
@@ -247,30 +402,22 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
                             kend + 1 - ki, ss.impact_time_s, ss.stop_time_s),
                 "at least 3 frames in the peak and plateau stages");
   }
-  double a_max = 0;
-  s.v_sand_max_m_s = kNaN;
-  for (std::size_t k = ki; k <= kend; ++k) {
-    if (std::isfinite(r.a_sand_m_s2[k])) a_max = std::max(a_max, r.a_sand_m_s2[k]);
+  std::size_t ke = nf;
+  if (!FindEndOfPeakStage(r, ki, kend, options, &ke, &s.t_end_found, &s.t_end_problem)) {
+    s.t_end_found = false;
+    s.warnings.push_back(
+        "t_e is not measurable: " + s.t_end_problem +
+        "; so t_e, the conservation error, m_add(t), m_add,max, the sigmoid fit, v_sand,max and "
+        "the momentum ratio (Eq. 11) are NaN");
+    s.seconds = timer.ElapsedSeconds();
+    for (const auto& w : s.warnings) LogWarning("momentum: {}", w);
+    return r;
+  }
+  // v_sand,max over the peak and plateau stages (the measured frames).
+  for (std::size_t k = ki; k <= kend; ++k)
     if (std::isfinite(r.v_sand_m_s[k]) && !(r.v_sand_m_s[k] <= s.v_sand_max_m_s))  // NaN-safe max
       s.v_sand_max_m_s = r.v_sand_m_s[k];
-  }
-  const double tol_a = options.sand_accel_tolerance * a_max;
-  const double tol_v = options.velocity_match_tolerance * s.v_p_max_m_s;
-  std::vector<bool> no_more_accel(kend + 2, true);
-  for (std::size_t k = kend + 1; k-- > ki;)
-    no_more_accel[k] = no_more_accel[k + 1] && !(r.a_sand_m_s2[k] > tol_a);
-  std::size_t ke = nf;
-  for (std::size_t k = ki; k <= kend && ke == nf; ++k) {
-    if (no_more_accel[k] && std::isfinite(r.v_sand_m_s[k]) &&
-        std::abs(r.v_pounder_m_s[k] - r.v_sand_m_s[k]) <= tol_v)
-      ke = k;
-  }
-  if (ke < nf) {
-    s.t_end_found = true;
-  } else {
-    ke = ki;
-    for (std::size_t k = ki; k <= kend; ++k)
-      if (std::isfinite(r.v_sand_m_s[k]) && !(r.v_sand_m_s[k] <= r.v_sand_m_s[ke])) ke = k;
+  if (!s.t_end_found) {
     s.warnings.push_back(fmt::format(
         "no frame where the soil stops accelerating and moves with the pounder (within {:.0f} % "
         "of v_p,max); t_e is the frame of the maximum soil velocity",
@@ -278,32 +425,7 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
   }
   s.end_frame = ke;
   s.t_end_peak_daq_s = frame_time_s[ke];
-  double p_total_te = r.p_total_kg_m_s[ke];
-  // Sub-frame t_e. Velocities at the frames are central differences, which smear the end of the
-  // peak stage over +-1 frame, while m_add(t) changes fast there; displacements are not smeared.
-  // The gap D(t) = z_p(t) - w_sand(t) (pounder penetration minus the grid's mean displacement)
-  // grows while v_p > v_sand and is constant once they move together; its growth rate
-  // v_p - v_sand closes about linearly, so D_e - D(t) ~ c (t_e - t)^2 just before t_e. From the
-  // two frames before ke: sqrt(D_e - D) is linear in t and its zero is t_e (kept in
-  // [t_{ke-1}, t_ke]).
-  if (s.t_end_found && ke >= ki + 2 && sensor.penetration_m.size() == t.size() &&
-      kin.disp_y_mm.size() == nf * ns) {
-    auto gap = [&](std::size_t k) {
-      const double w = 1e-3 * MeanOverSubsets(kin.disp_y_mm, ns, k, s.grid.subset_ids);
-      const double z =
-          SampleSeries(t, sensor.penetration_m, {frame_time_s[k]}, "pounder penetration")[0];
-      return z - w;
-    };
-    const double d_e = gap(ke), d1 = gap(ke - 1), d2 = gap(ke - 2);
-    const double s1 = std::sqrt(std::max(d_e - d1, 0.0)), s2 = std::sqrt(std::max(d_e - d2, 0.0));
-    if (std::isfinite(s1) && std::isfinite(s2) && s2 > s1 && s1 > 0) {
-      const double t1 = frame_time_s[ke - 1], t2 = frame_time_s[ke - 2];
-      const double t_zero = t1 + s1 * (t1 - t2) / (s2 - s1);
-      s.t_end_peak_daq_s = std::clamp(t_zero, t1, frame_time_s[ke]);
-      const double w = (s.t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
-      p_total_te = r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
-    }
-  }
+  const double p_total_te = RefineEndOfPeakStage(kin, sensor, r, ki, ke, &s);
   s.t_end_peak_s = s.t_end_peak_daq_s - ss.impact_time_s;
   s.momentum_conservation_error = std::abs(p_total_te - s.p_max_kg_m_s) / s.p_max_kg_m_s;
   for (std::size_t k = ki; k <= ke; ++k)
@@ -316,32 +438,7 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
     s.warnings.push_back(fmt::format("momentum is not conserved to 10 % at t_e (error {:.1f} %)",
                                      100 * s.momentum_conservation_error));
   }
-
-  // Added mass at the DAQ rate from the impact to t_e, and the Eq. 5 fit.
-  for (std::size_t i = std::min(ss.impact_index, n - 1); i < n && t[i] <= s.t_end_peak_daq_s; ++i) {
-    if (v[i] <= 0) continue;
-    r.added_mass_time_after_impact_s.push_back(t[i] - ss.impact_time_s);
-    r.added_mass_daq_kg.push_back(s.p_max_kg_m_s / v[i] - mp);
-  }
-  if (options.fit_sigmoid) {
-    std::size_t stride = 1;
-    if (ss.sample_rate_hz > 0 && ss.cutoff_hz > 0)
-      stride = std::max<std::size_t>(
-          1, static_cast<std::size_t>(std::lround(ss.sample_rate_hz / (2 * ss.cutoff_hz))));
-    if (r.added_mass_daq_kg.size() < 6 * stride) stride = 1;
-    std::vector<double> ft, fm;
-    for (std::size_t i = 0; i < r.added_mass_daq_kg.size(); i += stride) {
-      ft.push_back(r.added_mass_time_after_impact_s[i]);
-      fm.push_back(r.added_mass_daq_kg[i]);
-    }
-    try {
-      s.sigmoid = FitSigmoid(ft, fm, options.sigmoid);
-      s.sigmoid_fitted = true;
-      if (!s.sigmoid.converged) s.warnings.push_back("sigmoid fit: " + s.sigmoid.message);
-    } catch (const Error& e) {
-      s.warnings.push_back(std::string("sigmoid fit skipped: ") + e.what());
-    }
-  }
+  AddedMassAndFit(sensor, options, &r);
   s.seconds = timer.ElapsedSeconds();
   for (const auto& w : s.warnings) LogWarning("momentum: {}", w);
   return r;
@@ -363,10 +460,11 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
 
 std::string MomentumSummary::BriefReport() const {
   return fmt::format(
-      "p_max = {:.4g} kg m/s, t_e = {:.3f} ms, conservation error = {:.2f} %, m_add,max = {:.4g} "
-      "kg, momentum ratio = {:.4g}",
-      p_max_kg_m_s, 1e3 * t_end_peak_s, 100 * momentum_conservation_error, added_mass_max_kg,
-      momentum_ratio);
+             "p_max = {:.4g} kg m/s, t_e = {:.3f} ms, conservation error = {:.2f} %, m_add,max = "
+             "{:.4g} kg, momentum ratio = {:.4g}",
+             p_max_kg_m_s, 1e3 * t_end_peak_s, 100 * momentum_conservation_error, added_mass_max_kg,
+             momentum_ratio) +
+         (t_end_problem.empty() ? "" : "; t_e is not measurable: " + t_end_problem);
 }
 
 std::string MomentumSummary::FullReport() const {
@@ -376,7 +474,9 @@ std::string MomentumSummary::FullReport() const {
   r += fmt::format("p_max                 {:.5g} kg m/s (v_p,max {:.4f} m/s)\n", p_max_kg_m_s,
                    v_p_max_m_s);
   r += fmt::format("t_e                   {:.4f} ms after impact{}\n", 1e3 * t_end_peak_s,
-                   t_end_found ? "" : " (fallback: max soil velocity)");
+                   !t_end_problem.empty() ? " (not measurable)"
+                   : t_end_found          ? ""
+                                          : " (fallback: max soil velocity)");
   r += fmt::format("conservation error    {:.3f} %\n", 100 * momentum_conservation_error);
   r += fmt::format("m_add,max             {:.5g} kg\n", added_mass_max_kg);
   r += fmt::format("v_sand,max            {:.4f} m/s\n", v_sand_max_m_s);
@@ -400,6 +500,7 @@ JsonObject MomentumSummary::ToJson() const {
       .Add("grid_mass_kg", grid.mass_kg)
       .Add("grid_area_m2", grid.area_m2)
       .Add("t_end_found", t_end_found)
+      .Add("t_end_problem", t_end_problem)
       .Add("warnings", warnings);
   return j;
 }
@@ -511,7 +612,10 @@ void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorRes
       {"sigmoid_se_b_per_s", s.sigmoid_fitted ? s.sigmoid.se_b_per_s : kNaN},
       {"sigmoid_se_T_s", s.sigmoid_fitted ? s.sigmoid.se_T_s : kNaN}};
   for (const auto& [name, value] : attrs) out.SetAttribute("momentum", name, value);
-  out.SetAttribute("momentum", "t_e_found", s.t_end_found ? "yes" : "no (max soil velocity)");
+  out.SetAttribute("momentum", "t_e_found",
+                   !s.t_end_problem.empty() ? "not measurable: " + s.t_end_problem
+                   : s.t_end_found          ? std::string("yes")
+                                            : std::string("no (max soil velocity)"));
 }
 
 }  // namespace impactdic

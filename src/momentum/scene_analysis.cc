@@ -35,6 +35,7 @@ MomentumOptions MomentumOptionsFromScene(const Scene& scene, double mm_per_px) {
   m.grid_cols = scene.momentum.grid_cols;
   m.grid_rows = scene.momentum.grid_rows;
   m.rect_mm = scene.momentum.rect_mm;
+  if (scene.momentum.min_valid_fraction) m.min_valid_fraction = *scene.momentum.min_valid_fraction;
   if (scene.momentum.pounder_center_x_px && scene.momentum.surface_y_px) {
     const double cx_mm = *scene.momentum.pounder_center_x_px * mm_per_px;
     m.footprint.x_left_mm = cx_mm - 500 * scene.test.width_m;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -39,9 +40,15 @@ OutputGenerationOptions CampaignGenerationOptions(const std::vector<Scene>& scen
 void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
                  const std::string& folder) {
   std::vector<PowerLawSample> samples;
-  for (const auto& s : summary->scenes) {
-    if (std::isfinite(s.figures.added_mass_max_kg) && s.figures.added_mass_max_kg > 0) {
+  for (auto& s : summary->scenes) {
+    if (s.excluded.empty() &&
+        !(std::isfinite(s.figures.added_mass_max_kg) && s.figures.added_mass_max_kg > 0)) {
+      s.excluded = fmt::format("no measured m_add,max (got {})", s.figures.added_mass_max_kg);
+    }
+    if (s.excluded.empty()) {
       samples.push_back({s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg});
+    } else {
+      LogWarning("campaign: scene {} is left out of the Eq. 4 fit: {}", s.name, s.excluded);
     }
   }
   if (samples.size() >= 5) {
@@ -56,6 +63,7 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
   const std::string csv = (fs::path(folder) / kCampaignCsv).string();
   std::vector<std::string> names = {"mass_kg", "velocity_m_s", "area_m2"};
   for (const auto& n : SceneFigures{}.CsvNames()) names.push_back(n);
+  names.push_back("eq4_fit");
   std::vector<std::vector<std::string>> rows;
   names.insert(names.begin(), "scene");
   for (const auto& s : summary->scenes) {
@@ -64,6 +72,7 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
                                     fmt::format("{:.10g}", s.area_m2)};
     for (double v : s.figures.CsvValues())
       row.push_back(std::isfinite(v) ? fmt::format("{:.10g}", v) : "nan");
+    row.push_back(s.excluded.empty() ? "used" : "excluded");
     rows.push_back(row);
   }
   WriteCsvRows(csv, names, rows);
@@ -87,6 +96,10 @@ JsonObject CampaignSummary::RegressionJson() const {
   JsonObject j;
   j.Add("scenes", static_cast<int>(scenes.size()));
   j.Add("fitted", fitted);
+  JsonObject excluded;
+  for (const auto& s : scenes)
+    if (!s.excluded.empty()) excluded.Add(s.name, s.excluded);
+  j.Add("excluded", excluded);
   if (!fitted) {
     j.Add("note", fit_note);
     return j;
@@ -110,6 +123,8 @@ std::string CampaignSummary::FullReport() const {
     text +=
         fmt::format("  {:<20} m_p {:6.2f} kg  v0 {:5.2f} m/s  A {:.4f} m^2  m_add,max {:.3f} kg\n",
                     s.name, s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg);
+    if (!s.excluded.empty())
+      text += "  " + std::string(20, ' ') + "  not in the Eq. 4 fit: " + s.excluded + "\n";
   }
   if (fitted) {
     text += "Eq. 4: " + fit.BriefReport() + "\n";
@@ -137,6 +152,7 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
     PipelineOptions p;
     p.output_folder = generation.Path(scene.name);
     p.threads = options.threads;
+    p.allow_partial = true;  // Its outputs are written; it stays out of the fit (below).
     LogInfo("campaign: scene {} -> {}", scene.name,
             (fs::path(options.output_folder) / scene.name).string());
     const PipelineSummary run = RunScene(scene, p);
@@ -148,6 +164,7 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                          : scene.test.ImpactVelocity();
     s.area_m2 = scene.test.ContactArea();
     s.figures = run.figures;
+    if (!run.IsUsable()) s.excluded = "a stage produced nothing usable: " + run.FailureText();
     summary.scenes.push_back(s);
   }
   FitAndWrite(&summary, options, generation.staging_folder());
@@ -162,9 +179,13 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
   CsvReadOptions read;
   read.required_columns = {"mass_kg", "velocity_m_s", "area_m2", "added_mass_max_kg"};
   read.allow_non_finite = true;  // A scene without a measurement has nan; it is left out.
-  read.text_columns = {"scene"};
+  read.text_columns = {"scene", "eq4_fit"};
   const CsvTable table = ReadCsv(csv_path, read);
-  const bool named = !table.text_names.empty();
+  const auto has_text = [&](const char* name) {
+    return std::find(table.text_names.begin(), table.text_names.end(), name) !=
+           table.text_names.end();
+  };
+  const bool named = has_text("scene"), marked = has_text("eq4_fit");
   CampaignSummary summary;
   for (std::size_t r = 0; r < table.rows(); ++r) {
     CampaignScene s;
@@ -173,6 +194,8 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
     s.velocity_m_s = table.Column("velocity_m_s")[r];
     s.area_m2 = table.Column("area_m2")[r];
     s.figures.added_mass_max_kg = table.Column("added_mass_max_kg")[r];
+    if (marked && table.TextColumn("eq4_fit")[r] == "excluded")
+      s.excluded = "marked excluded in " + csv_path + " (eq4_fit)";
     if (!(s.mass_kg > 0 && s.velocity_m_s > 0 && s.area_m2 > 0)) {
       throw Error(ErrorKind::kFileFormat, "row of " + s.name,
                   fmt::format("m_p {}, v0 {}, A {}", s.mass_kg, s.velocity_m_s, s.area_m2),

@@ -227,6 +227,63 @@ double MeasuredPlateau(const SensorResult& sensor, double t1_after_impact_s, dou
   return (v[0] - v[1]) / (s.stop_time_s - t1) / g;
 }
 
+// Measured peak deceleration: the largest filtered deceleration of the PEAK STAGE, between the
+// impact and t_e (t_end_peak_s; NaN: up to T + 4/b of the scene's model instead, with a warning
+// when the momentum stage ran but could not measure t_e). The record's global maximum can be the
+// stop, where -dv/dt grows like v^-n (SPEC section 4).
+double MeasuredPeakDeceleration(const SensorResult& sensor, double t_end_peak_s,
+                                const SceneModel& model, bool momentum_ran,
+                                std::vector<std::string>* warnings) {
+  double window_s = t_end_peak_s;
+  if (!std::isfinite(window_s)) {
+    window_s = model.T_s + 4 / model.b_per_s;
+    if (momentum_ran) {
+      warnings->push_back(fmt::format(
+          "peak deceleration (measured): t_e was not measured, so the peak stage is taken as the "
+          "first T + 4/b = {:.3f} ms after the impact (the scene's model)",
+          1e3 * window_s));
+    }
+  }
+  const double t_i = sensor.summary.impact_time_s;
+  double peak = kNaN;
+  for (std::size_t i = 0; i < sensor.time_s.size(); ++i) {
+    const double dt = sensor.time_s[i] - t_i;
+    if (dt >= 0 && dt <= window_s && !(sensor.accel_g[i] - 1 <= peak)) peak = sensor.accel_g[i] - 1;
+  }
+  return peak;
+}
+
+// Why the correlation produced nothing usable ("" if it did): no valid subset in any frame.
+std::string CorrelationProblem(const DicSummary& s, double min_zncc) {
+  if (s.frames == 0 || s.valid_fraction > 0) return "";
+  std::size_t most = 0;
+  long long total = 0;
+  for (std::size_t i = 0; i < s.status_counts.size(); ++i) {
+    total += s.status_counts[i];
+    if (s.status_counts[i] > s.status_counts[most]) most = i;
+  }
+  return fmt::format(
+      "no valid subset in any of the {} frames after the reference ({} subsets; most common "
+      "status: {} in {} of {} results; dic.min_zncc = {})",
+      s.frames, s.subsets, ToString(static_cast<SubsetStatus>(most)), s.status_counts[most], total,
+      min_zncc);
+}
+
+// Throws when a stage produced nothing usable, unless the options allow a partial run.
+void ThrowIfFailed(const PipelineSummary& summary, const PipelineOptions& options) {
+  if (summary.failures.empty() || options.allow_partial) return;
+  std::string stages;
+  for (const StageFailure& f : summary.failures)
+    stages += fmt::format("\n  {}: {}", f.stage, f.reason);
+  throw Error(
+      ErrorKind::kNumerical,
+      fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was "
+                  "written (outputs of an earlier run in {} are kept); `impactdic run "
+                  "--allow-partial` writes them, with the figures that could not be "
+                  "measured as null and the reasons in summary.json",
+                  summary.scene_name, summary.failures.size(), stages, summary.output_folder));
+}
+
 std::vector<float> ToFloat(const std::vector<double>& v) { return {v.begin(), v.end()}; }
 
 // A run's outputs are one generation of its output folder (io/output_generation.h): written into
@@ -325,13 +382,29 @@ std::vector<double> SceneFigures::CsvValues() const {
           dic_subsets_per_s};
 }
 
+std::string PipelineSummary::FailureText() const {
+  std::string text;
+  for (const StageFailure& f : failures)
+    text += (text.empty() ? "" : "; ") + f.stage + ": " + f.reason;
+  return text;
+}
+
 std::string PipelineSummary::BriefReport() const {
   return fmt::format(
-      "{}: conservation error {:.2f} %, m_add,max {:.3f} kg (Eq. 4: {:.3f} kg), crater depth "
-      "{:.2f} mm measured / {:.2f} mm model, {:.1f} s",
-      scene_name, 100 * figures.momentum_conservation_error, figures.added_mass_max_kg,
-      figures.added_mass_eq4_kg, 1e3 * figures.crater_depth_measured_m,
-      1e3 * figures.crater_depth_model_m, seconds);
+             "{}: conservation error {:.2f} %, m_add,max {:.3f} kg (Eq. 4: {:.3f} kg), crater "
+             "depth {:.2f} mm measured / {:.2f} mm model, {:.1f} s",
+             scene_name, 100 * figures.momentum_conservation_error, figures.added_mass_max_kg,
+             figures.added_mass_eq4_kg, 1e3 * figures.crater_depth_measured_m,
+             1e3 * figures.crater_depth_model_m, seconds) +
+         (failures.empty() ? "" : "; PARTIAL: " + FailureText());
+}
+
+JsonObject PipelineSummary::ToJson() const {
+  JsonObject j = figures.ToJson();
+  JsonObject failed;
+  for (const StageFailure& f : failures) failed.Add(f.stage, f.reason);
+  j.Add("usable", IsUsable()).Add("failures", failed).Add("warnings", warnings);
+  return j;
 }
 
 std::string PipelineSummary::FullReport() const {
@@ -340,6 +413,8 @@ std::string PipelineSummary::FullReport() const {
     text += fmt::format("  {:<11} {} {}\n", s.name,
                         s.ran ? fmt::format("{:6.2f} s", s.seconds) : " skipped", s.note);
   }
+  for (const StageFailure& f : failures)
+    text += fmt::format("  FAILED {}: {} (its figures are null)\n", f.stage, f.reason);
   text += "Key figures (measured / model):\n";
   const auto names = figures.CsvNames();
   const auto values = figures.CsvValues();
@@ -519,6 +594,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       summary.warnings.push_back(fmt::format("correlation: only {:.1f} % of the subsets are valid",
                                              100 * dic->summary.valid_fraction));
     }
+    const std::string problem = CorrelationProblem(dic->summary, scene.dic.min_zncc);
+    if (!problem.empty()) summary.failures.push_back({"correlate", problem});
     stages.Ran("correlate", dic->summary.BriefReport(), t);
   } else {
     stages.Skipped("correlate", "not among the scene's stages");
@@ -591,6 +668,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
         fig.sigmoid_b_per_s = ms.sigmoid.b_per_s;
         fig.sigmoid_T_s = ms.sigmoid.T_s;
       }
+      if (!ms.IsUsable())
+        summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
       stages.Ran("kinematics", analysis->kinematics.summary.BriefReport(), t);
       stages.Ran("momentum", ms.BriefReport(), t);
     } else {
@@ -608,21 +687,9 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     if (!analysis) stages.Skipped("momentum", "no kinematics");
   }
 
-  // Measured peak deceleration: the largest filtered deceleration of the PEAK STAGE, i.e. between
-  // the impact and t_e (measured; without momentum results, T + 4/b of the scene's model). The
-  // record's global maximum can be the stop, where -dv/dt grows like v^-n (SPEC section 4).
   if (sensor) {
-    const double t_i = sensor->summary.impact_time_s;
-    const double t_end_peak = std::isfinite(fig.t_end_peak_s)
-                                  ? fig.t_end_peak_s
-                                  : scene.model.T_s + 4 / scene.model.b_per_s;
-    double peak = kNaN;
-    for (std::size_t i = 0; i < sensor->time_s.size(); ++i) {
-      const double dt = sensor->time_s[i] - t_i;
-      if (dt >= 0 && dt <= t_end_peak && !(sensor->accel_g[i] - 1 <= peak))
-        peak = sensor->accel_g[i] - 1;
-    }
-    fig.peak_deceleration_measured_g = peak;
+    fig.peak_deceleration_measured_g = MeasuredPeakDeceleration(
+        *sensor, fig.t_end_peak_s, scene.model, analysis.has_value(), &summary.warnings);
   }
 
   // --- model ---------------------------------------------------------------------------------
@@ -648,10 +715,14 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     fig.t_end_model_s = s.t_end_s;
     if (sensor)
       fig.plateau_deceleration_measured_g = MeasuredPlateau(*sensor, s.t1_s, scene.test.g_m_s2);
+    if (!s.IsUsable())
+      summary.failures.push_back({"model", "the solve did not reach v = 0: " + s.stop_reason});
     stages.Ran("model", s.BriefReport(), t);
   } else {
     stages.Skipped("model", "not among the scene's stages");
   }
+
+  ThrowIfFailed(summary, options);
 
   // --- outputs -------------------------------------------------------------------------------
   if (!want_outputs) {
@@ -775,6 +846,8 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     out.CreateGroup("/summary");
     for (std::size_t i = 0; i < names.size(); ++i)
       out.SetAttribute("/summary", names[i], values[i]);
+    out.SetAttribute("/summary", "failures",
+                     summary.failures.empty() ? std::string("none") : summary.FailureText());
     if (scene.outputs.hdf5) {
       out.Commit();
       summary.outputs.push_back(results_path);
@@ -798,7 +871,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     for (const auto& s : rendered.skipped) summary.warnings.push_back("render: " + s);
   }
   const std::string json_path = (folder / layout::kSummaryJson).string();
-  WriteTextFileAtomic(json_path, fig.ToJson().Dump() + "\n");
+  WriteTextFileAtomic(json_path, summary.ToJson().Dump() + "\n");
   summary.outputs.push_back(json_path);
   if (scene.outputs.csv) {
     const std::string csv_path = (folder / layout::kSummaryCsv).string();

@@ -324,11 +324,18 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
         d.sigmoid_b_per_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidBAttr);
         d.sigmoid_T_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidTAttr);
         d.t_e_s = t_e_s;
-        if (std::isnan(d.sigmoid_M_kg)) {
-          LogInfo("render: no sigmoid attributes on {}; m_add drawn without its fit",
-                  L::kMomentumGroup);
+        if (std::none_of(d.m_add_kg.begin(), d.m_add_kg.end(),
+                         [](double v) { return std::isfinite(v); })) {
+          // A run whose momentum stage could not measure t_e (`run --allow-partial`).
+          skip(L::kAddedMassPng,
+               std::string("no finite value in ") + L::kMAdd + " (t_e was not measured)");
+        } else {
+          if (std::isnan(d.sigmoid_M_kg)) {
+            LogInfo("render: no sigmoid attributes on {}; m_add drawn without its fit",
+                    L::kMomentumGroup);
+          }
+          summary.written.push_back(PlotAddedMass(d, out(L::kAddedMassPng), options.plot).path);
         }
-        summary.written.push_back(PlotAddedMass(d, out(L::kAddedMassPng), options.plot).path);
       } else {
         skip(L::kAddedMassPng, std::string("no ") + L::kMAdd + " with " + L::kMomentumT);
       }

@@ -261,8 +261,8 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
   run_ = SimulateImpact(p, solver);
   if (!run_.summary.stopped)
     throw Error(ErrorKind::kNumerical,
-                fmt::format("the impact model did not stop the pounder (t_end = {} s): {}",
-                            run_.summary.t_end_s, run_.summary.BriefReport()));
+                fmt::format("the impact model did not stop the pounder ({}): {}",
+                            run_.summary.stop_reason, run_.summary.BriefReport()));
   const double mp = spec_.pounder_mass_kg, t_end = run_.summary.t_end_s;
 
   // p_max: the maximum of m_p v_p(t) over t >= 0 (at t = 0 unless gravity still wins there).

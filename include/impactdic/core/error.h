@@ -41,6 +41,8 @@ class Error : public std::runtime_error {
 
   ErrorKind kind() const { return kind_; }
   const std::string& where() const { return where_; }
+  const std::string& found() const { return found_; }
+  const std::string& expected() const { return expected_; }
   const std::string& file() const { return file_; }
   int line() const { return line_; }
   int column() const { return column_; }

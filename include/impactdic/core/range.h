@@ -48,6 +48,11 @@ inline constexpr ValueRange kBedHeightRange{1e-3, 100, "m"};
 inline constexpr ValueRange kGravityRange{0, 100, "m/s^2"};
 // Added mass M = m_add,max (given instead of Eq. 4).
 inline constexpr ValueRange kAddedMassRange{0, 1e6, "kg"};
+// The model's soil parameters (Eq. 7-9; Table 2: K = 50, u = 1.9, T = 2 ms). With every range
+// of this file respected, no force of Eq. 9 can overflow: k = K rho_d g A <= 1e18 N/m.
+inline constexpr ValueRange kFrictionKRange{0, 1e6, ""};
+inline constexpr ValueRange kDampingFactorURange{1, 1e3, ""};
+inline constexpr ValueRange kSigmoidDelayRange{0, 1e3, "s"};
 
 // --- The camera (scene `inputs.*`, synthetic scene specs) ----------------------------------------
 // Recording frame rate: 1/s up to 10 million frames per second (the fastest cameras).

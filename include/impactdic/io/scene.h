@@ -101,6 +101,9 @@ struct SceneMomentum {
   int grid_rows = 2;  // Subset rows beneath the pounder, >= 1.
   // Optional rectangle in panel millimetres (x0, y0, x1, y1) instead of the default grid.
   std::optional<std::array<double, 4>> rect_mm;
+  // Per frame, the fraction of the grid's subsets that must be valid for p_gran to be measured
+  // there, in (0, 1]; unset: MomentumOptions::min_valid_fraction (the default is defined there).
+  std::optional<double> min_valid_fraction;
 };
 
 struct SceneModel {

@@ -41,16 +41,17 @@ struct ImpactModelParameters {
   double depth_m = 0.192;  // t_z, out-of-plane depth (m), kPounderSizeRange; A = D t_z.
   // M = m_add,max (kg), kAddedMassRange; NaN: Eq. 4.
   double added_mass_kg = std::numeric_limits<double>::quiet_NaN();
-  double friction_K = 50.0;              // K, >= 0 (dimensionless), Table 2.
+  double friction_K = 50.0;              // K, kFrictionKRange (dimensionless), Table 2.
   double damping_exponent_n = 0.2;       // n, in [0, 1], Table 2.
-  double damping_factor_u = 1.9;         // u, >= 1 (F_dyn resists the motion), Table 2.
-  double sigmoid_delay_T_s = 0.002;      // T, >= 0 (s), Table 2.
+  double damping_factor_u = 1.9;         // u, kDampingFactorURange (F_dyn resists), Table 2.
+  double sigmoid_delay_T_s = 0.002;      // T, kSigmoidDelayRange (s), Table 2.
   double sigmoid_rate_b_per_s = 2500.0;  // b, in (0, 1e12] (1/s), Table 2.
   double density_kg_m3 = 1550.0;         // rho_d, kSoilDensityRange.
   double gravity_m_s2 = 9.81;            // g, kGravityRange (0 for exact-solution checks).
   double bed_height_m = 0.6;             // For the "beyond the bed" warning, kBedHeightRange.
 
-  // Throws Error(kInvalidValue) naming the first broken field.
+  // Throws Error(kInvalidValue) naming the first broken field and its allowed range (the ranges
+  // of core/range.h: every force of Eq. 9 stays finite inside them).
   void Check() const;
   double ContactArea_m2() const { return width_m * depth_m; }
   double AddedMassMax_kg() const;  // M: the given value or Eq. 4.
@@ -92,7 +93,12 @@ ImpactSolver ImpactSolverFromString(const std::string& name);
 // How a run estimates its own error (ImpactSummary::error_estimate).
 enum class ErrorEstimator {
   // A companion run at rtol / 10, atol / 10: error ~ |Q(tol) - Q(tol / 10)| / 0.9 (tolerance
-  // proportionality; a Richardson-type estimate of the global error). Costs one more run.
+  // proportionality; a Richardson-type estimate of the global error). Costs one more run. When
+  // atol exceeds rtol times the solution's smallest scale (crater depth, v0, t_end), atol alone
+  // governs the step control and tightening it tenfold may change nothing (atol = 1e300: both
+  // runs take the same steps, and the difference is 0 whatever the true error): the companion's
+  // atol is then rtol / 10 times that scale, so it is really ten times tighter, and a warning
+  // says so.
   kCompanion,
   // The local error estimates summed over the steps, weighted by the sensitivity of the result
   // (a velocity error at t moves the crater depth by ~ (t_end - t) times it). Free, but it bounds
@@ -167,6 +173,11 @@ struct ImpactSummary {
   double t1_s = std::numeric_limits<double>::quiet_NaN();            // T + 4 / b
   double v_t1_m_s = std::numeric_limits<double>::quiet_NaN();
   bool stopped = false;  // v reached 0 before t_max.
+  // Why the solve ended: "v = 0 reached" when stopped, else what stopped it (t_max reached,
+  // step size underflow, step budget, a non-finite right-hand side ...). Without a stop, t_end_s,
+  // the crater depth, the plateau deceleration and the momentum ratio are NaN.
+  std::string stop_reason;
+  double t_reached_s = std::numeric_limits<double>::quiet_NaN();  // Last time covered.
   // "dopri5", "rodas3", "auto(dopri5)", "auto(dopri5->rodas3)", "ode45(dopri5)".
   std::string solver;
   std::string solver_reason;
@@ -177,7 +188,9 @@ struct ImpactSummary {
   // error estimates, weighted by the sensitivity of the result to them (a velocity error at t
   // shifts the crater depth by ~ (t_end - t) times it), summed over the steps.
   // The estimate of `error_estimator` (see ErrorEstimator); both are always filled in when the
-  // companion run was made.
+  // companion run was made. Never 0 unless the true error is: at least the round-off of the
+  // steps (2 eps sqrt(steps)); +inf when the tolerance could not be met (step size underflow,
+  // step budget); NaN when the solve never started.
   double error_estimate = std::numeric_limits<double>::quiet_NaN();
   double error_estimate_local = std::numeric_limits<double>::quiet_NaN();
   double error_estimate_companion = std::numeric_limits<double>::quiet_NaN();

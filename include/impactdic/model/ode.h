@@ -81,7 +81,8 @@ enum class OdeStatus {
   kStoppedByCallback,
   kLeftDomain,
   kStepSizeUnderflow,
-  kMaxSteps
+  kMaxSteps,
+  kNonFiniteRhs,  // f(x0, y0) is not finite: no step can be taken (e.g. overflowing inputs).
 };
 const char* ToString(OdeStatus status);
 

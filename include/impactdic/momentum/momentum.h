@@ -11,12 +11,18 @@
 //    panel mm (every subset whose centre lies inside). Area in the panel plane: by count, the
 //    number of subsets times one grid cell (step_x * step_y in mm, from the subset spacing); by
 //    rectangle, the rectangle's area. Mass m_s = rho_d * area * t_z.
-//  - p_gran(t) = m_s * mean vertical soil velocity over the grid (NaN subsets skipped);
+//  - p_gran(t) = m_s * mean vertical soil velocity over the grid (NaN subsets skipped), measured
+//    only in frames where at least min_valid_fraction of the grid's subsets are valid: elsewhere
+//    v_sand, a_sand, p_gran and p_tot are NaN (a warning gives their count and frames);
 //    p_p(t) = m_p v_p(t); p_max = max p_p after the impact (at the DAQ rate); p_tot = p_p + p_gran.
 //  - t_e (end of the peak stage): the first frame after the impact from which the mean soil
 //    acceleration stays <= sand_accel_tolerance * (its maximum after the impact) until the pounder
 //    stops, and where |v_p - v_sand| <= velocity_match_tolerance * v_p,max. If no frame satisfies
-//    both, the frame of the maximum soil velocity, with a warning.
+//    both, the frame of the maximum soil velocity, with a warning. t_e is NOT MEASURABLE (NaN, and
+//    with it the conservation error, m_add(t), m_add,max, the sigmoid fit, v_sand,max and the
+//    momentum ratio; MomentumSummary::t_end_problem says why) when no frame between the impact
+//    and the stop has a measured p_gran, or when a frame from the impact to t_e has none (t_e is
+//    the FIRST frame meeting the criteria: an unmeasured frame before it could have been t_e).
 //  - Conservation error |p_tot(t_e) - p_max| / p_max.
 //  - m_add(t) = p_max / v_p(t) - m_p (Eq. 3) from the impact to t_e; m_add,max = m_add(t_e).
 //  - Sigmoid (Eq. 5) fitted to m_add(t) at the DAQ rate between impact and t_e, thinned to one
@@ -61,6 +67,13 @@ struct MomentumOptions {
   PounderFootprint footprint;
   double velocity_match_tolerance = 0.05;  // Of v_p,max, in (0, 1].
   double sand_accel_tolerance = 0.05;      // Of the maximum soil acceleration, in [0, 1).
+  // Per frame, the fraction of the grid's subsets that must be valid for p_gran to be measured
+  // there (else NaN), in (0, 1]; scene key momentum.min_valid_fraction (this is its default).
+  // p_gran stands for the whole grid's mass through the mean over its valid subsets, and subsets
+  // fail where the soil shears hardest or is covered, not at random: 0.5 asks for a majority of
+  // the grid (6 of the default 6 x 2). docs/analysis.md has what dropping subsets does on the
+  // sample.
+  double min_valid_fraction = 0.5;
   bool fit_sigmoid = true;
   SigmoidFitOptions sigmoid;
   void Check() const;
@@ -84,7 +97,7 @@ struct MomentumSummary {
   double p_max_kg_m_s = std::numeric_limits<double>::quiet_NaN();
   double t_p_max_s = std::numeric_limits<double>::quiet_NaN();
   double v_p_max_m_s = std::numeric_limits<double>::quiet_NaN();
-  std::size_t end_frame = 0;                                       // Frame index of t_e.
+  std::size_t end_frame = 0;  // Frame index of t_e (meaningful only when t_e is measured).
   double t_end_peak_s = std::numeric_limits<double>::quiet_NaN();  // t_e after the impact.
   double t_end_peak_daq_s = std::numeric_limits<double>::quiet_NaN();
   double momentum_conservation_error = std::numeric_limits<double>::quiet_NaN();
@@ -92,14 +105,20 @@ struct MomentumSummary {
   double v_sand_max_m_s = std::numeric_limits<double>::quiet_NaN();
   double momentum_ratio = std::numeric_limits<double>::quiet_NaN();
   bool t_end_found = false;  // Both t_e criteria met.
+  // Why t_e (and every figure that depends on it) is NaN; empty when t_e was measured.
+  std::string t_end_problem;
+  std::size_t unmeasured_frames = 0;  // Frames whose p_gran is NaN (too few valid grid subsets).
   SigmoidFit sigmoid;
   bool sigmoid_fitted = false;
   double seconds = 0;
   std::vector<std::string> warnings;
+  // Whether the stage measured what it is for: t_e and m_add,max.
+  bool IsUsable() const { return t_end_problem.empty() && std::isfinite(added_mass_max_kg); }
   std::string BriefReport() const;
   std::string FullReport() const;
   // The analyze command's JSON keys: p_max_kg_m_s, t_end_peak_s, momentum_conservation_error,
-  // added_mass_max_kg, sigmoid_b_per_s, sigmoid_T_s, momentum_ratio, v_sand_max_m_s, then more.
+  // added_mass_max_kg, sigmoid_b_per_s, sigmoid_T_s, momentum_ratio, v_sand_max_m_s, then more
+  // (t_end_problem: "" when t_e was measured).
   JsonObject ToJson() const;
 };
 
@@ -111,7 +130,7 @@ struct MomentumResult {
   std::vector<double> a_sand_m_s2;
   std::vector<double> p_pounder_kg_m_s, p_gran_kg_m_s, p_total_kg_m_s;
   std::vector<double> added_mass_kg;  // NaN outside [impact, t_e].
-  std::vector<double> valid_subsets;  // Count of finite velocities in the grid.
+  std::vector<double> valid_subsets;  // Count of finite velocities in the grid (all frames).
   // At the DAQ rate between impact and t_e (what the sigmoid is fitted to, before thinning).
   std::vector<double> added_mass_time_after_impact_s, added_mass_daq_kg;
   MomentumSummary summary;

@@ -8,10 +8,16 @@
 //   CampaignSummary s = RunCampaign({"t01.yaml", "t02.yaml", ...}, options);
 //
 // Outputs: <output_folder>/<scene name>/ (each scene's pipeline outputs), campaign.csv (one row per
-// scene: name, m_p, v0, A and the key figures), regression.json (the fit). They are one generation
-// of the folder (io/output_generation.h): a failed or interrupted campaign leaves the previous one
-// as it was. RegressCampaignTable redoes campaign.csv and regression.json and keeps the folder's
-// other entries.
+// scene: name, m_p, v0, A, the key figures and eq4_fit = used | excluded), regression.json (the fit
+// and, under "excluded", each scene left out with the reason).
+//
+// A scene whose run produced nothing usable (PipelineSummary::failures, e.g. no valid subset or
+// no measurable t_e) still gets its outputs (the campaign runs scenes with allow_partial) but
+// never enters the Eq. 4 fit; the report, the log and regression.json say which and why.
+//
+// They are one generation of the folder (io/output_generation.h): a failed or interrupted campaign
+// leaves the previous one as it was. RegressCampaignTable redoes campaign.csv and regression.json
+// and keeps the folder's other entries.
 #ifndef IMPACTDIC_PIPELINE_CAMPAIGN_H_
 #define IMPACTDIC_PIPELINE_CAMPAIGN_H_
 
@@ -35,6 +41,9 @@ struct CampaignScene {
   std::string name;
   double mass_kg = 0, velocity_m_s = 0, area_m2 = 0;
   SceneFigures figures;
+  // Why the scene is left out of the Eq. 4 fit (a stage produced nothing usable, no measured
+  // m_add,max, or "excluded" in an input table); empty: it is in the fit.
+  std::string excluded;
 };
 
 struct CampaignSummary {
@@ -48,12 +57,13 @@ struct CampaignSummary {
   std::string FullReport() const;
 };
 
-// Runs every scene, then the regression (needs >= 5 scenes with a finite m_add,max).
+// Runs every scene, then the regression (needs >= 5 usable scenes with a finite m_add,max).
 CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                             const CampaignOptions& options);
 
 // The regression alone, from a CSV with the columns mass_kg, velocity_m_s, area_m2 and
-// added_mass_max_kg (e.g. a campaign.csv, or the user's own table).
+// added_mass_max_kg (e.g. a campaign.csv, or the user's own table); rows whose optional eq4_fit
+// column says "excluded" are left out.
 CampaignSummary RegressCampaignTable(const std::string& csv_path, const CampaignOptions& options);
 
 }  // namespace impactdic

@@ -8,6 +8,14 @@
 //   PipelineSummary s = RunScene(scene, options);
 //   std::cout << s.FullReport();
 //
+// A stage that ran but produced nothing usable (no valid subset in any frame, no measurable t_e, a
+// model solve that did not reach v = 0) is a FAILURE (PipelineSummary::failures): the figures
+// that depend on it are NaN (null in summary.json) with the reasons in `warnings`, and RunScene
+// throws Error(kNumerical) naming each failed stage and why before writing any output -- as for
+// any failed run, nothing new is written and a previous run's outputs stay -- unless
+// options.allow_partial (`impactdic run --allow-partial`): then the outputs are written and
+// summary.json says "usable": false with the failures.
+//
 // Outputs (folder: options.output_folder, else the scene's outputs.folder), one generation
 // (io/output_generation.h): written into a staging folder beside it and swapped in only when all
 // are complete, so the folder never holds files of two runs; a failed or interrupted run leaves the
@@ -31,6 +39,9 @@ struct PipelineOptions {
   std::string output_folder;  // Empty: the scene's outputs.folder. Created (replaced) at the end.
   bool png_frames = false;  // Also write the animation frames as PNG (or scene outputs.png_frames).
   int threads = -1;         // Correlation threads; -1: the scene's dic.threads (0 = all cores).
+  // Write the outputs and return even when a stage produced nothing usable (file comment);
+  // false: such a run throws Error(kNumerical) before writing anything.
+  bool allow_partial = false;
   void Check() const;
 };
 
@@ -71,21 +82,34 @@ struct SceneFigures {
   std::vector<double> CsvValues() const;
 };
 
+// A stage that ran but produced nothing usable, and why.
+struct StageFailure {
+  std::string stage;
+  std::string reason;
+};
+
 struct PipelineSummary {
   std::string scene_name;
   std::string output_folder;
   std::vector<StageReport> stages;
   SceneFigures figures;
-  std::vector<std::string> outputs;  // Files written.
+  std::vector<StageFailure> failures;  // Empty: every stage that ran produced what it is for.
+  std::vector<std::string> outputs;    // Files written.
   std::vector<std::string> warnings;
   double seconds = 0;
+  bool IsUsable() const { return failures.empty(); }
+  // "stage: reason; stage: reason" (empty when usable).
+  std::string FailureText() const;
   std::string BriefReport() const;
   std::string FullReport() const;
+  // summary.json: the figures' keys (SceneFigures::ToJson), then "usable", "failures" (stage ->
+  // reason) and "warnings".
+  JsonObject ToJson() const;
 };
 
 // Runs the scene. Throws Error for bad input (missing or truncated frames, sensor record not
-// covering the frames, unwritable output folder, ...) before anything that looks complete is
-// written.
+// covering the frames, unwritable output folder, ...) and for stages that produced nothing usable
+// (unless options.allow_partial; file comment) before anything that looks complete is written.
 PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
 
 }  // namespace impactdic
