@@ -12,6 +12,7 @@
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic::cli {
@@ -21,9 +22,53 @@ struct SynthArgs {
   std::string spec_path;
   std::string preset;
   std::string output;
+  std::string dem_dir;
   int frames = -1;
   bool calibrate = true;
 };
+
+// The scene points at calibration/camera.yaml: make it from the rendered images.
+void CalibrateRendered(const ImpactSceneSpec& spec, const std::string& output, bool calibrate) {
+  namespace fs = std::filesystem;
+  if (!spec.render_calibration || !spec.calibration_yaml.empty()) return;
+  const fs::path dir = fs::path(output) / "calibration";
+  const std::string yaml = (dir / "camera.yaml").string();
+  if (calibrate) {
+    CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
+    CalibrationSummary summary;
+    CameraCalibration calibration = CalibrateFromFiles(
+        {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
+    SaveCalibration(calibration, yaml);
+    LogInfo("calibration: {}", summary.BriefReport());
+  } else {
+    LogWarning(
+        "--no-calibrate: the scene points at {} which does not exist yet; make it with "
+        "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
+        yaml, (dir / "plane.png").string(), (dir / "view_*.png").string(), yaml);
+  }
+}
+
+// impactdic synth --dem DIR: films a DEM run (synth/dem_scene.h, docs/validation.md).
+void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec) {
+  if (args.frames != -1)
+    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(args.frames),
+                "no --frames with --dem (the frames are the DEM's snapshots)");
+  DemRecord record = ReadDemRecord(args.dem_dir);
+  DemScene scene(std::move(record), spec);
+  const DemTruth& t = scene.truth();
+  LogInfo(
+      "DEM scene: {} frames, {} grains, bulk density {:.1f} kg/m^3, grid mass {:.4g} kg (bulk "
+      "estimate {:.4g} kg), p_max {:.4g} N s, t_e {:.4g} ms, m_add,max {:.4g} kg, conservation "
+      "error at t_e {:.2f} % (max {:.2f} % in the peak stage)",
+      scene.frame_count(), scene.record().frames[0].grains.size(), t.bulk_density_kg_m3,
+      t.grid_mass_kg, t.grid_mass_bulk_kg, t.p_max_Ns, t.t_e_s * 1e3, t.m_add_max_kg,
+      100 * t.conservation_error_te, 100 * t.conservation_error_peak);
+  for (const auto& note : t.notes) LogWarning("DEM truth: {}", note);
+  DemSceneReport report = WriteDemScene(scene, args.output);
+  CalibrateRendered(scene.base().spec(), args.output, args.calibrate);
+  std::cout << report.BriefReport() << "\n";
+  std::cout << "scene: " << report.scene_yaml << "\n";
+}
 
 void RunSynth(const SynthArgs& args) {
   // Validate everything before any work.
@@ -47,6 +92,10 @@ void RunSynth(const SynthArgs& args) {
   if (fs::exists(args.output, ec) && !fs::is_directory(args.output, ec))
     throw Error(ErrorKind::kInvalidValue, "-o", args.output, "a folder, not a file");
 
+  if (!args.dem_dir.empty()) {
+    RunSynthDem(args, spec);
+    return;
+  }
   ImpactScene scene(spec);
   LogInfo("model: {}", scene.model_run().summary.BriefReport());
   LogInfo("scene: {} frames of {}x{} px, t_e = {:.4g} ms, m_grid = {:.4g} kg, ROI [{}, {}, {}, {}]",
@@ -55,24 +104,7 @@ void RunSynth(const SynthArgs& args) {
           scene.dic_grid().roi[2], scene.dic_grid().roi[3]);
   ImpactSceneReport report = WriteImpactScene(scene, args.output);
 
-  // The scene points at calibration/camera.yaml: make it from the rendered images.
-  if (spec.render_calibration && spec.calibration_yaml.empty()) {
-    const fs::path dir = fs::path(args.output) / "calibration";
-    const std::string yaml = (dir / "camera.yaml").string();
-    if (args.calibrate) {
-      CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
-      CalibrationSummary summary;
-      CameraCalibration calibration = CalibrateFromFiles(
-          {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
-      SaveCalibration(calibration, yaml);
-      LogInfo("calibration: {}", summary.BriefReport());
-    } else {
-      LogWarning(
-          "--no-calibrate: the scene points at {} which does not exist yet; make it with "
-          "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
-          yaml, (dir / "plane.png").string(), (dir / "view_*.png").string(), yaml);
-    }
-  }
+  CalibrateRendered(spec, args.output, args.calibrate);
   std::cout << report.BriefReport() << "\n";
   std::cout << "scene: " << report.scene_yaml << "\n";
 }
@@ -88,6 +120,10 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("SCENE_SPEC", args->spec_path, "Scene spec YAML (keys in docs/synth.md)");
   cmd->add_option("--preset", args->preset, "Use a preset instead of a spec: small, full, tiny");
   cmd->add_option("-o,--output", args->output, "Output folder (created)")->required();
+  cmd->add_option("--dem", args->dem_dir,
+                  "Film a DEM run instead (folder of validation/dem/run_case.sh: meta.txt, "
+                  "grains.dump, near.dump, pounder.txt; docs/validation.md); the spec gives the "
+                  "camera, noise, sensor and DIC settings");
   cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");
