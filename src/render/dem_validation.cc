@@ -35,7 +35,8 @@ double Attr(const H5Reader& in, const std::string& object, const std::string& na
 }
 
 struct TruthFile {
-  std::vector<double> frame_t, gx, gy, u, v, vx, vy, p_gran, v_sand, pounder_v, pounder_z;
+  std::vector<double> frame_t, gx, gy, u, v, vx, vy, p_gran, p_gran_fd, v_sand, pounder_v,
+      pounder_z;
   std::vector<double> fine_t, fine_p_gran, sensor_t, sensor_g;
   std::size_t cells = 0;
   double p_max = kNaN, t_e = kNaN, v_te = kNaN, m_add_max = kNaN, cons = kNaN, cons_peak = kNaN;
@@ -56,6 +57,7 @@ TruthFile ReadTruth(const std::string& path) {
   t.vy = in.ReadDouble("soil/velocity_y_mm_s");
   t.p_gran = in.ReadDouble("momentum/p_gran_Ns");
   t.v_sand = in.ReadDouble("momentum/v_sand_m_s");
+  t.p_gran_fd = in.ReadDouble("momentum/p_gran_fd_Ns");
   t.pounder_v = in.ReadDouble("pounder/v_m_s");
   t.pounder_z = in.ReadDouble("pounder/z_m");
   if (in.Exists("series/t_s")) {
@@ -167,13 +169,14 @@ void CompareMomentum(const H5Reader& res, const TruthFile& t, const std::vector<
   out->conservation_truth_peak = t.cons_peak;
   out->m_add_max_truth_kg = t.m_add_max;
   out->grid_mass_truth_kg = t.grid_mass;
-  double worst = 0, sum_tool = 0, sum_truth = 0;
+  double worst = 0, worst_fd = 0, sum_tool = 0, sum_truth = 0;
   bool any = false;
   for (std::size_t f = 0; f < frame.size(); ++f) {
     const std::size_t k = frame[f];
     const double tk = t.frame_t[k];
     out->t_s.push_back(tk);
     out->p_gran_truth_Ns.push_back(t.p_gran[k]);
+    out->p_gran_fd_truth_Ns.push_back(t.p_gran_fd[k]);
     out->p_pounder_truth_Ns.push_back(t.mp * t.pounder_v[k]);
     out->v_sand_truth_m_s.push_back(t.v_sand[k]);
     out->m_add_truth_kg.push_back(tk > 0 && tk <= t.t_e + 1e-9 ? t.p_max / t.pounder_v[k] - t.mp
@@ -181,6 +184,7 @@ void CompareMomentum(const H5Reader& res, const TruthFile& t, const std::vector<
     if (tk > 0 && tk <= t.t_e + 1e-9 && f < out->p_gran_tool_Ns.size() &&
         std::isfinite(out->p_gran_tool_Ns[f])) {
       worst = std::max(worst, std::abs(out->p_gran_tool_Ns[f] - t.p_gran[k]));
+      worst_fd = std::max(worst_fd, std::abs(out->p_gran_tool_Ns[f] - t.p_gran_fd[k]));
       sum_tool += out->p_gran_tool_Ns[f];
       sum_truth += t.p_gran[k];
       any = true;
@@ -190,6 +194,7 @@ void CompareMomentum(const H5Reader& res, const TruthFile& t, const std::vector<
     out->p_gran_error_peak_Ns = worst;
     out->p_gran_error_peak_rel = worst / t.p_max;
     out->p_gran_ratio_peak = sum_tool / sum_truth;
+    out->p_gran_fd_error_peak_rel = worst_fd / t.p_max;
   } else {
     out->notes.push_back("no analysed frame in (0, t_e] of the grains: p_gran not compared");
   }

@@ -91,6 +91,7 @@ void DemScene::ComputeTruth() {
   T.u_px.assign(static_cast<std::size_t>(F) * N, 0);
   T.v_px = T.velocity_x_mm_s = T.velocity_y_mm_s = T.u_px;
   T.p_gran_Ns.assign(static_cast<std::size_t>(F), 0);
+  std::vector<double> grid_y_m(static_cast<std::size_t>(F), 0);  // sum m y_down
   T.grid_mass_kg = 0;
   for (std::size_t i = 0; i < G; ++i)
     if (grid_cell[i] >= 0) T.grid_mass_kg += ref.grains[i].mass_kg;
@@ -102,7 +103,10 @@ void DemScene::ComputeTruth() {
       if (g.id != ref.grains[i].id)
         throw Error(ErrorKind::kFileFormat, "grains.dump", fmt::format("grain id {}", g.id),
                     fmt::format("the same ids in every snapshot (step {})", s.step));
-      if (grid_cell[i] >= 0) T.p_gran_Ns[static_cast<std::size_t>(k)] += -g.mass_kg * g.vy_m_s;
+      if (grid_cell[i] >= 0) {
+        T.p_gran_Ns[static_cast<std::size_t>(k)] += -g.mass_kg * g.vy_m_s;
+        grid_y_m[static_cast<std::size_t>(k)] += -g.mass_kg * g.y_m;
+      }
       if (dic_cell[i] < 0) continue;
       const std::size_t c = o + static_cast<std::size_t>(dic_cell[i]);
       const cv::Point2d p = PanelFromDem(g.x_m, g.y_m);
@@ -117,6 +121,19 @@ void DemScene::ComputeTruth() {
   }
   T.bulk_density_kg_m3 = spec_.density_kg_m3;
   T.grid_mass_bulk_kg = spec_.density_kg_m3 * mt.grid_area_mm2 * 1e-6 * m.depth_m;
+  T.p_gran_fd_Ns.assign(static_cast<std::size_t>(F), 0);
+  for (int k = 0; k < F; ++k) {
+    const std::size_t u = static_cast<std::size_t>(k);
+    if (k == 0)
+      T.p_gran_fd_Ns[u] = (-3 * grid_y_m[0] + 4 * grid_y_m[1] - grid_y_m[2]) /
+                          (T.frame_time_s[2] - T.frame_time_s[0]);
+    else if (k == F - 1)
+      T.p_gran_fd_Ns[u] = (3 * grid_y_m[u] - 4 * grid_y_m[u - 1] + grid_y_m[u - 2]) /
+                          (T.frame_time_s[u] - T.frame_time_s[u - 2]);
+    else
+      T.p_gran_fd_Ns[u] =
+          (grid_y_m[u + 1] - grid_y_m[u - 1]) / (T.frame_time_s[u + 1] - T.frame_time_s[u - 1]);
+  }
   T.v_sand_m_s.resize(T.p_gran_Ns.size());
   for (std::size_t k = 0; k < T.p_gran_Ns.size(); ++k)
     T.v_sand_m_s[k] = T.p_gran_Ns[k] / T.grid_mass_kg;
@@ -246,6 +263,8 @@ void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
   out.Write("momentum/grid_y_px", my, mdims, "px", "default momentum grid centres, y");
   out.Write("momentum/p_pounder_Ns", pp, "N s", "m_p v_p at the frames");
   out.Write("momentum/p_gran_Ns", T.p_gran_Ns, "N s", "sum m v_down of the grid's grains");
+  out.Write("momentum/p_gran_fd_Ns", T.p_gran_fd_Ns, "N s",
+            "grid mass x central difference of the grid grains' mean displacement (perfect DIC)");
   out.Write("momentum/v_sand_m_s", T.v_sand_m_s, "m/s", "p_gran / grid grain mass");
   auto scalar = [&](const std::string& name, double value, const std::string& units,
                     const std::string& what) {

@@ -133,6 +133,7 @@ TEST(DemScene, UniformGrainMotionGivesKnownCellVelocityAndMomentum) {
   EXPECT_NEAR(t.grid_mass_bulk_kg, t.grid_mass_kg, 0.03 * t.grid_mass_kg);
   for (std::size_t k = 0; k < t.p_gran_Ns.size(); ++k) {
     EXPECT_NEAR(t.p_gran_Ns[k], t.grid_mass_kg * kVGrain, 1e-9);
+    EXPECT_NEAR(t.p_gran_fd_Ns[k], t.grid_mass_kg * kVGrain, 1e-6);  // uniform motion: exact
     EXPECT_NEAR(t.v_sand_m_s[k], kVGrain, 1e-9);
   }
   // p_max at contact; t_e: the first frame where v_p - v_sand <= 2 % of v_p,max.

@@ -22,6 +22,7 @@ struct DemValidation {
   // Per analysed frame (time since contact on the DEM clock).
   std::vector<double> t_s, p_gran_tool_Ns, p_gran_truth_Ns, p_pounder_tool_Ns, p_pounder_truth_Ns;
   std::vector<double> v_sand_tool_m_s, v_sand_truth_m_s, m_add_tool_kg, m_add_truth_kg;
+  std::vector<double> p_gran_fd_truth_Ns;  // grains, central differences (a perfect DIC)
   // DIC against the cells' grains (valid subsets of analysed frames after the contact).
   std::size_t dic_samples = 0;
   double dic_velocity_rms_mm_s = kNaN;     // against the grains' mean velocity
@@ -38,6 +39,9 @@ struct DemValidation {
   double p_gran_error_peak_Ns = kNaN, p_gran_error_peak_rel = kNaN;
   // Ratio of the sums of p_gran,tool and p_gran,grains over those frames (a scale error).
   double p_gran_ratio_peak = kNaN;
+  // The same against the grains' central differences (what a perfect DIC at this frame rate
+  // gives): separates the DIC error from the time sampling.
+  double p_gran_fd_error_peak_rel = kNaN;
   // Sigmoid fit of the tool (Eq. 5).
   double sigmoid_M_kg = kNaN, sigmoid_b_per_s = kNaN, sigmoid_T_s = kNaN;
   // Eq. 9 with the fitted M, b, T (K, n, u of the scene) against the DEM pounder.

@@ -91,6 +91,9 @@ struct DemTruth {
   double bulk_density_kg_m3 = 0;   // Grain mass / area over the bed under the footprint.
   std::vector<double> p_gran_Ns;   // Per frame: sum m v_down of the grid grains.
   std::vector<double> v_sand_m_s;  // Per frame: p_gran / grid mass.
+  // Per frame: what a perfect DIC would give: the grid mass times the central difference (one
+  // sided at the ends) of the grid grains' mean displacement, as the kinematics stage does.
+  std::vector<double> p_gran_fd_Ns;
   // Fine series at the DAQ rate (from near.dump; empty without it): time since contact.
   std::vector<double> fine_t_s, fine_p_gran_Ns, fine_v_sand_m_s, fine_v_p_m_s, fine_p_p_Ns;
   // Pounder.
