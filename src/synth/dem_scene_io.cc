@@ -138,6 +138,16 @@ void DemScene::ComputeTruth() {
   for (std::size_t k = 0; k < T.p_gran_Ns.size(); ++k)
     T.v_sand_m_s[k] = T.p_gran_Ns[k] / T.grid_mass_kg;
 
+  std::unordered_map<std::int64_t, double> grid_mass_of;
+  for (std::size_t i = 0; i < G; ++i)
+    if (grid_cell[i] >= 0) grid_mass_of[ref.grains[i].id] = ref.grains[i].mass_kg;
+  ComputePeakStageTruth(grid_mass_of);
+}
+
+// p_max, the fine series from near.dump and t_e by the paper's definition (DemTruth::t_e_s).
+void DemScene::ComputePeakStageTruth(const std::unordered_map<std::int64_t, double>& grid_mass_of) {
+  DemTruth& T = truth_;
+  const DemMeta& m = record_.meta;
   // Pounder momentum maximum over the DEM samples after contact.
   const double mp = m.pounder_mass_kg;
   T.p_max_Ns = -std::numeric_limits<double>::infinity();
@@ -147,9 +157,6 @@ void DemScene::ComputeTruth() {
   }
 
   // Fine series from near.dump, if every grid grain is in it.
-  std::unordered_map<std::int64_t, double> grid_mass_of;
-  for (std::size_t i = 0; i < G; ++i)
-    if (grid_cell[i] >= 0) grid_mass_of[ref.grains[i].id] = ref.grains[i].mass_kg;
   bool fine = !record_.near.empty();
   for (const DemSnapshot& s : record_.near) {
     double p = 0;

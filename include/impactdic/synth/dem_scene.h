@@ -29,6 +29,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "impactdic/synth/impact_scene.h"
@@ -144,6 +145,8 @@ class DemScene {
 
  private:
   void ComputeTruth();
+  // grid_mass_of: mass of each grid grain by id.
+  void ComputePeakStageTruth(const std::unordered_map<std::int64_t, double>& grid_mass_of);
 
   DemRecord record_;
   ImpactSceneSpec spec_;
