@@ -17,6 +17,7 @@ void RegisterAnalyzeCommand(CLI::App& app);
 void RegisterModelCommand(CLI::App& app);
 void RegisterRenderCommand(CLI::App& app);
 void RegisterCampaignCommand(CLI::App& app);
+void RegisterValidateDemCommand(CLI::App& app);
 void RegisterVersionCommand(CLI::App& app);
 
 }  // namespace impactdic::cli

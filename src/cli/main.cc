@@ -62,6 +62,7 @@ int Main(int argc, char** argv) {
   cli::RegisterModelCommand(app);
   cli::RegisterRenderCommand(app);
   cli::RegisterCampaignCommand(app);
+  cli::RegisterValidateDemCommand(app);
   cli::RegisterVersionCommand(app);
 
   // An unknown first word is reported as such (CLI11 would only say a subcommand is required).

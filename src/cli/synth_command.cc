@@ -14,6 +14,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic::cli {
@@ -23,9 +24,62 @@ struct SynthArgs {
   std::string spec_path;
   std::string preset;
   std::string output;
+  std::string dem_dir;
   int frames = -1;
   bool calibrate = true;
 };
+
+// The scene points at calibration/camera.yaml: make it from the rendered images in `staging` (the
+// generation's folder; messages name `output`, where they will be).
+void CalibrateRendered(const ImpactSceneSpec& spec, const std::string& staging,
+                       const std::string& output, bool calibrate) {
+  namespace fs = std::filesystem;
+  if (!spec.render_calibration || !spec.calibration_yaml.empty()) return;
+  const fs::path dir = fs::path(staging) / "calibration";
+  const std::string yaml = (dir / "camera.yaml").string();
+  if (calibrate) {
+    CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
+    CalibrationSummary summary;
+    CameraCalibration calibration = CalibrateFromFiles(
+        {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
+    SaveCalibration(calibration, yaml);
+    LogInfo("calibration: {}", summary.BriefReport());
+  } else {
+    const fs::path final_dir = fs::path(output) / "calibration";
+    const std::string final_yaml = (final_dir / "camera.yaml").string();
+    LogWarning(
+        "--no-calibrate: the scene points at {} which does not exist yet; make it with "
+        "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
+        final_yaml, (final_dir / "plane.png").string(), (final_dir / "view_*.png").string(),
+        final_yaml);
+  }
+}
+
+// impactdic synth --dem DIR: films a DEM run (synth/dem_scene.h, docs/validation.md).
+void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGeneration& generation) {
+  if (args.frames != -1)
+    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(args.frames),
+                "no --frames with --dem (the frames are the DEM's snapshots)");
+  DemRecord record = ReadDemRecord(args.dem_dir);
+  DemScene scene(std::move(record), spec);
+  const DemTruth& t = scene.truth();
+  LogInfo(
+      "DEM scene: {} frames, {} grains, bulk density {:.1f} kg/m^3, grid mass {:.4g} kg (bulk "
+      "estimate {:.4g} kg), p_max {:.4g} N s, t_e {:.4g} ms, m_add,max {:.4g} kg, conservation "
+      "error at t_e {:.2f} % (max {:.2f} % in the peak stage)",
+      scene.frame_count(), scene.record().frames[0].grains.size(), t.bulk_density_kg_m3,
+      t.grid_mass_kg, t.grid_mass_bulk_kg, t.p_max_Ns, t.t_e_s * 1e3, t.m_add_max_kg,
+      100 * t.conservation_error_te, 100 * t.conservation_error_peak);
+  for (const auto& note : t.notes) LogWarning("DEM truth: {}", note);
+  DemSceneReport report = WriteDemScene(scene, generation.staging_folder());
+  CalibrateRendered(scene.base().spec(), generation.staging_folder(), args.output, args.calibrate);
+  generation.Commit();
+  for (std::string* path : {&report.out_dir, &report.scene_yaml, &report.truth_h5,
+                            &report.sensor_csv, &report.calibration_yaml})
+    *path = generation.FinalPath(*path);
+  std::cout << report.BriefReport() << "\n";
+  std::cout << "scene: " << report.scene_yaml << "\n";
+}
 
 void RunSynth(const SynthArgs& args) {
   // Validate everything before any work.
@@ -60,6 +114,10 @@ void RunSynth(const SynthArgs& args) {
                                                  // impactdic (newer runs leave a marker in it).
   OutputGeneration generation(args.output, generation_options);
 
+  if (!args.dem_dir.empty()) {
+    RunSynthDem(args, spec, generation);
+    return;
+  }
   ImpactScene scene(spec);
   LogInfo("model: {}", scene.model_run().summary.BriefReport());
   LogInfo("scene: {} frames of {}x{} px, t_e = {:.4g} ms, m_grid = {:.4g} kg, ROI [{}, {}, {}, {}]",
@@ -68,27 +126,7 @@ void RunSynth(const SynthArgs& args) {
           scene.dic_grid().roi[2], scene.dic_grid().roi[3]);
   ImpactSceneReport report = WriteImpactScene(scene, generation.staging_folder());
 
-  // The scene points at calibration/camera.yaml: make it from the rendered images.
-  if (spec.render_calibration && spec.calibration_yaml.empty()) {
-    const fs::path dir = fs::path(generation.staging_folder()) / "calibration";
-    const std::string yaml = (dir / "camera.yaml").string();
-    if (args.calibrate) {
-      CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
-      CalibrationSummary summary;
-      CameraCalibration calibration = CalibrateFromFiles(
-          {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
-      SaveCalibration(calibration, yaml);
-      LogInfo("calibration: {}", summary.BriefReport());
-    } else {
-      const fs::path final_dir = fs::path(args.output) / "calibration";
-      const std::string final_yaml = (final_dir / "camera.yaml").string();
-      LogWarning(
-          "--no-calibrate: the scene points at {} which does not exist yet; make it with "
-          "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
-          final_yaml, (final_dir / "plane.png").string(), (final_dir / "view_*.png").string(),
-          final_yaml);
-    }
-  }
+  CalibrateRendered(spec, generation.staging_folder(), args.output, args.calibrate);
   generation.Commit();
   for (std::string* path : {&report.out_dir, &report.scene_yaml, &report.truth_h5,
                             &report.sensor_csv, &report.spec_yaml, &report.calibration_dir})
@@ -110,6 +148,10 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_option("-o,--output", args->output,
                   "Output folder (created; an earlier scene in it is replaced when complete)")
       ->required();
+  cmd->add_option("--dem", args->dem_dir,
+                  "Film a DEM run instead (folder of validation/dem/run_case.sh: meta.txt, "
+                  "grains.dump, near.dump, pounder.txt; docs/validation.md); the spec gives the "
+                  "camera, noise, sensor and DIC settings");
   cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");

@@ -1,0 +1,65 @@
+// Comparison of an `impactdic run` on footage filmed from a DEM simulation with the truth
+// measured on the grains (issue 15; docs/validation.md). Reads the truth.h5 of
+// `impactdic synth --dem` and the results.h5 of `impactdic run`, and reports next to each other:
+// the DIC velocity field error, p_gran of the tool against the grains' momentum in the same 6 x 2
+// grid, p_max, t_e, the conservation error (Eq. 3) of the physics and of the tool, m_add(t) and
+// the sigmoid fit (Eq. 5), and Eq. 9 run with the fitted M, b, T against the DEM pounder's
+// deceleration. Optionally draws the figures of docs/validation.md.
+//
+//   DemValidation v = ValidateDemRun("scene/truth.h5", "run/results.h5", "figures/");
+//   std::cout << v.Report();
+#ifndef IMPACTDIC_RENDER_DEM_VALIDATION_H_
+#define IMPACTDIC_RENDER_DEM_VALIDATION_H_
+
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace impactdic {
+
+struct DemValidation {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  // Per analysed frame (time since contact on the DEM clock).
+  std::vector<double> t_s, p_gran_tool_Ns, p_gran_truth_Ns, p_pounder_tool_Ns, p_pounder_truth_Ns;
+  std::vector<double> v_sand_tool_m_s, v_sand_truth_m_s, m_add_tool_kg, m_add_truth_kg;
+  std::vector<double> p_gran_fd_truth_Ns;  // grains, central differences (a perfect DIC)
+  // DIC against the cells' grains (valid subsets of analysed frames after the contact).
+  std::size_t dic_samples = 0;
+  double dic_velocity_rms_mm_s = kNaN;     // against the grains' mean velocity
+  double dic_velocity_rms_fd_mm_s = kNaN;  // against central differences of their displacement
+  double dic_displacement_rms_px = kNaN;
+  double truth_speed_max_mm_s = kNaN;  // largest cell speed (scale of the errors)
+  // Momentum.
+  double p_max_tool_Ns = kNaN, p_max_truth_Ns = kNaN;
+  double t_e_tool_s = kNaN, t_e_truth_s = kNaN;
+  double conservation_tool = kNaN, conservation_truth = kNaN, conservation_truth_peak = kNaN;
+  double m_add_max_tool_kg = kNaN, m_add_max_truth_kg = kNaN;
+  double grid_mass_truth_kg = kNaN, grid_mass_tool_kg = kNaN;
+  // max |p_gran,tool - p_gran,grains| over the frames in [0, t_e (grains)], and relative to p_max.
+  double p_gran_error_peak_Ns = kNaN, p_gran_error_peak_rel = kNaN;
+  // Ratio of the sums of p_gran,tool and p_gran,grains over those frames (a scale error).
+  double p_gran_ratio_peak = kNaN;
+  // The same against the grains' central differences (what a perfect DIC at this frame rate
+  // gives): separates the DIC error from the time sampling.
+  double p_gran_fd_error_peak_rel = kNaN;
+  // Sigmoid fit of the tool (Eq. 5).
+  double sigmoid_M_kg = kNaN, sigmoid_b_per_s = kNaN, sigmoid_T_s = kNaN;
+  // Eq. 9 with the fitted M, b, T (K, n, u of the scene) against the DEM pounder.
+  double dem_peak_decel_g = kNaN, dem_t_peak_s = kNaN, model_peak_decel_g = kNaN,
+         model_t_peak_s = kNaN;
+  double dem_max_penetration_m = kNaN, model_crater_depth_m = kNaN;
+  double decel_rms_g = kNaN;  // model - DEM over [0, min(t_end model, end of DEM record)]
+  std::vector<std::string> notes;
+
+  std::string Report() const;  // The table of docs/validation.md for this case, as text.
+};
+
+// Reads both files (Error naming a missing dataset) and compares; figures_dir non-empty: writes
+// velocity_field_compare.png (DIC field next to the grains', same colour scale, at the frame
+// nearest t_e/2 of the grains), momentum_compare.png and deceleration_compare.png there.
+DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
+                             const std::string& figures_dir = "");
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_RENDER_DEM_VALIDATION_H_

@@ -1,0 +1,401 @@
+// Comparison of a run on DEM footage with the grains' truth (docs/validation.md).
+#include "impactdic/render/dem_validation.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/render/figures.h"
+#include "impactdic/render/render_results.h"
+#include "impactdic/render/results_layout.h"
+#include "impactdic/render/velocity_field.h"
+
+namespace impactdic {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Scalar(const H5Reader& in, const std::string& path) {
+  const std::vector<double> v = in.ReadDouble(path);
+  if (v.empty()) throw Error(ErrorKind::kFileFormat, path, "an empty dataset", "one value");
+  return v[0];
+}
+
+double Attr(const H5Reader& in, const std::string& object, const std::string& name) {
+  return in.HasAttribute(object, name) ? in.ReadNumberAttribute(object, name) : kNaN;
+}
+
+struct TruthFile {
+  std::vector<double> frame_t, gx, gy, u, v, vx, vy, p_gran, p_gran_fd, v_sand, pounder_v,
+      pounder_z;
+  std::vector<double> fine_t, fine_p_gran, sensor_t, sensor_g;
+  std::size_t cells = 0;
+  double p_max = kNaN, t_e = kNaN, v_te = kNaN, m_add_max = kNaN, cons = kNaN, cons_peak = kNaN;
+  double grid_mass = kNaN, bulk_density = kNaN, mp = kNaN, v0 = kNaN, width = kNaN, depth = kNaN;
+  double sx = kNaN;
+};
+
+TruthFile ReadTruth(const std::string& path) {
+  H5Reader in(path);
+  TruthFile t;
+  t.frame_t = in.ReadDouble("frames/time_s");
+  t.gx = in.ReadDouble("soil/grid_x_px");
+  t.gy = in.ReadDouble("soil/grid_y_px");
+  t.cells = t.gx.size();
+  t.u = in.ReadDouble("soil/u_px");
+  t.v = in.ReadDouble("soil/v_px");
+  t.vx = in.ReadDouble("soil/velocity_x_mm_s");
+  t.vy = in.ReadDouble("soil/velocity_y_mm_s");
+  t.p_gran = in.ReadDouble("momentum/p_gran_Ns");
+  t.v_sand = in.ReadDouble("momentum/v_sand_m_s");
+  t.p_gran_fd = in.ReadDouble("momentum/p_gran_fd_Ns");
+  t.pounder_v = in.ReadDouble("pounder/v_m_s");
+  t.pounder_z = in.ReadDouble("pounder/z_m");
+  if (in.Exists("series/t_s")) {
+    t.fine_t = in.ReadDouble("series/t_s");
+    t.fine_p_gran = in.ReadDouble("series/p_gran_Ns");
+  }
+  t.sensor_t = in.ReadDouble("sensor/t_s");
+  t.sensor_g = in.ReadDouble("sensor/accel_true_g");
+  t.p_max = Scalar(in, "momentum/p_max_Ns");
+  t.t_e = Scalar(in, "momentum/t_e_s");
+  t.v_te = Scalar(in, "momentum/v_te_m_s");
+  t.m_add_max = Scalar(in, "momentum/m_add_max_kg");
+  t.cons = Scalar(in, "momentum/conservation_error");
+  t.cons_peak = Scalar(in, "momentum/conservation_error_peak");
+  t.grid_mass = Scalar(in, "momentum/grid_mass_kg");
+  t.bulk_density = Scalar(in, "momentum/bulk_density_kg_m3");
+  t.mp = Attr(in, "dem", "pounder_mass_kg");
+  t.v0 = Attr(in, "dem", "impact_velocity_m_s");
+  t.width = Attr(in, "dem", "pounder_width_m");
+  t.depth = Attr(in, "dem", "depth_m");
+  t.sx = Attr(in, "camera", "sx_mm_per_px");
+  return t;
+}
+
+// Matches each DIC subset with the truth cell of the same centre (within 0.5 px), or -1.
+std::vector<long> MatchCells(const std::vector<double>& x, const std::vector<double>& y,
+                             const TruthFile& t) {
+  std::vector<long> cell(x.size(), -1);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    for (std::size_t c = 0; c < t.cells; ++c)
+      if (std::abs(x[i] - t.gx[c]) <= 0.5 && std::abs(y[i] - t.gy[c]) <= 0.5) {
+        cell[i] = static_cast<long>(c);
+        break;
+      }
+  return cell;
+}
+
+void CompareDic(const H5Reader& res, const TruthFile& t, const std::vector<std::size_t>& frame,
+                DemValidation* out, VelocityFieldSequence* tool_seq,
+                VelocityFieldSequence* truth_seq) {
+  const std::vector<double> x = res.ReadDouble(results_layout::kDicX);
+  const std::vector<double> y = res.ReadDouble(results_layout::kDicY);
+  const std::vector<double> u = res.ReadDouble(results_layout::kDicU);
+  const std::vector<double> v = res.ReadDouble(results_layout::kDicV);
+  const std::vector<double> vx = res.ReadDouble(results_layout::kVx);
+  const std::vector<double> vy = res.ReadDouble(results_layout::kVy);
+  const std::size_t N = x.size(), F = frame.size();
+  const std::vector<long> cell = MatchCells(x, y, t);
+  const double fps = 1 / (t.frame_t[1] - t.frame_t[0]);
+  double se_v = 0, se_fd = 0, se_u = 0, vmax = 0;
+  std::size_t n = 0, n_fd = 0;
+  truth_seq->vx_mm_s.assign(F * N, kNaN);
+  truth_seq->vy_mm_s.assign(F * N, kNaN);
+  for (std::size_t f = 0; f < F; ++f) {
+    const std::size_t k = frame[f];
+    for (std::size_t i = 0; i < N; ++i) {
+      if (cell[i] < 0) continue;
+      const std::size_t c = k * t.cells + static_cast<std::size_t>(cell[i]);
+      truth_seq->vx_mm_s[f * N + i] = t.vx[c];
+      truth_seq->vy_mm_s[f * N + i] = t.vy[c];
+      if (!(t.frame_t[k] > 0)) continue;
+      vmax = std::max(vmax, std::hypot(t.vx[c], t.vy[c]));
+      const std::size_t j = f * N + i;
+      if (!std::isfinite(vx[j]) || !std::isfinite(vy[j]) || !std::isfinite(t.vx[c])) continue;
+      se_v += std::pow(vx[j] - t.vx[c], 2) + std::pow(vy[j] - t.vy[c], 2);
+      ++n;
+      se_u += std::pow(u[j] - (t.u[c] - t.u[frame[0] * t.cells + (c % t.cells)]), 2) +
+              std::pow(v[j] - (t.v[c] - t.v[frame[0] * t.cells + (c % t.cells)]), 2);
+      if (k >= 1 && k + 1 < t.frame_t.size()) {
+        const std::size_t cp = c + t.cells, cm = c - t.cells;
+        const double sx = t.sx;  // mm/px (sx ~ sy for the fronto-parallel camera)
+        const double fx = (t.u[cp] - t.u[cm]) * sx * fps / 2,
+                     fy = (t.v[cp] - t.v[cm]) * sx * fps / 2;
+        se_fd += std::pow(vx[j] - fx, 2) + std::pow(vy[j] - fy, 2);
+        ++n_fd;
+      }
+    }
+  }
+  out->dic_samples = n;
+  out->dic_velocity_rms_mm_s = n ? std::sqrt(se_v / n) : kNaN;
+  out->dic_velocity_rms_fd_mm_s = n_fd ? std::sqrt(se_fd / n_fd) : kNaN;
+  out->dic_displacement_rms_px = n ? std::sqrt(se_u / n) : kNaN;
+  out->truth_speed_max_mm_s = vmax;
+  tool_seq->num_subsets = truth_seq->num_subsets = N;
+  tool_seq->x_px = truth_seq->x_px = x;
+  tool_seq->y_px = truth_seq->y_px = y;
+  tool_seq->vx_mm_s = vx;
+  tool_seq->vy_mm_s = vy;
+}
+
+void CompareMomentum(const H5Reader& res, const TruthFile& t, const std::vector<std::size_t>& frame,
+                     DemValidation* out) {
+  out->p_gran_tool_Ns = res.ReadDouble(results_layout::kPGran);
+  out->p_pounder_tool_Ns = res.ReadDouble(results_layout::kPPounder);
+  out->v_sand_tool_m_s = res.ReadDouble("/momentum/v_sand_m_s");
+  out->m_add_tool_kg = res.ReadDouble(results_layout::kMAdd);
+  const std::string g = results_layout::kMomentumGroup;
+  out->p_max_tool_Ns = Attr(res, g, "p_max_kg_m_s");
+  out->t_e_tool_s = Attr(res, g, "t_end_peak_s");
+  out->conservation_tool = Attr(res, g, "momentum_conservation_error");
+  out->m_add_max_tool_kg = Attr(res, g, "added_mass_max_kg");
+  out->grid_mass_tool_kg = Attr(res, g, "grid_mass_kg");
+  out->sigmoid_M_kg = Attr(res, g, "M");
+  out->sigmoid_b_per_s = Attr(res, g, "b");
+  out->sigmoid_T_s = Attr(res, g, "T");
+  out->p_max_truth_Ns = t.p_max;
+  out->t_e_truth_s = t.t_e;
+  out->conservation_truth = t.cons;
+  out->conservation_truth_peak = t.cons_peak;
+  out->m_add_max_truth_kg = t.m_add_max;
+  out->grid_mass_truth_kg = t.grid_mass;
+  double worst = 0, worst_fd = 0, sum_tool = 0, sum_truth = 0;
+  bool any = false;
+  for (std::size_t f = 0; f < frame.size(); ++f) {
+    const std::size_t k = frame[f];
+    const double tk = t.frame_t[k];
+    out->t_s.push_back(tk);
+    out->p_gran_truth_Ns.push_back(t.p_gran[k]);
+    out->p_gran_fd_truth_Ns.push_back(t.p_gran_fd[k]);
+    out->p_pounder_truth_Ns.push_back(t.mp * t.pounder_v[k]);
+    out->v_sand_truth_m_s.push_back(t.v_sand[k]);
+    out->m_add_truth_kg.push_back(tk > 0 && tk <= t.t_e + 1e-9 ? t.p_max / t.pounder_v[k] - t.mp
+                                                               : kNaN);
+    if (tk > 0 && tk <= t.t_e + 1e-9 && f < out->p_gran_tool_Ns.size() &&
+        std::isfinite(out->p_gran_tool_Ns[f])) {
+      worst = std::max(worst, std::abs(out->p_gran_tool_Ns[f] - t.p_gran[k]));
+      worst_fd = std::max(worst_fd, std::abs(out->p_gran_tool_Ns[f] - t.p_gran_fd[k]));
+      sum_tool += out->p_gran_tool_Ns[f];
+      sum_truth += t.p_gran[k];
+      any = true;
+    }
+  }
+  if (any) {
+    out->p_gran_error_peak_Ns = worst;
+    out->p_gran_error_peak_rel = worst / t.p_max;
+    out->p_gran_ratio_peak = sum_tool / sum_truth;
+    out->p_gran_fd_error_peak_rel = worst_fd / t.p_max;
+  } else {
+    out->notes.push_back("no analysed frame in (0, t_e] of the grains: p_gran not compared");
+  }
+}
+
+// Eq. 9 with the tool's fitted M, b, T against the DEM pounder (deceleration from the noise-free
+// accelerometer reading: decel = reading - 1 g).
+void CompareModel(const TruthFile& t, DemValidation* out, std::vector<double>* model_t,
+                  std::vector<double>* model_g) {
+  for (std::size_t i = 0; i < t.sensor_t.size(); ++i) {
+    if (t.sensor_t[i] < 0) continue;
+    if (!(t.sensor_g[i] - 1 <= out->dem_peak_decel_g))
+      out->dem_peak_decel_g = t.sensor_g[i] - 1, out->dem_t_peak_s = t.sensor_t[i];
+  }
+  out->dem_max_penetration_m = *std::max_element(t.pounder_z.begin(), t.pounder_z.end());
+  if (!std::isfinite(out->sigmoid_M_kg) || !std::isfinite(out->sigmoid_b_per_s) ||
+      !std::isfinite(out->sigmoid_T_s)) {
+    out->notes.push_back("no sigmoid fit in the results: Eq. 9 with fitted parameters not run");
+    return;
+  }
+  ImpactModelParameters p;
+  p.pounder_mass_kg = t.mp;
+  p.impact_velocity_m_s = t.v0;
+  p.width_m = t.width;
+  p.depth_m = t.depth;
+  p.density_kg_m3 = t.bulk_density;
+  p.added_mass_kg = out->sigmoid_M_kg;
+  p.sigmoid_rate_b_per_s = out->sigmoid_b_per_s;
+  p.sigmoid_delay_T_s = std::max(0.0, out->sigmoid_T_s);
+  try {
+    p.Check();
+    const ImpactRun run = SimulateImpact(p, ImpactSolverOptions{});
+    out->model_peak_decel_g = run.summary.peak_deceleration_g;
+    out->model_t_peak_s = run.summary.t_peak_s;
+    out->model_crater_depth_m = run.summary.crater_depth_m;
+    const double t_end = std::min(run.summary.t_end_s, t.sensor_t.back());
+    const double g = p.gravity_m_s2, h = 1e-5;
+    double se = 0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < t.sensor_t.size(); ++i) {
+      const double ti = t.sensor_t[i];
+      if (ti < h || ti > t_end - h) continue;
+      const double a =
+          (run.solution.StateAt(ti + h).v_m_s - run.solution.StateAt(ti - h).v_m_s) / (2 * h);
+      const double decel = -a / g;
+      model_t->push_back(ti);
+      model_g->push_back(decel);
+      se += std::pow(decel - (t.sensor_g[i] - 1), 2);
+      ++n;
+    }
+    out->decel_rms_g = n ? std::sqrt(se / n) : kNaN;
+  } catch (const Error& e) {
+    out->notes.push_back(std::string("Eq. 9 with the fitted parameters failed: ") + e.what());
+  }
+}
+
+void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequence tool_seq,
+                 VelocityFieldSequence truth_seq, const std::vector<double>& model_t,
+                 const std::vector<double>& model_g, const std::string& dir) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  // Velocity fields at the frame nearest t_e / 2 of the grains, one colour scale.
+  double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
+  std::size_t f_show = 0;
+  for (std::size_t f = 0; f < v.t_s.size(); ++f)
+    if (std::abs(v.t_s[f] - t_show) < std::abs(v.t_s[f_show] - t_show)) f_show = f;
+  VelocityOverlayOptions o;
+  double vmax = 0;
+  for (std::size_t i = 0; i < truth_seq.num_subsets; ++i) {
+    const double s = std::hypot(truth_seq.vx_mm_s[f_show * truth_seq.num_subsets + i],
+                                truth_seq.vy_mm_s[f_show * truth_seq.num_subsets + i]);
+    if (std::isfinite(s)) vmax = std::max(vmax, s);
+  }
+  o.max_speed_mm_s = vmax > 0 ? vmax : kNaN;
+  o.min_width_px = 640;
+  o.max_width_px = 640;
+  const VelocityFieldRenderer a(tool_seq, o), b(truth_seq, o);
+  const std::string when = fmt::format("t = {:.2f} ms", 1e3 * v.t_s[f_show]);
+  cv::Mat left = a.RenderFrame(f_show, "impactdic DIC, " + when);
+  cv::Mat right = b.RenderFrame(f_show, "DEM grains (cell means), " + when);
+  cv::Mat both;
+  cv::hconcat(left, right, both);
+  cv::imwrite((fs::path(dir) / "velocity_field_compare.png").string(), both);
+  // Small versions for the documentation: the upper part (where the soil moves), scaled.
+  cv::Mat top = both(cv::Rect(0, 0, both.cols, both.rows * 3 / 5)), small;
+  cv::resize(top, small, cv::Size(), 0.6, 0.6, cv::INTER_AREA);
+  cv::imwrite((fs::path(dir) / "velocity_field_compare_small.png").string(), small,
+              {cv::IMWRITE_PNG_COMPRESSION, 9});
+  const cv::Mat& frame = tool_seq.frames[f_show];
+  cv::imwrite((fs::path(dir) / "frame_small.png").string(),
+              frame(cv::Rect(0, 0, frame.cols, frame.rows * 3 / 5)),
+              {cv::IMWRITE_PNG_COMPRESSION, 9});
+
+  std::vector<double> t_ms, fine_ms, model_ms, sensor_ms, sensor_g, p_tot_tool, p_tot_truth;
+  for (double x : v.t_s) t_ms.push_back(1e3 * x);
+  for (double x : t.fine_t) fine_ms.push_back(1e3 * x);
+  for (double x : model_t) model_ms.push_back(1e3 * x);
+  for (std::size_t i = 0; i < v.t_s.size(); ++i) {
+    p_tot_tool.push_back(v.p_pounder_tool_Ns[i] + v.p_gran_tool_Ns[i]);
+    p_tot_truth.push_back(v.p_pounder_truth_Ns[i] + v.p_gran_truth_Ns[i]);
+  }
+  XyFigureData m;
+  m.title = "Momentum: impactdic vs DEM grains (6 x 2 grid)";
+  m.x_label = "time since contact [ms]";
+  m.y_label = "momentum [N s]";
+  m.series = {{t_ms, v.p_pounder_tool_Ns, "p_pounder (tool)", SeriesStyle::kLinesPoints},
+              {t_ms, v.p_gran_tool_Ns, "p_gran (tool, DIC)", SeriesStyle::kLinesPoints},
+              {t_ms, p_tot_tool, "p_total (tool)", SeriesStyle::kLinesPoints},
+              {t_ms, v.p_pounder_truth_Ns, "p_pounder (DEM)", SeriesStyle::kLines},
+              {t_ms, p_tot_truth, "p_total (DEM grains)", SeriesStyle::kLines}};
+  if (!fine_ms.empty())
+    m.series.push_back(
+        {fine_ms, t.fine_p_gran, "p_gran (DEM grains, 25 kHz)", SeriesStyle::kLines});
+  else
+    m.series.push_back({t_ms, v.p_gran_truth_Ns, "p_gran (DEM grains)", SeriesStyle::kLines});
+  m.legend = LegendPosition::kTopRight;
+  PlotXy(m, (fs::path(dir) / "momentum_compare.png").string());
+
+  for (std::size_t i = 0; i < t.sensor_t.size(); ++i)
+    if (t.sensor_t[i] >= -0.001) {
+      sensor_ms.push_back(1e3 * t.sensor_t[i]);
+      sensor_g.push_back(t.sensor_g[i] - 1);
+    }
+  XyFigureData d;
+  d.title = "Pounder deceleration: DEM vs Eq. 9 with the fitted M, b, T";
+  d.x_label = "time since contact [ms]";
+  d.y_label = "deceleration [g]";
+  d.series = {{sensor_ms, sensor_g, "DEM pounder (25 kHz)", SeriesStyle::kLines}};
+  if (!model_ms.empty())
+    d.series.push_back({model_ms, model_g, "Eq. 9, fitted", SeriesStyle::kLines});
+  PlotXy(d, (fs::path(dir) / "deceleration_compare.png").string());
+}
+
+}  // namespace
+
+DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
+                             const std::string& figures_dir) {
+  const TruthFile t = ReadTruth(truth_h5);
+  H5Reader res(results_h5);
+  DemValidation out;
+  std::vector<double> index = res.ReadDouble("/time/frame_index");
+  std::vector<std::size_t> frame;
+  for (double k : index) {
+    if (!(k >= 0) || static_cast<std::size_t>(k) >= t.frame_t.size())
+      throw Error(ErrorKind::kInvalidValue, results_h5 + ": /time/frame_index",
+                  fmt::format("{}", k),
+                  fmt::format("frame indices of the {} truth frames", t.frame_t.size()));
+    frame.push_back(static_cast<std::size_t>(k));
+  }
+  VelocityFieldSequence tool_seq, truth_seq;
+  CompareDic(res, t, frame, &out, &tool_seq, &truth_seq);
+  CompareMomentum(res, t, frame, &out);
+  std::vector<double> model_t, model_g;
+  CompareModel(t, &out, &model_t, &model_g);
+  if (!figures_dir.empty()) {
+    VelocityFieldSequence frames_only = ReadVelocityFieldSequence(res);
+    tool_seq.frames = truth_seq.frames = frames_only.frames;
+    tool_seq.time_ms = truth_seq.time_ms = frames_only.time_ms;
+    tool_seq.mm_per_px = truth_seq.mm_per_px = frames_only.mm_per_px;
+    DrawFigures(t, out, std::move(tool_seq), std::move(truth_seq), model_t, model_g, figures_dir);
+  }
+  return out;
+}
+
+std::string DemValidation::Report() const {
+  auto pct = [](double x) { return fmt::format("{:.1f} %", 100 * x); };
+  std::string r;
+  r += "| quantity | impactdic | DEM truth (grains) |\n|---|---|---|\n";
+  r += fmt::format(
+      "| DIC velocity error, RMS over {} subset samples after contact [mm/s] | {:.1f} "
+      "(vs central differences of the grains' displacement: {:.1f}) | max cell "
+      "speed {:.0f} |\n",
+      dic_samples, dic_velocity_rms_mm_s, dic_velocity_rms_fd_mm_s, truth_speed_max_mm_s);
+  r += fmt::format("| DIC displacement error, RMS [px] | {:.3f} | |\n", dic_displacement_rms_px);
+  r += fmt::format("| grid mass [kg] | {:.3f} (rho_d A t_z) | {:.3f} (sum of grain masses) |\n",
+                   grid_mass_tool_kg, grid_mass_truth_kg);
+  r += fmt::format("| p_max [N s] | {:.2f} | {:.2f} |\n", p_max_tool_Ns, p_max_truth_Ns);
+  r += fmt::format("| t_e [ms] | {:.2f} | {:.2f} |\n", 1e3 * t_e_tool_s, 1e3 * t_e_truth_s);
+  r += fmt::format(
+      "| p_gran through the peak stage: max abs(tool - grains) | {:.2f} N s ({} of "
+      "p_max); sum ratio tool/grains {:.3f} | |\n",
+      p_gran_error_peak_Ns, pct(p_gran_error_peak_rel), p_gran_ratio_peak);
+  r += fmt::format(
+      "| p_gran through the peak stage: max abs(tool - perfect DIC) | {} of p_max | (perfect "
+      "DIC: central differences of the grains' displacement) |\n",
+      pct(p_gran_fd_error_peak_rel));
+  r += fmt::format("| conservation error (Eq. 3) at t_e | {} | {} (max {} over the peak stage) |\n",
+                   pct(conservation_tool), pct(conservation_truth), pct(conservation_truth_peak));
+  r += fmt::format("| m_add,max [kg] | {:.2f} | {:.2f} |\n", m_add_max_tool_kg, m_add_max_truth_kg);
+  r += fmt::format("| sigmoid fit M [kg], b [1/s], T [ms] | {:.3g}, {:.4g}, {:.3f} | |\n",
+                   sigmoid_M_kg, sigmoid_b_per_s, 1e3 * sigmoid_T_s);
+  r += fmt::format(
+      "| peak deceleration [g] at [ms] | Eq. 9 fitted: {:.1f} at {:.2f} | {:.1f} at "
+      "{:.2f} |\n",
+      model_peak_decel_g, 1e3 * model_t_peak_s, dem_peak_decel_g, 1e3 * dem_t_peak_s);
+  r += fmt::format("| deceleration RMS difference [g] | {:.1f} | |\n", decel_rms_g);
+  r += fmt::format("| crater depth [mm] | Eq. 9 fitted: {:.1f} | {:.1f} (max penetration) |\n",
+                   1e3 * model_crater_depth_m, 1e3 * dem_max_penetration_m);
+  for (const auto& n : notes) r += "note: " + n + "\n";
+  return r;
+}
+
+}  // namespace impactdic

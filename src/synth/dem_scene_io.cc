@@ -1,0 +1,389 @@
+// DEM impact scene: the truth measured on the grains and writing the scene (docs/validation.md).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <unordered_map>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/synth/dem_scene.h"
+
+namespace impactdic {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+namespace fs = std::filesystem;
+
+// Index of the step x step cell (centred on a regular grid of centres) holding ideal pixel q, or
+// -1. centres: row-major cols x rows, spacing `step`.
+int CellOf(cv::Point2d q, const std::vector<cv::Point2d>& centres, int cols, int rows,
+           double step) {
+  if (centres.empty()) return -1;
+  const int i = static_cast<int>(std::floor((q.x - centres[0].x) / step + 0.5));
+  const int j = static_cast<int>(std::floor((q.y - centres[0].y) / step + 0.5));
+  if (i < 0 || j < 0 || i >= cols || j >= rows) return -1;
+  return j * cols + i;
+}
+
+// End of the peak stage on a series (see DemTruth::t_e_s); returns the index or npos.
+std::size_t FindPeakEnd(const std::vector<double>& t, const std::vector<double>& v_p,
+                        const std::vector<double>& v_sand, double t_pmax, double tol) {
+  const std::size_t n = t.size();
+  std::size_t last = n;  // the pounder's stop (v_p <= 0) bounds the search
+  for (std::size_t i = 0; i < n; ++i)
+    if (t[i] > t_pmax && v_p[i] <= 0) {
+      last = i;
+      break;
+    }
+  std::vector<double> later_max(n + 1, -std::numeric_limits<double>::infinity());
+  for (std::size_t i = last; i-- > 0;) later_max[i] = std::max(later_max[i + 1], v_sand[i]);
+  for (std::size_t i = 0; i < last; ++i) {
+    if (t[i] < t_pmax) continue;
+    if (v_p[i] - v_sand[i] <= tol && later_max[i + 1] <= v_sand[i] + tol) return i;
+  }
+  return std::string::npos;
+}
+
+}  // namespace
+
+void DemScene::ComputeTruth() {
+  DemTruth& T = truth_;
+  const DemMeta& m = record_.meta;
+  const int F = frame_count();
+  int kr = 0;
+  while (kr + 1 < F && FrameTime(kr + 1) < 0) ++kr;
+  T.reference_frame = kr;
+  T.frame_time_s.resize(static_cast<std::size_t>(F));
+  for (int k = 0; k < F; ++k) T.frame_time_s[static_cast<std::size_t>(k)] = FrameTime(k);
+  const ImpactScene& b = *base_;
+  const double sx = b.sx_mm_per_px(), sy = b.sy_mm_per_px(), step = spec_.step;
+  const DemSnapshot& ref = record_.frames[static_cast<std::size_t>(kr)];
+  const std::size_t G = ref.grains.size();
+
+  // Cells of the DIC grid and of the momentum grid at the reference frame.
+  const SceneDicGrid& dic = b.dic_grid();
+  const SceneMomentumTruth& mt = b.momentum();
+  std::vector<int> dic_cell(G), grid_cell(G);
+  std::vector<cv::Point2d> ref_mm(G);
+  for (std::size_t i = 0; i < G; ++i) {
+    ref_mm[i] = PanelFromDem(ref.grains[i].x_m, ref.grains[i].y_m);
+    const cv::Point2d q = b.IdealFromPanel(ref_mm[i]);
+    dic_cell[i] = CellOf(q, dic.centres_px, dic.cols, dic.rows, step);
+    grid_cell[i] = CellOf(q, mt.centres_px, mt.cols, mt.rows, step);
+  }
+  const std::size_t N = dic.centres_px.size();
+  T.grains_per_cell.assign(N, 0);
+  std::vector<double> cell_mass(N, 0);
+  for (std::size_t i = 0; i < G; ++i)
+    if (dic_cell[i] >= 0) {
+      ++T.grains_per_cell[static_cast<std::size_t>(dic_cell[i])];
+      cell_mass[static_cast<std::size_t>(dic_cell[i])] += ref.grains[i].mass_kg;
+    }
+  T.u_px.assign(static_cast<std::size_t>(F) * N, 0);
+  T.v_px = T.velocity_x_mm_s = T.velocity_y_mm_s = T.u_px;
+  T.p_gran_Ns.assign(static_cast<std::size_t>(F), 0);
+  std::vector<double> grid_y_m(static_cast<std::size_t>(F), 0);  // sum m y_down
+  T.grid_mass_kg = 0;
+  for (std::size_t i = 0; i < G; ++i)
+    if (grid_cell[i] >= 0) T.grid_mass_kg += ref.grains[i].mass_kg;
+  for (int k = 0; k < F; ++k) {
+    const DemSnapshot& s = record_.frames[static_cast<std::size_t>(k)];
+    const std::size_t o = static_cast<std::size_t>(k) * N;
+    for (std::size_t i = 0; i < G; ++i) {
+      const DemGrain& g = s.grains[i];
+      if (g.id != ref.grains[i].id)
+        throw Error(ErrorKind::kFileFormat, "grains.dump", fmt::format("grain id {}", g.id),
+                    fmt::format("the same ids in every snapshot (step {})", s.step));
+      if (grid_cell[i] >= 0) {
+        T.p_gran_Ns[static_cast<std::size_t>(k)] += -g.mass_kg * g.vy_m_s;
+        grid_y_m[static_cast<std::size_t>(k)] += -g.mass_kg * g.y_m;
+      }
+      if (dic_cell[i] < 0) continue;
+      const std::size_t c = o + static_cast<std::size_t>(dic_cell[i]);
+      const cv::Point2d p = PanelFromDem(g.x_m, g.y_m);
+      T.u_px[c] += g.mass_kg * (p.x - ref_mm[i].x) / sx;
+      T.v_px[c] += g.mass_kg * (p.y - ref_mm[i].y) / sy;
+      T.velocity_x_mm_s[c] += g.mass_kg * g.vx_m_s * 1000;
+      T.velocity_y_mm_s[c] += -g.mass_kg * g.vy_m_s * 1000;
+    }
+    for (std::size_t c = 0; c < N; ++c)
+      for (auto* field : {&T.u_px, &T.v_px, &T.velocity_x_mm_s, &T.velocity_y_mm_s})
+        (*field)[o + c] = cell_mass[c] > 0 ? (*field)[o + c] / cell_mass[c] : kNaN;
+  }
+  T.bulk_density_kg_m3 = spec_.density_kg_m3;
+  T.grid_mass_bulk_kg = spec_.density_kg_m3 * mt.grid_area_mm2 * 1e-6 * m.depth_m;
+  T.p_gran_fd_Ns.assign(static_cast<std::size_t>(F), 0);
+  for (int k = 0; k < F; ++k) {
+    const std::size_t u = static_cast<std::size_t>(k);
+    if (k == 0)
+      T.p_gran_fd_Ns[u] = (-3 * grid_y_m[0] + 4 * grid_y_m[1] - grid_y_m[2]) /
+                          (T.frame_time_s[2] - T.frame_time_s[0]);
+    else if (k == F - 1)
+      T.p_gran_fd_Ns[u] = (3 * grid_y_m[u] - 4 * grid_y_m[u - 1] + grid_y_m[u - 2]) /
+                          (T.frame_time_s[u] - T.frame_time_s[u - 2]);
+    else
+      T.p_gran_fd_Ns[u] =
+          (grid_y_m[u + 1] - grid_y_m[u - 1]) / (T.frame_time_s[u + 1] - T.frame_time_s[u - 1]);
+  }
+  T.v_sand_m_s.resize(T.p_gran_Ns.size());
+  for (std::size_t k = 0; k < T.p_gran_Ns.size(); ++k)
+    T.v_sand_m_s[k] = T.p_gran_Ns[k] / T.grid_mass_kg;
+
+  std::unordered_map<std::int64_t, double> grid_mass_of;
+  for (std::size_t i = 0; i < G; ++i)
+    if (grid_cell[i] >= 0) grid_mass_of[ref.grains[i].id] = ref.grains[i].mass_kg;
+  ComputePeakStageTruth(grid_mass_of);
+}
+
+// p_max, the fine series from near.dump and t_e by the paper's definition (DemTruth::t_e_s).
+void DemScene::ComputePeakStageTruth(const std::unordered_map<std::int64_t, double>& grid_mass_of) {
+  DemTruth& T = truth_;
+  const DemMeta& m = record_.meta;
+  // Pounder momentum maximum over the DEM samples after contact.
+  const double mp = m.pounder_mass_kg;
+  T.p_max_Ns = -std::numeric_limits<double>::infinity();
+  for (const DemPounderSample& s : record_.pounder) {
+    const double t = s.t_s - t_contact_s_;
+    if (t >= 0 && -mp * s.vy_m_s > T.p_max_Ns) T.p_max_Ns = -mp * s.vy_m_s, T.t_pmax_s = t;
+  }
+
+  // Fine series from near.dump, if every grid grain is in it.
+  bool fine = !record_.near.empty();
+  for (const DemSnapshot& s : record_.near) {
+    double p = 0;
+    std::size_t found = 0;
+    for (const DemGrain& g : s.grains) {
+      auto it = grid_mass_of.find(g.id);
+      if (it == grid_mass_of.end()) continue;
+      ++found;
+      p += -it->second * g.vy_m_s;
+    }
+    if (found != grid_mass_of.size()) {
+      fine = false;
+      T.notes.push_back(
+          fmt::format("near.dump misses {} of the {} grid grains: t_e from the frames only",
+                      grid_mass_of.size() - found, grid_mass_of.size()));
+      break;
+    }
+    const double t = s.step * m.timestep_s - t_contact_s_;
+    T.fine_t_s.push_back(t);
+    T.fine_p_gran_Ns.push_back(p);
+    T.fine_v_sand_m_s.push_back(p / T.grid_mass_kg);
+    T.fine_v_p_m_s.push_back(Pounder(t).v_m_s);
+    T.fine_p_p_Ns.push_back(mp * T.fine_v_p_m_s.back());
+  }
+  if (!fine) T.fine_t_s.clear(), T.fine_p_gran_Ns.clear(), T.fine_v_sand_m_s.clear();
+  if (!fine) T.fine_v_p_m_s.clear(), T.fine_p_p_Ns.clear();
+
+  // t_e from the grains.
+  const double tol = options_.velocity_tolerance * T.p_max_Ns / mp;
+  std::vector<double> t = T.fine_t_s, vs = T.fine_v_sand_m_s, vp = T.fine_v_p_m_s;
+  if (!fine) {
+    t = T.frame_time_s;
+    vs = T.v_sand_m_s;
+    vp.clear();
+    for (double tk : t) vp.push_back(Pounder(tk).v_m_s);
+  }
+  const std::size_t ie = FindPeakEnd(t, vp, vs, T.t_pmax_s, tol);
+  T.t_e_s = T.v_te_m_s = T.m_add_max_kg = T.conservation_error_te = T.conservation_error_peak =
+      kNaN;
+  if (ie == std::string::npos) {
+    T.notes.push_back(fmt::format(
+        "no time where the grid's grains stop accelerating and move with the pounder (within "
+        "{:.3g} m/s): t_e is NaN",
+        tol));
+    return;
+  }
+  T.t_e_s = t[ie];
+  T.v_te_m_s = vp[ie];
+  T.m_add_max_kg = T.p_max_Ns / T.v_te_m_s - mp;
+  T.conservation_error_te =
+      std::abs(mp * vp[ie] + vs[ie] * T.grid_mass_kg - T.p_max_Ns) / T.p_max_Ns;
+  T.conservation_error_peak = 0;
+  for (std::size_t i = 0; i <= ie; ++i)
+    if (t[i] >= T.t_pmax_s)
+      T.conservation_error_peak =
+          std::max(T.conservation_error_peak,
+                   std::abs(mp * vp[i] + vs[i] * T.grid_mass_kg - T.p_max_Ns) / T.p_max_Ns);
+}
+
+std::string DemSceneReport::BriefReport() const {
+  return fmt::format("synth --dem: {} frames of {} grains in {} ({:.1f} s rendering)", frames,
+                     grains, out_dir, render_seconds);
+}
+
+namespace {
+
+void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
+                   const std::string& path, const std::string& spec_yaml) {
+  const DemTruth& T = scene.truth();
+  const ImpactScene& b = scene.base();
+  const DemMeta& m = scene.record().meta;
+  const SceneDicGrid& grid = b.dic_grid();
+  const SceneMomentumTruth& mt = b.momentum();
+  const auto F = static_cast<std::size_t>(scene.frame_count());
+  H5Writer out(path);
+  out.WriteProvenance(spec_yaml);
+  out.SetAttribute("/", "generator", "impactdic synth --dem (LAMMPS DEM, validation/dem)");
+  out.SetAttribute("/", "conventions",
+                   "t = 0 at contact; depths and velocities down positive; pixels are ideal "
+                   "(undistorted) pixels of the first frame; panel mm origin at the pounder axis "
+                   "on the pounder bottom at contact");
+  std::vector<double> z(F), v(F), pp(F);
+  for (std::size_t k = 0; k < F; ++k) {
+    const PounderState ps = scene.Pounder(T.frame_time_s[k]);
+    z[k] = ps.z_m, v[k] = ps.v_m_s, pp[k] = m.pounder_mass_kg * ps.v_m_s;
+  }
+  out.Write("frames/time_s", T.frame_time_s, "s", "frame time since contact");
+  out.Write("pounder/z_m", z, "m", "pounder bottom below its position at contact, down +");
+  out.Write("pounder/v_m_s", v, "m/s", "pounder velocity, down positive");
+  const Dims gdims{static_cast<std::size_t>(grid.rows), static_cast<std::size_t>(grid.cols)};
+  const Dims fdims{F, gdims[0], gdims[1]};
+  std::vector<double> gx, gy;
+  for (const auto& c : grid.centres_px) gx.push_back(c.x), gy.push_back(c.y);
+  out.Write("soil/grid_x_px", gx, gdims, "px", "DIC subset centres (reference frame), x");
+  out.Write("soil/grid_y_px", gy, gdims, "px", "DIC subset centres (reference frame), y");
+  out.Write("soil/u_px", T.u_px, fdims, "px",
+            "mass-weighted mean displacement of the cell's grains since the reference frame, x");
+  out.Write("soil/v_px", T.v_px, fdims, "px", "the same, y down");
+  out.Write("soil/velocity_x_mm_s", T.velocity_x_mm_s, fdims, "mm/s",
+            "mass-weighted mean velocity of the cell's grains, x");
+  out.Write("soil/velocity_y_mm_s", T.velocity_y_mm_s, fdims, "mm/s", "the same, y down");
+  out.Write("soil/grains_per_cell", T.grains_per_cell, gdims, "1",
+            "grains whose centre lies in the step x step cell at the reference frame");
+  out.SetAttribute("soil", "reference_frame", T.reference_frame);
+  out.SetAttribute("soil", "step_px", scene.base().spec().step);
+  out.SetAttribute("soil", "subset_size_px", scene.base().spec().subset_size);
+  std::vector<double> mx, my;
+  for (const auto& c : mt.centres_px) mx.push_back(c.x), my.push_back(c.y);
+  const Dims mdims{static_cast<std::size_t>(mt.rows), static_cast<std::size_t>(mt.cols)};
+  out.Write("momentum/grid_x_px", mx, mdims, "px", "default momentum grid centres, x");
+  out.Write("momentum/grid_y_px", my, mdims, "px", "default momentum grid centres, y");
+  out.Write("momentum/p_pounder_Ns", pp, "N s", "m_p v_p at the frames");
+  out.Write("momentum/p_gran_Ns", T.p_gran_Ns, "N s", "sum m v_down of the grid's grains");
+  out.Write("momentum/p_gran_fd_Ns", T.p_gran_fd_Ns, "N s",
+            "grid mass x central difference of the grid grains' mean displacement (perfect DIC)");
+  out.Write("momentum/v_sand_m_s", T.v_sand_m_s, "m/s", "p_gran / grid grain mass");
+  auto scalar = [&](const std::string& name, double value, const std::string& units,
+                    const std::string& what) {
+    out.Write("momentum/" + name, std::vector<double>{value}, units, what);
+  };
+  scalar("p_max_Ns", T.p_max_Ns, "N s", "maximum pounder momentum (DEM samples)");
+  scalar("t_pmax_s", T.t_pmax_s, "s", "its time");
+  scalar("t_e_s", T.t_e_s, "s",
+         "end of the peak stage from the grains: v_p - v_sand <= tol and no later rise of "
+         "v_sand by more than tol");
+  scalar("v_te_m_s", T.v_te_m_s, "m/s", "v_p(t_e)");
+  scalar("m_add_max_kg", T.m_add_max_kg, "kg", "p_max / v_p(t_e) - m_p (Eq. 3)");
+  scalar("grid_mass_kg", T.grid_mass_kg, "kg", "mass of the grid's grains");
+  scalar("grid_mass_bulk_kg", T.grid_mass_bulk_kg, "kg", "rho_d * grid area * t_z");
+  scalar("bulk_density_kg_m3", T.bulk_density_kg_m3, "kg/m^3",
+         "grain mass per volume under the footprint, 5..105 mm deep");
+  scalar("grid_area_mm2", mt.grid_area_mm2, "mm^2", "cols * rows * step^2 * s^2");
+  scalar("conservation_error", T.conservation_error_te, "1",
+         "|p_pounder + p_gran - p_max| / p_max at t_e (grains)");
+  scalar("conservation_error_peak", T.conservation_error_peak, "1",
+         "its maximum over [t_pmax, t_e]");
+  std::string notes;
+  for (const auto& n : T.notes) notes += n + "; ";
+  out.SetAttribute("momentum", "notes", notes.empty() ? std::string("none") : notes);
+  if (!T.fine_t_s.empty()) {
+    out.Write("series/t_s", T.fine_t_s, "s", "time since contact (near.dump snapshots)");
+    out.Write("series/p_gran_Ns", T.fine_p_gran_Ns, "N s", "sum m v_down of the grid's grains");
+    out.Write("series/v_sand_m_s", T.fine_v_sand_m_s, "m/s", "grid grains' mean velocity");
+    out.Write("series/v_m_s", T.fine_v_p_m_s, "m/s", "pounder velocity");
+    out.Write("series/p_pounder_Ns", T.fine_p_p_Ns, "N s", "m_p v_p");
+  }
+  std::vector<double> st, sa;
+  for (std::size_t i = 0; i < rec.time_s.size(); ++i) {
+    const double ti = rec.time_s[i] - rec.impact_daq_time_s;
+    if (ti < -0.002) continue;
+    st.push_back(ti);
+    sa.push_back(rec.accel_true_g[i]);
+  }
+  out.Write("sensor/t_s", st, "s", "DAQ sample time since contact");
+  out.Write("sensor/accel_true_g", sa, "g", "noise-free reading from the DEM pounder (axis up)");
+  out.SetAttribute("sensor", "frame0_daq_time_s", rec.frame0_daq_time_s);
+  out.SetAttribute("sensor", "impact_daq_time_s", rec.impact_daq_time_s);
+  out.SetAttribute("sensor", "release_daq_time_s", rec.release_daq_time_s);
+  out.CreateGroup("dem");
+  out.SetAttribute("dem", "pounder_mass_kg", m.pounder_mass_kg);
+  out.SetAttribute("dem", "pounder_width_m", m.pounder_width_m);
+  out.SetAttribute("dem", "depth_m", m.depth_m);
+  out.SetAttribute("dem", "impact_velocity_m_s", scene.base().spec().impact_velocity_m_s);
+  out.SetAttribute("dem", "timestep_s", m.timestep_s);
+  out.SetAttribute("dem", "grains", static_cast<double>(scene.record().frames[0].grains.size()));
+  out.SetAttribute("dem", "contact_time_s", scene.contact_time_s());
+  out.CreateGroup("camera");
+  out.SetAttribute("camera", "sx_mm_per_px", b.sx_mm_per_px());
+  out.SetAttribute("camera", "sy_mm_per_px", b.sy_mm_per_px());
+  out.SetAttribute("camera", "pounder_axis_x_px", b.axis_px());
+  out.SetAttribute("camera", "surface_y_px", b.surface_px());
+  out.SetAttribute("camera", "fps", b.spec().fps);
+  out.Commit();
+}
+
+}  // namespace
+
+DemSceneReport WriteDemScene(const DemScene& scene, const std::string& out_dir) {
+  const ImpactSceneSpec& s = scene.base().spec();
+  DemSceneReport report;
+  report.out_dir = out_dir;
+  std::error_code ec;
+  fs::create_directories(fs::path(out_dir) / "frames", ec);
+  if (ec)
+    throw Error(ErrorKind::kIo, "-o", out_dir,
+                "a folder that can be created (" + ec.message() + ")");
+  for (const char* name : {"scene.yaml", "truth.h5", "sensor.csv", "spec.yaml"})
+    fs::remove(fs::path(out_dir) / name, ec);
+  for (const auto& entry : fs::directory_iterator(fs::path(out_dir) / "frames", ec))
+    if (entry.path().extension() == ".png") fs::remove(entry.path(), ec);
+
+  WallTimer timer;
+  {
+    ProgressBar bar("rendering DEM frames", static_cast<std::size_t>(scene.frame_count()));
+    for (int k = 0; k < scene.frame_count(); ++k) {
+      WriteImage((fs::path(out_dir) / "frames" / fmt::format("frame_{:04d}.png", k)).string(),
+                 scene.RenderFrame(k));
+      bar.Advance();
+    }
+  }
+  report.render_seconds = timer.ElapsedSeconds();
+  report.frames = scene.frame_count();
+  report.grains = static_cast<int>(scene.record().frames[0].grains.size());
+  if (s.render_calibration) {
+    CalibrationSetOptions copt;
+    copt.views = s.calibration_views;
+    copt.seed = s.seed * 31 + 7;
+    copt.panel_distance_mm =
+        s.mm_per_px * std::sqrt(scene.base().camera().fx * scene.base().camera().fy);
+    copt.render.bits = s.bits;
+    RenderCalibrationSet(scene.base().camera(), CheckerboardSpec{}, copt,
+                         (fs::path(out_dir) / "calibration").string());
+  }
+  report.calibration_yaml = !s.calibration_yaml.empty() ? s.calibration_yaml
+                            : s.render_calibration      ? "calibration/camera.yaml"
+                                                        : "";
+  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
+  report.sensor_csv = (fs::path(out_dir) / "sensor.csv").string();
+  WriteCsv(report.sensor_csv, {"time_s", "accel_g", "exposure"},
+           {rec.time_s, rec.accel_g, rec.exposure}, 10);
+  const std::string spec_yaml = ImpactSceneSpecToYaml(s);
+  WriteTextFileAtomic((fs::path(out_dir) / "spec.yaml").string(), spec_yaml);
+  report.truth_h5 = (fs::path(out_dir) / "truth.h5").string();
+  WriteDemTruth(scene, rec, report.truth_h5, spec_yaml);
+  report.scene_yaml = (fs::path(out_dir) / "scene.yaml").string();
+  WriteTextFileAtomic(report.scene_yaml, ImpactSceneYaml(scene.base(), report.calibration_yaml));
+  return report;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,91 @@
+// Tests of the DEM validation comparison (render/dem_validation.h): a results file that equals the
+// grains' truth plus known errors gives those errors back.
+#include "impactdic/render/dem_validation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "../synth/dem_test_record.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/synth/dem_scene.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Writes a results.h5 as `impactdic run` lays it out, from the truth of `scene`: the analysed
+// frames from the reference on, every DIC subset; velocities = truth + (dvx, 0) mm/s, p_gran =
+// truth * gran_factor.
+void WriteFakeResults(const DemScene& scene, const std::string& path, double dvx,
+                      double gran_factor) {
+  const DemTruth& t = scene.truth();
+  const auto& grid = scene.base().dic_grid().centres_px;
+  const std::size_t N = grid.size(), F = t.frame_time_s.size(), kr = t.reference_frame;
+  std::vector<double> index, x, y, u, v, vx, vy, pg, pp, vs, madd;
+  for (const auto& c : grid) x.push_back(c.x), y.push_back(c.y);
+  for (std::size_t k = kr; k < F; ++k) {
+    index.push_back(static_cast<double>(k));
+    for (std::size_t i = 0; i < N; ++i) {
+      const std::size_t j = k * N + i;
+      u.push_back(t.u_px[j] - t.u_px[kr * N + i]);
+      v.push_back(t.v_px[j] - t.v_px[kr * N + i]);
+      vx.push_back(t.velocity_x_mm_s[j] + dvx);
+      vy.push_back(t.velocity_y_mm_s[j]);
+    }
+    pg.push_back(gran_factor * t.p_gran_Ns[k]);
+    pp.push_back(dem_test::kMass * scene.Pounder(t.frame_time_s[k]).v_m_s);
+    vs.push_back(t.v_sand_m_s[k]);
+    madd.push_back(std::nan(""));
+  }
+  const std::size_t Fa = index.size();
+  H5Writer out(path);
+  out.Write("time/frame_index", index, Dims{Fa}, "1", "frame index");
+  out.Write("dic/x_px", x, Dims{N}, "px", "x");
+  out.Write("dic/y_px", y, Dims{N}, "px", "y");
+  out.Write("dic/u_px", u, Dims{Fa, N}, "px", "u");
+  out.Write("dic/v_px", v, Dims{Fa, N}, "px", "v");
+  out.Write("kinematics/vx_mm_s", vx, Dims{Fa, N}, "mm/s", "vx");
+  out.Write("kinematics/vy_mm_s", vy, Dims{Fa, N}, "mm/s", "vy");
+  out.Write("momentum/p_gran", pg, Dims{Fa}, "N s", "p_gran");
+  out.Write("momentum/p_pounder", pp, Dims{Fa}, "N s", "p_pounder");
+  out.Write("momentum/v_sand_m_s", vs, Dims{Fa}, "m/s", "v_sand");
+  out.Write("momentum/m_add_kg", madd, Dims{Fa}, "kg", "m_add");
+  out.SetAttribute("momentum", "p_max_kg_m_s", t.p_max_Ns);
+  out.SetAttribute("momentum", "t_end_peak_s", t.t_e_s);
+  out.Commit();
+}
+
+TEST(DemValidation, KnownErrorsComeBack) {
+  const std::string dir = dem_test::MakeDemDir("validation");
+  DemScene scene(ReadDemRecord(dir), dem_test::TinySpec());
+  const std::string scene_dir = dir + "/scene";
+  DemSceneReport report = WriteDemScene(scene, scene_dir);
+  const std::string results = dir + "/results.h5";
+  WriteFakeResults(scene, results, /*dvx=*/10, /*gran_factor=*/1.02);
+  const DemValidation v = ValidateDemRun(report.truth_h5, results);
+  EXPECT_GT(v.dic_samples, 100u);
+  EXPECT_NEAR(v.dic_velocity_rms_mm_s, 10, 1e-9);
+  EXPECT_NEAR(v.dic_displacement_rms_px, 0, 1e-9);
+  // Uniform motion: a perfect DIC (central differences) equals the grains' velocity.
+  EXPECT_NEAR(v.dic_velocity_rms_fd_mm_s, 10, 1e-3);
+  const DemTruth& t = scene.truth();
+  EXPECT_NEAR(v.p_gran_ratio_peak, 1.02, 1e-9);
+  EXPECT_NEAR(v.p_gran_error_peak_Ns, 0.02 * t.grid_mass_kg * dem_test::kVGrain, 1e-9);
+  EXPECT_NEAR(v.p_gran_error_peak_rel, 0.02 * t.grid_mass_kg * dem_test::kVGrain / t.p_max_Ns,
+              1e-9);
+  EXPECT_NEAR(v.p_max_truth_Ns, t.p_max_Ns, 1e-12);
+  EXPECT_NEAR(v.t_e_truth_s, t.t_e_s, 1e-12);
+  // No sigmoid in the results: Eq. 9 is not run, and the report says why.
+  EXPECT_TRUE(std::isnan(v.model_peak_decel_g));
+  ASSERT_FALSE(v.notes.empty());
+  EXPECT_NE(v.notes.back().find("no sigmoid fit"), std::string::npos);
+  // The DEM pounder's deceleration: F / (m_p g) - 1 in contact.
+  EXPECT_NEAR(v.dem_peak_decel_g, dem_test::kForce / (dem_test::kMass * dem_test::kG) - 1, 1e-6);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace impactdic

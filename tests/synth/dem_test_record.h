@@ -1,0 +1,104 @@
+// A DEM record in LAMMPS's formats with a known answer, written by the tests of the DEM
+// converter and of the DEM validation: a lattice of grains translating uniformly at 1 m/s down
+// and a pounder in free fall that meets a constant contact force at DEM time kContact.
+#ifndef IMPACTDIC_TESTS_SYNTH_DEM_TEST_RECORD_H_
+#define IMPACTDIC_TESTS_SYNTH_DEM_TEST_RECORD_H_
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "impactdic/synth/impact_scene.h"
+
+namespace impactdic::dem_test {
+
+namespace fs = std::filesystem;
+
+inline constexpr double kG = 9.81;
+inline constexpr double kDt = 2.5e-6;       // DEM time step: 1/1600 s = 250 steps, 20 us = 8 steps
+inline constexpr double kMass = 10;         // m_p [kg]
+inline constexpr double kVStart = 2.0;      // pounder speed at DEM time 0 [m/s], down
+inline constexpr double kContact = 1.0e-3;  // DEM time of the last contact-free sample [s]
+inline constexpr double kForce = 1200;      // contact force after it [N], up
+inline constexpr double kVGrain = 1.0;      // grains' speed [m/s], down
+inline constexpr double kSurfaceY = 0.5;    // pounder bottom at contact (LAMMPS y) [m]
+inline constexpr double kAxisX = 0.4;
+inline constexpr double kOffset = 0.05;     // pounder centre of mass above its bottom [m]
+inline constexpr double kSpacing = 0.005;   // grain lattice spacing [m]
+inline constexpr double kGrainMass = 0.01;  // [kg]
+inline constexpr double kDepth = 0.192;
+inline constexpr long kSteps = 8000;  // 20 ms
+
+// Pounder velocity (down) and bottom depth below the surface at DEM time t.
+inline double PounderV(double t) {
+  const double vc = kVStart + kG * kContact;
+  return t <= kContact ? kVStart + kG * t : vc - (kForce / kMass - kG) * (t - kContact);
+}
+inline double PounderZ(double t) {
+  const double zc = 0;  // the surface is the bottom at contact
+  if (t <= kContact) {
+    const double s = kContact - t;  // before contact, integrate backwards
+    return zc - (PounderV(kContact) * s - 0.5 * kG * s * s);
+  }
+  const double s = t - kContact, a = kForce / kMass - kG;
+  return zc + PounderV(kContact) * s - 0.5 * a * s * s;
+}
+
+inline std::string MakeDemDir(const std::string& name) {
+  const fs::path dir =
+      fs::temp_directory_path() / ("impactdic_dem_" + name + "_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream meta(dir / "meta.txt");
+  meta << "pounder_mass_kg " << kMass << "\npounder_width_m 0.15\ndepth_m " << kDepth
+       << "\nimpact_velocity_m_s 2.0\npounder_axis_x_m " << kAxisX << "\npounder_bottom_offset_m "
+       << kOffset << "\nbed_top_m 0.5\nbox_width_m 0.8\n"
+       << "timestep_s " << kDt << "\ngravity_m_s2 " << kG << "\n";
+  std::ofstream pounder(dir / "pounder.txt");
+  pounder.precision(12);
+  pounder << "# Time-averaged data for fix prec\n# TimeStep v_t v_yc v_vy v_fy\n";
+  for (long step = 0; step <= kSteps + 40; step += 8) {
+    const double t = step * kDt;
+    const double fy = t <= kContact + 1e-12 ? -kMass * kG : kForce - kMass * kG;
+    pounder << step << " " << t << " " << kSurfaceY - PounderZ(t) + kOffset << " " << -PounderV(t)
+            << " " << fy << "\n";
+  }
+  std::ofstream dump(dir / "grains.dump");
+  dump.precision(12);
+  for (long step = 0; step <= kSteps; step += 250) {
+    const double t = step * kDt;
+    std::vector<std::string> lines;
+    long id = 0;
+    for (int j = 0; j < 40; ++j)
+      for (int i = 0; i < 120; ++i) {
+        ++id;
+        const double x = kAxisX - 0.3 + (i + 0.5) * kSpacing;
+        const double y = kSurfaceY - 0.0025 - j * kSpacing - kVGrain * t;
+        lines.push_back(std::to_string(id) + " " + std::to_string(x) + " " + std::to_string(y) +
+                        " 0 " + std::to_string(-kVGrain) + " 0.0024 " + std::to_string(kGrainMass));
+      }
+    dump << "ITEM: TIMESTEP\n"
+         << step << "\nITEM: NUMBER OF ATOMS\n"
+         << lines.size() << "\nITEM: BOX BOUNDS ff ff pp\n0 0.8\n0 1.2\n-0.005 0.005\n"
+         << "ITEM: ATOMS id x y vx vy radius mass\n";
+    for (const auto& l : lines) dump << l << "\n";
+  }
+  return dir.string();
+}
+
+// The tiny preset at 1600 fps without noise, offset or sensor noise.
+inline ImpactSceneSpec TinySpec() {
+  ImpactSceneSpec spec = ImpactScenePreset("tiny");
+  spec.fps = 1600;
+  spec.noise_sigma = 0;
+  spec.sensor.noise_g = 0;
+  spec.sensor.offset_g = 0;
+  return spec;
+}
+
+}  // namespace impactdic::dem_test
+
+#endif  // IMPACTDIC_TESTS_SYNTH_DEM_TEST_RECORD_H_
