@@ -19,7 +19,7 @@
 namespace impactdic {
 namespace {
 
-// The sample lens scaled to the SPEC camera (1920x1440).
+// The sample lens scaled to the paper's camera (1920x1440).
 CameraCalibration FullFrameCalibration() {
   const SynthCamera lens = SampleCamera();
   CameraCalibration c;

@@ -1,4 +1,4 @@
-// impactdic model: the added-mass impact model (Eq. 9, SPEC section 4) for one test, the
+// impactdic model: the added-mass impact model (Eq. 9, docs/model.md) for one test, the
 // work-precision study of its solvers, or the paper's 27 combinations (Table 1).
 #include <fmt/format.h>
 

@@ -230,7 +230,7 @@ double MeasuredPlateau(const SensorResult& sensor, double t1_after_impact_s, dou
 // Measured peak deceleration: the largest filtered deceleration of the PEAK STAGE, between the
 // impact and t_e (t_end_peak_s; NaN: up to T + 4/b of the scene's model instead, with a warning
 // when the momentum stage ran but could not measure t_e). The record's global maximum can be the
-// stop, where -dv/dt grows like v^-n (SPEC section 4).
+// stop, where -dv/dt grows like v^-n (docs/model.md).
 double MeasuredPeakDeceleration(const SensorResult& sensor, double t_end_peak_s,
                                 const SceneModel& model, bool momentum_ran,
                                 std::vector<std::string>* warnings) {

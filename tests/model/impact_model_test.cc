@@ -1,4 +1,4 @@
-// The impact model against the exact solutions of SPEC section 4, a converged reference on the
+// The impact model against the exact solutions of docs/model.md, a converged reference on the
 // paper's 27 combinations, and the stiff / extreme cases.
 #include "impactdic/model/impact_model.h"
 
@@ -294,7 +294,7 @@ TEST(ImpactModel, SeriesHasEveryForceTermAndWritesCsv) {
   std::filesystem::remove(h5);
 }
 
-// ---- Stiff and extreme cases of SPEC section 4. Bounds: at rtol 1e-6 Dormand-Prince / auto
+// ---- Stiff and extreme cases of docs/model.md. Bounds: at rtol 1e-6 Dormand-Prince / auto
 // take at most 300 accepted steps and Rodas3 at most 3000 (measured: <= 80 and <= 400); nothing
 // is NaN; the warnings say what happened.
 struct Extreme {

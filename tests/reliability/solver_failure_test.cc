@@ -1,6 +1,6 @@
 // Fault injection (issue 11, item 6): a model solve that does not reach the end of motion is a
 // failure, not a result, and the error the solver reports for itself is never 0 when the true
-// error is not. True errors come from the exact solution (b) of SPEC section 4 (no added mass, no
+// error is not. True errors come from the exact solution (b) of docs/model.md (no added mass, no
 // damping: harmonic motion with a closed-form stop time and crater depth).
 #include <gtest/gtest.h>
 
@@ -97,7 +97,7 @@ TEST(SolverFailure, AbsurdParametersAreRefusedWithTheAllowedRange) {
     EXPECT_TRUE(Contains(e.what(), "pounder_mass_kg")) << e.what();
     EXPECT_TRUE(Contains(e.what(), "[0.01, 100000] kg")) << e.what();
   }
-  // Every limit admits the SPEC's extreme cases and refuses what overflows (field named).
+  // Every limit admits the extreme cases of docs/model.md and refuses what overflows (field named).
   struct Case {
     const char* field;
     void (*mutate)(ImpactModelParameters&);
@@ -125,7 +125,7 @@ TEST(SolverFailure, AbsurdParametersAreRefusedWithTheAllowedRange) {
       EXPECT_TRUE(Contains(e.what(), "]")) << e.what();  // The allowed range.
     }
   }
-  ImpactModelParameters big;  // m_p = 1000 kg from 18 m (SPEC's extreme case), b = 1e12.
+  ImpactModelParameters big;  // m_p = 1000 kg from 18 m (an extreme case of docs/model.md), b = 1e12.
   big.pounder_mass_kg = 1000;
   big.impact_velocity_m_s = ImpactVelocityFromHeight(18.0);
   big.sigmoid_rate_b_per_s = 1e12;

@@ -62,7 +62,7 @@ TEST(ValueFaults, EverySceneTestKeyHasItsRange) {
     EXPECT_NE(message.find(c.key), std::string::npos) << c.yaml << ": " << message;
     EXPECT_NE(message.find(c.expected), std::string::npos) << c.yaml << ": " << message;
   }
-  // The paper's values and the model's extreme cases (SPEC section 4) are inside.
+  // The paper's values and the model's extreme cases (docs/model.md) are inside.
   EXPECT_NO_THROW(
       ParseScene("inputs: {frames: f/*.png}\ntest: {mass_kg: 0.1, width_m: 0.001}\n", "s.yaml"));
   EXPECT_NO_THROW(ParseScene(

@@ -1,4 +1,4 @@
-// Lens calibration and the metric scale of the measurement plane (SPEC section 2.1).
+// Lens calibration and the metric scale of the measurement plane (docs/calibration.md).
 //
 // Checkerboard corners are found with cv::findChessboardCorners and refined with cv::cornerSubPix
 // (gradient-orthogonality estimator, Foerstner & Guelch 1987); the camera is calibrated with

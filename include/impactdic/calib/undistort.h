@@ -1,5 +1,5 @@
 // Undistortion of frames with precomputed maps, skipped where the lens does not need it
-// (SPEC section 2.2: "leave out what a scene does not need").
+// (docs/calibration.md: "leave out what a scene does not need").
 //
 // The undistorted image keeps the calibration's camera matrix K: output pixel p takes the input
 // value at K * distort(K^-1 p). The maps are computed once (cv::initUndistortRectifyMap, float

@@ -6,7 +6,7 @@
 //   // --mass: invalid value (got 1e+308); expected a pounder mass in [0.01, 1e+05] kg
 //
 // The ranges are generous: they hold every real drop test and the extreme cases the model must
-// run (SPEC section 4: m_p = 0.1 .. 1000 kg, 18 m drops, D = 0.001 m, v0 = 0.01 m/s).
+// run (docs/model.md, extreme cases: m_p = 0.1 .. 1000 kg, 18 m drops, D = 0.001 m, v0 = 0.01 m/s).
 #ifndef IMPACTDIC_CORE_RANGE_H_
 #define IMPACTDIC_CORE_RANGE_H_
 

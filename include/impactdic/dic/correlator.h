@@ -1,4 +1,4 @@
-// Subset DIC in the style of GeoPIV-RG (SPEC section 3): a grid of Lagrangian subsets tracked
+// Subset DIC in the style of GeoPIV-RG (docs/dic.md): a grid of Lagrangian subsets tracked
 // through an image sequence with IC-GN, reliability-guided initial guesses and reference updating.
 //
 //   DicOptions options;                     // subset 25, step 10, bicubic, affine, auto update

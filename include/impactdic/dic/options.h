@@ -1,4 +1,4 @@
-// Options of the correlation engine (SPEC section 3), nested by concern.
+// Options of the correlation engine (docs/dic.md), nested by concern.
 //
 //   DicOptions options;
 //   options.grid.subset_size = 25;

@@ -1,4 +1,4 @@
-// Soil kinematics from the correlation results (SPEC 2.4): pixels -> panel millimetres, then
+// Soil kinematics from the correlation results (docs/analysis.md): pixels -> panel millimetres, then
 // velocity and acceleration of every subset by finite differences in time.
 //
 // Frames: panel axes are image-aligned, x to the right and y DOWN, so a positive vertical

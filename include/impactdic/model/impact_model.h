@@ -1,5 +1,5 @@
 // The added-mass impact model (Eq. 9 of Loewe, Thiele, Kanty, Kirstein: "Experimental
-// investigation and modeling of impact stages during dynamic compaction"; SPEC section 4), SI
+// investigation and modeling of impact stages during dynamic compaction"; equations in docs/model.md), SI
 // units, z downward positive, t = 0 at contact:
 //   (m_p + m_add) dv/dt = -(dm_add/dt) v + F_dyn + F_fr + F_g,
 //   m_add = M / (1 + exp(-b (t - T)))                          (Eq. 5, 6)
@@ -229,7 +229,7 @@ ImpactSeries MakeImpactSeries(const ImpactModelParameters& params, const ImpactR
 void WriteImpactSeries(const std::string& path, const ImpactModelParameters& params,
                        const ImpactRun& run);
 
-// The exact solutions of SPEC section 4 (used by the tests and the work-precision study).
+// The exact solutions of docs/model.md (used by the tests and the work-precision study).
 // (a) K = 0, g = 0: (m_p + m_add(t)) v(t) = (m_p + m_add(0)) v0; z(t) in closed form.
 ImpactState ExactConservedMomentum(const ImpactModelParameters& p, double t_s);
 // (b) M = 0, u = 1 (no added mass, no damping): m_p z'' = m_p g - k z. Stop time and depth.

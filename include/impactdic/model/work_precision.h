@@ -1,7 +1,7 @@
 // Work-precision study of the impact-model solvers and the paper's 27 test combinations.
 //
 // For each solver (dopri5, stiff, auto, ode45 rules) and tolerance (1e-3 .. 1e-12) the model is
-// run on the exact cases of SPEC section 4 (conserved momentum: z and v at a fixed end time;
+// run on the exact cases of docs/model.md (conserved momentum: z and v at a fixed end time;
 // harmonic: stop time and depth) and on the default case / Table 1 combinations against a
 // converged reference (Dormand-Prince at rtol 1e-13), and the true relative errors of crater
 // depth, t_end, peak and plateau deceleration are put next to the cost (wall time, RHS

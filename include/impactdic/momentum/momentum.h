@@ -1,4 +1,4 @@
-// The momentum validation of Eq. 3 of the paper (SPEC 2.6): granular momentum of the soil beneath
+// The momentum validation of Eq. 3 of the paper (docs/analysis.md): granular momentum of the soil beneath
 // the pounder, pounder momentum, the end of the peak stage, added mass and its sigmoid fit.
 //
 // Conventions: vertical velocities are DOWNWARD positive (pounder: sensor module; soil: the

@@ -1,4 +1,4 @@
-// The whole pipeline on one scene (SPEC section 2): calibration -> frames -> correlate ->
+// The whole pipeline on one scene (README.md, "The pipeline"): calibration -> frames -> correlate ->
 // kinematics -> sensor -> momentum -> model -> outputs, skipping what the scene does not need and
 // saying so. `impactdic run SCENE.yaml` is a thin layer over RunScene().
 //

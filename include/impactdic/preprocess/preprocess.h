@@ -1,4 +1,4 @@
-// Frame preprocessing (SPEC section 2.2): undistortion (when the lens needs it), then the
+// Frame preprocessing (docs/calibration.md): undistortion (when the lens needs it), then the
 // filters GeoPIV-RG users rely on, each optional: Gaussian blur (sigma, kernel) and CLAHE
 // (contrast-limited adaptive histogram equalisation, Zuiderveld 1994, Graphics Gems IV
 // pp. 474-485, doi:10.1016/B978-0-12-336156-1.50061-6), on 8- and 16-bit frames.

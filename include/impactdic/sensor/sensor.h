@@ -1,5 +1,5 @@
 // Accelerometer processing: DAQ CSV -> pounder acceleration, velocity and penetration, impact
-// detection and the frame timeline (SPEC 2.5).
+// detection and the frame timeline (docs/analysis.md).
 //
 // Sign convention (stated once, used everywhere): the accelerometer axis points UP. Its reading
 // a_g (in g) is 0 in free fall, +1 at rest and 1 + deceleration / g while the sand stops the

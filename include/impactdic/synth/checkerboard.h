@@ -1,4 +1,4 @@
-// Checkerboard calibration views rendered through a known camera (SPEC section 5), the ground
+// Checkerboard calibration views rendered through a known camera (docs/synth.md), the ground
 // truth of the calib module's tests and of the sample data in calibration/.
 //
 // Camera model (the OpenCV / Brown-Conrady model, Brown 1966, Photogramm. Eng. 32(3):444-462;

@@ -1,4 +1,4 @@
-// Analytic displacement fields for synthetic DIC ground truth (SPEC section 5), in material
+// Analytic displacement fields for synthetic DIC ground truth (docs/synth.md), in material
 // (reference-image) coordinates [px], x right, y down. Each field returns u(X) and its Jacobian.
 //
 //   DisplacementField f = Rotation(/*angle_rad=*/0.035, /*cx=*/200, /*cy=*/200);

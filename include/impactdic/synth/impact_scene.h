@@ -1,4 +1,4 @@
-// Synthetic impact scenes (SPEC section 5; issue 7): a high-speed sequence of the panel of the
+// Synthetic impact scenes (docs/synth.md): a high-speed sequence of the panel of the
 // paper's test rig (Loewe, Thiele, Kanty, Kirstein, "Experimental investigation and modeling of
 // impact stages during dynamic compaction", sections 2-4), rendered EXACTLY from known fields,
 // with the matching accelerometer record, calibration images through the same lens, the scene
@@ -100,7 +100,7 @@ struct ImpactSceneSpec {
   double density_kg_m3 = 1550;                                            // rho_d, > 0.
   double bed_height_m = 0.6;                                              // > 0.
   double g_m_s2 = 9.81;                                                   // > 0.
-  // Impact model (SPEC section 4, Table 2).
+  // Impact model (the paper's Table 2).
   SceneAddedMass added_mass = SceneAddedMass::kGrid;
   double added_mass_kg = std::numeric_limits<double>::quiet_NaN();  // With kGiven, >= 0.
   double K = 50, n = 0.2, u = 1.9, T_s = 0.002, b_per_s = 2500;

@@ -1,4 +1,4 @@
-// Analytic speckle patterns and exact rendering of deformed images (SPEC section 5).
+// Analytic speckle patterns and exact rendering of deformed images (docs/synth.md).
 //
 // The pattern is a sum of Gaussian blobs defined in material coordinates (X, Y) [px of the
 // reference image]. A deformed image is rendered EXACTLY from a known displacement field: for every
