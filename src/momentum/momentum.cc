@@ -247,14 +247,17 @@ bool FindEndOfPeakStage(const MomentumResult& r, std::size_t ki, std::size_t ken
   }
   const double tol_a = options.sand_accel_tolerance * a_max;
   const double tol_v = options.velocity_match_tolerance * r.summary.v_p_max_m_s;
-  std::vector<bool> no_more_accel(kend + 2, true);
-  for (std::size_t k = kend + 1; k-- > ki;)
-    no_more_accel[k] = no_more_accel[k + 1] && !(r.a_sand_m_s2[k] > tol_a);
+  // later_max[k]: the largest measured soil velocity after frame k (up to the stop).
+  std::vector<double> later_max(kend + 2, -std::numeric_limits<double>::infinity());
+  for (std::size_t k = kend; k-- > ki;) {
+    const double v = r.v_sand_m_s[k + 1];
+    later_max[k] = std::isfinite(v) ? std::max(later_max[k + 1], v) : later_max[k + 1];
+  }
   std::size_t ke = kend + 1;
   for (std::size_t k = ki; k <= kend && ke > kend; ++k) {
-    if (no_more_accel[k] && std::isfinite(r.v_sand_m_s[k]) &&
-        std::abs(r.v_pounder_m_s[k] - r.v_sand_m_s[k]) <= tol_v)
-      ke = k;
+    const double vs = r.v_sand_m_s[k];
+    const bool stopped_accelerating = !(r.a_sand_m_s2[k] > tol_a) && later_max[k] <= vs + tol_v;
+    if (std::isfinite(vs) && stopped_accelerating && r.v_pounder_m_s[k] - vs <= tol_v) ke = k;
   }
   *criteria_met = ke <= kend;
   if (ke > kend) {
@@ -300,9 +303,22 @@ double RefineEndOfPeakStage(const KinematicsResult& kin, const SensorResult& sen
       return z - w;
     };
     const double d_e = gap(ke), d1 = gap(ke - 1), d2 = gap(ke - 2);
+    const double t1 = frame_time_s[ke - 1], t2 = frame_time_s[ke - 2], t_ke = frame_time_s[ke];
+    if (d_e < d1) {
+      // The soil overtook the pounder: t_e is the gap's maximum (v_p = v_sand), the vertex of
+      // the parabola through the three frames (v_p - v_sand linear across the crossing).
+      const double m21 = (d1 - d2) / (t1 - t2), m1e = (d_e - d1) / (t_ke - t1);
+      if (m21 > 0 && m1e < 0) {
+        const double t_zero = 0.5 * (t1 + t2) + m21 * 0.5 * (t_ke - t2) / (m21 - m1e);
+        s->t_end_peak_daq_s = std::clamp(t_zero, t1, t_ke);
+        const double w = (s->t_end_peak_daq_s - t1) / (t_ke - t1);
+        p_total_te =
+            r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
+      }
+      return p_total_te;
+    }
     const double s1 = std::sqrt(std::max(d_e - d1, 0.0)), s2 = std::sqrt(std::max(d_e - d2, 0.0));
     if (std::isfinite(s1) && std::isfinite(s2) && s2 > s1 && s1 > 0) {
-      const double t1 = frame_time_s[ke - 1], t2 = frame_time_s[ke - 2];
       const double t_zero = t1 + s1 * (t1 - t2) / (s2 - s1);
       s->t_end_peak_daq_s = std::clamp(t_zero, t1, frame_time_s[ke]);
       const double w = (s->t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
