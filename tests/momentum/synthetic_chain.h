@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <iterator>
+#include <numbers>
 
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/momentum.h"
@@ -20,17 +22,32 @@ namespace impactdic {
 // as m(tau_e), which makes v_p = v_sand at tau_e. Afterwards pounder and soil decelerate together
 // at d (> the soil's acceleration just before tau_e, so the soil acceleration turns negative at
 // tau_e) until they stop. Subsets outside the grid move at half the grid's velocity.
+//
+// With 0 < tau_c < tau_e (an overtaking chain) m_s = m(tau_c): the soil overtakes the pounder at
+// tau_c (v_p = v_sand there) and leads it at tau_e, where its acceleration ends; afterwards it
+// decelerates at d_sand (> d) until it moves with the pounder again. Momentum is still conserved
+// through the peak stage. tau_c <= 0: tau_c = tau_e (the chain above).
+//
+// bump_dv > 0 adds a late re-acceleration of the soil alone (as a wave reflected by the floor):
+// v_sand += bump_dv (1 - cos(2 pi (tau - bump_tau) / bump_width)) / 2 on
+// [bump_tau, bump_tau + bump_width], peak acceleration pi bump_dv / bump_width.
 struct Chain {
   double mp = 10, M = 8, b = 2500, T = 0.002, v0 = 3.7, d = 600;
   double t_impact = 0.01, tau_e = 0.002 + 2 / 2500.0;
   double fs = 25000, fps = 10000, offset = 0.005;
   std::size_t frames = 120;
-  double scale = 0.5;  // mm/px
+  double scale = 0.5;            // mm/px
+  double tau_c = 0, d_sand = 0;  // Overtaking chain (above); d_sand used when tau_c > 0.
+  double bump_dv = 0, bump_tau = 0, bump_width = 0;  // Late soil re-acceleration (above).
   double S(double tau) const { return 1 / (1 + std::exp(-b * (tau - T))); }
   double Madd(double tau) const { return M * (S(tau) - S(0)); }
   double PMax() const { return mp * v0; }
-  double Ms() const { return Madd(tau_e); }
-  double Ve() const { return PMax() / (mp + Ms()); }
+  double TauCross() const { return tau_c > 0 ? tau_c : tau_e; }
+  double Ms() const { return Madd(TauCross()); }
+  double Ve() const { return PMax() / (mp + Madd(tau_e)); }  // v_p(tau_e).
+  double VsE() const { return PMax() / Ms() * Madd(tau_e) / (mp + Madd(tau_e)); }
+  // Time after tau_e at which the soil moves with the pounder again.
+  double TauJoin() const { return VsE() > Ve() ? (VsE() - Ve()) / (d_sand - d) : 0; }
   double TauStop() const { return tau_e + Ve() / d; }
   double Vp(double t) const {
     const double tau = t - t_impact;
@@ -42,13 +59,23 @@ struct Chain {
     const double tau = t - t_impact;
     if (tau < 0) return 0;
     if (tau <= tau_e) return PMax() / Ms() * Madd(tau) / (mp + Madd(tau));
-    return std::max(0.0, Ve() - d * (tau - tau_e));
+    double bump = 0;
+    if (bump_dv > 0 && tau > bump_tau && tau < bump_tau + bump_width)
+      bump = 0.5 * bump_dv * (1 - std::cos(2 * std::numbers::pi * (tau - bump_tau) / bump_width));
+    if (tau < tau_e + TauJoin()) return VsE() - d_sand * (tau - tau_e) + bump;
+    return std::max(0.0, Ve() - d * (tau - tau_e)) + bump;
   }
   // Soil displacement [m] since t0 = offset (frame 0): composite Simpson, 4000 panels per frame
   // interval and exact at the breakpoints (error < 1e-12 m).
   double Xs(double t) const {
     double x = 0;
-    const double breaks[] = {t_impact, t_impact + tau_e, t_impact + TauStop()};
+    double breaks[] = {t_impact,
+                       t_impact + tau_e,
+                       t_impact + tau_e + TauJoin(),
+                       t_impact + TauStop(),
+                       t_impact + bump_tau,
+                       t_impact + bump_tau + bump_width};
+    std::sort(std::begin(breaks), std::end(breaks));
     double a = offset;
     auto integrate = [&](double lo, double hi) {
       const int n = 400;
@@ -81,6 +108,20 @@ inline SensorResult MakeChainSensor(const Chain& c) {
   s.summary.stop_time_s = c.t_impact + c.TauStop();
   s.summary.impact_velocity_m_s = c.v0;
   return s;
+}
+
+// The pounder penetration of the chain (since the impact, m) on the sensor's time base: what the
+// sensor stage integrates; RefineEndOfPeakStage reads it (trapezoid over 100 sub-steps per
+// sample: error < 1e-9 m).
+inline void AddChainPenetration(const Chain& c, SensorResult* s) {
+  s->penetration_m.assign(s->time_s.size(), 0);
+  double z = 0;
+  for (std::size_t i = 1; i < s->time_s.size(); ++i) {
+    const double t0 = s->time_s[i - 1], h = (s->time_s[i] - t0) / 100;
+    for (int j = 0; j < 100; ++j)
+      z += 0.5 * h * (c.Vp(t0 + j * h) + c.Vp(t0 + (j + 1) * h)) * (t0 + j * h >= c.t_impact);
+    s->penetration_m[i] = z;
+  }
 }
 
 // 10 x 5 subsets, step 10 px = 5 mm; centres x = 50..95 mm, y = 150..170 mm; the momentum grid
