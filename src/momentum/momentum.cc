@@ -286,7 +286,12 @@ bool FindEndOfPeakStage(const MomentumResult& r, std::size_t ki, std::size_t ken
 // grows while v_p > v_sand and is constant once they move together; its growth rate
 // v_p - v_sand closes about linearly, so D_e - D(t) ~ c (t_e - t)^2 just before t_e. From the
 // two frames before ke: sqrt(D_e - D) is linear in t and its zero is t_e (kept in
-// [t_{ke-1}, t_ke]). Returns p_tot at t_e (interpolated).
+// [t_{ke-1}, t_ke]). If instead D shrank over the last frame interval, the soil overtook the
+// pounder (v_p - v_sand changed sign) and D has its maximum at the crossing: t_e is the vertex of
+// the parabola through D at frames ke-2, ke-1, ke (v_p - v_sand linear across the crossing; kept
+// in [t_{ke-1}, t_ke]). Where the soil's lead stops growing after the crossing, as in the DEM of
+// docs/validation.md and the overtaking chain test, this comes late by ~1/3 frame. Returns p_tot
+// at t_e (interpolated).
 double RefineEndOfPeakStage(const KinematicsResult& kin, const SensorResult& sensor,
                             const MomentumResult& r, std::size_t ki, std::size_t ke,
                             MomentumSummary* s) {

@@ -144,6 +144,10 @@ TEST(Momentum, LateSoilReaccelerationDoesNotMoveTheEndOfThePeakStage) {
     (tau < c.tau_e ? a_max : a_late) = std::max(tau < c.tau_e ? a_max : a_late, m.a_sand_m_s2[k]);
   }
   EXPECT_GT(a_late, 0.05 * a_max) << a_late << " " << a_max;
+  std::printf(
+      "late soil acceleration %.1f m/s^2 (peak stage %.1f); t_e %.4f ms (truth %.4f), "
+      "m_add,max %.4f kg (truth %.4f)\n",
+      a_late, a_max, 1e3 * s.t_end_peak_s, 1e3 * c.tau_e, s.added_mass_max_kg, c.Ms());
   EXPECT_TRUE(s.t_end_found);
   // Within a frame: the second difference at the frame of tau_e straddles the kink from +315 to
   // -30 m/s^2, so that frame is still accelerating; m_add and p_tot change by < 0.3 % in a frame.

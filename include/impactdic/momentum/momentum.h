@@ -1,5 +1,5 @@
-// The momentum validation of Eq. 3 of the paper (docs/analysis.md): granular momentum of the soil beneath
-// the pounder, pounder momentum, the end of the peak stage, added mass and its sigmoid fit.
+// The momentum validation of Eq. 3 of the paper (docs/analysis.md): granular momentum of the soil
+// beneath the pounder, pounder momentum, the end of the peak stage, added mass and its sigmoid fit.
 //
 // Conventions: vertical velocities are DOWNWARD positive (pounder: sensor module; soil: the
 // kinematics module's panel y axis, which points down). Times are on the DAQ clock unless named
@@ -15,14 +15,23 @@
 //    only in frames where at least min_valid_fraction of the grid's subsets are valid: elsewhere
 //    v_sand, a_sand, p_gran and p_tot are NaN (a warning gives their count and frames);
 //    p_p(t) = m_p v_p(t); p_max = max p_p after the impact (at the DAQ rate); p_tot = p_p + p_gran.
-//  - t_e (end of the peak stage): the first frame after the impact from which the mean soil
-//    acceleration stays <= sand_accel_tolerance * (its maximum after the impact) until the pounder
-//    stops, and where |v_p - v_sand| <= velocity_match_tolerance * v_p,max. If no frame satisfies
-//    both, the frame of the maximum soil velocity, with a warning. t_e is NOT MEASURABLE (NaN, and
-//    with it the conservation error, m_add(t), m_add,max, the sigmoid fit, v_sand,max and the
-//    momentum ratio; MomentumSummary::t_end_problem says why) when no frame between the impact
-//    and the stop has a measured p_gran, or when a frame from the impact to t_e has none (t_e is
-//    the FIRST frame meeting the criteria: an unmeasured frame before it could have been t_e).
+//  - t_e (end of the peak stage; paper: the soil stops accelerating and moves with the pounder):
+//    the first frame after the impact where (1) v_p - v_sand <= velocity_match_tolerance *
+//    v_p,max: the pounder no longer outruns the soil, i.e. they move together OR the soil has
+//    overtaken the pounder since the previous frame (a light pounder: v_p - v_sand changes sign
+//    between two frames, and |v_p - v_sand| may exceed the tolerance at every frame after), and
+//    (2) the soil stops accelerating: its mean acceleration there is <= sand_accel_tolerance *
+//    (its maximum after the impact), and its velocity never again exceeds v_sand there by more
+//    than velocity_match_tolerance * v_p,max until the pounder stops (a late re-acceleration,
+//    e.g. a wave reflected by the floor, that gains less does not move t_e). Sub-frame t_e from
+//    the frames' displacements (RefineEndOfPeakStage in momentum.cc): where the soil overtook
+//    the pounder, the maximum of the gap between pounder and soil (v_p = v_sand). If no frame
+//    satisfies both, the frame of the maximum soil velocity, with a warning. t_e is NOT
+//    MEASURABLE (NaN, and with it the conservation error, m_add(t), m_add,max, the sigmoid fit,
+//    v_sand,max and the momentum ratio; MomentumSummary::t_end_problem says why) when no frame
+//    between the impact and the stop has a measured p_gran, or when a frame from the impact to t_e
+//    has none (t_e is the FIRST frame meeting the criteria: an unmeasured frame before it could
+//    have been t_e).
 //  - Conservation error |p_tot(t_e) - p_max| / p_max.
 //  - m_add(t) = p_max / v_p(t) - m_p (Eq. 3) from the impact to t_e; m_add,max = m_add(t_e).
 //  - Sigmoid (Eq. 5) fitted to m_add(t) at the DAQ rate between impact and t_e, thinned to one
