@@ -86,9 +86,12 @@ void Run(const CorrelateArgs& a) {
   options.Check();
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
+  const bool video = !pair && IsVideoFile(a.frames);  // Its frames, as `run`'s inputs.frames.
   if (pair) {
     paths.push_back(a.reference);
     paths.insert(paths.end(), a.deformed.begin(), a.deformed.end());
+  } else if (video) {
+    paths.push_back(a.frames);  // Checked and decoded by CorrelateVideo.
   } else {
     paths = ListFrameSequence(a.frames);  // A gap in the numbering is an error, as in `run`.
     CheckValue(paths.size() >= 2, "--frames",
@@ -106,7 +109,7 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
-    result = CorrelateFiles(paths, options);
+    result = video ? CorrelateVideo(a.frames, options) : CorrelateFiles(paths, options);
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     throw;
@@ -134,7 +137,8 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--reference", args->reference, "Reference image (first frame)");
   cmd->add_option("--deformed", args->deformed, "Deformed image(s), in order");
   cmd->add_option("--frames", args->frames,
-                  "Folder or glob of frames (sorted; the first is the reference)");
+                  "Folder or glob of frames (sorted; the first is the reference), or a video "
+                  "file (.mp4, .avi, .mov, .mkv: its frames, numbered from 0)");
   cmd->add_option("--subset", args->subset, "Subset size [px], odd (default 25)");
   cmd->add_option("--step", args->step, "Grid step [px] (default 10)");
   cmd->add_option("--roi", args->roi, "Region of interest X0,Y0,X1,Y1 [px] (default: image)");

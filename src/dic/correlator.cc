@@ -13,6 +13,7 @@
 #include "icgn.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/image_io.h"
 
 namespace impactdic {
 
@@ -48,9 +49,12 @@ SubsetRef CentredSubset(cv::Point2d pos) {
   return s;
 }
 
-// The saturation level of an image's depth (none for float images).
+// The saturation level of the first reference's data (io DataBits: 255, 4095 for 12-bit data in
+// 16-bit containers, 65535; none for float images). The contrast and featureless limits are
+// relative to it, so the same speckle as 12-bit or 16-bit data passes the same subsets.
 double FullScale(const cv::Mat& raw) {
-  return raw.depth() == CV_16U ? 65535.0 : raw.depth() == CV_8U ? 255.0 : 1e300;
+  const int bits = DataBits(raw);
+  return bits > 0 ? static_cast<double>((1 << bits) - 1) : 1e300;
 }
 
 // Whether a result is good enough for `auto`: converged with ZNCC >= UpdateOptions::auto_min_zncc.
@@ -109,8 +113,13 @@ std::string DicSummary::FullReport() const {
   std::string s = BriefReport() + "\n";
   s += fmt::format(
       "  time: coefficients {:.3f} s, reference {:.3f} s, initial guess {:.3f} s ({} searches), "
-      "IC-GN {:.3f} s\n  status:",
+      "IC-GN {:.3f} s\n",
       seconds_coefficients, seconds_reference, seconds_initial_guess, searches, seconds_icgn);
+  if (data_bits > 0) {
+    s += fmt::format("  data: {}-bit (saturation at grey level {}){}\n", data_bits,
+                     (1 << data_bits) - 1, data_bits == 12 ? ", 12-bit data in 16-bit images" : "");
+  }
+  s += "  status:";
   for (int i = 0; i < kSubsetStatusCount; ++i) {
     if (status_counts[i] > 0)
       s += fmt::format(" {}={}", ToString(static_cast<SubsetStatus>(i)), status_counts[i]);
@@ -125,6 +134,7 @@ struct Correlator::Impl {
   int nx = 0, ny = 0;
   cv::Size image_size;
   int depth = CV_8U;
+  double full_scale = 255;  // FullScale of the first reference: the range of the sequence's data.
   std::vector<cv::Point2d> initial;     // X0: centres in the first reference.
   std::vector<char> active;             // Still tracked.
   std::vector<SubsetStatus> permanent;  // Status of subsets no longer tracked.
@@ -209,7 +219,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   im.region = spline->region();
   spline->NodeGradients(&im.gx, &im.gy);
   raw(im.region).convertTo(im.f, CV_32F);
-  im.full_scale = FullScale(raw);
+  im.full_scale = full_scale;
   ref.subsets.assign(n, SubsetRef{});
   ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
@@ -593,7 +603,7 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
         !last.spline.Inside(im.region.x + size - 1, im.region.y + size - 1))
       return;
     last.raw(im.region).convertTo(im.f, CV_32F);
-    im.full_scale = FullScale(last.raw);
+    im.full_scale = full_scale;
     im.gx.create(size, size, CV_32F);
     im.gy.create(size, size, CV_32F);
     for (int r = 0; r < size; ++r) {
@@ -663,6 +673,7 @@ void Correlator::SetReference(const cv::Mat& image) {
              fmt::format("{}x{}", g.mask.cols, g.mask.rows), "the image size");
   m.image_size = image.size();
   m.depth = image.depth();
+  m.full_scale = FullScale(image);
   // Subsets keep kBorderPx from the image border: the interpolation support of a subset that
   // moves by a pixel must stay inside the image.
   const cv::Rect inner(kBorderPx, kBorderPx, image.cols - 2 * kBorderPx,
@@ -697,6 +708,7 @@ void Correlator::SetReference(const cv::Mat& image) {
   m.last_index = 0;
   m.summary = DicSummary{};
   m.summary.subsets = n;
+  m.summary.data_bits = DataBits(image);
   m.iteration_sum = m.converged_sum = 0;
   FrameResult timing;
   WallTimer timer;

@@ -4,6 +4,7 @@
 #include <fnmatch.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -112,6 +113,39 @@ class HeaderReader {
       return TiffSize(width, height);
     if (n_ >= 4 && p_[0] == 0xFF && p_[1] == 0xD8) return JpegSize(width, height);
     return false;
+  }
+
+  // Whether the file is a palette (indexed colour) TIFF: PhotometricInterpretation (262) = 3 in
+  // its first image file directory. `grey` tells whether every entry of its ColorMap (320; all
+  // red values, then all green, then all blue, 16 bits each) has red = green = blue.
+  bool TiffPalette(bool* grey) const {
+    if (n_ < 8 || !((p_[0] == 'I' && p_[1] == 'I') || (p_[0] == 'M' && p_[1] == 'M'))) return false;
+    const bool le = p_[0] == 'I';
+    if (Read(2, 2, le) != 42) return false;
+    const std::uint64_t ifd = Read(4, 4, le);
+    if (ifd + 2 > n_) return false;
+    const std::uint64_t entries = Read(ifd, 2, le);
+    bool palette = false;
+    std::uint64_t map_at = 0, map_count = 0;
+    for (std::uint64_t e = 0; e < entries && ifd + 2 + 12 * (e + 1) <= n_; ++e) {
+      const std::size_t at = ifd + 2 + 12 * e;
+      const std::uint64_t tag = Read(at, 2, le), type = Read(at + 2, 2, le);
+      if (tag == 262) palette = (type == 3 ? Read(at + 8, 2, le) : Read(at + 8, 4, le)) == 3;
+      if (tag == 320 && type == 3) {
+        map_count = Read(at + 4, 4, le);
+        map_at = Read(at + 8, 4, le);
+      }
+    }
+    if (!palette) return false;
+    // A ColorMap that is missing or lies outside the file: not grey (OpenCV refuses it anyway).
+    const std::uint64_t colours = map_count / 3;
+    *grey = colours > 0 && map_count % 3 == 0 && map_at + 2 * map_count <= n_;
+    for (std::uint64_t i = 0; *grey && i < colours; ++i) {
+      const std::uint64_t r = Read(map_at + 2 * i, 2, le);
+      *grey = r == Read(map_at + 2 * (colours + i), 2, le) &&
+              r == Read(map_at + 2 * (2 * colours + i), 2, le);
+    }
+    return true;
   }
 
  private:
@@ -232,6 +266,18 @@ std::string PngStructureProblem(const std::string& bytes) {
   return fmt::format("a truncated PNG: the file ends at byte {} before its IEND chunk", n);
 }
 
+// A palette TIFF whose palette is not grey: converted to grey like a colour frame, with one
+// warning per process (a sequence of such frames would otherwise repeat it for every frame).
+void WarnColourPalette(const std::string& path) {
+  static std::atomic<bool> warned{false};
+  if (warned.exchange(true)) return;
+  LogWarning(
+      "{} is a palette (indexed colour) TIFF whose palette is not grey: its colours are converted "
+      "to grey (0.299 R + 0.587 G + 0.114 B), as for colour frames; further such images are not "
+      "listed",
+      path);
+}
+
 }  // namespace
 
 std::vector<long long> FrameNumbers(const std::vector<std::string>& files) {
@@ -324,7 +370,12 @@ cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
                 "a file OpenCV cannot decode (corrupt or truncated?)", kImageWhat)
         .WithFile(path);
   }
-  if (file_channels) *file_channels = image.channels();
+  // OpenCV expands a palette TIFF into BGR colour. A grey palette (red = green = blue) gives three
+  // equal channels, so the conversion below returns exactly the palette's grey values: the file
+  // is a greyscale image. Any other palette is a colour image, converted like one.
+  bool grey_palette = false;
+  if (HeaderReader(bytes).TiffPalette(&grey_palette) && !grey_palette) WarnColourPalette(path);
+  if (file_channels) *file_channels = grey_palette ? 1 : image.channels();
   if (image.channels() == 3) {
     cv::cvtColor(image, image, cv::COLOR_BGR2GRAY);
   } else if (image.channels() == 4) {
@@ -336,6 +387,14 @@ cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
         .WithFile(path);
   }
   return image;
+}
+
+int DataBits(const cv::Mat& image) {
+  if (image.depth() == CV_8U) return 8;
+  if (image.depth() != CV_16U) return 0;
+  double max_value = 0;
+  cv::minMaxLoc(image.reshape(1), nullptr, &max_value);
+  return max_value <= 4095 ? 12 : 16;
 }
 
 std::string SequenceColourCheck::Check(const std::string& path, int file_channels) {

@@ -22,6 +22,13 @@ namespace impactdic {
 // The caller checks the numbering of a listed sequence (io ListFrameSequence).
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
 
+// Correlates the frames of a video (io ReadVideoFrames: decoded to grey) as a sequence, frame 0
+// the first reference. DicResult::frame_numbers are the 0-based video frame indices. A video that
+// decodes fewer frames than its container declares is correlated up to its last decodable frame,
+// with the warning (naming both counts) in DicResult::warnings. Error naming the file when it
+// cannot be opened or has fewer than two frames. All frames are decoded before correlating.
+DicResult CorrelateVideo(const std::string& path, const DicOptions& options);
+
 // Writes the result by extension:
 // .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status (one row per frame and subset;
 //       frame = the deformed image's frame number from its file name (frame_0012.png -> 12) when

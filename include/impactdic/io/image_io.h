@@ -19,12 +19,21 @@ inline constexpr long long kMaxImagePixels = 1LL << 28;
 // (io/input_file.h; a cheap check before a long job, ReadGreyImage does it too).
 void CheckImageFileExists(const std::string& path);
 
-// Reads one image as single-channel 8- or 16-bit (colour images are converted to grey; the
-// channel count of the file as decoded, 1, 3 or 4, goes to `file_channels` if given).
+// Reads one image as single-channel 8- or 16-bit (colour images are converted to grey,
+// 0.299 R + 0.587 G + 0.114 B; the channel count of the file as decoded, 1, 3 or 4, goes to
+// `file_channels` if given). A palette (indexed colour) TIFF whose palette is grey (red = green =
+// blue in every entry) reads as its palette's grey values and counts as one channel; any other
+// palette is converted to grey like a colour image, with one warning per process.
 // Error kFileNotFound when missing; kFileFormat for a folder or device, a header beyond the size
 // limits above, a truncated or corrupt PNG (checked chunk by chunk before decoding, so libpng
 // prints nothing), or anything else OpenCV cannot decode.
 cv::Mat ReadGreyImage(const std::string& path, int* file_channels = nullptr);
+
+// The dynamic range of an image's data in bits: 8 for 8-bit images; for 16-bit images 12 when no
+// value exceeds 4095 (12-bit data in a 16-bit container, as high-speed cameras write), else 16;
+// 0 for other depths. Its saturation level is 2^bits - 1. What the correlator's contrast and
+// saturation limits are relative to (judged on the first reference, so for the whole sequence).
+int DataBits(const cv::Mat& image);
 
 // Watches the colour layout of the images of one sequence, in order: the first image sets it,
 // and Check() returns (and logs) a warning naming an image whose layout differs, e.g. an RGB
