@@ -104,9 +104,9 @@ double DicSummary::SubsetsPerSecond() const {
 std::string DicSummary::BriefReport() const {
   return fmt::format(
       "{} subsets x {} frames: {:.2f}% valid, {:.2f} iterations/subset, {} reference updates, "
-      "{:.3f} s ({:.0f} subsets/s)",
+      "{:.3f} s ({:.0f} subsets/s){}",
       subsets, frames, 100 * valid_fraction, mean_iterations, reference_updates, seconds_total,
-      SubsetsPerSecond());
+      SubsetsPerSecond(), data_bits == 12 ? "; 12-bit data in 16-bit images" : "");
 }
 
 std::string DicSummary::FullReport() const {
@@ -115,10 +115,9 @@ std::string DicSummary::FullReport() const {
       "  time: coefficients {:.3f} s, reference {:.3f} s, initial guess {:.3f} s ({} searches), "
       "IC-GN {:.3f} s\n",
       seconds_coefficients, seconds_reference, seconds_initial_guess, searches, seconds_icgn);
-  if (data_bits > 0) {
-    s += fmt::format("  data: {}-bit (saturation at grey level {}){}\n", data_bits,
-                     (1 << data_bits) - 1, data_bits == 12 ? ", 12-bit data in 16-bit images" : "");
-  }
+  if (data_bits > 0)
+    s += fmt::format("  data: {}-bit (saturation at grey level {})\n", data_bits,
+                     (1 << data_bits) - 1);
   s += "  status:";
   for (int i = 0; i < kSubsetStatusCount; ++i) {
     if (status_counts[i] > 0)

@@ -65,6 +65,8 @@ TEST(TwelveBit, SameSpeckleAsTwelveAndSixteenBitGivesTheSameDisplacements) {
   EXPECT_EQ(b.summary.data_bits, 16);
   EXPECT_NE(a.summary.FullReport().find("12-bit data in 16-bit images"), std::string::npos)
       << a.summary.FullReport();
+  EXPECT_NE(a.summary.FullReport().find("saturation at grey level 4095"), std::string::npos);
+  EXPECT_EQ(b.summary.BriefReport().find("12-bit"), std::string::npos);
   ASSERT_EQ(a.frames.size(), 2u);
   ASSERT_EQ(a.positions.size(), b.positions.size());
   // ZNSSD is invariant to the grey scale and the scale is a power of two (exact in floating

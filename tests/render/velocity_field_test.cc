@@ -159,6 +159,24 @@ TEST(VelocityField, SixteenBitAndFloatFrames) {
   }
 }
 
+TEST(VelocityField, TwelveBitFramesInSixteenBitImagesGetTheFullContrast) {
+  // 12-bit camera data in 16-bit images (0..4095): stretched by its own percentiles, not shown at
+  // 1/16 of the brightness a fixed 0..65535 scale would give.
+  auto seq = MakeSequence(2, 320, 240, 12, CV_16U);
+  for (cv::Mat& f : seq.frames) f /= 16;
+  double max_value = 0;
+  cv::minMaxLoc(seq.frames[0], nullptr, &max_value);
+  ASSERT_LE(max_value, 4095);
+  VelocityFieldRenderer r(seq, {});
+  const cv::Mat img = r.RenderFrame(0);
+  double lo = 0, hi = 0;
+  cv::Mat top_grey;
+  cv::cvtColor(img(cv::Rect(0, 150, 900, 60)), top_grey, cv::COLOR_BGR2GRAY);
+  cv::minMaxLoc(top_grey, &lo, &hi);
+  EXPECT_LT(lo, 40);
+  EXPECT_GT(hi, 215);
+}
+
 TEST(VelocityField, CheckNamesTheBrokenField) {
   auto seq = MakeSequence(2, 320, 240, 12);
   seq.vy_mm_s.pop_back();
