@@ -1,8 +1,7 @@
 #include <fmt/format.h>
 
-#include <numeric>
-
 #include "impactdic/core/error.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/io/image_io.h"
 
@@ -10,14 +9,32 @@ namespace impactdic {
 
 DicResult CorrelateVideo(const std::string& path, const DicOptions& options) {
   options.Check();
-  std::string truncated;
-  const std::vector<cv::Mat> frames = ReadVideoFrames(path, /*max_frames=*/0, &truncated);
-  CheckValue(frames.size() >= 2, "--frames",
-             fmt::format("{} ({} decodable frame)", path, frames.size()),
-             "a video of at least two frames (the first is the reference)");
-  DicResult result = CorrelateSequence(frames, options);
-  result.frame_numbers.resize(frames.size());
-  std::iota(result.frame_numbers.begin(), result.frame_numbers.end(), 0LL);
+  VideoReader video(path);
+  cv::Mat reference, frame;
+  const bool first = video.Read(&reference);
+  if (!first || !video.Read(&frame)) {
+    throw Error(ErrorKind::kInvalidValue, "--frames",
+                fmt::format("{} decodable frame(s)", first ? 1 : 0),
+                "a video of at least two frames (the first is the reference)")
+        .WithFile(path);
+  }
+  Correlator correlator(options);
+  correlator.SetReference(reference);
+  DicResult result;
+  result.positions = correlator.positions();
+  // One frame decoded at a time: memory does not grow with the length of the video.
+  const double declared = video.declared_frames();
+  ProgressBar bar("correlate", declared > 1 ? static_cast<std::size_t>(declared) - 1 : 1);
+  do {
+    CheckSameSize({reference, frame},
+                  {path + " frame 0", fmt::format("{} frame {}", path, video.frames_read() - 1)});
+    result.frames.push_back(correlator.Correlate(frame));
+    bar.Advance();
+  } while (video.Read(&frame));
+  bar.Finish();
+  result.summary = correlator.summary();
+  for (long long k = 0; k < video.frames_read(); ++k) result.frame_numbers.push_back(k);
+  const std::string truncated = video.Finish();
   if (!truncated.empty()) result.warnings.push_back(truncated);
   return result;
 }

@@ -504,43 +504,63 @@ bool IsVideoFile(const std::string& path) {
   return ext == ".mp4" || ext == ".avi" || ext == ".mov" || ext == ".mkv";
 }
 
-std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames,
-                                     std::string* warning) {
+struct VideoReader::Impl {
+  cv::VideoCapture capture;
+  cv::Mat frame;
+};
+
+VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>()), path_(path) {
   CheckInputFile(path, "a video file OpenCV can decode (.mp4, .avi, ...)",
                  std::numeric_limits<std::uintmax_t>::max());
-  cv::VideoCapture capture(path);
-  if (!capture.isOpened()) {
+  if (!impl_->capture.open(path)) {
     throw Error(ErrorKind::kFileFormat, "video", "a file OpenCV cannot open",
                 "a video OpenCV can decode (.mp4, .avi, ...)")
         .WithFile(path);
   }
-  // The container's frame count (from its header or index; <= 0 when it does not say).
-  const double declared = capture.get(cv::CAP_PROP_FRAME_COUNT);
+  declared_ = impl_->capture.get(cv::CAP_PROP_FRAME_COUNT);
+}
+
+VideoReader::~VideoReader() = default;
+
+bool VideoReader::Read(cv::Mat* grey) {
+  if (!impl_->capture.read(impl_->frame)) return false;
+  // A new buffer for every frame: the caller may keep the previous one.
+  cv::Mat out;
+  if (impl_->frame.channels() == 3) {
+    cv::cvtColor(impl_->frame, out, cv::COLOR_BGR2GRAY);
+  } else {
+    out = impl_->frame.clone();
+  }
+  *grey = out;
+  ++frames_read_;
+  return true;
+}
+
+std::string VideoReader::Finish(int max_frames) const {
+  const auto wanted = static_cast<long long>(
+      max_frames > 0 ? std::min(declared_, static_cast<double>(max_frames)) : declared_);
+  if (declared_ <= 0 || frames_read_ >= wanted) return "";
+  const std::string text = fmt::format(
+      "{}: decoded {} frames but the container declares {}: the video is truncated or "
+      "damaged; the sequence ends after frame {}",
+      path_, frames_read_, static_cast<long long>(declared_), frames_read_ - 1);
+  LogWarning("{}", text);
+  return text;
+}
+
+std::vector<cv::Mat> ReadVideoFrames(const std::string& path, int max_frames,
+                                     std::string* warning) {
+  VideoReader video(path);
   std::vector<cv::Mat> frames;
   cv::Mat frame;
-  while ((max_frames <= 0 || static_cast<int>(frames.size()) < max_frames) && capture.read(frame)) {
-    cv::Mat grey;
-    if (frame.channels() == 3) {
-      cv::cvtColor(frame, grey, cv::COLOR_BGR2GRAY);
-    } else {
-      grey = frame.clone();
-    }
-    frames.push_back(grey);
-  }
+  while ((max_frames <= 0 || static_cast<int>(frames.size()) < max_frames) && video.Read(&frame))
+    frames.push_back(frame);
   if (frames.empty()) {
     throw Error(ErrorKind::kFileFormat, "video", "no decodable frames", "at least one frame")
         .WithFile(path);
   }
-  const auto wanted = static_cast<long long>(
-      max_frames > 0 ? std::min(declared, static_cast<double>(max_frames)) : declared);
-  if (declared > 0 && static_cast<long long>(frames.size()) < wanted) {
-    const std::string text = fmt::format(
-        "{}: decoded {} frames but the container declares {}: the video is truncated or "
-        "damaged; the sequence ends after frame {}",
-        path, frames.size(), static_cast<long long>(declared), frames.size() - 1);
-    LogWarning("{}", text);
-    if (warning) *warning = text;
-  }
+  const std::string text = video.Finish(max_frames);
+  if (warning && !text.empty()) *warning = text;
   return frames;
 }
 

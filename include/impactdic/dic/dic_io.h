@@ -22,11 +22,12 @@ namespace impactdic {
 // The caller checks the numbering of a listed sequence (io ListFrameSequence).
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options);
 
-// Correlates the frames of a video (io ReadVideoFrames: decoded to grey) as a sequence, frame 0
-// the first reference. DicResult::frame_numbers are the 0-based video frame indices. A video that
-// decodes fewer frames than its container declares is correlated up to its last decodable frame,
-// with the warning (naming both counts) in DicResult::warnings. Error naming the file when it
-// cannot be opened or has fewer than two frames. All frames are decoded before correlating.
+// Correlates the frames of a video (io VideoReader: decoded to grey) as a sequence, frame 0 the
+// first reference; one frame is decoded at a time, so memory does not grow with the video's
+// length. DicResult::frame_numbers are the 0-based video frame indices. A video that decodes
+// fewer frames than its container declares is correlated up to its last decodable frame, with the
+// warning (naming both counts) in DicResult::warnings. Error naming the file when it cannot be
+// opened or has fewer than two frames.
 DicResult CorrelateVideo(const std::string& path, const DicOptions& options);
 
 // Writes the result by extension:

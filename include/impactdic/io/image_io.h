@@ -3,6 +3,7 @@
 #ifndef IMPACTDIC_IO_IMAGE_IO_H_
 #define IMPACTDIC_IO_IMAGE_IO_H_
 
+#include <memory>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -79,6 +80,40 @@ std::vector<std::string> ListFrameSequence(const std::string& source);
 
 // True if `path` names a video container OpenCV should read (.mp4, .avi, .mov, .mkv).
 bool IsVideoFile(const std::string& path);
+
+// Reads the frames of a video one at a time, as greyscale, so that a long recording need not be
+// held in memory:
+//
+//   VideoReader video("clip.avi");          // Error naming the file if OpenCV cannot open it
+//   cv::Mat frame;
+//   while (video.Read(&frame)) { ... }
+//   std::string warning = video.Finish();   // "" unless the video was truncated (then logged)
+class VideoReader {
+ public:
+  explicit VideoReader(const std::string& path);
+  ~VideoReader();
+  VideoReader(const VideoReader&) = delete;
+  VideoReader& operator=(const VideoReader&) = delete;
+
+  // The next frame as one-channel grey (colour frames converted) in a buffer of its own; false
+  // after the last one.
+  bool Read(cv::Mat* grey);
+  // Frames read so far.
+  long long frames_read() const { return frames_read_; }
+  // The frame count the container declares (its header or index); <= 0 when it does not say.
+  double declared_frames() const { return declared_; }
+  // After reading: when fewer frames were read than the container declares (or than
+  // `max_frames` if > 0, when it declares more), the video is truncated or damaged: the warning
+  // naming both counts, also logged. "" otherwise.
+  std::string Finish(int max_frames = 0) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string path_;
+  double declared_ = 0;
+  long long frames_read_ = 0;
+};
 
 // Reads all frames of a video as greyscale (up to max_frames if > 0). When fewer frames decode
 // than the container declares (CAP_PROP_FRAME_COUNT), the video is truncated or damaged: the
