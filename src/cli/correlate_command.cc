@@ -1,4 +1,5 @@
 // impactdic correlate: subset DIC of an image sequence (library: impactdic/dic/dic_io.h).
+#include <fmt/format.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -31,9 +32,12 @@ struct CorrelateArgs {
   std::string interp = "bicubic";
   std::string shape = "affine";
   std::string update = "auto";
+  bool update_given = false;  // --reference-update was on the command line.
   int threads = 0;
   int search_radius = 40;
   double min_zncc = 0.8;
+  std::string mode = "sequence";
+  std::string max_uncertainty;  // Empty: the library default (IcgnOptions).
   std::string output;
 };
 
@@ -83,6 +87,14 @@ void Run(const CorrelateArgs& a) {
   options.update.mode = ReferenceUpdateFromString(a.update, &options.update.every_n);
   options.init.search_radius_px = a.search_radius;
   options.icgn.min_zncc = a.min_zncc;
+  options.mode = SequenceModeFromString(a.mode, "--mode");
+  if (options.mode == SequenceMode::kPairs && a.update_given && a.update != "fixed") {
+    throw Error(ErrorKind::kInvalidValue, "--reference-update", a.update + " with --mode pairs",
+                "no --reference-update (or fixed): pairs never update the reference");
+  }
+  if (!a.max_uncertainty.empty())
+    options.icgn.max_uncertainty_px =
+        MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
   options.Check();
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
@@ -136,6 +148,11 @@ void RegisterCorrelateCommand(CLI::App& app) {
       "correlate", "correlate: subset DIC (IC-GN, B-spline, reference updating) of a sequence");
   cmd->add_option("--reference", args->reference, "Reference image (first frame)");
   cmd->add_option("--deformed", args->deformed, "Deformed image(s), in order");
+  cmd->add_option("--mode", args->mode,
+                  "sequence | pairs (default sequence): sequence = the deformed images are "
+                  "frames of one recording, each predicted from the previous ones, reference "
+                  "updated by --reference-update; pairs = independent images, each correlated "
+                  "against the reference alone (--reference-update does not apply)");
   cmd->add_option("--frames", args->frames,
                   "Folder or glob of frames (sorted; the first is the reference), or a video "
                   "file (.mp4, .avi, .mov, .mkv: its frames, numbered from 0)");
@@ -154,8 +171,17 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--search-radius", args->search_radius,
                   "Integer search radius [px] (default 40)");
   cmd->add_option("--min-zncc", args->min_zncc, "ZNCC below which a subset fails (default 0.8)");
+  cmd->add_option("--max-uncertainty", args->max_uncertainty,
+                  fmt::format("Estimated standard deviation [px] of u or v above which a "
+                              "converged subset is `uncertain` (NaN); 0 or none: no limit, every "
+                              "converged subset is reported with sigma_u_px, sigma_v_px "
+                              "(default {})",
+                              IcgnOptions{}.max_uncertainty_px));
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, cmd] {
+    args->update_given = cmd->count("--reference-update") > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace impactdic::cli

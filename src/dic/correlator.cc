@@ -90,6 +90,15 @@ struct Reference {
   std::vector<double> hinv;
 };
 
+// A subset that was not found in the frame that became the reference: it stays tracked against
+// the reference it was last found in (kept alive by the shared pointer), is tried against it in
+// every frame (status `lost` while it fails) and rejoins the tracked subsets at the next reference
+// update after it is found again.
+struct Orphan {
+  std::shared_ptr<const Reference> ref;
+  cv::Point2d ref_pos;  // Its tracked point in that reference.
+};
+
 struct Attempt {
   IcgnResult r;
   bool solved = false, searched = false, propagated = false;
@@ -137,6 +146,7 @@ struct Correlator::Impl {
   std::vector<cv::Point2d> initial;     // X0: centres in the first reference.
   std::vector<char> active;             // Still tracked.
   std::vector<SubsetStatus> permanent;  // Status of subsets no longer tracked.
+  std::vector<Orphan> orphans;          // Per subset; ref == nullptr unless orphaned.
   Reference ref;
   // Tracked point in the current reference image.
   std::vector<cv::Point2d> ref_pos;
@@ -158,12 +168,10 @@ struct Correlator::Impl {
   std::vector<char> RescuedByLastFrame(const std::vector<int>& which,
                                        const std::vector<Attempt>& at, const Frame& frame,
                                        FrameResult* out);
-  void Lose(int i) {
-    active[i] = 0;
-    permanent[i] = SubsetStatus::kLost;
-  }
-  bool Search(const SubsetRef& s, Frame& frame, double gu, double gv, cv::Mat* scratch_mat,
-              Params* p0) const;
+  void SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out);
+  void MoveReferencePoints(const std::vector<cv::Point2d>& pos);
+  bool Search(const SubsetRef& s, const cv::Mat& ref_image32, Frame& frame, double gu, double gv,
+              cv::Mat* scratch_mat, Params* p0) const;
   void CheckImage(const cv::Mat& image, const char* what) const;
 };
 
@@ -243,7 +251,7 @@ void Correlator::Impl::MakeFrame(const cv::Mat& raw, int index, Frame* out) {
   // search radius and the largest displacement seen so far.
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (std::size_t i = 0; i < initial.size(); ++i) {
-    if (!active[i]) continue;
+    if (!active[i] && !orphans[i].ref) continue;
     cv::Point2d p = ref_pos[i];
     x0 = std::min(x0, p.x);
     x1 = std::max(x1, p.x);
@@ -275,8 +283,8 @@ void Correlator::Impl::MakeFrame(const cv::Mat& raw, int index, Frame* out) {
   f.view.y_max = std::min<double>(reach.y + reach.height - 1, f.spline.y_max());
 }
 
-bool Correlator::Impl::Search(const SubsetRef& s, Frame& frame, double gu, double gv,
-                              cv::Mat* result, Params* p0) const {
+bool Correlator::Impl::Search(const SubsetRef& s, const cv::Mat& ref_image32, Frame& frame,
+                              double gu, double gv, cv::Mat* result, Params* p0) const {
   const int R = options.init.search_radius_px;
   const cv::Rect full(0, 0, image_size.width, image_size.height);
   const cv::Rect templ_rect(s.cx - half, s.cy - half, size, size);
@@ -285,7 +293,7 @@ bool Correlator::Impl::Search(const SubsetRef& s, Frame& frame, double gu, doubl
             wy = s.cy + static_cast<int>(std::lround(gv));
   const cv::Rect window = cv::Rect(wx - half - R, wy - half - R, size + 2 * R, size + 2 * R) & full;
   if (window.width < size || window.height < size) return false;
-  cv::matchTemplate(frame.image32(window), ref.image32(templ_rect), *result, cv::TM_CCOEFF_NORMED);
+  cv::matchTemplate(frame.image32(window), ref_image32(templ_rect), *result, cv::TM_CCOEFF_NORMED);
   double best = -2;
   cv::Point loc(-1, -1);
   // Deterministic arg-max (first maximum in row-major order), ignoring non-finite scores.
@@ -399,7 +407,7 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
       gv = p0[shape.nm];
     }
     at[i].searched = true;
-    if (!Search(ref.subsets[i], frame, gu, gv, &result, &p0)) {
+    if (!Search(ref.subsets[i], ref.image32, frame, gu, gv, &result, &p0)) {
       if (!at[i].propagated) at[i].r.status = SubsetStatus::kNotFound;
       return;
     }
@@ -576,7 +584,97 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
   }
   // 2b. Everything still unsolved: waves over all subsets.
   propagate(1);
+  SolveOrphans(frame, at, out);
   return at;
+}
+
+// Orphans (lost at a reference update) are tried against the reference they were last found in.
+// Guess: the position found in the last frame; else the mean accumulated displacement of the
+// solved tracked subsets among the 3x3 neighbours in this frame; else no motion. If IC-GN fails
+// from it, an integer search around it. Runs after the tracked subsets are solved.
+void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out) {
+  const int n = static_cast<int>(initial.size());
+  std::vector<int> list;
+  for (int i = 0; i < n; ++i)
+    if (!active[i] && orphans[i].ref && Usable(orphans[i].ref->subsets[i].status))
+      list.push_back(i);
+  if (list.empty()) return;
+  WallTimer timer;
+  frame.Float();
+  const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
+  std::vector<char> searched(list.size(), 0);
+  tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
+    const int i = list[k];
+    const Orphan& o = orphans[i];
+    const Reference& old = *o.ref;
+    const SubsetRef& s = old.subsets[i];
+    cv::Point2d expected = pos_last[i];
+    if (std::isnan(expected.x)) {
+      const int r = i / nx, c = i % nx;
+      cv::Point2d sum(0, 0);
+      int count = 0;
+      for (int rr = std::max(0, r - 1); rr <= std::min(ny - 1, r + 1); ++rr) {
+        for (int cc = std::max(0, c - 1); cc <= std::min(nx - 1, c + 1); ++cc) {
+          const int j = rr * nx + cc;
+          if (!active[j] || !at[j].solved) continue;
+          double du, dv;
+          internal::Displacement(shape, at[j].r.p, ref.subsets[j].ox, ref.subsets[j].oy, &du, &dv);
+          sum += ref_pos[j] + cv::Point2d(du, dv) - initial[j];
+          ++count;
+        }
+      }
+      expected = count ? initial[i] + sum / count : o.ref_pos;
+    }
+    Params p0{};
+    p0[0] = expected.x - o.ref_pos.x;
+    p0[shape.nm] = expected.y - o.ref_pos.y;
+    IcgnResult r =
+        internal::RunIcgn(shape, old.images, s, &old.hinv[i * nn], frame.view, options.icgn, p0);
+    Params p1;
+    if (r.status != SubsetStatus::kConverged &&
+        Search(s, old.image32, frame, p0[0], p0[shape.nm], &scratch.local(), &p1)) {
+      searched[k] = 1;
+      r = internal::RunIcgn(shape, old.images, s, &old.hinv[i * nn], frame.view, options.icgn, p1);
+    }
+    if (r.status == SubsetStatus::kConverged) {
+      at[i].r = r;
+      at[i].solved = true;
+    }
+  });
+  out->searches += static_cast<int>(std::count(searched.begin(), searched.end(), 1));
+  out->seconds_icgn += timer.ElapsedSeconds();
+}
+
+// Before a reference update to the frame whose tracked positions are `pos`: tracked subsets move
+// their reference point there; those not found in it become orphans of the current reference
+// (status `lost` while they fail); orphans found in it rejoin the tracked subsets.
+void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos) {
+  const int n = static_cast<int>(initial.size());
+  std::vector<int> lost;
+  for (int i = 0; i < n; ++i) {
+    if (!active[i]) {
+      if (orphans[i].ref && !std::isnan(pos[i].x)) {
+        active[i] = 1;
+        permanent[i] = SubsetStatus::kConverged;
+        ref_pos[i] = pos[i];
+        orphans[i] = Orphan{};
+      }
+      continue;
+    }
+    if (std::isnan(pos[i].x))
+      lost.push_back(i);
+    else
+      ref_pos[i] = pos[i];
+  }
+  if (lost.empty()) return;
+  // The current reference is kept (moved, not copied: BuildReference reuses the buffers).
+  auto old = std::make_shared<Reference>(std::move(ref));
+  ref = Reference{};
+  for (int i : lost) {
+    active[i] = 0;
+    permanent[i] = SubsetStatus::kLost;
+    orphans[i] = Orphan{old, ref_pos[i]};
+  }
 }
 
 // For `auto`: whether the subsets `which` (failed or below auto_min_zncc against the current
@@ -688,6 +786,7 @@ void Correlator::SetReference(const cv::Mat& image) {
   m.initial.resize(n);
   m.active.assign(n, 1);
   m.permanent.assign(n, SubsetStatus::kConverged);
+  m.orphans.assign(n, Orphan{});
   for (int r = 0; r < m.ny; ++r) {
     for (int c = 0; c < m.nx; ++c) {
       const int i = r * m.nx + c;
@@ -736,6 +835,13 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   FrameResult out;
   out.frame = m.last_index + 1;
   const int n = static_cast<int>(m.initial.size());
+  const bool pairs = m.options.mode == SequenceMode::kPairs;
+  if (pairs) {
+    // An independent image: nothing is predicted from the images before it (seeds and
+    // propagation, as for the first frame after the reference).
+    m.pos_last.assign(n, cv::Point2d(kNaN, kNaN));
+    m.params_valid.assign(n, 0);
+  }
   // First frame after the reference: positions at frame 0 are the prediction base only through
   // the seeds; afterwards constant-velocity prediction.
   WallTimer timer;
@@ -744,7 +850,8 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   out.seconds_coefficients += timer.ElapsedSeconds();
   std::vector<Attempt> at = m.Solve(*frame, &out);
 
-  const ReferenceUpdate mode = m.options.update.mode;
+  // Pairs: the reference never changes (UpdateOptions do not apply).
+  const ReferenceUpdate mode = pairs ? ReferenceUpdate::kFixed : m.options.update.mode;
   if (mode == ReferenceUpdate::kAuto && m.last_frame && m.last_frame->index > m.ref.frame) {
     // Subsets that were trackable but decorrelated.
     const double min_zncc = m.options.update.auto_min_zncc;
@@ -761,13 +868,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
       const std::vector<char> rescued = m.RescuedByLastFrame(triggers, at, *frame, &out);
       if (std::find(rescued.begin(), rescued.end(), 1) != rescued.end()) {
         // Switch to the last good frame: its tracked positions become the new reference points.
-        for (int i = 0; i < n; ++i) {
-          if (!m.active[i]) continue;
-          if (std::isnan(m.pos_last[i].x))
-            m.Lose(i);
-          else
-            m.ref_pos[i] = m.pos_last[i];
-        }
+        m.MoveReferencePoints(m.pos_last);
         Frame& last = *m.last_frame;
         m.BuildReference(last.index, last.raw, &last.spline, last.Float(), &out);
         ++m.summary.reference_updates;
@@ -788,6 +889,8 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   out.zncc.assign(n, std::numeric_limits<float>::quiet_NaN());
   out.iterations.assign(n, 0);
   out.sigma_px.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.sigma_u_px = out.sigma_px;
+  out.sigma_v_px = out.sigma_px;
   out.status.resize(n);
   std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
   for (int i = 0; i < n; ++i) {
@@ -799,15 +902,18 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
       m.params_valid[i] = 0;
       continue;
     }
-    const SubsetRef& s = m.ref.subsets[i];
+    const Orphan& orphan = m.orphans[i];
+    const SubsetRef& s = orphan.ref ? orphan.ref->subsets[i] : m.ref.subsets[i];
     double du, dv;
     internal::Displacement(m.shape, r.p, s.ox, s.oy, &du, &dv);
-    pos[i] = m.ref_pos[i] + cv::Point2d(du, dv);
+    pos[i] = (orphan.ref ? orphan.ref_pos : m.ref_pos[i]) + cv::Point2d(du, dv);
     out.u_px[i] = pos[i].x - m.initial[i].x;
     out.v_px[i] = pos[i].y - m.initial[i].y;
+    out.sigma_u_px[i] = r.sigma_u_px;
+    out.sigma_v_px[i] = r.sigma_v_px;
     out.sigma_px[i] = r.sigma_px;
     m.params_last[i] = r.p;
-    m.params_valid[i] = 1;
+    m.params_valid[i] = orphan.ref ? 0 : 1;
     m.iteration_sum += r.iterations;
     ++m.converged_sum;
   }
@@ -824,14 +930,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
       (mode == ReferenceUpdate::kIncremental) ||
       (mode == ReferenceUpdate::kEveryN && out.frame - m.ref.frame >= m.options.update.every_n);
   if (scheduled) {
-    for (int i = 0; i < n; ++i) {
-      if (!m.active[i]) continue;
-      if (std::isnan(pos[i].x)) {
-        m.Lose(i);
-      } else {
-        m.ref_pos[i] = pos[i];
-      }
-    }
+    m.MoveReferencePoints(pos);
     m.BuildReference(out.frame, image, &frame->spline, frame->Float(), &out);
     ++m.summary.reference_updates;
     m.last_frame.reset();

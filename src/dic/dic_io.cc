@@ -123,10 +123,13 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
       for (std::size_t i = 0; i < n; ++i) {
         rows.push_back({frame, Number(result.positions[i].x), Number(result.positions[i].y),
                         Number(f.u_px[i]), Number(f.v_px[i]), Number(f.zncc[i]),
-                        std::to_string(f.iterations[i]), ToString(f.status[i])});
+                        std::to_string(f.iterations[i]), ToString(f.status[i]),
+                        Number(f.sigma_u_px[i]), Number(f.sigma_v_px[i])});
       }
     }
-    WriteCsvRows(path, {"frame", "x_px", "y_px", "u_px", "v_px", "zncc", "iterations", "status"},
+    WriteCsvRows(path,
+                 {"frame", "x_px", "y_px", "u_px", "v_px", "zncc", "iterations", "status",
+                  "sigma_u_px", "sigma_v_px"},
                  rows);
     return;
   }
@@ -142,7 +145,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   out.Write("dic/x_px", x, "px", "subset centre x in the first reference image (right)");
   out.Write("dic/y_px", y, "px", "subset centre y in the first reference image (down)");
   std::vector<double> u(n * frames), v(n * frames);
-  std::vector<float> zncc(n * frames), sigma(n * frames);
+  std::vector<float> zncc(n * frames), sigma(n * frames), sigma_u(n * frames), sigma_v(n * frames);
   std::vector<std::int32_t> iterations(n * frames), status(n * frames);
   std::vector<std::int32_t> reference(frames), frame_index(frames);
   std::vector<double> frame_number(frames);
@@ -155,7 +158,9 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
       u[k * n + i] = f.u_px[i];
       v[k * n + i] = f.v_px[i];
       zncc[k * n + i] = f.zncc[i];
-      sigma[k * n + i] = f.sigma_px.empty() ? NAN : f.sigma_px[i];
+      sigma[k * n + i] = f.sigma_px[i];
+      sigma_u[k * n + i] = f.sigma_u_px[i];
+      sigma_v[k * n + i] = f.sigma_v_px[i];
       iterations[k * n + i] = f.iterations[i];
       status[k * n + i] = static_cast<std::int32_t>(f.status[i]);
     }
@@ -169,7 +174,13 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
             "NaN if the subset failed");
   out.Write("dic/zncc", zncc, dims, "1", "zero-normalised cross-correlation of the subset");
   out.Write("dic/sigma_px", sigma, dims, "px",
-            "estimated standard deviation of the displacement increment (least squares)");
+            "the larger of sigma_u_px and sigma_v_px, NaN if the subset failed");
+  out.Write("dic/sigma_u_px", sigma_u, dims, "px",
+            "estimated standard deviation of u against the frame's reference (least-squares "
+            "covariance), NaN if the subset failed");
+  out.Write("dic/sigma_v_px", sigma_v, dims, "px",
+            "estimated standard deviation of v against the frame's reference (least-squares "
+            "covariance), NaN if the subset failed");
   out.Write("dic/iterations", iterations, dims, "1", "IC-GN iterations");
   out.Write("dic/status", status, dims, "1", "subset status code (see attribute codes)");
   out.Write("dic/frame", frame_index, Dims{frames}, "1", "index of the deformed image (1-based)");
@@ -188,6 +199,8 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
                    options.update.mode == ReferenceUpdate::kEveryN
                        ? fmt::format("every:{}", options.update.every_n)
                        : std::string(ToString(options.update.mode)));
+  out.SetAttribute("dic", "mode", ToString(options.mode));
+  out.SetAttribute("dic", "max_uncertainty_px", options.icgn.max_uncertainty_px);
   out.SetAttribute("dic", "subset_size_px", options.grid.subset_size);
   out.SetAttribute("dic", "step_px", options.grid.step);
   out.SetAttribute("dic", "valid_fraction", result.summary.valid_fraction);

@@ -1100,10 +1100,12 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
       // sigma_r^2 = sum r^2 / (N - n), sum r^2 = f_n^2 * 2 (1 - ZNCC) (r in reference grey levels).
       const double r2 = double(s.f_norm) * s.f_norm * 2 * std::max(0.0, 1.0 - result.zncc);
       const double var_r = r2 / (count - n);
-      result.sigma_px = static_cast<float>(std::sqrt(var_r * std::max(hinv[0], hinv[nm * n + nm])));
+      result.sigma_u_px = static_cast<float>(std::sqrt(var_r * hinv[0]));
+      result.sigma_v_px = static_cast<float>(std::sqrt(var_r * hinv[nm * n + nm]));
+      result.sigma_px = std::max(result.sigma_u_px, result.sigma_v_px);
       if (result.zncc < options.min_zncc) {
         result.status = SubsetStatus::kLowCorrelation;
-      } else if (!(result.sigma_px <= options.max_uncertainty_px)) {
+      } else if (options.LimitsUncertainty() && !(result.sigma_px <= options.max_uncertainty_px)) {
         result.status = SubsetStatus::kUncertain;
       } else {
         result.status = SubsetStatus::kConverged;

@@ -61,7 +61,8 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
 struct IcgnResult {
   Params p{};
   float zncc = 0;
-  float sigma_px = 0;  // Estimated standard deviation of the centre displacement [px].
+  // Estimated standard deviations of the centre displacement [px]: u, v and the larger of both.
+  float sigma_u_px = 0, sigma_v_px = 0, sigma_px = 0;
   int iterations = 0;
   SubsetStatus status = SubsetStatus::kNotFound;
 };

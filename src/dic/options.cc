@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "impactdic/core/error.h"
@@ -62,6 +63,30 @@ ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n)
   throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
 }
 
+const char* ToString(SequenceMode mode) {
+  return mode == SequenceMode::kPairs ? "pairs" : "sequence";
+}
+
+SequenceMode SequenceModeFromString(const std::string& text, const std::string& where) {
+  if (text == "sequence") return SequenceMode::kSequence;
+  if (text == "pairs") return SequenceMode::kPairs;
+  throw Error(ErrorKind::kInvalidValue, where, text, "sequence or pairs");
+}
+
+double MaxUncertaintyFromString(const std::string& text, const std::string& where) {
+  if (text == "none") return std::numeric_limits<double>::infinity();
+  double value = 0;
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  CheckValue(used > 0 && used == text.size() && value >= 0 && !std::isnan(value), where, text,
+             "an uncertainty limit >= 0 [px] (0 or none: no limit)");
+  return value;
+}
+
 std::string SubsetStatusCodes() {
   std::string codes;
   for (int s = 0; s < kSubsetStatusCount; ++s)
@@ -111,7 +136,7 @@ void IcgnOptions::Check() const {
   CheckValue(min_zncc >= -1 && min_zncc < 1, "dic.icgn.min_zncc", Num(min_zncc), "in [-1, 1)");
   CheckValue(min_contrast >= 0 && std::isfinite(min_contrast), "dic.icgn.min_contrast",
              Num(min_contrast), ">= 0 grey levels");
-  CheckValue(max_uncertainty_px > 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
+  CheckValue(max_uncertainty_px >= 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
              "> 0 px");
   CheckValue(max_saturated_fraction > 0 && max_saturated_fraction <= 1,
              "dic.icgn.max_saturated_fraction", Num(max_saturated_fraction), "in (0, 1]");

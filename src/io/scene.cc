@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <set>
 
 #include "impactdic/core/error.h"
@@ -413,6 +414,23 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   dic.Number(
       "min_zncc", &d.min_zncc, [](double v) { return v > 0 && v < 1; },
       "a ZNCC threshold in (0, 1)");
+  {
+    YAML::Node n = dic.Get("max_uncertainty_px");
+    if (n.IsDefined() && !n.IsNull()) {
+      double value = 0;
+      if (n.IsScalar() && n.Scalar() == "none") {
+        d.max_uncertainty_px = std::numeric_limits<double>::infinity();
+      } else if (n.IsScalar() && YAML::convert<double>::decode(n, value) && std::isfinite(value) &&
+                 value >= 0) {
+        d.max_uncertainty_px = value;
+      } else {
+        problems.Add(n, "dic.max_uncertainty_px",
+                     fmt::format("got {}; expected an uncertainty limit >= 0 [px], or none (0 "
+                                 "and none: no limit)",
+                                 Describe(n)));
+      }
+    }
+  }
   dic.Integer(
       "max_iterations", &d.max_iterations, [](int v) { return v >= 1; }, "an iteration cap >= 1");
   dic.Number("convergence_px", &d.convergence_px, Positive, "a convergence threshold > 0 [px]");

@@ -168,6 +168,8 @@ cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
   return mask;
 }
 
+}  // namespace
+
 DicOptions MakeDicOptions(const SceneDic& d) {
   DicOptions o;
   o.grid.subset_size = d.subset_size;
@@ -190,11 +192,14 @@ DicOptions MakeDicOptions(const SceneDic& d) {
   o.icgn.min_zncc = d.min_zncc;
   o.icgn.max_iterations = d.max_iterations;
   o.icgn.convergence_px = d.convergence_px;
+  if (d.max_uncertainty_px) o.icgn.max_uncertainty_px = *d.max_uncertainty_px;
   o.init.search_radius_px = d.search_radius_px;
   o.update.mode = ReferenceUpdateFromString(d.reference_update, &o.update.every_n);
   o.Check();
   return o;
 }
+
+namespace {
 
 ImpactModelParameters MakeModelParameters(const Scene& scene, double impact_velocity_m_s) {
   ImpactModelParameters p;
@@ -767,11 +772,15 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       out.Write(layout::kDicV, ToFloat(series.v_px), {F, N}, "px",
                 "accumulated displacement y (down); NaN = failed");
       std::vector<float> zncc(F * N, 1.0f);
+      // Frame 0 is the reference itself: ZNCC 1, sigma 0.
+      std::vector<float> sigma_u(F * N, 0.0f), sigma_v(F * N, 0.0f);
       std::vector<std::int32_t> status(F * N, 0), iterations(F * N, 0);
       for (std::size_t f = 1; f < F; ++f) {
         const FrameResult& r = dic->frames[f - 1];
         for (std::size_t i = 0; i < N; ++i) {
           zncc[f * N + i] = r.zncc[i];
+          sigma_u[f * N + i] = r.sigma_u_px[i];
+          sigma_v[f * N + i] = r.sigma_v_px[i];
           status[f * N + i] = static_cast<std::int32_t>(r.status[i]);
           iterations[f * N + i] = r.iterations[i];
         }
@@ -781,6 +790,12 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       out.Write("/dic/status", status, {F, N}, "1",
                 "subset status code (see attribute status_names)");
       out.Write("/dic/iterations", iterations, {F, N}, "1", "IC-GN iterations");
+      out.Write("/dic/sigma_u_px", sigma_u, {F, N}, "px",
+                "estimated standard deviation of u against the frame's reference; NaN = failed");
+      out.Write("/dic/sigma_v_px", sigma_v, {F, N}, "px",
+                "estimated standard deviation of v against the frame's reference; NaN = failed");
+      out.SetAttribute("/dic", "max_uncertainty_px",
+                       MakeDicOptions(scene.dic).icgn.max_uncertainty_px);
       // The same attributes under the names `impactdic correlate` uses (codes, shape_function).
       out.SetAttribute("/dic/status", "status_names", SubsetStatusCodes());
       out.SetAttribute("/dic/status", "codes", SubsetStatusCodes());

@@ -64,9 +64,11 @@ struct FrameResult {
   // (x right, y down), NaN unless status == kConverged.
   std::vector<double> u_px, v_px;
   std::vector<float> zncc;  // Zero-normalised cross-correlation, NaN if not computed.
-  // Estimated standard deviation of the displacement from this frame's correlation [px]
-  // (least-squares covariance), NaN if not converged.
-  std::vector<float> sigma_px;
+  // Estimated standard deviations of the displacement from this frame's correlation [px]
+  // (least-squares covariance sigma_r^2 H^-1 of the warp's translation: u, v, and the larger of
+  // both), NaN unless status == kConverged. They do not include the error carried over from an
+  // earlier reference (after a reference update).
+  std::vector<float> sigma_u_px, sigma_v_px, sigma_px;
   std::vector<int> iterations;  // IC-GN iterations of the final attempt.
   std::vector<SubsetStatus> status;
   // Costs of this frame [s].

@@ -31,15 +31,19 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
 DicResult CorrelateVideo(const std::string& path, const DicOptions& options);
 
 // Writes the result by extension:
-// .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status (one row per frame and subset;
+// .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status,sigma_u_px,sigma_v_px (one row
+//       per frame and subset;
 //       frame = the deformed image's frame number from its file name (frame_0012.png -> 12) when
 //       the names are one numbered series, else its 1-based index; x,y = subset centre in the
 //       first reference,
-//       u,v = accumulated displacement [px], x right, y down; status by name; NaN as "nan").
-// .h5:  /dic/x_px, /dic/y_px (subsets), /dic/u_px, v_px, zncc, sigma_px (frames x subsets),
+//       u,v = accumulated displacement [px], x right, y down; status by name; sigma_u,v = their
+//       estimated standard deviations against the frame's reference [px]; NaN as "nan").
+// .h5:  /dic/x_px, /dic/y_px (subsets), /dic/u_px, v_px, zncc, sigma_u_px, sigma_v_px, sigma_px
+//       (frames x subsets),
 //       /dic/iterations, /dic/status (int32, frames x subsets; the attribute `codes` lists
 //       code=name), /dic/frame (1-based index of the deformed image), /dic/frame_number (as the
-//       CSV's frame column), /dic/reference_frame (frames), attributes with the options.
+//       CSV's frame column), /dic/reference_frame (frames), attributes with the options (mode,
+//       max_uncertainty_px: +inf = no limit, ...).
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
 
 }  // namespace impactdic

@@ -9,6 +9,7 @@
 #ifndef IMPACTDIC_DIC_OPTIONS_H_
 #define IMPACTDIC_DIC_OPTIONS_H_
 
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -70,10 +71,16 @@ struct IcgnOptions {
   // Reference subsets with more than this fraction of pixels at 0 or full scale are
   // `saturated`, in (0, 1].
   double max_saturated_fraction = 0.2;
-  // Converged subsets whose displacement standard deviation, estimated from the residual and the
-  // inverse Hessian (least-squares covariance sigma_r^2 H^-1), exceeds this [px] are `uncertain`
-  // (failed), > 0.
+  // Converged subsets whose displacement standard deviation (the larger of sigma_u and sigma_v,
+  // estimated from the residual and the inverse Hessian: least-squares covariance
+  // sigma_r^2 H^-1) exceeds this [px] are `uncertain` (failed), >= 0. 0 or +inf: no limit, every
+  // converged subset is reported with its sigma_u, sigma_v (FrameResult) for downstream stages
+  // to weight or exclude. The one default of the scene key `dic.max_uncertainty_px` and of
+  // `correlate --max-uncertainty`.
   double max_uncertainty_px = 0.025;
+  bool LimitsUncertainty() const {
+    return max_uncertainty_px > 0 && std::isfinite(max_uncertainty_px);
+  }
   void Check() const;
 };
 
@@ -84,7 +91,21 @@ struct UpdateOptions {
   void Check() const;
 };
 
+// How the deformed images relate to each other (docs/dic.md):
+// kSequence: a time sequence (default): each frame starts from the prediction of the previous
+//   ones and the reference is updated by UpdateOptions.
+// kPairs: independent images, each correlated against the reference alone: no prediction from
+//   another image, no reference update (UpdateOptions does not apply), no subset is ever `lost`.
+enum class SequenceMode { kSequence, kPairs };
+const char* ToString(SequenceMode mode);
+// "sequence" or "pairs"; an Error naming `where` otherwise.
+SequenceMode SequenceModeFromString(const std::string& text, const std::string& where);
+// The uncertainty limit as written in a scene or on the command line: a number >= 0 [px], or
+// "none" (no limit, +inf); an Error naming `where` otherwise.
+double MaxUncertaintyFromString(const std::string& text, const std::string& where);
+
 struct DicOptions {
+  SequenceMode mode = SequenceMode::kSequence;
   GridOptions grid;
   InitialGuessOptions init;
   IcgnOptions icgn;

@@ -76,6 +76,10 @@ struct SceneDic {
   int threads = 0;               // 0 = all cores, N >= 1 = at most N (core/threads.h).
   int first_frame = 0;           // First frame to correlate (index in the sequence), >= 0.
   int last_frame = -1;           // Last frame (inclusive); -1 = the last frame.
+  // Uncertainty limit [px] (dic IcgnOptions::max_uncertainty_px): a converged subset whose
+  // estimated sd of u or v exceeds it is `uncertain` (NaN). Unset: the library's default; 0 or
+  // `none` (+inf): no limit, every converged subset is kept with its sigma_u_px, sigma_v_px.
+  std::optional<double> max_uncertainty_px;
 };
 
 struct SceneSensor {

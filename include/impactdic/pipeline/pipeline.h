@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/dic/options.h"
 #include "impactdic/io/json.h"
 #include "impactdic/io/scene.h"
 
@@ -111,6 +112,10 @@ struct PipelineSummary {
 // covering the frames, unwritable output folder, ...) and for stages that produced nothing usable
 // (unless options.allow_partial; file comment) before anything that looks complete is written.
 PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
+
+// The correlation options of a scene's `dic` section (keys not in the scene keep the dic
+// library's defaults, e.g. IcgnOptions::max_uncertainty_px). Error naming the key if invalid.
+DicOptions MakeDicOptions(const SceneDic& dic);
 
 }  // namespace impactdic
 
