@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include "../cli/cli_runner.h"
@@ -63,12 +64,25 @@ TEST_F(CorrelateCli, WritesTheCsvContract) {
   std::ifstream in(out);
   std::string header;
   std::getline(in, header);
-  EXPECT_EQ(header, "frame,x_px,y_px,u_px,v_px,zncc,iterations,status");
+  // The first eight columns are a contract; the sigma columns were added after them.
+  EXPECT_EQ(header, "frame,x_px,y_px,u_px,v_px,zncc,iterations,status,sigma_u_px,sigma_v_px");
   int rows = 0, converged = 0;
   std::string line;
   while (std::getline(in, line)) {
     ++rows;
-    converged += line.find(",converged") != std::string::npos;
+    std::vector<std::string> fields;
+    std::stringstream ss(line);
+    for (std::string field; std::getline(ss, field, ',');) fields.push_back(field);
+    ASSERT_EQ(fields.size(), 10u) << line;
+    const bool ok = fields[7] == "converged";
+    converged += ok;
+    // Converged rows carry finite sigmas within the default limit, the others "nan".
+    const double su = std::stod(fields[8]), sv = std::stod(fields[9]);
+    if (ok) {
+      EXPECT_TRUE(su > 0 && su <= 0.025 && sv > 0 && sv <= 0.025) << line;
+    } else {
+      EXPECT_TRUE(std::isnan(su) && std::isnan(sv)) << line;
+    }
   }
   // (120 - 8 - 25) / 10 + 1 = 9 columns, (100 - 8 - 25) / 10 + 1 = 7 rows, 2 frames.
   EXPECT_EQ(rows, 2 * 9 * 7);
@@ -93,6 +107,49 @@ TEST_F(CorrelateCli, WritesHdf5WithFramesAndStatusCodes) {
   EXPECT_EQ(h5.ReadStringAttribute("dic/status", "status_names"),
             h5.ReadStringAttribute("dic/status", "codes"));
   EXPECT_EQ(h5.ReadStringAttribute("dic", "shape"), "quadratic");  // --shape quadratic above
+  for (const char* name : {"dic/sigma_u_px", "dic/sigma_v_px"}) {
+    Dims sigma_dims;
+    h5.ReadFloat(name, &sigma_dims);
+    EXPECT_EQ(sigma_dims, dims) << name;
+    EXPECT_EQ(h5.ReadStringAttribute(name, "units"), "px") << name;
+  }
+  EXPECT_EQ(h5.ReadStringAttribute("dic", "mode"), "sequence");
+}
+
+TEST_F(CorrelateCli, PairsModeAndUncertaintyLimit) {
+  const std::string out = Path("pairs.h5");
+  const CliResult r =
+      RunCli(Pair() + " --mode pairs --max-uncertainty none --subset 25 --step 10 -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  H5Reader h5(out);
+  EXPECT_EQ(h5.ReadStringAttribute("dic", "mode"), "pairs");
+  EXPECT_TRUE(std::isinf(h5.ReadNumberAttribute("dic", "max_uncertainty_px")));
+  const std::vector<std::int32_t> reference = h5.ReadInt("dic/reference_frame");
+  EXPECT_EQ(reference, (std::vector<std::int32_t>{0, 0}));
+  // Both deformed images against the reference: 0.4/-0.3 and 0.8/-0.6 px.
+  Dims dims;
+  const std::vector<double> u = h5.ReadDouble("dic/u_px", &dims);
+  const std::vector<std::int32_t> status = h5.ReadInt("dic/status");
+  const std::vector<float> sigma_u = h5.ReadFloat("dic/sigma_u_px");
+  int converged = 0;
+  for (std::size_t k = 0; k < dims[0]; ++k) {
+    for (std::size_t i = 0; i < dims[1]; ++i) {
+      if (status[k * dims[1] + i] != 0) continue;
+      ++converged;
+      EXPECT_NEAR(u[k * dims[1] + i], 0.4 * (k + 1), 0.05);
+      EXPECT_GT(sigma_u[k * dims[1] + i], 0);
+    }
+  }
+  EXPECT_GT(converged, static_cast<int>(dims[0] * dims[1]) / 2);
+  ExpectError(Pair() + " --mode pair -o " + Path("x.csv"), "--mode");
+  ExpectError(Pair() + " --mode pairs --reference-update incremental -o " + Path("x.csv"),
+              "--reference-update");
+  ExpectError(Pair() + " --max-uncertainty -1 -o " + Path("x.csv"), "--max-uncertainty");
+  ExpectError(Pair() + " --max-uncertainty lots -o " + Path("x.csv"), "--max-uncertainty");
+  // --help names the modes, the default and the uncertainty default.
+  const CliResult help = RunCli("correlate --help");
+  for (const char* item : {"sequence | pairs (default sequence)", "--max-uncertainty", "0.025"})
+    EXPECT_NE(help.output.find(item), std::string::npos) << item << "\n" << help.output;
 }
 
 TEST_F(CorrelateCli, BadInputGivesClearErrors) {
