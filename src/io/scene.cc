@@ -483,6 +483,9 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   mom.OptionalNumber(
       "min_valid_fraction", &scene.momentum.min_valid_fraction,
       [](double v) { return v > 0 && v <= 1; }, "a fraction of the grid's subsets in (0, 1]");
+  mom.OptionalNumber(
+      "max_sigma_px", &scene.momentum.max_sigma_px, [](double v) { return v > 0; },
+      "a standard deviation limit > 0 [px]");
   mom.Finish();
 
   Section mod = top.Sub("model");

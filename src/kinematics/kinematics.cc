@@ -65,9 +65,34 @@ void CorrelationSeries::Check() const {
              fmt::format("frames x subsets = {}", n));
   CheckValue(valid.empty() || valid.size() == n, "valid", fmt::format("{} entries", valid.size()),
              fmt::format("empty or frames x subsets = {}", n));
+  CheckValue(
+      sigma_u_px.size() == sigma_v_px.size() && (sigma_u_px.empty() || sigma_u_px.size() == n),
+      "sigma_u_px / sigma_v_px",
+      fmt::format("{} / {} entries", sigma_u_px.size(), sigma_v_px.size()),
+      fmt::format("both empty or frames x subsets = {}", n));
   for (std::size_t i = 0; i < subsets; ++i)
     CheckValue(std::isfinite(x_px[i]) && std::isfinite(y_px[i]), "x_px / y_px",
                fmt::format("a non-finite position at subset {}", i), "finite grid positions");
+}
+
+std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& where,
+                                    CorrelationSeries* series) {
+  CheckValue(max_sigma_px > 0, where, fmt::format("{}", max_sigma_px), "> 0 px");
+  CorrelationSeries& s = *series;
+  s.Check();
+  CheckValue(!s.sigma_u_px.empty(), where, "set, but the correlation results have no sigma_u_px",
+             "results with per-subset sigmas (correlate them again with this version)");
+  const std::size_t n = s.frames * s.subsets;
+  if (s.valid.empty()) s.valid.assign(n, 1);
+  std::size_t excluded = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    if (!s.valid[j] || !(s.sigma_u_px[j] > max_sigma_px || s.sigma_v_px[j] > max_sigma_px))
+      continue;
+    s.valid[j] = 0;
+    s.u_px[j] = s.v_px[j] = std::numeric_limits<double>::quiet_NaN();
+    ++excluded;
+  }
+  return excluded;
 }
 
 void KinematicsOptions::Check() const {

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
@@ -92,6 +93,16 @@ CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_
     s.valid.resize(status.size());
     for (std::size_t i = 0; i < status.size(); ++i) s.valid[i] = status[i] == 0 ? 1 : 0;
   }
+  if (in.Exists("dic/sigma_u_px") && in.Exists("dic/sigma_v_px")) {
+    s.sigma_u_px = in.ReadFloat("dic/sigma_u_px");
+    s.sigma_v_px = in.ReadFloat("dic/sigma_v_px");
+    if (s.sigma_u_px.size() != s.u_px.size() || s.sigma_v_px.size() != s.u_px.size()) {
+      throw Error(ErrorKind::kFileFormat, "/dic/sigma_u_px, /dic/sigma_v_px",
+                  fmt::format("{} / {} entries", s.sigma_u_px.size(), s.sigma_v_px.size()),
+                  fmt::format("one per frame and subset ({})", s.u_px.size()))
+          .WithFile(h5_path);
+    }
+  }
   // The dic stage writes one row per DEFORMED image (/dic/frame: 1-based image index, the
   // reference image being 0). Prepend the reference row (zero displacement) so row k is frame k.
   if (in.Exists("dic/frame")) {
@@ -110,6 +121,10 @@ CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_
       s.u_px.insert(s.u_px.begin(), n, 0.0);
       s.v_px.insert(s.v_px.begin(), n, 0.0);
       if (!s.valid.empty()) s.valid.insert(s.valid.begin(), n, std::uint8_t{1});
+      if (!s.sigma_u_px.empty()) {
+        s.sigma_u_px.insert(s.sigma_u_px.begin(), n, 0.0f);
+        s.sigma_v_px.insert(s.sigma_v_px.begin(), n, 0.0f);
+      }
       ++s.frames;
     } else if (!index.empty() && index[0] != 0) {
       throw Error(ErrorKind::kFileFormat, "/dic/frame", fmt::format("first index {}", index[0]),
@@ -138,7 +153,21 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   const SensorOptions sopt = SensorOptionsFromScene(scene);
   const MomentumOptions mopt = MomentumOptionsFromScene(scene, mm_per_px);
   long first = -1;
-  const CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
+  CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
+  if (scene.momentum.max_sigma_px) {
+    std::size_t excluded = 0;
+    try {
+      excluded =
+          ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &dic);
+    } catch (Error& e) {
+      e.WithFile(results_path);
+      throw;
+    }
+    LogWarning(
+        "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
+        "momentum.max_sigma_px = {} px)",
+        excluded, dic.frames * dic.subsets, *scene.momentum.max_sigma_px);
+  }
   if (first < 0) first = scene.dic.first_frame;
   SceneAnalysisRun run;
   run.results_path = results_path;

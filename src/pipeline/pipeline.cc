@@ -168,6 +168,22 @@ cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
   return mask;
 }
 
+// The correlation series the kinematics and momentum use: without the samples above the scene's
+// momentum.max_sigma_px (if set; counted in a warning). /dic keeps them.
+CorrelationSeries AnalysedSeries(const CorrelationSeries& series, const Scene& scene,
+                                 std::vector<std::string>* warnings) {
+  CorrelationSeries s = series;
+  if (scene.momentum.max_sigma_px) {
+    const std::size_t n =
+        ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &s);
+    warnings->push_back(
+        fmt::format("kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
+                    "momentum.max_sigma_px = {} px)",
+                    n, s.frames * s.subsets, *scene.momentum.max_sigma_px));
+  }
+  return s;
+}
+
 }  // namespace
 
 DicOptions MakeDicOptions(const SceneDic& d) {
@@ -621,11 +637,15 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     series.u_px.assign(F * N, 0.0);
     series.v_px.assign(F * N, 0.0);
     series.valid.assign(F * N, 1);
+    series.sigma_u_px.assign(F * N, 0.0f);
+    series.sigma_v_px.assign(F * N, 0.0f);
     for (std::size_t f = 1; f < F; ++f) {
       const FrameResult& r = dic->frames[f - 1];
       for (std::size_t i = 0; i < N; ++i) {
         series.u_px[f * N + i] = r.u_px[i];
         series.v_px[f * N + i] = r.v_px[i];
+        series.sigma_u_px[f * N + i] = r.sigma_u_px[i];
+        series.sigma_v_px[f * N + i] = r.sigma_v_px[i];
         series.valid[f * N + i] = r.status[i] == SubsetStatus::kConverged ? 1 : 0;
       }
     }
@@ -647,6 +667,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     }
     PanelMapping mapping;
     mapping.mm_per_px = mm_per_px;
+    const CorrelationSeries analysed = AnalysedSeries(series, scene, &summary.warnings);
     if (sensor && scene.HasStage("momentum")) {
       WallTimer t;
       const MomentumOptions m = MomentumOptionsFromScene(scene, mm_per_px);
@@ -657,7 +678,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       analysis.emplace();
       analysis->frame_time_s.assign(frame_times_all.begin() + first,
                                     frame_times_all.begin() + last + 1);
-      analysis->kinematics = ComputeKinematics(series, mapping, k);
+      analysis->kinematics = ComputeKinematics(analysed, mapping, k);
       analysis->momentum =
           AnalyzeMomentum(analysis->kinematics, analysis->frame_time_s, *sensor, m);
       const MomentumSummary& ms = analysis->momentum.summary;
@@ -682,7 +703,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       WallTimer t;
       KinematicsOptions k;
       k.fps = scene.inputs.fps;
-      kinematics_only = ComputeKinematics(series, mapping, k);
+      kinematics_only = ComputeKinematics(analysed, mapping, k);
       stages.Ran("kinematics", kinematics_only->summary.BriefReport(), t);
       stages.Skipped("momentum", sensor ? "not among the scene's stages"
                                         : "needs the sensor record (pounder velocity)");

@@ -110,6 +110,39 @@ TEST(Kinematics, NanAwareDerivativesAndAverages) {
   }
 }
 
+// Samples above the sigma limit are left out (NaN, invalid) before the derivatives; the mean over
+// the grid then skips them; samples within the limit, and those already invalid, are untouched.
+TEST(Kinematics, UncertainSamplesAreLeftOutAboveTheSigmaLimit) {
+  CorrelationSeries dic;
+  dic.frames = 4;
+  dic.subsets = 2;
+  dic.x_px = {0, 10};
+  dic.y_px = {0, 0};
+  dic.u_px = {0, 0, 1, 1, 2, 2, 3, 3};
+  dic.v_px = {0, 0, 0, 0, 0, 0, 0, 0};
+  dic.valid = {1, 1, 1, 1, 1, 0, 1, 1};
+  dic.sigma_u_px = {0, 0, 0.01f, 0.01f, 0.01f, NAN, 0.02f, 0.02f};
+  dic.sigma_v_px = {0, 0, 0.01f, 0.04f, 0.01f, NAN, 0.02f, 0.02f};
+  EXPECT_EQ(ExcludeUncertainSamples(0.03, "momentum.max_sigma_px", &dic), 1u);
+  EXPECT_EQ(dic.valid, (std::vector<std::uint8_t>{1, 1, 1, 0, 1, 0, 1, 1}));
+  EXPECT_TRUE(std::isnan(dic.u_px[3]) && std::isnan(dic.v_px[3]));
+  EXPECT_EQ(dic.u_px[2], 1);
+  PanelMapping map;
+  map.mm_per_px = 1;
+  KinematicsOptions opt;
+  opt.fps = 1;
+  const KinematicsResult r = ComputeKinematics(dic, map, opt);
+  std::size_t count = 0;
+  EXPECT_NEAR(MeanOverSubsets(r.disp_x_mm, 2, 1, {0, 1}, &count), 1, 1e-12);
+  EXPECT_EQ(count, 1u);
+  ExpectErrorContaining([&] { ExcludeUncertainSamples(0, "momentum.max_sigma_px", &dic); },
+                        "momentum.max_sigma_px");
+  dic.sigma_u_px.clear();
+  dic.sigma_v_px.clear();
+  ExpectErrorContaining([&] { ExcludeUncertainSamples(0.03, "momentum.max_sigma_px", &dic); },
+                        "no sigma_u_px");
+}
+
 // A homography that is a scale + translation gives the same velocities as the scale.
 TEST(Kinematics, HomographyMatchesScale) {
   CorrelationSeries dic;

@@ -50,5 +50,19 @@ TEST(DicOptions, SceneAndCorrelateShareTheUncertaintyLimitDefault) {
   }
 }
 
+// The downstream limit (kinematics ExcludeUncertainSamples) is read from momentum.max_sigma_px.
+TEST(DicOptions, MomentumSigmaLimitIsAPositiveNumber) {
+  EXPECT_FALSE(ParseScene("inputs: {frames: f}\n", "x/scene.yaml").momentum.max_sigma_px);
+  EXPECT_EQ(ParseScene("inputs: {frames: f}\nmomentum: {max_sigma_px: 0.04}\n", "x/scene.yaml")
+                .momentum.max_sigma_px,
+            0.04);
+  try {
+    ParseScene("inputs: {frames: f}\nmomentum: {max_sigma_px: 0}\n", "x/scene.yaml");
+    FAIL() << "no error for 0";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("momentum.max_sigma_px"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace impactdic

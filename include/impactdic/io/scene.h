@@ -108,6 +108,10 @@ struct SceneMomentum {
   // Per frame, the fraction of the grid's subsets that must be valid for p_gran to be measured
   // there, in (0, 1]; unset: MomentumOptions::min_valid_fraction (the default is defined there).
   std::optional<double> min_valid_fraction;
+  // Subset samples whose correlation sigma_u or sigma_v exceeds this [px] are left out of the
+  // kinematics and the momentum grid mean (kinematics ExcludeUncertainSamples; /dic keeps them),
+  // > 0; unset: none left out. Pairs with dic.max_uncertainty_px: none.
+  std::optional<double> max_sigma_px;
 };
 
 struct SceneModel {

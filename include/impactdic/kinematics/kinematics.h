@@ -46,9 +46,21 @@ struct CorrelationSeries {
   std::vector<double> x_px, y_px;   // Subset centres in the reference frame [subsets].
   std::vector<double> u_px, v_px;   // Displacement since frame 0 [frames x subsets], row-major.
   std::vector<std::uint8_t> valid;  // [frames x subsets], 1 = valid; empty = valid where finite.
+  // Estimated standard deviations of u and v (dic FrameResult::sigma_u_px, sigma_v_px; 0 in the
+  // reference frame) [frames x subsets] [px]; empty = not known.
+  std::vector<float> sigma_u_px, sigma_v_px;
   // Throws Error(kInvalidValue) naming the inconsistent field.
   void Check() const;
 };
+
+// The downstream use of the correlation's uncertainty (scene key `momentum.max_sigma_px`): marks
+// the samples whose sigma_u_px or sigma_v_px exceeds max_sigma_px [px] invalid (NaN
+// displacement), so the kinematics (derivatives touching them are NaN) and the momentum grid
+// mean (NaN subsets skipped) leave them out; returns their count. Samples without a sigma (NaN:
+// failed subsets) are already invalid. Error naming `where` if max_sigma_px is not > 0 or the
+// series has no sigmas (results written before they existed).
+std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& where,
+                                    CorrelationSeries* series);
 
 struct KinematicsOptions {
   double fps = 1600;  // Camera frame rate [1/s], > 0; dt = 1 / fps.
