@@ -636,10 +636,9 @@ void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, Fram
       searched[k] = 1;
       r = internal::RunIcgn(shape, old.images, s, &old.hinv[i * nn], frame.view, options.icgn, p1);
     }
-    if (r.status == SubsetStatus::kConverged) {
-      at[i].r = r;
-      at[i].solved = true;
-    }
+    // Reported with the retry's outcome when IC-GN ran (e.g. `uncertain`), else still `lost`.
+    if (r.iterations > 0) at[i].r = r;
+    at[i].solved = r.status == SubsetStatus::kConverged;
   });
   out->searches += static_cast<int>(std::count(searched.begin(), searched.end(), 1));
   out->seconds_icgn += timer.ElapsedSeconds();

@@ -139,6 +139,56 @@ TEST(Sequence, SubsetLostAtAnUpdateIsTriedAgainstTheOldReference) {
   ExpectHiddenSubsetsFoundAgain(options, /*covered=*/3);
 }
 
+// `auto`: rigid motion; in frame 3 a dark block hides region A, and from frame 3 on the texture of
+// region B changes (30 % new grains blended in). In frame 3 A fails and B correlates below 0.95
+// against the reference and against frame 2: no update. In frame 4 B is below 0.95 against the
+// reference but passes against frame 3, so `auto` switches to frame 3, where A was hidden. A's
+// subsets are tried against the first reference instead of being dropped: found in frames 4 and 5
+// within 0.05 px.
+TEST(Sequence, AutoUpdateToAFrameWithHiddenSubsetsKeepsTryingThem) {
+  const int w = 200, h = 160, frames = 6, covered = 3;
+  Scene scene(w, h, /*noise_sigma=*/2, /*seed=*/31, /*supersampling=*/2);
+  Scene grains(w, h, /*noise_sigma=*/2, /*seed=*/32, /*supersampling=*/2);
+  const cv::Rect region_a(110, 30, 70, 60), region_b(15, 95, 70, 55);
+  std::vector<cv::Mat> images;
+  for (int k = 0; k < frames; ++k) {
+    const DisplacementField field = Translation(0.25 * k, 0.1 * k);
+    images.push_back(scene.Render(field, 300 + k));
+    if (k >= covered) {
+      cv::Mat b = images[k](region_b);
+      cv::addWeighted(b, 0.7, grains.Render(field, 400 + k)(region_b), 0.3, 0, b);
+    }
+  }
+  PaintBlock(&images[covered], region_a);
+  DicOptions options;
+  options.grid.step = 10;
+  options.update.mode = ReferenceUpdate::kAuto;
+  // No uncertainty limit: B must keep a position in frame 3 (its changed texture raises sigma).
+  options.icgn.max_uncertainty_px = 0;
+  const DicResult r = CorrelateSequence(images, options);
+  ASSERT_FALSE(r.frames[covered - 1].reference_updated);
+  ASSERT_TRUE(r.frames[covered].reference_updated);
+  ASSERT_EQ(r.frames[covered].reference_frame, covered);
+  const FrameResult& hidden = r.frames[covered - 1];
+  int tried = 0;
+  for (std::size_t i = 0; i < r.positions.size(); ++i) {
+    const cv::Point2d x = r.positions[i];
+    // Well inside A: hidden in frame 3, visible again from frame 4 on.
+    if (!(x.x > region_a.x + 14 && x.x < region_a.br().x - 14 && x.y > region_a.y + 14 &&
+          x.y < region_a.br().y - 14))
+      continue;
+    ASSERT_NE(hidden.status[i], SubsetStatus::kConverged) << "subset " << i;
+    ++tried;
+    for (int k = covered + 1; k < frames; ++k) {
+      const FrameResult& f = r.frames[k - 1];
+      ASSERT_EQ(f.status[i], SubsetStatus::kConverged) << "frame " << k << " subset " << i;
+      EXPECT_NEAR(f.u_px[i], 0.25 * k, 0.05) << "frame " << k << " subset " << i;
+      EXPECT_NEAR(f.v_px[i], 0.1 * k, 0.05) << "frame " << k << " subset " << i;
+    }
+  }
+  EXPECT_GE(tried, 4);
+}
+
 // Noisy translation, no uncertainty limit: over many independent subsets, the scatter of the
 // errors (sd about their mean) matches the mean reported sigma (rms of sigma) per component.
 // Least-squares theory says equal; measured (noise 6 grey levels): the observed sd is 1.30x the
