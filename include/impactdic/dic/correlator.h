@@ -42,7 +42,11 @@
 //     frame only if that rescues a subset that decorrelated (it passes against the last frame,
 //     tested on those subsets alone); subsets that fail against both references (covered by an
 //     object entering the view, a blurred frame) keep the reference and are found again when
-//     they reappear.
+//     they reappear. A subset not found in the frame that becomes the reference (any mode) is
+//     kept against the reference it was last found in, tried against it in every frame (`lost`
+//     while not found) and rejoins at the next update after it is found.
+//  Pairs (DicOptions::mode = kPairs): every image is correlated against the first reference as
+//  the first frame of a sequence is (steps 1-3, no prediction, no update).
 #ifndef IMPACTDIC_DIC_CORRELATOR_H_
 #define IMPACTDIC_DIC_CORRELATOR_H_
 

@@ -124,7 +124,8 @@ enum class SubsetStatus {
   kLowContrast = 6,      // Reference subset standard deviation below min_contrast.
   kSaturated = 7,        // Too many reference pixels at 0 or full scale.
   kNotFound = 8,         // No initial guess (search failed, no solved neighbour).
-  kLost = 9,             // Failed in the frame that became the reference: no longer tracked.
+  kLost = 9,             // Failed in the frame that became the reference, and not found again
+                         // against the reference it was last found in (tried every frame).
   kUncertain = 10,       // Converged, but the estimated standard deviation of the displacement
                          // exceeds IcgnOptions::max_uncertainty_px (e.g. few features).
 };
