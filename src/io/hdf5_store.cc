@@ -7,11 +7,13 @@
 #include <chrono>
 #include <ctime>
 #include <filesystem>
+#include <limits>
 #include <numeric>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace {
@@ -107,8 +109,11 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_u
   CheckOutputLocation(final_path);
   // kUpdate starts from the existing file's bytes: HDF5 never opens the original, so readers of
   // it (another process rendering it) are not locked out and it stays as it is until Commit().
+  // No size limit: the file is one impactdic wrote (results.h5 with /frames may be gigabytes).
   std::string existing;
-  if (mode == Mode::kUpdate) existing = ReadTextFile(final_path);
+  if (mode == Mode::kUpdate)
+    existing =
+        ReadInputFile(final_path, "an HDF5 file", std::numeric_limits<std::uintmax_t>::max());
   Guard(final_path, "open", [&] {
     H5::FileAccPropList access;
     access.setCore(kCoreIncrement, /*backing_store=*/false);

@@ -5,9 +5,11 @@
 
 #include <cmath>
 #include <filesystem>
+#include <random>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
+#include "impactdic/io/input_file.h"
 #include "test_dir.h"
 
 namespace impactdic {
@@ -203,6 +205,32 @@ TEST(Hdf5Store, UpdateAddsAndReplacesGroupsAtomically) {
   EXPECT_FALSE(in.Exists("momentum/p"));
   EXPECT_EQ(in.ReadDouble("momentum/q")[0], 7);
   EXPECT_THROW(H5Writer(dir.File("missing.h5"), H5Writer::Mode::kUpdate), Error);
+}
+
+// A results file with its frames is far larger than a text file: an update (analyze SCENE,
+// correlate -o into an existing file) must read it whole, not refuse it at the text-file limit.
+TEST(Hdf5Store, UpdatesAFileLargerThanTheTextFileLimit) {
+  TestDir dir;
+  const std::string path = dir.File("big.h5");
+  const std::size_t n = static_cast<std::size_t>(kMaxTextFileBytes) + (std::size_t{1} << 20);
+  {
+    H5Writer out(path);
+    // Random bytes: the writer deflates large datasets, and noise does not shrink.
+    std::mt19937 random(11);
+    std::vector<std::uint8_t> frames(n);
+    for (auto& b : frames) b = static_cast<std::uint8_t>(random());
+    out.Write("frames/images", frames, {n}, "grey level", "frames");
+    out.Commit();
+  }
+  ASSERT_GT(std::filesystem::file_size(path), kMaxTextFileBytes);
+  {
+    H5Writer update(path, /*owned_groups=*/{"/momentum"});
+    update.Write("momentum/p", std::vector<double>{5}, "N s", "new");
+    update.Commit();
+  }
+  H5Reader in(path);
+  EXPECT_EQ(in.ReadDouble("momentum/p")[0], 5);
+  EXPECT_TRUE(in.Exists("frames/images"));
 }
 
 }  // namespace
