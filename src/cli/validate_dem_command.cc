@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/render/dem_validation.h"
 
@@ -24,6 +25,9 @@ void RunValidateDem(const ValidateDemArgs& args) {
     if (!fs::is_regular_file(path, ec))
       throw Error(ErrorKind::kFileNotFound, name, path, "an existing HDF5 file");
   }
+  // Before any work: the table is never written over an input (io/atomic_file.h).
+  if (!args.csv.empty())
+    CheckOutputLocation(args.csv, {"--csv", {".csv"}, {args.truth, args.results}});
   const DemValidation v = ValidateDemRun(args.truth, args.results, args.figures);
   std::cout << v.Report();
   if (!args.csv.empty()) {

@@ -418,14 +418,14 @@ std::string SequenceColourCheck::Check(const std::string& path, int file_channel
   return text;
 }
 
-void WriteImage(const std::string& path, const cv::Mat& image) {
+void WriteImage(const std::string& path, const cv::Mat& image, const std::vector<int>& params) {
   // Encoded in memory (OpenCV picks the encoder from the extension) and written with our checked
   // writes: libpng's own file writing reports a full disk only as "libpng error: Write Error".
   const std::string ext = fs::path(path).extension().string();
   std::vector<uchar> bytes;
   bool ok = false;
   try {
-    ok = !ext.empty() && cv::imencode(ext, image, bytes);
+    ok = !ext.empty() && cv::imencode(ext, image, bytes, params);
   } catch (const cv::Exception&) {
     ok = false;
   }

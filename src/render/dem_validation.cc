@@ -257,6 +257,9 @@ void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequen
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir, ec))
+    throw Error(ErrorKind::kIo, "--figures", dir,
+                "a folder that can be created (" + ec.message() + ")");
   // Velocity fields at the frame nearest t_e / 2 of the grains, one colour scale.
   double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
   std::size_t f_show = 0;
@@ -278,16 +281,17 @@ void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequen
   cv::Mat right = b.RenderFrame(f_show, "DEM grains (cell means), " + when);
   cv::Mat both;
   cv::hconcat(left, right, both);
-  cv::imwrite((fs::path(dir) / "velocity_field_compare.png").string(), both);
+  // WriteImage: atomic, and a full disk is an error naming the file (cv::imwrite says nothing).
+  WriteImage((fs::path(dir) / "velocity_field_compare.png").string(), both);
   // Small versions for the documentation: the upper part (where the soil moves), scaled.
   cv::Mat top = both(cv::Rect(0, 0, both.cols, both.rows * 3 / 5)), small;
   cv::resize(top, small, cv::Size(), 0.6, 0.6, cv::INTER_AREA);
-  cv::imwrite((fs::path(dir) / "velocity_field_compare_small.png").string(), small,
-              {cv::IMWRITE_PNG_COMPRESSION, 9});
+  WriteImage((fs::path(dir) / "velocity_field_compare_small.png").string(), small,
+             {cv::IMWRITE_PNG_COMPRESSION, 9});
   const cv::Mat& frame = tool_seq.frames[f_show];
-  cv::imwrite((fs::path(dir) / "frame_small.png").string(),
-              frame(cv::Rect(0, 0, frame.cols, frame.rows * 3 / 5)),
-              {cv::IMWRITE_PNG_COMPRESSION, 9});
+  WriteImage((fs::path(dir) / "frame_small.png").string(),
+             frame(cv::Rect(0, 0, frame.cols, frame.rows * 3 / 5)),
+             {cv::IMWRITE_PNG_COMPRESSION, 9});
 
   std::vector<double> t_ms, fine_ms, model_ms, sensor_ms, sensor_g, p_tot_tool, p_tot_truth;
   for (double x : v.t_s) t_ms.push_back(1e3 * x);

@@ -164,5 +164,16 @@ TEST(OutputSafety, SynthRefusesToReplaceItsSpec) {
   EXPECT_FALSE(fs::exists(dir.File("frames")));
 }
 
+TEST(OutputSafety, ValidateDemRefusesAnInputAsItsCsv) {
+  TestDir dir;
+  const std::string truth = dir.File("truth.h5"), results = dir.File("results.h5");
+  WriteResultsLike(truth);
+  WriteResultsLike(results);
+  const std::string truth_before = ReadBytes(truth);
+  ExpectRefused(RunCli("validate-dem " + truth + " " + results + " --csv " + truth),
+                {"--csv", truth, ".csv"});
+  EXPECT_EQ(ReadBytes(truth), truth_before);
+}
+
 }  // namespace
 }  // namespace impactdic

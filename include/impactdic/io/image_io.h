@@ -51,8 +51,9 @@ class SequenceColourCheck {
   int mismatches_ = 0;
 };
 
-// Writes an 8/16-bit image atomically (format from the extension).
-void WriteImage(const std::string& path, const cv::Mat& image);
+// Writes an 8/16-bit image atomically (format from the extension); `params` are OpenCV's encoder
+// parameters (e.g. {cv::IMWRITE_PNG_COMPRESSION, 9}).
+void WriteImage(const std::string& path, const cv::Mat& image, const std::vector<int>& params = {});
 
 // True when `path` is a whole PNG file: the signature at the start and the IEND chunk at the end.
 // How the output of a helper program (gnuplot) that may stop writing on a full disk is checked.
