@@ -163,9 +163,7 @@ void RemoveOnInterrupt::Release() {
 void NoteOutputsComplete(const std::string& path) {
   std::lock_guard<std::mutex> lock(RegistryMutex());
   for (const auto& [id, temporary] : Registry()) {
-    if (path.size() > temporary.size() && path.compare(0, temporary.size(), temporary) == 0 &&
-        path[temporary.size()] == '/')
-      return;
+    if (path != temporary && IsSameOrInside(path, temporary)) return;
   }
   Completed().push_back(path);
 }
@@ -199,6 +197,11 @@ long TemporaryTagPid(std::string_view name, std::string_view prefix) {
   const char next = rest[i + 1];  // At least one hex digit after the dash.
   const bool hex = (next >= '0' && next <= '9') || (next >= 'a' && next <= 'f');
   return hex ? pid : 0;
+}
+
+bool IsSameOrInside(std::string_view path, std::string_view folder) {
+  return path.substr(0, folder.size()) == folder &&
+         (path.size() == folder.size() || path[folder.size()] == '/');
 }
 
 bool ProcessIsGone(long pid) {

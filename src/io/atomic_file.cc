@@ -36,9 +36,7 @@ AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_pat
                 "output folder " + folder.string() + " is not writable", "a writable folder");
   }
   RemoveStaleTemporaries(folder.string());
-  std::string name = ".";  // (Appended, not "." + ...: GCC 12 warns wrongly on that.)
-  name.append(final_fs.filename().string()).append(".tmp-").append(TemporaryTag());
-  temp_path_ = (folder / name).string();
+  temp_path_ = (folder / TemporaryName(final_fs.filename().string())).string();
   interrupt_guard_ = std::make_unique<RemoveOnInterrupt>(temp_path_);
 }
 

@@ -51,13 +51,6 @@ ParsedTemporary ParseTemporary(const std::string& name) {
   return {};
 }
 
-// ".<base><kind><pid>-<hex>" (built by append: GCC 12 warns wrongly on "." + ...).
-std::string TemporaryName(const std::string& base, const char* kind) {
-  std::string name = ".";
-  name.append(base).append(kind).append(TemporaryTag());
-  return name;
-}
-
 std::string Quoted(const std::vector<std::string>& names, std::size_t max_names) {
   std::string text;
   for (std::size_t i = 0; i < names.size() && i < max_names; ++i)
@@ -134,13 +127,13 @@ bool ExchangePaths(const std::string& from, const std::string& to) {
 std::mutex staged_mutex;
 std::vector<std::pair<std::string, std::string>> staged_folders;  // {staging, destination as given}
 
-bool IsInside(const std::string& path, const std::string& folder) {
-  return path == folder ||
-         (path.size() > folder.size() && path.compare(0, folder.size(), folder) == 0 &&
-          path[folder.size()] == '/');
-}
-
 }  // namespace
+
+std::string TemporaryName(const std::string& base, const char* kind) {
+  std::string name = ".";  // (Appended, not "." + ...: GCC 12 warns wrongly on that.)
+  name.append(base).append(kind).append(TemporaryTag());
+  return name;
+}
 
 bool IsTemporaryName(const std::string& name) {
   return ParseTemporary(name).kind != TemporaryKind::kNone;
@@ -281,7 +274,8 @@ std::string OutputPathForMessages(std::string path) {
   for (std::size_t depth = 0; depth <= staged_folders.size(); ++depth) {
     const std::pair<std::string, std::string>* best = nullptr;
     for (const auto& s : staged_folders)
-      if (IsInside(path, s.first) && (!best || s.first.size() > best->first.size())) best = &s;
+      if (IsSameOrInside(path, s.first) && (!best || s.first.size() > best->first.size()))
+        best = &s;
     if (!best) break;
     path = path.size() == best->first.size()
                ? best->second
@@ -292,10 +286,8 @@ std::string OutputPathForMessages(std::string path) {
 
 std::string OutputGeneration::FinalPath(const std::string& path) const {
   if (path == staging_) return folder_;
-  if (path.size() > staging_.size() && path.compare(0, staging_.size(), staging_) == 0 &&
-      path[staging_.size()] == '/') {
+  if (IsSameOrInside(path, staging_))
     return (fs::path(folder_) / path.substr(staging_.size() + 1)).string();
-  }
   return path;
 }
 
@@ -391,8 +383,7 @@ void OutputGeneration::Commit() {
   // A shell whose current folder is the destination (or inside it) keeps seeing the removed
   // previous generation until it changes folder again.
   const std::string cwd = fs::current_path(ec).string();
-  const bool replaces_cwd =
-      had_previous && !ec && (cwd == destination_ || cwd.rfind(destination_ + "/", 0) == 0);
+  const bool replaces_cwd = had_previous && !ec && IsSameOrInside(cwd, destination_);
   if (had_previous && options_.keep_other_entries) CarryOverPrevious();
   WriteMarker();
   {

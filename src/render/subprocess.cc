@@ -51,9 +51,7 @@ std::string TempSiblingPath(const std::string& final_path, const std::string& ex
   const fs::path final_fs(final_path);
   fs::path folder = final_fs.parent_path();
   if (folder.empty()) folder = ".";
-  std::string name = ".";
-  name.append(final_fs.stem().string()).append(".tmp-").append(TemporaryTag()).append(extension);
-  return (folder / name).string();
+  return (folder / (TemporaryName(final_fs.stem().string()) + extension)).string();
 }
 
 void CheckOutputFolder(const std::string& final_path) {

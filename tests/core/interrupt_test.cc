@@ -41,6 +41,17 @@ int InChild(const std::function<void()>& body) {
   return status;
 }
 
+// The one "is this path in that folder" test (staging folders, registered temporaries): whole
+// path components only.
+TEST(Interrupt, IsSameOrInsideComparesWholeComponents) {
+  EXPECT_TRUE(IsSameOrInside("/w/out", "/w/out"));
+  EXPECT_TRUE(IsSameOrInside("/w/out/results.h5", "/w/out"));
+  EXPECT_TRUE(IsSameOrInside("/w/out/a/b", "/w/out"));
+  EXPECT_FALSE(IsSameOrInside("/w/output/results.h5", "/w/out"));
+  EXPECT_FALSE(IsSameOrInside("/w/ou", "/w/out"));
+  EXPECT_FALSE(IsSameOrInside("/w", "/w/out"));
+}
+
 TEST(Interrupt, SigtermRemovesRegisteredPathsAndExitsWith143) {
   const fs::path dir = Scratch("term");
   const fs::path staging = dir / "staging", kept = dir / "kept.txt", released = dir / "done.txt";

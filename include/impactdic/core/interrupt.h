@@ -73,6 +73,10 @@ std::string TemporaryTag();
 // or 0 if `name` has no such form.
 long TemporaryTagPid(std::string_view name, std::string_view prefix);
 
+// True if `path` is `folder` or lies below it, comparing the strings ("a/b" is inside "a", "ab"
+// is not): for paths made the same way (absolute and normal, or both as given).
+bool IsSameOrInside(std::string_view path, std::string_view folder);
+
 // True if no process with this pid exists on this machine (kill(pid, 0) fails with ESRCH). A pid
 // that was reused by a new process counts as alive: its temporaries stay (never wrongly removed).
 bool ProcessIsGone(long pid);

@@ -110,6 +110,11 @@ std::vector<std::string> RemoveStaleTemporaries(const std::string& folder);
 // (gnuplot scripts, data and logs) of processes that no longer exist.
 std::vector<std::string> RemoveStaleSystemTemporaries();
 
+// The one way an impactdic temporary is named: ".<base><kind><pid>-<hex>", kind ".tmp-" (a file or
+// folder being written) or ".bak-" (the previous generation during a swap). The pid tells a later
+// process whether its maker still runs (RemoveStaleTemporaries).
+std::string TemporaryName(const std::string& base, const char* kind = ".tmp-");
+
 // True for the name of an impactdic temporary (".<name>.tmp-<pid>-<hex>...",
 // ".<name>.bak-<pid>-<hex>"), whoever made it.
 bool IsTemporaryName(const std::string& name);
