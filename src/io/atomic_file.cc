@@ -28,12 +28,14 @@ AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_pat
   if (folder.empty()) folder = ".";
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) {
-    throw Error(ErrorKind::kIo, final_path_, "output folder " + folder.string() + " does not exist",
+    throw Error(ErrorKind::kIo, OutputPathForMessages(final_path_),
+                "output folder " + OutputPathForMessages(folder.string()) + " does not exist",
                 "an existing, writable folder");
   }
   if (access(folder.c_str(), W_OK) != 0) {
-    throw Error(ErrorKind::kIo, final_path_,
-                "output folder " + folder.string() + " is not writable", "a writable folder");
+    throw Error(ErrorKind::kIo, OutputPathForMessages(final_path_),
+                "output folder " + OutputPathForMessages(folder.string()) + " is not writable",
+                "a writable folder");
   }
   RemoveStaleTemporaries(folder.string());
   temp_path_ = (folder / TemporaryName(final_fs.filename().string())).string();
@@ -51,14 +53,16 @@ void AtomicFile::Commit() {
   std::error_code ec;
   fs::rename(temp_path_, final_path_, ec);
   if (ec) {
-    throw Error(ErrorKind::kIo, final_path_, "cannot rename temporary file: " + ec.message(),
-                "a writable output location");
+    throw Error(ErrorKind::kIo, OutputPathForMessages(final_path_),
+                "cannot rename temporary file: " + ec.message(), "a writable output location");
   }
   committed_ = true;
   interrupt_guard_->Release();
 }
 
-void CheckOutputLocation(const std::string& path) { const AtomicFile probe(path); }
+void CheckOutputLocation(const std::string& path) {
+  const AtomicFile probe(path);  // Its constructor checks (and names the file for messages).
+}
 
 void CheckNotAnInput(const std::string& output, const std::string& option,
                      const std::vector<std::string>& inputs) {

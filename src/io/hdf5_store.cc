@@ -14,6 +14,7 @@
 #include "impactdic/core/version.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/io/output_generation.h"
 
 namespace impactdic {
 namespace {
@@ -72,7 +73,8 @@ auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltyp
   try {
     return fn();
   } catch (const H5::Exception& e) {
-    throw Error(ErrorKind::kIo, what, e.getDetailMsg(), "a valid HDF5 operation").WithFile(file);
+    throw Error(ErrorKind::kIo, what, e.getDetailMsg(), "a valid HDF5 operation")
+        .WithFile(OutputPathForMessages(file));
   }
 }
 

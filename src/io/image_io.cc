@@ -20,6 +20,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/io/output_generation.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -432,7 +433,7 @@ void WriteImage(const std::string& path, const cv::Mat& image, const std::vector
   if (!ok) {
     throw Error(ErrorKind::kIo, "image", "OpenCV could not encode it",
                 "an image extension (.png, .tif, ...)")
-        .WithFile(path);
+        .WithFile(OutputPathForMessages(path));
   }
   WriteFileAtomic(path, bytes.data(), bytes.size());
 }

@@ -17,6 +17,7 @@
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/output_generation.h"
 #include "subprocess.h"
 
 namespace impactdic {
@@ -140,7 +141,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
   options.Check();
   sequence.Check();
   CheckValue(!output_path.empty(), "animation output path", "empty", "a file name");
-  render_internal::CheckOutputFolder(output_path);
+  CheckOutputLocation(output_path);
   const VelocityFieldRenderer renderer(sequence, options.overlay);
   const std::size_t frames = sequence.num_frames();
 
@@ -231,7 +232,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
       std::error_code ec;
       fs::rename(temp, final_path, ec);
       if (ec) {
-        throw Error(ErrorKind::kIo, final_path,
+        throw Error(ErrorKind::kIo, OutputPathForMessages(final_path),
                     "cannot rename the temporary video: " + ec.message(),
                     "a writable output location");
       }
@@ -245,7 +246,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
         summary.fallback_reason =
             h264_failures.empty() ? "no H.264 fourcc was tried" : h264_failures;
         LogWarning("animation: H.264 did not work ({}); wrote Motion-JPEG AVI {} instead",
-                   summary.fallback_reason, final_path);
+                   summary.fallback_reason, OutputPathForMessages(final_path));
       }
       break;
     }
@@ -257,7 +258,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
     }
   }
   if (summary.path.empty()) {
-    throw Error(ErrorKind::kIo, "animation " + output_path,
+    throw Error(ErrorKind::kIo, "animation " + OutputPathForMessages(output_path),
                 "no video could be written and read back (" + h264_failures + ")",
                 options.codec == VideoCodec::kH264 ? "an OpenCV build with an H.264 encoder"
                                                    : "an OpenCV build with FFmpeg video writing");

@@ -17,6 +17,7 @@
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/output_generation.h"
 #include "subprocess.h"
 
 namespace impactdic {
@@ -380,9 +381,9 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
     throw Error(ErrorKind::kInvalidValue, "plot '" + plot.title + "'",
                 "no finite data point (or no positive one on a log axis)",
                 "at least one drawable point")
-        .WithFile(png_path);
+        .WithFile(OutputPathForMessages(png_path));
   }
-  render_internal::CheckOutputFolder(png_path);
+  CheckOutputLocation(png_path);
 
   PlotSummary summary;
   summary.gnuplot_binary = ResolveGnuplotBinary(options);
@@ -418,21 +419,22 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
     throw Error(ErrorKind::kFileNotFound, MissingGnuplotMessage(summary.gnuplot_binary));
   }
   if (result.exit_code != 0) {
-    throw Error(ErrorKind::kIo, "gnuplot failed drawing '" + png_path + "' (exit code " +
-                                    std::to_string(result.exit_code) + "); gnuplot said:\n" +
-                                    result.output.substr(0, 4000));
+    throw Error(ErrorKind::kIo, "gnuplot failed drawing '" + OutputPathForMessages(png_path) +
+                                    "' (exit code " + std::to_string(result.exit_code) +
+                                    "); gnuplot said:\n" + result.output.substr(0, 4000));
   }
   std::error_code ec;
   // gnuplot exits 0 even when its writes failed; a full disk leaves a truncated PNG.
   if (!fs::is_regular_file(temp_png, ec) || !IsCompletePng(temp_png)) {
     if (DiskFull(temp_png)) throw WriteError(png_path, ENOSPC);
-    throw Error(ErrorKind::kIo, "gnuplot exited normally but wrote no valid PNG for '" + png_path +
-                                    "'; gnuplot said:\n" + result.output.substr(0, 4000));
+    throw Error(ErrorKind::kIo, "gnuplot exited normally but wrote no valid PNG for '" +
+                                    OutputPathForMessages(png_path) + "'; gnuplot said:\n" +
+                                    result.output.substr(0, 4000));
   }
   fs::rename(temp_png, png_path, ec);
   if (ec) {
-    throw Error(ErrorKind::kIo, png_path, "cannot rename the temporary PNG: " + ec.message(),
-                "a writable output location");
+    throw Error(ErrorKind::kIo, OutputPathForMessages(png_path),
+                "cannot rename the temporary PNG: " + ec.message(), "a writable output location");
   }
   cleanup.keep = true;
   summary.path = png_path;

@@ -233,12 +233,12 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
     std::error_code ec;
     fs::create_directories(out_dir, ec);
     if (!fs::is_directory(out_dir, ec)) {
-      throw Error(ErrorKind::kIo, "output folder", out_dir,
+      throw Error(ErrorKind::kIo, "output folder", OutputPathForMessages(out_dir),
                   "a folder that exists or can be created");
     }
     if (access(out_dir.c_str(), W_OK) != 0) {
-      throw Error(ErrorKind::kIo, "output folder", out_dir + " is not writable",
-                  "a writable folder");
+      throw Error(ErrorKind::kIo, "output folder",
+                  OutputPathForMessages(out_dir) + " is not writable", "a writable folder");
     }
     RenderInto(reader, results_path, out_dir, options, summary);
   }
@@ -274,7 +274,7 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
                     "; " + L::kModelT + " + " + L::kModelDecel + "; " + L::kMAdd + "; " +
                     L::kTimeMs + " + " + L::kDicX + " + " + L::kDicY + " + " + L::kVx + " + " +
                     L::kVy + " (+ " + L::kFrameImages + ")")
-        .WithFile(results_path);
+        .WithFile(OutputPathForMessages(results_path));
   }
   const double t_e_s = reader.Exists(L::kMomentumGroup)
                            ? NumberAttribute(reader, L::kMomentumGroup, L::kTeAttr)
@@ -395,7 +395,8 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
       }
     }
   } catch (Error& e) {
-    if (e.file().empty() && e.kind() == ErrorKind::kFileFormat) e.WithFile(results_path);
+    if (e.file().empty() && e.kind() == ErrorKind::kFileFormat)
+      e.WithFile(OutputPathForMessages(results_path));
     throw;
   }
 }

@@ -54,20 +54,6 @@ std::string TempSiblingPath(const std::string& final_path, const std::string& ex
   return (folder / (TemporaryName(final_fs.stem().string()) + extension)).string();
 }
 
-void CheckOutputFolder(const std::string& final_path) {
-  fs::path folder = fs::path(final_path).parent_path();
-  if (folder.empty()) folder = ".";
-  std::error_code ec;
-  if (!fs::is_directory(folder, ec)) {
-    throw Error(ErrorKind::kIo, final_path, "output folder " + folder.string() + " does not exist",
-                "an existing, writable folder");
-  }
-  if (access(folder.c_str(), W_OK) != 0) {
-    throw Error(ErrorKind::kIo, final_path, "output folder " + folder.string() + " is not writable",
-                "a writable folder");
-  }
-}
-
 ProcessResult RunProcess(const std::string& program, const std::vector<std::string>& arguments) {
   ProcessResult result;
   TempFile capture(".log");

@@ -42,9 +42,6 @@ class TempFile {
 // nothing is created. The caller registers it with RemoveOnInterrupt while it exists.
 std::string TempSiblingPath(const std::string& final_path, const std::string& extension);
 
-// Throws Error kIo unless the folder that will hold `final_path` exists and is writable.
-void CheckOutputFolder(const std::string& final_path);
-
 }  // namespace impactdic::render_internal
 
 #endif  // IMPACTDIC_SRC_RENDER_SUBPROCESS_H_

@@ -228,7 +228,20 @@ TEST(OutputGeneration, TheNextProcessRemovesOrRestoresWhatADeadOneLeft) {
   EXPECT_TRUE(fs::exists(dir.path() / ".notes.tmp-keep"));
 }
 
+// Errors about a file being written into a generation name it where the user will look for it,
+// never the staging folder that is gone when the message is read.
+TEST(OutputGeneration, WritersNameFilesByTheirFinalPath) {
+  TestDir dir;
+  const std::string out = dir.File("out");
+  OutputGeneration g(out, RunLike());
+  const std::string text = ErrorText([&] { WriteTextFileAtomic(g.Path("figs/a.txt"), "x"); });
+  EXPECT_NE(text.find(out + "/figs/a.txt"), std::string::npos) << text;
+  EXPECT_EQ(text.find(".tmp-"), std::string::npos) << text;
+}
+
 TEST(OutputGeneration, TemporaryNamesCarryTheirProcess) {
+  EXPECT_TRUE(IsTemporaryName(TemporaryName("results.h5")));
+  EXPECT_TRUE(IsTemporaryName(TemporaryName("out", ".bak-")));
   const std::string tag = TemporaryTag();
   EXPECT_EQ(TemporaryTagPid(".x.tmp-" + tag, ".x.tmp-"), getpid());
   EXPECT_EQ(TemporaryTagPid(".x.tmp-" + tag + ".png", ".x.tmp-"), getpid());
