@@ -9,19 +9,14 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
-#include "impactdic/core/progress.h"
-#include "impactdic/core/timer.h"
-#include "impactdic/io/atomic_file.h"
-#include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
-#include "impactdic/io/image_io.h"
 #include "impactdic/synth/dem_scene.h"
+#include "scene_files.h"
 
 namespace impactdic {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-namespace fs = std::filesystem;
 
 // Index of the step x step cell (centred on a regular grid of centres) holding ideal pixel q, or
 // -1. centres: row-major cols x rows, spacing `step`.
@@ -335,54 +330,23 @@ void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
 }  // namespace
 
 DemSceneReport WriteDemScene(const DemScene& scene, const std::string& out_dir) {
-  const ImpactSceneSpec& s = scene.base().spec();
+  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
+  const synth_internal::SceneFiles files = synth_internal::WriteSceneFiles(
+      scene.base(), scene.frame_count(), [&](int k) { return scene.RenderFrame(k); },
+      "rendering DEM frames", rec,
+      [&](const std::string& path, const std::string& spec_yaml) {
+        WriteDemTruth(scene, rec, path, spec_yaml);
+      },
+      out_dir);
   DemSceneReport report;
   report.out_dir = out_dir;
-  std::error_code ec;
-  fs::create_directories(fs::path(out_dir) / "frames", ec);
-  if (ec)
-    throw Error(ErrorKind::kIo, "-o", out_dir,
-                "a folder that can be created (" + ec.message() + ")");
-  for (const char* name : {"scene.yaml", "truth.h5", "sensor.csv", "spec.yaml"})
-    fs::remove(fs::path(out_dir) / name, ec);
-  for (const auto& entry : fs::directory_iterator(fs::path(out_dir) / "frames", ec))
-    if (entry.path().extension() == ".png") fs::remove(entry.path(), ec);
-
-  WallTimer timer;
-  {
-    ProgressBar bar("rendering DEM frames", static_cast<std::size_t>(scene.frame_count()));
-    for (int k = 0; k < scene.frame_count(); ++k) {
-      WriteImage((fs::path(out_dir) / "frames" / fmt::format("frame_{:04d}.png", k)).string(),
-                 scene.RenderFrame(k));
-      bar.Advance();
-    }
-  }
-  report.render_seconds = timer.ElapsedSeconds();
   report.frames = scene.frame_count();
   report.grains = static_cast<int>(scene.record().frames[0].grains.size());
-  if (s.render_calibration) {
-    CalibrationSetOptions copt;
-    copt.views = s.calibration_views;
-    copt.seed = s.seed * 31 + 7;
-    copt.panel_distance_mm =
-        s.mm_per_px * std::sqrt(scene.base().camera().fx * scene.base().camera().fy);
-    copt.render.bits = s.bits;
-    RenderCalibrationSet(scene.base().camera(), CheckerboardSpec{}, copt,
-                         (fs::path(out_dir) / "calibration").string());
-  }
-  report.calibration_yaml = !s.calibration_yaml.empty() ? s.calibration_yaml
-                            : s.render_calibration      ? "calibration/camera.yaml"
-                                                        : "";
-  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
-  report.sensor_csv = (fs::path(out_dir) / "sensor.csv").string();
-  WriteCsv(report.sensor_csv, {"time_s", "accel_g", "exposure"},
-           {rec.time_s, rec.accel_g, rec.exposure}, 10);
-  const std::string spec_yaml = ImpactSceneSpecToYaml(s);
-  WriteTextFileAtomic((fs::path(out_dir) / "spec.yaml").string(), spec_yaml);
-  report.truth_h5 = (fs::path(out_dir) / "truth.h5").string();
-  WriteDemTruth(scene, rec, report.truth_h5, spec_yaml);
-  report.scene_yaml = (fs::path(out_dir) / "scene.yaml").string();
-  WriteTextFileAtomic(report.scene_yaml, ImpactSceneYaml(scene.base(), report.calibration_yaml));
+  report.render_seconds = files.render_seconds;
+  report.calibration_yaml = files.calibration_yaml;
+  report.sensor_csv = files.sensor_csv;
+  report.truth_h5 = files.truth_h5;
+  report.scene_yaml = files.scene_yaml;
   return report;
 }
 

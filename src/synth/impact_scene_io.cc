@@ -17,8 +17,10 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/synth/impact_scene.h"
+#include "scene_files.h"
 
 namespace impactdic {
 namespace {
@@ -581,63 +583,87 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
 
 }  // namespace
 
-ImpactSceneReport WriteImpactScene(const ImpactScene& scene, const std::string& out_dir) {
-  WallTimer total;
-  const ImpactSceneSpec& s = scene.spec();
-  ImpactSceneReport report;
-  report.out_dir = out_dir;
+namespace synth_internal {
+
+SceneFiles WriteSceneFiles(
+    const ImpactScene& base, int frames, const std::function<cv::Mat(int)>& render_frame,
+    const std::string& progress_label, const ImpactScene::SensorRecord& record,
+    const std::function<void(const std::string&, const std::string&)>& write_truth,
+    const std::string& out_dir) {
+  const ImpactSceneSpec& s = base.spec();
+  const fs::path dir(out_dir);
+  SceneFiles files;
   std::error_code ec;
-  fs::create_directories(fs::path(out_dir) / "frames", ec);
+  fs::create_directories(dir / "frames", ec);
   if (ec)
-    throw Error(ErrorKind::kIo, "-o", out_dir,
+    throw Error(ErrorKind::kIo, "-o", OutputPathForMessages(out_dir),
                 "a folder that can be created (" + ec.message() + ")");
   // Stale outputs of an earlier run would look complete: remove them first.
   for (const char* name : {"scene.yaml", "truth.h5", "sensor.csv", "spec.yaml"})
-    fs::remove(fs::path(out_dir) / name, ec);
-  for (const auto& entry : fs::directory_iterator(fs::path(out_dir) / "frames", ec)) {
+    fs::remove(dir / name, ec);
+  for (const auto& entry : fs::directory_iterator(dir / "frames", ec)) {
     if (entry.path().extension() == ".png") fs::remove(entry.path(), ec);
   }
 
-  // Frames.
   WallTimer render_timer;
   {
-    ProgressBar bar("rendering frames", static_cast<std::size_t>(scene.frame_count()));
-    for (int k = 0; k < scene.frame_count(); ++k) {
-      WriteImage((fs::path(out_dir) / "frames" / fmt::format("frame_{:04d}.png", k)).string(),
-                 scene.RenderFrame(k));
+    ProgressBar bar(progress_label, static_cast<std::size_t>(frames));
+    for (int k = 0; k < frames; ++k) {
+      WriteImage((dir / "frames" / fmt::format("frame_{:04d}.png", k)).string(), render_frame(k));
       bar.Advance();
     }
   }
-  report.render_seconds = render_timer.ElapsedSeconds();
-  report.frames = scene.frame_count();
+  files.render_seconds = render_timer.ElapsedSeconds();
 
   // Calibration images through the same lens, the panel view at the scene's scale.
   if (s.render_calibration) {
     CalibrationSetOptions copt;
     copt.views = s.calibration_views;
     copt.seed = s.seed * 31 + 7;
-    copt.panel_distance_mm = s.mm_per_px * std::sqrt(scene.camera().fx * scene.camera().fy);
+    copt.panel_distance_mm = s.mm_per_px * std::sqrt(base.camera().fx * base.camera().fy);
     copt.render.bits = s.bits;
-    report.calibration_dir = (fs::path(out_dir) / "calibration").string();
-    RenderCalibrationSet(scene.camera(), CheckerboardSpec{}, copt, report.calibration_dir);
+    files.calibration_dir = (dir / "calibration").string();
+    RenderCalibrationSet(base.camera(), CheckerboardSpec{}, copt, files.calibration_dir);
   }
-  report.calibration_yaml = !s.calibration_yaml.empty() ? s.calibration_yaml
-                            : s.render_calibration      ? "calibration/camera.yaml"
-                                                        : "";
+  files.calibration_yaml = !s.calibration_yaml.empty() ? s.calibration_yaml
+                           : s.render_calibration      ? "calibration/camera.yaml"
+                                                       : "";
 
-  // Sensor record.
-  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
-  report.sensor_csv = (fs::path(out_dir) / "sensor.csv").string();
-  WriteCsv(report.sensor_csv, {"time_s", "accel_g", "exposure"},
-           {rec.time_s, rec.accel_g, rec.exposure}, 10);
-
+  files.sensor_csv = (dir / "sensor.csv").string();
+  WriteCsv(files.sensor_csv, {"time_s", "accel_g", "exposure"},
+           {record.time_s, record.accel_g, record.exposure}, 10);
   const std::string spec_yaml = ImpactSceneSpecToYaml(s);
-  report.spec_yaml = (fs::path(out_dir) / "spec.yaml").string();
-  WriteTextFileAtomic(report.spec_yaml, spec_yaml);
-  report.truth_h5 = (fs::path(out_dir) / "truth.h5").string();
-  WriteTruth(scene, rec, report.truth_h5, spec_yaml);
-  report.scene_yaml = (fs::path(out_dir) / "scene.yaml").string();
-  WriteTextFileAtomic(report.scene_yaml, ImpactSceneYaml(scene, report.calibration_yaml));
+  files.spec_yaml = (dir / "spec.yaml").string();
+  WriteTextFileAtomic(files.spec_yaml, spec_yaml);
+  files.truth_h5 = (dir / "truth.h5").string();
+  write_truth(files.truth_h5, spec_yaml);
+  files.scene_yaml = (dir / "scene.yaml").string();
+  WriteTextFileAtomic(files.scene_yaml, ImpactSceneYaml(base, files.calibration_yaml));
+  return files;
+}
+
+}  // namespace synth_internal
+
+ImpactSceneReport WriteImpactScene(const ImpactScene& scene, const std::string& out_dir) {
+  WallTimer total;
+  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
+  const synth_internal::SceneFiles files = synth_internal::WriteSceneFiles(
+      scene, scene.frame_count(), [&](int k) { return scene.RenderFrame(k); }, "rendering frames",
+      rec,
+      [&](const std::string& path, const std::string& spec_yaml) {
+        WriteTruth(scene, rec, path, spec_yaml);
+      },
+      out_dir);
+  ImpactSceneReport report;
+  report.out_dir = out_dir;
+  report.frames = scene.frame_count();
+  report.render_seconds = files.render_seconds;
+  report.calibration_dir = files.calibration_dir;
+  report.calibration_yaml = files.calibration_yaml;
+  report.sensor_csv = files.sensor_csv;
+  report.spec_yaml = files.spec_yaml;
+  report.truth_h5 = files.truth_h5;
+  report.scene_yaml = files.scene_yaml;
 
   report.t_e_s = scene.momentum().t_e_s;
   report.p_max_Ns = scene.momentum().p_max_Ns;
