@@ -144,6 +144,9 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
   // Load (and so validate) every scene before running any.
   std::vector<Scene> scenes;
   for (const auto& path : scene_paths) scenes.push_back(LoadScene(path));
+  // The new generation replaces the campaign's folder whole: no scene may read from it.
+  for (const Scene& scene : scenes)
+    CheckOutputFolderHoldsNoInput(scene, options.output_folder, "-o");
   WallTimer timer;
   CampaignSummary summary;
   OutputGeneration generation(options.output_folder,

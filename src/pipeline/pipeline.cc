@@ -12,6 +12,7 @@
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/threads.h"
@@ -296,13 +297,13 @@ void ThrowIfFailed(const PipelineSummary& summary, const PipelineOptions& option
   std::string stages;
   for (const StageFailure& f : summary.failures)
     stages += fmt::format("\n  {}: {}", f.stage, f.reason);
-  throw Error(
-      ErrorKind::kNumerical,
-      fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was "
-                  "written (outputs of an earlier run in {} are kept); `impactdic run "
-                  "--allow-partial` writes them, with the figures that could not be "
-                  "measured as null and the reasons in summary.json",
-                  summary.scene_name, summary.failures.size(), stages, summary.output_folder));
+  throw Error(ErrorKind::kNumerical,
+              fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was "
+                          "written (outputs of an earlier run in {} are kept); `impactdic run "
+                          "--allow-partial` writes them, with the figures that could not be "
+                          "measured as null and the reasons in summary.json",
+                          summary.scene_name, summary.failures.size(), stages,
+                          OutputPathForMessages(summary.output_folder)));
 }
 
 std::vector<float> ToFloat(const std::vector<double>& v) { return {v.begin(), v.end()}; }
@@ -317,9 +318,8 @@ OutputGenerationOptions RunGenerationOptions() {
   return o;
 }
 
-// The output folder must not hold an input: run replaces the files it wrote there before
-// (results.h5, summary.*, figures, video), so a scene, frame, sensor or calibration file in it
-// could be overwritten or taken for an output. Error kInvalidValue naming the option and both.
+}  // namespace
+
 void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder,
                                    const std::string& option) {
   std::error_code ec;
@@ -332,15 +332,14 @@ void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder
                                    scene.inputs.sensor, scene.inputs.truth, scene.dic.mask}) {
     if (input.empty()) continue;
     const fs::path in = fs::weakly_canonical(fs::absolute(input, ec), ec);
-    const auto [out_end, in_it] = std::mismatch(out.begin(), out.end(), in.begin(), in.end());
-    if (out_end != out.end()) continue;  // `in` is not `out` or below it.
-    throw Error(ErrorKind::kInvalidValue, option, folder + ", which holds the input " + input,
-                "an output folder apart from the inputs (run replaces what it wrote there)")
+    if (!IsSameOrInside(in.string(), out.string())) continue;
+    throw Error(
+        ErrorKind::kInvalidValue, option,
+        OutputPathForMessages(folder) + ", which holds the input " + input,
+        "an output folder apart from the inputs (what was written there before is replaced)")
         .WithFile(scene.path);
   }
 }
-
-}  // namespace
 
 void PipelineOptions::Check() const {
   CheckValue(threads == -1 || IsValidThreadCount(threads), "threads", std::to_string(threads),
@@ -920,7 +919,9 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   generation->Commit();
   for (auto& o : summary.outputs) o = generation->FinalPath(o);
   stages.Ran("outputs",
-             fmt::format("{} files in {}", summary.outputs.size(), summary.output_folder), t_out);
+             fmt::format("{} files in {}", summary.outputs.size(),
+                         OutputPathForMessages(summary.output_folder)),
+             t_out);
   summary.seconds = total.ElapsedSeconds();
   return summary;
 }

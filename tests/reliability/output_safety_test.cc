@@ -155,6 +155,20 @@ TEST(OutputSafety, RunRefusesAnOutputFolderHoldingItsInputs) {
   EXPECT_EQ(ReadBytes(dir.File("scene/scene.yaml")), scene_before);
 }
 
+// A campaign replaces its folder whole: a scene read from inside it (here a synth folder nested
+// in it, which the folder's own rules accept) would be deleted by the swap.
+TEST(OutputSafety, CampaignRefusesAFolderHoldingASceneItRuns) {
+  TestDir dir;
+  const CliResult synth = RunCli("-q synth --preset tiny --no-calibrate -o " + dir.File("camp/s1"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const std::string scene_before = ReadBytes(dir.File("camp/s1/scene.yaml"));
+  ExpectRefused(RunCli("campaign " + dir.File("camp/s1/scene.yaml") + " -o " + dir.File("camp")),
+                {"-o", "holds the input", dir.File("camp")});
+  EXPECT_EQ(ReadBytes(dir.File("camp/s1/scene.yaml")), scene_before);
+  EXPECT_TRUE(fs::exists(dir.File("camp/s1/frames")));
+  EXPECT_FALSE(fs::exists(dir.File("camp/campaign.csv")));
+}
+
 TEST(OutputSafety, SynthRefusesToReplaceItsSpec) {
   TestDir dir;
   const std::string spec = dir.Write("scene.yaml", "preset: tiny\n");

@@ -108,6 +108,14 @@ struct PipelineSummary {
   JsonObject ToJson() const;
 };
 
+// The output folder must not hold an input: a run replaces the files it wrote there before
+// (results.h5, summary.*, figures, video) and a campaign its whole folder, so a scene, frame,
+// sensor or calibration file in it could be overwritten, removed or taken for an output. Error
+// kInvalidValue naming `option`, the folder and the input. RunScene checks it; so does
+// RunCampaign for its folder.
+void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder,
+                                   const std::string& option);
+
 // Runs the scene. Throws Error for bad input (missing or truncated frames, sensor record not
 // covering the frames, unwritable output folder, ...) and for stages that produced nothing usable
 // (unless options.allow_partial; file comment) before anything that looks complete is written.
