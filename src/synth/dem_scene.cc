@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/input_file.h"
 #include "random.h"
 
 namespace impactdic {
@@ -22,9 +23,14 @@ namespace {
 using synth_detail::Rng;
 using synth_detail::SplitMix64;
 
+// Checked like every input (io/input_file.h: a folder, device or pipe is refused by name); no
+// size limit, the dumps are read line by line.
 std::ifstream OpenText(const std::string& path) {
+  CheckInputFile(path, "a DEM output file", std::numeric_limits<std::uintmax_t>::max());
   std::ifstream in(path);
-  if (!in) throw Error(ErrorKind::kFileNotFound, path, "no readable file", "a DEM output file");
+  if (!in)
+    throw Error(ErrorKind::kIo, "", "cannot open it for reading", "a DEM output file")
+        .WithFile(path);
   return in;
 }
 

@@ -132,6 +132,23 @@ TEST(DemScene, MalformedDumpNamesFileAndLine) {
   fs::remove_all(dir);
 }
 
+// A DEM file is an input like any other (io/input_file.h): a folder in its place is named as one,
+// not read as an empty or malformed dump.
+TEST(DemScene, AFolderInPlaceOfADumpIsNamed) {
+  const std::string dir = MakeDemDir("folder_dump");
+  fs::remove(dir + "/grains.dump");
+  fs::create_directory(dir + "/grains.dump");
+  try {
+    ReadDemRecord(dir);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    const std::string text = e.what();
+    EXPECT_NE(text.find("grains.dump"), std::string::npos) << text;
+    EXPECT_NE(text.find("a folder"), std::string::npos) << text;
+  }
+  fs::remove_all(dir);
+}
+
 TEST(DemScene, FrameRateMismatchIsAnError) {
   const std::string dir = MakeDemDir("fps");
   ImpactSceneSpec spec = TinySpec();
