@@ -125,7 +125,8 @@ TEST(SolverFailure, AbsurdParametersAreRefusedWithTheAllowedRange) {
       EXPECT_TRUE(Contains(e.what(), "]")) << e.what();  // The allowed range.
     }
   }
-  ImpactModelParameters big;  // m_p = 1000 kg from 18 m (an extreme case of docs/model.md), b = 1e12.
+  ImpactModelParameters
+      big;  // m_p = 1000 kg from 18 m (an extreme case of docs/model.md), b = 1e12.
   big.pounder_mass_kg = 1000;
   big.impact_velocity_m_s = ImpactVelocityFromHeight(18.0);
   big.sigmoid_rate_b_per_s = 1e12;

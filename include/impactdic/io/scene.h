@@ -1,6 +1,6 @@
 // The scene file (YAML): one impact test, its inputs, parameters, the stages and outputs wanted,
-// and per-stage options. Defaults are the paper's values (README.md, "References"). The full format with
-// every key is documented in README.md ("Scene file").
+// and per-stage options. Defaults are the paper's values (README.md, "References"). The full format
+// with every key is documented in README.md ("Scene file").
 //
 //   Scene scene = LoadScene("sample_frames/scene.yaml");   // throws Error listing every problem
 //   double v0 = scene.test.ImpactVelocity();

@@ -1,5 +1,5 @@
-// Soil kinematics from the correlation results (docs/analysis.md): pixels -> panel millimetres, then
-// velocity and acceleration of every subset by finite differences in time.
+// Soil kinematics from the correlation results (docs/analysis.md): pixels -> panel millimetres,
+// then velocity and acceleration of every subset by finite differences in time.
 //
 // Frames: panel axes are image-aligned, x to the right and y DOWN, so a positive vertical
 // velocity is downward (the momentum module's convention). A homography must map image pixels to

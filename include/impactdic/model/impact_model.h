@@ -1,6 +1,6 @@
 // The added-mass impact model (Eq. 9 of Loewe, Thiele, Kanty, Kirstein: "Experimental
-// investigation and modeling of impact stages during dynamic compaction"; equations in docs/model.md), SI
-// units, z downward positive, t = 0 at contact:
+// investigation and modeling of impact stages during dynamic compaction"; equations in
+// docs/model.md), SI units, z downward positive, t = 0 at contact:
 //   (m_p + m_add) dv/dt = -(dm_add/dt) v + F_dyn + F_fr + F_g,
 //   m_add = M / (1 + exp(-b (t - T)))                          (Eq. 5, 6)
 //   F_g = (m_p + m_add) g,  F_fr = -k z,  F_dyn = -k z (u - 1) / v^n,  k = K rho_d g A  (Eq. 7, 8)

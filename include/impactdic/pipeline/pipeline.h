@@ -1,6 +1,6 @@
-// The whole pipeline on one scene (README.md, "The pipeline"): calibration -> frames -> correlate ->
-// kinematics -> sensor -> momentum -> model -> outputs, skipping what the scene does not need and
-// saying so. `impactdic run SCENE.yaml` is a thin layer over RunScene().
+// The whole pipeline on one scene (README.md, "The pipeline"): calibration -> frames -> correlate
+// -> kinematics -> sensor -> momentum -> model -> outputs, skipping what the scene does not need
+// and saying so. `impactdic run SCENE.yaml` is a thin layer over RunScene().
 //
 //   Scene scene = LoadScene("sample_frames/scene.yaml");
 //   PipelineOptions options;

@@ -13,11 +13,10 @@
 #ifndef IMPACTDIC_SYNTH_SPECKLE_H_
 #define IMPACTDIC_SYNTH_SPECKLE_H_
 
-#include <opencv2/core.hpp>
-
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <vector>
 
 namespace impactdic {
@@ -57,9 +56,9 @@ class SpecklePattern {
 };
 
 struct RenderOptions {
-  int bits = 8;                  // 8 or 16 (output CV_8U or CV_16U).
-  double noise_sigma = 0;        // Gaussian noise sigma in grey levels of the output depth, >= 0.
-  double gain = 1.0;             // Brightness/contrast change: I' = gain * I + offset (normalised).
+  int bits = 8;            // 8 or 16 (output CV_8U or CV_16U).
+  double noise_sigma = 0;  // Gaussian noise sigma in grey levels of the output depth, >= 0.
+  double gain = 1.0;       // Brightness/contrast change: I' = gain * I + offset (normalised).
   double offset = 0.0;
   int supersampling = 3;         // Samples per pixel side (pixel-area integration), >= 1.
   std::uint64_t noise_seed = 7;  // Seed of the noise.
