@@ -15,6 +15,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/input_file.h"
+#include "lens_render.h"
 #include "random.h"
 
 namespace impactdic {
@@ -414,47 +415,17 @@ cv::Mat DemScene::RenderFrame(int k, bool with_noise) const {
     }
     return ax <= shaft_mm ? spec_.pounder_level + 0.06 : -1.0;
   };
-  const int w = spec_.width, h = spec_.height, ss = spec_.supersampling;
-  const double full = spec_.bits == 8 ? 255.0 : 65535.0;
-  cv::Mat image(h, w, spec_.bits == 8 ? CV_8U : CV_16U);
-  const std::size_t stride = static_cast<std::size_t>(w) + 1;
   const std::uint64_t noise_seed = spec_.seed * 7919 + 1000003ull * static_cast<std::uint64_t>(k);
-  tbb::parallel_for(0, h, [&](int r) {
-    Rng noise(SplitMix64(noise_seed) ^ (0x100000001B3ull * static_cast<std::uint64_t>(r + 1)));
-    for (int c = 0; c < w; ++c) {
-      const cv::Point2d& c00 = corner_map_[r * stride + c];
-      const cv::Point2d& c10 = corner_map_[r * stride + c + 1];
-      const cv::Point2d& c01 = corner_map_[(r + 1) * stride + c];
-      const cv::Point2d& c11 = corner_map_[(r + 1) * stride + c + 1];
-      double sum = 0;
-      for (int sy = 0; sy < ss; ++sy) {
-        const double b = (sy + 0.5) / ss;
-        for (int sx = 0; sx < ss; ++sx) {
-          const double a = (sx + 0.5) / ss;
-          const cv::Point2d q =
-              (1 - a) * (1 - b) * c00 + a * (1 - b) * c10 + (1 - a) * b * c01 + a * b * c11;
-          const cv::Point2d p = base_->PanelFromIdeal(q);
-          const double pl = pounder_at(p.x, p.y);
-          if (pl >= 0) {
-            sum += pl;
-            continue;
-          }
-          double rho = 1;
-          const long g = index.Find(p.x, p.y, &rho);
-          sum += g >= 0 ? level[static_cast<std::size_t>(g)] * (1 - 0.35 * rho * rho)
-                        : options_.pore_level;
-        }
-      }
-      double value = sum / (ss * ss) * full;
-      if (with_noise && spec_.noise_sigma > 0) value += spec_.noise_sigma * noise.Normal();
-      value = std::clamp(std::round(value), 0.0, full);
-      if (spec_.bits == 8)
-        image.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(value);
-      else
-        image.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(value);
-    }
-  });
-  return image;
+  return synth_detail::RenderThroughLens(
+      spec_, corner_map_, noise_seed, with_noise, [&](const cv::Point2d& q) {
+        const cv::Point2d p = base_->PanelFromIdeal(q);
+        const double pl = pounder_at(p.x, p.y);
+        if (pl >= 0) return pl;
+        double rho = 1;
+        const long g = index.Find(p.x, p.y, &rho);
+        return g >= 0 ? level[static_cast<std::size_t>(g)] * (1 - 0.35 * rho * rho)
+                      : options_.pore_level;
+      });
 }
 
 // As ImpactScene::MakeSensorRecord: sample i reads the cell average 1 - (v(t + dt/2) -

@@ -11,6 +11,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
+#include "lens_render.h"
 #include "random.h"
 
 namespace impactdic {
@@ -611,57 +612,21 @@ cv::Mat ImpactScene::RenderAt(double t_s, std::uint64_t noise_seed, bool with_no
 // undisturbed surface the background, below it the analytic speckle.
 cv::Mat ImpactScene::RenderWithField(const DisplacementField& field, double pounder_z_m,
                                      std::uint64_t noise_seed, bool with_noise) const {
-  const int w = spec_.width, h = spec_.height, ss = spec_.supersampling;
   PounderDrawing pounder{pounder_z_m * 1000,
                          spec_.width_m * 500,
                          0.4 * spec_.width_m * 1000,
                          0.15 * spec_.width_m * 1000,
                          std::max(1.5 * std::max(sx_, sy_), 0.02 * spec_.width_m * 1000),
                          spec_.pounder_level};
-  const double full = spec_.bits == 8 ? 255.0 : 65535.0;
-  cv::Mat image(h, w, spec_.bits == 8 ? CV_8U : CV_16U);
-  const std::size_t stride = static_cast<std::size_t>(w) + 1;
-  tbb::parallel_for(0, h, [&](int r) {
-    Rng noise(SplitMix64(noise_seed) ^ (0x100000001B3ull * static_cast<std::uint64_t>(r + 1)));
-    for (int c = 0; c < w; ++c) {
-      const cv::Point2d& c00 = corner_map_[r * stride + c];
-      const cv::Point2d& c10 = corner_map_[r * stride + c + 1];
-      const cv::Point2d& c01 = corner_map_[(r + 1) * stride + c];
-      const cv::Point2d& c11 = corner_map_[(r + 1) * stride + c + 1];
-      double sum = 0;
-      for (int sy = 0; sy < ss; ++sy) {
-        const double b = (sy + 0.5) / ss;
-        for (int sx = 0; sx < ss; ++sx) {
-          const double a = (sx + 0.5) / ss;
-          // Bilinear position inside the pixel's (undistorted) quadrilateral.
-          const cv::Point2d q =
-              (1 - a) * (1 - b) * c00 + a * (1 - b) * c10 + (1 - a) * b * c01 + a * b * c11;
-          const cv::Point2d m = PanelFromIdeal(q);
-          const double pl = pounder.At(m.x, m.y);
-          if (pl >= 0) {
-            sum += pl;
-            continue;
-          }
-          double X, Y;
-          InvertField(field, q.x, q.y, &X, &Y);
-          if ((Y - surface_px_) < 0) {
-            sum += spec_.background_level;
-          } else {
-            sum += pattern_->Intensity(X, Y);
-          }
-        }
-      }
-      double value = sum / (ss * ss) * full;
-      if (with_noise && spec_.noise_sigma > 0) value += spec_.noise_sigma * noise.Normal();
-      value = std::clamp(std::round(value), 0.0, full);
-      if (spec_.bits == 8) {
-        image.at<std::uint8_t>(r, c) = static_cast<std::uint8_t>(value);
-      } else {
-        image.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(value);
-      }
-    }
-  });
-  return image;
+  return synth_detail::RenderThroughLens(
+      spec_, corner_map_, noise_seed, with_noise, [&](const cv::Point2d& q) {
+        const cv::Point2d m = PanelFromIdeal(q);
+        const double pl = pounder.At(m.x, m.y);
+        if (pl >= 0) return pl;
+        double X, Y;
+        InvertField(field, q.x, q.y, &X, &Y);
+        return (Y - surface_px_) < 0 ? spec_.background_level : pattern_->Intensity(X, Y);
+      });
 }
 
 cv::Mat ImpactScene::RenderFrame(int k, bool with_noise) const {
