@@ -310,9 +310,12 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
       case SeriesStyle::kDashed:
         elements << " with lines lw " << Number(s.line_width) << " dt (8,5)";
         break;
-      case SeriesStyle::kPoints: elements << " with points pt 7 ps 1.1"; break;
+      case SeriesStyle::kPoints:
+        elements << " with points pt " << s.point_type << " ps " << Number(s.point_size);
+        break;
       case SeriesStyle::kLinesPoints:
-        elements << " with linespoints lw " << Number(s.line_width) << " pt 7 ps 1.1";
+        elements << " with linespoints lw " << Number(s.line_width) << " pt " << s.point_type
+                 << " ps " << Number(s.point_size);
         break;
     }
     elements << " lc rgb " << Quote(color);
@@ -371,6 +374,9 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
         std::to_string(s.x.size()) + " x values and " + std::to_string(s.y.size()) + " y values",
         "as many x as y values");
     CheckValue(s.line_width > 0, "plot series line_width", Number(s.line_width), "> 0");
+    CheckValue(s.point_type >= 1 && s.point_type <= 15, "plot series point_type",
+               std::to_string(s.point_type), "1..15");
+    CheckValue(s.point_size > 0, "plot series point_size", Number(s.point_size), "> 0");
   }
   const bool any_points =
       std::any_of(plot.series.begin(), plot.series.end(),

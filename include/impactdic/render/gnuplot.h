@@ -42,6 +42,10 @@ struct PlotSeries {
   std::string color;           // "#rrggbb"; empty = the next colour of the palette
   double line_width = 2.5;     // in gnuplot line-width units (>0)
   bool second_y_axis = false;  // plotted against the right-hand y axis (Plot::y2_label)
+  // gnuplot point type of the markers (kPoints, kLinesPoints): 7 filled circle, 5 filled square,
+  // 9 filled triangle, 13 filled diamond, 11 filled downward triangle; [1, 15].
+  int point_type = 7;
+  double point_size = 1.1;  // marker size, in gnuplot's units (>0)
 };
 
 enum class MarkerOrientation { kVertical, kHorizontal };
