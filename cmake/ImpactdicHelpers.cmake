@@ -36,7 +36,9 @@ endfunction()
 function(impactdic_add_test)
   cmake_parse_arguments(ARG "WHOLE" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${ARG_NAME} ${ARG_SOURCES})
-  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
+  # Tests may read and write images with OpenCV directly (the library itself does not link it).
+  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} impactdic_deps::opencv_codecs GTest::gtest
+                                            GTest::gtest_main)
   target_compile_definitions(${ARG_NAME} PRIVATE
       IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
       IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
@@ -53,6 +55,7 @@ endfunction()
 function(impactdic_add_benchmark)
   cmake_parse_arguments(ARG "" "NAME" "SOURCES;DEPS" ${ARGN})
   add_executable(${ARG_NAME} ${ARG_SOURCES})
-  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} benchmark::benchmark)
+  target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} impactdic_deps::opencv_codecs
+                                            benchmark::benchmark)
   impactdic_target_defaults(${ARG_NAME})
 endfunction()

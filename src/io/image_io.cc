@@ -12,15 +12,17 @@
 #include <fstream>
 #include <limits>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // flags only: the codecs are in the plugin (io/opencv_codecs.h)
 #include <opencv2/imgproc.hpp>
-#include <opencv2/videoio.hpp>
+#include <opencv2/videoio.hpp>  // property ids only
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/io/opencv_codecs.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/io/png_grey.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -359,8 +361,9 @@ cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
   }
   cv::Mat image;
   try {
-    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
-    image = cv::imdecode(buffer, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    // Greyscale PNGs without OpenCV's codecs (loading them costs more than decoding a frame).
+    if (!DecodeGreyPng(bytes, &image))
+      image = opencv_codecs::Decode(bytes, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
   } catch (const cv::Exception& e) {
     throw Error(ErrorKind::kFileFormat, "image", "a file OpenCV cannot decode: " + e.err,
                 kImageWhat)
@@ -426,7 +429,7 @@ void WriteImage(const std::string& path, const cv::Mat& image, const std::vector
   std::vector<uchar> bytes;
   bool ok = false;
   try {
-    ok = !ext.empty() && cv::imencode(ext, image, bytes, params);
+    ok = !ext.empty() && opencv_codecs::Encode(ext, image, &bytes, params);
   } catch (const cv::Exception&) {
     ok = false;
   }
@@ -506,25 +509,25 @@ bool IsVideoFile(const std::string& path) {
 }
 
 struct VideoReader::Impl {
-  cv::VideoCapture capture;
+  opencv_codecs::VideoCapture capture;
   cv::Mat frame;
 };
 
 VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>()), path_(path) {
   CheckInputFile(path, "a video file OpenCV can decode (.mp4, .avi, ...)",
                  std::numeric_limits<std::uintmax_t>::max());
-  if (!impl_->capture.open(path)) {
+  if (!impl_->capture.Open(path)) {
     throw Error(ErrorKind::kFileFormat, "video", "a file OpenCV cannot open",
                 "a video OpenCV can decode (.mp4, .avi, ...)")
         .WithFile(path);
   }
-  declared_ = impl_->capture.get(cv::CAP_PROP_FRAME_COUNT);
+  declared_ = impl_->capture.Get(cv::CAP_PROP_FRAME_COUNT);
 }
 
 VideoReader::~VideoReader() = default;
 
 bool VideoReader::Read(cv::Mat* grey) {
-  if (!impl_->capture.read(impl_->frame)) return false;
+  if (!impl_->capture.Read(&impl_->frame)) return false;
   // A new buffer for every frame: the caller may keep the previous one.
   cv::Mat out;
   if (impl_->frame.channels() == 3) {

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/videoio.hpp>
+#include <opencv2/videoio.hpp>  // ids only: the video code is in the plugin (io/opencv_codecs.h)
 #include <optional>
 
 #include "impactdic/core/error.h"
@@ -17,6 +17,7 @@
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/opencv_codecs.h"
 #include "impactdic/io/output_generation.h"
 #include "subprocess.h"
 
@@ -63,16 +64,16 @@ std::string AnimationSummary::BriefReport() const {
 }
 
 std::size_t CountVideoFrames(const std::string& path) {
-  cv::VideoCapture capture;
+  opencv_codecs::VideoCapture capture;
   try {
-    capture.open(path, cv::CAP_FFMPEG);
-    if (!capture.isOpened()) capture.open(path, cv::CAP_ANY);
+    capture.Open(path, cv::CAP_FFMPEG);
+    if (!capture.IsOpened()) capture.Open(path, cv::CAP_ANY);
   } catch (const cv::Exception&) {
     return 0;
   }
-  if (!capture.isOpened()) return 0;
+  if (!capture.IsOpened()) return 0;
   std::size_t count = 0;
-  while (capture.grab()) ++count;
+  while (capture.Grab()) ++count;
   return count;
 }
 
@@ -91,7 +92,9 @@ struct AttemptResult {
   std::size_t read_back = 0;
 };
 
-int Fourcc(const std::string& f) { return cv::VideoWriter::fourcc(f[0], f[1], f[2], f[3]); }
+int Fourcc(const std::string& f) {
+  return opencv_codecs::VideoWriter::Fourcc(f[0], f[1], f[2], f[3]);
+}
 
 std::uint64_t BigEndian(const unsigned char* p, int bytes) {
   std::uint64_t v = 0;
@@ -186,10 +189,10 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
 
     AttemptResult result;
     {
-      cv::VideoWriter writer;
+      opencv_codecs::VideoWriter writer;
       try {
-        result.opened = writer.open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
-                                    renderer.canvas_size(), /*isColor=*/true);
+        result.opened = writer.Open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
+                                    renderer.canvas_size(), /*is_color=*/true);
       } catch (const cv::Exception& e) {
         result.failure = e.what();
       }
@@ -208,14 +211,14 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
             ++summary.png_frames;
           }
           t.Restart();
-          writer.write(image);
+          writer.Write(image);
           encode_s += t.ElapsedSeconds();
           bar.Advance();
         }
         bar.Finish();
         png_done = true;
         WallTimer t;
-        writer.release();
+        writer.Release();
         // The writer does not report failed writes: a video cut short on a disk with no block
         // left failed for want of space, and every other codec would fail alike.
         if (DiskFull(temp) && !ContainerComplete(temp, attempt.container))

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgcodecs.hpp>  // flag values only (WriteImage encodes)
 #include <opencv2/imgproc.hpp>
 
 #include "impactdic/core/error.h"

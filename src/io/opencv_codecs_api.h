@@ -1,0 +1,40 @@
+// The table of functions the OpenCV codecs plugin (opencv_codecs_plugin.cc) hands to the loader
+// (opencv_codecs.cc). Both sides are built from this header in the same build, so the layout
+// matches; kOpenCvCodecsApiVersion guards against a stale plugin file from another build.
+#ifndef IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_
+#define IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_
+
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace impactdic::io_internal {
+
+inline constexpr int kOpenCvCodecsApiVersion = 1;
+
+struct OpenCvCodecsApi {
+  int version = kOpenCvCodecsApiVersion;
+  cv::Mat (*decode)(const cv::Mat& buffer, int flags) = nullptr;
+  bool (*encode)(const std::string& ext, const cv::Mat& image, std::vector<uchar>* bytes,
+                 const std::vector<int>& params) = nullptr;
+  void* (*capture_new)() = nullptr;
+  void (*capture_delete)(void* capture) = nullptr;
+  bool (*capture_open)(void* capture, const std::string& path, int api) = nullptr;
+  bool (*capture_is_opened)(const void* capture) = nullptr;
+  bool (*capture_read)(void* capture, cv::Mat* frame) = nullptr;
+  bool (*capture_grab)(void* capture) = nullptr;
+  double (*capture_get)(const void* capture, int property) = nullptr;
+  void* (*writer_new)() = nullptr;
+  void (*writer_delete)(void* writer) = nullptr;
+  bool (*writer_open)(void* writer, const std::string& path, int api, int fourcc, double fps,
+                      cv::Size size, bool is_color) = nullptr;
+  void (*writer_write)(void* writer, const cv::Mat& frame) = nullptr;
+  void (*writer_release)(void* writer) = nullptr;
+};
+
+}  // namespace impactdic::io_internal
+
+// The plugin's one exported symbol.
+extern "C" const impactdic::io_internal::OpenCvCodecsApi* ImpactdicOpenCvCodecsApi();
+
+#endif  // IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_

@@ -1,0 +1,129 @@
+// The correlation path stays light (issue 13, item 6): `impactdic correlate` of greyscale PNGs
+// must not load OpenCV's image codecs or video I/O (with them the dynamic loader maps ~250
+// libraries, ~0.1-0.17 s per process). Checked on the real binary through the dynamic loader's own
+// trace (LD_DEBUG=files), with a TIFF pair as the positive control (it must load the codecs
+// plugin, so the trace is known to work), and with the plugin made unavailable. Speed itself is
+// measured in bench/startup_benchmark.py, not here.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <string>
+
+#include "cli_runner.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Startup : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("impactdic_startup_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "_" +
+            std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // A speckle pattern and a copy shifted by one pixel.
+    cv::Mat noise(122, 161, CV_8UC1);
+    cv::RNG rng(4);
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 1.5);
+    cv::normalize(noise, noise, 20, 235, cv::NORM_MINMAX);
+    for (const char* ext : {".png", ".tif"}) {
+      ASSERT_TRUE(cv::imwrite(File(std::string("ref") + ext), noise(cv::Rect(0, 0, 160, 120))));
+      ASSERT_TRUE(cv::imwrite(File(std::string("def") + ext), noise(cv::Rect(1, 1, 160, 120))));
+    }
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string File(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Correlate(const std::string& ext) const {
+    return "correlate --reference " + File("ref" + ext) + " --deformed " + File("def" + ext) +
+           " --subset 21 --step 20 --threads 1 -o " + File("out" + ext + ".csv");
+  }
+
+  fs::path dir_;
+};
+
+// Runs the binary with one environment variable set (only for it, not for the shell).
+CliResult RunWith(const std::string& variable, const std::string& arguments) {
+  const std::string command =
+      variable + " " + std::string(IMPACTDIC_CLI_PATH) + " " + arguments + " 2>&1";
+  CliResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) result.output.append(buffer, n);
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+// The libraries whose loading the trace shows ("file=NAME [0];  needed by ..." or "dlopen").
+bool Loads(const std::string& trace, const std::string& library) {
+  return trace.find("file=" + library) != std::string::npos ||
+         trace.find("/" + library) != std::string::npos;
+}
+
+TEST_F(Startup, CorrelatingGreyPngsLoadsNoImageCodecsOrVideo) {
+  const CliResult r = RunWith("LD_DEBUG=files", "-q " + Correlate(".png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output.substr(0, 4000);
+  // The trace works: the core library is listed.
+  ASSERT_TRUE(Loads(r.output, "libopencv_core.so")) << r.output.substr(0, 2000);
+  for (const char* heavy :
+       {"libopencv_imgcodecs.so", "libopencv_videoio.so", "libopencv_highgui.so",
+        "libimpactdic_opencv_codecs.so", "libgdal.so", "libavcodec.so", "libgstreamer-1.0.so"}) {
+    EXPECT_FALSE(Loads(r.output, heavy)) << heavy << " is loaded by `impactdic correlate` of PNGs";
+  }
+}
+
+TEST_F(Startup, VersionLoadsNoImageCodecsOrVideo) {
+  const CliResult r = RunWith("LD_DEBUG=files", "version");
+  ASSERT_EQ(r.exit_code, 0) << r.output.substr(0, 4000);
+  ASSERT_TRUE(Loads(r.output, "libopencv_core.so")) << r.output.substr(0, 2000);
+  EXPECT_FALSE(Loads(r.output, "libopencv_imgcodecs.so"));
+  EXPECT_FALSE(Loads(r.output, "libopencv_videoio.so"));
+}
+
+TEST_F(Startup, ATiffPairLoadsTheCodecsPluginAndGivesTheSameResult) {
+  {
+    const CliResult r = RunWith("LD_DEBUG=files", "-q " + Correlate(".tif"));
+    ASSERT_EQ(r.exit_code, 0) << r.output.substr(0, 4000);
+    EXPECT_TRUE(Loads(r.output, "libimpactdic_opencv_codecs.so")) << r.output.substr(0, 2000);
+    EXPECT_TRUE(Loads(r.output, "libopencv_imgcodecs.so"));
+  }
+  ASSERT_EQ(RunCli("-q " + Correlate(".png")).exit_code, 0);
+  // Same pixels through either decoder: the same numbers.
+  auto read = [](const std::string& path) {
+    std::ifstream in(path);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string png = read(File("out.png.csv")), tif = read(File("out.tif.csv"));
+  EXPECT_FALSE(png.empty());
+  EXPECT_EQ(png, tif);
+}
+
+TEST_F(Startup, WithoutThePluginPngsStillCorrelateAndTiffsSayWhatIsMissing) {
+  const std::string missing = File("no_such_plugin.so");
+  const std::string no_plugin = "IMPACTDIC_OPENCV_CODECS=" + missing;
+  const CliResult png = RunWith(no_plugin, "-q " + Correlate(".png"));
+  EXPECT_EQ(png.exit_code, 0) << png.output;
+  const CliResult tif = RunWith(no_plugin, "-q " + Correlate(".tif"));
+  EXPECT_EQ(tif.exit_code, 1) << tif.output;
+  EXPECT_NE(tif.output.find("libimpactdic_opencv_codecs.so"), std::string::npos) << tif.output;
+  EXPECT_NE(tif.output.find("IMPACTDIC_OPENCV_CODECS"), std::string::npos) << tif.output;
+  EXPECT_NE(tif.output.find(missing), std::string::npos) << tif.output;
+}
+
+}  // namespace
+}  // namespace impactdic
