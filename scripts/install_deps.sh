@@ -8,6 +8,7 @@ PACKAGES=(
   libopencv-dev                                 # OpenCV 4.6: core imgproc imgcodecs videoio calib3d
   libeigen3-dev                                 # Eigen 3.4
   libhdf5-dev                                   # HDF5 1.10 with the C++ API
+  zlib1g-dev                                    # zlib (greyscale PNG frames; HDF5 uses it too)
   libtbb-dev                                    # oneTBB 2021
   libgtest-dev libgmock-dev                     # GoogleTest 1.12
   libbenchmark-dev                              # Google Benchmark 1.7 (bench/, built on request)
