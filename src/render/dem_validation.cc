@@ -16,7 +16,7 @@
 #include "impactdic/model/impact_model.h"
 #include "impactdic/render/figures.h"
 #include "impactdic/render/render_results.h"
-#include "impactdic/render/results_layout.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/render/velocity_field.h"
 
 namespace impactdic {

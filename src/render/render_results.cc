@@ -11,7 +11,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/render/results_layout.h"
+#include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
