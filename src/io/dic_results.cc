@@ -105,10 +105,10 @@ void ReadGrid(const H5Reader& in, const std::string& file, DicResultsTable* t) {
   // Positions per subset, or per frame and subset (then the first row).
   if (t->subsets == 0 || t->x_px.size() < t->subsets || t->y_px.size() != t->x_px.size() ||
       t->x_px.size() % t->subsets != 0) {
-    throw Error(ErrorKind::kFileFormat, "/dic/x_px, /dic/y_px",
-                fmt::format("{} / {} entries", t->x_px.size(), t->y_px.size()),
-                fmt::format("one position per subset ({}), or one per frame and subset",
-                            t->subsets))
+    throw Error(
+        ErrorKind::kFileFormat, "/dic/x_px, /dic/y_px",
+        fmt::format("{} / {} entries", t->x_px.size(), t->y_px.size()),
+        fmt::format("one position per subset ({}), or one per frame and subset", t->subsets))
         .WithFile(file);
   }
   t->x_px.resize(t->subsets);
@@ -159,7 +159,8 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& t) {
     if (!t.status_codes.empty())
       out.SetAttribute(L::kDicStatus, L::kStatusCodesAttr, t.status_codes);
   }
-  if (!t.iterations.empty()) out.Write(L::kDicIterations, t.iterations, dims, "1", "IC-GN iterations");
+  if (!t.iterations.empty())
+    out.Write(L::kDicIterations, t.iterations, dims, "1", "IC-GN iterations");
   const char* sigma_note = "(least-squares covariance; 0 in row 0, NaN = failed)";
   if (!t.sigma_u_px.empty()) {
     out.Write(L::kDicSigmaU, t.sigma_u_px, dims, "px",

@@ -99,7 +99,7 @@ double MeasuredPlateauDeceleration(const SensorResult& sensor, double t1_after_i
 }
 
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px) {
+                                     double mm_per_px, bool allow_partial) {
   CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
              fmt::format("{}", mm_per_px), "> 0 mm/px (or a calibration with a plane scale)");
   if (scene.inputs.sensor.empty()) {
@@ -143,6 +143,15 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
       e.WithFile(timing && !run.sensor.exposure.empty() ? scene.inputs.sensor : scene.path);
     }
     throw;
+  }
+  const MomentumSummary& m = run.analysis.momentum.summary;
+  if (!m.IsUsable() && !allow_partial) {
+    throw Error(ErrorKind::kNumerical,
+                fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
+                            "measurable: {}\nNothing was written ({} is as it was); `impactdic "
+                            "analyze --allow-partial` writes it, with the figures that could not "
+                            "be measured as NaN",
+                            scene.name, m.t_end_problem, results_path));
   }
   H5Writer out(results_path, H5Writer::Mode::kUpdate);
   WriteAnalysis(out, run.analysis, run.sensor);

@@ -68,9 +68,9 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   SceneRunData data;
   data.mm_per_px = scene.inputs.mm_per_px;
   stages::StageContext context{scene, options, data, summary};
-  for (const auto& make : {stages::MakeCalibrateStage, stages::MakeSensorStage,
-                           stages::MakeFramesStage, stages::MakeCorrelateStage,
-                           stages::MakeKinematicsStage, stages::MakeMomentumStage})
+  for (const auto& make :
+       {stages::MakeCalibrateStage, stages::MakeSensorStage, stages::MakeFramesStage,
+        stages::MakeCorrelateStage, stages::MakeKinematicsStage, stages::MakeMomentumStage})
     stages::RunStage(*make(), context);
   stages::AddMeasuredPeakDeceleration(context);
   stages::RunStage(*stages::MakeModelStage(), context);

@@ -10,6 +10,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/io/results_layout.h"
 
@@ -109,19 +110,20 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   seq.num_subsets = n;
   seq.x_px = x;
   seq.y_px = y;
-  // Lagrangian positions from the accumulated displacement, when stored.
+  // Lagrangian positions from the accumulated displacement, when stored (read by io
+  // ReadDicResults, whatever the layout version).
   if (fixed && r.Exists(L::kDicU) && r.Exists(L::kDicV)) {
-    Dims du, dv;
-    const auto u = r.ReadDouble(L::kDicU, &du);
-    const auto v = r.ReadDouble(L::kDicV, &dv);
-    if (du != dvx) ShapeError(r, L::kDicU, file, du, "[frames x subsets] = " + Dims2Text(dvx));
-    if (dv != dvx) ShapeError(r, L::kDicV, file, dv, "[frames x subsets] = " + Dims2Text(dvx));
+    const DicResultsTable dic = ReadDicResults(r, file);
+    if (dic.rows != f || dic.subsets != n) {
+      ShapeError(r, L::kDicU, file, Dims{dic.rows, dic.subsets},
+                 "[frames x subsets] = " + Dims2Text(dvx));
+    }
     seq.x_px.assign(f * n, 0.0);
     seq.y_px.assign(f * n, 0.0);
     for (std::size_t i = 0; i < f; ++i) {
       for (std::size_t s = 0; s < n; ++s) {
-        seq.x_px[i * n + s] = x[s] + u[i * n + s];
-        seq.y_px[i * n + s] = y[s] + v[i * n + s];
+        seq.x_px[i * n + s] = x[s] + dic.u_px[i * n + s];
+        seq.y_px[i * n + s] = y[s] + dic.v_px[i * n + s];
       }
     }
   }

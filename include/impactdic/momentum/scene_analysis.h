@@ -1,10 +1,10 @@
 // `impactdic analyze SCENE.yaml`: the sensor, kinematics and momentum stages of one scene from its
 // correlation results (HDF5), written back into the same file.
 //
-// The correlation results are read with io ReadDicResults (any layout version, io/results_layout.h):
-// row 0 is the first reference, a sample is valid when its status is converged (or, without
-// /dic/status, when its displacement is finite); the /dic attribute first_frame is the index of
-// row 0 in the camera sequence (default: the scene's dic.first_frame).
+// The correlation results are read with io ReadDicResults (any layout version,
+// io/results_layout.h): row 0 is the first reference, a sample is valid when its status is
+// converged (or, without /dic/status, when its displacement is finite); the /dic attribute
+// first_frame is the index of row 0 in the camera sequence (default: the scene's dic.first_frame).
 //
 //   Scene scene = LoadScene("scene.yaml");
 //   SceneAnalysisRun run = AnalyzeSceneResults(scene, "results/results.h5", /*mm_per_px=*/0.1);
@@ -54,8 +54,11 @@ struct SceneAnalysisRun {
 
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
 // and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
+// As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
+// Error(kNumerical) with the reason and nothing written, unless allow_partial (then written,
+// with NaN figures; the caller reports the run as partial).
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px);
+                                     double mm_per_px, bool allow_partial = false);
 
 }  // namespace impactdic
 

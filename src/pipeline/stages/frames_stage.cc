@@ -175,11 +175,11 @@ class FramesStage : public Stage {
     d.last_frame = scene.dic.last_frame < 0 ? d.source_frames - 1 : scene.dic.last_frame;
     const std::string skipped_note = d.sensor ? TimeFrames(c) : "";
     if (d.last_frame - d.first_frame < 2) {
-      throw Error(ErrorKind::kInvalidValue, "frames",
-                  fmt::format("{} frames from {} to {}",
-                              std::max(0, d.last_frame - d.first_frame + 1), d.first_frame,
-                              d.last_frame),
-                  "at least 3 frames to correlate and differentiate")
+      throw Error(
+          ErrorKind::kInvalidValue, "frames",
+          fmt::format("{} frames from {} to {}", std::max(0, d.last_frame - d.first_frame + 1),
+                      d.first_frame, d.last_frame),
+          "at least 3 frames to correlate and differentiate")
           .WithFile(scene.inputs.frames);
     }
     ReadFrames(c, source);

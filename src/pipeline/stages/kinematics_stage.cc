@@ -45,7 +45,8 @@ class KinematicsStage : public Stage {
     mapping.mm_per_px = d.mm_per_px;
     KinematicsOptions k;
     k.fps = c.scene.inputs.fps;
-    d.kinematics = ComputeKinematics(AnalysedSeries(*d.dic, c.scene, &c.summary.warnings), mapping, k);
+    d.kinematics =
+        ComputeKinematics(AnalysedSeries(*d.dic, c.scene, &c.summary.warnings), mapping, k);
     // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when
     // the record has no exposure channel); none without a sensor record.
     if (!d.frame_times_s.empty()) {
