@@ -251,6 +251,71 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
 
 namespace {
 
+// The frame of the velocity snapshot: the one nearest t_e, else (no t_e) the one of the largest
+// mean speed; *title says which.
+std::size_t SnapshotFrame(const VelocityFieldSequence& seq, double t_e_s, std::string* title) {
+  if (std::isfinite(t_e_s)) {
+    *title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
+    return FrameNearestTime(seq, 1e3 * t_e_s);
+  }
+  std::size_t frame = 0;
+  double best = -1;
+  for (std::size_t i = 0; i < seq.num_frames(); ++i) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t s = 0; s < seq.num_subsets; ++s) {
+      const double v =
+          std::hypot(seq.vx_mm_s[i * seq.num_subsets + s], seq.vy_mm_s[i * seq.num_subsets + s]);
+      if (std::isfinite(v)) sum += v, ++count;
+    }
+    if (count > 0 && sum / count > best) best = sum / count, frame = i;
+  }
+  LogInfo(
+      "render: no {} attribute on {}; the snapshot shows the frame of the largest mean speed ({})",
+      L::kTeAttr, L::kMomentumGroup, frame);
+  *title = "Velocity field at the largest mean speed";
+  return frame;
+}
+
+// The velocity snapshot and the animation (or why they are skipped).
+void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
+                       const RenderResultsOptions& options, const std::string& out_dir,
+                       RenderResultsSummary& summary) {
+  auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  auto skip = [&](const std::string& output, const std::string& reason) {
+    LogInfo("render: skipping {}: {}", output, reason);
+    summary.skipped.push_back(output + ": " + reason);
+  };
+  if (!has_field) {
+    const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " + L::kDicX +
+                               ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
+    if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+    if (options.animation) skip(L::kAnimationName, reason);
+  } else {
+    const VelocityFieldSequence seq = ReadVelocityFieldSequence(reader, /*require_frames=*/false);
+    if (seq.frames.empty()) {
+      const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
+      if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+      if (options.animation) skip(L::kAnimationName, reason);
+    } else {
+      if (options.snapshot) {
+        std::string title;
+        const std::size_t frame = SnapshotFrame(seq, t_e_s, &title);
+        RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng), options.snapshot_overlay,
+                               title);
+        summary.written.push_back(out(L::kVelocitySnapshotPng));
+      }
+      if (options.animation) {
+        AnimationOptions a = options.animation_options;
+        if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
+        summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
+        summary.has_animation = true;
+        summary.written.push_back(summary.animation.path);
+      }
+    }
+  }
+}
+
 void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
                 const RenderResultsOptions& options, RenderResultsSummary& summary) {
   auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
@@ -343,59 +408,8 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
       }
     }
 
-    if (options.snapshot || options.animation) {
-      if (!has_field) {
-        const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " +
-                                   L::kDicX + ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
-        if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-        if (options.animation) skip(L::kAnimationName, reason);
-      } else {
-        const VelocityFieldSequence seq =
-            ReadVelocityFieldSequence(reader, /*require_frames=*/false);
-        if (seq.frames.empty()) {
-          const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
-          if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-          if (options.animation) skip(L::kAnimationName, reason);
-        } else {
-          if (options.snapshot) {
-            std::size_t frame = 0;
-            std::string title;
-            if (std::isfinite(t_e_s)) {
-              frame = FrameNearestTime(seq, 1e3 * t_e_s);
-              title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
-            } else {
-              // Without t_e: the frame of the largest mean speed.
-              double best = -1;
-              for (std::size_t i = 0; i < seq.num_frames(); ++i) {
-                double sum = 0;
-                std::size_t count = 0;
-                for (std::size_t s = 0; s < seq.num_subsets; ++s) {
-                  const double v = std::hypot(seq.vx_mm_s[i * seq.num_subsets + s],
-                                              seq.vy_mm_s[i * seq.num_subsets + s]);
-                  if (std::isfinite(v)) sum += v, ++count;
-                }
-                if (count > 0 && sum / count > best) best = sum / count, frame = i;
-              }
-              LogInfo(
-                  "render: no {} attribute on {}; the snapshot shows the frame of the largest "
-                  "mean speed ({})",
-                  L::kTeAttr, L::kMomentumGroup, frame);
-              title = "Velocity field at the largest mean speed";
-            }
-            RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng),
-                                   options.snapshot_overlay, title);
-            summary.written.push_back(out(L::kVelocitySnapshotPng));
-          }
-          if (options.animation) {
-            AnimationOptions a = options.animation_options;
-            if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
-            summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
-            summary.has_animation = true;
-            summary.written.push_back(summary.animation.path);
-          }
-        }
-      }
-    }
+    if (options.snapshot || options.animation)
+      DrawVelocityField(reader, has_field, t_e_s, options, out_dir, summary);
   } catch (Error& e) {
     if (e.file().empty() && e.kind() == ErrorKind::kFileFormat)
       e.WithFile(OutputPathForMessages(results_path));
