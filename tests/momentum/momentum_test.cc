@@ -16,6 +16,7 @@
 #include "impactdic/io/csv.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/momentum/scene_analysis.h"
 #include "synthetic_chain.h"
 
 namespace impactdic {
@@ -339,6 +340,23 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   EXPECT_EQ(outside.exit_code, 1) << outside.output;
   EXPECT_NE(outside.output.find("far.yaml"), std::string::npos) << outside.output;
   EXPECT_NE(outside.output.find("momentum grid"), std::string::npos) << outside.output;
+}
+
+// The measured peak deceleration has one definition (sensor PeakDecelerationSample): the largest
+// a_g - 1 between the impact and the end of the window, the first of equal samples; the peak
+// stage's window leaves out the larger deceleration at the stop.
+TEST(PeakDeceleration, LargestSampleOfTheWindowAfterTheImpact) {
+  SensorResult r;
+  r.time_s = {0, 1, 2, 3, 4, 5, 6, 7};
+  r.accel_g = {9, 1, 4, 6, 6, 2, 12, 1};  // 9 before the impact, 12 at the stop (t = 6).
+  r.summary.impact_time_s = 1.5;
+  EXPECT_EQ(PeakDecelerationSample(r.time_s, r.accel_g, 1.5, 0.0, 3.5), 3u);  // First of the 6s.
+  EXPECT_EQ(MeasuredPeakDeceleration(r, /*peak_stage_s=*/3.5), 5.0);
+  EXPECT_EQ(MeasuredPeakDeceleration(r, /*peak_stage_s=*/10), 11.0);  // Up to the stop.
+  EXPECT_EQ(PeakDecelerationSample(r.time_s, r.accel_g, 1.5, 0.0, 0.2), r.time_s.size());
+  EXPECT_TRUE(std::isnan(MeasuredPeakDeceleration(r, /*peak_stage_s=*/0.2)));
+  r.summary.impact_time_s = std::nan("");
+  EXPECT_TRUE(std::isnan(MeasuredPeakDeceleration(r, /*peak_stage_s=*/3.5)));
 }
 
 // `analyze SCENE` as `run`: when t_e is not measurable (every subset failed in frames 60-62 of
