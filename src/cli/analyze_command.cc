@@ -1,5 +1,6 @@
 // impactdic analyze: the accelerometer record alone (--sensor CSV), or a scene's sensor,
-// kinematics and momentum stages from its correlation results (SCENE.yaml).
+// kinematics and momentum stages from its correlation results (SCENE.yaml; exit 1 when t_e is not
+// measurable, as `run`, unless --allow-partial).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -12,6 +13,7 @@
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
@@ -41,6 +43,7 @@ struct AnalyzeArgs {
   double impact_threshold = 5;
   std::string output;
   std::string results;
+  bool allow_partial = false;
 };
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
@@ -79,9 +82,11 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
                 "--release-time only with --from-release");
   }
   if (!a.output.empty()) CheckOutputLocation(a.output, {"--output", {".h5", ".hdf5"}, {a.sensor}});
-  if (cmd.count("--results") > 0) {
-    throw Error(ErrorKind::kInvalidValue, "--results", "with --sensor",
-                "--results only with the SCENE.yaml form");
+  for (const char* scene_only : {"--results", "--allow-partial"}) {
+    if (cmd.count(scene_only) > 0) {
+      throw Error(ErrorKind::kInvalidValue, scene_only, "with --sensor",
+                  std::string(scene_only) + " only with the SCENE.yaml form");
+    }
   }
   SensorOptions o;
   o.columns.time = a.time_column;
@@ -183,14 +188,18 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   const std::string results =
       a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
                         : a.results;
-  const SceneAnalysisRun run = AnalyzeSceneResults(scene, results, mm_per_px);
+  const SceneAnalysisRun run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial);
   const MomentumSummary& m = run.analysis.momentum.summary;
+  if (!m.IsUsable())
+    LogWarning("analyze: partial results (--allow-partial): t_e is not measurable: {}",
+               m.t_end_problem);
   if (a.format == "json") {
     JsonObject j = m.ToJson();
     j.Add("impact_time_s", run.sensor.summary.impact_time_s)
         .Add("impact_velocity_m_s", run.sensor.summary.impact_velocity_m_s)
         .Add("final_penetration_m", run.sensor.summary.final_penetration_m)
-        .Add("results", results);
+        .Add("results", results)
+        .Add("usable", m.IsUsable());
     std::cout << j.Dump() << "\n";
   } else {
     std::cout << "scene " << scene.path << " -> " << results << "\n"
@@ -239,6 +248,10 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--output", args->output, "also write the sensor series to this HDF5 file");
   cmd->add_option("--results", args->results,
                   "correlation results HDF5 of the scene (default <outputs.folder>/results.h5)");
+  cmd->add_flag("--allow-partial", args->allow_partial,
+                "SCENE form: write the results (exit 0) even when t_e is not measurable, with the "
+                "figures that depend on it NaN; without it such an analysis fails (exit 1) and "
+                "the results file is left as it was, as with `impactdic run`");
   cmd->callback([args, cmd] {
     const AnalyzeArgs& a = *args;
     if (a.format != "text" && a.format != "json") {

@@ -4,6 +4,7 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/task_group.h>
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 namespace {
@@ -35,7 +37,90 @@ long long FrameLabel(const DicResult& result, int index) {
   return k < result.frame_numbers.size() ? result.frame_numbers[k] : index;
 }
 
+std::string ReferenceUpdateText(const UpdateOptions& update) {
+  return update.mode == ReferenceUpdate::kEveryN ? fmt::format("every:{}", update.every_n)
+                                                 : std::string(ToString(update.mode));
+}
+
 }  // namespace
+
+bool IsValidStatus(SubsetStatus status) { return status == SubsetStatus::kConverged; }
+static_assert(static_cast<int>(SubsetStatus::kConverged) == results_layout::kValidStatusCode);
+
+bool FailsInReference(SubsetStatus status) {
+  return status == SubsetStatus::kMasked || status == SubsetStatus::kSingularHessian ||
+         status == SubsetStatus::kLowContrast || status == SubsetStatus::kSaturated;
+}
+
+DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& options,
+                                    int first_frame) {
+  DicResultsTable t;
+  t.first_frame = first_frame;  // -1: unknown (the indices are then those of the images given).
+  first_frame = std::max(first_frame, 0);
+  const std::size_t n = result.positions.size(), rows = result.frames.size() + 1;
+  t.layout_version = results_layout::kDicLayoutVersion;
+  t.rows = rows;
+  t.subsets = n;
+  for (const cv::Point2d& p : result.positions) {
+    t.x_px.push_back(p.x);
+    t.y_px.push_back(p.y);
+  }
+  // Row 0: the first reference itself.
+  t.u_px.assign(rows * n, 0.0);
+  t.v_px.assign(rows * n, 0.0);
+  t.zncc.assign(rows * n, 1.0f);
+  t.sigma_u_px.assign(rows * n, 0.0f);
+  t.sigma_v_px.assign(rows * n, 0.0f);
+  t.sigma_px.assign(rows * n, 0.0f);
+  t.iterations.assign(rows * n, 0);
+  t.status.assign(rows * n, static_cast<std::int32_t>(SubsetStatus::kConverged));
+  // The number from the file names, else the index in the input sequence.
+  const auto number = [&](int index) {
+    return static_cast<double>(result.frame_numbers.empty() ? first_frame + index
+                                                            : FrameLabel(result, index));
+  };
+  t.frame.push_back(first_frame);
+  t.reference_frame.push_back(first_frame);
+  t.frame_number.push_back(number(0));
+  if (!result.frames.empty()) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const SubsetStatus s = result.frames[0].status[i];
+      if (!FailsInReference(s)) continue;
+      t.status[i] = static_cast<std::int32_t>(s);
+      t.u_px[i] = t.v_px[i] = std::nan("");
+    }
+  }
+  for (std::size_t r = 1; r < rows; ++r) {
+    const FrameResult& f = result.frames[r - 1];
+    t.frame.push_back(first_frame + f.frame);
+    t.reference_frame.push_back(first_frame + f.reference_frame);
+    t.frame_number.push_back(number(f.frame));
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = r * n + i;
+      t.u_px[k] = f.u_px[i];
+      t.v_px[k] = f.v_px[i];
+      t.zncc[k] = f.zncc[i];
+      t.sigma_u_px[k] = f.sigma_u_px[i];
+      t.sigma_v_px[k] = f.sigma_v_px[i];
+      t.sigma_px[k] = f.sigma_px[i];
+      t.iterations[k] = f.iterations[i];
+      t.status[k] = static_cast<std::int32_t>(f.status[i]);
+    }
+  }
+  t.status_codes = SubsetStatusCodes();
+  t.text_attributes = {{"interpolation", ToString(options.icgn.interpolation)},
+                       {"shape", ToString(options.icgn.shape)},
+                       {"reference_update", ReferenceUpdateText(options.update)},
+                       {"mode", ToString(options.mode)},
+                       {"summary", result.summary.BriefReport()}};
+  t.number_attributes = {{"max_uncertainty_px", options.icgn.max_uncertainty_px},
+                         {"subset_size_px", options.grid.subset_size},
+                         {"step_px", options.grid.step},
+                         {"valid_fraction", result.summary.valid_fraction},
+                         {"mean_iterations", result.summary.mean_iterations},
+                         {"reference_updates", result.summary.reference_updates}};
+  return t;
+}
 
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options) {
   options.Check();
@@ -137,75 +222,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
     throw Error(ErrorKind::kInvalidValue, "output", path, "a file ending in .csv or .h5");
   }
   H5Writer out(path, /*owned_groups=*/{"/dic"});  // Other groups of an existing file stay.
-  std::vector<double> x(n), y(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    x[i] = result.positions[i].x;
-    y[i] = result.positions[i].y;
-  }
-  out.Write("dic/x_px", x, "px", "subset centre x in the first reference image (right)");
-  out.Write("dic/y_px", y, "px", "subset centre y in the first reference image (down)");
-  std::vector<double> u(n * frames), v(n * frames);
-  std::vector<float> zncc(n * frames), sigma(n * frames), sigma_u(n * frames), sigma_v(n * frames);
-  std::vector<std::int32_t> iterations(n * frames), status(n * frames);
-  std::vector<std::int32_t> reference(frames), frame_index(frames);
-  std::vector<double> frame_number(frames);
-  for (std::size_t k = 0; k < frames; ++k) {
-    const FrameResult& f = result.frames[k];
-    reference[k] = f.reference_frame;
-    frame_index[k] = f.frame;
-    frame_number[k] = static_cast<double>(FrameLabel(result, f.frame));
-    for (std::size_t i = 0; i < n; ++i) {
-      u[k * n + i] = f.u_px[i];
-      v[k * n + i] = f.v_px[i];
-      zncc[k * n + i] = f.zncc[i];
-      sigma[k * n + i] = f.sigma_px[i];
-      sigma_u[k * n + i] = f.sigma_u_px[i];
-      sigma_v[k * n + i] = f.sigma_v_px[i];
-      iterations[k * n + i] = f.iterations[i];
-      status[k * n + i] = static_cast<std::int32_t>(f.status[i]);
-    }
-  }
-  const Dims dims{frames, n};
-  out.Write("dic/u_px", u, dims, "px",
-            "accumulated displacement x (right) of the subset centre since the first reference, "
-            "NaN if the subset failed");
-  out.Write("dic/v_px", v, dims, "px",
-            "accumulated displacement y (down) of the subset centre since the first reference, "
-            "NaN if the subset failed");
-  out.Write("dic/zncc", zncc, dims, "1", "zero-normalised cross-correlation of the subset");
-  out.Write("dic/sigma_px", sigma, dims, "px",
-            "the larger of sigma_u_px and sigma_v_px, NaN if the subset failed");
-  out.Write("dic/sigma_u_px", sigma_u, dims, "px",
-            "estimated standard deviation of u against the frame's reference (least-squares "
-            "covariance), NaN if the subset failed");
-  out.Write("dic/sigma_v_px", sigma_v, dims, "px",
-            "estimated standard deviation of v against the frame's reference (least-squares "
-            "covariance), NaN if the subset failed");
-  out.Write("dic/iterations", iterations, dims, "1", "IC-GN iterations");
-  out.Write("dic/status", status, dims, "1", "subset status code (see attribute codes)");
-  out.Write("dic/frame", frame_index, Dims{frames}, "1", "index of the deformed image (1-based)");
-  out.Write("dic/frame_number", frame_number, "1",
-            "frame number of the deformed image from its file name (its 1-based index when the "
-            "names are not one numbered series), as the CSV's frame column");
-  out.Write("dic/reference_frame", reference, Dims{frames}, "1",
-            "index of the reference image each frame was correlated against (0 = first)");
-  // The same attributes under the names `impactdic run` uses (status_names, shape).
-  out.SetAttribute("dic/status", "codes", SubsetStatusCodes());
-  out.SetAttribute("dic/status", "status_names", SubsetStatusCodes());
-  out.SetAttribute("dic", "interpolation", ToString(options.icgn.interpolation));
-  out.SetAttribute("dic", "shape_function", ToString(options.icgn.shape));
-  out.SetAttribute("dic", "shape", ToString(options.icgn.shape));
-  out.SetAttribute("dic", "reference_update",
-                   options.update.mode == ReferenceUpdate::kEveryN
-                       ? fmt::format("every:{}", options.update.every_n)
-                       : std::string(ToString(options.update.mode)));
-  out.SetAttribute("dic", "mode", ToString(options.mode));
-  out.SetAttribute("dic", "max_uncertainty_px", options.icgn.max_uncertainty_px);
-  out.SetAttribute("dic", "subset_size_px", options.grid.subset_size);
-  out.SetAttribute("dic", "step_px", options.grid.step);
-  out.SetAttribute("dic", "valid_fraction", result.summary.valid_fraction);
-  out.SetAttribute("dic", "mean_iterations", result.summary.mean_iterations);
-  out.SetAttribute("dic", "reference_updates", result.summary.reference_updates);
+  WriteDicResults(out, MakeDicResultsTable(result, options, /*first_frame=*/-1));
   out.Commit();
 }
 

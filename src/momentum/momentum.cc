@@ -566,14 +566,15 @@ void WriteSensor(H5Writer& out, const SensorResult& sensor) {
                    "penetration downward positive");
 }
 
-void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor) {
-  const KinematicsResult& k = analysis.kinematics;
+void WriteKinematics(H5Writer& out, const KinematicsResult& k,
+                     const std::vector<double>& frame_time_s) {
   const Dims fs{k.frames, k.subsets};
   out.Remove("kinematics");
-  out.Remove("momentum");
   out.Write("kinematics/time_s", k.time_s, "s", "frame time k / fps since frame 0");
-  out.Write("kinematics/frame_time_daq_s", analysis.frame_time_s, "s",
-            "frame time on the DAQ clock (exposure edges or offset + k / fps)");
+  if (!frame_time_s.empty()) {
+    out.Write("kinematics/frame_time_daq_s", frame_time_s, "s",
+              "frame time on the DAQ clock (exposure edges or offset + k / fps)");
+  }
   out.Write("kinematics/x_mm", k.x_mm, "mm", "reference subset centre x (panel, right)");
   out.Write("kinematics/y_mm", k.y_mm, "mm", "reference subset centre y (panel, down)");
   out.Write("kinematics/ux_mm", k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
@@ -586,8 +587,16 @@ void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorRes
   out.Write("kinematics/ax_mm_s2", k.acc_x_mm_s2, fs, "mm/s^2", "subset acceleration x (right)");
   out.Write("kinematics/ay_mm_s2", k.acc_y_mm_s2, fs, "mm/s^2", "subset acceleration y (down)");
   out.SetAttribute("kinematics", "vy_positive", "down");
+}
+
+void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor) {
+  WriteKinematics(out, analysis.kinematics, analysis.frame_time_s);
   WriteSensor(out, sensor);
-  const MomentumResult& m = analysis.momentum;
+  WriteMomentum(out, analysis.momentum, sensor);
+}
+
+void WriteMomentum(H5Writer& out, const MomentumResult& m, const SensorResult& sensor) {
+  out.Remove("momentum");
   const MomentumSummary& s = m.summary;
   const double ti = sensor.summary.impact_time_s;
   std::vector<double> t_after(m.frame_time_s.size());

@@ -7,6 +7,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
@@ -51,98 +52,54 @@ MomentumOptions MomentumOptionsFromScene(const Scene& scene, double mm_per_px) {
   return m;
 }
 
+CorrelationSeries CorrelationSeriesFromTable(const DicResultsTable& t) {
+  CorrelationSeries s;
+  s.frames = t.rows;
+  s.subsets = t.subsets;
+  s.x_px = t.x_px;
+  s.y_px = t.y_px;
+  s.u_px = t.u_px;
+  s.v_px = t.v_px;
+  if (!t.status.empty()) {
+    s.valid.resize(t.status.size());
+    for (std::size_t k = 0; k < t.status.size(); ++k) s.valid[k] = t.IsValid(k) ? 1 : 0;
+  }
+  s.sigma_u_px = t.sigma_u_px;
+  s.sigma_v_px = t.sigma_v_px;
+  s.Check();
+  return s;
+}
+
 CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_frame) {
   if (!std::filesystem::exists(h5_path)) {
     throw Error(ErrorKind::kFileNotFound, "", "",
                 "the correlation results (run `impactdic correlate` or `impactdic run` first)")
         .WithFile(h5_path);
   }
-  H5Reader in(h5_path);
-  Dims du, dv, dx, dy;
-  CorrelationSeries s;
-  s.u_px = in.ReadDouble("dic/u_px", &du);
-  s.v_px = in.ReadDouble("dic/v_px", &dv);
-  s.x_px = in.ReadDouble("dic/x_px", &dx);
-  s.y_px = in.ReadDouble("dic/y_px", &dy);
-  if (du.size() < 2 || du != dv) {
-    throw Error(ErrorKind::kFileFormat, "/dic/u_px, /dic/v_px",
-                fmt::format("{}-D / {}-D datasets of different or too few dimensions", du.size(),
-                            dv.size()),
-                "equal [frames x subsets] (or [frames x rows x cols]) datasets")
-        .WithFile(h5_path);
-  }
-  s.frames = du[0];
-  s.subsets = s.u_px.size() / s.frames;
-  if (s.x_px.size() < s.subsets || s.y_px.size() != s.x_px.size() ||
-      s.x_px.size() % s.subsets != 0) {
-    throw Error(ErrorKind::kFileFormat, "/dic/x_px, /dic/y_px",
-                fmt::format("{} / {} entries", s.x_px.size(), s.y_px.size()),
-                fmt::format("one position per subset ({}), or one per frame and subset", s.subsets))
-        .WithFile(h5_path);
-  }
-  s.x_px.resize(s.subsets);
-  s.y_px.resize(s.subsets);
-  if (in.Exists("dic/status")) {
-    Dims ds;
-    const std::vector<std::int32_t> status = in.ReadInt("dic/status", &ds);
-    if (status.size() != s.u_px.size()) {
-      throw Error(ErrorKind::kFileFormat, "/dic/status", fmt::format("{} entries", status.size()),
-                  fmt::format("one per frame and subset ({})", s.u_px.size()))
-          .WithFile(h5_path);
-    }
-    s.valid.resize(status.size());
-    for (std::size_t i = 0; i < status.size(); ++i) s.valid[i] = status[i] == 0 ? 1 : 0;
-  }
-  if (in.Exists("dic/sigma_u_px") && in.Exists("dic/sigma_v_px")) {
-    s.sigma_u_px = in.ReadFloat("dic/sigma_u_px");
-    s.sigma_v_px = in.ReadFloat("dic/sigma_v_px");
-    if (s.sigma_u_px.size() != s.u_px.size() || s.sigma_v_px.size() != s.u_px.size()) {
-      throw Error(ErrorKind::kFileFormat, "/dic/sigma_u_px, /dic/sigma_v_px",
-                  fmt::format("{} / {} entries", s.sigma_u_px.size(), s.sigma_v_px.size()),
-                  fmt::format("one per frame and subset ({})", s.u_px.size()))
-          .WithFile(h5_path);
-    }
-  }
-  // The dic stage writes one row per DEFORMED image (/dic/frame: 1-based image index, the
-  // reference image being 0). Prepend the reference row (zero displacement) so row k is frame k.
-  if (in.Exists("dic/frame")) {
-    const std::vector<std::int32_t> index = in.ReadInt("dic/frame");
-    for (std::size_t k = 0; k < index.size(); ++k) {
-      if (index.size() != s.frames || index[k] != index[0] + static_cast<std::int32_t>(k)) {
-        throw Error(ErrorKind::kFileFormat, "/dic/frame",
-                    fmt::format("{} indices starting {}, not consecutive or not one per row",
-                                index.size(), index.empty() ? -1 : index[0]),
-                    "consecutive image indices, one per row of /dic/u_px")
-            .WithFile(h5_path);
-      }
-    }
-    if (!index.empty() && index[0] == 1) {
-      const std::size_t n = s.subsets;
-      s.u_px.insert(s.u_px.begin(), n, 0.0);
-      s.v_px.insert(s.v_px.begin(), n, 0.0);
-      if (!s.valid.empty()) s.valid.insert(s.valid.begin(), n, std::uint8_t{1});
-      if (!s.sigma_u_px.empty()) {
-        s.sigma_u_px.insert(s.sigma_u_px.begin(), n, 0.0f);
-        s.sigma_v_px.insert(s.sigma_v_px.begin(), n, 0.0f);
-      }
-      ++s.frames;
-    } else if (!index.empty() && index[0] != 0) {
-      throw Error(ErrorKind::kFileFormat, "/dic/frame", fmt::format("first index {}", index[0]),
-                  "0 (reference row included) or 1 (first deformed image)")
-          .WithFile(h5_path);
-    }
-  }
-  if (first_frame) {
-    *first_frame = in.HasAttribute("dic", "first_frame")
-                       ? std::lround(in.ReadNumberAttribute("dic", "first_frame"))
-                       : -1;
-  }
-  s.Check();
-  return s;
+  const DicResultsTable table = ReadDicResults(H5Reader(h5_path), h5_path);
+  if (first_frame) *first_frame = table.first_frame;
+  return CorrelationSeriesFromTable(table);
+}
+
+double MeasuredPeakDeceleration(const SensorResult& sensor, double peak_stage_s) {
+  const double t_i = sensor.summary.impact_time_s;
+  const std::size_t k =
+      PeakDecelerationSample(sensor.time_s, sensor.accel_g, t_i, /*from_s=*/0.0, peak_stage_s);
+  return k < sensor.accel_g.size() ? sensor.accel_g[k] - 1 : std::nan("");
+}
+
+double MeasuredPlateauDeceleration(const SensorResult& sensor, double t1_after_impact_s, double g) {
+  const SensorSummary& s = sensor.summary;
+  if (!std::isfinite(s.impact_time_s) || !std::isfinite(s.stop_time_s)) return std::nan("");
+  const double t1 = s.impact_time_s + t1_after_impact_s;
+  if (!(s.stop_time_s > t1)) return std::nan("");
+  const std::vector<double> v =
+      SampleSeries(sensor.time_s, sensor.velocity_m_s, {t1, s.stop_time_s}, "sensor velocity");
+  return (v[0] - v[1]) / (s.stop_time_s - t1) / g;
 }
 
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px) {
+                                     double mm_per_px, bool allow_partial) {
   CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
              fmt::format("{}", mm_per_px), "> 0 mm/px (or a calibration with a plane scale)");
   if (scene.inputs.sensor.empty()) {
@@ -186,6 +143,15 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
       e.WithFile(timing && !run.sensor.exposure.empty() ? scene.inputs.sensor : scene.path);
     }
     throw;
+  }
+  const MomentumSummary& m = run.analysis.momentum.summary;
+  if (!m.IsUsable() && !allow_partial) {
+    throw Error(ErrorKind::kNumerical,
+                fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
+                            "measurable: {}\nNothing was written ({} is as it was); `impactdic "
+                            "analyze --allow-partial` writes it, with the figures that could not "
+                            "be measured as NaN",
+                            scene.name, m.t_end_problem, results_path));
   }
   H5Writer out(results_path, H5Writer::Mode::kUpdate);
   WriteAnalysis(out, run.analysis, run.sensor);

@@ -13,10 +13,10 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/render/figures.h"
 #include "impactdic/render/render_results.h"
-#include "impactdic/render/results_layout.h"
 #include "impactdic/render/velocity_field.h"
 
 namespace impactdic {

@@ -10,8 +10,9 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/render/results_layout.h"
+#include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -109,19 +110,20 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   seq.num_subsets = n;
   seq.x_px = x;
   seq.y_px = y;
-  // Lagrangian positions from the accumulated displacement, when stored.
+  // Lagrangian positions from the accumulated displacement, when stored (read by io
+  // ReadDicResults, whatever the layout version).
   if (fixed && r.Exists(L::kDicU) && r.Exists(L::kDicV)) {
-    Dims du, dv;
-    const auto u = r.ReadDouble(L::kDicU, &du);
-    const auto v = r.ReadDouble(L::kDicV, &dv);
-    if (du != dvx) ShapeError(r, L::kDicU, file, du, "[frames x subsets] = " + Dims2Text(dvx));
-    if (dv != dvx) ShapeError(r, L::kDicV, file, dv, "[frames x subsets] = " + Dims2Text(dvx));
+    const DicResultsTable dic = ReadDicResults(r, file);
+    if (dic.rows != f || dic.subsets != n) {
+      ShapeError(r, L::kDicU, file, Dims{dic.rows, dic.subsets},
+                 "[frames x subsets] = " + Dims2Text(dvx));
+    }
     seq.x_px.assign(f * n, 0.0);
     seq.y_px.assign(f * n, 0.0);
     for (std::size_t i = 0; i < f; ++i) {
       for (std::size_t s = 0; s < n; ++s) {
-        seq.x_px[i * n + s] = x[s] + u[i * n + s];
-        seq.y_px[i * n + s] = y[s] + v[i * n + s];
+        seq.x_px[i * n + s] = x[s] + dic.u_px[i * n + s];
+        seq.y_px[i * n + s] = y[s] + dic.v_px[i * n + s];
       }
     }
   }
@@ -249,6 +251,71 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
 
 namespace {
 
+// The frame of the velocity snapshot: the one nearest t_e, else (no t_e) the one of the largest
+// mean speed; *title says which.
+std::size_t SnapshotFrame(const VelocityFieldSequence& seq, double t_e_s, std::string* title) {
+  if (std::isfinite(t_e_s)) {
+    *title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
+    return FrameNearestTime(seq, 1e3 * t_e_s);
+  }
+  std::size_t frame = 0;
+  double best = -1;
+  for (std::size_t i = 0; i < seq.num_frames(); ++i) {
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t s = 0; s < seq.num_subsets; ++s) {
+      const double v =
+          std::hypot(seq.vx_mm_s[i * seq.num_subsets + s], seq.vy_mm_s[i * seq.num_subsets + s]);
+      if (std::isfinite(v)) sum += v, ++count;
+    }
+    if (count > 0 && sum / count > best) best = sum / count, frame = i;
+  }
+  LogInfo(
+      "render: no {} attribute on {}; the snapshot shows the frame of the largest mean speed ({})",
+      L::kTeAttr, L::kMomentumGroup, frame);
+  *title = "Velocity field at the largest mean speed";
+  return frame;
+}
+
+// The velocity snapshot and the animation (or why they are skipped).
+void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
+                       const RenderResultsOptions& options, const std::string& out_dir,
+                       RenderResultsSummary& summary) {
+  auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  auto skip = [&](const std::string& output, const std::string& reason) {
+    LogInfo("render: skipping {}: {}", output, reason);
+    summary.skipped.push_back(output + ": " + reason);
+  };
+  if (!has_field) {
+    const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " + L::kDicX +
+                               ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
+    if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+    if (options.animation) skip(L::kAnimationName, reason);
+  } else {
+    const VelocityFieldSequence seq = ReadVelocityFieldSequence(reader, /*require_frames=*/false);
+    if (seq.frames.empty()) {
+      const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
+      if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
+      if (options.animation) skip(L::kAnimationName, reason);
+    } else {
+      if (options.snapshot) {
+        std::string title;
+        const std::size_t frame = SnapshotFrame(seq, t_e_s, &title);
+        RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng), options.snapshot_overlay,
+                               title);
+        summary.written.push_back(out(L::kVelocitySnapshotPng));
+      }
+      if (options.animation) {
+        AnimationOptions a = options.animation_options;
+        if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
+        summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
+        summary.has_animation = true;
+        summary.written.push_back(summary.animation.path);
+      }
+    }
+  }
+}
+
 void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
                 const RenderResultsOptions& options, RenderResultsSummary& summary) {
   auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
@@ -341,59 +408,8 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
       }
     }
 
-    if (options.snapshot || options.animation) {
-      if (!has_field) {
-        const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " +
-                                   L::kDicX + ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
-        if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-        if (options.animation) skip(L::kAnimationName, reason);
-      } else {
-        const VelocityFieldSequence seq =
-            ReadVelocityFieldSequence(reader, /*require_frames=*/false);
-        if (seq.frames.empty()) {
-          const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
-          if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-          if (options.animation) skip(L::kAnimationName, reason);
-        } else {
-          if (options.snapshot) {
-            std::size_t frame = 0;
-            std::string title;
-            if (std::isfinite(t_e_s)) {
-              frame = FrameNearestTime(seq, 1e3 * t_e_s);
-              title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
-            } else {
-              // Without t_e: the frame of the largest mean speed.
-              double best = -1;
-              for (std::size_t i = 0; i < seq.num_frames(); ++i) {
-                double sum = 0;
-                std::size_t count = 0;
-                for (std::size_t s = 0; s < seq.num_subsets; ++s) {
-                  const double v = std::hypot(seq.vx_mm_s[i * seq.num_subsets + s],
-                                              seq.vy_mm_s[i * seq.num_subsets + s]);
-                  if (std::isfinite(v)) sum += v, ++count;
-                }
-                if (count > 0 && sum / count > best) best = sum / count, frame = i;
-              }
-              LogInfo(
-                  "render: no {} attribute on {}; the snapshot shows the frame of the largest "
-                  "mean speed ({})",
-                  L::kTeAttr, L::kMomentumGroup, frame);
-              title = "Velocity field at the largest mean speed";
-            }
-            RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng),
-                                   options.snapshot_overlay, title);
-            summary.written.push_back(out(L::kVelocitySnapshotPng));
-          }
-          if (options.animation) {
-            AnimationOptions a = options.animation_options;
-            if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
-            summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
-            summary.has_animation = true;
-            summary.written.push_back(summary.animation.path);
-          }
-        }
-      }
-    }
+    if (options.snapshot || options.animation)
+      DrawVelocityField(reader, has_field, t_e_s, options, out_dir, summary);
   } catch (Error& e) {
     if (e.file().empty() && e.kind() == ErrorKind::kFileFormat)
       e.WithFile(OutputPathForMessages(results_path));

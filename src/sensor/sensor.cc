@@ -501,9 +501,8 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   }
   // Peak deceleration (a_g - 1) between impact and stop, refined by a parabola through the
   // largest sample and its neighbours.
-  std::size_t kp = ki;
-  for (std::size_t i = ki; i <= kend && i < n; ++i)
-    if (acc[i] > acc[kp]) kp = i;
+  std::size_t kp = PeakDecelerationSample(t, acc, t[ki], 0.0, t[std::min(kend, n - 1)] - t[ki]);
+  if (kp >= n) kp = ki;
   double tp = t[kp], peak = acc[kp] - 1;
   if (kp > 0 && kp + 1 < n) {
     const double ym = acc[kp - 1], y0 = acc[kp], yp = acc[kp + 1];
@@ -613,6 +612,25 @@ std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double 
                             t0, t1));
   }
   return times;
+}
+
+int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s) {
+  int reference = 0;
+  for (std::size_t k = 0; k < frame_times_s.size(); ++k)
+    if (frame_times_s[k] <= impact_time_s) reference = static_cast<int>(k);
+  return reference;
+}
+
+std::size_t PeakDecelerationSample(const std::vector<double>& time_s,
+                                   const std::vector<double>& accel_g, double t_ref_s,
+                                   double from_s, double to_s) {
+  std::size_t peak = time_s.size();
+  for (std::size_t i = 0; i < time_s.size() && i < accel_g.size(); ++i) {
+    const double dt = time_s[i] - t_ref_s;
+    if (dt >= from_s && dt <= to_s && (peak == time_s.size() || accel_g[i] > accel_g[peak]))
+      peak = i;
+  }
+  return peak;
 }
 
 std::vector<double> SampleSeries(const std::vector<double>& time_s,

@@ -14,7 +14,9 @@
 #include "impactdic/core/error.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/momentum/scene_analysis.h"
 #include "synthetic_chain.h"
 
 namespace impactdic {
@@ -338,6 +340,82 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   EXPECT_EQ(outside.exit_code, 1) << outside.output;
   EXPECT_NE(outside.output.find("far.yaml"), std::string::npos) << outside.output;
   EXPECT_NE(outside.output.find("momentum grid"), std::string::npos) << outside.output;
+}
+
+// The measured peak deceleration has one definition (sensor PeakDecelerationSample): the largest
+// a_g - 1 between the impact and the end of the window, the first of equal samples; the peak
+// stage's window leaves out the larger deceleration at the stop.
+TEST(PeakDeceleration, LargestSampleOfTheWindowAfterTheImpact) {
+  SensorResult r;
+  r.time_s = {0, 1, 2, 3, 4, 5, 6, 7};
+  r.accel_g = {9, 1, 4, 6, 6, 2, 12, 1};  // 9 before the impact, 12 at the stop (t = 6).
+  r.summary.impact_time_s = 1.5;
+  EXPECT_EQ(PeakDecelerationSample(r.time_s, r.accel_g, 1.5, 0.0, 3.5), 3u);  // First of the 6s.
+  EXPECT_EQ(MeasuredPeakDeceleration(r, /*peak_stage_s=*/3.5), 5.0);
+  EXPECT_EQ(MeasuredPeakDeceleration(r, /*peak_stage_s=*/10), 11.0);  // Up to the stop.
+  EXPECT_EQ(PeakDecelerationSample(r.time_s, r.accel_g, 1.5, 0.0, 0.2), r.time_s.size());
+  EXPECT_TRUE(std::isnan(MeasuredPeakDeceleration(r, /*peak_stage_s=*/0.2)));
+  r.summary.impact_time_s = std::nan("");
+  EXPECT_TRUE(std::isnan(MeasuredPeakDeceleration(r, /*peak_stage_s=*/3.5)));
+}
+
+// `analyze SCENE` as `run`: when t_e is not measurable (every subset failed in frames 60-62 of
+// the peak stage) it fails with exit 1 and leaves the results file as it was; --allow-partial
+// writes it with the figures that depend on t_e NaN (null) and "usable": false.
+TEST(AnalyzeSceneCli, UnmeasurableTeFailsUnlessAllowPartial) {
+  Chain c;
+  c.t_impact = 0.02 + c.v0 / 9.81;
+  c.offset = c.t_impact - 0.005;
+  TestDir dir;
+  WriteCsv(dir.File("daq.csv"), {"time_s", "accel_g"}, ChainRecord(c), 12);
+  const CorrelationSeries dic = MakeCorrelation(c);
+  std::filesystem::create_directories(dir.path() / "results");
+  const std::string results = dir.File("results/results.h5");
+  {
+    // The current layout (io/dic_results.h): row 0 the reference.
+    DicResultsTable t;
+    t.rows = dic.frames;
+    t.subsets = dic.subsets;
+    t.x_px = dic.x_px;
+    t.y_px = dic.y_px;
+    t.u_px = dic.u_px;
+    t.v_px = dic.v_px;
+    t.status.assign(t.u_px.size(), 0);
+    for (std::size_t k = 0; k < t.status.size(); ++k) {
+      const std::size_t frame = k / t.subsets;
+      if (std::isnan(t.v_px[k]) || (frame >= 60 && frame <= 62)) t.status[k] = 1;
+    }
+    H5Writer out(results);
+    WriteDicResults(out, t);
+    out.Commit();
+  }
+  const double density = c.Ms() / (12 * 25e-6 * 0.192);
+  const std::string scene =
+      dir.Write("scene.yaml",
+                fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
+                            "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
+                            "  density_kg_m3: {:.17g}\nsensor:\n  frame_time_offset_s: {:.17g}\n"
+                            "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
+                            "outputs:\n  folder: results\n",
+                            c.fps, c.scale, c.mp, density, c.offset));
+  const CliResult failed = RunCli("-q analyze " + scene + " --format json");
+  EXPECT_EQ(failed.exit_code, 1) << failed.output;
+  EXPECT_NE(failed.output.find("t_e is not measurable"), std::string::npos) << failed.output;
+  EXPECT_NE(failed.output.find("--allow-partial"), std::string::npos) << failed.output;
+  EXPECT_FALSE(H5Reader(results).Exists("momentum/p_gran"));  // Left as it was.
+  const CliResult partial = RunCli("-q analyze " + scene + " --format json --allow-partial");
+  ASSERT_EQ(partial.exit_code, 0) << partial.output;
+  EXPECT_NE(partial.output.find("\"usable\": false"), std::string::npos) << partial.output;
+  EXPECT_NE(partial.output.find("\"added_mass_max_kg\": null"), std::string::npos)
+      << partial.output;
+  EXPECT_TRUE(H5Reader(results).Exists("momentum/p_gran"));
+  // The flag belongs to the scene form.
+  const CliResult sensor_form =
+      RunCli("analyze --sensor " + dir.File("daq.csv") + " --from-release --allow-partial");
+  EXPECT_EQ(sensor_form.exit_code, 1);
+  EXPECT_NE(sensor_form.output.find("--allow-partial only with the SCENE.yaml form"),
+            std::string::npos)
+      << sensor_form.output;
 }
 
 }  // namespace

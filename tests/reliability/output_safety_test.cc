@@ -125,7 +125,7 @@ TEST(OutputSafety, ModelAndCorrelateIntoAnExistingFileReplaceOnlyTheirGroups) {
   EXPECT_EQ(in.ReadInt("frames/images"), std::vector<std::int32_t>(24, 7));
   // /dic is correlate's: its new grid, not the old three values.
   EXPECT_TRUE(in.Exists("dic/x_px"));
-  EXPECT_EQ(in.Dimensions("dic/u_px")[0], 1u);  // one deformed frame
+  EXPECT_EQ(in.Dimensions("dic/u_px")[0], 2u);  // the reference row and one deformed frame
   EXPECT_GT(in.Dimensions("dic/u_px")[1], 3u);
 }
 

@@ -12,7 +12,7 @@
 #include "../cli/cli_runner.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/hdf5_store.h"
-#include "impactdic/render/results_layout.h"
+#include "impactdic/io/results_layout.h"
 #include "test_util.h"
 
 namespace impactdic {

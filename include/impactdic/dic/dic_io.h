@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "impactdic/dic/correlator.h"
+#include "impactdic/io/dic_results.h"
 
 namespace impactdic {
 
@@ -30,6 +31,22 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
 // opened or has fewer than two frames.
 DicResult CorrelateVideo(const std::string& path, const DicOptions& options);
 
+// Whether a subset's displacement is used downstream (kinematics, momentum, figures): only a
+// converged subset (the status code results_layout::kValidStatusCode in files).
+bool IsValidStatus(SubsetStatus status);
+
+// Whether a status of the first deformed frame is the reference's own fault (masked, featureless,
+// low contrast, saturated): such a subset has no valid displacement in the reference row either.
+bool FailsInReference(SubsetStatus status);
+
+// The result as the rows of the results files (io/dic_results.h, io/results_layout.h): row 0 the
+// first reference (zero displacement, NaN where FailsInReference), then one row per deformed
+// frame; frame indices offset by `first_frame` (the first reference's index in the camera
+// sequence; -1: unknown, the indices are those of the images correlated and no first_frame
+// attribute is written); the options and the summary as attributes.
+DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& options,
+                                    int first_frame);
+
 // Writes the result by extension:
 // .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status,sigma_u_px,sigma_v_px (one row
 //       per frame and subset;
@@ -38,12 +55,10 @@ DicResult CorrelateVideo(const std::string& path, const DicOptions& options);
 //       first reference,
 //       u,v = accumulated displacement [px], x right, y down; status by name; sigma_u,v = their
 //       estimated standard deviations against the frame's reference [px]; NaN as "nan").
-// .h5:  /dic/x_px, /dic/y_px (subsets), /dic/u_px, v_px, zncc, sigma_u_px, sigma_v_px, sigma_px
-//       (frames x subsets),
-//       /dic/iterations, /dic/status (int32, frames x subsets; the attribute `codes` lists
-//       code=name), /dic/frame (1-based index of the deformed image), /dic/frame_number (as the
-//       CSV's frame column), /dic/reference_frame (frames), attributes with the options (mode,
-//       max_uncertainty_px: +inf = no limit, ...).
+// .h5:  the /dic group of the results layout (io/results_layout.h, written by WriteDicResults
+//       from MakeDicResultsTable(result, options, /*first_frame=*/-1)): one row per image, the
+//       reference first; /dic/frame_number as the CSV's frame column; other groups of an existing
+//       file are kept.
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
 
 }  // namespace impactdic

@@ -163,7 +163,7 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
                                  const MomentumOptions& options, std::size_t first_frame = 0);
 
 // Write the /sensor group, and the /kinematics, /sensor and /momentum groups, with units and
-// descriptions on every dataset (names follow render/results_layout.h where it has them):
+// descriptions on every dataset (names follow io/results_layout.h where it has them):
 //   /sensor: t_s (since impact), time_daq_s, decel_g (= accel_g - 1), accel_g, accel_down_m_s2,
 //            velocity_m_s, penetration_m, force/<name>; summary numbers as attributes.
 //   /kinematics: time_s, frame_time_daq_s, x_mm, y_mm [N]; ux_mm, uy_mm, vx_mm_s, vy_mm_s,
@@ -174,6 +174,12 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
 // Each replaces the groups it writes if they exist, so calling both is harmless.
 void WriteSensor(H5Writer& out, const SensorResult& sensor);
 void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor);
+// The /kinematics group alone (WriteAnalysis writes it too); frame_time_daq_s only when
+// frame_time_s is not empty.
+void WriteKinematics(H5Writer& out, const KinematicsResult& kinematics,
+                     const std::vector<double>& frame_time_s);
+// The /momentum group alone (WriteAnalysis writes it too).
+void WriteMomentum(H5Writer& out, const MomentumResult& momentum, const SensorResult& sensor);
 
 }  // namespace impactdic
 

@@ -1,17 +1,10 @@
 // `impactdic analyze SCENE.yaml`: the sensor, kinematics and momentum stages of one scene from its
 // correlation results (HDF5), written back into the same file.
 //
-// Correlation layout read (render/results_layout.h, the dic stage's output):
-//   /dic/x_px, /dic/y_px   subset centres in the reference frame, [N] (or [R x C], or [F x N]:
-//                          then the first row)
-//   /dic/u_px, /dic/v_px   displacement since the reference frame, [F x N] (or [F x R x C])
-//   /dic/status            optional, same shape as u_px, 0 = converged (dic SubsetStatus);
-//                          anything else, or a non-finite displacement, is invalid.
-//   /dic/frame             optional, image index of each row. When it starts at 1 (the dic
-//                          stage's rows are the deformed images only), a zero-displacement row
-//                          for the reference image (frame 0) is prepended.
-//   Optional number attribute "first_frame" of /dic: index of the first correlated frame in the
-//   camera sequence (default: the scene's dic.first_frame).
+// The correlation results are read with io ReadDicResults (any layout version,
+// io/results_layout.h): row 0 is the first reference, a sample is valid when its status is
+// converged (or, without /dic/status, when its displacement is finite); the /dic attribute
+// first_frame is the index of row 0 in the camera sequence (default: the scene's dic.first_frame).
 //
 //   Scene scene = LoadScene("scene.yaml");
 //   SceneAnalysisRun run = AnalyzeSceneResults(scene, "results/results.h5", /*mm_per_px=*/0.1);
@@ -20,6 +13,7 @@
 
 #include <string>
 
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/scene.h"
 #include "impactdic/momentum/momentum.h"
 
@@ -34,9 +28,23 @@ SensorOptions SensorOptionsFromScene(const Scene& scene);
 // Error when neither those keys nor momentum.rect_mm are given.
 MomentumOptions MomentumOptionsFromScene(const Scene& scene, double mm_per_px);
 
-// Reads the correlation results (layout above). *first_frame (optional) receives the /dic
+// The correlation arrays of a results table (io/dic_results.h): valid = status converged.
+CorrelationSeries CorrelationSeriesFromTable(const DicResultsTable& table);
+
+// Reads the correlation results (io ReadDicResults). *first_frame (optional) receives the /dic
 // attribute first_frame, or -1 when absent.
 CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_frame = nullptr);
+
+// Measured peak deceleration [g] of the PEAK STAGE: the largest filtered deceleration between the
+// impact and `peak_stage_s` after it (sensor PeakDecelerationSample; the pipeline takes t_e, or
+// the model's T + 4/b when t_e was not measured). The record's global maximum can be the stop,
+// where -dv/dt grows like v^-n (docs/model.md). NaN without an impact or a sample in the window.
+double MeasuredPeakDeceleration(const SensorResult& sensor, double peak_stage_s);
+
+// Mean deceleration [g] of the sensor record over [impact + t1, stop]: the measured counterpart
+// of the model's plateau deceleration v(t1) / (t_end - t1) / g. NaN without impact or stop, or
+// when the stop is not after t1.
+double MeasuredPlateauDeceleration(const SensorResult& sensor, double t1_after_impact_s, double g);
 
 struct SceneAnalysisRun {
   SensorResult sensor;
@@ -46,8 +54,11 @@ struct SceneAnalysisRun {
 
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
 // and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
+// As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
+// Error(kNumerical) with the reason and nothing written, unless allow_partial (then written,
+// with NaN figures; the caller reports the run as partial).
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px);
+                                     double mm_per_px, bool allow_partial = false);
 
 }  // namespace impactdic
 

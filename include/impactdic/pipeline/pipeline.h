@@ -1,6 +1,9 @@
-// The whole pipeline on one scene (README.md, "The pipeline"): calibration -> frames -> correlate
-// -> kinematics -> sensor -> momentum -> model -> outputs, skipping what the scene does not need
-// and saying so. `impactdic run SCENE.yaml` is a thin layer over RunScene().
+// The whole pipeline on one scene (README.md, "The pipeline"; the stage graph and the data between
+// the stages in docs/architecture.md): calibrate -> sensor -> frames -> correlate -> kinematics
+// -> momentum -> model -> outputs, skipping what the scene does not need and saying so. Each
+// stage is a unit in src/pipeline/stages/, the data between them is SceneRunData
+// (pipeline/run_data.h), the outputs are OutputWriters (pipeline/output_writer.h).
+// `impactdic run SCENE.yaml` is a thin layer over RunScene().
 //
 //   Scene scene = LoadScene("sample_frames/scene.yaml");
 //   PipelineOptions options;
@@ -33,6 +36,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/json.h"
 #include "impactdic/io/scene.h"
+#include "impactdic/pipeline/output_writer.h"
 
 namespace impactdic {
 
@@ -43,6 +47,9 @@ struct PipelineOptions {
   // Write the outputs and return even when a stage produced nothing usable (file comment);
   // false: such a run throws Error(kNumerical) before writing anything.
   bool allow_partial = false;
+  // Writers run after the built-in ones (results.h5, figures, summary.json, summary.csv) when the
+  // scene has the outputs stage (pipeline/output_writer.h).
+  OutputWriters extra_output_writers;
   void Check() const;
 };
 
@@ -115,6 +122,10 @@ struct PipelineSummary {
 // RunCampaign for its folder.
 void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder,
                                    const std::string& option);
+
+// The scene's `stages` list is consistent: `correlate` needs `frames` (the images it correlates).
+// Error kInvalidValue naming `stages` otherwise. RunScene checks it before any work.
+void CheckSceneStages(const Scene& scene);
 
 // Runs the scene. Throws Error for bad input (missing or truncated frames, sensor record not
 // covering the frames, unwritable output folder, ...) and for stages that produced nothing usable

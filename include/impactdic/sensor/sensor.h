@@ -181,6 +181,19 @@ std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
 std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
                                double offset_s, std::size_t* edges_found = nullptr);
 
+// The first frame to correlate for an impact at impact_time_s (DAQ clock): the last frame exposed
+// at or before it (nothing earlier moves), 0 if none is; frame_times_s from FrameTimes.
+int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s);
+
+// THE definition of the measured peak deceleration: the sample of largest filtered deceleration
+// accel_g - 1 among those with from_s <= time_s - t_ref_s <= to_s (the first of equal ones);
+// time_s.size() if there is none. SensorSummary::peak_deceleration_g takes it between the impact
+// and the stop (refined by a parabola), the pipeline's peak stage between the impact and t_e
+// (momentum MeasuredPeakDeceleration).
+std::size_t PeakDecelerationSample(const std::vector<double>& time_s,
+                                   const std::vector<double>& accel_g, double t_ref_s,
+                                   double from_s, double to_s);
+
 // Linear interpolation of series(time) at the query times; Error naming `what` when a query lies
 // outside [time.front(), time.back()].
 std::vector<double> SampleSeries(const std::vector<double>& time_s,

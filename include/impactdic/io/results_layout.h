@@ -1,23 +1,60 @@
-// The names of the datasets and attributes of results.h5 that `impactdic render` reads, in one
-// place (docs/render.md documents the layout). The pipeline writes them; if a name changes, change
-// it here. Shapes: F = analysed frames, N = subsets, R x C = frame rows x columns, K = samples.
-#ifndef IMPACTDIC_RENDER_RESULTS_LAYOUT_H_
-#define IMPACTDIC_RENDER_RESULTS_LAYOUT_H_
+// The layout of the results files, in one place: the names of the datasets and attributes of
+// results.h5 (`impactdic run`) and of `impactdic correlate -o X.h5`, which every writer and reader
+// uses (README.md "HDF5 layout", docs/render.md). The /dic group is written and read by one
+// writer and one reader (io/dic_results.h). If a name changes, change it here. Shapes: F =
+// analysed frames, N = subsets, R x C = frame rows x columns, K = samples.
+#ifndef IMPACTDIC_IO_RESULTS_LAYOUT_H_
+#define IMPACTDIC_IO_RESULTS_LAYOUT_H_
 
 #include <array>
 
 namespace impactdic::results_layout {
 
-// Time of every analysed frame since impact [ms], [F].
+// Time of every analysed frame since impact [ms], [F]; the frames' index in the input sequence
+// [F] (equal to kDicFrame).
 inline constexpr const char* kTimeMs = "/time/t_ms";
+inline constexpr const char* kTimeFrameIndex = "/time/frame_index";
 
+// --- The DIC results (/dic), layout version kDicLayoutVersion -------------------------------
+// Row f of every [F x N] dataset is analysed frame f; row 0 is the first reference image itself
+// (zero displacement, status converged, ZNCC 1, sigma 0; a subset the reference cannot carry --
+// masked, featureless, low contrast, saturated -- has that status and NaN displacement there).
+// Earlier files (no kLayoutVersionAttr on /dic) are read too (io/dic_results.h):
+//   version 1, `impactdic run`: the same rows, u/v as float, no /dic/frame (kTimeFrameIndex);
+//   version 1, `impactdic correlate`: no reference row (F - 1 rows of the deformed images),
+//     /dic/frame 1-based; the status codes also under the attribute `status_names`, the shape
+//     also under `shape_function`.
+inline constexpr const char* kDicGroup = "/dic";
+inline constexpr const char* kLayoutVersionAttr = "layout_version";  // Number attribute of /dic.
+inline constexpr int kDicLayoutVersion = 2;
 // Subset grid: reference centres [px], [N] (or [F x N] for Lagrangian positions).
 inline constexpr const char* kDicX = "/dic/x_px";
 inline constexpr const char* kDicY = "/dic/y_px";
-// Accumulated displacement [px], [F x N]; when present the drawn subsets move with it
-// (position = x_px + u_px), otherwise they stay at x_px, y_px.
+// Accumulated displacement since the first reference [px], double, [F x N], NaN = failed; when
+// present the drawn subsets move with it (position = x_px + u_px), otherwise they stay at x_px,
+// y_px.
 inline constexpr const char* kDicU = "/dic/u_px";
 inline constexpr const char* kDicV = "/dic/v_px";
+// Quality per frame and subset, [F x N]: ZNCC (float), IC-GN iterations (int32), status (int32,
+// dic SubsetStatus; the attribute kStatusCodesAttr lists code=name). kValidStatusCode is the
+// only status whose displacement is used (dic IsValidStatus).
+inline constexpr const char* kDicZncc = "/dic/zncc";
+inline constexpr const char* kDicIterations = "/dic/iterations";
+inline constexpr const char* kDicStatus = "/dic/status";
+inline constexpr const char* kStatusCodesAttr = "codes";
+inline constexpr int kValidStatusCode = 0;
+// Estimated standard deviations [px], float, [F x N] (0 in row 0, NaN = failed): u, v, the larger.
+inline constexpr const char* kDicSigmaU = "/dic/sigma_u_px";
+inline constexpr const char* kDicSigmaV = "/dic/sigma_v_px";
+inline constexpr const char* kDicSigma = "/dic/sigma_px";
+// Per row [F]: index of the image in the input sequence (0 = its first image; the first
+// reference is row 0, at index first_frame), int32; the frame number from the file names
+// (else the index), double; the index of the reference image the row was correlated against.
+inline constexpr const char* kDicFrame = "/dic/frame";
+inline constexpr const char* kDicFrameNumber = "/dic/frame_number";
+inline constexpr const char* kDicReferenceFrame = "/dic/reference_frame";
+// Number attribute of /dic: index in the input sequence of the first reference (row 0).
+inline constexpr const char* kFirstFrameAttr = "first_frame";
 
 // Subset velocity [mm/s], [F x N], NaN = invalid subset.
 inline constexpr const char* kKinematicsGroup = "/kinematics";
@@ -80,4 +117,4 @@ inline constexpr std::array<const char*, 3> kRunOnlyOutputNames = {kResultsFile,
 
 }  // namespace impactdic::results_layout
 
-#endif  // IMPACTDIC_RENDER_RESULTS_LAYOUT_H_
+#endif  // IMPACTDIC_IO_RESULTS_LAYOUT_H_

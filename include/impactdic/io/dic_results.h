@@ -1,0 +1,59 @@
+// The DIC results of a file (the /dic group of results.h5 and of `impactdic correlate -o X.h5`):
+// one table, one writer, one reader. The layout (names, shapes, row 0 = the first reference) is in
+// io/results_layout.h; the dic module fills the table from its result (dic/dic_io.h
+// MakeDicResultsTable), the momentum module reads it back (ReadCorrelationSeries).
+//
+//   H5Writer out("run/results.h5");
+//   WriteDicResults(out, MakeDicResultsTable(result, options, /*first_frame=*/0));
+//   out.Commit();
+//   const DicResultsTable t = ReadDicResults(H5Reader("run/results.h5"), "run/results.h5");
+#ifndef IMPACTDIC_IO_DIC_RESULTS_H_
+#define IMPACTDIC_IO_DIC_RESULTS_H_
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "impactdic/io/hdf5_store.h"
+
+namespace impactdic {
+
+// The arrays of the /dic group, row-major [rows x subsets]; row 0 is the first reference.
+struct DicResultsTable {
+  int layout_version = 0;  // As read (1 = written before versions existed); written: the current.
+  std::size_t rows = 0, subsets = 0;
+  std::vector<double> x_px, y_px;  // Subset centres in the first reference [subsets].
+  std::vector<double> u_px, v_px;  // Accumulated displacement [rows x subsets], NaN = failed.
+  // [rows x subsets]; empty = not in the file (read: then every finite displacement is valid).
+  std::vector<std::int32_t> status, iterations;
+  std::vector<float> zncc, sigma_u_px, sigma_v_px, sigma_px;
+  // [rows]: image index in the input sequence, frame number (file name), reference image index.
+  // Empty = not in the file.
+  std::vector<std::int32_t> frame, reference_frame;
+  std::vector<double> frame_number;
+  long first_frame = -1;     // Index of row 0 in the input sequence; -1 = not in the file.
+  std::string status_codes;  // "0=converged, 1=..." (attribute of /dic/status); "" = none.
+  // Further attributes of /dic (the options, the correlation's summary).
+  std::map<std::string, double> number_attributes;
+  std::map<std::string, std::string> text_attributes;
+
+  // true where sample k (row-major) is valid: its status is results_layout::kValidStatusCode
+  // (or no status is stored) and its displacement is finite.
+  bool IsValid(std::size_t k) const;
+  // Error(kInvalidValue) naming the field whose size does not match rows x subsets.
+  void Check() const;
+};
+
+// Writes the table as the /dic group (current layout version; replaces an existing /dic).
+void WriteDicResults(H5Writer& out, const DicResultsTable& table);
+
+// Reads the /dic group in any layout version (results_layout.h): the table in the current layout
+// (a correlate file of version 1 gets its reference row prepended). Error kFileFormat naming
+// `file` and the dataset when it is missing or its shape or frame indices are inconsistent.
+DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_IO_DIC_RESULTS_H_

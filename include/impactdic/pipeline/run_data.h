@@ -1,0 +1,59 @@
+// The data that flows between the stages of a scene's run (pipeline/pipeline.h, the stage graph
+// in docs/architecture.md). Each stage reads what the stages before it left here and adds its
+// own outputs; an empty optional means the stage did not run (its reason is in
+// PipelineSummary::stages). The output writers (pipeline/output_writer.h) read it all.
+#ifndef IMPACTDIC_PIPELINE_RUN_DATA_H_
+#define IMPACTDIC_PIPELINE_RUN_DATA_H_
+
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "impactdic/calib/calibration.h"
+#include "impactdic/dic/correlator.h"
+#include "impactdic/io/dic_results.h"
+#include "impactdic/kinematics/kinematics.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/momentum/momentum.h"
+#include "impactdic/sensor/sensor.h"
+
+namespace impactdic {
+
+struct SceneRunData {
+  // calibrate: the camera model, and the panel scale [mm/px] (inputs.mm_per_px, else the
+  // calibration's plane scale; 0 = none).
+  std::optional<CameraCalibration> calibration;
+  double mm_per_px = 0;
+
+  // sensor: the accelerometer record analysed (impact time and velocity, pounder motion).
+  std::optional<SensorResult> sensor;
+
+  // frames: the analysed frames first_frame..last_frame of the source's source_frames, after
+  // preprocessing; the DAQ time of every frame of the source (empty without a sensor record).
+  int source_frames = 0;
+  int first_frame = 0, last_frame = -1;
+  std::vector<double> frame_times_s;
+  std::vector<cv::Mat> frames;
+  std::string preprocess_note;  // What the preprocessing did (one line).
+
+  // correlate: the correlation's rows (io/dic_results.h; row 0 = frame first_frame) and summary.
+  std::optional<DicResultsTable> dic;
+  DicSummary dic_summary;
+
+  // kinematics: subset motion on the panel from the analysed series (momentum.max_sigma_px
+  // applied); analysed_frame_times_s = frame_times_s[first_frame..last_frame] (may be empty).
+  std::optional<KinematicsResult> kinematics;
+  std::vector<double> analysed_frame_times_s;
+
+  // momentum: the momentum balance (needs kinematics and the sensor record).
+  std::optional<MomentumResult> momentum;
+
+  // model: the impact model's solve and its parameters.
+  std::optional<ImpactRun> model;
+  ImpactModelParameters model_parameters;
+};
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_PIPELINE_RUN_DATA_H_

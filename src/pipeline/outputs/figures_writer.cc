@@ -1,0 +1,53 @@
+// The figures (momentum, deceleration, added mass), the velocity snapshot at t_e and the
+// animation, drawn by render RenderResults from results.h5 (on disk, or held in memory when
+// outputs.hdf5 is false).
+#include "impactdic/io/results_layout.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/render/gnuplot.h"
+#include "impactdic/render/render_results.h"
+#include "writers.h"
+
+namespace impactdic::outputs {
+namespace L = results_layout;
+namespace {
+
+class FiguresWriter : public OutputWriter {
+ public:
+  std::string name() const override { return "figures"; }
+  std::vector<std::string> FileNames() const override {
+    return {L::kRenderOutputNames.begin(), L::kRenderOutputNames.end()};
+  }
+  // Figures need gnuplot: find out before the run, not after it.
+  void CheckBeforeRun(const Scene& scene) const override {
+    if (scene.outputs.figures) DetectPngTerminal(ResolveGnuplotBinary(PlotOptions{}));
+  }
+  std::string SkipReason(const Scene& scene, const SceneRunData&) const override {
+    return scene.outputs.figures || scene.outputs.animation
+               ? ""
+               : "outputs.figures and outputs.animation are false";
+  }
+  void Write(OutputContext& c) const override {
+    const Scene& scene = c.scene;
+    RenderResultsOptions r;
+    r.output_dir = c.folder;
+    r.new_generation = false;  // Part of the run's generation.
+    r.figures = scene.outputs.figures;
+    r.snapshot = scene.outputs.figures;
+    r.animation = scene.outputs.animation;
+    r.png_frames = c.options.png_frames || scene.outputs.png_frames;
+    const RenderResultsSummary rendered =
+        scene.outputs.hdf5
+            ? RenderResults(c.results_path, r)
+            : RenderResults(H5Reader(c.results_path, c.results_in_memory), c.results_path, r);
+    for (const auto& w : rendered.written) c.summary.outputs.push_back(w);
+    for (const auto& s : rendered.skipped) c.summary.warnings.push_back("render: " + s);
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const OutputWriter> MakeFiguresWriter() {
+  return std::make_shared<FiguresWriter>();
+}
+
+}  // namespace impactdic::outputs

@@ -1,0 +1,139 @@
+// results.h5: everything the run measured and modelled (layout: io/results_layout.h, README.md
+// "HDF5 layout"). Without outputs.hdf5 it is still built, in memory, when the figures or the
+// animation need it (OutputContext::results_in_memory), and not kept.
+#include <algorithm>
+#include <cstdint>
+
+#include "impactdic/io/dic_results.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "writers.h"
+
+namespace impactdic::outputs {
+namespace L = results_layout;
+namespace {
+
+// /time: every analysed frame's time since the impact [ms] and its index in the input sequence.
+// Without a sensor record the frames are timed k / fps from the first analysed frame.
+void WriteFrameTimes(H5Writer& out, const Scene& scene, const SceneRunData& d) {
+  const std::size_t F = d.dic->rows;
+  const std::vector<double>& all = d.frame_times_s;
+  const auto first = static_cast<std::size_t>(d.first_frame);
+  const double t_ref = all.empty() ? 0.0 : all[first];
+  const double t_impact = d.sensor ? d.sensor->summary.impact_time_s : t_ref;
+  std::vector<double> t_ms(F), frame_index(F);
+  for (std::size_t f = 0; f < F; ++f) {
+    const double tf = all.empty() ? f / scene.inputs.fps : all[first + f];
+    t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
+    frame_index[f] = static_cast<double>(first + f);
+  }
+  out.Write(L::kTimeMs, t_ms, "ms", "time of each analysed frame since the impact");
+  out.Write(L::kTimeFrameIndex, frame_index, "1",
+            "index of the analysed frame in the input sequence");
+}
+
+// /frames/images: the analysed frames after preprocessing, with their own depth (8 or 16 bit).
+void WriteFrames(H5Writer& out, const std::vector<cv::Mat>& frames) {
+  const std::size_t F = frames.size(), R = static_cast<std::size_t>(frames[0].rows),
+                    C = static_cast<std::size_t>(frames[0].cols);
+  auto write = [&](auto sample) {
+    using T = decltype(sample);
+    std::vector<T> pixels(F * R * C);
+    for (std::size_t f = 0; f < F; ++f) {
+      for (std::size_t y = 0; y < R; ++y) {
+        const T* row = frames[f].ptr<T>(static_cast<int>(y));
+        std::copy(row, row + C, pixels.begin() + (f * R + y) * C);
+      }
+    }
+    out.Write(L::kFrameImages, pixels, {F, R, C}, "grey level",
+              "analysed camera frames after preprocessing");
+  };
+  const bool deep = frames[0].depth() == CV_16U;
+  if (deep)
+    write(std::uint16_t{});
+  else
+    write(std::uint8_t{});
+  out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, deep ? 16.0 : 8.0);
+}
+
+// /kinematics, /sensor, /momentum.
+void WriteMotion(H5Writer& out, const SceneRunData& d) {
+  if (d.sensor) WriteSensor(out, *d.sensor);
+  if (d.kinematics) WriteKinematics(out, *d.kinematics, d.analysed_frame_times_s);
+  if (d.momentum) WriteMomentum(out, *d.momentum, *d.sensor);
+  if (d.kinematics) out.SetAttribute(L::kKinematicsGroup, L::kMmPerPxAttr, d.mm_per_px);
+}
+
+// /model: the impact model's series and summary.
+void WriteModel(H5Writer& out, const SceneRunData& d) {
+  const ImpactModelParameters& p = d.model_parameters;
+  const ImpactSeries s = MakeImpactSeries(p, *d.model);
+  std::vector<double> decel(s.size());
+  for (std::size_t i = 0; i < s.size(); ++i) decel[i] = -s.dv_dt_m_s2[i] / p.gravity_m_s2;
+  out.Write(L::kModelT, s.t_s, "s", "model time since impact");
+  out.Write(L::kModelDecel, decel, "g", "model pounder deceleration -dv/dt / g");
+  out.Write("/model/z_m", s.z_m, "m", "model penetration (down)");
+  out.Write("/model/v_m_s", s.v_m_s, "m/s", "model pounder velocity (down)");
+  out.Write("/model/m_add_kg", s.m_add_kg, "kg", "model added mass, Eq. 5");
+  out.SetAttribute("/model", "summary", d.model->summary.BriefReport());
+  out.SetAttribute("/model", "solver", d.model->summary.solver);
+  out.SetAttribute("/model", "error_estimate", d.model->summary.error_estimate);
+}
+
+// /, /stages and /summary attributes: the scene, what each stage did, the key figures.
+void WriteRunAttributes(H5Writer& out, const Scene& scene, const PipelineSummary& summary) {
+  out.WriteProvenance(scene.yaml_text);
+  out.SetAttribute("/", "scene_name", scene.name);
+  out.SetAttribute("/", "scene_path", scene.path);
+  for (const auto& s : summary.stages)
+    out.SetAttribute("/stages", s.name, s.ran ? "ran: " + s.note : "skipped: " + s.note);
+}
+
+void WriteSummaryGroup(H5Writer& out, const PipelineSummary& summary) {
+  const auto names = summary.figures.CsvNames();
+  const auto values = summary.figures.CsvValues();
+  out.CreateGroup("/summary");
+  for (std::size_t i = 0; i < names.size(); ++i) out.SetAttribute("/summary", names[i], values[i]);
+  out.SetAttribute("/summary", "failures",
+                   summary.failures.empty() ? std::string("none") : summary.FailureText());
+}
+
+class ResultsFileWriter : public OutputWriter {
+ public:
+  std::string name() const override { return L::kResultsFile; }
+  std::vector<std::string> FileNames() const override { return {L::kResultsFile}; }
+  std::string SkipReason(const Scene& scene, const SceneRunData&) const override {
+    const auto& o = scene.outputs;
+    return o.hdf5 || o.figures || o.animation ? ""
+                                              : "outputs.hdf5, figures and animation are false";
+  }
+  void Write(OutputContext& c) const override {
+    const SceneRunData& d = c.data;
+    c.results_path = c.Path(L::kResultsFile);
+    H5Writer out(c.results_path);
+    WriteRunAttributes(out, c.scene, c.summary);
+    if (d.dic) {
+      WriteFrameTimes(out, c.scene, d);
+      WriteDicResults(out, *d.dic);
+    }
+    if (!d.frames.empty()) WriteFrames(out, d.frames);
+    WriteMotion(out, d);
+    if (d.model) WriteModel(out, d);
+    WriteSummaryGroup(out, c.summary);
+    if (c.scene.outputs.hdf5) {
+      out.Commit();
+      c.summary.outputs.push_back(c.results_path);
+    } else {
+      c.results_in_memory = out.CommitToMemory();
+    }
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const OutputWriter> MakeResultsFileWriter() {
+  return std::make_shared<ResultsFileWriter>();
+}
+
+}  // namespace impactdic::outputs

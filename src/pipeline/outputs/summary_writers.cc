@@ -1,0 +1,49 @@
+// summary.json and summary.csv: the key figures of the run (PipelineSummary::ToJson, SceneFigures).
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/results_layout.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "writers.h"
+
+namespace impactdic::outputs {
+namespace L = results_layout;
+namespace {
+
+class SummaryJsonWriter : public OutputWriter {
+ public:
+  std::string name() const override { return L::kSummaryJson; }
+  std::vector<std::string> FileNames() const override { return {L::kSummaryJson}; }
+  std::string SkipReason(const Scene&, const SceneRunData&) const override { return ""; }
+  void Write(OutputContext& c) const override {
+    const std::string path = c.Path(L::kSummaryJson);
+    WriteTextFileAtomic(path, c.summary.ToJson().Dump() + "\n");
+    c.summary.outputs.push_back(path);
+  }
+};
+
+class SummaryCsvWriter : public OutputWriter {
+ public:
+  std::string name() const override { return L::kSummaryCsv; }
+  std::vector<std::string> FileNames() const override { return {L::kSummaryCsv}; }
+  std::string SkipReason(const Scene& scene, const SceneRunData&) const override {
+    return scene.outputs.csv ? "" : "outputs.csv is false";
+  }
+  void Write(OutputContext& c) const override {
+    const std::string path = c.Path(L::kSummaryCsv);
+    std::vector<std::vector<double>> columns;
+    for (double v : c.summary.figures.CsvValues()) columns.push_back({v});
+    WriteCsv(path, c.summary.figures.CsvNames(), columns);
+    c.summary.outputs.push_back(path);
+  }
+};
+
+}  // namespace
+
+std::shared_ptr<const OutputWriter> MakeSummaryJsonWriter() {
+  return std::make_shared<SummaryJsonWriter>();
+}
+std::shared_ptr<const OutputWriter> MakeSummaryCsvWriter() {
+  return std::make_shared<SummaryCsvWriter>();
+}
+
+}  // namespace impactdic::outputs

@@ -1,0 +1,107 @@
+#include <fmt/format.h>
+
+#include "impactdic/pipeline/pipeline.h"
+
+namespace impactdic {
+
+JsonObject SceneFigures::ToJson() const {
+  JsonObject j;
+  const auto names = CsvNames();
+  const auto values = CsvValues();
+  for (std::size_t i = 0; i < names.size(); ++i) j.Add(names[i], values[i]);
+  return j;
+}
+
+std::vector<std::string> SceneFigures::CsvNames() const {
+  return {"impact_velocity_m_s",
+          "p_max_kg_m_s",
+          "t_end_peak_s",
+          "momentum_conservation_error",
+          "added_mass_max_kg",
+          "added_mass_eq4_kg",
+          "sigmoid_M_kg",
+          "sigmoid_b_per_s",
+          "sigmoid_T_s",
+          "momentum_ratio_measured",
+          "momentum_ratio_model",
+          "v_sand_max_m_s",
+          "peak_deceleration_measured_g",
+          "peak_deceleration_model_g",
+          "plateau_deceleration_measured_g",
+          "plateau_deceleration_model_g",
+          "crater_depth_measured_m",
+          "crater_depth_model_m",
+          "t_end_model_s",
+          "dic_valid_fraction",
+          "dic_subsets_per_s"};
+}
+
+std::vector<double> SceneFigures::CsvValues() const {
+  return {impact_velocity_m_s,
+          p_max_kg_m_s,
+          t_end_peak_s,
+          momentum_conservation_error,
+          added_mass_max_kg,
+          added_mass_eq4_kg,
+          sigmoid_M_kg,
+          sigmoid_b_per_s,
+          sigmoid_T_s,
+          momentum_ratio_measured,
+          momentum_ratio_model,
+          v_sand_max_m_s,
+          peak_deceleration_measured_g,
+          peak_deceleration_model_g,
+          plateau_deceleration_measured_g,
+          plateau_deceleration_model_g,
+          crater_depth_measured_m,
+          crater_depth_model_m,
+          t_end_model_s,
+          dic_valid_fraction,
+          dic_subsets_per_s};
+}
+
+std::string PipelineSummary::FailureText() const {
+  std::string text;
+  for (const StageFailure& f : failures)
+    text += (text.empty() ? "" : "; ") + f.stage + ": " + f.reason;
+  return text;
+}
+
+std::string PipelineSummary::BriefReport() const {
+  return fmt::format(
+             "{}: conservation error {:.2f} %, m_add,max {:.3f} kg (Eq. 4: {:.3f} kg), crater "
+             "depth {:.2f} mm measured / {:.2f} mm model, {:.1f} s",
+             scene_name, 100 * figures.momentum_conservation_error, figures.added_mass_max_kg,
+             figures.added_mass_eq4_kg, 1e3 * figures.crater_depth_measured_m,
+             1e3 * figures.crater_depth_model_m, seconds) +
+         (failures.empty() ? "" : "; PARTIAL: " + FailureText());
+}
+
+JsonObject PipelineSummary::ToJson() const {
+  JsonObject j = figures.ToJson();
+  JsonObject failed;
+  for (const StageFailure& f : failures) failed.Add(f.stage, f.reason);
+  j.Add("usable", IsUsable()).Add("failures", failed).Add("warnings", warnings);
+  return j;
+}
+
+std::string PipelineSummary::FullReport() const {
+  std::string text = fmt::format("Scene {} -> {}\n", scene_name, output_folder);
+  for (const auto& s : stages) {
+    text += fmt::format("  {:<11} {} {}\n", s.name,
+                        s.ran ? fmt::format("{:6.2f} s", s.seconds) : " skipped", s.note);
+  }
+  for (const StageFailure& f : failures)
+    text += fmt::format("  FAILED {}: {} (its figures are null)\n", f.stage, f.reason);
+  text += "Key figures (measured / model):\n";
+  const auto names = figures.CsvNames();
+  const auto values = figures.CsvValues();
+  for (std::size_t i = 0; i < names.size(); ++i)
+    text += fmt::format("  {:<32} {:.6g}\n", names[i], values[i]);
+  for (const auto& w : warnings) text += "  warning: " + w + "\n";
+  text += "Outputs:\n";
+  for (const auto& o : outputs) text += "  " + o + "\n";
+  return text;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,72 @@
+// correlate: subset DIC of the analysed frames (dic CorrelateSequence), as the rows of the
+// results layout (dic MakeDicResultsTable). No valid subset in any frame is a failure.
+#include <fmt/format.h>
+#include <tbb/global_control.h>
+
+#include <optional>
+
+#include "impactdic/dic/dic_io.h"
+#include "scene_inputs.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+// Why the correlation produced nothing usable ("" if it did): no valid subset in any frame.
+std::string CorrelationProblem(const DicSummary& s, double min_zncc) {
+  if (s.frames == 0 || s.valid_fraction > 0) return "";
+  std::size_t most = 0;
+  long long total = 0;
+  for (std::size_t i = 0; i < s.status_counts.size(); ++i) {
+    total += s.status_counts[i];
+    if (s.status_counts[i] > s.status_counts[most]) most = i;
+  }
+  return fmt::format(
+      "no valid subset in any of the {} frames after the reference ({} subsets; most common "
+      "status: {} in {} of {} results; dic.min_zncc = {})",
+      s.frames, s.subsets, ToString(static_cast<SubsetStatus>(most)), s.status_counts[most], total,
+      min_zncc);
+}
+
+class CorrelateStage : public Stage {
+ public:
+  const char* name() const override { return "correlate"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    const std::string listed = NotListed(c.scene, name());
+    if (!listed.empty()) return listed;
+    return c.data.frames.empty() ? "no frames" : "";
+  }
+
+  std::string Run(StageContext& c) const override {
+    const Scene& scene = c.scene;
+    SceneRunData& d = c.data;
+    DicOptions options = MakeDicOptions(scene.dic);
+    options.grid.mask = SceneMask(scene, d.frames[0].size());
+    const int threads = c.options.threads >= 0 ? c.options.threads : scene.dic.threads;
+    std::optional<tbb::global_control> limit;
+    if (threads > 0)
+      limit.emplace(tbb::global_control::max_allowed_parallelism,
+                    static_cast<std::size_t>(threads));
+    const DicResult dic = CorrelateSequence(d.frames, options);
+    d.dic_summary = dic.summary;
+    d.dic = MakeDicResultsTable(dic, options, d.first_frame);
+    d.dic->text_attributes["preprocess"] = d.preprocess_note;
+    SceneFigures& fig = c.summary.figures;
+    fig.dic_valid_fraction = dic.summary.valid_fraction;
+    fig.dic_subsets_per_s = dic.summary.SubsetsPerSecond();
+    if (!dic.summary.IsUsable()) {
+      c.summary.warnings.push_back(fmt::format(
+          "correlation: only {:.1f} % of the subsets are valid", 100 * dic.summary.valid_fraction));
+    }
+    const std::string problem = CorrelationProblem(dic.summary, scene.dic.min_zncc);
+    if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
+    return dic.summary.BriefReport();
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeCorrelateStage() { return std::make_unique<CorrelateStage>(); }
+
+}  // namespace impactdic::stages

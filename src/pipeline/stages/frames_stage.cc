@@ -1,0 +1,197 @@
+// frames: the images of the scene (an image sequence or a video), checked, timed on the DAQ clock
+// and preprocessed; with a sensor record the first frame is the last one before the impact.
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/preprocess/preprocess.h"
+#include "scene_inputs.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+// The frames of the scene: the sorted image files, or the frames of a video.
+struct FrameSource {
+  std::vector<std::string> files;     // Empty for a video.
+  std::vector<cv::Mat> video;         // Decoded video frames.
+  std::vector<std::string> warnings;  // A truncated video, a colour image in a grey sequence.
+  SequenceColourCheck colour;         // Image files, in the order read.
+  int count() const {
+    return files.empty() ? static_cast<int>(video.size()) : static_cast<int>(files.size());
+  }
+  std::string Name(int k) const {
+    return files.empty() ? fmt::format("video frame {}", k) : files[static_cast<std::size_t>(k)];
+  }
+  cv::Mat Read(int k) {
+    if (files.empty()) return video[static_cast<std::size_t>(k)];
+    const std::string& path = files[static_cast<std::size_t>(k)];
+    int channels = 1;
+    cv::Mat image = ReadGreyImage(path, &channels);
+    const std::string warning = colour.Check(path, channels);
+    if (!warning.empty()) warnings.push_back(warning);
+    return image;
+  }
+};
+
+FrameSource OpenFrames(const std::string& source) {
+  FrameSource frames;
+  if (IsVideoFile(source)) {
+    std::string warning;
+    frames.video = ReadVideoFrames(source, /*max_frames=*/0, &warning);
+    if (!warning.empty()) frames.warnings.push_back(warning);
+  } else {
+    frames.files = ListFrameSequence(source);  // A gap in the numbering is an error.
+  }
+  return frames;
+}
+
+// dic.first_frame and dic.last_frame against the n frames of the source: Error naming the key,
+// its value and the allowed range.
+void CheckFrameRange(const Scene& scene, int n) {
+  const int last = scene.dic.last_frame < 0 ? n - 1 : scene.dic.last_frame;
+  if (last >= n) {
+    throw Error(ErrorKind::kInvalidValue, "dic.last_frame", std::to_string(last),
+                fmt::format("< the number of frames ({}) in {}", n, scene.inputs.frames))
+        .WithFile(scene.path);
+  }
+  const int first = scene.dic.first_frame;
+  if (first > 0 && last - first < 2) {
+    throw Error(ErrorKind::kInvalidValue, "dic.first_frame", std::to_string(first),
+                fmt::format("a frame index <= {}: {} holds {} frames (0..{}){}, and at least 3 "
+                            "from dic.first_frame on are correlated",
+                            std::max(0, last - 2), scene.inputs.frames, n, n - 1,
+                            scene.dic.last_frame < 0
+                                ? ""
+                                : fmt::format(", dic.last_frame is {}", scene.dic.last_frame)))
+        .WithFile(scene.path);
+  }
+}
+
+// dic.roi against the frame size: the correlator needs it inside the frame. Error naming the key,
+// its value and the frame size.
+void CheckSceneRoi(const Scene& scene, cv::Size frame) {
+  const auto& r = scene.dic.roi;
+  if (!(r[2] > r[0] && r[3] > r[1])) return;  // Not set: the whole frame.
+  if (r[2] <= frame.width && r[3] <= frame.height) return;
+  throw Error(
+      ErrorKind::kInvalidValue, "dic.roi",
+      fmt::format("[{}, {}, {}, {}]{}", r[0], r[1], r[2], r[3],
+                  r[0] >= frame.width || r[1] >= frame.height ? ", entirely outside the frames"
+                                                              : ", partly outside the frames"),
+      fmt::format("a rectangle [x0, y0, x1, y1] inside the {}x{} frames (x1 <= {}, "
+                  "y1 <= {})",
+                  frame.width, frame.height, frame.width, frame.height))
+      .WithFile(scene.path);
+}
+
+// The DAQ time of every frame, and the first frame to correlate: the last one exposed before the
+// impact (sensor ReferenceFrameForImpact) unless the scene sets dic.first_frame. Returns a note
+// on the frames left out ("" if none).
+std::string TimeFrames(StageContext& c) {
+  const Scene& scene = c.scene;
+  SceneRunData& d = c.data;
+  const int n = d.source_frames;
+  std::size_t edges = 0;  // Exposure edges in the record.
+  try {
+    d.frame_times_s =
+        FrameTimes(*d.sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s, &edges);
+  } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
+    if (e.file().empty()) e.WithFile(scene.inputs.sensor);
+    throw;
+  }
+  if (edges > static_cast<std::size_t>(n)) {
+    const std::string w = fmt::format(
+        "{} exposure edges in {} for {} frames: frame k is timed by edge k, the last {} "
+        "edge(s) are unused; if frames are missing from the sequence, every later frame "
+        "time is wrong",
+        edges, scene.inputs.sensor, n, edges - static_cast<std::size_t>(n));
+    LogWarning("{}", w);
+    c.summary.warnings.push_back("sensor: " + w);
+  }
+  if (scene.dic.first_frame != 0) return "";
+  d.first_frame = ReferenceFrameForImpact(d.frame_times_s, d.sensor->summary.impact_time_s);
+  if (d.first_frame == 0) return "";
+  return fmt::format("; frames 0..{} before the impact are not correlated", d.first_frame - 1);
+}
+
+PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
+  PreprocessOptions o;
+  o.gaussian.enabled = scene.preprocess.gaussian;
+  o.gaussian.sigma_px = scene.preprocess.gaussian_sigma;
+  o.gaussian.kernel_size = scene.preprocess.gaussian_kernel;
+  o.clahe.enabled = scene.preprocess.clahe;
+  o.clahe.clip_limit = scene.preprocess.clahe_clip_limit;
+  o.clahe.tile_grid = scene.preprocess.clahe_tile_grid;
+  o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
+  return o;
+}
+
+// Reads frames first..last, checks their size against the first (and the roi, the
+// calibration), preprocesses them.
+void ReadFrames(StageContext& c, FrameSource& source) {
+  SceneRunData& d = c.data;
+  const PreprocessOptions pre_options = ScenePreprocessOptions(c.scene);
+  std::vector<std::string> names;
+  std::optional<Preprocessor> pre;
+  ProgressBar bar("frames", static_cast<std::size_t>(d.last_frame - d.first_frame + 1));
+  for (int k = d.first_frame; k <= d.last_frame; ++k) {
+    cv::Mat image = source.Read(k);
+    if (d.frames.empty()) {
+      CheckSceneRoi(c.scene, image.size());
+      if (d.calibration) CheckFrameSize(*d.calibration, image.size(), source.Name(k));
+      pre.emplace(pre_options, d.calibration ? &*d.calibration : nullptr, image.size());
+    }
+    names.push_back(source.Name(k));
+    d.frames.push_back(image);
+    CheckSameSize({d.frames.front(), image}, {names.front(), names.back()});
+    d.frames.back() = pre->Apply(image);
+    bar.Advance();
+  }
+  bar.Finish();
+  for (const auto& w : source.warnings) c.summary.warnings.push_back("frames: " + w);
+  d.preprocess_note = pre->summary().BriefReport();
+}
+
+class FramesStage : public Stage {
+ public:
+  const char* name() const override { return "frames"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    const Scene& scene = c.scene;
+    SceneRunData& d = c.data;
+    FrameSource source = OpenFrames(scene.inputs.frames);
+    d.source_frames = source.count();
+    CheckFrameRange(scene, d.source_frames);
+    d.first_frame = scene.dic.first_frame;
+    d.last_frame = scene.dic.last_frame < 0 ? d.source_frames - 1 : scene.dic.last_frame;
+    const std::string skipped_note = d.sensor ? TimeFrames(c) : "";
+    if (d.last_frame - d.first_frame < 2) {
+      throw Error(
+          ErrorKind::kInvalidValue, "frames",
+          fmt::format("{} frames from {} to {}", std::max(0, d.last_frame - d.first_frame + 1),
+                      d.first_frame, d.last_frame),
+          "at least 3 frames to correlate and differentiate")
+          .WithFile(scene.inputs.frames);
+    }
+    ReadFrames(c, source);
+    const cv::Mat& f0 = d.frames[0];
+    return fmt::format("{} of {} frames ({}x{}, {}-bit){}; {}", d.frames.size(), d.source_frames,
+                       f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, skipped_note,
+                       d.preprocess_note);
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeFramesStage() { return std::make_unique<FramesStage>(); }
+
+}  // namespace impactdic::stages

@@ -1,0 +1,64 @@
+// kinematics: subset motion on the panel (mm, mm/s) from the correlation rows, without the samples
+// above momentum.max_sigma_px.
+#include <fmt/format.h>
+
+#include "impactdic/core/error.h"
+#include "impactdic/momentum/scene_analysis.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+// The correlation series the kinematics and momentum use: without the samples above the scene's
+// momentum.max_sigma_px (if set; counted in a warning). /dic keeps them.
+CorrelationSeries AnalysedSeries(const DicResultsTable& dic, const Scene& scene,
+                                 std::vector<std::string>* warnings) {
+  CorrelationSeries s = CorrelationSeriesFromTable(dic);
+  if (scene.momentum.max_sigma_px) {
+    const std::size_t n =
+        ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &s);
+    warnings->push_back(
+        fmt::format("kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
+                    "momentum.max_sigma_px = {} px)",
+                    n, s.frames * s.subsets, *scene.momentum.max_sigma_px));
+  }
+  return s;
+}
+
+class KinematicsStage : public Stage {
+ public:
+  const char* name() const override { return "kinematics"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    if (!c.data.dic) return "no correlation results";
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    SceneRunData& d = c.data;
+    if (!(d.mm_per_px > 0)) {
+      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px", "no scale",
+                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
+          .WithFile(c.scene.path);
+    }
+    PanelMapping mapping;
+    mapping.mm_per_px = d.mm_per_px;
+    KinematicsOptions k;
+    k.fps = c.scene.inputs.fps;
+    d.kinematics =
+        ComputeKinematics(AnalysedSeries(*d.dic, c.scene, &c.summary.warnings), mapping, k);
+    // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when
+    // the record has no exposure channel); none without a sensor record.
+    if (!d.frame_times_s.empty()) {
+      d.analysed_frame_times_s.assign(d.frame_times_s.begin() + d.first_frame,
+                                      d.frame_times_s.begin() + d.last_frame + 1);
+    }
+    return d.kinematics->summary.BriefReport();
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeKinematicsStage() { return std::make_unique<KinematicsStage>(); }
+
+}  // namespace impactdic::stages

@@ -1,0 +1,69 @@
+// momentum: the momentum balance of pounder and soil (needs the kinematics and the sensor record);
+// t_e not measurable is a failure. Also the measured peak deceleration of the peak stage.
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "impactdic/momentum/scene_analysis.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+class MomentumStage : public Stage {
+ public:
+  const char* name() const override { return "momentum"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    if (!c.data.kinematics) return "no kinematics";
+    if (!c.data.sensor) return "needs the sensor record (pounder velocity)";
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    SceneRunData& d = c.data;
+    const MomentumOptions options = MomentumOptionsFromScene(c.scene, d.mm_per_px);
+    d.momentum = AnalyzeMomentum(*d.kinematics, d.analysed_frame_times_s, *d.sensor, options);
+    const MomentumSummary& ms = d.momentum->summary;
+    for (const auto& w : ms.warnings) c.summary.warnings.push_back("momentum: " + w);
+    SceneFigures& fig = c.summary.figures;
+    fig.p_max_kg_m_s = ms.p_max_kg_m_s;
+    fig.t_end_peak_s = ms.t_end_peak_s;
+    fig.momentum_conservation_error = ms.momentum_conservation_error;
+    fig.added_mass_max_kg = ms.added_mass_max_kg;
+    fig.v_sand_max_m_s = ms.v_sand_max_m_s;
+    fig.momentum_ratio_measured = ms.momentum_ratio;
+    if (ms.sigmoid_fitted) {
+      fig.sigmoid_M_kg = ms.sigmoid.M_kg;
+      fig.sigmoid_b_per_s = ms.sigmoid.b_per_s;
+      fig.sigmoid_T_s = ms.sigmoid.T_s;
+    }
+    if (!ms.IsUsable())
+      c.summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
+    return ms.BriefReport();
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeMomentumStage() { return std::make_unique<MomentumStage>(); }
+
+void AddMeasuredPeakDeceleration(StageContext& c) {
+  if (!c.data.sensor) return;
+  // The peak stage ends at t_e; without it, T + 4/b of the scene's model (with a warning when the
+  // momentum stage ran but could not measure t_e).
+  double window_s = c.summary.figures.t_end_peak_s;
+  if (!std::isfinite(window_s)) {
+    window_s = c.scene.model.T_s + 4 / c.scene.model.b_per_s;
+    if (c.data.momentum) {
+      c.summary.warnings.push_back(fmt::format(
+          "peak deceleration (measured): t_e was not measured, so the peak stage is taken as the "
+          "first T + 4/b = {:.3f} ms after the impact (the scene's model)",
+          1e3 * window_s));
+    }
+  }
+  c.summary.figures.peak_deceleration_measured_g =
+      MeasuredPeakDeceleration(*c.data.sensor, window_s);
+}
+
+}  // namespace impactdic::stages

@@ -1,0 +1,51 @@
+// outputs: every output writer (pipeline/output_writer.h) into the staging folder of the run's
+// output generation, swapped in when all are complete.
+#include <fmt/format.h>
+
+#include "impactdic/core/log.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+class OutputsStage : public Stage {
+ public:
+  OutputsStage(const OutputWriters& writers, OutputGeneration* generation)
+      : writers_(writers), generation_(generation) {}
+
+  const char* name() const override { return "outputs"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    OutputContext out{c.scene, c.options, c.data, c.summary, generation_->staging_folder(), {}, {}};
+    for (const auto& writer : writers_) {
+      const std::string why = writer->SkipReason(c.scene, c.data);
+      if (why.empty()) {
+        writer->Write(out);
+      } else {
+        LogInfo("[outputs] {} skipped: {}", writer->name(), why);
+      }
+    }
+    // All complete: swap the new generation in (the previous one stays until this succeeds).
+    generation_->Commit();
+    for (auto& o : c.summary.outputs) o = generation_->FinalPath(o);
+    return fmt::format("{} files in {}", c.summary.outputs.size(),
+                       OutputPathForMessages(c.summary.output_folder));
+  }
+
+ private:
+  const OutputWriters& writers_;
+  OutputGeneration* generation_;
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeOutputsStage(const OutputWriters& writers,
+                                        OutputGeneration* generation) {
+  return std::make_unique<OutputsStage>(writers, generation);
+}
+
+}  // namespace impactdic::stages

@@ -1,0 +1,31 @@
+// sensor: the accelerometer record (impact time and velocity, pounder motion, crater depth).
+#include "impactdic/momentum/scene_analysis.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+class SensorStage : public Stage {
+ public:
+  const char* name() const override { return "sensor"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    if (c.scene.inputs.sensor.empty()) return "no sensor CSV in the scene";
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    const SensorResult& sensor = c.data.sensor.emplace(
+        AnalyzeSensorCsv(c.scene.inputs.sensor, SensorOptionsFromScene(c.scene)));
+    for (const auto& w : sensor.summary.warnings) c.summary.warnings.push_back("sensor: " + w);
+    c.summary.figures.impact_velocity_m_s = sensor.summary.impact_velocity_m_s;
+    c.summary.figures.crater_depth_measured_m = sensor.summary.final_penetration_m;
+    return sensor.summary.BriefReport();
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeSensorStage() { return std::make_unique<SensorStage>(); }
+
+}  // namespace impactdic::stages

@@ -1,0 +1,80 @@
+// The output writers' extension point (pipeline/output_writer.h), shown by a worked example: a
+// test-only writer of one more format, registered with one line (PipelineOptions::
+// extra_output_writers) and invoked by the outputs stage like the built-in ones. The same steps
+// add a built-in format (docs/architecture.md, "How to add an output format").
+#include "impactdic/pipeline/output_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "../io/test_dir.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/pipeline.h"
+
+namespace impactdic {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The new format: the modelled crater depth and stopping time as a two-line text file.
+class ModelTextWriter : public OutputWriter {
+ public:
+  std::string name() const override { return "model.txt"; }
+  std::vector<std::string> FileNames() const override { return {"model.txt"}; }
+  std::string SkipReason(const Scene&, const SceneRunData& data) const override {
+    return data.model ? "" : "no model solve";
+  }
+  void Write(OutputContext& c) const override {
+    const std::string path = c.Path("model.txt");
+    std::ostringstream text;
+    text.precision(17);
+    text << "crater_depth_m " << c.data.model->summary.crater_depth_m << "\n"
+         << "t_end_s " << c.data.model->summary.t_end_s << "\n";
+    WriteTextFileAtomic(path, text.str());
+    c.summary.outputs.push_back(path);
+  }
+};
+
+Scene ModelOnlyScene(const TestDir& dir, const std::string& stages) {
+  // The frames are named but not read (no frames stage).
+  return ParseScene("inputs: {frames: frames}\nstages: " + stages +
+                        "\noutputs: {folder: out, figures: false, animation: false}\n",
+                    dir.File("scene.yaml"));
+}
+
+TEST(OutputWriter, ARegisteredWriterIsInvokedWithTheRunsData) {
+  TestDir dir;
+  PipelineOptions options;
+  options.extra_output_writers.push_back(std::make_shared<ModelTextWriter>());  // Registration.
+  const PipelineSummary s = RunScene(ModelOnlyScene(dir, "[model, outputs]"), options);
+  const fs::path file = fs::path(dir.File("out")) / "model.txt";
+  ASSERT_TRUE(fs::exists(file));
+  // Listed among the outputs with its final path (not the staging folder's).
+  EXPECT_NE(std::find(s.outputs.begin(), s.outputs.end(), file.string()), s.outputs.end());
+  // It saw the same model solve as the summary.
+  std::ifstream in(file);
+  std::string key;
+  double depth = 0, t_end = 0;
+  in >> key >> depth >> key >> t_end;
+  EXPECT_EQ(depth, s.figures.crater_depth_model_m);
+  EXPECT_EQ(t_end, s.figures.t_end_model_s);
+  EXPECT_TRUE(fs::exists(fs::path(dir.File("out")) / "summary.json"));  // The built-in ones too.
+  // Its file is one of the run's own names: the next run's generation replaces it.
+  const PipelineSummary again = RunScene(ModelOnlyScene(dir, "[outputs]"), options);
+  EXPECT_FALSE(fs::exists(file));  // No model this time: skipped, and the old file is gone.
+  EXPECT_TRUE(fs::exists(fs::path(dir.File("out")) / "summary.json"));
+}
+
+TEST(OutputWriter, BuiltInWritersAreTheFourFormats) {
+  std::vector<std::string> names;
+  for (const auto& w : BuiltInOutputWriters()) names.push_back(w->name());
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"results.h5", "figures", "summary.json", "summary.csv"}));
+}
+
+}  // namespace
+}  // namespace impactdic
