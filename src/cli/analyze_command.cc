@@ -18,9 +18,9 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/momentum/momentum.h"
-#include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/sensor/sensor.h"
 
 namespace impactdic::cli {

@@ -9,7 +9,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/threads.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic::cli {

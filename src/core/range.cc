@@ -7,7 +7,8 @@
 namespace impactdic {
 
 std::string ValueRange::Text() const {
-  return fmt::format("[{:g}, {:g}]{}{}", min, max, unit[0] ? " " : "", unit);
+  return fmt::format("{}{:g}, {:g}{}{}{}", min_open ? '(' : '[', min, max, max_open ? ')' : ']',
+                     unit[0] ? " " : "", unit);
 }
 
 void CheckRange(double value, const ValueRange& range, const std::string& where,

@@ -63,6 +63,11 @@ ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n)
   throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
 }
 
+std::string ReferenceUpdateText(const UpdateOptions& update) {
+  if (update.mode == ReferenceUpdate::kEveryN) return fmt::format("every:{}", update.every_n);
+  return ToString(update.mode);
+}
+
 const char* ToString(SequenceMode mode) {
   return mode == SequenceMode::kPairs ? "pairs" : "sequence";
 }
@@ -109,9 +114,11 @@ SubsetStatus SubsetStatusFromString(const std::string& name) {
 }
 
 void GridOptions::Check() const {
-  CheckValue(subset_size >= 5 && subset_size % 2 == 1 && subset_size <= 201, "dic.grid.subset_size",
-             std::to_string(subset_size), "an odd integer in [5, 201]");
-  CheckValue(step >= 1, "dic.grid.step", std::to_string(step), "an integer >= 1");
+  CheckValue(kSubsetSizeRange.Contains(subset_size) && subset_size % 2 == 1,
+             "dic.grid.subset_size", std::to_string(subset_size),
+             "an odd integer in " + kSubsetSizeRange.Text());
+  CheckValue(kGridStepRange.Contains(step), "dic.grid.step", std::to_string(step),
+             "an integer in " + kGridStepRange.Text());
   CheckValue(roi.width >= 0 && roi.height >= 0 && roi.x >= 0 && roi.y >= 0, "dic.grid.roi",
              "x=" + std::to_string(roi.x) + " y=" + std::to_string(roi.y) +
                  " w=" + std::to_string(roi.width) + " h=" + std::to_string(roi.height),
@@ -121,19 +128,20 @@ void GridOptions::Check() const {
 }
 
 void InitialGuessOptions::Check() const {
-  CheckValue(search_radius_px >= 1 && search_radius_px <= 2000, "dic.init.search_radius_px",
-             std::to_string(search_radius_px), "an integer in [1, 2000]");
+  CheckValue(kSearchRadiusRange.Contains(search_radius_px), "dic.init.search_radius_px",
+             std::to_string(search_radius_px), "an integer in " + kSearchRadiusRange.Text());
   CheckValue(seed_spacing >= 1, "dic.init.seed_spacing", std::to_string(seed_spacing), ">= 1");
   CheckValue(min_search_zncc > -1 && min_search_zncc < 1, "dic.init.min_search_zncc",
              Num(min_search_zncc), "in (-1, 1)");
 }
 
 void IcgnOptions::Check() const {
-  CheckValue(convergence_px > 0 && convergence_px <= 1, "dic.icgn.convergence_px",
-             Num(convergence_px), "in (0, 1] px");
-  CheckValue(max_iterations >= 1 && max_iterations <= 200, "dic.icgn.max_iterations",
-             std::to_string(max_iterations), "in [1, 200]");
-  CheckValue(min_zncc >= -1 && min_zncc < 1, "dic.icgn.min_zncc", Num(min_zncc), "in [-1, 1)");
+  CheckValue(kConvergenceRange.Contains(convergence_px), "dic.icgn.convergence_px",
+             Num(convergence_px), "in " + kConvergenceRange.Text());
+  CheckValue(kMaxIterationsRange.Contains(max_iterations), "dic.icgn.max_iterations",
+             std::to_string(max_iterations), "in " + kMaxIterationsRange.Text());
+  CheckValue(kMinZnccRange.Contains(min_zncc), "dic.icgn.min_zncc", Num(min_zncc),
+             "in " + kMinZnccRange.Text());
   CheckValue(min_contrast >= 0 && std::isfinite(min_contrast), "dic.icgn.min_contrast",
              Num(min_contrast), ">= 0 grey levels");
   CheckValue(max_uncertainty_px >= 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
@@ -144,8 +152,8 @@ void IcgnOptions::Check() const {
 
 void UpdateOptions::Check() const {
   CheckValue(every_n >= 1, "dic.update.every_n", std::to_string(every_n), ">= 1");
-  CheckValue(auto_min_zncc > -1 && auto_min_zncc <= 1, "dic.update.auto_min_zncc",
-             Num(auto_min_zncc), "in (-1, 1]");
+  CheckValue(kAutoMinZnccRange.Contains(auto_min_zncc), "dic.update.auto_min_zncc",
+             Num(auto_min_zncc), "in " + kAutoMinZnccRange.Text());
 }
 
 void DicOptions::Check() const {

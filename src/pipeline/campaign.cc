@@ -13,7 +13,7 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -161,11 +161,11 @@ CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
     const PipelineSummary run = RunScene(scene, p);
     CampaignScene s;
     s.name = scene.name;
-    s.mass_kg = scene.test.mass_kg;
+    s.mass_kg = scene.model.pounder_mass_kg;
     s.velocity_m_s = std::isfinite(run.figures.impact_velocity_m_s)
                          ? run.figures.impact_velocity_m_s
-                         : scene.test.ImpactVelocity();
-    s.area_m2 = scene.test.ContactArea();
+                         : scene.ImpactVelocity();
+    s.area_m2 = scene.model.ContactArea_m2();
     s.figures = run.figures;
     if (!run.IsUsable()) s.excluded = "a stage produced nothing usable: " + run.FailureText();
     summary.scenes.push_back(s);

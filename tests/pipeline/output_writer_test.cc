@@ -12,7 +12,7 @@
 
 #include "../io/test_dir.h"
 #include "impactdic/io/atomic_file.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {

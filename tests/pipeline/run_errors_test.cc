@@ -13,7 +13,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {

@@ -8,7 +8,7 @@
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {

@@ -24,8 +24,8 @@
 #include "../momentum/synthetic_chain.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
-#include "impactdic/io/scene.h"
-#include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/pipeline.h"
 
@@ -174,11 +174,10 @@ TEST(FailedStageMomentum, SceneKeyIsReadAndItsDefaultIsTheLibrarys) {
   TestDir dir;
   const std::string base = "inputs: {frames: f/*.png}\nmomentum: {rect_mm: [0, 0, 10, 10]";
   const Scene unset = ParseScene(base + "}\n", dir.File("a.yaml"));
-  EXPECT_FALSE(unset.momentum.min_valid_fraction.has_value());
-  EXPECT_EQ(MomentumOptionsFromScene(unset, 1.0).min_valid_fraction,
+  EXPECT_EQ(MakeMomentumOptions(unset, 1.0).min_valid_fraction,
             MomentumOptions{}.min_valid_fraction);
   const Scene set = ParseScene(base + ", min_valid_fraction: 0.3}\n", dir.File("b.yaml"));
-  EXPECT_EQ(MomentumOptionsFromScene(set, 1.0).min_valid_fraction, 0.3);
+  EXPECT_EQ(MakeMomentumOptions(set, 1.0).min_valid_fraction, 0.3);
   try {
     ParseScene(base + ", min_valid_fraction: 1.5}\n", dir.File("c.yaml"));
     FAIL() << "expected an error for min_valid_fraction 1.5";

@@ -9,7 +9,7 @@
 #include "../core/expect_error.h"
 #include "fault_util.h"
 #include "impactdic/core/range.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/model/impact_model.h"
 
 namespace impactdic {

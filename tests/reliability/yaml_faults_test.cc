@@ -8,7 +8,7 @@
 #include "../core/expect_error.h"
 #include "fault_util.h"
 #include "impactdic/calib/calibration.h"
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/synth/impact_scene.h"
 

@@ -14,14 +14,19 @@
 
 namespace impactdic {
 
-// The closed interval [min, max] in `unit`; NaN and infinities are never inside.
+// The interval from min to max in `unit`, closed unless an end is marked open; NaN and
+// infinities are never inside.
 struct ValueRange {
   double min = 0;
   double max = 0;
   const char* unit = "";
+  bool min_open = false;  // (min, ...: min itself is outside.
+  bool max_open = false;  // ..., max): max itself is outside.
 
-  bool Contains(double value) const { return value >= min && value <= max; }
-  // "[0.01, 1e+05] kg"
+  bool Contains(double value) const {
+    return (min_open ? value > min : value >= min) && (max_open ? value < max : value <= max);
+  }
+  // "[0.01, 1e+05] kg", "(0, 1)"
   std::string Text() const;
 };
 
@@ -53,6 +58,9 @@ inline constexpr ValueRange kAddedMassRange{0, 1e6, "kg"};
 inline constexpr ValueRange kFrictionKRange{0, 1e6, ""};
 inline constexpr ValueRange kDampingFactorURange{1, 1e3, ""};
 inline constexpr ValueRange kSigmoidDelayRange{0, 1e3, "s"};
+// Damping exponent n (Eq. 8) and sigmoid rate b (Eq. 6; Table 2: n = 0.2, b = 2500 1/s).
+inline constexpr ValueRange kDampingExponentNRange{0, 1, ""};
+inline constexpr ValueRange kSigmoidRateRange{0, 1e12, "1/s", /*min_open=*/true};
 
 // --- The camera (scene `inputs.*`, synthetic scene specs) ----------------------------------------
 // Recording frame rate: 1/s up to 10 million frames per second (the fastest cameras).

@@ -13,6 +13,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "impactdic/core/range.h"
 #include "impactdic/dic/bspline.h"
 
 namespace impactdic {
@@ -34,10 +35,22 @@ enum class ReferenceUpdate { kFixed, kIncremental, kEveryN, kAuto };
 const char* ToString(ReferenceUpdate mode);
 // "fixed", "incremental", "auto", or "every:N" (N >= 1 is returned in *every_n).
 ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n);
+struct UpdateOptions;
+// The text ReferenceUpdateFromString reads: "auto", "every:5", ...
+std::string ReferenceUpdateText(const UpdateOptions& update);
+
+// Allowed values of the options below, shared by their Check() and the scene's `dic.*` keys.
+inline constexpr ValueRange kSubsetSizeRange{5, 201, "px"};  // And odd.
+inline constexpr ValueRange kGridStepRange{1, 1e6, "px"};
+inline constexpr ValueRange kSearchRadiusRange{1, 2000, "px"};
+inline constexpr ValueRange kConvergenceRange{0, 1, "px", /*min_open=*/true};
+inline constexpr ValueRange kMaxIterationsRange{1, 200, ""};
+inline constexpr ValueRange kMinZnccRange{-1, 1, "", /*min_open=*/false, /*max_open=*/true};
+inline constexpr ValueRange kAutoMinZnccRange{-1, 1, "", /*min_open=*/true};
 
 struct GridOptions {
-  int subset_size = 25;  // Subset side S [px], odd, >= 5.
-  int step = 10;         // Grid spacing [px], >= 1.
+  int subset_size = 25;  // Subset side S [px], odd, kSubsetSizeRange.
+  int step = 10;         // Grid spacing [px], kGridStepRange.
   // Region of interest [px] in the first reference; subsets lie entirely inside it. An empty
   // rectangle means the whole image.
   cv::Rect roi;
@@ -47,7 +60,8 @@ struct GridOptions {
 };
 
 struct InitialGuessOptions {
-  // Integer-pixel ZNCC search radius [px] around the predicted position, >= 1. The search runs
+  // Integer-pixel ZNCC search radius [px] around the predicted position, kSearchRadiusRange
+  // (the scene's dic.search_radius_px and correlate's --search-radius). The search runs
   // at seed points and for subsets the propagation could not solve.
   int search_radius_px = 40;
   // Seeds lie on every `seed_spacing`-th grid node in x and y (plus the grid centre), >= 1.
@@ -60,10 +74,13 @@ struct InitialGuessOptions {
 struct IcgnOptions {
   Interpolation interpolation = Interpolation::kBicubic;
   ShapeFunction shape = ShapeFunction::kAffine;
-  // Convergence: the increment of the warp moves every subset corner by < this [px], (0, 1].
+  // Convergence: the increment of the warp moves every subset corner by < this [px],
+  // kConvergenceRange.
   double convergence_px = 1e-3;
-  int max_iterations = 20;  // Iteration cap, in [1, 200].
-  // A converged subset whose ZNCC is below this is `low_correlation` (failed), in [-1, 1).
+  int max_iterations = 20;  // Iteration cap, kMaxIterationsRange.
+  // A converged subset whose ZNCC is below this is `low_correlation` (failed), kMinZnccRange.
+  // Validity only: the `auto` reference update has its own threshold,
+  // UpdateOptions::auto_min_zncc.
   double min_zncc = 0.8;
   // Reference subsets whose intensity standard deviation is below this [grey levels of an 8-bit
   // image; scaled by 257 for 16-bit] are `low_contrast`, >= 0.
@@ -87,7 +104,10 @@ struct IcgnOptions {
 struct UpdateOptions {
   ReferenceUpdate mode = ReferenceUpdate::kAuto;
   int every_n = 10;             // Frames per reference for kEveryN, >= 1.
-  double auto_min_zncc = 0.95;  // kAuto threshold, in (-1, 1].
+  // kAuto: the reference is updated once a tracked subset correlates below this,
+  // kAutoMinZnccRange. Above IcgnOptions::min_zncc on purpose: the reference moves on while the
+  // subsets still correlate well, before they fail.
+  double auto_min_zncc = 0.95;
   void Check() const;
 };
 

@@ -1,4 +1,4 @@
-// The one way YAML files are loaded: scene files (io/scene.h), calibration files (calib) and
+// The one way YAML files are loaded: scene files (pipeline/scene.h), calibration files (calib) and
 // synthetic scene specs (synth).
 //
 //   const YAML::Node root = LoadYamlFile("camera.yaml", "a calibration file (YAML)");
@@ -13,7 +13,13 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
+#include <functional>
+#include <set>
 #include <string>
+#include <vector>
+
+#include "impactdic/core/range.h"
 
 namespace impactdic {
 
@@ -22,6 +28,132 @@ YAML::Node LoadYaml(const std::string& text, const std::string& path, const std:
 
 // ReadInputFile(path, what, kMaxTextFileBytes) (a regular file of at most 64 MiB), then LoadYaml.
 YAML::Node LoadYamlFile(const std::string& path, const std::string& what);
+
+// Closest candidate by edit distance, or "" when none is close (for "did you mean").
+std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates);
+
+// "nothing", "'abc'", "a list of 3", "a map": what a node holds, for messages.
+std::string DescribeYaml(const YAML::Node& node);
+
+// Every problem found in one YAML file, so the user sees all of them at once:
+//   "file:LINE: key.path: got 'x'; expected ...".
+class YamlProblems {
+ public:
+  explicit YamlProblems(std::string file) : file_(std::move(file)) {}
+  // `at` gives the line (an undefined node: none).
+  void Add(const YAML::Node& at, const std::string& key_path, const std::string& text);
+  bool empty() const { return lines_.empty(); }
+  std::size_t size() const { return lines_.size(); }
+  const std::vector<std::string>& lines() const { return lines_; }
+  // Error(kInvalidValue) "N problem(s) in `what` FILE:" and one line per problem, if any.
+  void ThrowIfAny(const std::string& what) const;
+
+ private:
+  std::string file_;
+  std::vector<std::string> lines_;
+};
+
+// One map of a YAML file, read key by key: every accessor records the key as known, a wrong type
+// or value is a problem naming the key path ("dic.subset_size"), and Finish() reports the keys no
+// accessor asked for, suggesting the closest known one ("did you mean 'subset_size'?"). The one
+// section reader of scene files, calibration files and synthetic scene specs.
+//
+//   YamlProblems problems(path);
+//   YamlSection top(root, "", &problems);
+//   YamlSection dic = top.Sub("dic");
+//   dic.Read("step", &step, ValueRange{1, 1e6}, "a grid step [px]");
+//   dic.Finish();
+//   top.Finish();
+//   problems.ThrowIfAny("scene file");
+//
+// The Read functions leave *out unchanged when the key is absent or null, and return whether a
+// valid value was stored.
+class YamlSection {
+ public:
+  YamlSection(YAML::Node node, std::string prefix, YamlProblems* problems);
+
+  std::string PathOf(const std::string& key) const;
+  bool Has(const std::string& key) const;
+  // The node of `key` (undefined when absent); marks the key as known.
+  YAML::Node Get(const std::string& key);
+  YamlSection Sub(const std::string& key);
+  // A problem with `key` (its line when present, else the section's).
+  void Problem(const std::string& key, const std::string& text);
+  YamlProblems* problems() const { return problems_; }
+
+  // A finite number in `range`; `what` names it ("a pounder mass").
+  bool Read(const std::string& key, double* out, const ValueRange& range, const std::string& what);
+  // An integer in `range`.
+  bool Read(const std::string& key, int* out, const ValueRange& range, const std::string& what);
+  bool Read(const std::string& key, std::uint64_t* out);
+  bool Read(const std::string& key, bool* out);
+  bool Read(const std::string& key, std::string* out);
+  // One of `allowed` (a near miss gets "did you mean").
+  bool ReadChoice(const std::string& key, std::string* out, const std::vector<std::string>& allowed);
+  // Any present, non-null node: `parse` stores it and returns false when it is invalid, which is
+  // reported as "got ...; expected `expected`".
+  bool ReadWith(const std::string& key, const std::function<bool(const YAML::Node&)>& parse,
+                const std::string& expected);
+
+  // Reports keys that no accessor asked for, with a "did you mean" suggestion.
+  void Finish();
+
+ private:
+  YAML::Node node_;
+  std::string prefix_;
+  YamlProblems* problems_;
+  std::set<std::string> known_;
+};
+
+// Keys of one YAML section bound to the fields of option structs (as COLMAP's OptionManager binds
+// option names to fields): the table both reads the section into the fields and documents it
+// (key, default = the field's value when the table was built, expected values, meaning), so a
+// default lives only in the struct that declares the field.
+//
+//   DicOptions options;
+//   YamlOptionTable t("dic");
+//   t.Add("step", &options.grid.step, ValueRange{1, 1e6, "px"}, "a grid step", "Grid spacing");
+//   t.Read(section);   // section.Finish() is the caller's
+class YamlOptionTable {
+ public:
+  struct Entry {
+    std::string key;           // "step"
+    std::string expected;      // "an integer in [1, 1e+06] px"
+    std::string doc;           // Meaning, unit.
+    std::string default_text;  // The bound field's value when bound.
+    std::function<bool(const YAML::Node&)> parse;  // Stores a valid node; false if invalid.
+    std::vector<std::string> choices;              // AddChoice: the names ("did you mean").
+  };
+
+  explicit YamlOptionTable(std::string section) : section_(std::move(section)) {}
+  const std::string& section() const { return section_; }
+  const std::vector<Entry>& entries() const { return entries_; }
+
+  YamlOptionTable& Add(const std::string& key, double* field, const ValueRange& range,
+                       const std::string& what, const std::string& doc);
+  YamlOptionTable& Add(const std::string& key, int* field, const ValueRange& range,
+                       const std::string& what, const std::string& doc);
+  YamlOptionTable& Add(const std::string& key, bool* field, const std::string& doc);
+  YamlOptionTable& Add(const std::string& key, std::string* field, const std::string& doc);
+  // A name of `names`; `set` stores it (names are checked first).
+  YamlOptionTable& AddChoice(const std::string& key, const std::vector<std::string>& names,
+                             const std::string& default_text,
+                             const std::function<void(const std::string&)>& set,
+                             const std::string& doc);
+  // Anything else: `parse` validates and stores.
+  YamlOptionTable& AddCustom(const std::string& key, const std::string& expected,
+                             const std::string& default_text,
+                             std::function<bool(const YAML::Node&)> parse, const std::string& doc);
+
+  // Reads every bound key present in `section` (problems go to its YamlProblems).
+  void Read(YamlSection& section) const;
+  // Markdown table rows "| `dic.step` | 10 | an integer >= 1 | Grid spacing |".
+  std::string Reference() const;
+
+ private:
+  std::string section_;
+  std::vector<Entry> entries_;
+};
 
 }  // namespace impactdic
 

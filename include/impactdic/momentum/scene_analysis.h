@@ -1,32 +1,22 @@
-// `impactdic analyze SCENE.yaml`: the sensor, kinematics and momentum stages of one scene from its
-// correlation results (HDF5), written back into the same file.
+// The momentum analysis' readers and measured figures used by `impactdic analyze SCENE.yaml`
+// (pipeline/scene_analysis.h) and the pipeline's stages.
 //
 // The correlation results are read with io ReadDicResults (any layout version,
 // io/results_layout.h): row 0 is the first reference, a sample is valid when its status is
 // converged (or, without /dic/status, when its displacement is finite); the /dic attribute
 // first_frame is the index of row 0 in the camera sequence (default: the scene's dic.first_frame).
 //
-//   Scene scene = LoadScene("scene.yaml");
-//   SceneAnalysisRun run = AnalyzeSceneResults(scene, "results/results.h5", /*mm_per_px=*/0.1);
+//   long first = -1;
+//   CorrelationSeries dic = ReadCorrelationSeries("results/results.h5", &first);
 #ifndef IMPACTDIC_MOMENTUM_SCENE_ANALYSIS_H_
 #define IMPACTDIC_MOMENTUM_SCENE_ANALYSIS_H_
 
 #include <string>
 
 #include "impactdic/io/dic_results.h"
-#include "impactdic/io/scene.h"
 #include "impactdic/momentum/momentum.h"
 
 namespace impactdic {
-
-// The scene's sensor section and test parameters as SensorOptions (integrate_from = impact uses the
-// test's impact velocity).
-SensorOptions SensorOptionsFromScene(const Scene& scene);
-
-// The scene's test and momentum sections as MomentumOptions; the pounder footprint from
-// momentum.pounder_center_x_px / surface_y_px (converted with the uniform scale mm_per_px).
-// Error when neither those keys nor momentum.rect_mm are given.
-MomentumOptions MomentumOptionsFromScene(const Scene& scene, double mm_per_px);
 
 // The correlation arrays of a results table (io/dic_results.h): valid = status converged.
 CorrelationSeries CorrelationSeriesFromTable(const DicResultsTable& table);
@@ -45,20 +35,6 @@ double MeasuredPeakDeceleration(const SensorResult& sensor, double peak_stage_s)
 // of the model's plateau deceleration v(t1) / (t_end - t1) / g. NaN without impact or stop, or
 // when the stop is not after t1.
 double MeasuredPlateauDeceleration(const SensorResult& sensor, double t1_after_impact_s, double g);
-
-struct SceneAnalysisRun {
-  SensorResult sensor;
-  SceneAnalysis analysis;
-  std::string results_path;
-};
-
-// Reads the correlation results, analyses the sensor record, computes kinematics and momentum
-// and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
-// As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
-// Error(kNumerical) with the reason and nothing written, unless allow_partial (then written,
-// with NaN figures; the caller reports the run as partial).
-SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px, bool allow_partial = false);
 
 }  // namespace impactdic
 

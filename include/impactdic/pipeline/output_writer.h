@@ -29,7 +29,7 @@
 #include <string>
 #include <vector>
 
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/run_data.h"
 
 namespace impactdic {

@@ -35,8 +35,8 @@
 
 #include "impactdic/dic/options.h"
 #include "impactdic/io/json.h"
-#include "impactdic/io/scene.h"
 #include "impactdic/pipeline/output_writer.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 
@@ -132,8 +132,9 @@ void CheckSceneStages(const Scene& scene);
 // (unless options.allow_partial; file comment) before anything that looks complete is written.
 PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
 
-// The correlation options of a scene's `dic` section (keys not in the scene keep the dic
-// library's defaults, e.g. IcgnOptions::max_uncertainty_px). Error naming the key if invalid.
+// The correlation options of a scene's `dic` section: SceneDic::options (keys not in the scene
+// keep the dic library's defaults) with the region of interest (roi, roi_polygon) applied. Error
+// naming the key if invalid.
 DicOptions MakeDicOptions(const SceneDic& dic);
 
 }  // namespace impactdic

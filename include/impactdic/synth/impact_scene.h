@@ -302,7 +302,7 @@ ImpactSceneReport WriteImpactScene(const ImpactScene& scene, const std::string& 
 
 // The spec as YAML (every key, the form ParseImpactSceneSpec reads).
 std::string ImpactSceneSpecToYaml(const ImpactSceneSpec& spec);
-// The scene file (io/scene.h format) the pipeline reads for this scene, with paths relative to
+// The scene file (pipeline/scene.h format) the pipeline reads for this scene, with paths relative to
 // the output folder.
 std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibration_yaml);
 

@@ -59,7 +59,7 @@ class CorrelateStage : public Stage {
       c.summary.warnings.push_back(fmt::format(
           "correlation: only {:.1f} % of the subsets are valid", 100 * dic.summary.valid_fraction));
     }
-    const std::string problem = CorrelationProblem(dic.summary, scene.dic.min_zncc);
+    const std::string problem = CorrelationProblem(dic.summary, scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
     return dic.summary.BriefReport();
   }

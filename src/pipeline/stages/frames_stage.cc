@@ -121,12 +121,8 @@ std::string TimeFrames(StageContext& c) {
 
 PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
   PreprocessOptions o;
-  o.gaussian.enabled = scene.preprocess.gaussian;
-  o.gaussian.sigma_px = scene.preprocess.gaussian_sigma;
-  o.gaussian.kernel_size = scene.preprocess.gaussian_kernel;
-  o.clahe.enabled = scene.preprocess.clahe;
-  o.clahe.clip_limit = scene.preprocess.clahe_clip_limit;
-  o.clahe.tile_grid = scene.preprocess.clahe_tile_grid;
+  o.gaussian = scene.preprocess.gaussian;
+  o.clahe = scene.preprocess.clahe;
   o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
   return o;
 }

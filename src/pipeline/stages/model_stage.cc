@@ -21,17 +21,14 @@ class ModelStage : public Stage {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     SceneFigures& fig = c.summary.figures;
-    const double v0 = std::isfinite(fig.impact_velocity_m_s) ? fig.impact_velocity_m_s
-                                                             : scene.test.ImpactVelocity();
+    const double v0 =
+        std::isfinite(fig.impact_velocity_m_s) ? fig.impact_velocity_m_s : scene.ImpactVelocity();
     d.model_parameters = MakeModelParameters(scene, v0);
-    ImpactSolverOptions solver;
-    solver.solver = ImpactSolverFromString(scene.model.solver);
-    solver.rtol = scene.model.rtol;
-    solver.atol = scene.model.atol;
-    d.model = SimulateImpact(d.model_parameters, solver);
+    d.model = SimulateImpact(d.model_parameters, scene.solver);
     const ImpactSummary& s = d.model->summary;
     for (const auto& w : s.warnings) c.summary.warnings.push_back("model: " + w);
-    fig.added_mass_eq4_kg = AddedMassMaxEq4(scene.test.mass_kg, v0, scene.test.ContactArea());
+    fig.added_mass_eq4_kg =
+        AddedMassMaxEq4(scene.model.pounder_mass_kg, v0, scene.model.ContactArea_m2());
     fig.momentum_ratio_model = s.momentum_ratio;
     fig.peak_deceleration_model_g = s.peak_deceleration_g;
     fig.plateau_deceleration_model_g = s.plateau_deceleration_g;
@@ -39,7 +36,7 @@ class ModelStage : public Stage {
     fig.t_end_model_s = s.t_end_s;
     if (d.sensor) {
       fig.plateau_deceleration_measured_g =
-          MeasuredPlateauDeceleration(*d.sensor, s.t1_s, scene.test.g_m_s2);
+          MeasuredPlateauDeceleration(*d.sensor, s.t1_s, scene.model.gravity_m_s2);
     }
     if (!s.IsUsable())
       c.summary.failures.push_back({"model", "the solve did not reach v = 0: " + s.stop_reason});

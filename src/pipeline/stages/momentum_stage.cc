@@ -22,7 +22,7 @@ class MomentumStage : public Stage {
 
   std::string Run(StageContext& c) const override {
     SceneRunData& d = c.data;
-    const MomentumOptions options = MomentumOptionsFromScene(c.scene, d.mm_per_px);
+    const MomentumOptions options = MakeMomentumOptions(c.scene, d.mm_per_px);
     d.momentum = AnalyzeMomentum(*d.kinematics, d.analysed_frame_times_s, *d.sensor, options);
     const MomentumSummary& ms = d.momentum->summary;
     for (const auto& w : ms.warnings) c.summary.warnings.push_back("momentum: " + w);
@@ -54,7 +54,7 @@ void AddMeasuredPeakDeceleration(StageContext& c) {
   // momentum stage ran but could not measure t_e).
   double window_s = c.summary.figures.t_end_peak_s;
   if (!std::isfinite(window_s)) {
-    window_s = c.scene.model.T_s + 4 / c.scene.model.b_per_s;
+    window_s = c.scene.model.sigmoid_delay_T_s + 4 / c.scene.model.sigmoid_rate_b_per_s;
     if (c.data.momentum) {
       c.summary.warnings.push_back(fmt::format(
           "peak deceleration (measured): t_e was not measured, so the peak stage is taken as the "

@@ -47,31 +47,10 @@ cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
   return mask;
 }
 
-ImpactModelParameters MakeModelParameters(const Scene& scene, double impact_velocity_m_s) {
-  ImpactModelParameters p;
-  p.pounder_mass_kg = scene.test.mass_kg;
-  p.impact_velocity_m_s = impact_velocity_m_s;
-  p.width_m = scene.test.width_m;
-  p.depth_m = scene.test.depth_m;
-  p.added_mass_kg = scene.model.added_mass_kg ? *scene.model.added_mass_kg : std::nan("");
-  p.friction_K = scene.model.K;
-  p.damping_exponent_n = scene.model.n;
-  p.damping_factor_u = scene.model.u;
-  p.sigmoid_delay_T_s = scene.model.T_s;
-  p.sigmoid_rate_b_per_s = scene.model.b_per_s;
-  p.density_kg_m3 = scene.test.density_kg_m3;
-  p.gravity_m_s2 = scene.test.g_m_s2;
-  p.bed_height_m = scene.test.bed_height_m;
-  p.Check();
-  return p;
-}
-
 }  // namespace stages
 
 DicOptions MakeDicOptions(const SceneDic& d) {
-  DicOptions o;
-  o.grid.subset_size = d.subset_size;
-  o.grid.step = d.step;
+  DicOptions o = d.options;
   if (d.roi[2] > d.roi[0] && d.roi[3] > d.roi[1]) {
     o.grid.roi = cv::Rect(d.roi[0], d.roi[1], d.roi[2] - d.roi[0], d.roi[3] - d.roi[1]);
   }
@@ -85,14 +64,6 @@ DicOptions MakeDicOptions(const SceneDic& d) {
     }
     o.grid.roi = o.grid.roi.area() > 0 ? (o.grid.roi & box) : box;
   }
-  o.icgn.interpolation = InterpolationFromString(d.interpolation);
-  o.icgn.shape = ShapeFunctionFromString(d.shape);
-  o.icgn.min_zncc = d.min_zncc;
-  o.icgn.max_iterations = d.max_iterations;
-  o.icgn.convergence_px = d.convergence_px;
-  if (d.max_uncertainty_px) o.icgn.max_uncertainty_px = *d.max_uncertainty_px;
-  o.init.search_radius_px = d.search_radius_px;
-  o.update.mode = ReferenceUpdateFromString(d.reference_update, &o.update.every_n);
   o.Check();
   return o;
 }

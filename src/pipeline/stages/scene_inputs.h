@@ -7,9 +7,9 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "impactdic/io/scene.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic::stages {
 
@@ -19,10 +19,6 @@ std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& v
 // The correlator's mask from the scene's polygon and mask image (empty if neither is given):
 // non-zero where subsets may be centred. Error naming dic.mask / dic.roi_polygon.
 cv::Mat SceneMask(const Scene& scene, cv::Size frame_size);
-
-// The scene's test and model sections as the impact model's parameters, with the impact
-// velocity given (the sensor's, else the scene's v0).
-ImpactModelParameters MakeModelParameters(const Scene& scene, double impact_velocity_m_s);
 
 }  // namespace impactdic::stages
 

@@ -15,8 +15,8 @@ class SensorStage : public Stage {
   }
 
   std::string Run(StageContext& c) const override {
-    const SensorResult& sensor = c.data.sensor.emplace(
-        AnalyzeSensorCsv(c.scene.inputs.sensor, SensorOptionsFromScene(c.scene)));
+    const SensorResult& sensor =
+        c.data.sensor.emplace(AnalyzeSensorCsv(c.scene.inputs.sensor, MakeSensorOptions(c.scene)));
     for (const auto& w : sensor.summary.warnings) c.summary.warnings.push_back("sensor: " + w);
     c.summary.figures.impact_velocity_m_s = sensor.summary.impact_velocity_m_s;
     c.summary.figures.crater_depth_measured_m = sensor.summary.final_penetration_m;

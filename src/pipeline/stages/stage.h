@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "impactdic/io/output_generation.h"
-#include "impactdic/io/scene.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic::stages {
 

@@ -1,0 +1,33 @@
+// `impactdic analyze SCENE.yaml`: the sensor, kinematics and momentum stages of one scene from its
+// correlation results (HDF5; read by momentum/scene_analysis.h), written back into the same file.
+//
+//   Scene scene = LoadScene("scene.yaml");
+//   SceneAnalysisRun run = AnalyzeSceneResults(scene, "results/results.h5", /*mm_per_px=*/0.1);
+#ifndef IMPACTDIC_PIPELINE_SCENE_ANALYSIS_H_
+#define IMPACTDIC_PIPELINE_SCENE_ANALYSIS_H_
+
+#include <string>
+
+#include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/sensor.h"
+
+namespace impactdic {
+
+struct SceneAnalysisRun {
+  SensorResult sensor;
+  SceneAnalysis analysis;
+  std::string results_path;
+};
+
+// Reads the correlation results, analyses the sensor record, computes kinematics and momentum
+// and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
+// As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
+// Error(kNumerical) with the reason and nothing written, unless allow_partial (then written,
+// with NaN figures; the caller reports the run as partial).
+SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
+                                     double mm_per_px, bool allow_partial = false);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_PIPELINE_SCENE_ANALYSIS_H_

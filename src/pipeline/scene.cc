@@ -1,0 +1,486 @@
+#include "impactdic/pipeline/scene.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
+#include "impactdic/core/threads.h"
+#include "impactdic/io/input_file.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr const char* kSceneFileWhat = "a scene file (YAML)";
+
+// Ranges of scene-only keys (the library options' ranges are their structs').
+constexpr ValueRange kPositive{0, 1e300, "", /*min_open=*/true};
+constexpr ValueRange kNonNegative{0, 1e300, ""};
+constexpr ValueRange kAnyTime{-1e300, 1e300, "s"};
+constexpr ValueRange kCount{1, 1e6, ""};
+constexpr ValueRange kFraction{0, 1, "", /*min_open=*/true};
+// Gravity must push the pounder down in a scene (0 is only for the model's exact solutions).
+constexpr ValueRange kSceneGravityRange{kGravityRange.min, kGravityRange.max, kGravityRange.unit,
+                                        /*min_open=*/true};
+
+std::string Num(double v) { return fmt::format("{}", v); }
+
+// A number in `range`, or null/absent: unset.
+void AddOptional(YamlOptionTable& t, const std::string& key, std::optional<double>* field,
+                 const ValueRange& range, const std::string& what, const std::string& doc) {
+  t.AddCustom(
+      key, what + " in " + range.Text(), field->has_value() ? Num(**field) : "unset",
+      [field, range](const YAML::Node& n) {
+        double v = 0;
+        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
+          return false;
+        *field = v;
+        return true;
+      },
+      doc);
+}
+
+// A path, resolved against the scene file's folder.
+void AddPath(YamlOptionTable& t, const std::string& key, std::string* field,
+             const std::string& folder, const std::string& doc) {
+  t.AddCustom(
+      key, "a path", *field,
+      [field, folder](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        if (n.Scalar().empty()) return true;
+        const fs::path p(n.Scalar());
+        *field = p.is_absolute() ? p.lexically_normal().string()
+                                 : (fs::path(folder) / p).lexically_normal().string();
+        return true;
+      },
+      doc);
+}
+
+// An odd integer in `range` (subset and kernel sizes).
+void AddOdd(YamlOptionTable& t, const std::string& key, int* field, const ValueRange& range,
+            const std::string& doc) {
+  t.AddCustom(
+      key, "an odd integer in " + range.Text(), std::to_string(*field),
+      [field, range](const YAML::Node& n) {
+        int v = 0;
+        if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !range.Contains(v) || v % 2 == 0)
+          return false;
+        *field = v;
+        return true;
+      },
+      doc);
+}
+
+YamlOptionTable InputsTable(Scene* s) {
+  YamlOptionTable t("inputs");
+  SceneInputs& in = s->inputs;
+  AddPath(t, "frames", &in.frames, s->folder, "Folder, glob or video file of the frames (required)");
+  t.Add("fps", &in.fps, kCameraFpsRange, "a camera frame rate", "Camera frame rate");
+  AddPath(t, "calibration", &in.calibration, s->folder, "Calibration YAML (impactdic calibrate)");
+  t.Add("mm_per_px", &in.mm_per_px, kMmPerPxRange, "an image scale",
+        "Scale without a calibration; 0 = the calibration's plane scale");
+  AddPath(t, "sensor", &in.sensor, s->folder, "DAQ CSV; none = no sensor stage");
+  AddPath(t, "truth", &in.truth, s->folder, "Ground-truth HDF5 (synthetic scenes)");
+  return t;
+}
+
+// The pounder and soil are the model's parameters (ImpactModelParameters), read by every stage.
+YamlOptionTable TestTable(Scene* s) {
+  YamlOptionTable t("test");
+  ImpactModelParameters& m = s->model;
+  t.Add("mass_kg", &m.pounder_mass_kg, kPounderMassRange, "a pounder mass", "Pounder mass m_p");
+  t.Add("drop_height_m", &s->test.drop_height_m, kDropHeightRange, "a drop height",
+        "Drop height h; v0 = sqrt(2 g h) unless impact_velocity_m_s is given");
+  AddOptional(t, "impact_velocity_m_s", &s->test.impact_velocity_m_s, kImpactVelocityRange,
+              "an impact velocity", "Impact velocity v0 (overrides the drop height)");
+  t.Add("width_m", &m.width_m, kPounderSizeRange, "a pounder width D", "Pounder width D");
+  t.Add("depth_m", &m.depth_m, kPounderSizeRange, "an out-of-plane depth t_z",
+        "Out-of-plane depth t_z");
+  t.Add("density_kg_m3", &m.density_kg_m3, kSoilDensityRange, "a dry density",
+        "Dry density rho_d");
+  t.Add("bed_height_m", &m.bed_height_m, kBedHeightRange, "a bed height", "Sand bed height");
+  t.Add("g_m_s2", &m.gravity_m_s2, kSceneGravityRange, "a gravitational acceleration",
+        "Gravitational acceleration g");
+  return t;
+}
+
+std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
+  GaussianBlurOptions& g = s->preprocess.gaussian;
+  YamlOptionTable gauss("preprocess.gaussian");
+  gauss.Add("enabled", &g.enabled, "Gaussian blur on/off");
+  gauss.Add("sigma", &g.sigma_px, ValueRange{0, 20, "px", /*min_open=*/true}, "a sigma",
+            "Standard deviation of the blur");
+  AddOdd(gauss, "kernel", &g.kernel_size, ValueRange{3, 201, "px"}, "Kernel size");
+  ClaheOptions& c = s->preprocess.clahe;
+  YamlOptionTable clahe("preprocess.clahe");
+  clahe.Add("enabled", &c.enabled, "CLAHE on/off");
+  clahe.Add("clip_limit", &c.clip_limit, ValueRange{0, 1000, "", /*min_open=*/true},
+            "a clip limit", "Contrast limit relative to a flat histogram");
+  clahe.Add("tile_grid", &c.tile_grid, ValueRange{1, 64, ""}, "tiles per side", "Tiles per side");
+  return {gauss, clahe};
+}
+
+void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
+  SceneDic& d = s->dic;
+  AddPath(t, "mask", &d.mask, s->folder, "Mask image: subsets centred on non-zero pixels only");
+  t.AddCustom(
+      "threads", kThreadCountExpected, std::to_string(d.threads),
+      [&d](const YAML::Node& n) {
+        int v = 0;
+        if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !IsValidThreadCount(v))
+          return false;
+        d.threads = v;
+        return true;
+      },
+      "Worker threads");
+  t.Add("first_frame", &d.first_frame, ValueRange{0, 1e9, ""}, "frame index",
+        "First frame to correlate; 0 with a sensor record: the last frame before the impact");
+  t.Add("last_frame", &d.last_frame, ValueRange{-1, 1e9, ""}, "frame index (-1: the last)",
+        "Last frame (inclusive); -1 = the last frame");
+}
+
+YamlOptionTable DicTable(Scene* s) {
+  YamlOptionTable t("dic");
+  DicOptions& o = s->dic.options;
+  AddOdd(t, "subset_size", &o.grid.subset_size, kSubsetSizeRange, "Subset side S");
+  t.Add("step", &o.grid.step, kGridStepRange, "grid step", "Grid spacing");
+  t.AddChoice(
+      "interpolation", {"bicubic", "biquintic"}, ToString(o.icgn.interpolation),
+      [&o](const std::string& v) { o.icgn.interpolation = InterpolationFromString(v); },
+      "B-spline interpolation of the deformed image");
+  t.AddChoice(
+      "shape", {"affine", "quadratic"}, ToString(o.icgn.shape),
+      [&o](const std::string& v) { o.icgn.shape = ShapeFunctionFromString(v); },
+      "Subset shape function");
+  t.AddCustom(
+      "reference_update", "fixed, incremental, every:N (N >= 1) or auto",
+      ReferenceUpdateText(o.update),
+      [&o](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        try {
+          o.update.mode = ReferenceUpdateFromString(n.Scalar(), &o.update.every_n);
+        } catch (const Error&) {
+          return false;
+        }
+        return true;
+      },
+      "When the reference image changes (docs/dic.md)");
+  t.Add("min_zncc", &o.icgn.min_zncc, kMinZnccRange, "a ZNCC threshold",
+        "A converged subset below it is low_correlation (failed); not the auto threshold");
+  t.Add("auto_min_zncc", &o.update.auto_min_zncc, kAutoMinZnccRange, "a ZNCC threshold",
+        "reference_update auto: the reference moves on once a tracked subset falls below it");
+  t.AddCustom(
+      "max_uncertainty_px", "an uncertainty limit >= 0 [px], or none (0 and none: no limit)",
+      Num(o.icgn.max_uncertainty_px),
+      [&o](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        try {
+          o.icgn.max_uncertainty_px = MaxUncertaintyFromString(n.Scalar(), "");
+        } catch (const Error&) {
+          return false;
+        }
+        return std::isfinite(o.icgn.max_uncertainty_px) || n.Scalar() == "none";
+      },
+      "Converged subsets with sigma_u or sigma_v above it are uncertain (NaN)");
+  t.Add("max_iterations", &o.icgn.max_iterations, kMaxIterationsRange, "iteration cap",
+        "IC-GN iteration cap");
+  t.Add("convergence_px", &o.icgn.convergence_px, kConvergenceRange, "a convergence threshold",
+        "IC-GN stops when the update moves no subset point more");
+  t.Add("search_radius_px", &o.init.search_radius_px, kSearchRadiusRange, "search radius",
+        "Integer-pixel initial-guess search radius");
+  AddDicFrameKeys(t, s);
+  return t;
+}
+
+YamlOptionTable SensorTable(Scene* s) {
+  YamlOptionTable t("sensor");
+  SensorOptions& o = s->sensor.options;
+  t.Add("time_column", &o.columns.time, "Time column [s]");
+  t.Add("accel_column", &o.columns.accel, "Acceleration column");
+  t.AddChoice(
+      "accel_unit", {"auto", "g", "m/s^2"}, ToString(o.columns.accel_unit),
+      [&o](const std::string& v) { o.columns.accel_unit = AccelUnitFromString(v); },
+      "Unit of the acceleration column; auto = from its name");
+  t.Add("exposure_column", &o.columns.exposure,
+        "Camera exposure column (frame times from its rising edges); empty or absent = none");
+  t.Add("cutoff_hz", &o.cutoff_hz, ValueRange{0, 1e9, "Hz", /*min_open=*/true},
+        "a cut-off frequency", "Low-pass cut-off (< fs / 2)");
+  t.AddChoice(
+      "integrate_from", {"release", "impact"}, ToString(o.integrate_from),
+      [&o](const std::string& v) { o.integrate_from = IntegrationStartFromString(v); },
+      "Integrate from the release (v = 0) or the impact (v0 of the test)");
+  t.Add("frame_time_offset_s", &s->sensor.frame_time_offset_s, kAnyTime, "a time of frame 0",
+        "Time of frame 0 on the DAQ clock (no exposure channel)");
+  t.Add("quiet_window_s", &o.quiet_window_s, ValueRange{0, 1e3, "s", /*min_open=*/true},
+        "a window length", "Offset/noise window length");
+  return t;
+}
+
+YamlOptionTable MomentumTable(Scene* s) {
+  YamlOptionTable t("momentum");
+  SceneMomentum& m = s->momentum;
+  AddOptional(t, "pounder_center_x_px", &m.pounder_center_x_px, kNonNegative, "a pixel column",
+              "Footprint centre in the first frame");
+  AddOptional(t, "surface_y_px", &m.surface_y_px, kNonNegative, "a pixel row",
+              "Sand surface (pounder bottom at impact) in the first frame");
+  t.Add("grid_cols", &m.options.grid_cols, kCount, "subset count", "Subsets across the footprint");
+  t.Add("grid_rows", &m.options.grid_rows, kCount, "subset count", "Subset rows beneath it");
+  t.Add("min_valid_fraction", &m.options.min_valid_fraction, kFraction,
+        "a fraction of the grid's subsets", "Per frame: p_gran only where this much is valid");
+  AddOptional(t, "max_sigma_px", &m.max_sigma_px, kPositive, "a standard deviation limit [px]",
+              "Subset samples above it are left out of kinematics and p_gran");
+  return t;
+}
+
+YamlOptionTable ModelTable(Scene* s) {
+  YamlOptionTable t("model");
+  ImpactModelParameters& m = s->model;
+  t.AddCustom(
+      "added_mass_kg", "an added mass M in " + kAddedMassRange.Text(), "Eq. 4",
+      [&m](const YAML::Node& n) {
+        double v = 0;
+        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !kAddedMassRange.Contains(v))
+          return false;
+        m.added_mass_kg = v;
+        return true;
+      },
+      "Added mass M; unset: Eq. 4");
+  t.Add("K", &m.friction_K, kFrictionKRange, "a friction coefficient K", "Table 2");
+  t.Add("n", &m.damping_exponent_n, kDampingExponentNRange, "a damping exponent n", "Table 2");
+  t.Add("u", &m.damping_factor_u, kDampingFactorURange,
+        "a damping factor u (>= 1: F_dyn must resist the motion)", "Table 2");
+  t.Add("T_s", &m.sigmoid_delay_T_s, kSigmoidDelayRange, "a sigmoid delay T", "Table 2");
+  t.Add("b_per_s", &m.sigmoid_rate_b_per_s, kSigmoidRateRange, "a sigmoid rate b", "Table 2");
+  ImpactSolverOptions& o = s->solver;
+  t.AddChoice(
+      "solver", {"auto", "dopri5", "stiff"}, ToString(o.solver),
+      [&o](const std::string& v) { o.solver = ImpactSolverFromString(v); }, "ODE solver");
+  t.Add("rtol", &o.rtol, ValueRange{1e-14, 0.1, ""}, "a relative tolerance",
+        "Relative tolerance; unset: 1e-6");
+  t.Add("atol", &o.atol, kPositive, "an absolute tolerance",
+        "Absolute tolerance; unset: 1e-3 * rtol");
+  return t;
+}
+
+YamlOptionTable OutputsTable(Scene* s) {
+  YamlOptionTable t("outputs");
+  SceneOutputs& o = s->outputs;
+  AddPath(t, "folder", &o.folder, s->folder, "Output folder (`impactdic run -o` overrides)");
+  t.Add("hdf5", &o.hdf5, "results.h5");
+  t.Add("csv", &o.csv, "summary.csv and the series CSVs");
+  t.Add("figures", &o.figures, "Figures (gnuplot)");
+  t.Add("animation", &o.animation, "Animation");
+  t.Add("png_frames", &o.png_frames, "The animation's frames as PNG files");
+  return t;
+}
+
+// `stages:` in pipeline order whatever order the file lists them in.
+void ReadStages(YamlSection& top, Scene* scene) {
+  const auto& all = AllSceneStages();
+  const YAML::Node stages = top.Get("stages");
+  if (!stages.IsDefined() || stages.IsNull()) {
+    scene->stages = all;
+    return;
+  }
+  if (!stages.IsSequence()) {
+    top.Problem("stages",
+                fmt::format("got {}; expected a list of stage names", DescribeYaml(stages)));
+    return;
+  }
+  std::vector<std::string> listed;
+  for (const auto& st : stages) {
+    const std::string name = st.IsScalar() ? st.Scalar() : "";
+    if (std::find(all.begin(), all.end(), name) != all.end()) {
+      listed.push_back(name);
+      continue;
+    }
+    const std::string close = ClosestMatch(name, all);
+    top.problems()->Add(st, "stages",
+                        fmt::format("unknown stage {}{}", DescribeYaml(st),
+                                    close.empty() ? "" : " (did you mean '" + close + "'?)"));
+  }
+  for (const auto& name : all)
+    if (std::find(listed.begin(), listed.end(), name) != listed.end())
+      scene->stages.push_back(name);
+}
+
+// The keys that are not one field: roi, roi_polygon (dic), rect_mm (momentum).
+void ReadDicRegions(YamlSection& dic, SceneDic* d) {
+  dic.ReadWith(
+      "roi",
+      [d](const YAML::Node& n) {
+        std::array<int, 4> r{};
+        if (!n.IsSequence() || n.size() != 4) return false;
+        for (std::size_t i = 0; i < 4; ++i)
+          if (!n[i].IsScalar() || !YAML::convert<int>::decode(n[i], r[i])) return false;
+        if (!(r[0] >= 0 && r[1] >= 0 && r[0] < r[2] && r[1] < r[3])) return false;
+        d->roi = r;
+        return true;
+      },
+      "[x0, y0, x1, y1] in pixels with 0 <= x0 < x1 and 0 <= y0 < y1");
+  dic.ReadWith(
+      "roi_polygon",
+      [d](const YAML::Node& n) {
+        if (!n.IsSequence() || n.size() < 3) return false;
+        std::vector<std::array<double, 2>> vertices;
+        for (const auto& p : n) {
+          std::array<double, 2> v{};
+          if (!p.IsSequence() || p.size() != 2 || !p[0].IsScalar() || !p[1].IsScalar() ||
+              !YAML::convert<double>::decode(p[0], v[0]) ||
+              !YAML::convert<double>::decode(p[1], v[1]) || !kNonNegative.Contains(v[0]) ||
+              !kNonNegative.Contains(v[1]))
+            return false;
+          vertices.push_back(v);
+        }
+        d->roi_polygon = vertices;
+        return true;
+      },
+      "a list of at least 3 vertices [x, y] in pixels (>= 0)");
+}
+
+void ReadMomentumRect(YamlSection& momentum, MomentumOptions* m) {
+  momentum.ReadWith(
+      "rect_mm",
+      [m](const YAML::Node& n) {
+        std::array<double, 4> r{};
+        if (!n.IsSequence() || n.size() != 4) return false;
+        for (std::size_t i = 0; i < 4; ++i) {
+          if (!n[i].IsScalar() || !YAML::convert<double>::decode(n[i], r[i]) ||
+              !std::isfinite(r[i]))
+            return false;
+        }
+        if (!(r[0] < r[2] && r[1] < r[3])) return false;
+        m->rect_mm = r;
+        return true;
+      },
+      "[x0, y0, x1, y1] in mm with x0 < x1 and y0 < y1");
+}
+
+// Rules across keys, and the library structs' own Check() as a last guard (it names the struct
+// field; every key's range above is the struct's, so it should never fire).
+void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* problems) {
+  if (scene.inputs.frames.empty())
+    problems->Add(root["inputs"], "inputs.frames",
+                  "missing; expected a frames folder, glob or video file");
+  if (!scene.test.impact_velocity_m_s && scene.test.drop_height_m <= 0)
+    problems->Add(root["test"], "test.drop_height_m",
+                  "is 0 and no test.impact_velocity_m_s is given; expected one of them > 0");
+  const SceneDic& d = scene.dic;
+  if (d.last_frame >= 0 && d.last_frame <= d.first_frame)
+    problems->Add(
+        root["dic"], "dic.last_frame",
+        fmt::format("got {}; expected > dic.first_frame ({}) or -1", d.last_frame, d.first_frame));
+  if (!problems->empty()) return;
+  try {
+    scene.dic.options.Check();
+    scene.preprocess.Check();
+    MakeSensorOptions(scene);
+    MakeModelParameters(scene, scene.ImpactVelocity());
+    scene.solver.Check();
+  } catch (const Error& e) {
+    problems->Add(root, "(options)", e.what());
+  }
+}
+
+}  // namespace
+
+double Scene::ImpactVelocity() const {
+  if (test.impact_velocity_m_s) return *test.impact_velocity_m_s;
+  return std::sqrt(2.0 * model.gravity_m_s2 * test.drop_height_m);
+}
+
+bool Scene::HasStage(const std::string& stage) const {
+  return std::find(stages.begin(), stages.end(), stage) != stages.end();
+}
+
+const std::vector<std::string>& AllSceneStages() {
+  static const std::vector<std::string> kStages = {
+      "calibrate", "frames", "correlate", "kinematics", "sensor", "momentum", "model", "outputs"};
+  return kStages;
+}
+
+std::vector<YamlOptionTable> SceneOptionTables(Scene* scene) {
+  std::vector<YamlOptionTable> tables = {InputsTable(scene), TestTable(scene)};
+  for (YamlOptionTable& t : PreprocessTables(scene)) tables.push_back(std::move(t));
+  for (auto make : {DicTable, SensorTable, MomentumTable, ModelTable, OutputsTable})
+    tables.push_back(make(scene));
+  return tables;
+}
+
+Scene LoadScene(const std::string& path) {
+  return ParseScene(ReadInputFile(path, kSceneFileWhat, kMaxTextFileBytes), path);
+}
+
+Scene ParseScene(const std::string& yaml_text, const std::string& path) {
+  Scene scene;
+  scene.path = path;
+  scene.yaml_text = yaml_text;
+  scene.folder = fs::path(path).parent_path().string();
+  if (scene.folder.empty()) scene.folder = ".";
+  scene.name = fs::path(path).stem().string();
+  scene.outputs.folder = (fs::path(scene.folder) / "results").lexically_normal().string();
+
+  const YAML::Node root = LoadYaml(yaml_text, path, kSceneFileWhat);
+  YamlProblems problems(path);
+  YamlSection top(root, "", &problems);
+  top.Read("name", &scene.name);
+  ReadStages(top, &scene);
+  YamlSection preprocess = top.Sub("preprocess");
+  for (const YamlOptionTable& table : SceneOptionTables(&scene)) {
+    const std::string& name = table.section();
+    const bool nested = name.rfind("preprocess.", 0) == 0;
+    YamlSection section = nested ? preprocess.Sub(name.substr(11)) : top.Sub(name);
+    table.Read(section);
+    if (name == "dic") ReadDicRegions(section, &scene.dic);
+    if (name == "momentum") ReadMomentumRect(section, &scene.momentum.options);
+    section.Finish();
+  }
+  preprocess.Finish();
+  top.Finish();
+  CheckScene(scene, root, &problems);
+  problems.ThrowIfAny("scene file");
+  scene.model.impact_velocity_m_s = scene.ImpactVelocity();
+  return scene;
+}
+
+SensorOptions MakeSensorOptions(const Scene& scene) {
+  SensorOptions o = scene.sensor.options;
+  o.g_m_s2 = scene.model.gravity_m_s2;
+  if (o.integrate_from == IntegrationStart::kImpact) o.impact_velocity_m_s = scene.ImpactVelocity();
+  o.Check();
+  return o;
+}
+
+MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px) {
+  MomentumOptions m = scene.momentum.options;
+  m.pounder_mass_kg = scene.model.pounder_mass_kg;
+  m.pounder_width_m = scene.model.width_m;
+  m.depth_m = scene.model.depth_m;
+  m.density_kg_m3 = scene.model.density_kg_m3;
+  const SceneMomentum& sm = scene.momentum;
+  if (sm.pounder_center_x_px && sm.surface_y_px) {
+    const double cx_mm = *sm.pounder_center_x_px * mm_per_px;
+    m.footprint.x_left_mm = cx_mm - 500 * scene.model.width_m;
+    m.footprint.x_right_mm = cx_mm + 500 * scene.model.width_m;
+    m.footprint.bottom_y_mm = *sm.surface_y_px * mm_per_px;
+  } else if (!m.rect_mm) {
+    throw Error(ErrorKind::kInvalidValue, "momentum.pounder_center_x_px / surface_y_px", "missing",
+                "the pounder's position in the first frame (px), or momentum.rect_mm")
+        .WithFile(scene.path);
+  }
+  m.Check();
+  return m;
+}
+
+ImpactModelParameters MakeModelParameters(const Scene& scene, double impact_velocity_m_s) {
+  ImpactModelParameters p = scene.model;
+  p.impact_velocity_m_s = impact_velocity_m_s;
+  p.Check();
+  return p;
+}
+
+}  // namespace impactdic

@@ -1,0 +1,76 @@
+#include "impactdic/pipeline/scene_analysis.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/momentum/scene_analysis.h"
+
+namespace impactdic {
+
+SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
+                                     double mm_per_px, bool allow_partial) {
+  CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
+             fmt::format("{}", mm_per_px), "> 0 mm/px (or a calibration with a plane scale)");
+  if (scene.inputs.sensor.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "inputs.sensor", "empty",
+                "the DAQ CSV (the momentum analysis needs the pounder velocity)")
+        .WithFile(scene.path);
+  }
+  const SensorOptions sopt = MakeSensorOptions(scene);
+  const MomentumOptions mopt = MakeMomentumOptions(scene, mm_per_px);
+  long first = -1;
+  CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
+  if (scene.momentum.max_sigma_px) {
+    std::size_t excluded = 0;
+    try {
+      excluded =
+          ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &dic);
+    } catch (Error& e) {
+      e.WithFile(results_path);
+      throw;
+    }
+    LogWarning(
+        "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
+        "momentum.max_sigma_px = {} px)",
+        excluded, dic.frames * dic.subsets, *scene.momentum.max_sigma_px);
+  }
+  if (first < 0) first = scene.dic.first_frame;
+  SceneAnalysisRun run;
+  run.results_path = results_path;
+  run.sensor = AnalyzeSensorCsv(scene.inputs.sensor, sopt);
+  PanelMapping mapping;
+  mapping.mm_per_px = mm_per_px;
+  try {
+    run.analysis =
+        AnalyzeCorrelation(dic, mapping, scene.inputs.fps, scene.sensor.frame_time_offset_s,
+                           run.sensor, mopt, static_cast<std::size_t>(first));
+  } catch (Error& e) {
+    // Name the file to fix: the DAQ record when its exposure channel times the frames, else the
+    // scene's settings (fps, frame_time_offset_s, the grid).
+    if (e.file().empty()) {
+      const bool timing = e.where() == "exposure channel" || e.where() == "frame times";
+      e.WithFile(timing && !run.sensor.exposure.empty() ? scene.inputs.sensor : scene.path);
+    }
+    throw;
+  }
+  const MomentumSummary& m = run.analysis.momentum.summary;
+  if (!m.IsUsable() && !allow_partial) {
+    throw Error(ErrorKind::kNumerical,
+                fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
+                            "measurable: {}\nNothing was written ({} is as it was); `impactdic "
+                            "analyze --allow-partial` writes it, with the figures that could not "
+                            "be measured as NaN",
+                            scene.name, m.t_end_problem, results_path));
+  }
+  H5Writer out(results_path, H5Writer::Mode::kUpdate);
+  WriteAnalysis(out, run.analysis, run.sensor);
+  out.SetAttribute("kinematics", "mm_per_px", mm_per_px);
+  out.Commit();
+  return run;
+}
+
+}  // namespace impactdic
