@@ -18,29 +18,31 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/sensor/sensor.h"
 
 namespace impactdic::cli {
 namespace {
 
+// Defaults: the sensor library's SensorOptions, except --accel-column (empty: the first of
+// accel_g, accel_m_s2 in the file).
 struct AnalyzeArgs {
   std::string scene;
   std::string sensor;
   bool from_release = false;
   std::optional<double> impact_velocity;
-  double cutoff = 1500;
+  double cutoff = SensorOptions{}.cutoff_hz;
   std::string format = "text";
-  std::string time_column = "time_s";
+  std::string time_column = SensorOptions{}.columns.time;
   std::string accel_column;
-  std::string accel_unit = "auto";
-  std::string exposure_column = "exposure";
-  std::string offset_reference = "free-fall";
+  std::string accel_unit = ToString(SensorOptions{}.columns.accel_unit);
+  std::string exposure_column = SensorOptions{}.columns.exposure;
+  std::string offset_reference = ToString(SensorOptions{}.offset_reference);
   std::optional<double> release_time;
-  double quiet_window = 0.005;
-  double impact_threshold = 5;
+  double quiet_window = SensorOptions{}.quiet_window_s;
+  double impact_threshold = SensorOptions{}.impact_threshold_g;
   std::string output;
   std::string results;
   bool allow_partial = false;
@@ -224,27 +226,29 @@ void RegisterAnalyzeCommand(CLI::App& app) {
                 "--release-time)");
   cmd->add_option("--impact-velocity", args->impact_velocity,
                   "integrate from the detected impact with this velocity [m/s]");
-  cmd->add_option("--cutoff", args->cutoff, "low-pass cut-off [Hz] (default 1500)");
+  cmd->add_option("--cutoff", args->cutoff, "low-pass cut-off [Hz]")->capture_default_str();
   cmd->add_option("--format", args->format, "output format: text or json (default text)");
-  cmd->add_option("--time-column", args->time_column, "time column [s] (default time_s)");
+  cmd->add_option("--time-column", args->time_column, "time column [s]")->capture_default_str();
   cmd->add_option("--accel-column", args->accel_column,
                   "acceleration column (default: accel_g, else accel_m_s2)");
-  cmd->add_option("--accel-unit", args->accel_unit,
-                  "auto (from the column name), g or m/s^2 (default auto)");
+  cmd->add_option("--accel-unit", args->accel_unit, "auto (from the column name), g or m/s^2")
+      ->capture_default_str();
   cmd->add_option("--exposure-column", args->exposure_column,
-                  "camera exposure column (default exposure; ignored when absent)");
+                  "camera exposure column (ignored when absent)")
+      ->capture_default_str();
   cmd->add_option("--offset-reference", args->offset_reference,
                   "what reads a known level: free-fall (the whole free fall reads 0 g), "
                   "free-fall-window (the quiet window before the impact reads 0 g), rest (the "
-                  "record start reads 1 g) or none (default free-fall)");
+                  "record start reads 1 g) or none")
+      ->capture_default_str();
   cmd->add_option("--release-time", args->release_time,
                   "release time on the DAQ clock [s] (with --from-release, when the record does "
                   "not start at rest)");
-  cmd->add_option("--quiet-window", args->quiet_window,
-                  "length of the offset/noise window [s] (default 0.005)");
+  cmd->add_option("--quiet-window", args->quiet_window, "length of the offset/noise window [s]")
+      ->capture_default_str();
   cmd->add_option("--impact-threshold", args->impact_threshold,
-                  "reading [g] that is certainly the impact; the onset is found before it "
-                  "(default 5)");
+                  "reading [g] that is certainly the impact; the onset is found before it")
+      ->capture_default_str();
   cmd->add_option("--output", args->output, "also write the sensor series to this HDF5 file");
   cmd->add_option("--results", args->results,
                   "correlation results HDF5 of the scene (default <outputs.folder>/results.h5)");

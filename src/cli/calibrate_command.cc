@@ -26,9 +26,9 @@ struct CalibrateArgs {
   std::vector<std::string> images;
   std::string output;
   std::string format = "text";
-  double max_rms_px = 1.0;
-  int min_views = 6;
-  bool fix_k3 = false;
+  double max_rms_px = CalibrationOptions{}.max_rms_px;  // Defaults: the calib library's.
+  int min_views = CalibrationOptions{}.min_views;
+  bool fix_k3 = CalibrationOptions{}.fix_k3;
 };
 
 void PrintText(const CameraCalibration& c, const CalibrationSummary& s, const std::string& out) {

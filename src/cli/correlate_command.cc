@@ -21,25 +21,41 @@
 namespace impactdic::cli {
 namespace {
 
+// Defaults: the dic library's DicOptions (one definition for `correlate`, scenes and the library).
 struct CorrelateArgs {
   std::string reference;
   std::vector<std::string> deformed;
   std::string frames;
-  int subset = 25;
-  int step = 10;
+  int subset = DicOptions{}.grid.subset_size;
+  int step = DicOptions{}.grid.step;
   std::string roi;
   std::string mask;
-  std::string interp = "bicubic";
-  std::string shape = "affine";
-  std::string update = "auto";
+  std::string interp = ToString(DicOptions{}.icgn.interpolation);
+  std::string shape = ToString(DicOptions{}.icgn.shape);
+  std::string update = ReferenceUpdateText(DicOptions{}.update);
   bool update_given = false;  // --reference-update was on the command line.
   int threads = 0;
-  int search_radius = 40;
-  double min_zncc = 0.8;
-  std::string mode = "sequence";
-  std::string max_uncertainty;  // Empty: the library default (IcgnOptions).
+  int search_radius = DicOptions{}.init.search_radius_px;
+  double min_zncc = DicOptions{}.icgn.min_zncc;
+  std::string mode = ToString(DicOptions{}.mode);
+  std::string max_uncertainty = fmt::format("{}", DicOptions{}.icgn.max_uncertainty_px);
   std::string output;
 };
+
+// The command-line flag of a DicOptions field named in a library error.
+std::string FlagOf(const std::string& field) {
+  static const std::vector<std::pair<std::string, std::string>> kFlags = {
+      {"dic.grid.subset_size", "--subset"},
+      {"dic.grid.step", "--step"},
+      {"dic.grid.roi", "--roi"},
+      {"dic.grid.mask", "--mask"},
+      {"dic.init.search_radius_px", "--search-radius"},
+      {"dic.icgn.min_zncc", "--min-zncc"},
+      {"dic.icgn.max_uncertainty_px", "--max-uncertainty"}};
+  for (const auto& [name, flag] : kFlags)
+    if (name == field) return flag;
+  return field;
+}
 
 cv::Rect ParseRoi(const std::string& text) {
   std::vector<int> v;
@@ -74,9 +90,6 @@ void Run(const CorrelateArgs& a) {
     CheckValue(!a.deformed.empty(), "--deformed", "missing", "at least one deformed image");
   }
   DicOptions options;
-  CheckValue(a.subset >= 5 && a.subset % 2 == 1, "--subset", std::to_string(a.subset),
-             "an odd integer >= 5 [px]");
-  CheckValue(a.step >= 1, "--step", std::to_string(a.step), "an integer >= 1 [px]");
   CheckThreadCount(a.threads, "--threads");
   options.grid.subset_size = a.subset;
   options.grid.step = a.step;
@@ -92,10 +105,13 @@ void Run(const CorrelateArgs& a) {
     throw Error(ErrorKind::kInvalidValue, "--reference-update", a.update + " with --mode pairs",
                 "no --reference-update (or fixed): pairs never update the reference");
   }
-  if (!a.max_uncertainty.empty())
-    options.icgn.max_uncertainty_px =
-        MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
-  options.Check();
+  options.icgn.max_uncertainty_px =
+      MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
+  try {
+    options.Check();
+  } catch (const Error& e) {
+    throw Error(e.kind(), FlagOf(e.where()), e.found(), e.expected());
+  }
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
   const bool video = !pair && IsVideoFile(a.frames);  // Its frames, as `run`'s inputs.frames.
@@ -149,34 +165,39 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--reference", args->reference, "Reference image (first frame)");
   cmd->add_option("--deformed", args->deformed, "Deformed image(s), in order");
   cmd->add_option("--mode", args->mode,
-                  "sequence | pairs (default sequence): sequence = the deformed images are "
+                  "sequence | pairs: sequence = the deformed images are "
                   "frames of one recording, each predicted from the previous ones, reference "
                   "updated by --reference-update; pairs = independent images, each correlated "
-                  "against the reference alone (--reference-update does not apply)");
+                  "against the reference alone (--reference-update does not apply)")
+      ->capture_default_str();
   cmd->add_option("--frames", args->frames,
                   "Folder or glob of frames (sorted; the first is the reference), or a video "
                   "file (.mp4, .avi, .mov, .mkv: its frames, numbered from 0)");
-  cmd->add_option("--subset", args->subset, "Subset size [px], odd (default 25)");
-  cmd->add_option("--step", args->step, "Grid step [px] (default 10)");
+  cmd->add_option("--subset", args->subset, "Subset size [px], odd, in " + kSubsetSizeRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--step", args->step, "Grid step [px]")->capture_default_str();
   cmd->add_option("--roi", args->roi, "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
   cmd->add_option("--mask", args->mask,
                   "Mask image of the reference's size: subsets are correlated only where their "
                   "centre pixel is non-zero (status `masked` elsewhere)");
-  cmd->add_option("--interp", args->interp, "bicubic | biquintic (default bicubic)");
-  cmd->add_option("--shape", args->shape, "affine | quadratic (default affine)");
-  cmd->add_option("--reference-update", args->update,
-                  "fixed | incremental | every:N | auto (default auto)");
+  cmd->add_option("--interp", args->interp, "bicubic | biquintic")->capture_default_str();
+  cmd->add_option("--shape", args->shape, "affine | quadratic")->capture_default_str();
+  cmd->add_option("--reference-update", args->update, "fixed | incremental | every:N | auto")
+      ->capture_default_str();
   cmd->add_option("--threads", args->threads,
-                  std::string("Worker threads: ") + kThreadCountExpected + " (default 0)");
+                  std::string("Worker threads: ") + kThreadCountExpected)
+      ->capture_default_str();
   cmd->add_option("--search-radius", args->search_radius,
-                  "Integer search radius [px] (default 40)");
-  cmd->add_option("--min-zncc", args->min_zncc, "ZNCC below which a subset fails (default 0.8)");
+                  "Integer search radius [px], in " + kSearchRadiusRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--min-zncc", args->min_zncc,
+                  "ZNCC below which a subset fails, in " + kMinZnccRange.Text())
+      ->capture_default_str();
   cmd->add_option("--max-uncertainty", args->max_uncertainty,
-                  fmt::format("Estimated standard deviation [px] of u or v above which a "
-                              "converged subset is `uncertain` (NaN); 0 or none: no limit, every "
-                              "converged subset is reported with sigma_u_px, sigma_v_px "
-                              "(default {})",
-                              IcgnOptions{}.max_uncertainty_px));
+                  "Estimated standard deviation [px] of u or v above which a "
+                  "converged subset is `uncertain` (NaN); 0 or none: no limit, every "
+                  "converged subset is reported with sigma_u_px, sigma_v_px")
+      ->capture_default_str();
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;

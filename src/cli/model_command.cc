@@ -22,14 +22,22 @@
 namespace impactdic::cli {
 namespace {
 
+// Defaults: the model library's ImpactModelParameters and ImpactSolverOptions (Table 2 is
+// defined there once).
 struct ModelArgs {
   std::optional<double> mass, height, velocity, width, added_mass;
-  double depth = 0.192;
-  double K = 50, n = 0.2, u = 1.9, T = 0.002, b = 2500, rho = 1550, g = 9.81;
-  double bed_height = 0.6;
+  double depth = ImpactModelParameters{}.depth_m;
+  double K = ImpactModelParameters{}.friction_K;
+  double n = ImpactModelParameters{}.damping_exponent_n;
+  double u = ImpactModelParameters{}.damping_factor_u;
+  double T = ImpactModelParameters{}.sigmoid_delay_T_s;
+  double b = ImpactModelParameters{}.sigmoid_rate_b_per_s;
+  double rho = ImpactModelParameters{}.density_kg_m3;
+  double g = ImpactModelParameters{}.gravity_m_s2;
+  double bed_height = ImpactModelParameters{}.bed_height_m;
   std::optional<double> rtol, atol, t_max;
-  std::string solver = "auto";
-  std::string error_estimate = "companion";
+  std::string solver = ToString(ImpactSolverOptions{}.solver);
+  std::string error_estimate = ToString(ImpactSolverOptions{}.error_estimator);
   bool ode45_defaults = false;
   std::string format = "text";
   std::string output;
@@ -122,11 +130,11 @@ ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
   if (a.width) CheckRange(*a.width, kPounderSizeRange, "--width", "a pounder width D");
   CheckRange(a.depth, kPounderSizeRange, "--depth", "an out-of-plane depth t_z");
   if (a.added_mass) CheckRange(*a.added_mass, kAddedMassRange, "--added-mass", "an added mass M");
-  RequireFinite(a.K, a.K >= 0, "--K", "K >= 0");
-  RequireFinite(a.n, a.n >= 0 && a.n <= 1, "--n", "n in [0, 1]");
-  RequireFinite(a.u, a.u >= 1, "--u", "u >= 1 (F_dyn must resist the motion)");
-  RequireFinite(a.T, a.T >= 0, "--T", "T >= 0 s");
-  RequireFinite(a.b, a.b > 0 && a.b <= 1e12, "--b", "b in (0, 1e12] 1/s");
+  CheckRange(a.K, kFrictionKRange, "--K", "a friction coefficient K");
+  CheckRange(a.n, kDampingExponentNRange, "--n", "a damping exponent n");
+  CheckRange(a.u, kDampingFactorURange, "--u", "a damping factor u (F_dyn must resist the motion)");
+  CheckRange(a.T, kSigmoidDelayRange, "--T", "a sigmoid delay T");
+  CheckRange(a.b, kSigmoidRateRange, "--b", "a sigmoid rate b");
   CheckRange(a.rho, kSoilDensityRange, "--rho", "a dry density");
   CheckRange(a.g, kGravityRange, "--g", "a gravitational acceleration");
   CheckRange(a.bed_height, kBedHeightRange, "--bed-height", "a bed height");
@@ -303,22 +311,27 @@ void RegisterModelCommand(CLI::App& app) {
   cmd->add_option("--velocity", args->velocity,
                   "impact velocity v0, in " + kImpactVelocityRange.Text());
   cmd->add_option("--width", args->width, "pounder width D, in " + kPounderSizeRange.Text());
-  cmd->add_option("--depth", args->depth,
-                  "out-of-plane depth t_z, in " + kPounderSizeRange.Text() + " (default 0.192)");
+  cmd->add_option("--depth", args->depth, "out-of-plane depth t_z, in " + kPounderSizeRange.Text())
+      ->capture_default_str();
   cmd->add_option("--added-mass", args->added_mass,
                   "maximum added mass M, in " + kAddedMassRange.Text() + " (default: Eq. 4)");
-  cmd->add_option("--K", args->K, "friction coefficient K, >= 0 (default 50)");
-  cmd->add_option("--n", args->n, "damping exponent n, [0, 1] (default 0.2)");
-  cmd->add_option("--u", args->u, "damping factor u, >= 1 (default 1.9)");
-  cmd->add_option("--T", args->T, "sigmoid delay T [s], >= 0 (default 0.002)");
-  cmd->add_option("--b", args->b, "sigmoid rate b [1/s], (0, 1e12] (default 2500)");
-  cmd->add_option("--rho", args->rho,
-                  "dry density rho_d, in " + kSoilDensityRange.Text() + " (default 1550)");
-  cmd->add_option("--g", args->g, "gravity g, in " + kGravityRange.Text() + " (default 9.81)");
+  cmd->add_option("--K", args->K, "friction coefficient K, in " + kFrictionKRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--n", args->n, "damping exponent n, in " + kDampingExponentNRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--u", args->u, "damping factor u, in " + kDampingFactorURange.Text())
+      ->capture_default_str();
+  cmd->add_option("--T", args->T, "sigmoid delay T, in " + kSigmoidDelayRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--b", args->b, "sigmoid rate b, in " + kSigmoidRateRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--rho", args->rho, "dry density rho_d, in " + kSoilDensityRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--g", args->g, "gravity g, in " + kGravityRange.Text())->capture_default_str();
   cmd->add_option("--bed-height", args->bed_height,
-                  "sand bed height for the penetration warning, in " + kBedHeightRange.Text() +
-                      " (default 0.6)");
-  cmd->add_option("--solver", args->solver, "auto | dopri5 | stiff (default auto)");
+                  "sand bed height for the penetration warning, in " + kBedHeightRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--solver", args->solver, "auto | dopri5 | stiff")->capture_default_str();
   cmd->add_option("--rtol", args->rtol, "relative tolerance, [1e-14, 0.1] (default 1e-6)");
   cmd->add_option("--atol", args->atol, "absolute tolerance, > 0 (default 1e-3 * rtol)");
   cmd->add_flag(

@@ -22,8 +22,8 @@ void RegisterRenderCommand(CLI::App& app) {
     bool png_frames = false;
     bool no_animation = false;
     bool no_figures = false;
-    std::string codec = "auto";
-    double fps = 25.0;
+    std::string codec = ToString(AnimationOptions{}.codec);  // Defaults: the render library's.
+    double fps = AnimationOptions{}.fps;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("RESULTS", args->results, "results.h5 written by `impactdic run`")->required();

@@ -114,9 +114,8 @@ SubsetStatus SubsetStatusFromString(const std::string& name) {
 }
 
 void GridOptions::Check() const {
-  CheckValue(kSubsetSizeRange.Contains(subset_size) && subset_size % 2 == 1,
-             "dic.grid.subset_size", std::to_string(subset_size),
-             "an odd integer in " + kSubsetSizeRange.Text());
+  CheckValue(kSubsetSizeRange.Contains(subset_size) && subset_size % 2 == 1, "dic.grid.subset_size",
+             std::to_string(subset_size), "an odd integer in " + kSubsetSizeRange.Text());
   CheckValue(kGridStepRange.Contains(step), "dic.grid.step", std::to_string(step),
              "an integer in " + kGridStepRange.Text());
   CheckValue(roi.width >= 0 && roi.height >= 0 && roi.x >= 0 && roi.y >= 0, "dic.grid.roi",

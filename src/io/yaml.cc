@@ -162,8 +162,7 @@ std::string DescribeYaml(const YAML::Node& node) {
   return "a map";
 }
 
-void YamlProblems::Add(const YAML::Node& at, const std::string& key_path,
-                       const std::string& text) {
+void YamlProblems::Add(const YAML::Node& at, const std::string& key_path, const std::string& text) {
   std::string where = file_;
   if (at.IsDefined() && at.Mark().line >= 0) where += fmt::format(":{}", at.Mark().line + 1);
   lines_.push_back(fmt::format("{}: {}: {}", where, key_path, text));
@@ -302,9 +301,9 @@ void YamlSection::Finish() {
   for (const auto& entry : node_) {
     const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "(complex key)";
     if (known_.count(key)) continue;
-    problems_->Add(entry.first, PathOf(key),
-                   "unknown key" + DidYouMean(key, known) + "; known keys here: " +
-                       JoinKeys(known));
+    problems_->Add(
+        entry.first, PathOf(key),
+        "unknown key" + DidYouMean(key, known) + "; known keys here: " + JoinKeys(known));
   }
 }
 
@@ -340,8 +339,7 @@ YamlOptionTable& YamlOptionTable::Add(const std::string& key, int* field, const 
       doc);
 }
 
-YamlOptionTable& YamlOptionTable::Add(const std::string& key, bool* field,
-                                      const std::string& doc) {
+YamlOptionTable& YamlOptionTable::Add(const std::string& key, bool* field, const std::string& doc) {
   return AddCustom(
       key, "true or false", *field ? "true" : "false",
       [field](const YAML::Node& n) {

@@ -78,7 +78,8 @@ void AddOdd(YamlOptionTable& t, const std::string& key, int* field, const ValueR
 YamlOptionTable InputsTable(Scene* s) {
   YamlOptionTable t("inputs");
   SceneInputs& in = s->inputs;
-  AddPath(t, "frames", &in.frames, s->folder, "Folder, glob or video file of the frames (required)");
+  AddPath(t, "frames", &in.frames, s->folder,
+          "Folder, glob or video file of the frames (required)");
   t.Add("fps", &in.fps, kCameraFpsRange, "a camera frame rate", "Camera frame rate");
   AddPath(t, "calibration", &in.calibration, s->folder, "Calibration YAML (impactdic calibrate)");
   t.Add("mm_per_px", &in.mm_per_px, kMmPerPxRange, "an image scale",
@@ -100,8 +101,7 @@ YamlOptionTable TestTable(Scene* s) {
   t.Add("width_m", &m.width_m, kPounderSizeRange, "a pounder width D", "Pounder width D");
   t.Add("depth_m", &m.depth_m, kPounderSizeRange, "an out-of-plane depth t_z",
         "Out-of-plane depth t_z");
-  t.Add("density_kg_m3", &m.density_kg_m3, kSoilDensityRange, "a dry density",
-        "Dry density rho_d");
+  t.Add("density_kg_m3", &m.density_kg_m3, kSoilDensityRange, "a dry density", "Dry density rho_d");
   t.Add("bed_height_m", &m.bed_height_m, kBedHeightRange, "a bed height", "Sand bed height");
   t.Add("g_m_s2", &m.gravity_m_s2, kSceneGravityRange, "a gravitational acceleration",
         "Gravitational acceleration g");
@@ -118,8 +118,8 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
   ClaheOptions& c = s->preprocess.clahe;
   YamlOptionTable clahe("preprocess.clahe");
   clahe.Add("enabled", &c.enabled, "CLAHE on/off");
-  clahe.Add("clip_limit", &c.clip_limit, ValueRange{0, 1000, "", /*min_open=*/true},
-            "a clip limit", "Contrast limit relative to a flat histogram");
+  clahe.Add("clip_limit", &c.clip_limit, ValueRange{0, 1000, "", /*min_open=*/true}, "a clip limit",
+            "Contrast limit relative to a flat histogram");
   clahe.Add("tile_grid", &c.tile_grid, ValueRange{1, 64, ""}, "tiles per side", "Tiles per side");
   return {gauss, clahe};
 }

@@ -29,91 +29,161 @@ namespace fs = std::filesystem;
 
 constexpr const char* kSpecFileWhat = "a synthetic scene spec (YAML)";
 
-// Reads one map of the spec, remembering which keys were asked for so unknown keys are errors.
-class SpecSection {
- public:
-  SpecSection(YAML::Node node, std::string prefix, std::string file)
-      : node_(std::move(node)), prefix_(std::move(prefix)), file_(std::move(file)) {
-    if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap())
-      Fail(node_, prefix_.empty() ? "(top level)" : prefix_, "a map of keys");
-  }
+// Spec keys hold any value of their type; ImpactSceneSpec::Check() judges the values.
+void Number(YamlOptionTable& t, const std::string& key, double* field) {
+  t.AddCustom(
+      key, "a number", fmt::format("{}", *field),
+      [field](const YAML::Node& n) {
+        double v = 0;
+        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v))
+          return false;
+        *field = v;
+        return true;
+      },
+      "");
+}
 
-  std::string PathOf(const std::string& key) const {
-    return prefix_.empty() ? key : prefix_ + "." + key;
-  }
-  YAML::Node Get(const std::string& key) {
-    known_.insert(key);
-    if (!node_.IsDefined() || node_.IsNull()) return YAML::Node();
-    return node_[key];
-  }
-  SpecSection Sub(const std::string& key) { return SpecSection(Get(key), PathOf(key), file_); }
+void Integer(YamlOptionTable& t, const std::string& key, int* field) {
+  t.AddCustom(
+      key, "an integer", std::to_string(*field),
+      [field](const YAML::Node& n) {
+        return n.IsScalar() && YAML::convert<int>::decode(n, *field);
+      },
+      "");
+}
 
-  void Number(const std::string& key, double* value) {
-    YAML::Node n = Get(key);
-    if (!n.IsDefined() || n.IsNull()) return;
-    double v = 0;
-    if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v))
-      Fail(n, PathOf(key), "a number");
-    *value = v;
-  }
-  void Integer(const std::string& key, int* value) {
-    YAML::Node n = Get(key);
-    if (!n.IsDefined() || n.IsNull()) return;
-    int v = 0;
-    if (!n.IsScalar() || !YAML::convert<int>::decode(n, v)) Fail(n, PathOf(key), "an integer");
-    *value = v;
-  }
-  void Unsigned(const std::string& key, std::uint64_t* value) {
-    YAML::Node n = Get(key);
-    if (!n.IsDefined() || n.IsNull()) return;
-    unsigned long long v = 0;
-    if (!n.IsScalar() || !YAML::convert<unsigned long long>::decode(n, v))
-      Fail(n, PathOf(key), "a non-negative integer");
-    *value = v;
-  }
-  void Bool(const std::string& key, bool* value) {
-    YAML::Node n = Get(key);
-    if (!n.IsDefined() || n.IsNull()) return;
-    bool v = false;
-    if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) Fail(n, PathOf(key), "true or false");
-    *value = v;
-  }
-  void String(const std::string& key, std::string* value) {
-    YAML::Node n = Get(key);
-    if (!n.IsDefined() || n.IsNull()) return;
-    if (!n.IsScalar()) Fail(n, PathOf(key), "a text value");
-    *value = n.Scalar();
-  }
-  // Throws for keys nobody asked for.
-  void Finish() const {
-    if (!node_.IsDefined() || !node_.IsMap()) return;
-    for (const auto& entry : node_) {
-      const std::string key = entry.first.Scalar();
-      if (known_.count(key)) continue;
-      std::string list;
-      for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
-      throw Error(ErrorKind::kInvalidValue, PathOf(key), "an unknown key", "one of " + list)
-          .WithFile(file_, entry.first.Mark().line + 1);
-    }
-  }
-  [[noreturn]] void Fail(const YAML::Node& n, const std::string& where,
-                         const std::string& expected) const {
-    std::string found = "nothing";
-    if (n.IsScalar())
-      found = "'" + n.Scalar() + "'";
-    else if (n.IsSequence())
-      found = "a list";
-    else if (n.IsMap())
-      found = "a map";
-    throw Error(ErrorKind::kInvalidValue, where, found, expected)
-        .WithFile(file_, n.Mark().line >= 0 ? n.Mark().line + 1 : 0);
-  }
+void Seed(YamlOptionTable& t, const std::string& key, std::uint64_t* field) {
+  t.AddCustom(
+      key, "a non-negative integer", std::to_string(*field),
+      [field](const YAML::Node& n) {
+        unsigned long long v = 0;
+        if (!n.IsScalar() || !YAML::convert<unsigned long long>::decode(n, v)) return false;
+        *field = v;
+        return true;
+      },
+      "");
+}
 
- private:
-  YAML::Node node_;
-  std::string prefix_, file_;
-  std::set<std::string> known_;
-};
+YamlOptionTable TestAndModelKeys(ImpactSceneSpec* s, YamlOptionTable* model) {
+  YamlOptionTable t("test");
+  Number(t, "mass_kg", &s->pounder_mass_kg);
+  Number(t, "drop_height_m", &s->drop_height_m);
+  Number(t, "impact_velocity_m_s", &s->impact_velocity_m_s);
+  Number(t, "width_m", &s->width_m);
+  Number(t, "depth_m", &s->depth_m);
+  Number(t, "density_kg_m3", &s->density_kg_m3);
+  Number(t, "bed_height_m", &s->bed_height_m);
+  Number(t, "g_m_s2", &s->g_m_s2);
+  model->AddCustom(
+      "added_mass", "grid, eq4 or an added mass >= 0 [kg]", ToString(s->added_mass),
+      [s](const YAML::Node& n) {
+        double v = 0;
+        if (n.IsScalar() && n.Scalar() == "grid") {
+          s->added_mass = SceneAddedMass::kGrid;
+        } else if (n.IsScalar() && n.Scalar() == "eq4") {
+          s->added_mass = SceneAddedMass::kEq4;
+        } else if (n.IsScalar() && YAML::convert<double>::decode(n, v) && std::isfinite(v) &&
+                   v >= 0) {
+          s->added_mass = SceneAddedMass::kGiven;
+          s->added_mass_kg = v;
+        } else {
+          return false;
+        }
+        return true;
+      },
+      "");
+  Number(*model, "K", &s->K);
+  Number(*model, "n", &s->n);
+  Number(*model, "u", &s->u);
+  Number(*model, "T_s", &s->T_s);
+  Number(*model, "b_per_s", &s->b_per_s);
+  return t;
+}
+
+YamlOptionTable CameraKeys(ImpactSceneSpec* s) {
+  YamlOptionTable t("camera");
+  t.AddChoice(
+      "lens", {"sample", "ideal"}, ToString(s->lens),
+      [s](const std::string& v) { s->lens = SceneLensFromString(v, "camera.lens"); }, "");
+  Integer(t, "width", &s->width);
+  Integer(t, "height", &s->height);
+  Number(t, "mm_per_px", &s->mm_per_px);
+  Number(t, "fps", &s->fps);
+  Number(t, "surface_fraction", &s->surface_fraction);
+  return t;
+}
+
+YamlOptionTable FramesKeys(ImpactSceneSpec* s) {
+  YamlOptionTable t("frames");
+  Integer(t, "before_impact", &s->frames_before_impact);
+  Integer(t, "count", &s->frames);
+  Number(t, "impact_phase", &s->impact_phase);
+  Integer(t, "bits", &s->bits);
+  Number(t, "noise_sigma", &s->noise_sigma);
+  Integer(t, "supersampling", &s->supersampling);
+  Number(t, "background_level", &s->background_level);
+  Number(t, "pounder_level", &s->pounder_level);
+  return t;
+}
+
+YamlOptionTable SpeckleKeys(ImpactSceneSpec* s) {
+  YamlOptionTable t("speckle");
+  Number(t, "blob_radius_px", &s->speckle.blob_radius_px);
+  Number(t, "density", &s->speckle.density);
+  Number(t, "contrast", &s->speckle.contrast);
+  Number(t, "background", &s->speckle.background);
+  Seed(t, "seed", &s->speckle.seed);
+  return t;
+}
+
+YamlOptionTable SoilKeys(SceneSoilOptions* soil) {
+  YamlOptionTable t("soil");
+  Number(t, "core_depth_mm", &soil->core_depth_mm);
+  Number(t, "cone_depth_mm", &soil->cone_depth_mm);
+  Number(t, "decay_length_mm", &soil->decay_length_mm);
+  Number(t, "wave_speed_m_s", &soil->wave_speed_m_s);
+  Number(t, "wave_amplitude_mm", &soil->wave_amplitude_mm);
+  Number(t, "wave_decay_length_mm", &soil->wave_decay_length_mm);
+  Number(t, "wave_rise_time_s", &soil->wave_rise_time_s);
+  return t;
+}
+
+YamlOptionTable SensorKeys(SceneSensorOptions* sensor) {
+  YamlOptionTable t("sensor");
+  Number(t, "rate_hz", &sensor->rate_hz);
+  Number(t, "offset_g", &sensor->offset_g);
+  Number(t, "noise_g", &sensor->noise_g);
+  Number(t, "exposure_s", &sensor->exposure_s);
+  Number(t, "pre_release_s", &sensor->pre_release_s);
+  Number(t, "tail_s", &sensor->tail_s);
+  return t;
+}
+
+// The spec's sections (after `preset`, which sets the defaults they override).
+std::vector<YamlOptionTable> SpecTables(ImpactSceneSpec* s) {
+  YamlOptionTable model("model");
+  YamlOptionTable test = TestAndModelKeys(s, &model);
+  YamlOptionTable dic("dic");
+  Integer(dic, "subset_size", &s->subset_size);
+  Integer(dic, "step", &s->step);
+  YamlOptionTable momentum("momentum");
+  Integer(momentum, "grid_cols", &s->grid_cols);
+  Integer(momentum, "grid_rows", &s->grid_rows);
+  YamlOptionTable calibration("calibration");
+  calibration.Add("render", &s->render_calibration, "");
+  Integer(calibration, "views", &s->calibration_views);
+  calibration.Add("scene_yaml", &s->calibration_yaml, "");
+  return {test,
+          model,
+          CameraKeys(s),
+          FramesKeys(s),
+          SpeckleKeys(s),
+          SoilKeys(&s->soil),
+          SensorKeys(&s->sensor),
+          dic,
+          momentum,
+          calibration};
+}
 
 std::string Num(double v) { return fmt::format("{}", v); }
 
@@ -121,132 +191,27 @@ std::string Num(double v) { return fmt::format("{}", v); }
 
 ImpactSceneSpec ParseImpactSceneSpec(const std::string& yaml_text, const std::string& path) {
   const YAML::Node root = LoadYaml(yaml_text, path, kSpecFileWhat);
-  SpecSection top(root, "", path);
+  YamlProblems problems(path);
+  YamlSection top(root, "", &problems);
   ImpactSceneSpec spec;
-  {
-    std::string preset;
-    top.String("preset", &preset);
-    if (!preset.empty()) {
-      try {
-        spec = ImpactScenePreset(preset);
-      } catch (Error& e) {
-        throw e.WithFile(path);
-      }
+  std::string preset;
+  top.Read("preset", &preset);
+  if (!preset.empty()) {
+    try {
+      spec = ImpactScenePreset(preset);
+    } catch (Error& e) {
+      throw e.WithFile(path);
     }
   }
-  top.String("name", &spec.name);
-  top.Unsigned("seed", &spec.seed);
-
-  SpecSection t = top.Sub("test");
-  t.Number("mass_kg", &spec.pounder_mass_kg);
-  t.Number("drop_height_m", &spec.drop_height_m);
-  t.Number("impact_velocity_m_s", &spec.impact_velocity_m_s);
-  t.Number("width_m", &spec.width_m);
-  t.Number("depth_m", &spec.depth_m);
-  t.Number("density_kg_m3", &spec.density_kg_m3);
-  t.Number("bed_height_m", &spec.bed_height_m);
-  t.Number("g_m_s2", &spec.g_m_s2);
-  t.Finish();
-
-  SpecSection m = top.Sub("model");
-  {
-    YAML::Node n = m.Get("added_mass");
-    if (n.IsDefined() && !n.IsNull()) {
-      double v = 0;
-      if (n.IsScalar() && n.Scalar() == "grid") {
-        spec.added_mass = SceneAddedMass::kGrid;
-      } else if (n.IsScalar() && n.Scalar() == "eq4") {
-        spec.added_mass = SceneAddedMass::kEq4;
-      } else if (n.IsScalar() && YAML::convert<double>::decode(n, v) && std::isfinite(v) &&
-                 v >= 0) {
-        spec.added_mass = SceneAddedMass::kGiven;
-        spec.added_mass_kg = v;
-      } else {
-        m.Fail(n, "model.added_mass", "grid, eq4 or an added mass >= 0 [kg]");
-      }
-    }
+  top.Read("name", &spec.name);
+  top.Read("seed", &spec.seed);
+  for (const YamlOptionTable& table : SpecTables(&spec)) {
+    YamlSection section = top.Sub(table.section());
+    table.Read(section);
+    section.Finish();
   }
-  m.Number("K", &spec.K);
-  m.Number("n", &spec.n);
-  m.Number("u", &spec.u);
-  m.Number("T_s", &spec.T_s);
-  m.Number("b_per_s", &spec.b_per_s);
-  m.Finish();
-
-  SpecSection c = top.Sub("camera");
-  {
-    std::string lens;
-    c.String("lens", &lens);
-    if (!lens.empty()) {
-      try {
-        spec.lens = SceneLensFromString(lens, "camera.lens");
-      } catch (Error& e) {
-        throw e.WithFile(path);
-      }
-    }
-  }
-  c.Integer("width", &spec.width);
-  c.Integer("height", &spec.height);
-  c.Number("mm_per_px", &spec.mm_per_px);
-  c.Number("fps", &spec.fps);
-  c.Number("surface_fraction", &spec.surface_fraction);
-  c.Finish();
-
-  SpecSection f = top.Sub("frames");
-  f.Integer("before_impact", &spec.frames_before_impact);
-  f.Integer("count", &spec.frames);
-  f.Number("impact_phase", &spec.impact_phase);
-  f.Integer("bits", &spec.bits);
-  f.Number("noise_sigma", &spec.noise_sigma);
-  f.Integer("supersampling", &spec.supersampling);
-  f.Number("background_level", &spec.background_level);
-  f.Number("pounder_level", &spec.pounder_level);
-  f.Finish();
-
-  SpecSection sp = top.Sub("speckle");
-  sp.Number("blob_radius_px", &spec.speckle.blob_radius_px);
-  sp.Number("density", &spec.speckle.density);
-  sp.Number("contrast", &spec.speckle.contrast);
-  sp.Number("background", &spec.speckle.background);
-  sp.Unsigned("seed", &spec.speckle.seed);
-  sp.Finish();
-
-  SpecSection so = top.Sub("soil");
-  so.Number("core_depth_mm", &spec.soil.core_depth_mm);
-  so.Number("cone_depth_mm", &spec.soil.cone_depth_mm);
-  so.Number("decay_length_mm", &spec.soil.decay_length_mm);
-  so.Number("wave_speed_m_s", &spec.soil.wave_speed_m_s);
-  so.Number("wave_amplitude_mm", &spec.soil.wave_amplitude_mm);
-  so.Number("wave_decay_length_mm", &spec.soil.wave_decay_length_mm);
-  so.Number("wave_rise_time_s", &spec.soil.wave_rise_time_s);
-  so.Finish();
-
-  SpecSection se = top.Sub("sensor");
-  se.Number("rate_hz", &spec.sensor.rate_hz);
-  se.Number("offset_g", &spec.sensor.offset_g);
-  se.Number("noise_g", &spec.sensor.noise_g);
-  se.Number("exposure_s", &spec.sensor.exposure_s);
-  se.Number("pre_release_s", &spec.sensor.pre_release_s);
-  se.Number("tail_s", &spec.sensor.tail_s);
-  se.Finish();
-
-  SpecSection d = top.Sub("dic");
-  d.Integer("subset_size", &spec.subset_size);
-  d.Integer("step", &spec.step);
-  d.Finish();
-
-  SpecSection mo = top.Sub("momentum");
-  mo.Integer("grid_cols", &spec.grid_cols);
-  mo.Integer("grid_rows", &spec.grid_rows);
-  mo.Finish();
-
-  SpecSection ca = top.Sub("calibration");
-  ca.Bool("render", &spec.render_calibration);
-  ca.Integer("views", &spec.calibration_views);
-  ca.String("scene_yaml", &spec.calibration_yaml);
-  ca.Finish();
   top.Finish();
-
+  problems.ThrowIfAny("synthetic scene spec");
   try {
     spec.Check();
   } catch (Error& e) {

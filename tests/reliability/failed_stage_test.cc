@@ -24,10 +24,10 @@
 #include "../momentum/synthetic_chain.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
-#include "impactdic/pipeline/scene.h"
-#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/pipeline/scene_analysis.h"
 
 namespace impactdic {
 namespace {

@@ -58,6 +58,24 @@ TEST(ImpactSceneSpec, PresetsPassCheckAndRoundTripThroughYaml) {
   EXPECT_EQ(full.frames, 9);
 }
 
+// The spec is read by the shared YAML section reader (io/yaml.h): every problem at once, unknown
+// keys with the closest valid key.
+TEST(ImpactSceneSpec, UnknownKeysSuggestTheClosestAndEveryProblemIsReported) {
+  try {
+    ParseImpactSceneSpec("dic: {subset_sise: 21}\ncamera: {widht: 640, fps: fast}\n", "spec.yaml");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    for (const char* expected :
+         {"3 problems in synthetic scene spec spec.yaml:",
+          "spec.yaml:1: dic.subset_sise: unknown key (did you mean 'subset_size'?)",
+          "spec.yaml:2: camera.widht: unknown key (did you mean 'width'?)",
+          "spec.yaml:2: camera.fps: got 'fast'; expected a number"}) {
+      EXPECT_NE(what.find(expected), std::string::npos) << "missing: " << expected << "\n" << what;
+    }
+  }
+}
+
 // Each bad value is reported with its key path, the value and what is expected.
 TEST(ImpactSceneSpec, BadValuesGiveClearErrors) {
   struct Case {

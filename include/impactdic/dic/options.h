@@ -103,7 +103,7 @@ struct IcgnOptions {
 
 struct UpdateOptions {
   ReferenceUpdate mode = ReferenceUpdate::kAuto;
-  int every_n = 10;             // Frames per reference for kEveryN, >= 1.
+  int every_n = 10;  // Frames per reference for kEveryN, >= 1.
   // kAuto: the reference is updated once a tracked subset correlates below this,
   // kAutoMinZnccRange. Above IcgnOptions::min_zncc on purpose: the reference moves on while the
   // subsets still correlate well, before they fail.

@@ -89,7 +89,8 @@ class YamlSection {
   bool Read(const std::string& key, bool* out);
   bool Read(const std::string& key, std::string* out);
   // One of `allowed` (a near miss gets "did you mean").
-  bool ReadChoice(const std::string& key, std::string* out, const std::vector<std::string>& allowed);
+  bool ReadChoice(const std::string& key, std::string* out,
+                  const std::vector<std::string>& allowed);
   // Any present, non-null node: `parse` stores it and returns false when it is invalid, which is
   // reported as "got ...; expected `expected`".
   bool ReadWith(const std::string& key, const std::function<bool(const YAML::Node&)>& parse,
@@ -117,10 +118,10 @@ class YamlSection {
 class YamlOptionTable {
  public:
   struct Entry {
-    std::string key;           // "step"
-    std::string expected;      // "an integer in [1, 1e+06] px"
-    std::string doc;           // Meaning, unit.
-    std::string default_text;  // The bound field's value when bound.
+    std::string key;                               // "step"
+    std::string expected;                          // "an integer in [1, 1e+06] px"
+    std::string doc;                               // Meaning, unit.
+    std::string default_text;                      // The bound field's value when bound.
     std::function<bool(const YAML::Node&)> parse;  // Stores a valid node; false if invalid.
     std::vector<std::string> choices;              // AddChoice: the names ("did you mean").
   };

@@ -1,12 +1,13 @@
-#include "impactdic/io/scene.h"
+#include "impactdic/pipeline/scene.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
+#include "../cli/cli_runner.h"
+#include "../io/test_dir.h"
 #include "impactdic/core/error.h"
-#include "test_dir.h"
 
 namespace impactdic {
 namespace {
@@ -47,23 +48,25 @@ dic:
   EXPECT_EQ(s.inputs.sensor, (dir.path() / "daq/sensor.csv").string());
   EXPECT_EQ(s.inputs.calibration, "/abs/cal.yaml");
   EXPECT_EQ(s.outputs.folder, (dir.path() / "sub/results").string());
-  EXPECT_DOUBLE_EQ(s.test.mass_kg, 13);
-  EXPECT_DOUBLE_EQ(s.test.depth_m, 0.192);       // paper default t_z
-  EXPECT_DOUBLE_EQ(s.test.density_kg_m3, 1550);  // paper default rho_d
-  EXPECT_NEAR(s.test.ImpactVelocity(), std::sqrt(2 * 9.81 * 1.2), 1e-12);
-  EXPECT_NEAR(s.test.ContactArea(), 0.2 * 0.192, 1e-15);
-  EXPECT_EQ(s.dic.subset_size, 31);
-  EXPECT_EQ(s.dic.step, 10);
-  EXPECT_EQ(s.dic.reference_update, "every:5");
+  EXPECT_DOUBLE_EQ(s.model.pounder_mass_kg, 13);
+  EXPECT_DOUBLE_EQ(s.model.depth_m, 0.192);       // paper default t_z
+  EXPECT_DOUBLE_EQ(s.model.density_kg_m3, 1550);  // paper default rho_d
+  EXPECT_NEAR(s.ImpactVelocity(), std::sqrt(2 * 9.81 * 1.2), 1e-12);
+  EXPECT_NEAR(s.model.impact_velocity_m_s, s.ImpactVelocity(), 0);
+  EXPECT_NEAR(s.model.ContactArea_m2(), 0.2 * 0.192, 1e-15);
+  EXPECT_EQ(s.dic.options.grid.subset_size, 31);
+  EXPECT_EQ(s.dic.options.grid.step, 10);
+  EXPECT_EQ(s.dic.options.update.mode, ReferenceUpdate::kEveryN);
+  EXPECT_EQ(s.dic.options.update.every_n, 5);
   EXPECT_EQ(s.dic.roi[2], 300);
   ASSERT_EQ(s.dic.roi_polygon.size(), 3u);
   EXPECT_DOUBLE_EQ(s.dic.roi_polygon[2][1], 190.5);
   EXPECT_EQ(s.dic.mask, (dir.path() / "sub/masks/soil.png").string());
-  EXPECT_DOUBLE_EQ(s.model.K, 50);
-  EXPECT_DOUBLE_EQ(s.model.b_per_s, 2500);
-  EXPECT_DOUBLE_EQ(s.sensor.cutoff_hz, 1500);
-  EXPECT_EQ(s.momentum.grid_cols, 6);
-  EXPECT_EQ(s.momentum.grid_rows, 2);
+  EXPECT_DOUBLE_EQ(s.model.friction_K, 50);
+  EXPECT_DOUBLE_EQ(s.model.sigmoid_rate_b_per_s, 2500);
+  EXPECT_DOUBLE_EQ(s.sensor.options.cutoff_hz, 1500);
+  EXPECT_EQ(s.momentum.options.grid_cols, 6);
+  EXPECT_EQ(s.momentum.options.grid_rows, 2);
   EXPECT_EQ(s.stages, AllSceneStages());
   EXPECT_NE(s.yaml_text.find("test-a"), std::string::npos);
 }
@@ -75,7 +78,7 @@ test: {impact_velocity_m_s: 3.5, drop_height_m: 0.2}
 stages: [momentum, correlate]
 )",
                              "x/scene.yaml");
-  EXPECT_DOUBLE_EQ(s.test.ImpactVelocity(), 3.5);
+  EXPECT_DOUBLE_EQ(s.ImpactVelocity(), 3.5);
   EXPECT_EQ(s.stages, (std::vector<std::string>{"correlate", "momentum"}));
   EXPECT_TRUE(s.HasStage("momentum"));
   EXPECT_FALSE(s.HasStage("model"));
@@ -105,7 +108,8 @@ stages: [correlate, momentun]
   for (const char* expected :
        {"inputs.fps: got '-3'; expected a camera frame rate in [1, 1e+07] 1/s",
         "test.mass_kg: got 'heavy'; expected a pounder mass in [0.01, 100000] kg",
-        "test.width_m: got '0'", "dic.subset_size: got '24'; expected an odd subset size >= 5",
+        "test.width_m: got '0'",
+        "dic.subset_size: got '24'; expected an odd integer in [5, 201] px",
         "dic.interpolation: got 'bicubik'; expected one of bicubic, biquintic (did you mean "
         "'bicubic'?)",
         "dic.reference_update: got 'every:0'", "dic.roi: got a list of 3",
@@ -146,9 +150,38 @@ TEST(Scene, MissingFramesAndBadYamlAndMissingFile) {
   }
 }
 
-TEST(Scene, ClosestMatchOnlySuggestsCloseWords) {
-  EXPECT_EQ(ClosestMatch("subset_sise", {"subset_size", "step"}), "subset_size");
-  EXPECT_EQ(ClosestMatch("zzzzzz", {"subset_size", "step"}), "");
+// dic.min_zncc is the validity threshold; the auto reference update has its own key, bound to
+// UpdateOptions::auto_min_zncc (the README says so).
+TEST(Scene, MinZnccAndAutoMinZnccSetTheirOwnLibraryFields) {
+  const Scene s =
+      ParseScene("inputs: {frames: f}\ndic: {min_zncc: 0.7, auto_min_zncc: 0.9}\n", "x/scene.yaml");
+  EXPECT_DOUBLE_EQ(s.dic.options.icgn.min_zncc, 0.7);
+  EXPECT_DOUBLE_EQ(s.dic.options.update.auto_min_zncc, 0.9);
+}
+
+// The model requires u >= 1 (F_dyn must resist the motion): the scene refuses u = 0.5 at load,
+// naming model.u, its line and the model's range.
+TEST(Scene, ModelParameterOutsideTheModelsRangeIsRefusedAtLoad) {
+  const std::string msg = LoadError("inputs: {frames: f}\nmodel:\n  u: 0.5\n");
+  EXPECT_NE(msg.find("scene.yaml:3: model.u: got '0.5'; expected a damping factor u (>= 1: F_dyn "
+                     "must resist the motion) in [1, 1000]"),
+            std::string::npos)
+      << msg;
+  EXPECT_EQ(msg.find("damping_factor_u"), std::string::npos) << msg;
+}
+
+// ... and `impactdic run` stops there, before any frame is read: the frames folder does not
+// exist, yet the only error is model.u, and no output folder is made.
+TEST(Scene, RunRefusesABadModelParameterBeforeReadingAnyFrame) {
+  TestDir dir;
+  const std::string scene = dir.Write("scene.yaml",
+                                      "inputs: {frames: no_such_folder/*.png, mm_per_px: 1}\n"
+                                      "model: {u: 0.5}\n");
+  const CliResult r = RunCli("run " + scene + " -o " + dir.File("out"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("model.u: got '0.5'"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("no_such_folder"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("out")));
 }
 
 }  // namespace

@@ -1,0 +1,214 @@
+// Each option is defined once: a scene that leaves a key out, and a CLI command that is not given
+// the flag, get the library's default. These tests fail if a scene or CLI default drifts from the
+// library option structs (docs/architecture.md, "Options").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "../cli/cli_runner.h"
+#include "impactdic/calib/calibration.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/preprocess/preprocess.h"
+#include "impactdic/render/animation.h"
+#include "impactdic/sensor/sensor.h"
+
+namespace impactdic {
+namespace {
+
+// NaN == NaN for "unset" defaults.
+void ExpectSame(double scene, double library, const char* field) {
+  if (std::isnan(library)) {
+    EXPECT_TRUE(std::isnan(scene)) << field << ": " << scene;
+  } else {
+    EXPECT_EQ(scene, library) << field;
+  }
+}
+
+Scene MinimalScene() { return ParseScene("inputs: {frames: f/*.png}\n", "x/scene.yaml"); }
+
+TEST(OptionDefaults, SceneDicKeysDefaultToDicOptions) {
+  const DicOptions& s = MinimalScene().dic.options;
+  const DicOptions d;
+  EXPECT_EQ(s.mode, d.mode);
+  EXPECT_EQ(s.grid.subset_size, d.grid.subset_size);
+  EXPECT_EQ(s.grid.step, d.grid.step);
+  EXPECT_EQ(s.grid.roi, d.grid.roi);
+  EXPECT_TRUE(s.grid.mask.empty());
+  EXPECT_EQ(s.init.search_radius_px, d.init.search_radius_px);
+  EXPECT_EQ(s.init.seed_spacing, d.init.seed_spacing);
+  EXPECT_EQ(s.init.min_search_zncc, d.init.min_search_zncc);
+  EXPECT_EQ(s.icgn.interpolation, d.icgn.interpolation);
+  EXPECT_EQ(s.icgn.shape, d.icgn.shape);
+  EXPECT_EQ(s.icgn.convergence_px, d.icgn.convergence_px);
+  EXPECT_EQ(s.icgn.max_iterations, d.icgn.max_iterations);
+  EXPECT_EQ(s.icgn.min_zncc, d.icgn.min_zncc);
+  EXPECT_EQ(s.icgn.min_contrast, d.icgn.min_contrast);
+  EXPECT_EQ(s.icgn.max_saturated_fraction, d.icgn.max_saturated_fraction);
+  EXPECT_EQ(s.icgn.max_uncertainty_px, d.icgn.max_uncertainty_px);
+  EXPECT_EQ(s.update.mode, d.update.mode);
+  EXPECT_EQ(s.update.every_n, d.update.every_n);
+  EXPECT_EQ(s.update.auto_min_zncc, d.update.auto_min_zncc);
+}
+
+TEST(OptionDefaults, SceneModelAndTestKeysDefaultToImpactModelParameters) {
+  const Scene scene = MinimalScene();
+  const ImpactModelParameters& s = scene.model;
+  const ImpactModelParameters d;
+  ExpectSame(s.pounder_mass_kg, d.pounder_mass_kg, "pounder_mass_kg");
+  ExpectSame(s.width_m, d.width_m, "width_m");
+  ExpectSame(s.depth_m, d.depth_m, "depth_m");
+  ExpectSame(s.added_mass_kg, d.added_mass_kg, "added_mass_kg");
+  ExpectSame(s.friction_K, d.friction_K, "friction_K");
+  ExpectSame(s.damping_exponent_n, d.damping_exponent_n, "damping_exponent_n");
+  ExpectSame(s.damping_factor_u, d.damping_factor_u, "damping_factor_u");
+  ExpectSame(s.sigmoid_delay_T_s, d.sigmoid_delay_T_s, "sigmoid_delay_T_s");
+  ExpectSame(s.sigmoid_rate_b_per_s, d.sigmoid_rate_b_per_s, "sigmoid_rate_b_per_s");
+  ExpectSame(s.density_kg_m3, d.density_kg_m3, "density_kg_m3");
+  ExpectSame(s.gravity_m_s2, d.gravity_m_s2, "gravity_m_s2");
+  ExpectSame(s.bed_height_m, d.bed_height_m, "bed_height_m");
+  // The default drop height gives the library's default impact velocity (0.7 m, g = 9.81).
+  EXPECT_NEAR(scene.ImpactVelocity(), d.impact_velocity_m_s, 1e-12);
+  const ImpactSolverOptions& so = scene.solver;
+  const ImpactSolverOptions sd;
+  EXPECT_EQ(so.solver, sd.solver);
+  ExpectSame(so.rtol, sd.rtol, "rtol");
+  ExpectSame(so.atol, sd.atol, "atol");
+  EXPECT_EQ(so.error_estimator, sd.error_estimator);
+}
+
+TEST(OptionDefaults, ScenePreprocessSensorAndMomentumKeysDefaultToTheirLibraries) {
+  const Scene scene = MinimalScene();
+  const PreprocessOptions pd;
+  EXPECT_EQ(scene.preprocess.gaussian.enabled, pd.gaussian.enabled);
+  EXPECT_EQ(scene.preprocess.gaussian.sigma_px, pd.gaussian.sigma_px);
+  EXPECT_EQ(scene.preprocess.gaussian.kernel_size, pd.gaussian.kernel_size);
+  EXPECT_EQ(scene.preprocess.clahe.enabled, pd.clahe.enabled);
+  EXPECT_EQ(scene.preprocess.clahe.clip_limit, pd.clahe.clip_limit);
+  EXPECT_EQ(scene.preprocess.clahe.tile_grid, pd.clahe.tile_grid);
+  EXPECT_EQ(scene.preprocess.undistort, pd.undistort);
+
+  const SensorOptions s = MakeSensorOptions(scene), sd;
+  EXPECT_EQ(s.columns.time, sd.columns.time);
+  EXPECT_EQ(s.columns.accel, sd.columns.accel);
+  EXPECT_EQ(s.columns.accel_unit, sd.columns.accel_unit);
+  EXPECT_EQ(s.columns.exposure, sd.columns.exposure);
+  EXPECT_EQ(s.g_m_s2, sd.g_m_s2);
+  EXPECT_EQ(s.cutoff_hz, sd.cutoff_hz);
+  EXPECT_EQ(s.offset_reference, sd.offset_reference);
+  EXPECT_EQ(s.quiet_window_s, sd.quiet_window_s);
+  EXPECT_EQ(s.integrate_from, sd.integrate_from);
+  EXPECT_EQ(s.impact_threshold_g, sd.impact_threshold_g);
+
+  // The pounder and soil reach the momentum stage from test.*: the same defaults as the
+  // momentum library's own.
+  Scene with_grid = scene;
+  with_grid.momentum.pounder_center_x_px = 100;
+  with_grid.momentum.surface_y_px = 50;
+  const MomentumOptions m = MakeMomentumOptions(with_grid, /*mm_per_px=*/1), md;
+  EXPECT_EQ(m.pounder_mass_kg, md.pounder_mass_kg);
+  EXPECT_EQ(m.pounder_width_m, md.pounder_width_m);
+  EXPECT_EQ(m.depth_m, md.depth_m);
+  EXPECT_EQ(m.density_kg_m3, md.density_kg_m3);
+  EXPECT_EQ(m.grid_cols, md.grid_cols);
+  EXPECT_EQ(m.grid_rows, md.grid_rows);
+  EXPECT_EQ(m.rect_mm, md.rect_mm);
+  EXPECT_EQ(m.min_valid_fraction, md.min_valid_fraction);
+}
+
+// What CLI11 shows as an option's default ("--subset INT=25") for `value` (it formats with a
+// stream).
+template <typename T>
+std::string Shown(const T& value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// `impactdic SUB --help` shows `flag` with the default `value`.
+void ExpectHelpDefault(const std::string& help, const std::string& flag, const std::string& value) {
+  const std::string shown = " " + flag + " ";
+  std::size_t at = help.find(shown);
+  ASSERT_NE(at, std::string::npos) << flag << " not in:\n" << help;
+  const std::size_t eq = help.find('=', at);
+  const std::size_t end = help.find_first_of(" \n", eq);
+  ASSERT_NE(eq, std::string::npos) << flag;
+  EXPECT_EQ(help.substr(eq + 1, end - eq - 1), value) << flag << " in:\n" << help;
+}
+
+TEST(OptionDefaults, CliCommandsShowTheLibraryDefaults) {
+  const CliResult correlate = RunCli("correlate --help");
+  ASSERT_EQ(correlate.exit_code, 0) << correlate.output;
+  const DicOptions d;
+  ExpectHelpDefault(correlate.output, "--subset", Shown(d.grid.subset_size));
+  ExpectHelpDefault(correlate.output, "--step", Shown(d.grid.step));
+  ExpectHelpDefault(correlate.output, "--interp", ToString(d.icgn.interpolation));
+  ExpectHelpDefault(correlate.output, "--shape", ToString(d.icgn.shape));
+  ExpectHelpDefault(correlate.output, "--reference-update", ReferenceUpdateText(d.update));
+  ExpectHelpDefault(correlate.output, "--search-radius", Shown(d.init.search_radius_px));
+  ExpectHelpDefault(correlate.output, "--min-zncc", Shown(d.icgn.min_zncc));
+  ExpectHelpDefault(correlate.output, "--max-uncertainty", Shown(d.icgn.max_uncertainty_px));
+  ExpectHelpDefault(correlate.output, "--mode", ToString(d.mode));
+
+  const CliResult model = RunCli("model --help");
+  ASSERT_EQ(model.exit_code, 0) << model.output;
+  const ImpactModelParameters p;
+  ExpectHelpDefault(model.output, "--depth", Shown(p.depth_m));
+  ExpectHelpDefault(model.output, "--K", Shown(p.friction_K));
+  ExpectHelpDefault(model.output, "--n", Shown(p.damping_exponent_n));
+  ExpectHelpDefault(model.output, "--u", Shown(p.damping_factor_u));
+  ExpectHelpDefault(model.output, "--T", Shown(p.sigmoid_delay_T_s));
+  ExpectHelpDefault(model.output, "--b", Shown(p.sigmoid_rate_b_per_s));
+  ExpectHelpDefault(model.output, "--rho", Shown(p.density_kg_m3));
+  ExpectHelpDefault(model.output, "--g", Shown(p.gravity_m_s2));
+  ExpectHelpDefault(model.output, "--bed-height", Shown(p.bed_height_m));
+  ExpectHelpDefault(model.output, "--solver", ToString(ImpactSolverOptions{}.solver));
+
+  const CliResult analyze = RunCli("analyze --help");
+  ASSERT_EQ(analyze.exit_code, 0) << analyze.output;
+  const SensorOptions s;
+  ExpectHelpDefault(analyze.output, "--cutoff", Shown(s.cutoff_hz));
+  ExpectHelpDefault(analyze.output, "--time-column", s.columns.time);
+  ExpectHelpDefault(analyze.output, "--accel-unit", ToString(s.columns.accel_unit));
+  ExpectHelpDefault(analyze.output, "--exposure-column", s.columns.exposure);
+  ExpectHelpDefault(analyze.output, "--offset-reference", ToString(s.offset_reference));
+  ExpectHelpDefault(analyze.output, "--quiet-window", Shown(s.quiet_window_s));
+  ExpectHelpDefault(analyze.output, "--impact-threshold", Shown(s.impact_threshold_g));
+
+  const CliResult calibrate = RunCli("calibrate --help");
+  ASSERT_EQ(calibrate.exit_code, 0) << calibrate.output;
+  ExpectHelpDefault(calibrate.output, "--max-rms", Shown(CalibrationOptions{}.max_rms_px));
+  ExpectHelpDefault(calibrate.output, "--min-views", Shown(CalibrationOptions{}.min_views));
+
+  const CliResult render = RunCli("render --help");
+  ASSERT_EQ(render.exit_code, 0) << render.output;
+  ExpectHelpDefault(render.output, "--fps", Shown(AnimationOptions{}.fps));
+  ExpectHelpDefault(render.output, "--codec", ToString(AnimationOptions{}.codec));
+}
+
+// Every key the scene reads is in the README's scene file reference.
+TEST(OptionDefaults, EverySceneKeyIsDocumentedInTheReadme) {
+  std::ifstream in(std::string(IMPACTDIC_SOURCE_DIR) + "/README.md");
+  ASSERT_TRUE(in) << "README.md";
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string readme = text.str();
+  const std::size_t begin = readme.find("## Scene file");
+  ASSERT_NE(begin, std::string::npos);
+  const std::string section = readme.substr(begin, readme.find("\n## ", begin + 1) - begin);
+  Scene scene;
+  for (const YamlOptionTable& table : SceneOptionTables(&scene)) {
+    for (const auto& entry : table.entries()) {
+      EXPECT_NE(section.find(entry.key + ":"), std::string::npos)
+          << table.section() << "." << entry.key << " is not in README.md's \"Scene file\"";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace impactdic
