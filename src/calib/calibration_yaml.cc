@@ -3,7 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
-#include <set>
+#include <functional>
+#include <optional>
+#include <vector>
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
@@ -15,34 +17,85 @@ namespace {
 
 constexpr const char* kFormat = "impactdic-calibration-1";
 
-std::string Number(double v) { return fmt::format("{:.17g}", v); }
 
-// Reads `key` of `node` as T; Error(kFileFormat) naming the file and key path otherwise.
-template <typename T>
-T Get(const YAML::Node& node, const std::string& key, const std::string& path,
-      const std::string& prefix, const std::string& expected) {
-  const YAML::Node value = node[key];
-  if (!value) throw Error(ErrorKind::kFileFormat, prefix + key, "missing", expected).WithFile(path);
-  try {
-    return value.as<T>();
-  } catch (const YAML::Exception&) {
-    throw Error(ErrorKind::kFileFormat, prefix + key,
-                value.IsScalar() ? "'" + value.Scalar() + "'" : "a non-scalar value", expected)
-        .WithFile(path, value.Mark().line + 1, value.Mark().column + 1);
-  }
+constexpr ValueRange kAnyFinite{-1e300, 1e300, ""};
+constexpr ValueRange kPositive{0, 1e300, "", /*min_open=*/true};
+constexpr ValueRange kNonNegative{0, 1e300, ""};
+
+// A required number.
+void Required(YamlSection& s, const std::string& key, double* out, const ValueRange& range,
+              const std::string& what) {
+  if (s.Require(key, what)) s.Read(key, out, range, what);
 }
 
-void CheckKeys(const YAML::Node& node, const std::set<std::string>& allowed,
-               const std::string& path, const std::string& prefix) {
-  for (const auto& item : node) {
-    const std::string key = item.first.as<std::string>();
-    if (!allowed.count(key)) {
-      std::string list;
-      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
-      throw Error(ErrorKind::kFileFormat, prefix + key, "unknown key", "one of: " + list)
-          .WithFile(path, item.first.Mark().line + 1, item.first.Mark().column + 1);
-    }
+// A list of exactly n finite numbers.
+void Numbers(YamlSection& s, const std::string& key, double* out, std::size_t n,
+             const std::string& expected) {
+  if (!s.Require(key, expected)) return;
+  s.ReadWith(
+      key,
+      [out, n](const YAML::Node& node) {
+        if (!node.IsSequence() || node.size() != n) return false;
+        for (std::size_t k = 0; k < n; ++k) {
+          if (!node[k].IsScalar() || !YAML::convert<double>::decode(node[k], out[k]) ||
+              !std::isfinite(out[k]))
+            return false;
+        }
+        return true;
+      },
+      expected);
+}
+
+// `views` / `rejected`: lists of {image, <second>} maps.
+template <typename Item>
+void Items(YamlSection& s, const std::string& key, const std::string& second,
+           const std::function<bool(const YAML::Node&, Item*)>& parse, std::vector<Item>* out) {
+  s.ReadWith(
+      key,
+      [&](const YAML::Node& list) {
+        if (!list.IsSequence()) return false;
+        for (const auto& node : list) {
+          Item item;
+          if (!node.IsMap() || !node["image"].IsScalar() || !parse(node[second], &item))
+            return false;
+          item.image = node["image"].Scalar();
+          out->push_back(item);
+        }
+        return true;
+      },
+      "a list of {image, " + second + "}");
+}
+
+void ReadBoard(YamlSection& top, BoardSpec* board) {
+  YamlSection b = top.Sub("board");
+  if (!top.Require("board", "{cols, rows, square_mm}")) return;
+  for (const char* key : {"cols", "rows"}) {
+    if (b.Require(key, "an integer >= 2"))
+      b.Read(key, key[0] == 'c' ? &board->cols : &board->rows, ValueRange{2, 1e4, ""}, ">= 2");
   }
+  Required(b, "square_mm", &board->square_mm, kPositive, "a square side [mm]");
+  b.Finish();
+}
+
+std::optional<PlaneScale> ReadPlane(YamlSection& top) {
+  if (!top.Has("plane")) {
+    top.Get("plane");
+    return std::nullopt;
+  }
+  YamlSection s = top.Sub("plane");
+  PlaneScale p;
+  s.Read("image", &p.image);
+  Required(s, "mm_per_px", &p.mm_per_px, kPositive, "a plane scale [mm/px]");
+  Required(s, "mm_per_px_uncertainty", &p.mm_per_px_uncertainty, kNonNegative,
+           "a scale uncertainty [mm/px]");
+  s.Read("local_scale_spread_rel", &p.local_scale_spread_rel, kNonNegative, "a relative spread");
+  s.Read("residual_rms_mm", &p.residual_rms_mm, kAnyFinite, "a residual [mm]");
+  s.Read("corners", &p.corners, ValueRange{0, 1e9, ""}, "a corner count");
+  double h[9] = {};
+  Numbers(s, "mm_from_px", h, 9, "9 numbers (3x3 homography, row-major)");
+  for (int k = 0; k < 9; ++k) p.mm_from_px(k / 3, k % 3) = h[k];
+  s.Finish();
+  return p;
 }
 
 }  // namespace
@@ -104,96 +157,46 @@ CameraCalibration LoadCalibration(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path, kWhat);
   if (!root.IsMap())
     throw Error(ErrorKind::kFileFormat, "", "not a YAML map", kWhat).WithFile(path);
-  CheckKeys(root,
-            {"format", "image_width", "image_height", "board", "fx", "fy", "cx", "cy", "dist",
-             "rms_px", "views", "rejected", "plane"},
-            path, "");
-  const std::string format = Get<std::string>(root, "format", path, "", kFormat);
-  if (format != kFormat)
-    throw Error(ErrorKind::kFileFormat, "format", "'" + format + "'", kFormat).WithFile(path);
-
+  YamlProblems problems(path);
+  YamlSection top(root, "", &problems);
   CameraCalibration c;
-  c.image_width = Get<int>(root, "image_width", path, "", "an integer > 0 [px]");
-  c.image_height = Get<int>(root, "image_height", path, "", "an integer > 0 [px]");
-  if (c.image_width <= 0 || c.image_height <= 0)
-    throw Error(ErrorKind::kFileFormat, "image_width/image_height",
-                fmt::format("{}x{}", c.image_width, c.image_height), "positive sizes")
-        .WithFile(path);
-  const YAML::Node board = root["board"];
-  if (!board || !board.IsMap())
-    throw Error(ErrorKind::kFileFormat, "board", "missing or not a map", "{cols, rows, square_mm}")
-        .WithFile(path);
-  CheckKeys(board, {"cols", "rows", "square_mm"}, path, "board.");
-  c.board.cols = Get<int>(board, "cols", path, "board.", "an integer >= 2");
-  c.board.rows = Get<int>(board, "rows", path, "board.", "an integer >= 2");
-  c.board.square_mm = Get<double>(board, "square_mm", path, "board.", "a number > 0 [mm]");
+  std::string format;
+  if (top.Require("format", kFormat) && top.Read("format", &format) && format != kFormat)
+    top.Problem("format", fmt::format("got '{}'; expected {}", format, kFormat));
+  for (const char* key : {"image_width", "image_height"}) {
+    if (top.Require(key, "an image size > 0 [px]"))
+      top.Read(key, key[6] == 'w' ? &c.image_width : &c.image_height, ValueRange{1, 1e6, "px"},
+               "an image size");
+  }
+  ReadBoard(top, &c.board);
+  Required(top, "fx", &c.fx, kPositive, "a focal length [px]");
+  Required(top, "fy", &c.fy, kPositive, "a focal length [px]");
+  Required(top, "cx", &c.cx, kAnyFinite, "a principal point [px]");
+  Required(top, "cy", &c.cy, kAnyFinite, "a principal point [px]");
+  Numbers(top, "dist", c.dist.data(), 5, "5 numbers [k1, k2, p1, p2, k3]");
+  c.rms_px = std::nan("");
+  top.Read("rms_px", &c.rms_px, kNonNegative, "a reprojection RMS [px]");
+  Items<ViewRecord>(
+      top, "views", "rms_px",
+      [](const YAML::Node& n, ViewRecord* v) {
+        return n.IsScalar() && YAML::convert<double>::decode(n, v->rms_px);
+      },
+      &c.views);
+  Items<RejectedView>(
+      top, "rejected", "reason",
+      [](const YAML::Node& n, RejectedView* r) {
+        if (!n.IsScalar()) return false;
+        r->reason = n.Scalar();
+        return true;
+      },
+      &c.rejected);
+  c.plane = ReadPlane(top);
+  top.Finish();
+  problems.ThrowIfAny("calibration file", ErrorKind::kFileFormat);
   try {
     c.board.Check();
   } catch (Error& e) {
     throw e.WithFile(path);
-  }
-  c.fx = Get<double>(root, "fx", path, "", "a number > 0 [px]");
-  c.fy = Get<double>(root, "fy", path, "", "a number > 0 [px]");
-  c.cx = Get<double>(root, "cx", path, "", "a number [px]");
-  c.cy = Get<double>(root, "cy", path, "", "a number [px]");
-  if (!(c.fx > 0 && c.fy > 0 && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) &&
-        std::isfinite(c.cy)))
-    throw Error(ErrorKind::kFileFormat, "fx/fy/cx/cy",
-                fmt::format("{}, {}, {}, {}", c.fx, c.fy, c.cx, c.cy),
-                "finite values with fx, fy > 0")
-        .WithFile(path);
-  const auto dist = Get<std::vector<double>>(root, "dist", path, "", "[k1, k2, p1, p2, k3]");
-  if (dist.size() != 5)
-    throw Error(ErrorKind::kFileFormat, "dist", fmt::format("{} values", dist.size()),
-                "5 values [k1, k2, p1, p2, k3]")
-        .WithFile(path);
-  for (int k = 0; k < 5; ++k) {
-    if (!std::isfinite(dist[k]))
-      throw Error(ErrorKind::kFileFormat, "dist", "a non-finite value", "finite numbers")
-          .WithFile(path);
-    c.dist[k] = dist[k];
-  }
-  c.rms_px = root["rms_px"] && !root["rms_px"].IsNull()
-                 ? Get<double>(root, "rms_px", path, "", "a number >= 0 [px]")
-                 : std::nan("");
-  if (const YAML::Node views = root["views"]; views && views.IsSequence())
-    for (const auto& v : views)
-      c.views.push_back({Get<std::string>(v, "image", path, "views[].", "a file name"),
-                         Get<double>(v, "rms_px", path, "views[].", "a number [px]")});
-  if (const YAML::Node rejected = root["rejected"]; rejected && rejected.IsSequence())
-    for (const auto& r : rejected)
-      c.rejected.push_back({Get<std::string>(r, "image", path, "rejected[].", "a file name"),
-                            Get<std::string>(r, "reason", path, "rejected[].", "text")});
-  if (const YAML::Node plane = root["plane"]; plane && !plane.IsNull()) {
-    if (!plane.IsMap())
-      throw Error(ErrorKind::kFileFormat, "plane", "not a map", "the plane scale map")
-          .WithFile(path);
-    CheckKeys(plane,
-              {"image", "mm_per_px", "mm_per_px_uncertainty", "local_scale_spread_rel",
-               "residual_rms_mm", "corners", "mm_from_px"},
-              path, "plane.");
-    PlaneScale p;
-    p.image = plane["image"] ? Get<std::string>(plane, "image", path, "plane.", "a file name") : "";
-    p.mm_per_px = Get<double>(plane, "mm_per_px", path, "plane.", "a number > 0 [mm/px]");
-    if (!(p.mm_per_px > 0 && std::isfinite(p.mm_per_px)))
-      throw Error(ErrorKind::kFileFormat, "plane.mm_per_px", Number(p.mm_per_px), "> 0")
-          .WithFile(path);
-    p.mm_per_px_uncertainty =
-        Get<double>(plane, "mm_per_px_uncertainty", path, "plane.", "a number >= 0 [mm/px]");
-    if (plane["local_scale_spread_rel"])
-      p.local_scale_spread_rel =
-          Get<double>(plane, "local_scale_spread_rel", path, "plane.", "a number >= 0");
-    if (plane["residual_rms_mm"])
-      p.residual_rms_mm = Get<double>(plane, "residual_rms_mm", path, "plane.", "a number [mm]");
-    if (plane["corners"]) p.corners = Get<int>(plane, "corners", path, "plane.", "an integer");
-    const auto h = Get<std::vector<double>>(plane, "mm_from_px", path, "plane.",
-                                            "9 numbers (3x3 homography, row-major)");
-    if (h.size() != 9)
-      throw Error(ErrorKind::kFileFormat, "plane.mm_from_px", fmt::format("{} values", h.size()),
-                  "9 numbers (3x3 homography, row-major)")
-          .WithFile(path);
-    for (int k = 0; k < 9; ++k) p.mm_from_px(k / 3, k % 3) = h[k];
-    c.plane = p;
   }
   return c;
 }

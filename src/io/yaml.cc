@@ -168,12 +168,12 @@ void YamlProblems::Add(const YAML::Node& at, const std::string& key_path, const 
   lines_.push_back(fmt::format("{}: {}: {}", where, key_path, text));
 }
 
-void YamlProblems::ThrowIfAny(const std::string& what) const {
+void YamlProblems::ThrowIfAny(const std::string& what, ErrorKind kind) const {
   if (lines_.empty()) return;
   std::string text = fmt::format("{} problem{} in {} {}:", lines_.size(),
                                  lines_.size() == 1 ? "" : "s", what, file_);
   for (const auto& line : lines_) text += "\n  " + line;
-  throw Error(ErrorKind::kInvalidValue, text);
+  throw Error(kind, text);
 }
 
 YamlSection::YamlSection(YAML::Node node, std::string prefix, YamlProblems* problems)
@@ -206,6 +206,12 @@ YamlSection YamlSection::Sub(const std::string& key) {
 void YamlSection::Problem(const std::string& key, const std::string& text) {
   const YAML::Node at = node_.IsMap() && node_[key].IsDefined() ? node_[key] : node_;
   problems_->Add(at, PathOf(key), text);
+}
+
+bool YamlSection::Require(const std::string& key, const std::string& expected) {
+  if (Has(key)) return true;
+  Problem(key, "missing; expected " + expected);
+  return false;
 }
 
 bool YamlSection::ReadWith(const std::string& key,

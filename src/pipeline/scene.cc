@@ -374,6 +374,21 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
     problems->Add(
         root["dic"], "dic.last_frame",
         fmt::format("got {}; expected > dic.first_frame ({}) or -1", d.last_frame, d.first_frame));
+  // The momentum stage runs after the correlation: its grid must be known now.
+  const SceneMomentum& m = scene.momentum;
+  const bool momentum_runs = !scene.inputs.sensor.empty() && scene.HasStage("correlate") &&
+                             scene.HasStage("kinematics") && scene.HasStage("sensor") &&
+                             scene.HasStage("momentum");
+  if (m.pounder_center_x_px.has_value() != m.surface_y_px.has_value()) {
+    problems->Add(root["momentum"],
+                  m.pounder_center_x_px ? "momentum.surface_y_px" : "momentum.pounder_center_x_px",
+                  "missing; expected both momentum.pounder_center_x_px and momentum.surface_y_px "
+                  "(the pounder's position in the first frame, px) or neither");
+  } else if (momentum_runs && !m.pounder_center_x_px && !m.options.rect_mm) {
+    problems->Add(root["momentum"], "momentum.pounder_center_x_px / surface_y_px",
+                  "missing; expected the pounder's position in the first frame (px), or "
+                  "momentum.rect_mm (the momentum stage runs: a sensor CSV is given)");
+  }
   if (!problems->empty()) return;
   try {
     scene.dic.options.Check();

@@ -346,7 +346,13 @@ TEST(CalibrationYaml, BadFilesNameTheKey) {
   write(good_head + "fx: abc\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");
   ExpectErrorContaining([&] { LoadCalibration(path); }, "fx");
   write(good_head + "fy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");
-  ExpectErrorContaining([&] { LoadCalibration(path); }, "fx: bad file format (got missing)");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "fx: missing; expected a focal length");
+  // Every problem at once (the shared section reader, io/yaml.h), unknown keys with a suggestion.
+  write(good_head + "fx: abc\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\nrms_pz: 1\n");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, "2 problems in calibration file");
+  ExpectErrorContaining([&] { LoadCalibration(path); }, ":5: fx: got 'abc'");
+  ExpectErrorContaining([&] { LoadCalibration(path); },
+                        ":10: rms_pz: unknown key (did you mean 'rms_px'?)");
   write(good_head + "fx: 800\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\nfocal: 3\n");
   ExpectErrorContaining([&] { LoadCalibration(path); }, "focal");
   write(good_head + "fx: 800\nfy: 800\ncx: 320\ncy: 240\ndist: [0, 0, 0, 0, 0]\n");

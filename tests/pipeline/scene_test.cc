@@ -41,6 +41,7 @@ dic:
   roi: [10, 20, 300, 200]
   roi_polygon: [[20, 30], [280, 30], [150, 190.5]]
   mask: masks/soil.png
+momentum: {pounder_center_x_px: 150, surface_y_px: 40}
 )");
   const Scene s = LoadScene(path);
   EXPECT_EQ(s.name, "test-a");
@@ -168,6 +169,23 @@ TEST(Scene, ModelParameterOutsideTheModelsRangeIsRefusedAtLoad) {
             std::string::npos)
       << msg;
   EXPECT_EQ(msg.find("damping_factor_u"), std::string::npos) << msg;
+}
+
+// The momentum stage runs after the correlation: without the pounder's position (or rect_mm) it
+// could not select its grid, so a scene with a sensor record is refused at load, not after
+// minutes of correlation.
+TEST(Scene, MomentumGridPositionIsRequiredAtLoadWhenTheMomentumStageRuns) {
+  const std::string msg = LoadError("inputs: {frames: f, sensor: daq.csv}\n");
+  EXPECT_NE(msg.find("momentum.pounder_center_x_px / surface_y_px: missing"), std::string::npos)
+      << msg;
+  EXPECT_NE(LoadError("inputs: {frames: f, sensor: daq.csv}\nmomentum: {surface_y_px: 3}\n")
+                .find("momentum.pounder_center_x_px: missing"),
+            std::string::npos);
+  // Not needed without a sensor record, or when the momentum stage is not run, or with rect_mm.
+  EXPECT_EQ(LoadError("inputs: {frames: f}\n"), "");
+  EXPECT_EQ(LoadError("inputs: {frames: f, sensor: daq.csv}\nstages: [correlate, sensor]\n"), "");
+  EXPECT_EQ(LoadError("inputs: {frames: f, sensor: daq.csv}\nmomentum: {rect_mm: [0, 0, 9, 9]}\n"),
+            "");
 }
 
 // ... and `impactdic run` stops there, before any frame is read: the frames folder does not

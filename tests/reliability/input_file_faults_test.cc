@@ -56,8 +56,10 @@ TEST(InputFileFaults, DeviceOrFolderAsSensorIsRefusedBeforeReading) {
                    {folder, "is a folder, not a regular file", "a CSV file"});
   // The same through a scene's inputs.sensor.
   WriteFrames(dir, "frames", "f_", 0, 4);
-  const std::string scene = dir.Write(
-      "scene.yaml", "inputs: {frames: frames/*.png, mm_per_px: 0.5, sensor: /dev/zero}\n");
+  const std::string scene =
+      dir.Write("scene.yaml",
+                "inputs: {frames: frames/*.png, mm_per_px: 0.5, sensor: /dev/zero}\n"
+                "momentum: {pounder_center_x_px: 10, surface_y_px: 5}\n");
   ExpectCliFailure("run " + scene + " -o " + dir.File("out"), {"/dev/zero", "character device"});
 }
 

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 
 namespace impactdic {
@@ -45,8 +46,8 @@ class YamlProblems {
   bool empty() const { return lines_.empty(); }
   std::size_t size() const { return lines_.size(); }
   const std::vector<std::string>& lines() const { return lines_; }
-  // Error(kInvalidValue) "N problem(s) in `what` FILE:" and one line per problem, if any.
-  void ThrowIfAny(const std::string& what) const;
+  // Error(`kind`) "N problem(s) in `what` FILE:" and one line per problem, if any.
+  void ThrowIfAny(const std::string& what, ErrorKind kind = ErrorKind::kInvalidValue) const;
 
  private:
   std::string file_;
@@ -79,6 +80,8 @@ class YamlSection {
   YamlSection Sub(const std::string& key);
   // A problem with `key` (its line when present, else the section's).
   void Problem(const std::string& key, const std::string& text);
+  // A problem "missing; expected `expected`" unless `key` is present and not null.
+  bool Require(const std::string& key, const std::string& expected);
   YamlProblems* problems() const { return problems_; }
 
   // A finite number in `range`; `what` names it ("a pounder mass").
