@@ -91,19 +91,23 @@ struct SceneSensorOptions {
 
 struct ImpactSceneSpec {
   std::string name = "synthetic_impact";
-  // Test (paper Table 1; SI units).
-  double pounder_mass_kg = 10;  // m_p, > 0.
-  double drop_height_m = 0.7;   // h, > 0 (unless impact_velocity_m_s is set).
+  // Test (paper Table 1; SI units). Defaults: the model's (ImpactModelParameters, defined once).
+  double pounder_mass_kg = ImpactModelParameters{}.pounder_mass_kg;  // m_p, > 0.
+  double drop_height_m = 0.7;  // h, > 0 (unless impact_velocity_m_s is set).
   double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();  // v0; NaN: sqrt(2gh).
-  double width_m = 0.15;                                                  // D, > 0.
-  double depth_m = 0.192;                                                 // t_z, > 0.
-  double density_kg_m3 = 1550;                                            // rho_d, > 0.
-  double bed_height_m = 0.6;                                              // > 0.
-  double g_m_s2 = 9.81;                                                   // > 0.
-  // Impact model (the paper's Table 2).
+  double width_m = ImpactModelParameters{}.width_m;                       // D, > 0.
+  double depth_m = ImpactModelParameters{}.depth_m;                       // t_z, > 0.
+  double density_kg_m3 = ImpactModelParameters{}.density_kg_m3;           // rho_d, > 0.
+  double bed_height_m = ImpactModelParameters{}.bed_height_m;             // > 0.
+  double g_m_s2 = ImpactModelParameters{}.gravity_m_s2;                   // > 0.
+  // Impact model: the paper's Table 2, as defined in ImpactModelParameters.
   SceneAddedMass added_mass = SceneAddedMass::kGrid;
   double added_mass_kg = std::numeric_limits<double>::quiet_NaN();  // With kGiven, >= 0.
-  double K = 50, n = 0.2, u = 1.9, T_s = 0.002, b_per_s = 2500;
+  double K = ImpactModelParameters{}.friction_K;
+  double n = ImpactModelParameters{}.damping_exponent_n;
+  double u = ImpactModelParameters{}.damping_factor_u;
+  double T_s = ImpactModelParameters{}.sigmoid_delay_T_s;
+  double b_per_s = ImpactModelParameters{}.sigmoid_rate_b_per_s;
   // Camera.
   SceneLens lens = SceneLens::kSample;
   int width = 640, height = 480;   // [px], >= 64 x 48.
@@ -302,8 +306,8 @@ ImpactSceneReport WriteImpactScene(const ImpactScene& scene, const std::string& 
 
 // The spec as YAML (every key, the form ParseImpactSceneSpec reads).
 std::string ImpactSceneSpecToYaml(const ImpactSceneSpec& spec);
-// The scene file (pipeline/scene.h format) the pipeline reads for this scene, with paths relative to
-// the output folder.
+// The scene file (pipeline/scene.h format) the pipeline reads for this scene, with paths relative
+// to the output folder.
 std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibration_yaml);
 
 }  // namespace impactdic
