@@ -37,11 +37,6 @@ long long FrameLabel(const DicResult& result, int index) {
   return k < result.frame_numbers.size() ? result.frame_numbers[k] : index;
 }
 
-std::string ReferenceUpdateText(const UpdateOptions& update) {
-  return update.mode == ReferenceUpdate::kEveryN ? fmt::format("every:{}", update.every_n)
-                                                 : std::string(ToString(update.mode));
-}
-
 }  // namespace
 
 bool IsValidStatus(SubsetStatus status) { return status == SubsetStatus::kConverged; }
