@@ -134,10 +134,6 @@ std::string DidYouMean(const std::string& word, const std::vector<std::string>& 
   return close.empty() ? "" : fmt::format(" (did you mean '{}'?)", close);
 }
 
-std::string RangeExpected(const std::string& what, const ValueRange& range) {
-  return what + " in " + range.Text();
-}
-
 }  // namespace
 
 std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates) {
@@ -153,6 +149,14 @@ std::string ClosestMatch(const std::string& word, const std::vector<std::string>
   // Close enough: at most a third of the word's letters differ (at least 1, at most 3 edits).
   const std::size_t limit = std::clamp<std::size_t>(word.size() / 3, 1, 3);
   return best_distance <= limit ? best : "";
+}
+
+std::string ExpectedText(const std::string& what, const ValueRange& range) {
+  constexpr double kUnbounded = 1e300;
+  const std::string unit = range.unit[0] ? std::string(" ") + range.unit : "";
+  if (range.max < kUnbounded) return what + " in " + range.Text();
+  if (range.min <= -kUnbounded) return what + (unit.empty() ? "" : " [" + unit.substr(1) + "]");
+  return fmt::format("{} {} {:g}{}", what, range.min_open ? ">" : ">=", range.min, unit);
 }
 
 std::string DescribeYaml(const YAML::Node& node) {
@@ -235,7 +239,7 @@ bool YamlSection::Read(const std::string& key, double* out, const ValueRange& ra
         *out = v;
         return true;
       },
-      RangeExpected(what, range));
+      ExpectedText(what, range));
 }
 
 bool YamlSection::Read(const std::string& key, int* out, const ValueRange& range,
@@ -248,7 +252,7 @@ bool YamlSection::Read(const std::string& key, int* out, const ValueRange& range
         *out = v;
         return true;
       },
-      RangeExpected("an integer " + what, range));
+      ExpectedText("an integer " + what, range));
 }
 
 bool YamlSection::Read(const std::string& key, std::uint64_t* out) {
@@ -321,7 +325,7 @@ YamlOptionTable& YamlOptionTable::Add(const std::string& key, double* field,
                                       const ValueRange& range, const std::string& what,
                                       const std::string& doc) {
   return AddCustom(
-      key, RangeExpected(what, range), ValueText(*field),
+      key, ExpectedText(what, range), ValueText(*field),
       [field, range](const YAML::Node& n) {
         double v = 0;
         if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
@@ -335,7 +339,7 @@ YamlOptionTable& YamlOptionTable::Add(const std::string& key, double* field,
 YamlOptionTable& YamlOptionTable::Add(const std::string& key, int* field, const ValueRange& range,
                                       const std::string& what, const std::string& doc) {
   return AddCustom(
-      key, RangeExpected("an integer " + what, range), std::to_string(*field),
+      key, ExpectedText("an integer " + what, range), std::to_string(*field),
       [field, range](const YAML::Node& n) {
         int v = 0;
         if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !range.Contains(v)) return false;

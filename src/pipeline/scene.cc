@@ -18,10 +18,13 @@ namespace {
 constexpr const char* kSceneFileWhat = "a scene file (YAML)";
 
 // Ranges of scene-only keys (the library options' ranges are their structs').
+// A bound of 1e300 is none (ExpectedText, io/yaml.h).
 constexpr ValueRange kPositive{0, 1e300, "", /*min_open=*/true};
 constexpr ValueRange kNonNegative{0, 1e300, ""};
+constexpr ValueRange kPositivePx{0, 1e300, "px", /*min_open=*/true};
+constexpr ValueRange kNonNegativePx{0, 1e300, "px"};
 constexpr ValueRange kAnyTime{-1e300, 1e300, "s"};
-constexpr ValueRange kCount{1, 1e6, ""};
+constexpr ValueRange kCount{1, 1e300, ""};
 constexpr ValueRange kFraction{0, 1, "", /*min_open=*/true};
 // Gravity must push the pounder down in a scene (0 is only for the model's exact solutions).
 constexpr ValueRange kSceneGravityRange{kGravityRange.min, kGravityRange.max, kGravityRange.unit,
@@ -33,7 +36,7 @@ std::string Num(double v) { return fmt::format("{}", v); }
 void AddOptional(YamlOptionTable& t, const std::string& key, std::optional<double>* field,
                  const ValueRange& range, const std::string& what, const std::string& doc) {
   t.AddCustom(
-      key, what + " in " + range.Text(), field->has_value() ? Num(**field) : "unset",
+      key, ExpectedText(what, range), field->has_value() ? Num(**field) : "unset",
       [field, range](const YAML::Node& n) {
         double v = 0;
         if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
@@ -120,7 +123,7 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
   clahe.Add("enabled", &c.enabled, "CLAHE on/off");
   clahe.Add("clip_limit", &c.clip_limit, ValueRange{0, 1000, "", /*min_open=*/true}, "a clip limit",
             "Contrast limit relative to a flat histogram");
-  clahe.Add("tile_grid", &c.tile_grid, ValueRange{1, 64, ""}, "tiles per side", "Tiles per side");
+  clahe.Add("tile_grid", &c.tile_grid, ValueRange{1, 64, ""}, "tile count", "Tiles per side");
   return {gauss, clahe};
 }
 
@@ -137,9 +140,9 @@ void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
         return true;
       },
       "Worker threads");
-  t.Add("first_frame", &d.first_frame, ValueRange{0, 1e9, ""}, "frame index",
+  t.Add("first_frame", &d.first_frame, ValueRange{0, 1e300, ""}, "frame index",
         "First frame to correlate; 0 with a sensor record: the last frame before the impact");
-  t.Add("last_frame", &d.last_frame, ValueRange{-1, 1e9, ""}, "frame index (-1: the last)",
+  t.Add("last_frame", &d.last_frame, ValueRange{-1, 1e300, ""}, "frame index (-1: the last)",
         "Last frame (inclusive); -1 = the last frame");
 }
 
@@ -207,7 +210,7 @@ YamlOptionTable SensorTable(Scene* s) {
       "Unit of the acceleration column; auto = from its name");
   t.Add("exposure_column", &o.columns.exposure,
         "Camera exposure column (frame times from its rising edges); empty or absent = none");
-  t.Add("cutoff_hz", &o.cutoff_hz, ValueRange{0, 1e9, "Hz", /*min_open=*/true},
+  t.Add("cutoff_hz", &o.cutoff_hz, ValueRange{0, 1e300, "Hz", /*min_open=*/true},
         "a cut-off frequency", "Low-pass cut-off (< fs / 2)");
   t.AddChoice(
       "integrate_from", {"release", "impact"}, ToString(o.integrate_from),
@@ -223,17 +226,33 @@ YamlOptionTable SensorTable(Scene* s) {
 YamlOptionTable MomentumTable(Scene* s) {
   YamlOptionTable t("momentum");
   SceneMomentum& m = s->momentum;
-  AddOptional(t, "pounder_center_x_px", &m.pounder_center_x_px, kNonNegative, "a pixel column",
+  AddOptional(t, "pounder_center_x_px", &m.pounder_center_x_px, kNonNegativePx, "a pixel column",
               "Footprint centre in the first frame");
-  AddOptional(t, "surface_y_px", &m.surface_y_px, kNonNegative, "a pixel row",
+  AddOptional(t, "surface_y_px", &m.surface_y_px, kNonNegativePx, "a pixel row",
               "Sand surface (pounder bottom at impact) in the first frame");
   t.Add("grid_cols", &m.options.grid_cols, kCount, "subset count", "Subsets across the footprint");
   t.Add("grid_rows", &m.options.grid_rows, kCount, "subset count", "Subset rows beneath it");
   t.Add("min_valid_fraction", &m.options.min_valid_fraction, kFraction,
         "a fraction of the grid's subsets", "Per frame: p_gran only where this much is valid");
-  AddOptional(t, "max_sigma_px", &m.max_sigma_px, kPositive, "a standard deviation limit [px]",
+  AddOptional(t, "max_sigma_px", &m.max_sigma_px, kPositivePx, "a standard deviation limit",
               "Subset samples above it are left out of kinematics and p_gran");
   return t;
+}
+
+// A solver tolerance: NaN (unset) means the solver's rule, shown as `unset_text`.
+void AddTolerance(YamlOptionTable& t, const std::string& key, double* field,
+                  const ValueRange& range, const std::string& what, const std::string& unset_text,
+                  const std::string& doc) {
+  t.AddCustom(
+      key, ExpectedText(what, range), std::isnan(*field) ? unset_text : Num(*field),
+      [field, range](const YAML::Node& n) {
+        double v = 0;
+        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
+          return false;
+        *field = v;
+        return true;
+      },
+      doc);
 }
 
 YamlOptionTable ModelTable(Scene* s) {
@@ -249,20 +268,25 @@ YamlOptionTable ModelTable(Scene* s) {
         return true;
       },
       "Added mass M; unset: Eq. 4");
-  t.Add("K", &m.friction_K, kFrictionKRange, "a friction coefficient K", "Table 2");
-  t.Add("n", &m.damping_exponent_n, kDampingExponentNRange, "a damping exponent n", "Table 2");
+  t.Add("K", &m.friction_K, kFrictionKRange, "a friction coefficient K",
+        "Friction coefficient K (Eq. 8, Table 2)");
+  t.Add("n", &m.damping_exponent_n, kDampingExponentNRange, "a damping exponent n",
+        "Damping exponent n (Eq. 8, Table 2)");
   t.Add("u", &m.damping_factor_u, kDampingFactorURange,
-        "a damping factor u (>= 1: F_dyn must resist the motion)", "Table 2");
-  t.Add("T_s", &m.sigmoid_delay_T_s, kSigmoidDelayRange, "a sigmoid delay T", "Table 2");
-  t.Add("b_per_s", &m.sigmoid_rate_b_per_s, kSigmoidRateRange, "a sigmoid rate b", "Table 2");
+        "a damping factor u (>= 1: F_dyn must resist the motion)",
+        "Damping factor u (Eq. 8, Table 2)");
+  t.Add("T_s", &m.sigmoid_delay_T_s, kSigmoidDelayRange, "a sigmoid delay T",
+        "Sigmoid delay T (Eq. 6, Table 2)");
+  t.Add("b_per_s", &m.sigmoid_rate_b_per_s, kSigmoidRateRange, "a sigmoid rate b",
+        "Sigmoid rate b (Eq. 6, Table 2)");
   ImpactSolverOptions& o = s->solver;
   t.AddChoice(
       "solver", {"auto", "dopri5", "stiff"}, ToString(o.solver),
       [&o](const std::string& v) { o.solver = ImpactSolverFromString(v); }, "ODE solver");
-  t.Add("rtol", &o.rtol, ValueRange{1e-14, 0.1, ""}, "a relative tolerance",
-        "Relative tolerance; unset: 1e-6");
-  t.Add("atol", &o.atol, kPositive, "an absolute tolerance",
-        "Absolute tolerance; unset: 1e-3 * rtol");
+  AddTolerance(t, "rtol", &o.rtol, ValueRange{1e-14, 0.1, ""}, "a relative tolerance", "1e-6",
+               "Relative tolerance of the ODE solver");
+  AddTolerance(t, "atol", &o.atol, kPositive, "an absolute tolerance", "1e-3 * rtol",
+               "Absolute tolerance of the ODE solver");
   return t;
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -208,6 +209,28 @@ TEST(OptionDefaults, EverySceneKeyIsDocumentedInTheReadme) {
           << table.section() << "." << entry.key << " is not in README.md's \"Scene file\"";
     }
   }
+}
+
+// docs/scene_keys.md is the scene tables' own reference (YamlOptionTable::Reference: key, default
+// = the bound struct's value, expected values, meaning). Run with IMPACTDIC_UPDATE_DOCS=1 to
+// rewrite it after changing an option.
+TEST(OptionDefaults, SceneKeyReferenceIsGeneratedFromTheBindings) {
+  Scene scene;
+  std::string expected =
+      "# Scene keys\n\nGenerated from the scene's option tables (`SceneOptionTables`, "
+      "src/pipeline/scene.cc) by\n`IMPACTDIC_UPDATE_DOCS=1 build/release/tests/pipeline/"
+      "pipeline_test --gtest_filter='OptionDefaults.*'`;\nthe defaults are the library structs' "
+      "(docs/architecture.md, \"Options\"). Besides these keys: `name`,\n`stages`, "
+      "`dic.roi`, `dic.roi_polygon`, `momentum.rect_mm` (README.md, \"Scene file\").\n\n"
+      "| key | default | expected | meaning |\n|---|---|---|---|\n";
+  for (const YamlOptionTable& table : SceneOptionTables(&scene)) expected += table.Reference();
+  const std::string path = std::string(IMPACTDIC_SOURCE_DIR) + "/docs/scene_keys.md";
+  if (std::getenv("IMPACTDIC_UPDATE_DOCS")) std::ofstream(path) << expected;
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_EQ(text.str(), expected)
+      << "docs/scene_keys.md is out of date; regenerate it (see the test)";
 }
 
 }  // namespace
