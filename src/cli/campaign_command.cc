@@ -1,5 +1,6 @@
-// impactdic campaign SCENE.yaml... [-o OUTDIR] | --from-table CSV: many scenes, then the Eq. 4
-// power-law regression over their measured m_add,max (pipeline/campaign.h).
+// impactdic campaign CAMPAIGN.yaml | SCENE.yaml... [-o OUTDIR] [--shard I/N] [--jobs N] [--force]
+// | --merge DIR... | --from-table CSV: many tests, then the Eq. 4 power-law regression and the
+// comparison figures (pipeline/campaign.h, docs/campaign.md).
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -12,56 +13,108 @@
 #include "impactdic/pipeline/campaign.h"
 
 namespace impactdic::cli {
+namespace {
+
+struct CampaignArgs {
+  std::vector<std::string> files, merge;
+  std::string table, output = "results/campaign", format = "text", shard;
+  std::optional<int> threads;  // Unset: each scene's dic.threads.
+  int jobs = 0;
+  double confidence = 0.95;
+  bool force = false, no_figures = false;
+};
+
+// The plan of the positional files: one campaign file, or scene files.
+CampaignPlan PlanOf(const std::vector<std::string>& files) {
+  if (files.size() == 1 && IsCampaignFile(files[0])) return LoadCampaignFile(files[0]);
+  for (const auto& f : files) {
+    if (IsCampaignFile(f)) {
+      throw Error(ErrorKind::kInvalidValue, "files", f + " is a campaign file",
+                  "one campaign file alone, or scene files");
+    }
+  }
+  return PlanFromSceneFiles(files);
+}
+
+CampaignOptions OptionsOf(const CampaignArgs& a) {
+  if (a.format != "text" && a.format != "json")
+    throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
+  if (a.threads) CheckThreadCount(*a.threads, "--threads");
+  if (a.jobs < 0)
+    throw Error(ErrorKind::kInvalidValue, "--jobs", std::to_string(a.jobs),
+                "0 (auto) or a number of tests at a time >= 1");
+  if (!(a.confidence > 0 && a.confidence < 1)) {
+    throw Error(ErrorKind::kInvalidValue, "--confidence", std::to_string(a.confidence),
+                "a level in (0, 1)");
+  }
+  CampaignOptions o;
+  o.output_folder = a.output;
+  o.threads = a.threads.value_or(-1);
+  o.jobs = a.jobs;
+  o.confidence = a.confidence;
+  o.force = a.force;
+  o.figures = !a.no_figures;
+  if (!a.shard.empty()) o.shard = ParseShard(a.shard, "--shard");
+  return o;
+}
+
+void Run(const CampaignArgs& a) {
+  const int modes = !a.files.empty() + !a.table.empty() + !a.merge.empty();
+  if (modes != 1) {
+    throw Error(ErrorKind::kInvalidValue, "files / --from-table / --merge",
+                modes == 0 ? "none" : "more than one",
+                "a campaign file or scene files, --from-table CSV, or --merge DIR...: one of them");
+  }
+  const CampaignOptions options = OptionsOf(a);
+  if ((!a.table.empty() || !a.merge.empty()) && (!a.shard.empty() || a.force)) {
+    throw Error(ErrorKind::kInvalidValue, "--shard / --force", "with --from-table or --merge",
+                "--shard and --force only when running tests");
+  }
+  CampaignSummary summary;
+  if (!a.table.empty()) {
+    summary = RegressCampaignTable(a.table, options);
+  } else if (!a.merge.empty()) {
+    summary = MergeCampaigns(a.merge, options);
+  } else {
+    summary = RunCampaign(PlanOf(a.files), options);
+  }
+  if (a.format == "json") {
+    std::cout << summary.RegressionJson().Dump() << "\n";
+  } else {
+    std::cout << summary.FullReport();
+  }
+}
+
+}  // namespace
 
 void RegisterCampaignCommand(CLI::App& app) {
-  struct Args {
-    std::vector<std::string> scenes;
-    std::string table, output = "results/campaign", format = "text";
-    std::optional<int> threads;  // Unset: each scene's dic.threads.
-    double confidence = 0.95;
-  };
-  auto args = std::make_shared<Args>();
+  auto args = std::make_shared<CampaignArgs>();
   auto* cmd = app.add_subcommand(
       "campaign",
-      "Run many scenes and fit Eq. 4, m_add,max = c m_p^a v0^b A^g, with confidence intervals");
-  cmd->add_option("scenes", args->scenes, "Scene files (YAML)");
+      "Run many tests (a campaign file: scene list, glob or synthesised parameter matrix; or "
+      "scene files), fit Eq. 4 m_add,max = c m_p^a v0^b A^g with confidence intervals, and draw "
+      "the comparison figures (docs/campaign.md)");
+  cmd->add_option("files", args->files, "A campaign file (YAML), or scene files");
   cmd->add_option("--from-table", args->table,
                   "Fit Eq. 4 from a CSV with mass_kg, velocity_m_s, area_m2, added_mass_max_kg "
-                  "(e.g. a campaign.csv) instead of running scenes");
+                  "(e.g. a campaign.csv) instead of running tests");
+  cmd->add_option("--merge", args->merge,
+                  "Combine the output folders of shard runs (--shard I/N) into -o")
+      ->expected(1, -1);
   cmd->add_option("-o,--output", args->output, "Output folder (default results/campaign)");
+  cmd->add_option("--shard", args->shard,
+                  "Run only shard I of N: tests I, I+N, I+2N, ... in plan order (e.g. 2/3)");
+  cmd->add_option("--jobs", args->jobs,
+                  "Tests at the same time: 0 = auto (one per thread), N >= 1 (default 0)");
   cmd->add_option("--threads", args->threads,
-                  std::string("Correlation threads: ") + kThreadCountExpected +
-                      " (default: each scene's dic.threads)");
+                  std::string("Threads of the whole campaign: ") + kThreadCountExpected +
+                      " (default: each scene's dic.threads, one test at a time)");
+  cmd->add_flag("--force", args->force, "Reprocess tests whose complete results exist");
+  cmd->add_flag("--no-figures", args->no_figures, "Skip the comparison figures");
   cmd->add_option("--confidence", args->confidence,
                   "Confidence level of the intervals (default 0.95)");
   cmd->add_option("--format", args->format, "Report on stdout: text or json (the regression)");
-  cmd->callback([args] {
-    if (args->scenes.empty() == args->table.empty()) {
-      throw Error(ErrorKind::kInvalidValue, "scenes / --from-table",
-                  args->scenes.empty() ? "neither" : "both",
-                  "scene files or --from-table CSV, not both");
-    }
-    if (args->format != "text" && args->format != "json") {
-      throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
-    }
-    if (args->threads) CheckThreadCount(*args->threads, "--threads");
-    CampaignOptions options;
-    options.output_folder = args->output;
-    options.threads = args->threads.value_or(-1);
-    options.confidence = args->confidence;
-    if (!(args->confidence > 0 && args->confidence < 1)) {
-      throw Error(ErrorKind::kInvalidValue, "--confidence", std::to_string(args->confidence),
-                  "a level in (0, 1)");
-    }
-    const CampaignSummary summary = args->table.empty()
-                                        ? RunCampaign(args->scenes, options)
-                                        : RegressCampaignTable(args->table, options);
-    if (args->format == "json") {
-      std::cout << summary.RegressionJson().Dump() << "\n";
-    } else {
-      std::cout << summary.FullReport();
-    }
-  });
+  cmd->callback([args] { Run(*args); });
 }
 
 }  // namespace impactdic::cli

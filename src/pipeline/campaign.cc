@@ -1,85 +1,172 @@
+// Running a campaign: each test (synthesised first if it is a spec) through the pipeline into its
+// own folder, one generation each; complete tests of an earlier run are resumed; tests run in
+// parallel (bounded), each in its own TBB arena; then the campaign-level files.
 #include "impactdic/pipeline/campaign.h"
 
 #include <fmt/format.h>
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
+#include <optional>
+#include <thread>
 
+#include "campaign_internal.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
-#include "impactdic/io/atomic_file.h"
-#include "impactdic/io/csv.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
+using namespace campaign_internal;
 namespace {
 
-constexpr const char* kCampaignCsv = "campaign.csv";
-constexpr const char* kRegressionJson = "regression.json";
-
-// A campaign's outputs are one generation of its folder (io/output_generation.h). From scenes it
-// replaces the whole folder; from a table (`scene_names` empty) it redoes campaign.csv and
-// regression.json and keeps the rest (the scene folders of an earlier campaign).
-OutputGenerationOptions CampaignGenerationOptions(const std::vector<Scene>& scenes,
-                                                  bool from_table) {
-  OutputGenerationOptions o;
-  o.command = from_table ? "impactdic campaign --from-table" : "impactdic campaign";
-  o.own_names = {kCampaignCsv, kRegressionJson};
-  for (const Scene& scene : scenes) o.own_names.push_back(scene.name);
-  o.keep_other_entries = from_table;
-  return o;
+// The row's inputs, known before the test runs.
+CampaignRow RowSkeleton(const CampaignTest& t) {
+  CampaignRow r;
+  r.index = t.index;
+  r.name = t.name;
+  r.source = t.source;
+  r.scene_hash = t.hash_hex;
+  r.tool_version = ToolVersion();
+  if (t.synthesise) {
+    r.mass_kg = t.spec.pounder_mass_kg;
+    r.drop_height_m = t.spec.drop_height_m;
+    r.velocity_m_s = t.spec.ImpactVelocity();
+    r.width_m = t.spec.width_m;
+    r.area_m2 = t.spec.width_m * t.spec.depth_m;
+    r.added_mass_given_kg = t.spec.added_mass_kg;
+  } else {
+    const Scene scene = LoadScene(t.scene_path);
+    r.mass_kg = scene.model.pounder_mass_kg;
+    // A scene giving v0 directly has no drop height.
+    r.drop_height_m = scene.test.impact_velocity_m_s ? CampaignRow::kNaN : scene.test.drop_height_m;
+    r.velocity_m_s = scene.ImpactVelocity();
+    r.width_m = scene.model.width_m;
+    r.area_m2 = scene.model.ContactArea_m2();
+  }
+  return r;
 }
 
-// Fits Eq. 4 over the scenes with a usable m_add,max and writes campaign.csv and regression.json
-// into `folder` (the staging folder of the campaign's generation).
-void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
-                 const std::string& folder) {
-  std::vector<PowerLawSample> samples;
-  for (auto& s : summary->scenes) {
-    if (s.excluded.empty() &&
-        !(std::isfinite(s.figures.added_mass_max_kg) && s.figures.added_mass_max_kg > 0)) {
-      s.excluded = fmt::format("no measured m_add,max (got {})", s.figures.added_mass_max_kg);
+// The row of a complete earlier result of this test (same scene hash and tool version), if any.
+std::optional<CampaignRow> CompleteRow(const CampaignTest& t, const std::string& folder) {
+  const fs::path dir = fs::path(folder) / t.name;
+  std::error_code ec;
+  if (!fs::is_regular_file(dir / kRowCsv, ec) || !fs::exists(dir / kOutputMarkerName, ec))
+    return std::nullopt;
+  try {
+    std::vector<CampaignRow> rows = ReadRows((dir / kRowCsv).string());
+    if (rows.size() != 1 || rows[0].scene_hash != t.hash_hex ||
+        rows[0].tool_version != ToolVersion() || rows[0].status == "failed") {
+      return std::nullopt;
     }
-    if (s.excluded.empty()) {
-      samples.push_back({s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg});
-    } else {
-      LogWarning("campaign: scene {} is left out of the Eq. 4 fit: {}", s.name, s.excluded);
+    rows[0].index = t.index;  // The plan may have changed around it.
+    rows[0].source = t.source;
+    return rows[0];
+  } catch (const Error& e) {
+    LogWarning("campaign: {}: earlier results not reusable ({}); processing it again", t.name,
+               e.what());
+    return std::nullopt;
+  }
+}
+
+// Synthesises (if needed) and runs one test into its folder (a generation of its own, complete or
+// absent). `threads`: PipelineOptions::threads. Never throws for the test's own errors: they
+// become status "failed" with the message.
+CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int threads) {
+  WallTimer timer;
+  CampaignRow row = RowSkeleton(t);
+  try {
+    OutputGenerationOptions go;
+    go.command = "impactdic campaign (test " + t.name + ")";
+    go.own_names = {"results", "synth", kRowCsv};
+    OutputGeneration generation((fs::path(folder) / t.name).string(), go);
+    std::string scene_path = t.scene_path;
+    if (t.synthesise) {
+      const ImpactScene synthetic(t.spec);
+      scene_path = WriteImpactScene(synthetic, generation.Path("synth")).scene_yaml;
     }
+    Scene scene = LoadScene(scene_path);
+    if (t.animation) scene.outputs.animation = *t.animation;
+    if (t.figures) scene.outputs.figures = *t.figures;
+    PipelineOptions p;
+    p.output_folder = generation.Path("results");
+    p.threads = threads;
+    p.allow_partial = true;  // Its outputs are written; it stays out of the fit (FitEq4).
+    const PipelineSummary run = RunScene(scene, p);
+    row.figures = run.figures.CsvValues();
+    if (std::isfinite(run.figures.impact_velocity_m_s))
+      row.velocity_m_s = run.figures.impact_velocity_m_s;
+    row.status = run.IsUsable() ? "ok" : "unusable";
+    if (!run.IsUsable()) row.excluded = "a stage produced nothing usable: " + run.FailureText();
+    row.wall_time_s = timer.ElapsedSeconds();
+    WriteRows(generation.Path(kRowCsv), {row});
+    generation.Commit();
+  } catch (const std::exception& e) {
+    row.status = "failed";
+    row.error = e.what();
+    row.wall_time_s = timer.ElapsedSeconds();
+    LogWarning("campaign: test {} failed: {}", t.name, e.what());
   }
-  if (samples.size() >= 5) {
-    summary->fit = FitPowerLaw(samples, options.confidence);
-    summary->fitted = true;
-  } else {
-    summary->fit_note = fmt::format(
-        "{} of {} scenes have a measured m_add,max; the Eq. 4 regression needs at least 5",
-        samples.size(), summary->scenes.size());
-    LogWarning("campaign: {}", summary->fit_note);
+  return row;
+}
+
+struct Parallelism {
+  int jobs = 1;           // Tests at the same time.
+  int test_threads = -1;  // Threads of each test: an arena's size, or -1 (the scene's dic.threads).
+};
+
+Parallelism SplitThreads(const CampaignOptions& o, std::size_t tests) {
+  Parallelism p;
+  const int n = static_cast<int>(std::max<std::size_t>(tests, 1));
+  if (o.threads < 0) {
+    p.jobs = std::min(o.jobs > 0 ? o.jobs : 1, n);
+    return p;
   }
-  const std::string csv = (fs::path(folder) / kCampaignCsv).string();
-  std::vector<std::string> names = {"mass_kg", "velocity_m_s", "area_m2"};
-  for (const auto& n : SceneFigures{}.CsvNames()) names.push_back(n);
-  names.push_back("eq4_fit");
-  std::vector<std::vector<std::string>> rows;
-  names.insert(names.begin(), "scene");
-  for (const auto& s : summary->scenes) {
-    std::vector<std::string> row = {s.name, fmt::format("{:.10g}", s.mass_kg),
-                                    fmt::format("{:.10g}", s.velocity_m_s),
-                                    fmt::format("{:.10g}", s.area_m2)};
-    for (double v : s.figures.CsvValues())
-      row.push_back(std::isfinite(v) ? fmt::format("{:.10g}", v) : "nan");
-    row.push_back(s.excluded.empty() ? "used" : "excluded");
-    rows.push_back(row);
-  }
-  WriteCsvRows(csv, names, rows);
-  summary->outputs.push_back(csv);
-  const std::string json = (fs::path(folder) / kRegressionJson).string();
-  WriteTextFileAtomic(json, summary->RegressionJson().Dump() + "\n");
-  summary->outputs.push_back(json);
+  const int total = o.threads > 0
+                        ? o.threads
+                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  p.jobs = std::min(o.jobs > 0 ? o.jobs : total, n);
+  p.test_threads = std::max(1, total / p.jobs);
+  return p;
+}
+
+// Runs the selected tests with `par.jobs` workers; rows in `rows` (by position in `todo`).
+void RunTests(const std::vector<const CampaignTest*>& todo, const std::string& folder,
+              const Parallelism& par, std::vector<CampaignRow>* rows) {
+  rows->resize(todo.size());
+  ProgressBar bar("campaign", todo.size());
+  std::mutex mutex;
+  std::atomic<std::size_t> next{0};
+  const auto worker = [&] {
+    for (std::size_t i = next++; i < todo.size(); i = next++) {
+      LogInfo("campaign: test {} ({} of {}) -> {}", todo[i]->name, i + 1, todo.size(),
+              (fs::path(folder) / todo[i]->name).string());
+      CampaignRow row;
+      if (par.test_threads > 0) {
+        tbb::task_arena arena(par.test_threads);
+        arena.execute([&] { row = ProcessTest(*todo[i], folder, /*threads=*/0); });
+      } else {
+        row = ProcessTest(*todo[i], folder, /*threads=*/-1);
+      }
+      const std::lock_guard<std::mutex> lock(mutex);
+      (*rows)[i] = std::move(row);
+      bar.Advance();
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 1; j < par.jobs; ++j) threads.emplace_back(worker);
+  worker();
+  for (auto& t : threads) t.join();
+  bar.Finish();
 }
 
 }  // namespace
@@ -88,131 +175,63 @@ void CampaignOptions::Check() const {
   CheckValue(!output_folder.empty(), "output_folder", "an empty path", "a folder");
   CheckValue(threads == -1 || IsValidThreadCount(threads), "threads", std::to_string(threads),
              std::string("-1 (each scene's dic.threads) or ") + kThreadCountExpected);
+  CheckValue(jobs >= 0, "jobs", std::to_string(jobs), "0 (auto) or a number of tests >= 1");
   CheckValue(confidence > 0 && confidence < 1, "confidence", fmt::format("{}", confidence),
              "a level in (0, 1)");
+  CheckValue(shard.count >= 1 && shard.index >= 1 && shard.index <= shard.count, "shard",
+             shard.ToString(), "I/N with 1 <= I <= N");
 }
 
-JsonObject CampaignSummary::RegressionJson() const {
-  JsonObject j;
-  j.Add("scenes", static_cast<int>(scenes.size()));
-  j.Add("fitted", fitted);
-  JsonObject excluded;
-  for (const auto& s : scenes)
-    if (!s.excluded.empty()) excluded.Add(s.name, s.excluded);
-  j.Add("excluded", excluded);
-  if (!fitted) {
-    j.Add("note", fit_note);
-    return j;
-  }
-  j.Add("c", fit.c).Add("a", fit.a).Add("b", fit.b).Add("g", fit.g);
-  j.Add("ci_c", std::vector<double>{fit.ci_c[0], fit.ci_c[1]});
-  j.Add("ci_a", std::vector<double>{fit.ci_a[0], fit.ci_a[1]});
-  j.Add("ci_b", std::vector<double>{fit.ci_b[0], fit.ci_b[1]});
-  j.Add("ci_g", std::vector<double>{fit.ci_g[0], fit.ci_g[1]});
-  j.Add("confidence", fit.confidence)
-      .Add("r_squared", fit.r_squared)
-      .Add("n", static_cast<int>(fit.n));
-  j.Add("residual_sd_log", fit.residual_sd);
-  j.Add("paper", JsonObject().Add("c", 425.0).Add("a", 0.1).Add("b", 0.2).Add("g", 1.3));
-  return j;
-}
-
-std::string CampaignSummary::FullReport() const {
-  std::string text = fmt::format("Campaign of {} scenes ({:.1f} s)\n", scenes.size(), seconds);
-  for (const auto& s : scenes) {
-    text +=
-        fmt::format("  {:<20} m_p {:6.2f} kg  v0 {:5.2f} m/s  A {:.4f} m^2  m_add,max {:.3f} kg\n",
-                    s.name, s.mass_kg, s.velocity_m_s, s.area_m2, s.figures.added_mass_max_kg);
-    if (!s.excluded.empty())
-      text += "  " + std::string(20, ' ') + "  not in the Eq. 4 fit: " + s.excluded + "\n";
-  }
-  if (fitted) {
-    text += "Eq. 4: " + fit.BriefReport() + "\n";
-  } else {
-    text += "Eq. 4: not fitted: " + fit_note + "\n";
-  }
-  for (const auto& o : outputs) text += "  " + o + "\n";
-  return text;
-}
-
-CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
-                            const CampaignOptions& options) {
+CampaignSummary RunCampaign(const CampaignPlan& plan, const CampaignOptions& options) {
   options.Check();
-  if (scene_paths.empty()) {
-    throw Error(ErrorKind::kInvalidValue, "scenes", "none", "at least one scene file");
-  }
-  // Load (and so validate) every scene before running any.
-  std::vector<Scene> scenes;
-  for (const auto& path : scene_paths) scenes.push_back(LoadScene(path));
-  // The new generation replaces the campaign's folder whole: no scene may read from it.
-  for (const Scene& scene : scenes)
-    CheckOutputFolderHoldsNoInput(scene, options.output_folder, "-o");
   WallTimer timer;
+  std::vector<const CampaignTest*> todo;
   CampaignSummary summary;
-  OutputGeneration generation(options.output_folder,
-                              CampaignGenerationOptions(scenes, /*from_table=*/false));
-  for (const Scene& scene : scenes) {
-    PipelineOptions p;
-    p.output_folder = generation.Path(scene.name);
-    p.threads = options.threads;
-    p.allow_partial = true;  // Its outputs are written; it stays out of the fit (below).
-    LogInfo("campaign: scene {} -> {}", scene.name,
-            (fs::path(options.output_folder) / scene.name).string());
-    const PipelineSummary run = RunScene(scene, p);
-    CampaignScene s;
-    s.name = scene.name;
-    s.mass_kg = scene.model.pounder_mass_kg;
-    s.velocity_m_s = std::isfinite(run.figures.impact_velocity_m_s)
-                         ? run.figures.impact_velocity_m_s
-                         : scene.ImpactVelocity();
-    s.area_m2 = scene.model.ContactArea_m2();
-    s.figures = run.figures;
-    if (!run.IsUsable()) s.excluded = "a stage produced nothing usable: " + run.FailureText();
-    summary.scenes.push_back(s);
+  summary.tests_total = static_cast<int>(plan.tests.size());
+  for (const CampaignTest& t : plan.tests) {
+    if (!options.shard.Selects(t.index)) continue;
+    // The campaign folder's generation keeps what it holds: still, no input may lie in it.
+    if (!t.synthesise)
+      CheckOutputFolderHoldsNoInput(LoadScene(t.scene_path), options.output_folder, "-o");
+    std::optional<CampaignRow> done =
+        options.force ? std::nullopt : CompleteRow(t, options.output_folder);
+    if (done) {
+      LogInfo("campaign: test {} is complete in {} (same scene, same tool): not run again", t.name,
+              (fs::path(options.output_folder) / t.name).string());
+      summary.rows.push_back(std::move(*done));
+      ++summary.resumed;
+    } else {
+      todo.push_back(&t);
+    }
   }
-  FitAndWrite(&summary, options, generation.staging_folder());
+  // Checks the folder before any work; written at the end (the tests' folders commit on their own).
+  OutputGeneration generation(options.output_folder, CampaignLevelGeneration("impactdic campaign"));
+  const Parallelism par = SplitThreads(options, todo.size());
+  std::optional<tbb::global_control> limit;
+  if (options.threads > 0)
+    limit.emplace(tbb::global_control::max_allowed_parallelism,
+                  static_cast<std::size_t>(options.threads));
+  LogInfo("campaign: {} tests to run ({} resumed, shard {}), {} at a time, {} threads each",
+          todo.size(), summary.resumed, options.shard.ToString(), par.jobs,
+          par.test_threads > 0 ? std::to_string(par.test_threads) : "scene's dic.threads");
+  std::vector<CampaignRow> rows;
+  RunTests(todo, options.output_folder, par, &rows);
+  for (auto& r : rows) {
+    summary.failed += r.status == "failed";
+    summary.rows.push_back(std::move(r));
+  }
+  FitAndWrite(&summary, options, generation.staging_folder(),
+              plan.yaml_text.empty() ? "# scene files\n" : plan.yaml_text);
   generation.Commit();
   for (auto& o : summary.outputs) o = generation.FinalPath(o);
   summary.seconds = timer.ElapsedSeconds();
   return summary;
 }
 
-CampaignSummary RegressCampaignTable(const std::string& csv_path, const CampaignOptions& options) {
+CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
+                            const CampaignOptions& options) {
   options.Check();
-  CsvReadOptions read;
-  read.required_columns = {"mass_kg", "velocity_m_s", "area_m2", "added_mass_max_kg"};
-  read.allow_non_finite = true;  // A scene without a measurement has nan; it is left out.
-  read.text_columns = {"scene", "eq4_fit"};
-  const CsvTable table = ReadCsv(csv_path, read);
-  const auto has_text = [&](const char* name) {
-    return std::find(table.text_names.begin(), table.text_names.end(), name) !=
-           table.text_names.end();
-  };
-  const bool named = has_text("scene"), marked = has_text("eq4_fit");
-  CampaignSummary summary;
-  for (std::size_t r = 0; r < table.rows(); ++r) {
-    CampaignScene s;
-    s.name = named ? table.TextColumn("scene")[r] : fmt::format("row {}", r + 1);
-    s.mass_kg = table.Column("mass_kg")[r];
-    s.velocity_m_s = table.Column("velocity_m_s")[r];
-    s.area_m2 = table.Column("area_m2")[r];
-    s.figures.added_mass_max_kg = table.Column("added_mass_max_kg")[r];
-    if (marked && table.TextColumn("eq4_fit")[r] == "excluded")
-      s.excluded = "marked excluded in " + csv_path + " (eq4_fit)";
-    if (!(s.mass_kg > 0 && s.velocity_m_s > 0 && s.area_m2 > 0)) {
-      throw Error(ErrorKind::kFileFormat, "row of " + s.name,
-                  fmt::format("m_p {}, v0 {}, A {}", s.mass_kg, s.velocity_m_s, s.area_m2),
-                  "positive mass_kg, velocity_m_s and area_m2")
-          .WithFile(csv_path);
-    }
-    summary.scenes.push_back(s);
-  }
-  OutputGeneration generation(options.output_folder,
-                              CampaignGenerationOptions({}, /*from_table=*/true));
-  FitAndWrite(&summary, options, generation.staging_folder());
-  generation.Commit();
-  for (auto& o : summary.outputs) o = generation.FinalPath(o);
-  return summary;
+  return RunCampaign(PlanFromSceneFiles(scene_paths), options);
 }
 
 }  // namespace impactdic

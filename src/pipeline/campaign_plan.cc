@@ -1,0 +1,376 @@
+// The campaign's plan: which tests, from a campaign file (scene list, glob, parameter matrix to
+// synthesise) or scene files; their unique names and content hashes; shards.
+#include <fmt/format.h>
+#include <glob.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <filesystem>
+#include <map>
+#include <random>
+
+#include "campaign_internal.h"
+#include "impactdic/core/error.h"
+#include "impactdic/core/version.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/io/yaml.h"
+#include "impactdic/pipeline/campaign.h"
+
+namespace impactdic {
+namespace fs = std::filesystem;
+namespace campaign_internal {
+
+std::string ContentHash(const std::string& bytes) {
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 offset basis and prime.
+  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
+  return fmt::format("{:016x}", h);
+}
+
+std::string ToolVersion() { return fmt::format("{}+{}", Version(), GitRevision()); }
+
+}  // namespace campaign_internal
+
+namespace {
+using campaign_internal::ContentHash;
+
+constexpr const char* kWhat = "a campaign file (YAML)";
+
+// Error for a node of the campaign file: "FILE:LINE: KEY: got ...; expected ...".
+[[noreturn]] void Fail(const std::string& file, const YAML::Node& node, const std::string& key,
+                       const std::string& found, const std::string& expected) {
+  Error e(ErrorKind::kInvalidValue, key, found, expected);
+  if (node.IsDefined() && node.Mark().line >= 0) {
+    e.WithFile(file, node.Mark().line + 1, node.Mark().column + 1);
+  } else {
+    e.WithFile(file);
+  }
+  throw e;
+}
+
+std::string Describe(const YAML::Node& node) {
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list";
+  if (node.IsMap()) return "a map";
+  return "nothing";
+}
+
+void CheckKeys(const std::string& file, const YAML::Node& map, const std::string& prefix,
+               const std::vector<std::string>& known) {
+  for (const auto& kv : map) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
+    const std::string close = ClosestMatch(key, known);
+    std::string expected = "one of: ";
+    for (std::size_t i = 0; i < known.size(); ++i) expected += (i ? ", " : "") + known[i];
+    if (!close.empty()) expected = "did you mean '" + close + "'? (" + expected + ")";
+    Fail(file, kv.first, prefix + key, "an unknown key", expected);
+  }
+}
+
+// A string or a list of strings.
+std::vector<std::string> Strings(const std::string& file, const YAML::Node& node,
+                                 const std::string& key) {
+  std::vector<std::string> out;
+  if (node.IsScalar()) return {node.Scalar()};
+  if (!node.IsSequence() || node.size() == 0)
+    Fail(file, node, key, Describe(node), "a path or a non-empty list of paths");
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    if (!node[i].IsScalar() || node[i].Scalar().empty())
+      Fail(file, node[i], fmt::format("{}[{}]", key, i), Describe(node[i]), "a path");
+    out.push_back(node[i].Scalar());
+  }
+  return out;
+}
+
+std::vector<double> Numbers(const std::string& file, const YAML::Node& node,
+                            const std::string& key) {
+  if (!node.IsSequence() || node.size() == 0)
+    Fail(file, node, key, Describe(node), "a non-empty list of positive numbers");
+  std::vector<double> out;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    double v = 0;
+    if (!node[i].IsScalar() || !YAML::convert<double>::decode(node[i], v) || !(v > 0) ||
+        !std::isfinite(v)) {
+      Fail(file, node[i], fmt::format("{}[{}]", key, i), Describe(node[i]), "a positive number");
+    }
+    out.push_back(v);
+  }
+  return out;
+}
+
+std::string Resolve(const std::string& file, const std::string& path) {
+  const fs::path p(path);
+  if (p.is_absolute() || file.empty()) return path;
+  return (fs::path(file).parent_path() / p).lexically_normal().string();
+}
+
+CampaignTest SceneFileTest(const std::string& path, const std::string& where,
+                           const std::string& campaign_file) {
+  Scene scene;
+  try {
+    scene = LoadScene(path);
+  } catch (const Error& e) {
+    if (campaign_file.empty()) throw;
+    throw Error(e.kind(), where, e.what(), "a scene file that loads").WithFile(campaign_file);
+  }
+  CampaignTest t;
+  t.scene_path = path;
+  t.source = path;
+  t.name = scene.name;
+  t.hash_hex = ContentHash(scene.yaml_text);
+  return t;
+}
+
+std::vector<std::string> GlobPaths(const std::string& file, const YAML::Node& node,
+                                   const std::string& key, const std::string& pattern) {
+  glob_t g{};
+  const int rc = glob(Resolve(file, pattern).c_str(), 0, nullptr, &g);
+  std::vector<std::string> out;
+  for (std::size_t i = 0; rc == 0 && i < g.gl_pathc; ++i) out.push_back(g.gl_pathv[i]);
+  globfree(&g);
+  if (out.empty())
+    Fail(file, node, key, "'" + pattern + "' (matches no file)", "a pattern matching scene files");
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Two independent standard normal numbers per call from a portable generator (Box-Muller on
+// mt19937_64's raw output: the same on every standard library, unlike normal_distribution).
+double StandardNormal(std::mt19937_64& rng) {
+  const double u1 = (static_cast<double>(rng() >> 11) + 1.0) * 0x1.0p-53;  // (0, 1]
+  const double u2 = static_cast<double>(rng() >> 11) * 0x1.0p-53;          // [0, 1)
+  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
+}
+
+// Overlays `over` onto `base` (maps merged key by key, anything else replaced).
+void Overlay(YAML::Node base, const YAML::Node& over) {
+  for (const auto& kv : over) {
+    const std::string key = kv.first.as<std::string>();
+    if (kv.second.IsMap() && base[key].IsMap()) {
+      Overlay(base[key], kv.second);
+    } else {
+      base[key] = kv.second;
+    }
+  }
+}
+
+// The synthesised tests' shared spec: the campaign default (docs/campaign.md: the tiny preset,
+// frames until the pounder stops, a 4 x 4 momentum grid), or `preset:`, with the keys of
+// synthesise.spec over it, read by the synth spec reader (its errors name the key path).
+ImpactSceneSpec SharedSpec(const std::string& file, const YAML::Node& node) {
+  ImpactSceneSpec base = ImpactScenePreset("tiny");
+  base.frames = 0;
+  base.grid_cols = 4;
+  base.grid_rows = 4;
+  if (!node.IsDefined()) return base;
+  if (!node.IsMap()) Fail(file, node, "synthesise.spec", Describe(node), "a map of synth keys");
+  YAML::Node over = YAML::Clone(node);
+  if (over["preset"]) {
+    base = ImpactScenePreset(over["preset"].as<std::string>());
+    over.remove("preset");
+  }
+  YAML::Node merged = YAML::Load(ImpactSceneSpecToYaml(base));
+  Overlay(merged, over);
+  YAML::Emitter out;
+  out << merged;
+  return ParseImpactSceneSpec(out.c_str(), file + " (synthesise.spec)");
+}
+
+// Panel scale that makes the momentum grid's soil mass rho_d (cols rows step^2 s^2) t_z equal M:
+// the synthetic soil field makes the measured m_add,max equal that grid mass (docs/synth.md), so
+// the measured m_add,max follows the M the test is given.
+double GridScaleMmPerPx(const ImpactSceneSpec& s, double added_mass_kg) {
+  const double area_m2 = added_mass_kg / (s.density_kg_m3 * s.depth_m);
+  return 1e3 * std::sqrt(area_m2 / (s.grid_cols * s.grid_rows)) / s.step;
+}
+
+std::vector<CampaignTest> MatrixTests(const std::string& file, const YAML::Node& node) {
+  if (!(node.IsMap() || node.IsNull()))
+    Fail(file, node, "synthesise", Describe(node), "a map (or nothing: Table 1 defaults)");
+  if (node.IsMap())
+    CheckKeys(file, node, "synthesise.",
+              {"spec", "mass_kg", "drop_height_m", "width_m", "added_mass_noise", "seed"});
+  const auto list = [&](const char* key, std::vector<double> def) {
+    return node.IsMap() && node[key] ? Numbers(file, node[key], std::string("synthesise.") + key)
+                                     : def;
+  };
+  const std::vector<double> masses = list("mass_kg", {7, 10, 13});
+  const std::vector<double> heights = list("drop_height_m", {0.2, 0.7, 1.2});
+  const std::vector<double> widths = list("width_m", {0.10, 0.15, 0.20});
+  double noise = 0.05;
+  std::uint64_t seed = 1;
+  if (node.IsMap() && node["added_mass_noise"]) {
+    const YAML::Node n = node["added_mass_noise"];
+    if (!n.IsScalar() || !YAML::convert<double>::decode(n, noise) || !(noise >= 0 && noise < 1))
+      Fail(file, n, "synthesise.added_mass_noise", Describe(n), "a number in [0, 1)");
+  }
+  if (node.IsMap() && node["seed"] && !YAML::convert<std::uint64_t>::decode(node["seed"], seed))
+    Fail(file, node["seed"], "synthesise.seed", Describe(node["seed"]), "an integer >= 0");
+  const ImpactSceneSpec shared = SharedSpec(file, node.IsMap() ? node["spec"] : YAML::Node());
+  std::mt19937_64 rng(seed);
+  std::vector<CampaignTest> tests;
+  for (double m : masses) {
+    for (double h : heights) {
+      for (double d : widths) {
+        CampaignTest t;
+        t.synthesise = true;
+        t.spec = shared;
+        t.spec.name = t.name = fmt::format("m{}_h{}_D{}", m, h, d);
+        t.spec.pounder_mass_kg = m;
+        t.spec.drop_height_m = h;
+        t.spec.impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
+        t.spec.width_m = d;
+        const double eq4 = Eq4AddedMass(m, t.spec.ImpactVelocity(), d * t.spec.depth_m);
+        t.spec.added_mass = SceneAddedMass::kGiven;
+        t.spec.added_mass_kg = eq4 * std::exp(noise * StandardNormal(rng));
+        t.spec.mm_per_px = GridScaleMmPerPx(t.spec, t.spec.added_mass_kg);
+        t.spec.seed = shared.seed + tests.size();
+        const double grid_span_m = (t.spec.grid_cols - 1) * t.spec.step * t.spec.mm_per_px * 1e-3;
+        if (grid_span_m > d) {
+          Fail(file, node, "synthesise (test " + t.name + ")",
+               fmt::format("a momentum grid {:.1f} mm wide under a {:.0f} mm pounder",
+                           grid_span_m * 1e3, d * 1e3),
+               "a grid beneath the pounder: more momentum.grid_rows or fewer grid_cols in "
+               "synthesise.spec");
+        }
+        t.spec.Check();
+        t.source = "synthesised";
+        t.hash_hex = ContentHash(ImpactSceneSpecToYaml(t.spec));
+        tests.push_back(std::move(t));
+      }
+    }
+  }
+  return tests;
+}
+
+// `outputs:` {animation, figures}: overrides of every test's scene outputs (part of its hash).
+void ApplyOutputs(const std::string& file, const YAML::Node& node,
+                  std::vector<CampaignTest>* tests) {
+  if (!node.IsMap()) Fail(file, node, "outputs", Describe(node), "a map (animation, figures)");
+  CheckKeys(file, node, "outputs.", {"animation", "figures"});
+  std::optional<bool> animation, figures;
+  for (auto [key, target] : {std::pair{"animation", &animation}, std::pair{"figures", &figures}}) {
+    if (!node[key]) continue;
+    bool v = false;
+    if (!node[key].IsScalar() || !YAML::convert<bool>::decode(node[key], v))
+      Fail(file, node[key], std::string("outputs.") + key, Describe(node[key]), "true or false");
+    *target = v;
+  }
+  for (auto& t : *tests) {
+    t.animation = animation;
+    t.figures = figures;
+    t.hash_hex = ContentHash(t.hash_hex + fmt::format(" animation {} figures {}",
+                                                      animation ? int(*animation) : -1,
+                                                      figures ? int(*figures) : -1));
+  }
+}
+
+// A name usable as a folder: [A-Za-z0-9._-], not starting with '.', not a campaign file's name.
+std::string FolderName(const std::string& name) {
+  std::string out;
+  for (char c : name) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' ||
+                              c == '_' || c == '.')
+                                 ? c
+                                 : '_';
+  if (out.empty() || out[0] == '.') out = "test" + out;
+  const auto reserved = campaign_internal::CampaignFileNames();
+  if (std::find(reserved.begin(), reserved.end(), out) != reserved.end()) out += "-test";
+  return out;
+}
+
+// Unique folder names: a name shared by several tests (two scene.yaml in different folders both
+// called "scene") gets "-" and 8 hex digits of the hash of its source (path or spec) appended.
+void AssignNamesAndIndices(std::vector<CampaignTest>* tests, const std::string& file) {
+  std::map<std::string, int> count;
+  for (auto& t : *tests) ++count[t.name = FolderName(t.name)];
+  std::map<std::string, const CampaignTest*> seen;
+  for (std::size_t i = 0; i < tests->size(); ++i) {
+    CampaignTest& t = (*tests)[i];
+    t.index = static_cast<int>(i) + 1;
+    if (count[t.name] > 1) {
+      const std::string key = t.synthesise ? t.hash_hex
+                                           : fs::absolute(t.scene_path).lexically_normal().string();
+      t.name += "-" + ContentHash(key).substr(0, 8);
+    }
+    if (seen.count(t.name)) {
+      throw Error(ErrorKind::kInvalidValue, "scenes", "'" + t.source + "' listed twice",
+                  "each test once")
+          .WithFile(file.empty() ? t.source : file);
+    }
+    seen[t.name] = &t;
+  }
+}
+
+}  // namespace
+
+std::string CampaignShard::ToString() const { return fmt::format("{}/{}", index, count); }
+
+CampaignShard ParseShard(const std::string& text, const std::string& where) {
+  CampaignShard s;
+  char slash = 0, extra = 0;
+  const int n = std::sscanf(text.c_str(), "%d%c%d%c", &s.index, &slash, &s.count, &extra);
+  if (n != 3 || slash != '/' || s.count < 1 || s.index < 1 || s.index > s.count) {
+    throw Error(ErrorKind::kInvalidValue, where, "'" + text + "'",
+                "I/N with 1 <= I <= N (shard I of N: tests I, I+N, I+2N, ...)");
+  }
+  return s;
+}
+
+double Eq4AddedMass(double mass_kg, double velocity_m_s, double area_m2) {
+  return 425.0 * std::pow(mass_kg, 0.1) * std::pow(velocity_m_s, 0.2) * std::pow(area_m2, 1.3);
+}
+
+bool IsCampaignFile(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path, kWhat);
+  return root.IsMap() && !root["inputs"] &&
+         (root["scenes"] || root["scene_glob"] || root["synthesise"]);
+}
+
+CampaignPlan LoadCampaignFile(const std::string& path) {
+  const YAML::Node root = LoadYamlFile(path, kWhat);
+  if (!root.IsMap()) Fail(path, root, "(top level)", Describe(root), "a map of campaign keys");
+  CheckKeys(path, root, "", {"scenes", "scene_glob", "synthesise", "outputs"});
+  CampaignPlan plan;
+  plan.path = path;
+  std::ifstream in(path);
+  plan.yaml_text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (root["scenes"]) {
+    const auto files = Strings(path, root["scenes"], "scenes");
+    for (std::size_t i = 0; i < files.size(); ++i) {
+      plan.tests.push_back(
+          SceneFileTest(Resolve(path, files[i]), fmt::format("scenes[{}]", i), path));
+    }
+  }
+  if (root["scene_glob"]) {
+    const auto patterns = Strings(path, root["scene_glob"], "scene_glob");
+    for (const auto& pattern : patterns) {
+      for (const auto& f : GlobPaths(path, root["scene_glob"], "scene_glob", pattern))
+        plan.tests.push_back(SceneFileTest(f, "scene_glob '" + pattern + "'", path));
+    }
+  }
+  if (root["synthesise"]) {
+    for (auto& t : MatrixTests(path, root["synthesise"])) plan.tests.push_back(std::move(t));
+  }
+  if (plan.tests.empty()) {
+    Fail(path, root, "scenes / scene_glob / synthesise", "no test",
+         "at least one scene file, glob match or synthesised test");
+  }
+  if (root["outputs"]) ApplyOutputs(path, root["outputs"], &plan.tests);
+  AssignNamesAndIndices(&plan.tests, path);
+  return plan;
+}
+
+CampaignPlan PlanFromSceneFiles(const std::vector<std::string>& scene_paths) {
+  if (scene_paths.empty())
+    throw Error(ErrorKind::kInvalidValue, "scenes", "none", "at least one scene file");
+  CampaignPlan plan;
+  for (const auto& p : scene_paths) plan.tests.push_back(SceneFileTest(p, p, ""));
+  AssignNamesAndIndices(&plan.tests, "");
+  return plan;
+}
+
+}  // namespace impactdic
