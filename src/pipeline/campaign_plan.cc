@@ -7,9 +7,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <filesystem>
 #include <map>
 #include <random>
 
@@ -272,10 +272,9 @@ void ApplyOutputs(const std::string& file, const YAML::Node& node,
 // A name usable as a folder: [A-Za-z0-9._-], not starting with '.', not a campaign file's name.
 std::string FolderName(const std::string& name) {
   std::string out;
-  for (char c : name) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '-' ||
-                              c == '_' || c == '.')
-                                 ? c
-                                 : '_';
+  for (char c : name)
+    out +=
+        (std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.') ? c : '_';
   if (out.empty() || out[0] == '.') out = "test" + out;
   const auto reserved = campaign_internal::CampaignFileNames();
   if (std::find(reserved.begin(), reserved.end(), out) != reserved.end()) out += "-test";
@@ -292,8 +291,8 @@ void AssignNamesAndIndices(std::vector<CampaignTest>* tests, const std::string& 
     CampaignTest& t = (*tests)[i];
     t.index = static_cast<int>(i) + 1;
     if (count[t.name] > 1) {
-      const std::string key = t.synthesise ? t.hash_hex
-                                           : fs::absolute(t.scene_path).lexically_normal().string();
+      const std::string key =
+          t.synthesise ? t.hash_hex : fs::absolute(t.scene_path).lexically_normal().string();
       t.name += "-" + ContentHash(key).substr(0, 8);
     }
     if (seen.count(t.name)) {

@@ -23,8 +23,8 @@ namespace fs = std::filesystem;
 namespace campaign_internal {
 namespace {
 
-constexpr const char* kTextColumns[] = {"scene",  "eq4_fit", "source",
-                                        "status", "error",   "eq4_excluded_reason",
+constexpr const char* kTextColumns[] = {"scene",      "eq4_fit",     "source",
+                                        "status",     "error",       "eq4_excluded_reason",
                                         "scene_hash", "tool_version"};
 
 // Shortest text that reads back to the same double; NaN as "nan".
@@ -66,9 +66,9 @@ std::vector<std::string> NumericColumnNames() {
 std::vector<double> NumericValues(const CampaignRow& r) {
   std::vector<double> v = {r.mass_kg, r.velocity_m_s, r.area_m2};
   v.insert(v.end(), r.figures.begin(), r.figures.end());
-  for (double x : {static_cast<double>(r.index), r.drop_height_m, r.width_m,
-                   r.RelativePenetrationMeasured(), r.RelativePenetrationModel(), r.wall_time_s,
-                   r.added_mass_given_kg})
+  for (double x :
+       {static_cast<double>(r.index), r.drop_height_m, r.width_m, r.RelativePenetrationMeasured(),
+        r.RelativePenetrationModel(), r.wall_time_s, r.added_mass_given_kg})
     v.push_back(x);
   return v;
 }
@@ -79,8 +79,8 @@ const std::vector<ComparisonSpec>& ComparisonSpecs() {
   static const std::vector<ComparisonSpec> specs = {
       {"fig5_added_mass.png", "Added mass (Fig. 5)", "m_{add,max} by Eq. 4 [kg]",
        "m_{add,max} measured [kg]", "added_mass_max_kg", "added_mass_eq4_kg"},
-      {"fig7_peak_deceleration.png", "Peak deceleration (Fig. 7)", "simulated [g]",
-       "measured [g]", "peak_deceleration_measured_g", "peak_deceleration_model_g"},
+      {"fig7_peak_deceleration.png", "Peak deceleration (Fig. 7)", "simulated [g]", "measured [g]",
+       "peak_deceleration_measured_g", "peak_deceleration_model_g"},
       {"fig8_plateau_deceleration.png", "Plateau deceleration (Fig. 8)", "simulated [g]",
        "measured [g]", "plateau_deceleration_measured_g", "plateau_deceleration_model_g"},
       {"fig9_relative_penetration.png", "Relative penetration depth / D (Fig. 9, Eq. 10)",
@@ -103,15 +103,13 @@ std::vector<std::string> RowColumnNames() {
   for (const char* n :
        {"eq4_fit", "test_index", "source", "drop_height_m", "width_m",
         "relative_penetration_measured", "relative_penetration_model", "status", "error",
-        "eq4_excluded_reason", "scene_hash", "tool_version", "wall_time_s",
-        "added_mass_given_kg"})
+        "eq4_excluded_reason", "scene_hash", "tool_version", "wall_time_s", "added_mass_given_kg"})
     names.push_back(n);
   return names;
 }
 
 std::vector<std::string> RowCells(const CampaignRow& r) {
-  std::vector<std::string> c = {Cell(r.name), Num(r.mass_kg), Num(r.velocity_m_s),
-                                Num(r.area_m2)};
+  std::vector<std::string> c = {Cell(r.name), Num(r.mass_kg), Num(r.velocity_m_s), Num(r.area_m2)};
   for (double v : r.figures) c.push_back(Num(v));
   c.push_back(r.excluded.empty() ? "used" : "excluded");
   c.push_back(fmt::format("{}", r.index));
@@ -191,8 +189,8 @@ void FitEq4(CampaignSummary* summary, const CampaignOptions& options) {
     if (r.excluded.empty() && !(std::isfinite(m_add) && m_add > 0))
       r.excluded = fmt::format("no measured m_add,max (got {})", m_add);
     if (r.excluded.empty() && !(r.mass_kg > 0 && r.velocity_m_s > 0 && r.area_m2 > 0)) {
-      r.excluded = fmt::format("no positive m_p, v0, A (got {}, {}, {})", r.mass_kg,
-                               r.velocity_m_s, r.area_m2);
+      r.excluded = fmt::format("no positive m_p, v0, A (got {}, {}, {})", r.mass_kg, r.velocity_m_s,
+                               r.area_m2);
     }
     if (r.excluded.empty()) {
       samples.push_back({r.mass_kg, r.velocity_m_s, r.area_m2, m_add});
@@ -225,8 +223,8 @@ void Compare(CampaignSummary* summary, const CampaignOptions& options, const std
   for (const ComparisonSpec& spec : ComparisonSpecs()) {
     ComparisonFigureData data{spec.title, spec.x_label, spec.y_label, {}};
     for (const auto& r : summary->rows)
-      data.points.push_back({Column(r, spec.predicted), Column(r, spec.observed), r.width_m,
-                             r.name});
+      data.points.push_back(
+          {Column(r, spec.predicted), Column(r, spec.observed), r.width_m, r.name});
     const ComparisonFit fit = FitComparison(data.points);
     summary->comparisons.emplace_back(fs::path(spec.file).stem().string(), fit);
     if (!options.figures) continue;
@@ -265,8 +263,7 @@ void WriteH5(const CampaignSummary& s, const std::string& path, const std::strin
       values.push_back(cells[std::find(all.begin(), all.end(), text) - all.begin()]);
     }
     std::string json = "[";
-    for (std::size_t i = 0; i < values.size(); ++i)
-      json += (i ? ", " : "") + JsonString(values[i]);
+    for (std::size_t i = 0; i < values.size(); ++i) json += (i ? ", " : "") + JsonString(values[i]);
     out.SetAttribute("tests", text, json + "]");
   }
   out.CreateGroup("regression");
@@ -350,9 +347,8 @@ JsonObject CampaignSummary::RegressionJson() const {
 }
 
 std::string CampaignSummary::FullReport() const {
-  std::string text =
-      fmt::format("Campaign: {} of {} tests ({} resumed, {} failed, {:.1f} s)\n", rows.size(),
-                  tests_total, resumed, failed, seconds);
+  std::string text = fmt::format("Campaign: {} of {} tests ({} resumed, {} failed, {:.1f} s)\n",
+                                 rows.size(), tests_total, resumed, failed, seconds);
   for (const auto& r : rows) {
     text += fmt::format(
         "  {:>3} {:<24} m_p {:6.2f} kg  v0 {:5.2f} m/s  A {:.4f} m^2  m_add,max {:.3f} kg  {}\n",
@@ -364,9 +360,10 @@ std::string CampaignSummary::FullReport() const {
   }
   text += fitted ? "Eq. 4: " + fit.BriefReport() + "\n" : "Eq. 4: not fitted: " + fit_note + "\n";
   for (const auto& [name, f] : comparisons) {
-    text += fmt::format("  {:<28} n {:2d}  slope {:.4f}  intercept {:.4g}  R^2 {:.4f}  "
-                        "rms |obs/pred - 1| {:.4f}\n",
-                        name, f.n, f.slope, f.intercept, f.r_squared, f.rms_relative_deviation);
+    text += fmt::format(
+        "  {:<28} n {:2d}  slope {:.4f}  intercept {:.4g}  R^2 {:.4f}  "
+        "rms |obs/pred - 1| {:.4f}\n",
+        name, f.n, f.slope, f.intercept, f.r_squared, f.rms_relative_deviation);
   }
   for (const auto& w : warnings) text += "  warning: " + w + "\n";
   for (const auto& o : outputs) text += "  " + o + "\n";
@@ -402,17 +399,18 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
     const int total =
         static_cast<int>(H5Reader(h5).ReadNumberAttribute("/campaign", "tests_total"));
     if (summary.tests_total != 0 && total != summary.tests_total) {
-      throw Error(ErrorKind::kInvalidValue, "--merge", fmt::format("{} holds a campaign of {} tests", folder, total),
+      throw Error(ErrorKind::kInvalidValue, "--merge",
+                  fmt::format("{} holds a campaign of {} tests", folder, total),
                   fmt::format("shards of one campaign ({} tests, as {})", summary.tests_total,
                               holder.begin()->second));
     }
     summary.tests_total = total;
     for (auto& r : ReadRows(csv)) {
       if (holder.count(r.index)) {
-        throw Error(ErrorKind::kInvalidValue, "--merge",
-                    fmt::format("test {} ({}) in both {} and {}", r.index, r.name,
-                                holder[r.index], folder),
-                    "each test in one shard only");
+        throw Error(
+            ErrorKind::kInvalidValue, "--merge",
+            fmt::format("test {} ({}) in both {} and {}", r.index, r.name, holder[r.index], folder),
+            "each test in one shard only");
       }
       holder[r.index] = folder;
       summary.rows.push_back(std::move(r));
@@ -422,10 +420,10 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
   for (int k = 1; k <= summary.tests_total; ++k)
     if (!holder.count(k)) missing.push_back(std::to_string(k));
   if (!missing.empty()) {
-    throw Error(ErrorKind::kInvalidValue, "--merge",
-                fmt::format("tests {} of {} missing", fmt::join(missing, ", "),
-                            summary.tests_total),
-                "the output folders of all shards");
+    throw Error(
+        ErrorKind::kInvalidValue, "--merge",
+        fmt::format("tests {} of {} missing", fmt::join(missing, ", "), summary.tests_total),
+        "the output folders of all shards");
   }
   OutputGeneration generation(options.output_folder,
                               CampaignLevelGeneration("impactdic campaign --merge"));
@@ -443,7 +441,7 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
   CsvReadOptions read;
   read.required_columns = {"mass_kg", "velocity_m_s", "area_m2", "added_mass_max_kg"};
   read.allow_non_finite = true;  // A test without a measurement has nan; it is left out.
-  read.text_columns = {"scene", "eq4_fit"};
+  read.text_columns.assign(std::begin(kTextColumns), std::end(kTextColumns));  // campaign.csv's
   const CsvTable table = ReadCsv(csv_path, read);
   const auto has_text = [&](const char* name) {
     return std::find(table.text_names.begin(), table.text_names.end(), name) !=

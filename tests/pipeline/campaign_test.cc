@@ -38,8 +38,8 @@ TEST(Campaign, RegressionFromTableRecoversEq4) {
   options.output_folder = dir.File("out");
   const CampaignSummary s = RegressCampaignTable(WriteEq4Table(dir), options);
   ASSERT_TRUE(s.fitted);
-  EXPECT_EQ(s.scenes.size(), 27u);
-  EXPECT_EQ(s.scenes[3].name, "t4");
+  EXPECT_EQ(s.rows.size(), 27u);
+  EXPECT_EQ(s.rows[3].name, "t4");
   // The table keeps 6 decimals, so the inputs carry ~1e-6 relative rounding.
   EXPECT_NEAR(s.fit.c, 425, 425 * 1e-3);
   EXPECT_NEAR(s.fit.a, 0.1, 1e-4);
@@ -61,7 +61,7 @@ TEST(Campaign, TooFewScenesGiveANoteNotAFit) {
   options.output_folder = dir.File("out");
   const CampaignSummary s = RegressCampaignTable(path, options);
   EXPECT_FALSE(s.fitted);
-  EXPECT_NE(s.fit_note.find("1 of 2 scenes"), std::string::npos) << s.fit_note;
+  EXPECT_NE(s.fit_note.find("1 of 2 tests"), std::string::npos) << s.fit_note;
 }
 
 TEST(Campaign, BadTablesAndOptionsAreClearErrors) {
@@ -81,7 +81,7 @@ TEST(Campaign, BadTablesAndOptionsAreClearErrors) {
   EXPECT_THROW(RegressCampaignTable(missing, options), Error);
   const CliResult both = RunCli("campaign a.yaml --from-table " + negative);
   EXPECT_EQ(both.exit_code, 1);
-  EXPECT_NE(both.output.find("not both"), std::string::npos) << both.output;
+  EXPECT_NE(both.output.find("one of them"), std::string::npos) << both.output;
   const CliResult conf = RunCli("campaign --from-table " + negative + " --confidence 1.5");
   EXPECT_EQ(conf.exit_code, 1);
   EXPECT_NE(conf.output.find("--confidence"), std::string::npos) << conf.output;

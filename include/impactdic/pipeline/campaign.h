@@ -80,8 +80,8 @@ struct CampaignTest {
   std::string name;        // Unique in the plan: its folder in the output.
   std::string scene_path;  // A scene file; empty for a synthesised test.
   bool synthesise = false;
-  ImpactSceneSpec spec;    // With synthesise.
-  std::string source;      // Scene path, or "synthesised", for messages and the CSV.
+  ImpactSceneSpec spec;  // With synthesise.
+  std::string source;    // Scene path, or "synthesised", for messages and the CSV.
   // The campaign file's `outputs:` (applied to the scene's outputs section); unset: the scene's.
   std::optional<bool> animation, figures;
   // Hash of the scene file's bytes or of the spec's YAML (16 hex digits; resuming compares it).
@@ -113,8 +113,7 @@ struct CampaignRow {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   int index = 0;
   std::string name, source;
-  double mass_kg = kNaN, drop_height_m = kNaN, velocity_m_s = kNaN, width_m = kNaN,
-         area_m2 = kNaN;
+  double mass_kg = kNaN, drop_height_m = kNaN, velocity_m_s = kNaN, width_m = kNaN, area_m2 = kNaN;
   // Synthesised tests: the added mass M the scene was made with (the measured m_add,max should
   // equal it, docs/campaign.md); NaN for scene files.
   double added_mass_given_kg = kNaN;
