@@ -77,16 +77,16 @@ std::vector<double> NumericValues(const CampaignRow& r) {
 
 const std::vector<ComparisonSpec>& ComparisonSpecs() {
   static const std::vector<ComparisonSpec> specs = {
-      {"fig5_added_mass.png", "Added mass (Fig. 5)", "m_{add,max} by Eq. 4 [kg]",
-       "m_{add,max} measured [kg]", "added_mass_max_kg", "added_mass_eq4_kg"},
+      {"fig5_added_mass.png", "Added mass (Fig. 5)", "m_add,max by Eq. 4 [kg]",
+       "m_add,max measured [kg]", "added_mass_max_kg", "added_mass_eq4_kg"},
       {"fig7_peak_deceleration.png", "Peak deceleration (Fig. 7)", "simulated [g]", "measured [g]",
        "peak_deceleration_measured_g", "peak_deceleration_model_g"},
       {"fig8_plateau_deceleration.png", "Plateau deceleration (Fig. 8)", "simulated [g]",
        "measured [g]", "plateau_deceleration_measured_g", "plateau_deceleration_model_g"},
       {"fig9_relative_penetration.png", "Relative penetration depth / D (Fig. 9, Eq. 10)",
        "simulated", "measured", "relative_penetration_measured", "relative_penetration_model"},
-      {"fig10_momentum_ratio.png", "Momentum ratio p_{gran} / p_{max} (Fig. 10, Eq. 11)",
-       "simulated", "measured", "momentum_ratio_measured", "momentum_ratio_model"},
+      {"fig10_momentum_ratio.png", "Momentum ratio p_gran / p_max (Fig. 10, Eq. 11)", "simulated",
+       "measured", "momentum_ratio_measured", "momentum_ratio_model"},
   };
   return specs;
 }
