@@ -76,7 +76,7 @@ void Run(const CampaignArgs& a) {
   } else if (!a.merge.empty()) {
     summary = MergeCampaigns(a.merge, options);
   } else {
-    summary = RunCampaign(PlanOf(a.files), options);
+    summary = RunCampaignPlan(PlanOf(a.files), options);
   }
   if (a.format == "json") {
     std::cout << summary.RegressionJson().Dump() << "\n";

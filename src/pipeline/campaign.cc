@@ -182,7 +182,7 @@ void CampaignOptions::Check() const {
              shard.ToString(), "I/N with 1 <= I <= N");
 }
 
-CampaignSummary RunCampaign(const CampaignPlan& plan, const CampaignOptions& options) {
+CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions& options) {
   options.Check();
   WallTimer timer;
   std::vector<const CampaignTest*> todo;
@@ -231,7 +231,7 @@ CampaignSummary RunCampaign(const CampaignPlan& plan, const CampaignOptions& opt
 CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                             const CampaignOptions& options) {
   options.Check();
-  return RunCampaign(PlanFromSceneFiles(scene_paths), options);
+  return RunCampaignPlan(PlanFromSceneFiles(scene_paths), options);
 }
 
 }  // namespace impactdic

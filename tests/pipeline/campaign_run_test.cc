@@ -125,7 +125,7 @@ TEST(CampaignRun, CompleteTestsAreResumedChangedOnesRedoneForceRedoesAll) {
   o.output_folder = dir.File("out");
   o.threads = 2;
   const CampaignSummary first =
-      RunCampaign(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.2]")), o);
+      RunCampaignPlan(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.2]")), o);
   ASSERT_EQ(first.rows.size(), 2u);
   EXPECT_EQ(first.resumed, 0);
   const std::string t1 = first.rows[0].name, t2 = first.rows[1].name;
@@ -133,7 +133,7 @@ TEST(CampaignRun, CompleteTestsAreResumedChangedOnesRedoneForceRedoesAll) {
   const std::string csv = ReadText(dir.File("out/campaign.csv"));
 
   const CampaignSummary again =
-      RunCampaign(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.2]")), o);
+      RunCampaignPlan(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.2]")), o);
   EXPECT_EQ(again.resumed, 2);
   EXPECT_EQ(Fingerprint(dir.File("out/" + t1)), f1);
   EXPECT_EQ(Fingerprint(dir.File("out/" + t2)), f2);
@@ -141,7 +141,7 @@ TEST(CampaignRun, CompleteTestsAreResumedChangedOnesRedoneForceRedoesAll) {
 
   // A changed test (D 0.2 -> 0.25) is new; the unchanged one is resumed.
   const CampaignSummary changed =
-      RunCampaign(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.25]")), o);
+      RunCampaignPlan(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.25]")), o);
   EXPECT_EQ(changed.resumed, 1);
   EXPECT_EQ(Fingerprint(dir.File("out/" + t1)), f1);
   ASSERT_EQ(changed.rows.size(), 2u);
@@ -150,7 +150,7 @@ TEST(CampaignRun, CompleteTestsAreResumedChangedOnesRedoneForceRedoesAll) {
 
   o.force = true;
   const CampaignSummary forced =
-      RunCampaign(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.25]")), o);
+      RunCampaignPlan(LoadCampaignFile(QuickCampaign(dir, "c.yaml", "[0.15, 0.25]")), o);
   EXPECT_EQ(forced.resumed, 0);
   EXPECT_NE(Fingerprint(dir.File("out/" + t1)), f1);
 }

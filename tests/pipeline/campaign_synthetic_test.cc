@@ -41,7 +41,7 @@ TEST(CampaignSynthetic, Table1CampaignRecoversEq4WithinItsIntervalsAndTheOneToOn
   CampaignOptions o;
   o.output_folder = dir.File("out");
   o.threads = 2;
-  const CampaignSummary s = RunCampaign(LoadCampaignFile(file), o);
+  const CampaignSummary s = RunCampaignPlan(LoadCampaignFile(file), o);
   ASSERT_EQ(s.rows.size(), 27u);
   for (const CampaignRow& r : s.rows) {
     ASSERT_EQ(r.status, "ok") << r.name << ": " << r.error;

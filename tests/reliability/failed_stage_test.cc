@@ -393,11 +393,11 @@ TEST_F(FailedStageRun, CampaignLeavesUnusableScenesOutOfTheEq4Fit) {
   options.output_folder = Out("campaign");
   const CampaignSummary s =
       RunCampaign({Variant("good", {}), Variant("bad", {kNoValidSubset})}, options);
-  ASSERT_EQ(s.scenes.size(), 2u);
-  EXPECT_TRUE(s.scenes[0].excluded.empty()) << s.scenes[0].excluded;
-  EXPECT_TRUE(Contains(s.scenes[1].excluded, "correlate: no valid subset")) << s.scenes[1].excluded;
+  ASSERT_EQ(s.rows.size(), 2u);
+  EXPECT_TRUE(s.rows[0].excluded.empty()) << s.rows[0].excluded;
+  EXPECT_TRUE(Contains(s.rows[1].excluded, "correlate: no valid subset")) << s.rows[1].excluded;
   EXPECT_FALSE(s.fitted);
-  EXPECT_TRUE(Contains(s.fit_note, "1 of 2 scenes")) << s.fit_note;
+  EXPECT_TRUE(Contains(s.fit_note, "1 of 2 tests")) << s.fit_note;
   EXPECT_TRUE(Contains(s.FullReport(), "not in the Eq. 4 fit: a stage produced nothing usable"))
       << s.FullReport();
   const std::string regression = ReadText(Out("campaign/regression.json"));
@@ -405,11 +405,14 @@ TEST_F(FailedStageRun, CampaignLeavesUnusableScenesOutOfTheEq4Fit) {
       << regression;
   CsvReadOptions read;
   read.allow_non_finite = true;
-  read.text_columns = {"scene", "eq4_fit"};
+  read.text_columns = {"scene",      "eq4_fit",     "source",
+                       "status",     "error",       "eq4_excluded_reason",
+                       "scene_hash", "tool_version"};
   const CsvTable table = ReadCsv(Out("campaign/campaign.csv"), read);
   EXPECT_EQ(table.TextColumn("eq4_fit"), (std::vector<std::string>{"used", "excluded"}));
+  EXPECT_EQ(table.TextColumn("status"), (std::vector<std::string>{"ok", "unusable"}));
   // The failed scene's own outputs are there (the campaign runs scenes with allow_partial).
-  EXPECT_TRUE(Contains(ReadText(Out("campaign/bad/summary.json")), "\"usable\": false"));
+  EXPECT_TRUE(Contains(ReadText(Out("campaign/bad/results/summary.json")), "\"usable\": false"));
 }
 
 // A campaign table whose rows say "excluded" never enters the fit, even with a finite m_add,max:
@@ -433,7 +436,7 @@ TEST(FailedStageCampaign, ExcludedTableRowsStayOutOfTheFit) {
   EXPECT_EQ(s.fit.n, 6u);
   EXPECT_NEAR(s.fit.g, 1.3, 1e-3);
   EXPECT_NEAR(s.fit.c, 425, 425 * 0.02);
-  EXPECT_TRUE(Contains(s.scenes.back().excluded, "eq4_fit")) << s.scenes.back().excluded;
+  EXPECT_TRUE(Contains(s.rows.back().excluded, "eq4_fit")) << s.rows.back().excluded;
 }
 
 }  // namespace

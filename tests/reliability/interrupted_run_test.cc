@@ -21,6 +21,7 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/output_generation.h"
 
 namespace impactdic {
 namespace {
@@ -297,10 +298,11 @@ TEST(InterruptedSynth, FolderKeepsTheEarlierSceneWhole) {
   }
 }
 
-// `campaign -o DIR` over an earlier campaign, ended while its second scene runs: DIR keeps the
-// earlier campaign whole (its scene folders, campaign.csv, regression.json); SIGTERM also removes
-// the nested staging folders of the scene runs.
-TEST(InterruptedCampaign, FolderKeepsTheEarlierCampaignWhole) {
+// `campaign -o DIR --force` over an earlier campaign, ended while its second test runs: DIR keeps
+// the earlier campaign's files (its test folder a10, campaign.csv, regression.json) untouched, and
+// the test that completed before the signal (b12, a generation of its own) is kept; SIGTERM also
+// removes the staging folders (docs/campaign.md, "Resuming").
+TEST(InterruptedCampaign, FolderKeepsTheEarlierCampaignAndTheCompletedTests) {
   const Prepared& p = Prepare();
   ASSERT_TRUE(p.error.empty()) << p.error;
   TestDir dir;
@@ -308,29 +310,42 @@ TEST(InterruptedCampaign, FolderKeepsTheEarlierCampaignWhole) {
   fs::create_directories(tmp);
   ASSERT_EQ(RunToEnd({"-q", "campaign", p.scene_a, "-o", out}, tmp, dir.File("a.log")).code, 0);
   const auto old_generation = Fingerprint(out);
-  ASSERT_EQ(old_generation.count("a10/summary.json"), 1u);
+  ASSERT_EQ(old_generation.count("a10/results/summary.json"), 1u);
+  ASSERT_EQ(old_generation.count("campaign.csv"), 1u);
   for (const int sig : {SIGKILL, SIGTERM}) {
     SCOPED_TRACE(sig == SIGKILL ? "SIGKILL" : "SIGTERM");
-    CliProcess campaign({"-q", "campaign", p.scene_b, p.scene_a, "-o", out}, tmp,
+    fs::remove_all(out + "/b12");
+    CliProcess campaign({"-q", "campaign", p.scene_b, p.scene_a, "-o", out, "--force"}, tmp,
                         dir.File("b.log"));
     const ChildExit e = campaign.SignalWhen(
-        [&] {  // b12 is complete in the staging folder; a10 runs.
-          const auto staging = TemporariesOf(dir.path(), "campaign", campaign.pid());
-          return !staging.empty() && fs::exists(dir.path() / *staging.begin() / "b12");
+        [&] {  // b12 is complete (swapped in); a10 runs.
+          return fs::exists(out + "/b12/" + kOutputMarkerName) &&
+                 !TemporariesOf(out, "a10", campaign.pid()).empty();
         },
         sig, /*whole_group=*/sig == SIGKILL);
     ASSERT_TRUE(e.signalled_by_us) << e.Describe();
-    EXPECT_EQ(Fingerprint(out), old_generation) << e.Describe();
+    const auto now = Fingerprint(out);
+    for (const auto& [name, id] : old_generation) {
+      const auto it = now.find(name);
+      EXPECT_TRUE(it != now.end() && it->second == id) << name << " changed; " << e.Describe();
+    }
+    EXPECT_EQ(now.count("b12/results/summary.json"), 1u) << e.Describe();
+    EXPECT_EQ(now.count("b12/campaign_row.csv"), 1u) << e.Describe();
     if (sig == SIGTERM) {
       EXPECT_EQ(e.code, 128 + SIGTERM) << e.Describe();
       EXPECT_TRUE(TemporariesOf(dir.path(), "campaign").empty()) << e.Describe();
+      EXPECT_TRUE(TemporariesOf(out, "a10").empty()) << e.Describe();
     }
   }
-  ASSERT_EQ(RunToEnd({"-q", "campaign", p.scene_b, "-o", out}, tmp, dir.File("c.log")).code, 0);
+  // The next campaign resumes b12 and writes the campaign-level files for its tests only.
+  const ChildExit last = RunToEnd({"campaign", p.scene_b, "-o", out}, tmp, dir.File("c.log"));
+  ASSERT_EQ(last.code, 0) << last.Describe();
+  EXPECT_NE(last.output.find("(1 resumed, 0 failed"), std::string::npos) << last.Describe();
   EXPECT_TRUE(TemporariesOf(dir.path(), "campaign").empty());
-  const auto new_generation = Fingerprint(out);
-  EXPECT_EQ(new_generation.count("b12/summary.json"), 1u);
-  EXPECT_EQ(new_generation.count("a10/summary.json"), 0u);  // Not part of the new campaign.
+  EXPECT_TRUE(TemporariesOf(out, "a10").empty());
+  const std::string csv = ReadTextFile(out + "/campaign.csv");
+  EXPECT_NE(csv.find("\nb12,"), std::string::npos) << csv;
+  EXPECT_EQ(csv.find("\na10,"), std::string::npos) << csv;  // Not part of the new campaign.
 }
 
 // Commands refuse an output folder holding files impactdic did not write (and delete nothing);

@@ -10,7 +10,7 @@
 //   CampaignOptions options;
 //   options.output_folder = "results/campaign";
 //   options.shard = ParseShard("2/3", "--shard");   // optional: every third test
-//   CampaignSummary s = RunCampaign(plan, options);
+//   CampaignSummary s = RunCampaignPlan(plan, options);
 //   MergeCampaigns({"out1", "out2", "out3"}, options);  // shards -> one campaign
 //
 // Output folder (options.output_folder):
@@ -151,7 +151,7 @@ struct CampaignSummary {
 // Runs the plan's tests (those of options.shard) in parallel, resuming complete ones, then writes
 // the campaign-level files. Error for bad options or an output folder that cannot be used; a
 // failing test is a row with status "failed", not an error.
-CampaignSummary RunCampaign(const CampaignPlan& plan, const CampaignOptions& options);
+CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions& options);
 // The same for scene files (the command line's `impactdic campaign SCENE.yaml...`).
 CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                             const CampaignOptions& options);
