@@ -83,8 +83,12 @@ std::optional<CampaignRow> CompleteRow(const CampaignTest& t, const std::string&
 // become status "failed" with the message.
 CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int threads) {
   WallTimer timer;
-  CampaignRow row = RowSkeleton(t);
+  CampaignRow row;
+  row.index = t.index;
+  row.name = t.name;
+  row.source = t.source;
   try {
+    row = RowSkeleton(t);  // Loads the scene file again: it may have gone meanwhile.
     OutputGenerationOptions go;
     go.command = "impactdic campaign (test " + t.name + ")";
     go.own_names = {"results", "synth", kRowCsv};
