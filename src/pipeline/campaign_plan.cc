@@ -324,7 +324,7 @@ double Eq4AddedMass(double mass_kg, double velocity_m_s, double area_m2) {
 }
 
 bool IsCampaignFile(const std::string& path) {
-  const YAML::Node root = LoadYamlFile(path, kWhat);
+  const YAML::Node root = LoadYamlFile(path, "a campaign or scene file (YAML)");
   return root.IsMap() && !root["inputs"] &&
          (root["scenes"] || root["scene_glob"] || root["synthesise"]);
 }
