@@ -213,6 +213,9 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
   }
   destination_ = dest.string();
   const fs::path parent = dest.parent_path();
+  // After a signal, a generation nested in a staging folder the cleanup is removing (a campaign
+  // test's results/) must not make that folder again: wait for the exit instead.
+  WaitIfInterrupted();
   fs::create_directories(parent, ec);
   if (ec || !fs::is_directory(parent)) {
     throw Error(ErrorKind::kIo, "output folder",

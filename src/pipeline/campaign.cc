@@ -17,6 +17,7 @@
 
 #include "campaign_internal.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/threads.h"
@@ -115,6 +116,7 @@ CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int th
     WriteRows(generation.Path(kRowCsv), {row});
     generation.Commit();
   } catch (const std::exception& e) {
+    WaitIfInterrupted();  // An error caused by an interruption: the cleanup ends the process.
     row.status = "failed";
     row.error = e.what();
     row.wall_time_s = timer.ElapsedSeconds();
