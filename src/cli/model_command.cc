@@ -18,6 +18,7 @@
 #include "impactdic/io/json.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/model/work_precision.h"
+#include "impactdic/render/work_precision_figure.h"
 
 namespace impactdic::cli {
 namespace {

@@ -12,6 +12,7 @@
 
 #include "icgn.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/image_io.h"
 
@@ -26,7 +27,6 @@ using internal::SubsetRef;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kBorderPx = 4;
 
 bool Usable(SubsetStatus s) { return s == SubsetStatus::kConverged; }
@@ -885,9 +885,9 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   // Results: tracked positions and accumulated displacements.
   out.u_px.assign(n, kNaN);
   out.v_px.assign(n, kNaN);
-  out.zncc.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.zncc.assign(n, kNaNf);
   out.iterations.assign(n, 0);
-  out.sigma_px.assign(n, std::numeric_limits<float>::quiet_NaN());
+  out.sigma_px.assign(n, kNaNf);
   out.sigma_u_px = out.sigma_px;
   out.sigma_v_px = out.sigma_px;
   out.status.resize(n);

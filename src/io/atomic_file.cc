@@ -15,6 +15,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/input_file.h"
 #include "impactdic/io/output_generation.h"
@@ -79,8 +80,7 @@ void CheckNotAnInput(const std::string& output, const std::string& option,
 }
 
 void CheckOutputLocation(const std::string& path, const OutputRules& rules) {
-  std::string ext = fs::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string ext = ToLower(fs::path(path).extension().string());
   if (!rules.extensions.empty() &&
       std::find(rules.extensions.begin(), rules.extensions.end(), ext) == rules.extensions.end()) {
     std::string allowed;  // ".csv, .h5 or .hdf5"

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/input_file.h"
 
@@ -31,20 +32,13 @@ std::vector<std::string> SplitCells(const std::string& line) {
   return cells;
 }
 
-std::string JoinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 // Parses a cell as a double; returns false when it is not a number at all.
 bool ParseNumber(const std::string& cell, double* value) {
   if (cell.empty()) {
     *value = std::nan("");
     return true;
   }
-  std::string lower;
-  for (char c : cell) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  const std::string lower = ToLower(cell);
   if (lower == "nan" || lower == "-nan") {
     *value = std::nan("");
     return true;
@@ -114,7 +108,7 @@ const std::vector<double>& CsvTable::Column(const std::string& name) const {
   for (std::size_t i = 0; i < names.size(); ++i)
     if (names[i] == name) return columns[i];
   throw Error(ErrorKind::kFileFormat, "column '" + name + "'",
-              "missing; columns are " + JoinNames(names), "a header with a '" + name + "' column")
+              "missing; columns are " + Join(names), "a header with a '" + name + "' column")
       .WithFile(path);
 }
 

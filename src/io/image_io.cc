@@ -18,6 +18,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/input_file.h"
 #include "impactdic/io/opencv_codecs.h"
@@ -28,14 +29,9 @@ namespace impactdic {
 namespace fs = std::filesystem;
 namespace {
 
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 bool IsImageFile(const fs::path& p) {
   static const char* kExt[] = {".tif", ".tiff", ".png", ".bmp", ".jpg", ".jpeg", ".pgm", ".jp2"};
-  const std::string ext = Lower(p.extension().string());
+  const std::string ext = ToLower(p.extension().string());
   return std::any_of(std::begin(kExt), std::end(kExt), [&](const char* e) { return ext == e; });
 }
 
@@ -504,7 +500,7 @@ std::vector<std::string> ListFrameSequence(const std::string& source) {
 }
 
 bool IsVideoFile(const std::string& path) {
-  const std::string ext = Lower(fs::path(path).extension().string());
+  const std::string ext = ToLower(fs::path(path).extension().string());
   return ext == ".mp4" || ext == ".avi" || ext == ".mov" || ext == ".mkv";
 }
 

@@ -6,12 +6,11 @@
 #include <limits>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
-namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-}  // namespace
+namespace {}  // namespace
 
 void PanelMapping::Check() const {
   if (homography) {
@@ -89,7 +88,7 @@ std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& wher
     if (!s.valid[j] || !(s.sigma_u_px[j] > max_sigma_px || s.sigma_v_px[j] > max_sigma_px))
       continue;
     s.valid[j] = 0;
-    s.u_px[j] = s.v_px[j] = std::numeric_limits<double>::quiet_NaN();
+    s.u_px[j] = s.v_px[j] = kNaN;
     ++excluded;
   }
   return excluded;

@@ -7,13 +7,13 @@
 #include <numbers>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::string Num(double v) { return fmt::format("{:.6g}", v); }
@@ -281,26 +281,8 @@ PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSoluti
     // A peak of deceleration: positive, and distinct from the numerical ripple.
     if (!(g[i] > 0.0) || !(prominence > 1e-3 * std::abs(g[i]) + 1e-9)) continue;
     // Golden-section search for the maximum in [u_{i-1}, u_{i+1}].
-    const double r = (std::sqrt(5.0) - 1.0) / 2.0;
-    double a = us[i - 1], b = us[i + 1];
-    double c = b - r * (b - a), d = a + r * (b - a);
-    double gc = decel(c), gd = decel(d);
-    for (int it = 0; it < 200 && b - a > 1e-10 * std::max(1.0, std::abs(b)); ++it) {
-      if (gc > gd) {
-        b = d;
-        d = c;
-        gd = gc;
-        c = b - r * (b - a);
-        gc = decel(c);
-      } else {
-        a = c;
-        c = d;
-        gc = gd;
-        d = a + r * (b - a);
-        gd = decel(d);
-      }
-    }
-    const double u = 0.5 * (a + b);
+    const double u = GoldenSectionMaximize(decel, us[i - 1], us[i + 1],
+                                           {.max_iterations = 200, .relative_tolerance = 1e-10});
     const double value = std::max(decel(u), g[i]);
     if (std::isnan(best.value) || value > best.value) {
       best.value = value;

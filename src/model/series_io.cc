@@ -1,27 +1,14 @@
 // Writing the model's time series (CSV or HDF5).
-#include <cctype>
 #include <string>
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/model/impact_model.h"
 
 namespace impactdic {
-namespace {
-
-// Case-insensitive, as the CLI's check of -o (CheckOutputLocation).
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  if (s.size() < suffix.size()) return false;
-  for (std::size_t i = 0; i < suffix.size(); ++i)
-    if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i])
-      return false;
-  return true;
-}
-
-}  // namespace
-
 void WriteImpactSeries(const std::string& path, const ImpactModelParameters& params,
                        const ImpactRun& run) {
   const ImpactSeries s = MakeImpactSeries(params, run);
@@ -31,11 +18,11 @@ void WriteImpactSeries(const std::string& path, const ImpactModelParameters& par
   const std::vector<std::vector<double>> columns = {
       s.t_s,       s.z_m,       s.v_m_s,      s.dv_dt_m_s2, s.m_add_kg, s.dm_add_dt_kg_s,
       s.inertia_N, s.dynamic_N, s.friction_N, s.gravity_N};
-  if (EndsWith(path, ".csv")) {
+  if (EndsWithIgnoreCase(path, ".csv")) {
     WriteCsv(path, names, columns, /*precision=*/17);
     return;
   }
-  if (!EndsWith(path, ".h5") && !EndsWith(path, ".hdf5"))
+  if (!EndsWithIgnoreCase(path, ".h5") && !EndsWithIgnoreCase(path, ".hdf5"))
     throw Error(ErrorKind::kInvalidValue, "-o", path, "a file name ending in .csv, .h5 or .hdf5");
   const std::vector<std::string> units = {"s",    "m", "m/s", "m/s^2", "kg",
                                           "kg/s", "N", "N",   "N",     "N"};

@@ -4,12 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <map>
 #include <set>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
@@ -17,8 +16,6 @@
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double RelErr(double value, double reference) {
   if (std::isnan(reference)) return kNaN;
@@ -207,16 +204,9 @@ std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& optio
       const AddedMass am = AddedMassAt(M, b, T, t);
       return p0 * am.dm_dt_kg_s / ((mp + am.m_add_kg) * (mp + am.m_add_kg));
     };
-    double a = T - 5.0 / b, c = T + 5.0 / b;
-    const double r = (std::sqrt(5.0) - 1.0) / 2.0;
-    for (int i = 0; i < 300; ++i) {
-      const double x1 = c - r * (c - a), x2 = a + r * (c - a);
-      if (decel(x1) > decel(x2))
-        c = x2;
-      else
-        a = x1;
-    }
-    exact_a_peak = decel(0.5 * (a + c)) / 9.81;
+    exact_a_peak =
+        decel(GoldenSectionMaximize(decel, T - 5.0 / b, T + 5.0 / b, {.max_iterations = 300})) /
+        9.81;
   }
   // Exact case (b): harmonic (M = 0, u = 1).
   ImpactModelParameters harmonic = DefaultCase();
@@ -352,78 +342,6 @@ void WriteWorkPrecisionCsv(const std::string& path, const std::vector<WorkPrecis
                      std::to_string(r.rhs_evals), std::to_string(r.steps),
                      std::to_string(r.jacobian_evals), std::to_string(r.warnings)});
   WriteCsvRows(path, names, cells);
-}
-
-void PlotWorkPrecision(const std::string& png_path, const std::vector<WorkPrecisionRow>& rows,
-                       const std::string& case_name) {
-  if (std::system("command -v gnuplot > /dev/null 2>&1") != 0)
-    throw Error(ErrorKind::kIo, "--plot", png_path,
-                "gnuplot on the PATH (install the package gnuplot-nox) to draw the figure");
-  std::vector<std::string> solvers;
-  for (const WorkPrecisionRow& r : rows)
-    if (r.case_name == case_name &&
-        std::find(solvers.begin(), solvers.end(), r.solver) == solvers.end())
-      solvers.push_back(r.solver);
-  if (solvers.empty())
-    throw Error(ErrorKind::kInvalidValue, "--plot", case_name, "a case present in the study");
-  AtomicFile png(png_path);
-  AtomicFile data(png_path + ".dat");
-  AtomicFile script(png_path + ".gp");
-  std::string dat;
-  for (const std::string& s : solvers) {
-    dat += "# " + s + "\n";
-    for (const WorkPrecisionRow& r : rows) {
-      if (r.case_name != case_name || r.solver != s) continue;
-      const double err = std::max(r.depth_error, 1e-17);
-      dat += fmt::format("{:.6e} {:.6e} {:.6e}\n", r.wall_time_s, err, r.rtol);
-    }
-    dat += "\n\n";
-  }
-  {
-    std::FILE* f = std::fopen(data.temp_path().c_str(), "w");
-    if (!f) throw Error(ErrorKind::kIo, "--plot", data.temp_path(), "a writable folder");
-    std::fputs(dat.c_str(), f);
-    std::fclose(f);
-  }
-  std::string gp =
-      "set terminal pngcairo size 900,650 enhanced font 'Sans,11'\n"
-      "set output '" +
-      png.temp_path() +
-      "'\n"
-      "set logscale xy\n"
-      "set format x '10^{%L}'\nset format y '10^{%L}'\n"
-      "set xlabel 'wall time per run (s)'\n"
-      "set ylabel 'relative error of the crater depth'\n"
-      "set title 'impact model work-precision (" +
-      case_name +
-      ", rtol 1e-3..1e-12)'\n"
-      "set key outside right\nset grid\n"
-      "plot ";
-  for (std::size_t i = 0; i < solvers.size(); ++i)
-    gp += fmt::format("{}'{}' index {} using 1:2 with linespoints lw 2 title '{}'", i ? ", " : "",
-                      data.temp_path(), i, solvers[i]);
-  gp += "\n";
-  {
-    std::FILE* f = std::fopen(script.temp_path().c_str(), "w");
-    if (!f) throw Error(ErrorKind::kIo, "--plot", script.temp_path(), "a writable folder");
-    std::fputs(gp.c_str(), f);
-    std::fclose(f);
-  }
-  std::string cmd = "gnuplot '" + script.temp_path() + "' 2>&1";
-  int rc = std::system(cmd.c_str());
-  if (rc != 0) {
-    // Older gnuplot builds lack cairo: fall back to the plain png terminal.
-    std::string fallback = gp;
-    fallback.replace(0, fallback.find('\n'), "set terminal png size 900,650");
-    std::FILE* f = std::fopen(script.temp_path().c_str(), "w");
-    if (f) {
-      std::fputs(fallback.c_str(), f);
-      std::fclose(f);
-    }
-    rc = std::system(cmd.c_str());
-  }
-  if (rc != 0) throw Error(ErrorKind::kIo, "--plot", png_path, "gnuplot to succeed (it failed)");
-  png.Commit();
 }
 
 }  // namespace impactdic

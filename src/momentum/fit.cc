@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/model/impact_model.h"
 
@@ -118,7 +119,7 @@ SigmoidFit FitSigmoid(const std::vector<double>& t_s, const std::vector<double>&
       for (std::size_t i = 1; i < n; ++i)
         if (y[i - 1] < level && y[i] >= level)
           return t[i - 1] + (level - y[i - 1]) / (y[i] - y[i - 1]) * (t[i] - t[i - 1]);
-      return std::numeric_limits<double>::quiet_NaN();
+      return kNaN;
     };
     const double span = t.back() - t.front();
     double T0 = crossing(0.5 * m0);

@@ -8,13 +8,12 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::vector<double> UniqueSorted(std::vector<double> v, double tol) {
   std::sort(v.begin(), v.end());

@@ -11,6 +11,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/results_layout.h"
@@ -21,8 +22,6 @@
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double Scalar(const H5Reader& in, const std::string& path) {
   const std::vector<double> v = in.ReadDouble(path);

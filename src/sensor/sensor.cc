@@ -9,24 +9,14 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/numeric.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/sensor/filter.h"
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 double Mean(const std::vector<double>& x, std::size_t begin, std::size_t end) {
   double s = 0;
@@ -67,7 +57,7 @@ const char* ToString(AccelUnit unit) {
 }
 
 AccelUnit AccelUnitFromString(const std::string& text) {
-  const std::string t = Lower(text);
+  const std::string t = ToLower(text);
   if (t == "auto") return AccelUnit::kAuto;
   if (t == "g") return AccelUnit::kG;
   if (t == "m/s^2" || t == "m_s2" || t == "m/s2") return AccelUnit::kMetrePerSecond2;
@@ -85,7 +75,7 @@ const char* ToString(OffsetReference reference) {
 }
 
 OffsetReference OffsetReferenceFromString(const std::string& text) {
-  const std::string t = Lower(text);
+  const std::string t = ToLower(text);
   if (t == "free-fall" || t == "freefall" || t == "free_fall") return OffsetReference::kFreeFall;
   if (t == "free-fall-window") return OffsetReference::kFreeFallWindow;
   if (t == "rest") return OffsetReference::kRest;
@@ -99,7 +89,7 @@ const char* ToString(IntegrationStart start) {
 }
 
 IntegrationStart IntegrationStartFromString(const std::string& text) {
-  const std::string t = Lower(text);
+  const std::string t = ToLower(text);
   if (t == "release") return IntegrationStart::kRelease;
   if (t == "impact") return IntegrationStart::kImpact;
   throw Error(ErrorKind::kInvalidValue, "integrate_from", "'" + text + "'", "release or impact");
@@ -163,7 +153,7 @@ SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns
   }
   AccelUnit unit = columns.accel_unit;
   if (unit == AccelUnit::kAuto) {
-    const std::string l = Lower(accel);
+    const std::string l = ToLower(accel);
     if (EndsWith(l, "_g") || l == "g") {
       unit = AccelUnit::kG;
     } else if (EndsWith(l, "_m_s2") || EndsWith(l, "m/s^2") || EndsWith(l, "m/s2")) {
@@ -186,7 +176,7 @@ SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns
     r.exposure = table.Column(columns.exposure);
   if (columns.force.empty()) {
     for (const auto& n : table.names)
-      if (Lower(n).rfind("force", 0) == 0) r.force_names.push_back(n);
+      if (StartsWith(ToLower(n), "force")) r.force_names.push_back(n);
   } else {
     r.force_names = columns.force;
   }

@@ -9,14 +9,13 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/synth/dem_scene.h"
 #include "scene_files.h"
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Index of the step x step cell (centred on a regular grid of centres) holding ideal pixel q, or
 // -1. centres: row-major cols x rows, spacing `step`.

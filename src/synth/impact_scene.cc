@@ -10,14 +10,13 @@
 #include <numbers>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 #include "lens_render.h"
 #include "random.h"
 
 namespace impactdic {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 using synth_detail::Rng;
 using synth_detail::SplitMix64;
@@ -278,15 +277,9 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
     }
     double lo = span * std::max(0, best - 1) / n, hi = span * std::min(n, best + 1) / n;
     if (best > 0) {  // Golden-section refinement of the maximum.
-      const double r = (std::sqrt(5.0) - 1) / 2;
-      for (int it = 0; it < 80 && hi - lo > 1e-15; ++it) {
-        const double a = hi - r * (hi - lo), b = lo + r * (hi - lo);
-        if (run_.solution.StateAt(a).v_m_s > run_.solution.StateAt(b).v_m_s)
-          hi = b;
-        else
-          lo = a;
-      }
-      momentum_.t_pmax_s = 0.5 * (lo + hi);
+      momentum_.t_pmax_s =
+          GoldenSectionMaximize([&](double t) { return run_.solution.StateAt(t).v_m_s; }, lo, hi,
+                                {.max_iterations = 80, .relative_tolerance = 1e-15});
       best_v = std::max(best_v, run_.solution.StateAt(momentum_.t_pmax_s).v_m_s);
     } else {
       momentum_.t_pmax_s = 0;

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "test_util.h"
 
 namespace impactdic {
@@ -16,7 +17,6 @@ namespace {
 using test::IsPngOfSize;
 using test::MakeSequence;
 using test::ScratchDir;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The blend the overlay should produce at a pixel of grey `g` and colour-table index `idx`.
 cv::Vec3d ExpectedBlend(double g, int idx, double alpha) {

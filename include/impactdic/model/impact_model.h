@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/model/ode.h"
 
 namespace impactdic {
@@ -40,7 +41,7 @@ struct ImpactModelParameters {
   double width_m = 0.15;   // D (m), kPounderSizeRange.
   double depth_m = 0.192;  // t_z, out-of-plane depth (m), kPounderSizeRange; A = D t_z.
   // M = m_add,max (kg), kAddedMassRange; NaN: Eq. 4.
-  double added_mass_kg = std::numeric_limits<double>::quiet_NaN();
+  double added_mass_kg = kNaN;
   double friction_K = 50.0;              // K, kFrictionKRange (dimensionless), Table 2.
   double damping_exponent_n = 0.2;       // n, in [0, 1], Table 2.
   double damping_factor_u = 1.9;         // u, kDampingFactorURange (F_dyn resists), Table 2.
@@ -111,9 +112,9 @@ ErrorEstimator ErrorEstimatorFromString(const std::string& name);  // "companion
 struct ImpactSolverOptions {
   ImpactSolver solver = ImpactSolver::kAuto;
   // Relative tolerance, in [1e-14, 0.1]; NaN: 1e-6 (1e-3 with ode45_defaults).
-  double rtol = std::numeric_limits<double>::quiet_NaN();
+  double rtol = kNaN;
   // Absolute tolerance (m, m/s; s in the end phase), > 0; NaN: 1e-3 * rtol (ode45's ratio).
-  double atol = std::numeric_limits<double>::quiet_NaN();
+  double atol = kNaN;
   ErrorEstimator error_estimator = ErrorEstimator::kCompanion;
   // MATLAB ode45's rules (error norm, initial step, step factors) on the Dormand-Prince pair;
   // with rtol/atol left at their defaults RelTol = 1e-3, AbsTol = 1e-6 (the paper's setting).
@@ -162,28 +163,28 @@ class ImpactSolution {
 };
 
 struct ImpactSummary {
-  double t_end_s = std::numeric_limits<double>::quiet_NaN();
-  double crater_depth_m = std::numeric_limits<double>::quiet_NaN();
-  double relative_penetration = std::numeric_limits<double>::quiet_NaN();  // Eq. 10
-  double added_mass_max_kg = std::numeric_limits<double>::quiet_NaN();     // M
-  double peak_deceleration_g = std::numeric_limits<double>::quiet_NaN();   // -dv/dt / g
-  double t_peak_s = std::numeric_limits<double>::quiet_NaN();
-  double plateau_deceleration_g = std::numeric_limits<double>::quiet_NaN();  // v(t1)/(t_end-t1)/g
-  double momentum_ratio = std::numeric_limits<double>::quiet_NaN();  // m_add(t1) v(t1)/(m_p v0)
-  double t1_s = std::numeric_limits<double>::quiet_NaN();            // T + 4 / b
-  double v_t1_m_s = std::numeric_limits<double>::quiet_NaN();
+  double t_end_s = kNaN;
+  double crater_depth_m = kNaN;
+  double relative_penetration = kNaN;  // Eq. 10
+  double added_mass_max_kg = kNaN;     // M
+  double peak_deceleration_g = kNaN;   // -dv/dt / g
+  double t_peak_s = kNaN;
+  double plateau_deceleration_g = kNaN;  // v(t1)/(t_end-t1)/g
+  double momentum_ratio = kNaN;          // m_add(t1) v(t1)/(m_p v0)
+  double t1_s = kNaN;                    // T + 4 / b
+  double v_t1_m_s = kNaN;
   bool stopped = false;  // v reached 0 before t_max.
   // Why the solve ended: "v = 0 reached" when stopped, else what stopped it (t_max reached,
   // step size underflow, step budget, a non-finite right-hand side ...). Without a stop, t_end_s,
   // the crater depth, the plateau deceleration and the momentum ratio are NaN.
   std::string stop_reason;
-  double t_reached_s = std::numeric_limits<double>::quiet_NaN();  // Last time covered.
+  double t_reached_s = kNaN;  // Last time covered.
   // "dopri5", "rodas3", "auto(dopri5)", "auto(dopri5->rodas3)", "ode45(dopri5)".
   std::string solver;
   std::string solver_reason;
   long steps = 0, rejected_steps = 0, rhs_evals = 0, jacobian_evals = 0;
   long end_phase_steps = 0;  // Of `steps`, those in the end-phase variable s.
-  double t_switch_s = std::numeric_limits<double>::quiet_NaN();  // Start of the end phase.
+  double t_switch_s = kNaN;  // Start of the end phase.
   // Relative global error estimate of the crater depth and t_end (max of the two): the local
   // error estimates, weighted by the sensitivity of the result to them (a velocity error at t
   // shifts the crater depth by ~ (t_end - t) times it), summed over the steps.
@@ -191,9 +192,9 @@ struct ImpactSummary {
   // companion run was made. Never 0 unless the true error is: at least the round-off of the
   // steps (2 eps sqrt(steps)); +inf when the tolerance could not be met (step size underflow,
   // step budget); NaN when the solve never started.
-  double error_estimate = std::numeric_limits<double>::quiet_NaN();
-  double error_estimate_local = std::numeric_limits<double>::quiet_NaN();
-  double error_estimate_companion = std::numeric_limits<double>::quiet_NaN();
+  double error_estimate = kNaN;
+  double error_estimate_local = kNaN;
+  double error_estimate_companion = kNaN;
   std::string error_estimator;       // "companion" or "local"
   long companion_rhs_evals = 0;      // Cost of the companion run (not in rhs_evals).
   double wall_time_s = 0.0;          // Everything, the companion run included.

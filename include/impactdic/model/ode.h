@@ -32,6 +32,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
+
 namespace impactdic {
 
 using Vec2 = std::array<double, 2>;
@@ -103,9 +105,9 @@ struct OdeResult {
   Vec2 y{};
   Vec2 f{};  // f(x, y).
   long steps = 0, rejected_steps = 0, rhs_evals = 0, jacobian_evals = 0;
-  bool stiffness_detected = false;                                // kAuto: switched to Rodas3.
-  double stiffness_x = std::numeric_limits<double>::quiet_NaN();  // Where it switched.
-  double max_h_lambda = 0.0;  // Largest stiffness indicator h|lambda| seen by the DOPRI test.
+  bool stiffness_detected = false;  // kAuto: switched to Rodas3.
+  double stiffness_x = kNaN;        // Where it switched.
+  double max_h_lambda = 0.0;        // Largest stiffness indicator h|lambda| seen by the DOPRI test.
 };
 
 // Integrates from (x0, y0) towards x_end. Accepted steps are appended to `steps` if not null.

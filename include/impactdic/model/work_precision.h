@@ -72,10 +72,7 @@ struct WorkPrecisionRow {
 std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& options);
 std::string FormatWorkPrecision(const std::vector<WorkPrecisionRow>& rows);
 void WriteWorkPrecisionCsv(const std::string& path, const std::vector<WorkPrecisionRow>& rows);
-// Error versus wall time for `case_name`, one line per solver (gnuplot, pngcairo or png
-// terminal), written atomically. Error(kIo) if gnuplot is missing or fails.
-void PlotWorkPrecision(const std::string& png_path, const std::vector<WorkPrecisionRow>& rows,
-                       const std::string& case_name = "default");
+// The figure: PlotWorkPrecision in render/work_precision_figure.h.
 
 }  // namespace impactdic
 

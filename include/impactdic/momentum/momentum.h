@@ -48,6 +48,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/io/json.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/fit.h"
@@ -60,9 +61,9 @@ class H5Writer;
 // The pounder's footprint in panel mm at frame 0 (x right, y down). NaN = default: centred on the
 // correlated grid, width pounder_width_m, bottom edge half a grid step above the top subset row.
 struct PounderFootprint {
-  double x_left_mm = std::numeric_limits<double>::quiet_NaN();
-  double x_right_mm = std::numeric_limits<double>::quiet_NaN();
-  double bottom_y_mm = std::numeric_limits<double>::quiet_NaN();
+  double x_left_mm = kNaN;
+  double x_right_mm = kNaN;
+  double bottom_y_mm = kNaN;
 };
 
 struct MomentumOptions {
@@ -103,16 +104,16 @@ MomentumGrid SelectMomentumGrid(const KinematicsResult& kin, const MomentumOptio
 
 struct MomentumSummary {
   MomentumGrid grid;
-  double p_max_kg_m_s = std::numeric_limits<double>::quiet_NaN();
-  double t_p_max_s = std::numeric_limits<double>::quiet_NaN();
-  double v_p_max_m_s = std::numeric_limits<double>::quiet_NaN();
-  std::size_t end_frame = 0;  // Frame index of t_e (meaningful only when t_e is measured).
-  double t_end_peak_s = std::numeric_limits<double>::quiet_NaN();  // t_e after the impact.
-  double t_end_peak_daq_s = std::numeric_limits<double>::quiet_NaN();
-  double momentum_conservation_error = std::numeric_limits<double>::quiet_NaN();
-  double added_mass_max_kg = std::numeric_limits<double>::quiet_NaN();
-  double v_sand_max_m_s = std::numeric_limits<double>::quiet_NaN();
-  double momentum_ratio = std::numeric_limits<double>::quiet_NaN();
+  double p_max_kg_m_s = kNaN;
+  double t_p_max_s = kNaN;
+  double v_p_max_m_s = kNaN;
+  std::size_t end_frame = 0;   // Frame index of t_e (meaningful only when t_e is measured).
+  double t_end_peak_s = kNaN;  // t_e after the impact.
+  double t_end_peak_daq_s = kNaN;
+  double momentum_conservation_error = kNaN;
+  double added_mass_max_kg = kNaN;
+  double v_sand_max_m_s = kNaN;
+  double momentum_ratio = kNaN;
   bool t_end_found = false;  // Both t_e criteria met.
   // Why t_e (and every figure that depends on it) is NaN; empty when t_e was measured.
   std::string t_end_problem;

@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
+
 namespace impactdic {
 
 // Unit of the acceleration column. kAuto: from the column name ("..._g" = g, "..._m_s2" or
@@ -73,9 +75,9 @@ struct SensorOptions {
   double quiet_guard_s = 0.001;   // Gap between the free-fall window and the impact [s], >= 0.
   IntegrationStart integrate_from = IntegrationStart::kRelease;
   // kImpact: the impact velocity [m/s], > 0 (NaN otherwise).
-  double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
+  double impact_velocity_m_s = kNaN;
   // kRelease: release time on the DAQ clock [s]; NaN = the record starts at rest.
-  double release_time_s = std::numeric_limits<double>::quiet_NaN();
+  double release_time_s = kNaN;
   // A filtered reading above this [g] is certainly the impact (coarse search only; the impact time
   // is the onset found backwards from it), > 1 (the rest level).
   double impact_threshold_g = 5;
@@ -112,20 +114,19 @@ struct SensorSummary {
   double cutoff_hz = 0;
   double offset_g = 0;  // Subtracted from the reading.
   // First and last sample time of the window the offset was taken from (NaN: none).
-  std::array<double, 2> offset_window_s{std::numeric_limits<double>::quiet_NaN(),
-                                        std::numeric_limits<double>::quiet_NaN()};
-  double noise_g = 0;  // Standard deviation of the raw reading in the quiet window.
-  double release_time_s = std::numeric_limits<double>::quiet_NaN();  // DAQ clock; NaN = unknown.
-  double impact_time_s = std::numeric_limits<double>::quiet_NaN();   // DAQ clock (onset).
+  std::array<double, 2> offset_window_s{kNaN, kNaN};
+  double noise_g = 0;            // Standard deviation of the raw reading in the quiet window.
+  double release_time_s = kNaN;  // DAQ clock; NaN = unknown.
+  double impact_time_s = kNaN;   // DAQ clock (onset).
   std::size_t impact_index = 0;  // First sample at or after the impact.
-  double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
-  double peak_deceleration_g = std::numeric_limits<double>::quiet_NaN();  // max(a_g - 1).
-  double t_peak_s = std::numeric_limits<double>::quiet_NaN();             // After impact.
-  double peak_time_s = std::numeric_limits<double>::quiet_NaN();          // DAQ clock.
-  double stop_time_s = std::numeric_limits<double>::quiet_NaN();          // DAQ clock.
-  double final_penetration_m = std::numeric_limits<double>::quiet_NaN();  // Crater depth.
-  bool stopped = false;  // The velocity returned to ~0 inside the record.
-  double seconds = 0;    // Processing wall time.
+  double impact_velocity_m_s = kNaN;
+  double peak_deceleration_g = kNaN;  // max(a_g - 1).
+  double t_peak_s = kNaN;             // After impact.
+  double peak_time_s = kNaN;          // DAQ clock.
+  double stop_time_s = kNaN;          // DAQ clock.
+  double final_penetration_m = kNaN;  // Crater depth.
+  bool stopped = false;               // The velocity returned to ~0 inside the record.
+  double seconds = 0;                 // Processing wall time.
   std::vector<std::string> warnings;
 
   bool IsUsable() const {
