@@ -29,6 +29,7 @@
 #include <emmintrin.h>
 #endif
 #endif
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -49,38 +50,6 @@ void Monomials(double xi, double eta, double m[6]) {
   m[3] = 0.5 * xi * xi;
   m[4] = xi * eta;
   m[5] = 0.5 * eta * eta;
-}
-
-// Cholesky inverse of a symmetric positive definite n x n matrix (row-major). Returns false if
-// a pivot is below 1e-10 of its diagonal entry (the subset's data cannot determine the warp).
-bool InvertSpd(const double* a, int n, double* inv) {
-  double l[144] = {};
-  for (int j = 0; j < n; ++j) {
-    double d = a[j * n + j];
-    for (int k = 0; k < j; ++k) d -= l[j * 12 + k] * l[j * 12 + k];
-    if (!(d > 1e-10 * a[j * n + j]) || !(a[j * n + j] > 0)) return false;
-    l[j * 12 + j] = std::sqrt(d);
-    for (int i = j + 1; i < n; ++i) {
-      double s = a[i * n + j];
-      for (int k = 0; k < j; ++k) s -= l[i * 12 + k] * l[j * 12 + k];
-      l[i * 12 + j] = s / l[j * 12 + j];
-    }
-  }
-  // inv = L^-T L^-1: solve for each unit vector.
-  for (int c = 0; c < n; ++c) {
-    double y[12];
-    for (int i = 0; i < n; ++i) {
-      double s = i == c ? 1 : 0;
-      for (int k = 0; k < i; ++k) s -= l[i * 12 + k] * y[k];
-      y[i] = s / l[i * 12 + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-      double s = y[i];
-      for (int k = i + 1; k < n; ++k) s -= l[k * 12 + i] * inv[k * n + c];
-      inv[i * n + c] = s / l[i * 12 + i];
-    }
-  }
-  return true;
 }
 
 inline void QuinticWeightsF(float t, float w[6]) {
@@ -829,7 +798,8 @@ Shape MakeShape(ShapeFunction kind, int half) {
         for (int j = 0; j < 6; ++j) a[i * 6 + j] += m[k][i] * m[k][j];
     }
     double inv[36];
-    InvertSpd(a, 6, inv);
+    [[maybe_unused]] const bool invertible = InvertSpd(a, 6, inv);
+    assert(invertible && "the 5x5 sample grid determines every quadratic coefficient");
     s.fit.assign(6 * 25, 0);
     const double scale[6] = {
         1, 1.0 / half, 1.0 / half, 1.0 / (half * half), 1.0 / (half * half), 1.0 / (half * half)};

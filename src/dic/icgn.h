@@ -27,6 +27,11 @@ struct Shape {
 };
 Shape MakeShape(ShapeFunction kind, int half);
 
+// Inverse of a symmetric positive definite n x n matrix (row-major, 1 <= n <= 12) by Cholesky
+// factorisation A = L L^T (Eigen::LLT). Returns false, leaving inv unspecified, if a pivot
+// L_jj^2 is not above 1e-10 of its diagonal entry A_jj (the data cannot determine a parameter).
+bool InvertSpd(const double* a, int n, double* inv);
+
 // Displacement (du, dv) of the warp at (xi, eta).
 void Displacement(const Shape& s, const Params& p, double xi, double eta, double* du, double* dv);
 // The same warp expressed about a centre moved by (ox, oy).

@@ -1,0 +1,29 @@
+// The dic module is compiled for the build machine (-march=native); with AVX-512, GCC 12 reports
+// false "may be used uninitialized" warnings inside Eigen's vectorised kernels (its intrinsics'
+// __Y placeholders), so this file holds only the Eigen code and silences that one warning.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <cassert>
+
+#include "icgn.h"
+
+namespace impactdic::internal {
+
+bool InvertSpd(const double* a, int n, double* inv) {
+  assert(n >= 1 && n <= 12);
+  using Matrix =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, /*MaxRows=*/12,
+                    /*MaxCols=*/12>;
+  const Eigen::Map<const Matrix> matrix(a, n, n);
+  const Eigen::LLT<Matrix> llt(matrix);
+  if (llt.info() != Eigen::Success) return false;
+  const Matrix l = llt.matrixL();
+  for (int j = 0; j < n; ++j)
+    if (!(matrix(j, j) > 0) || !(l(j, j) * l(j, j) > 1e-10 * matrix(j, j))) return false;
+  Eigen::Map<Matrix>(inv, n, n) = llt.solve(Matrix::Identity(n, n));
+  return true;
+}
+
+}  // namespace impactdic::internal
