@@ -136,7 +136,7 @@ void BM_FramePair(benchmark::State& state) {
 void BM_SequenceFrame(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, g_threads);
   DicOptions options = BenchOptions();
-  options.update.mode = ReferenceUpdate::kFixed;
+  options.update.policy = "fixed";
   std::vector<std::string> paths;
   for (int k = 0; k < kSequenceFrames; ++k) paths.push_back(FramePath(k));
   double best = 1e300;

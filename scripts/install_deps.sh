@@ -15,6 +15,7 @@ PACKAGES=(
   libcli11-dev libyaml-cpp-dev libspdlog-dev libfmt-dev
   gnuplot-nox                                   # figures (PNG through gnuplot's cairo/png terminal)
   python3-h5py                                  # tests check that h5py opens our files
+  clang-tidy                                    # lint (.clang-tidy), run by scripts/test.sh
 )
 
 missing=()

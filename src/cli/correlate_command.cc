@@ -15,6 +15,7 @@
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 
@@ -97,7 +98,13 @@ void Run(const CorrelateArgs& a) {
   if (!a.mask.empty()) options.grid.mask = ReadGreyImage(a.mask) != 0;
   options.icgn.interpolation = InterpolationFromString(a.interp);
   options.icgn.shape = ShapeFunctionFromString(a.shape);
-  options.update.mode = ReferenceUpdateFromString(a.update, &options.update.every_n);
+  options.update.policy = a.update;
+  try {
+    ReferenceUpdatePolicyFromString(a.update, options.update);
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, "--reference-update", a.update,
+                ReferenceUpdatePolicyUsage());
+  }
   options.init.search_radius_px = a.search_radius;
   options.icgn.min_zncc = a.min_zncc;
   options.mode = SequenceModeFromString(a.mode, "--mode");

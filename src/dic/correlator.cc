@@ -14,6 +14,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/dic/reference_update.h"
 #include "impactdic/io/image_io.h"
 
 namespace impactdic {
@@ -30,13 +31,6 @@ namespace {
 constexpr int kBorderPx = 4;
 
 bool Usable(SubsetStatus s) { return s == SubsetStatus::kConverged; }
-
-// Whether a status should make `auto` switch to a newer reference: the subset was trackable but
-// did not correlate well enough (not: masked, out of the image, featureless...).
-bool IsDecorrelation(SubsetStatus s) {
-  return s == SubsetStatus::kLowCorrelation || s == SubsetStatus::kMaxIterations ||
-         s == SubsetStatus::kNotFound || s == SubsetStatus::kUncertain;
-}
 
 // A reference subset centred on the pixel nearest to the material point `pos` (the offset is
 // kept, so the displacement of `pos` itself is read from the warp).
@@ -55,11 +49,6 @@ SubsetRef CentredSubset(cv::Point2d pos) {
 double FullScale(const cv::Mat& raw) {
   const int bits = DataBits(raw);
   return bits > 0 ? static_cast<double>((1 << bits) - 1) : 1e300;
-}
-
-// Whether a result is good enough for `auto`: converged with ZNCC >= UpdateOptions::auto_min_zncc.
-bool PassesAuto(const IcgnResult& r, double min_zncc) {
-  return r.status == SubsetStatus::kConverged && r.zncc >= min_zncc;
 }
 
 struct Frame {
@@ -156,7 +145,8 @@ struct Correlator::Impl {
   std::vector<Params> params_last;
   std::vector<char> params_valid;
   int last_index = 0;
-  std::unique_ptr<Frame> last_frame;  // For `auto`: the last good frame.
+  std::unique_ptr<ReferenceUpdatePolicy> policy;  // From options.update (kSequence).
+  std::unique_ptr<Frame> last_frame;  // For policies that KeepsLastFrame(): the last good frame.
   DicSummary summary;
   long long iteration_sum = 0, converged_sum = 0;
   tbb::enumerable_thread_specific<cv::Mat> scratch;
@@ -173,6 +163,25 @@ struct Correlator::Impl {
   bool Search(const SubsetRef& s, const cv::Mat& ref_image32, Frame& frame, double gu, double gv,
               cv::Mat* scratch_mat, Params* p0) const;
   void CheckImage(const cv::Mat& image, const char* what) const;
+
+  // The steps of Correlate after the frame is solved against the current reference.
+  struct FrameView {  // Storage of a SolvedFrame.
+    std::vector<SubsetStatus> status;
+    std::vector<float> zncc;
+    std::vector<char> trackable;
+  };
+  SolvedFrame View(int frame_index, const std::vector<Attempt>& at, FrameView* storage) const;
+  // Redoes the frame against the last solved frame when the policy asks and that rescues one of
+  // the subsets it named.
+  void RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* at, FrameResult* out);
+  // The results of `at` into out (displacements, ZNCC, sigma, status), the warps kept for the
+  // next prediction; returns the tracked positions (NaN where not converged).
+  std::vector<cv::Point2d> StoreResults(const std::vector<Attempt>& at, FrameResult* out);
+  // Makes the frame the reference if the policy says so, else keeps it if the policy needs it.
+  void AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
+                        const std::vector<Attempt>& at, const std::vector<cv::Point2d>& pos,
+                        FrameResult* out);
+  void AddToSummary(const FrameResult& out);
 };
 
 void Correlator::Impl::CheckImage(const cv::Mat& image, const char* what) const {
@@ -676,13 +685,14 @@ void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos) 
   }
 }
 
-// For `auto`: whether the subsets `which` (failed or below auto_min_zncc against the current
-// reference) would pass against the candidate reference, the last frame, i.e. converge with
-// ZNCC >= auto_min_zncc. Only these subsets are prepared, each centred on the pixel nearest to its
-// tracked point in the last frame as BuildReference would, with its intensities and the node
-// gradients of the last frame's spline over the subset alone (so the test costs a few subsets,
-// not a reference). IC-GN starts from the result against the current reference if it converged,
-// else from the constant-velocity prediction. Subsets not tracked in the last frame cannot pass.
+// For policies that redo frames (`auto`): whether the subsets `which` (failed or below
+// auto_min_zncc against the current reference) would pass against the candidate reference, the
+// last frame, i.e. converge with a result the policy Rescues (ZNCC >= auto_min_zncc). Only these
+// subsets are prepared, each centred on the pixel nearest to its tracked point in the last frame as
+// BuildReference would, with its intensities and the node gradients of the last frame's spline over
+// the subset alone (so the test costs a few subsets, not a reference). IC-GN starts from the result
+// against the current reference if it converged, else from the constant-velocity prediction.
+// Subsets not tracked in the last frame cannot pass.
 std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& which,
                                                        const std::vector<Attempt>& at,
                                                        const Frame& frame, FrameResult* out) {
@@ -733,7 +743,7 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
     p0[0] = expected.x - pos_last[i].x;
     p0[shape.nm] = expected.y - pos_last[i].y;
     const IcgnResult r = internal::RunIcgn(shape, im, s, hinv.data(), frame.view, options.icgn, p0);
-    rescued[k] = PassesAuto(r, options.update.auto_min_zncc);
+    rescued[k] = policy->Rescues(r.status, r.zncc);
   });
   out->seconds_reference += timer.ElapsedSeconds();
   return rescued;
@@ -745,6 +755,9 @@ Correlator::Correlator(const DicOptions& options) : impl_(std::make_unique<Impl>
   impl_->half = options.grid.subset_size / 2;
   impl_->size = options.grid.subset_size;
   impl_->shape = internal::MakeShape(options.icgn.shape, impl_->half);
+  // Pairs: the reference never changes (UpdateOptions do not apply).
+  impl_->policy = ReferenceUpdatePolicyFromString(
+      options.mode == SequenceMode::kPairs ? "fixed" : options.update.policy, options.update);
 }
 
 Correlator::~Correlator() = default;
@@ -826,6 +839,118 @@ void Correlator::SetReference(const cv::Mat& image) {
   // so that it uses the seeds (pair mode) rather than a zero-displacement prediction.
 }
 
+SolvedFrame Correlator::Impl::View(int frame_index, const std::vector<Attempt>& at,
+                                   FrameView* storage) const {
+  const std::size_t n = at.size();
+  storage->status.resize(n);
+  storage->zncc.resize(n);
+  storage->trackable.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    storage->status[i] = at[i].r.status;
+    storage->zncc[i] = at[i].r.zncc;
+    storage->trackable[i] = active[i] && Usable(ref.subsets[i].status) ? 1 : 0;
+  }
+  return {.frame = frame_index,
+          .reference_frame = ref.frame,
+          .status = storage->status,
+          .zncc = storage->zncc,
+          .trackable = storage->trackable};
+}
+
+void Correlator::Impl::RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* at,
+                                           FrameResult* out) {
+  if (!policy->KeepsLastFrame() || !last_frame || last_frame->index <= ref.frame) return;
+  FrameView storage;
+  const std::vector<int> candidates = policy->RedoCandidates(View(out->frame, *at, &storage));
+  if (candidates.empty()) return;
+  // The switch is made only if it rescues a candidate: one that passes against the last frame as
+  // reference. Subsets covered by an object entering the view fail against both.
+  const std::vector<char> rescued = RescuedByLastFrame(candidates, *at, frame, out);
+  if (std::find(rescued.begin(), rescued.end(), 1) != rescued.end()) {
+    // Switch to the last good frame: its tracked positions become the new reference points.
+    MoveReferencePoints(pos_last);
+    Frame& last = *last_frame;
+    BuildReference(last.index, last.raw, &last.spline, last.Float(), out);
+    ++summary.reference_updates;
+    out->reference_updated = true;
+    *at = Solve(frame, out);
+  }
+  // Candidates that failed against both references (covered by an object, or a bad frame) stay
+  // tracked against the kept reference: NaN in this frame, and found again when they reappear,
+  // as with `fixed`. While they stay failed their rescue test costs nothing (no position in the
+  // last frame).
+}
+
+std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attempt>& at,
+                                                        FrameResult* out) {
+  const int n = static_cast<int>(at.size());
+  out->u_px.assign(n, kNaN);
+  out->v_px.assign(n, kNaN);
+  out->zncc.assign(n, kNaNf);
+  out->iterations.assign(n, 0);
+  out->sigma_px.assign(n, kNaNf);
+  out->sigma_u_px = out->sigma_px;
+  out->sigma_v_px = out->sigma_px;
+  out->status.resize(n);
+  std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
+  for (int i = 0; i < n; ++i) {
+    const IcgnResult& r = at[i].r;
+    out->status[i] = r.status;
+    out->iterations[i] = r.iterations;
+    if (r.iterations > 0) out->zncc[i] = r.zncc;
+    if (r.status != SubsetStatus::kConverged) {
+      params_valid[i] = 0;
+      continue;
+    }
+    const Orphan& orphan = orphans[i];
+    const SubsetRef& s = orphan.ref ? orphan.ref->subsets[i] : ref.subsets[i];
+    double du, dv;
+    internal::Displacement(shape, r.p, s.ox, s.oy, &du, &dv);
+    pos[i] = (orphan.ref ? orphan.ref_pos : ref_pos[i]) + cv::Point2d(du, dv);
+    out->u_px[i] = pos[i].x - initial[i].x;
+    out->v_px[i] = pos[i].y - initial[i].y;
+    out->sigma_u_px[i] = r.sigma_u_px;
+    out->sigma_v_px[i] = r.sigma_v_px;
+    out->sigma_px[i] = r.sigma_px;
+    params_last[i] = r.p;
+    params_valid[i] = orphan.ref ? 0 : 1;
+    iteration_sum += r.iterations;
+    ++converged_sum;
+  }
+  return pos;
+}
+
+void Correlator::Impl::AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
+                                        const std::vector<Attempt>& at,
+                                        const std::vector<cv::Point2d>& pos, FrameResult* out) {
+  FrameView storage;
+  if (policy->MakesFrameTheReference(View(out->frame, at, &storage))) {
+    // The frame just solved becomes the reference.
+    MoveReferencePoints(pos);
+    BuildReference(out->frame, image, &frame->spline, frame->Float(), out);
+    ++summary.reference_updates;
+    last_frame.reset();
+  } else if (policy->KeepsLastFrame()) {
+    last_frame = std::move(frame);
+  }
+}
+
+void Correlator::Impl::AddToSummary(const FrameResult& out) {
+  const int n = static_cast<int>(out.status.size());
+  DicSummary& s = summary;
+  ++s.frames;
+  for (int i = 0; i < n; ++i) ++s.status_counts[static_cast<int>(out.status[i])];
+  s.valid_fraction =
+      double(s.status_counts[static_cast<int>(SubsetStatus::kConverged)]) / (double(n) * s.frames);
+  s.mean_iterations = converged_sum ? double(iteration_sum) / converged_sum : 0;
+  s.searches += out.searches;
+  s.seconds_coefficients += out.seconds_coefficients;
+  s.seconds_reference += out.seconds_reference;
+  s.seconds_initial_guess += out.seconds_initial_guess;
+  s.seconds_icgn += out.seconds_icgn;
+  s.seconds_total += out.seconds_total;
+}
+
 FrameResult Correlator::Correlate(const cv::Mat& image) {
   Impl& m = *impl_;
   CheckValue(!m.initial.empty(), "Correlator", "no reference", "SetReference() first");
@@ -834,8 +959,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   FrameResult out;
   out.frame = m.last_index + 1;
   const int n = static_cast<int>(m.initial.size());
-  const bool pairs = m.options.mode == SequenceMode::kPairs;
-  if (pairs) {
+  if (m.options.mode == SequenceMode::kPairs) {
     // An independent image: nothing is predicted from the images before it (seeds and
     // propagation, as for the first frame after the reference).
     m.pos_last.assign(n, cv::Point2d(kNaN, kNaN));
@@ -848,74 +972,11 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   m.MakeFrame(image, out.frame, frame.get());
   out.seconds_coefficients += timer.ElapsedSeconds();
   std::vector<Attempt> at = m.Solve(*frame, &out);
-
-  // Pairs: the reference never changes (UpdateOptions do not apply).
-  const ReferenceUpdate mode = pairs ? ReferenceUpdate::kFixed : m.options.update.mode;
-  if (mode == ReferenceUpdate::kAuto && m.last_frame && m.last_frame->index > m.ref.frame) {
-    // Subsets that were trackable but decorrelated.
-    const double min_zncc = m.options.update.auto_min_zncc;
-    std::vector<int> triggers;
-    for (int i = 0; i < n; ++i) {
-      if (!m.active[i] || !Usable(m.ref.subsets[i].status)) continue;
-      if (IsDecorrelation(at[i].r.status) ||
-          (at[i].r.status == SubsetStatus::kConverged && at[i].r.zncc < min_zncc))
-        triggers.push_back(i);
-    }
-    // The update is made only if it rescues a triggering subset: one that passes against the last
-    // frame as reference. Subsets covered by an object entering the view fail against both.
-    if (!triggers.empty()) {
-      const std::vector<char> rescued = m.RescuedByLastFrame(triggers, at, *frame, &out);
-      if (std::find(rescued.begin(), rescued.end(), 1) != rescued.end()) {
-        // Switch to the last good frame: its tracked positions become the new reference points.
-        m.MoveReferencePoints(m.pos_last);
-        Frame& last = *m.last_frame;
-        m.BuildReference(last.index, last.raw, &last.spline, last.Float(), &out);
-        ++m.summary.reference_updates;
-        out.reference_updated = true;
-        at = m.Solve(*frame, &out);
-      }
-      // Triggering subsets that failed against both references (covered by an object, or a
-      // bad frame) stay tracked against the kept reference: NaN in this frame, and found again
-      // when they reappear, as with `fixed`. While they stay failed their rescue test costs
-      // nothing (no position in the last frame).
-    }
-  }
+  m.RedoIfThePolicyAsks(*frame, &at, &out);
   out.reference_frame = m.ref.frame;
 
   // Results: tracked positions and accumulated displacements.
-  out.u_px.assign(n, kNaN);
-  out.v_px.assign(n, kNaN);
-  out.zncc.assign(n, kNaNf);
-  out.iterations.assign(n, 0);
-  out.sigma_px.assign(n, kNaNf);
-  out.sigma_u_px = out.sigma_px;
-  out.sigma_v_px = out.sigma_px;
-  out.status.resize(n);
-  std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
-  for (int i = 0; i < n; ++i) {
-    const IcgnResult& r = at[i].r;
-    out.status[i] = r.status;
-    out.iterations[i] = r.iterations;
-    if (r.iterations > 0) out.zncc[i] = r.zncc;
-    if (r.status != SubsetStatus::kConverged) {
-      m.params_valid[i] = 0;
-      continue;
-    }
-    const Orphan& orphan = m.orphans[i];
-    const SubsetRef& s = orphan.ref ? orphan.ref->subsets[i] : m.ref.subsets[i];
-    double du, dv;
-    internal::Displacement(m.shape, r.p, s.ox, s.oy, &du, &dv);
-    pos[i] = (orphan.ref ? orphan.ref_pos : m.ref_pos[i]) + cv::Point2d(du, dv);
-    out.u_px[i] = pos[i].x - m.initial[i].x;
-    out.v_px[i] = pos[i].y - m.initial[i].y;
-    out.sigma_u_px[i] = r.sigma_u_px;
-    out.sigma_v_px[i] = r.sigma_v_px;
-    out.sigma_px[i] = r.sigma_px;
-    m.params_last[i] = r.p;
-    m.params_valid[i] = orphan.ref ? 0 : 1;
-    m.iteration_sum += r.iterations;
-    ++m.converged_sum;
-  }
+  const std::vector<cv::Point2d> pos = m.StoreResults(at, &out);
   m.pos_prev = m.pos_last;
   m.pos_last = pos;
   if (out.frame == 1) {
@@ -923,33 +984,9 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
     for (int i = 0; i < n; ++i) m.pos_prev[i] = m.initial[i];
   }
   m.last_index = out.frame;
-
-  // Scheduled updates: the frame just solved becomes the reference.
-  const bool scheduled =
-      (mode == ReferenceUpdate::kIncremental) ||
-      (mode == ReferenceUpdate::kEveryN && out.frame - m.ref.frame >= m.options.update.every_n);
-  if (scheduled) {
-    m.MoveReferencePoints(pos);
-    m.BuildReference(out.frame, image, &frame->spline, frame->Float(), &out);
-    ++m.summary.reference_updates;
-    m.last_frame.reset();
-  } else if (mode == ReferenceUpdate::kAuto) {
-    m.last_frame = std::move(frame);
-  }
-
+  m.AdvanceReference(image, std::move(frame), at, pos, &out);
   out.seconds_total = total.ElapsedSeconds();
-  DicSummary& s = m.summary;
-  ++s.frames;
-  for (int i = 0; i < n; ++i) ++s.status_counts[static_cast<int>(out.status[i])];
-  s.valid_fraction =
-      double(s.status_counts[static_cast<int>(SubsetStatus::kConverged)]) / (double(n) * s.frames);
-  s.mean_iterations = m.converged_sum ? double(m.iteration_sum) / m.converged_sum : 0;
-  s.searches += out.searches;
-  s.seconds_coefficients += out.seconds_coefficients;
-  s.seconds_reference += out.seconds_reference;
-  s.seconds_initial_guess += out.seconds_initial_guess;
-  s.seconds_icgn += out.seconds_icgn;
-  s.seconds_total += out.seconds_total;
+  m.AddToSummary(out);
   return out;
 }
 

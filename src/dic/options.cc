@@ -7,6 +7,7 @@
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/reference_update.h"
 
 namespace impactdic {
 namespace {
@@ -30,43 +31,7 @@ ShapeFunction ShapeFunctionFromString(const std::string& name) {
   throw Error(ErrorKind::kInvalidValue, "shape function", name, "affine or quadratic");
 }
 
-const char* ToString(ReferenceUpdate mode) {
-  switch (mode) {
-    case ReferenceUpdate::kFixed: return "fixed";
-    case ReferenceUpdate::kIncremental: return "incremental";
-    case ReferenceUpdate::kEveryN: return "every";
-    case ReferenceUpdate::kAuto: return "auto";
-  }
-  return "?";
-}
-
-ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n) {
-  const std::string expected = "fixed, incremental, auto or every:N (N >= 1)";
-  if (text == "fixed") return ReferenceUpdate::kFixed;
-  if (text == "incremental") return ReferenceUpdate::kIncremental;
-  if (text == "auto") return ReferenceUpdate::kAuto;
-  if (text.rfind("every:", 0) == 0) {
-    const std::string number = text.substr(6);
-    std::size_t used = 0;
-    int n = 0;
-    try {
-      n = std::stoi(number, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != number.size() || n < 1) {
-      throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
-    }
-    if (every_n) *every_n = n;
-    return ReferenceUpdate::kEveryN;
-  }
-  throw Error(ErrorKind::kInvalidValue, "reference update", text, expected);
-}
-
-std::string ReferenceUpdateText(const UpdateOptions& update) {
-  if (update.mode == ReferenceUpdate::kEveryN) return fmt::format("every:{}", update.every_n);
-  return ToString(update.mode);
-}
+std::string ReferenceUpdateText(const UpdateOptions& update) { return update.policy; }
 
 const char* ToString(SequenceMode mode) {
   return mode == SequenceMode::kPairs ? "pairs" : "sequence";
@@ -150,7 +115,12 @@ void IcgnOptions::Check() const {
 }
 
 void UpdateOptions::Check() const {
-  CheckValue(every_n >= 1, "dic.update.every_n", std::to_string(every_n), ">= 1");
+  try {
+    ReferenceUpdatePolicyFromString(policy, *this);
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, "dic.update.policy", policy,
+                ReferenceUpdatePolicyUsage());
+  }
   CheckValue(kAutoMinZnccRange.Contains(auto_min_zncc), "dic.update.auto_min_zncc",
              Num(auto_min_zncc), "in " + kAutoMinZnccRange.Text());
 }

@@ -9,6 +9,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/threads.h"
+#include "impactdic/dic/reference_update.h"
 #include "impactdic/io/input_file.h"
 
 namespace impactdic {
@@ -160,15 +161,15 @@ YamlOptionTable DicTable(Scene* s) {
       [&o](const std::string& v) { o.icgn.shape = ShapeFunctionFromString(v); },
       "Subset shape function");
   t.AddCustom(
-      "reference_update", "fixed, incremental, every:N (N >= 1) or auto",
-      ReferenceUpdateText(o.update),
+      "reference_update", ReferenceUpdatePolicyUsage(), ReferenceUpdateText(o.update),
       [&o](const YAML::Node& n) {
         if (!n.IsScalar()) return false;
         try {
-          o.update.mode = ReferenceUpdateFromString(n.Scalar(), &o.update.every_n);
+          ReferenceUpdatePolicyFromString(n.Scalar(), o.update);
         } catch (const Error&) {
           return false;
         }
+        o.update.policy = n.Scalar();
         return true;
       },
       "When the reference image changes (docs/dic.md)");

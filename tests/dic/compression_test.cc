@@ -97,8 +97,8 @@ TEST(Compression, AutoUpdatesTheReferenceWhereTheFixedOneDecorrelates) {
   options.grid.step = 15;  // 12 x 19 = 228 subsets.
   // Errors against the truth of the tracked material points: the subset centres of the first
   // image, displaced by the field of each frame.
-  auto run = [&](ReferenceUpdate mode) {
-    options.update.mode = mode;
+  auto run = [&](const std::string& policy) {
+    options.update.policy = policy;
     Correlator correlator(options);
     correlator.SetReference(images[0]);
     const std::vector<cv::Point2d>& positions = correlator.positions();
@@ -134,8 +134,8 @@ TEST(Compression, AutoUpdatesTheReferenceWhereTheFixedOneDecorrelates) {
     s.updates = correlator.summary().reference_updates;
     return s;
   };
-  const ModeStats fixed = run(ReferenceUpdate::kFixed);
-  const ModeStats automatic = run(ReferenceUpdate::kAuto);
+  const ModeStats fixed = run("fixed");
+  const ModeStats automatic = run("auto");
   std::printf(
       "fixed: below 99 %% valid from frame %d, last frame %.1f %% valid, RMS %.4f px, "
       "min ZNCC %.4f, %lld decorrelated results\n"

@@ -8,6 +8,7 @@
 #include "dic_test_util.h"
 #include "impactdic/core/error.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/reference_update.h"
 
 namespace impactdic {
 namespace {
@@ -245,16 +246,14 @@ TEST(Icgn, OptionsCheckNamesTheBrokenField) {
   b.icgn.convergence_px = 0;
   expect_names(b, "convergence_px");
   b = o;
-  b.update.every_n = 0;
-  expect_names(b, "every_n");
+  b.update.policy = "every:0";
+  expect_names(b, "update.policy");
   b = o;
   b.init.search_radius_px = 0;
   expect_names(b, "search_radius_px");
-  int n = 0;
-  EXPECT_EQ(ReferenceUpdateFromString("every:7", &n), ReferenceUpdate::kEveryN);
-  EXPECT_EQ(n, 7);
-  EXPECT_THROW(ReferenceUpdateFromString("every:0", &n), Error);
-  EXPECT_THROW(ReferenceUpdateFromString("sometimes", &n), Error);
+  EXPECT_EQ(ReferenceUpdatePolicyFromString("every:7")->Name(), "every:7");
+  EXPECT_THROW(ReferenceUpdatePolicyFromString("every:0"), Error);
+  EXPECT_THROW(ReferenceUpdatePolicyFromString("sometimes"), Error);
   EXPECT_EQ(ShapeFunctionFromString("quadratic"), ShapeFunction::kQuadratic);
 }
 

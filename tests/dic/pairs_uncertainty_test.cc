@@ -46,10 +46,10 @@ TEST(Pairs, IndependentImagesAreEachCorrelatedAgainstTheReference) {
   DicOptions options;
   options.grid.step = 10;
   options.mode = SequenceMode::kPairs;
-  for (ReferenceUpdate update : {ReferenceUpdate::kAuto, ReferenceUpdate::kIncremental}) {
-    options.update.mode = update;
+  for (const char* update : {"auto", "incremental"}) {
+    options.update.policy = update;
     const DicResult r = CorrelateSequence(images, options);
-    EXPECT_EQ(r.summary.reference_updates, 0) << ToString(update);
+    EXPECT_EQ(r.summary.reference_updates, 0) << update;
     const int h = options.grid.subset_size / 2;
     for (int k = 0; k < 3; ++k) {
       const FrameResult& f = r.frames[k];
@@ -67,7 +67,7 @@ TEST(Pairs, IndependentImagesAreEachCorrelatedAgainstTheReference) {
         if ((box & inside) != box) continue;
         if (k == 0 && (box & (block + cv::Point(-3, -3) + cv::Size(6, 6))).area() > 0) continue;
         ASSERT_EQ(f.status[i], SubsetStatus::kConverged)
-            << ToString(update) << " image " << k + 1 << " subset " << i;
+            << update << " image " << k + 1 << " subset " << i;
         EXPECT_NEAR(f.u_px[i], shifts[k][0], 0.05) << "image " << k + 1;
         EXPECT_NEAR(f.v_px[i], shifts[k][1], 0.05) << "image " << k + 1;
         sum2 += std::pow(f.u_px[i] - shifts[k][0], 2) + std::pow(f.v_px[i] - shifts[k][1], 2);
@@ -80,7 +80,7 @@ TEST(Pairs, IndependentImagesAreEachCorrelatedAgainstTheReference) {
   // The same images as a sequence with `incremental`: the reference moves to each image in turn
   // (frames 2 and 3 are correlated against the previous image, not the first).
   options.mode = SequenceMode::kSequence;
-  options.update.mode = ReferenceUpdate::kIncremental;
+  options.update.policy = "incremental";
   const DicResult seq = CorrelateSequence(images, options);
   EXPECT_EQ(seq.frames[1].reference_frame, 1);
   EXPECT_EQ(seq.frames[2].reference_frame, 2);
@@ -132,10 +132,9 @@ void ExpectHiddenSubsetsFoundAgain(const DicOptions& options, int covered) {
 TEST(Sequence, SubsetLostAtAnUpdateIsTriedAgainstTheOldReference) {
   DicOptions options;
   options.grid.step = 10;
-  options.update.mode = ReferenceUpdate::kIncremental;
+  options.update.policy = "incremental";
   ExpectHiddenSubsetsFoundAgain(options, /*covered=*/2);
-  options.update.mode = ReferenceUpdate::kEveryN;
-  options.update.every_n = 3;
+  options.update.policy = "every:3";
   ExpectHiddenSubsetsFoundAgain(options, /*covered=*/3);
 }
 
@@ -162,7 +161,7 @@ TEST(Sequence, AutoUpdateToAFrameWithHiddenSubsetsKeepsTryingThem) {
   PaintBlock(&images[covered], region_a);
   DicOptions options;
   options.grid.step = 10;
-  options.update.mode = ReferenceUpdate::kAuto;
+  options.update.policy = "auto";
   // No uncertainty limit: B must keep a position in frame 3 (its changed texture raises sigma).
   options.icgn.max_uncertainty_px = 0;
   const DicResult r = CorrelateSequence(images, options);

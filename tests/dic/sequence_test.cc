@@ -58,8 +58,8 @@ TEST(Sequence, RigidMotionAutoKeepsTheReferenceIncrementalRandomWalks) {
   double rms[2] = {0, 0};
   int updates[2] = {0, 0};
   int k = 0;
-  for (ReferenceUpdate mode : {ReferenceUpdate::kAuto, ReferenceUpdate::kIncremental}) {
-    options.update.mode = mode;
+  for (const char* mode : {"auto", "incremental"}) {
+    options.update.policy = mode;
     const DicResult r = CorrelateSequence(images, options);
     const ErrorStats e = Errors(r.positions, r.frames.back(), seq.at(99));
     // The subsets that are still inside the image after 20 px are tracked.
@@ -87,7 +87,7 @@ TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
   PaintBlocks(&images);
   DicOptions options;
   options.grid.step = 10;
-  options.update.mode = ReferenceUpdate::kFixed;
+  options.update.policy = "fixed";
   const DicResult r = CorrelateSequence(images, options);
   const int h = options.grid.subset_size / 2;
   for (int k = 1; k < frames; ++k) {
@@ -145,15 +145,14 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
   options.grid.step = 10;
   const int h = options.grid.subset_size / 2;
   struct Run {
-    ReferenceUpdate mode;
+    std::string mode;
     int updates = 0;
     double rms = 0, max_abs = 0;  // Over the uncovered subsets of every frame.
     DicResult result;
   };
-  std::vector<Run> runs = {
-      {ReferenceUpdate::kFixed}, {ReferenceUpdate::kAuto}, {ReferenceUpdate::kIncremental}};
+  std::vector<Run> runs = {{"fixed"}, {"auto"}, {"incremental"}};
   for (Run& run : runs) {
-    options.update.mode = run.mode;
+    options.update.policy = run.mode;
     run.result = CorrelateSequence(images, options);
     const DicResult& r = run.result;
     run.updates = r.summary.reference_updates;
@@ -166,13 +165,13 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
         const bool valid = f.status[i] == SubsetStatus::kConverged;
         // Covered subsets fail: NaN, not garbage.
         if (covered >= 0.25) {
-          EXPECT_FALSE(valid) << ToString(run.mode) << " frame " << k << " subset " << i;
+          EXPECT_FALSE(valid) << run.mode << " frame " << k << " subset " << i;
           EXPECT_TRUE(std::isnan(f.u_px[i]) && std::isnan(f.v_px[i]))
-              << ToString(run.mode) << " frame " << k << " subset " << i;
+              << run.mode << " frame " << k << " subset " << i;
         }
         if (!valid) continue;
-        EXPECT_NEAR(f.u_px[i], 0, 0.05) << ToString(run.mode) << " frame " << k;
-        EXPECT_NEAR(f.v_px[i], 0, 0.05) << ToString(run.mode) << " frame " << k;
+        EXPECT_NEAR(f.u_px[i], 0, 0.05) << run.mode << " frame " << k;
+        EXPECT_NEAR(f.v_px[i], 0, 0.05) << run.mode << " frame " << k;
         if (covered > 0) continue;
         sum2 += f.u_px[i] * f.u_px[i] + f.v_px[i] * f.v_px[i];
         run.max_abs = std::max({run.max_abs, std::abs(f.u_px[i]), std::abs(f.v_px[i])});
@@ -180,11 +179,11 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
       }
       // The uncovered subsets are all tracked, except by `incremental`, which loses every subset
       // that failed in a frame that became the reference.
-      if (run.mode != ReferenceUpdate::kIncremental) {
+      if (run.mode != "incremental") {
         for (std::size_t i = 0; i < r.positions.size(); ++i) {
           if (Covered(r.positions[i], cv::Vec2d(0, 0), h, BlockInFrame(k)) == 0) {
             EXPECT_EQ(f.status[i], SubsetStatus::kConverged)
-                << ToString(run.mode) << " frame " << k << " subset " << i;
+                << run.mode << " frame " << k << " subset " << i;
           }
         }
       }
@@ -193,7 +192,7 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
     std::printf(
         "%s: %d reference updates; uncovered results of all frames: RMS %.4f px, "
         "max %.4f px (%d results)\n",
-        ToString(run.mode), run.updates, run.rms, run.max_abs, count);
+        run.mode.c_str(), run.updates, run.rms, run.max_abs, count);
   }
   const Run &fixed = runs[0], &automatic = runs[1], &incremental = runs[2];
   EXPECT_EQ(fixed.updates, 0);
@@ -202,7 +201,7 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
   EXPECT_LE(automatic.rms, 1.1 * fixed.rms);
   EXPECT_LE(automatic.max_abs, 1.1 * fixed.max_abs);
   // The decisions of `auto` do not depend on the thread count either (1 vs 2 threads).
-  options.update.mode = ReferenceUpdate::kAuto;
+  options.update.policy = "auto";
   ExpectSameForOneAndTwoThreads(images, options);
 }
 
@@ -217,25 +216,25 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
   cv::GaussianBlur(images[bad], images[bad], cv::Size(0, 0), 3.0);
   DicOptions options;
   options.grid.step = 12;
-  for (ReferenceUpdate mode : {ReferenceUpdate::kFixed, ReferenceUpdate::kAuto}) {
-    options.update.mode = mode;
+  for (const char* mode : {"fixed", "auto"}) {
+    options.update.policy = mode;
     const DicResult r = CorrelateSequence(images, options);
-    EXPECT_EQ(r.summary.reference_updates, 0) << ToString(mode);
+    EXPECT_EQ(r.summary.reference_updates, 0) << mode;
     const std::size_t n = r.positions.size();
     std::size_t failed_in_bad = 0;
     for (std::size_t i = 0; i < n; ++i)
       failed_in_bad += r.frames[bad - 1].status[i] != SubsetStatus::kConverged;
-    EXPECT_GT(failed_in_bad, n / 2) << ToString(mode) << ": the blur should defeat the subsets";
+    EXPECT_GT(failed_in_bad, n / 2) << mode << ": the blur should defeat the subsets";
     for (int k = bad + 1; k < frames; ++k) {
       const FrameResult& f = r.frames[k - 1];
       for (std::size_t i = 0; i < n; ++i) {
         EXPECT_EQ(f.status[i], SubsetStatus::kConverged)
-            << ToString(mode) << " frame " << k << " subset " << i;
-        EXPECT_NEAR(f.u_px[i], 0.2 * k, 0.05) << ToString(mode) << " frame " << k;
+            << mode << " frame " << k << " subset " << i;
+        EXPECT_NEAR(f.u_px[i], 0.2 * k, 0.05) << mode << " frame " << k;
       }
     }
   }
-  options.update.mode = ReferenceUpdate::kAuto;
+  options.update.policy = "auto";
   ExpectSameForOneAndTwoThreads(images, options);
 }
 
@@ -245,8 +244,7 @@ TEST(Sequence, ResultsDoNotDependOnTheThreadCount) {
   const std::vector<cv::Mat> images = RenderSequence(scene, seq);
   DicOptions options;
   options.grid.step = 7;
-  options.update.mode = ReferenceUpdate::kEveryN;
-  options.update.every_n = 2;
+  options.update.policy = "every:2";
   DicResult one, two;
   {
     tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);

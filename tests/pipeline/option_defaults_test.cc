@@ -52,8 +52,7 @@ TEST(OptionDefaults, SceneDicKeysDefaultToDicOptions) {
   EXPECT_EQ(s.icgn.min_contrast, d.icgn.min_contrast);
   EXPECT_EQ(s.icgn.max_saturated_fraction, d.icgn.max_saturated_fraction);
   EXPECT_EQ(s.icgn.max_uncertainty_px, d.icgn.max_uncertainty_px);
-  EXPECT_EQ(s.update.mode, d.update.mode);
-  EXPECT_EQ(s.update.every_n, d.update.every_n);
+  EXPECT_EQ(s.update.policy, d.update.policy);
   EXPECT_EQ(s.update.auto_min_zncc, d.update.auto_min_zncc);
 }
 

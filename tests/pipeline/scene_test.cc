@@ -57,8 +57,7 @@ momentum: {pounder_center_x_px: 150, surface_y_px: 40}
   EXPECT_NEAR(s.model.ContactArea_m2(), 0.2 * 0.192, 1e-15);
   EXPECT_EQ(s.dic.options.grid.subset_size, 31);
   EXPECT_EQ(s.dic.options.grid.step, 10);
-  EXPECT_EQ(s.dic.options.update.mode, ReferenceUpdate::kEveryN);
-  EXPECT_EQ(s.dic.options.update.every_n, 5);
+  EXPECT_EQ(s.dic.options.update.policy, "every:5");
   EXPECT_EQ(s.dic.roi[2], 300);
   ASSERT_EQ(s.dic.roi_polygon.size(), 3u);
   EXPECT_DOUBLE_EQ(s.dic.roi_polygon[2][1], 190.5);

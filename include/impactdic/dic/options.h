@@ -4,7 +4,7 @@
 //   options.grid.subset_size = 25;
 //   options.grid.step = 10;
 //   options.icgn.interpolation = Interpolation::kBiquintic;
-//   options.update.mode = ReferenceUpdate::kAuto;
+//   options.update.policy = "auto";
 //   options.Check();  // Error naming the broken field.
 #ifndef IMPACTDIC_DIC_OPTIONS_H_
 #define IMPACTDIC_DIC_OPTIONS_H_
@@ -24,19 +24,9 @@ enum class ShapeFunction { kAffine, kQuadratic };
 const char* ToString(ShapeFunction shape);
 ShapeFunction ShapeFunctionFromString(const std::string& name);
 
-// When the reference image changes during a sequence (GeoPIV-RG's answer to random walk):
-// kFixed: always the first image; kIncremental: the previous frame; kEveryN: every N frames;
-// kAuto: keep the reference while every subset that is still tracked correlates at or above
-// UpdateOptions::auto_min_zncc; when one does not, switch to the last good frame and redo the
-// frame against it, but only if that rescues one of the subsets that failed (tested on those
-// subsets alone); subsets that fail against both references (e.g. covered by the pounder) keep
-// the reference and are found again when they reappear.
-enum class ReferenceUpdate { kFixed, kIncremental, kEveryN, kAuto };
-const char* ToString(ReferenceUpdate mode);
-// "fixed", "incremental", "auto", or "every:N" (N >= 1 is returned in *every_n).
-ReferenceUpdate ReferenceUpdateFromString(const std::string& text, int* every_n);
+// The reference-update policy as written in the options and the scene ("auto", "every:5"; the
+// policies are in dic/reference_update.h).
 struct UpdateOptions;
-// The text ReferenceUpdateFromString reads: "auto", "every:5", ...
 std::string ReferenceUpdateText(const UpdateOptions& update);
 
 // Allowed values of the options below, shared by their Check() and the scene's `dic.*` keys.
@@ -101,10 +91,17 @@ struct IcgnOptions {
   void Check() const;
 };
 
+// When the reference image changes during a sequence (GeoPIV-RG's answer to random walk): a
+// registered policy by name (dic/reference_update.h):
+// "fixed": always the first image; "incremental": the previous frame; "every:N": every N frames;
+// "auto": keep the reference while every subset that is still tracked correlates at or above
+// auto_min_zncc; when one does not, switch to the last good frame and redo the frame against it,
+// but only if that rescues one of the subsets that failed (tested on those subsets alone);
+// subsets that fail against both references (e.g. covered by the pounder) keep the reference and
+// are found again when they reappear.
 struct UpdateOptions {
-  ReferenceUpdate mode = ReferenceUpdate::kAuto;
-  int every_n = 10;  // Frames per reference for kEveryN, >= 1.
-  // kAuto: the reference is updated once a tracked subset correlates below this,
+  std::string policy = "auto";  // A registered policy (ReferenceUpdatePolicyFromString).
+  // "auto": the reference is updated once a tracked subset correlates below this,
   // kAutoMinZnccRange. Above IcgnOptions::min_zncc on purpose: the reference moves on while the
   // subsets still correlate well, before they fail.
   double auto_min_zncc = 0.95;

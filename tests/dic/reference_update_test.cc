@@ -1,0 +1,115 @@
+// Reference-update policies as an extension point (docs/architecture.md, "Extension points"): a
+// policy written here, registered at run time and selected by name like the built-in ones.
+#include "impactdic/dic/reference_update.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dic_test_util.h"
+#include "impactdic/core/error.h"
+#include "impactdic/dic/correlator.h"
+
+namespace impactdic {
+namespace {
+
+// The worked example: "once:K" makes frame K the reference, once, and keeps it afterwards (e.g.
+// the first frame after a known event). One class and one registration call.
+class OnceUpdate final : public ReferenceUpdatePolicy {
+ public:
+  explicit OnceUpdate(int k) : k_(k) {}
+  std::string Name() const override { return "once:" + std::to_string(k_); }
+  bool MakesFrameTheReference(const SolvedFrame& frame) const override { return frame.frame == k_; }
+
+ private:
+  int k_;
+};
+
+void RegisterOnce() {
+  static const bool registered = [] {
+    RegisterReferenceUpdatePolicy(
+        {"once", "once:K (K >= 1)", [](const std::string& argument, const UpdateOptions&) {
+           const int k = std::stoi(argument);
+           CheckValue(k >= 1, "once:K", argument, "K >= 1");
+           return std::make_unique<OnceUpdate>(k);
+         }});
+    return true;
+  }();
+  (void)registered;
+}
+
+TEST(ReferenceUpdate, ATestOnlyPolicyIsSelectedByNameAndDrivesTheCorrelator) {
+  RegisterOnce();
+  testing::Scene scene(160, 120, /*noise_sigma=*/1, /*seed=*/5, /*supersampling=*/2);
+  const FieldSequence seq = LinearSequence(Translation(2.5, -1.5), 6);
+  std::vector<cv::Mat> images;
+  for (int k = 0; k < seq.frames; ++k) images.push_back(scene.Render(seq.at(k), 300 + k));
+  DicOptions options;
+  options.grid.step = 10;
+  options.update.policy = "once:2";
+  options.Check();  // The registered name passes the options' check.
+  const DicResult result = CorrelateSequence(images, options);
+  ASSERT_EQ(result.frames.size(), 5u);
+  EXPECT_EQ(result.summary.reference_updates, 1);
+  // Frames 1 and 2 against the first image; after frame 2 became the reference, the rest
+  // against it. Displacements stay relative to the first image (accumulated), so they match the
+  // field throughout.
+  for (const FrameResult& f : result.frames) {
+    EXPECT_EQ(f.reference_frame, f.frame <= 2 ? 0 : 2) << f.frame;
+    const testing::ErrorStats e = testing::Errors(result.positions, f, seq.at(f.frame));
+    EXPECT_GT(e.valid, 0.9 * result.positions.size()) << f.frame;
+    EXPECT_LT(e.rms, 0.02) << f.frame;
+  }
+}
+
+TEST(ReferenceUpdate, RegistryListsPoliciesAndRefusesBadNames) {
+  RegisterOnce();
+  EXPECT_EQ(ReferenceUpdatePolicyFromString("once:3")->Name(), "once:3");
+  EXPECT_NE(ReferenceUpdatePolicyUsage().find("once:K (K >= 1)"), std::string::npos);
+  for (const char* name : {"fixed", "incremental", "auto", "every:4"})
+    EXPECT_EQ(ReferenceUpdatePolicyFromString(name)->Name(), name);
+  // A name given twice, a ':' in a name.
+  EXPECT_THROW(RegisterReferenceUpdatePolicy({"once", "once",
+                                              [](const std::string&, const UpdateOptions&) {
+                                                return std::make_unique<OnceUpdate>(1);
+                                              }}),
+               Error);
+  EXPECT_THROW(RegisterReferenceUpdatePolicy({"a:b", "a:b", nullptr}), Error);
+  // Unknown names and bad arguments name the text and list what is registered.
+  for (const char* bad : {"sometimes", "fixed:2", "every:", "every:x", "once:0", "auto:"}) {
+    try {
+      ReferenceUpdatePolicyFromString(bad);
+      FAIL() << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
+  const std::vector<SubsetStatus> status = {SubsetStatus::kConverged, SubsetStatus::kConverged,
+                                            SubsetStatus::kLowCorrelation, SubsetStatus::kMasked,
+                                            SubsetStatus::kNotFound};
+  const std::vector<float> zncc = {0.99f, 0.90f, 0.5f, 0.0f, 0.0f};
+  const std::vector<char> trackable = {1, 1, 1, 0, 0};
+  const SolvedFrame frame{
+      .frame = 7, .reference_frame = 3, .status = status, .zncc = zncc, .trackable = trackable};
+  UpdateOptions options;
+  options.auto_min_zncc = 0.95;
+  const auto automatic = ReferenceUpdatePolicyFromString("auto", options);
+  EXPECT_TRUE(automatic->KeepsLastFrame());
+  // Below the threshold or decorrelated, among trackable subsets only.
+  EXPECT_EQ(automatic->RedoCandidates(frame), (std::vector<int>{1, 2}));
+  EXPECT_TRUE(automatic->Rescues(SubsetStatus::kConverged, 0.96f));
+  EXPECT_FALSE(automatic->Rescues(SubsetStatus::kConverged, 0.94f));
+  EXPECT_FALSE(automatic->MakesFrameTheReference(frame));
+  EXPECT_FALSE(ReferenceUpdatePolicyFromString("fixed")->MakesFrameTheReference(frame));
+  EXPECT_TRUE(ReferenceUpdatePolicyFromString("incremental")->MakesFrameTheReference(frame));
+  EXPECT_TRUE(ReferenceUpdatePolicyFromString("every:4")->MakesFrameTheReference(frame));
+  EXPECT_FALSE(ReferenceUpdatePolicyFromString("every:5")->MakesFrameTheReference(frame));
+}
+
+}  // namespace
+}  // namespace impactdic
