@@ -318,13 +318,13 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   sum.added_mass_max_kg = M;
   sum.t1_s = t1;
 
-  OdeMethod method = OdeMethod::kDopri5;
+  std::string method = "dopri5";
   if (options.ode45_defaults) {
-    method = OdeMethod::kOde45;
+    method = "ode45";
   } else if (options.solver == ImpactSolver::kStiff) {
-    method = OdeMethod::kRodas3;
+    method = "rodas3";
   } else if (options.solver == ImpactSolver::kAuto) {
-    method = OdeMethod::kAuto;
+    method = "auto";
   }
 
   // ---- Time phase: y = (z, v), x = t.
@@ -362,7 +362,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   to.max_steps = options.max_steps;
   to.landmarks = {tw0, tw1, t1};
   to.max_step_at = [&](double t) { return (t >= tw0 && t < tw1) ? h_window : kInf; };
-  if (method == OdeMethod::kOde45) to.max_step = 0.1 * options.t_max_s;  // ode45's MaxStep rule
+  if (method == "ode45") to.max_step = 0.1 * options.t_max_s;  // ode45's MaxStep rule
   to.stop_on_domain_exit = true;
   to.stop_after_step = [&](double t, const Vec2& y, const Vec2& f) {
     vmax = std::max(vmax, y[1]);
@@ -485,7 +485,7 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
     double last_t = r1.x;
     double last_dtds = 0.0;
     OdeOptions eo;
-    eo.method = (method == OdeMethod::kAuto && stiff_switch) ? OdeMethod::kRodas3 : method;
+    eo.method = (method == "auto" && stiff_switch) ? "rodas3" : method;
     eo.rtol = rtol;
     eo.atol = atol;
     eo.max_steps = options.max_steps;
@@ -615,16 +615,16 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
   if (tolerance_trouble) sum.error_estimate = std::numeric_limits<double>::infinity();
 
   // Which solver ran and why.
-  if (method == OdeMethod::kOde45) {
+  if (method == "ode45") {
     sum.solver = "ode45(dopri5)";
     sum.solver_reason = fmt::format(
         "requested --ode45-defaults: Dormand-Prince 5(4) with MATLAB ode45's error norm, initial "
         "step and step factors, RelTol {}, AbsTol {}",
         Num(rtol), Num(atol));
-  } else if (method == OdeMethod::kRodas3) {
+  } else if (method == "rodas3") {
     sum.solver = "rodas3";
     sum.solver_reason = "requested: stiff solver (Rosenbrock Rodas3, analytic Jacobian)";
-  } else if (method == OdeMethod::kDopri5) {
+  } else if (method == "dopri5") {
     sum.solver = "dopri5";
     sum.solver_reason = "requested: Dormand-Prince 5(4)";
   } else if (stiff_switch) {

@@ -3,8 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
+#include <string>
 #include <vector>
+
+#include "impactdic/core/error.h"
+#include "impactdic/model/ode_stepper.h"
 
 namespace impactdic {
 namespace {
@@ -39,8 +45,7 @@ OdeSystem NonlinearForced() {
 TEST(Ode, EveryMethodMeetsItsToleranceOnTheOscillator) {
   // Tolerance proportionality: over 10 time units the global error stays within 50x the
   // tolerance (error propagation over ~1.6 periods of a neutrally stable problem), and shrinks.
-  for (OdeMethod m :
-       {OdeMethod::kDopri5, OdeMethod::kOde45, OdeMethod::kRodas3, OdeMethod::kAuto}) {
+  for (const char* m : {"dopri5", "ode45", "rodas3", "auto"}) {
     double previous = 1.0;
     for (double tol : {1e-4, 1e-7, 1e-10}) {
       OdeOptions o;
@@ -48,11 +53,11 @@ TEST(Ode, EveryMethodMeetsItsToleranceOnTheOscillator) {
       o.rtol = tol;
       o.atol = tol;
       const OdeResult r = IntegrateOde(Oscillator(), 0.0, {1.0, 0.0}, 10.0, o);
-      ASSERT_EQ(r.status, OdeStatus::kReachedEnd) << ToString(m);
+      ASSERT_EQ(r.status, OdeStatus::kReachedEnd) << m;
       EXPECT_EQ(r.x, 10.0);
       const double err = std::abs(r.y[0] - std::cos(10.0));
-      EXPECT_LT(err, 50 * tol) << ToString(m) << " tol " << tol;
-      EXPECT_LT(err, previous) << ToString(m) << " tol " << tol;
+      EXPECT_LT(err, 50 * tol) << m << " tol " << tol;
+      EXPECT_LT(err, previous) << m << " tol " << tol;
       previous = err;
     }
   }
@@ -63,7 +68,7 @@ TEST(Ode, Rodas3IsThirdOrderWithTheAnalyticJacobian) {
   std::vector<double> errors;
   for (double h : {0.1, 0.05, 0.025}) {
     OdeOptions o;
-    o.method = OdeMethod::kRodas3;
+    o.method = "rodas3";
     o.rtol = 1e-1;
     o.atol = 1e3;
     o.initial_step = h;
@@ -98,7 +103,7 @@ TEST(Ode, DenseOutputIsAccurateInsideSteps) {
   // Hairer's 4th-order continuous extension (DOPRI) and the cubic Hermite (Rodas3): the
   // interpolant's error at tol 1e-8 stays within 100x tol (interpolation order is one lower than
   // the step's).
-  for (OdeMethod m : {OdeMethod::kDopri5, OdeMethod::kRodas3}) {
+  for (const char* m : {"dopri5", "rodas3"}) {
     OdeOptions o;
     o.method = m;
     o.rtol = 1e-8;
@@ -112,7 +117,7 @@ TEST(Ode, DenseOutputIsAccurateInsideSteps) {
         const Vec2 y = s.Interpolate(theta);
         worst = std::max(worst, std::abs(y[0] - std::cos(s.x0 + theta * s.h)));
       }
-    EXPECT_LT(worst, 100 * 1e-8) << ToString(m);
+    EXPECT_LT(worst, 100 * 1e-8) << m;
   }
 }
 
@@ -147,9 +152,9 @@ TEST(Ode, AutoSwitchesToRodas3OnAStiffProblem) {
   OdeOptions o;
   o.rtol = 1e-6;
   o.atol = 1e-9;
-  o.method = OdeMethod::kDopri5;
+  o.method = "dopri5";
   const OdeResult explicit_run = IntegrateOde(sys, 0.0, {0.0, 0.0}, 2.0, o);
-  o.method = OdeMethod::kAuto;
+  o.method = "auto";
   const OdeResult auto_run = IntegrateOde(sys, 0.0, {0.0, 0.0}, 2.0, o);
   EXPECT_TRUE(auto_run.stiffness_detected);
   EXPECT_LT(auto_run.steps * 5, explicit_run.steps);
@@ -165,7 +170,7 @@ TEST(Ode, Ode45ModeFollowsMatlabsInitialStepAndGrowthRules) {
   OdeSystem sys;
   sys.rhs = [](double, const Vec2&) { return Vec2{1.0, 2.0}; };
   OdeOptions o;
-  o.method = OdeMethod::kOde45;
+  o.method = "ode45";
   o.rtol = 1e-3;
   o.atol = 1e-6;
   o.max_step = 1.0;
@@ -213,6 +218,86 @@ TEST(Ode, ATooLongTrialStepLeavingTheDomainIsRetriedNotTakenAsTheExit) {
   EXPECT_GT(r.x, 0.9);
   EXPECT_LT(r.x, 0.96);
   EXPECT_GT(r.rejected_steps, 0);
+}
+
+// The worked example of an ODE method added from outside the library (docs/architecture.md,
+// "Extension points"): Heun's method with the embedded Euler step, order 2(1), an elementary
+// controller h_new = h min(5, max(0.2, 0.9 err^(-1/2))). One class and one registration call.
+class HeunEulerStepper final : public OdeStepper {
+ public:
+  double Order() const override { return 2.0; }
+  OdeTrial Attempt(OdeStepContext& c, double /*x*/, const Vec2& y, const Vec2& f, double h,
+                   double x_target) override {
+    OdeTrial t;
+    t.x1 = x_target;
+    const Vec2 k2 = c.F(x_target, {y[0] + h * f[0], y[1] + h * f[1]});
+    double sum = 0.0;
+    for (int i = 0; i < 2; ++i) {
+      t.y1[i] = y[i] + 0.5 * h * (f[i] + k2[i]);
+      t.local_error[i] = 0.5 * h * (k2[i] - f[i]);
+      const double scale =
+          c.options().atol + c.options().rtol * std::max(std::abs(y[i]), std::abs(t.y1[i]));
+      sum += (t.local_error[i] / scale) * (t.local_error[i] / scale);
+    }
+    t.error = std::sqrt(sum / 2.0);
+    t.domain_violation = !c.InDomain(x_target, t.y1);
+    t.ok = !t.domain_violation;
+    if (t.ok) t.f1 = c.F(x_target, t.y1);
+    return t;
+  }
+  double AfterRejection(const OdeOptions&, double h_abs, double error, bool) override {
+    return h_abs * std::max(0.2, 0.9 / std::sqrt(error));
+  }
+  double AfterAcceptance(const OdeOptions&, double h_abs, double error, bool) override {
+    return h_abs * std::min(5.0, std::max(0.2, 0.9 / std::sqrt(std::max(error, 1e-300))));
+  }
+};
+
+void RegisterHeunEuler() {
+  static const bool registered = [] {
+    RegisterOdeMethod("heun-euler", [] { return std::make_unique<HeunEulerStepper>(); });
+    return true;
+  }();
+  (void)registered;
+}
+
+TEST(OdeExtension, ATestOnlyMethodIsSelectedByNameAndMeetsItsTolerance) {
+  RegisterHeunEuler();
+  const std::vector<std::string> names = OdeMethodNames();
+  EXPECT_NE(std::find(names.begin(), names.end(), "heun-euler"), names.end());
+  OdeOptions o;
+  o.method = "heun-euler";
+  o.rtol = o.atol = 1e-6;
+  std::vector<OdeStep> steps;
+  const OdeResult r = IntegrateOde(Oscillator(), 0.0, {1.0, 0.0}, 10.0, o, &steps);
+  ASSERT_EQ(r.status, OdeStatus::kReachedEnd);
+  EXPECT_EQ(r.x, 10.0);
+  // The same tolerance proportionality as the built-in methods.
+  EXPECT_LT(std::abs(r.y[0] - std::cos(10.0)), 50 * o.rtol);
+  // A second-order method needs far more steps than Dormand-Prince for the same tolerance.
+  o.method = "dopri5";
+  const OdeResult dopri = IntegrateOde(Oscillator(), 0.0, {1.0, 0.0}, 10.0, o);
+  EXPECT_GT(r.steps, 5 * dopri.steps);
+  // Its steps have the driver's cubic Hermite dense output (the default of Accepted).
+  ASSERT_FALSE(steps.empty());
+  EXPECT_FALSE(steps[0].dopri_dense);
+  EXPECT_NEAR(steps[0].Interpolate(1.0)[0], steps[0].y1[0], 1e-15);
+}
+
+TEST(OdeExtension, UnknownMethodsAndDuplicateNamesAreRefused) {
+  RegisterHeunEuler();
+  OdeOptions o;
+  o.method = "rk4";
+  try {
+    IntegrateOde(Oscillator(), 0.0, {1.0, 0.0}, 1.0, o);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("rk4"), std::string::npos) << what;
+    EXPECT_NE(what.find("dopri5, ode45, rodas3, auto"), std::string::npos) << what;
+  }
+  EXPECT_THROW(RegisterOdeMethod("dopri5", [] { return std::make_unique<HeunEulerStepper>(); }),
+               Error);
 }
 
 }  // namespace

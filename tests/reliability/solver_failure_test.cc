@@ -75,10 +75,10 @@ TEST(SolverFailure, NonFiniteRightHandSideIsNamedNotAStepSizeUnderflow) {
     return Vec2{y[1], std::numeric_limits<double>::infinity()};
   };
   OdeOptions o;
-  for (OdeMethod method : {OdeMethod::kDopri5, OdeMethod::kRodas3, OdeMethod::kAuto}) {
+  for (const char* method : {"dopri5", "rodas3", "auto"}) {
     o.method = method;
     const OdeResult r = IntegrateOde(sys, 0.0, {0.0, 1.0}, 1.0, o);
-    EXPECT_EQ(r.status, OdeStatus::kNonFiniteRhs) << ToString(method);
+    EXPECT_EQ(r.status, OdeStatus::kNonFiniteRhs) << method;
     EXPECT_EQ(r.steps, 0);
   }
   EXPECT_EQ(std::string(ToString(OdeStatus::kNonFiniteRhs)),

@@ -48,16 +48,12 @@ struct OdeSystem {
   std::function<bool(double x, const Vec2& y)> in_domain;
 };
 
-enum class OdeMethod {
-  kDopri5,  // Dormand-Prince 5(4), Hairer's controller and RMS error norm.
-  kOde45,   // Dormand-Prince 5(4) with MATLAB ode45's norm, initial step and step factors.
-  kRodas3,  // Rosenbrock Rodas3, analytic Jacobian.
-  kAuto,    // kDopri5 with stiffness detection, switching to kRodas3 when it fires.
-};
-const char* ToString(OdeMethod method);
-
 struct OdeOptions {
-  OdeMethod method = OdeMethod::kDopri5;
+  // A registered method (ode_stepper.h): "dopri5" (Dormand-Prince 5(4), Hairer's controller and
+  // RMS error norm), "ode45" (the same pair with MATLAB ode45's norm, initial step and step
+  // factors), "rodas3" (Rosenbrock Rodas3, analytic Jacobian) or "auto" (dopri5 with stiffness
+  // detection, switching to rodas3 when it fires).
+  std::string method = "dopri5";
   double rtol = 1e-6;  // Relative tolerance, > 0.
   double atol = 1e-9;  // Absolute tolerance, > 0 (same for both components).
   // Initial step magnitude; <= 0 or NaN: automatic (Hairer's or ode45's rule).
@@ -105,7 +101,7 @@ struct OdeResult {
   Vec2 y{};
   Vec2 f{};  // f(x, y).
   long steps = 0, rejected_steps = 0, rhs_evals = 0, jacobian_evals = 0;
-  bool stiffness_detected = false;  // kAuto: switched to Rodas3.
+  bool stiffness_detected = false;  // "auto": switched to Rodas3.
   double stiffness_x = kNaN;        // Where it switched.
   double max_h_lambda = 0.0;        // Largest stiffness indicator h|lambda| seen by the DOPRI test.
 };
