@@ -296,287 +296,301 @@ PeakResult FindPeak(const ImpactModelParameters& p, double M, const ImpactSoluti
 
 namespace {
 
-// One run with the local-sum estimate (no companion run, no tolerance warning).
-ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOptions& options) {
-  WallTimer timer;
-  const ImpactModelParameters& p = params;
-  const double M = p.AddedMassMax_kg();
-  const double k = p.Stiffness_N_m();
-  const double mp = p.pounder_mass_kg, g = p.gravity_m_s2, u1 = p.damping_factor_u - 1.0;
-  const double n = p.damping_exponent_n, b = p.sigmoid_rate_b_per_s, T = p.sigmoid_delay_T_s;
-  const bool singular = p.SingularEnd();
-  const double pexp = singular ? n : 1.0;  // s = v^pexp in the end phase.
-  const double rtol = options.EffectiveRtol(), atol = options.EffectiveAtol();
-  const double t1 = T + 4.0 / b;
-  const double tw0 = T - options.sigmoid_window / b, tw1 = T + options.sigmoid_window / b;
-  const double h_window = options.sigmoid_step / b;
+// The constants of one simulation, derived once from the parameters and the solver options.
+struct Simulation {
+  const ImpactModelParameters& p;
+  const ImpactSolverOptions& options;
+  double M, k, mp, g, u1, n, b, T;
+  bool singular;      // The v^-n damping term makes v = 0 a singular end (SingularEnd()).
+  double pexp;        // s = v^pexp in the end phase.
+  double rtol, atol;  // Effective tolerances.
+  double t1;          // Start of the plateau, T + 4 / b.
+  double tw0, tw1;    // The sigmoid window where steps are limited to h_window.
+  double h_window;
+  std::string method;  // The ODE method (ode_stepper.h).
 
-  ImpactRun run;
-  ImpactSummary& sum = run.summary;
-  ImpactSolution& sol = run.solution;
-  sol.end_exponent_p = pexp;
-  sum.added_mass_max_kg = M;
-  sum.t1_s = t1;
-
-  std::string method = "dopri5";
-  if (options.ode45_defaults) {
-    method = "ode45";
-  } else if (options.solver == ImpactSolver::kStiff) {
-    method = "rodas3";
-  } else if (options.solver == ImpactSolver::kAuto) {
-    method = "auto";
+  Simulation(const ImpactModelParameters& params, const ImpactSolverOptions& solver_options)
+      : p(params), options(solver_options) {
+    M = p.AddedMassMax_kg();
+    k = p.Stiffness_N_m();
+    mp = p.pounder_mass_kg;
+    g = p.gravity_m_s2;
+    u1 = p.damping_factor_u - 1.0;
+    n = p.damping_exponent_n;
+    b = p.sigmoid_rate_b_per_s;
+    T = p.sigmoid_delay_T_s;
+    singular = p.SingularEnd();
+    pexp = singular ? n : 1.0;
+    rtol = options.EffectiveRtol();
+    atol = options.EffectiveAtol();
+    t1 = T + 4.0 / b;
+    tw0 = T - options.sigmoid_window / b;
+    tw1 = T + options.sigmoid_window / b;
+    h_window = options.sigmoid_step / b;
+    method = options.ode45_defaults                    ? "ode45"
+             : options.solver == ImpactSolver::kStiff ? "rodas3"
+             : options.solver == ImpactSolver::kAuto  ? "auto"
+                                                      : "dopri5";
   }
+};
 
-  // ---- Time phase: y = (z, v), x = t.
-  OdeSystem time_sys;
-  time_sys.rhs = [&](double t, const Vec2& y) {
-    return Vec2{y[1], EvaluateImpactForces(p, M, t, y[0], y[1]).dv_dt_m_s2};
+// What the integrations report beyond the solution.
+struct IntegrationNotes {
+  bool stiff_switch = false;  // "auto" switched to Rodas3 ...
+  double stiff_at = kNaN;     // ... at this time [s].
+  double max_h_lambda = 0.0;  // Largest stiffness indicator of the Dormand-Prince steps.
+  bool tolerance_trouble = false;
+};
+
+// Time phase: y = (z, v), x = t, Eq. 9 with its analytic Jacobian; v > 0 is the domain.
+OdeSystem TimePhaseSystem(const Simulation& c) {
+  OdeSystem sys;
+  sys.rhs = [&c](double t, const Vec2& y) {
+    return Vec2{y[1], EvaluateImpactForces(c.p, c.M, t, y[0], y[1]).dv_dt_m_s2};
   };
-  time_sys.jacobian = [&](double t, const Vec2& y, Mat2* J, Vec2* ft) {
-    const ImpactForces f = EvaluateImpactForces(p, M, t, y[0], y[1]);
-    const double m = mp + f.added.m_add_kg;
+  sys.jacobian = [&c](double t, const Vec2& y, Mat2* J, Vec2* ft) {
+    const ImpactForces f = EvaluateImpactForces(c.p, c.M, t, y[0], y[1]);
+    const double m = c.mp + f.added.m_add_kg;
     const double v = std::max(std::abs(y[1]), 1e-300);
-    const double vn = n == 0 ? 1.0 : std::pow(v, n);
-    const double a_z = (-k * u1 / vn - k) / m;
-    const double a_v = (-f.added.dm_dt_kg_s + n * k * y[0] * u1 / (vn * v)) / m;
-    const double a_t = (-f.added.d2m_dt2_kg_s2 * y[1] + f.added.dm_dt_kg_s * g -
+    const double vn = c.n == 0 ? 1.0 : std::pow(v, c.n);
+    const double a_z = (-c.k * c.u1 / vn - c.k) / m;
+    const double a_v = (-f.added.dm_dt_kg_s + c.n * c.k * y[0] * c.u1 / (vn * v)) / m;
+    const double a_t = (-f.added.d2m_dt2_kg_s2 * y[1] + f.added.dm_dt_kg_s * c.g -
                         f.dv_dt_m_s2 * f.added.dm_dt_kg_s) /
                        m;
     *J = {0.0, 1.0, a_z, a_v};
     *ft = {0.0, a_t};
   };
-  time_sys.in_domain = [](double, const Vec2& y) { return y[1] > 0.0; };
+  sys.in_domain = [](double, const Vec2& y) { return y[1] > 0.0; };
+  return sys;
+}
 
-  double vmax = p.impact_velocity_m_s;
+// Integrates the time phase until the switch to the end phase (v has fallen below
+// switch_velocity_fraction of its maximum after the sigmoid window, and v = 0 can be reached).
+OdeResult IntegrateTimePhase(const Simulation& c, ImpactRun* run) {
+  const OdeSystem time_sys = TimePhaseSystem(c);
+  double vmax = c.p.impact_velocity_m_s;
   auto end_phase_ready = [&](double t, const Vec2& y, double a) {
     if (!(a < 0.0)) return false;
-    if (singular) return k * y[0] * u1 > 0.0;
+    if (c.singular) return c.k * y[0] * c.u1 > 0.0;
     // Regular end: dv/dt at v = 0 must be negative for v to reach 0.
-    return EvaluateImpactForces(p, M, t, y[0], 0.0).dv_dt_m_s2 < 0.0;
+    return EvaluateImpactForces(c.p, c.M, t, y[0], 0.0).dv_dt_m_s2 < 0.0;
   };
-
   OdeOptions to;
-  to.method = method;
-  to.rtol = rtol;
-  to.atol = atol;
-  to.max_steps = options.max_steps;
-  to.landmarks = {tw0, tw1, t1};
-  to.max_step_at = [&](double t) { return (t >= tw0 && t < tw1) ? h_window : kInf; };
-  if (method == "ode45") to.max_step = 0.1 * options.t_max_s;  // ode45's MaxStep rule
+  to.method = c.method;
+  to.rtol = c.rtol;
+  to.atol = c.atol;
+  to.max_steps = c.options.max_steps;
+  to.landmarks = {c.tw0, c.tw1, c.t1};
+  to.max_step_at = [&](double t) { return (t >= c.tw0 && t < c.tw1) ? c.h_window : kInf; };
+  if (c.method == "ode45") to.max_step = 0.1 * c.options.t_max_s;  // ode45's MaxStep rule
   to.stop_on_domain_exit = true;
   to.stop_after_step = [&](double t, const Vec2& y, const Vec2& f) {
     vmax = std::max(vmax, y[1]);
-    return t >= tw1 && y[1] <= options.switch_velocity_fraction * vmax &&
+    return t >= c.tw1 && y[1] <= c.options.switch_velocity_fraction * vmax &&
            end_phase_ready(t, y, f[1]);
   };
-  const OdeResult r1 = IntegrateOde(time_sys, 0.0, {0.0, p.impact_velocity_m_s}, options.t_max_s,
-                                    to, &sol.time_steps);
-  sum.steps = r1.steps;
-  sum.rejected_steps = r1.rejected_steps;
-  sum.rhs_evals = r1.rhs_evals;
-  sum.jacobian_evals = r1.jacobian_evals;
-  bool stiff_switch = r1.stiffness_detected;
-  double stiff_at = r1.stiffness_x;
-  double max_h_lambda = r1.max_h_lambda;
-  bool tolerance_trouble = false;
-  sol.t_end_s = r1.x;
-  sol.z_end_m = r1.y[0];
-  sol.v_end_m_s = r1.y[1];
+  return IntegrateOde(time_sys, 0.0, {0.0, c.p.impact_velocity_m_s}, c.options.t_max_s, to,
+                      &run->solution.time_steps);
+}
 
-  bool do_end_phase = false;
+// Records how the time phase ended; true if the end phase should follow.
+bool TimePhaseEnded(const Simulation& c, const OdeResult& r1, ImpactSummary* sum,
+                    IntegrationNotes* notes) {
   switch (r1.status) {
     case OdeStatus::kReachedEnd:
-      sum.stop_reason =
+      sum->stop_reason =
           fmt::format("v did not reach 0 by t_max = {} s (v = {} m/s, z = {} m): no crater depth",
-                      Num(options.t_max_s), Num(r1.y[1]), Num(r1.y[0]));
-      sum.warnings.push_back(sum.stop_reason);
-      break;
-    case OdeStatus::kStoppedByCallback: do_end_phase = true; break;
+                      Num(c.options.t_max_s), Num(r1.y[1]), Num(r1.y[0]));
+      sum->warnings.push_back(sum->stop_reason);
+      return false;
+    case OdeStatus::kStoppedByCallback: return true;
     case OdeStatus::kLeftDomain:
-      if (r1.f[1] < 0.0) {
-        do_end_phase = true;
-      } else {
-        sum.stop_reason = fmt::format(
-            "a step would have made v <= 0 at t = {} s while dv/dt >= 0; stopped there", Num(r1.x));
-        sum.warnings.push_back(sum.stop_reason);
-      }
-      break;
+      if (r1.f[1] < 0.0) return true;
+      sum->stop_reason = fmt::format(
+          "a step would have made v <= 0 at t = {} s while dv/dt >= 0; stopped there", Num(r1.x));
+      sum->warnings.push_back(sum->stop_reason);
+      return false;
     case OdeStatus::kStepSizeUnderflow:
     case OdeStatus::kMaxSteps:
-      tolerance_trouble = true;
-      sum.stop_reason = fmt::format("tolerance not met: {} at t = {} s in the time phase",
-                                    ToString(r1.status), Num(r1.x));
-      sum.warnings.push_back(sum.stop_reason);
-      if (r1.f[1] < 0.0 && r1.y[1] > 0.0) do_end_phase = true;
-      break;
+      notes->tolerance_trouble = true;
+      sum->stop_reason = fmt::format("tolerance not met: {} at t = {} s in the time phase",
+                                     ToString(r1.status), Num(r1.x));
+      sum->warnings.push_back(sum->stop_reason);
+      return r1.f[1] < 0.0 && r1.y[1] > 0.0;
     case OdeStatus::kNonFiniteRhs:
-      sum.stop_reason = fmt::format(
+      sum->stop_reason = fmt::format(
           "dv/dt is not finite at t = 0 (z = 0, v = {} m/s): the parameters overflow Eq. 9",
           Num(r1.y[1]));
-      sum.warnings.push_back(sum.stop_reason);
-      break;
-  }
-
-  // ---- End phase: y = (t, z), x = s = v^pexp, from s0 down to 0.
-  if (do_end_phase) {
-    sum.t_switch_s = r1.x;
-    OdeSystem end_sys;
-    // Returns q = v^n dv/dt (singular) or dv/dt (regular) and its partial derivatives.
-    struct QTerms {
-      double q, q_t, q_z, q_s, v, dv_ds;
-    };
-    auto qterms = [&](double s, const Vec2& y) {
-      QTerms r{};
-      const double t = y[0], z = y[1];
-      const double sv = std::max(s, 0.0);
-      const AddedMass am = AddedMassAt(M, b, T, t);
-      const double m = mp + am.m_add_kg;
-      if (singular) {
-        r.v = std::pow(sv, 1.0 / n);
-        r.dv_ds = std::pow(sv, 1.0 / n - 1.0) / n;
-        const double G = -am.dm_dt_kg_s * r.v - k * z + m * g;
-        const double P = sv * G - k * z * u1;
-        r.q = P / m;
-        const double P_t = sv * (-am.d2m_dt2_kg_s2 * r.v + am.dm_dt_kg_s * g);
-        r.q_t = P_t / m - P * am.dm_dt_kg_s / (m * m);
-        r.q_z = (-sv * k - k * u1) / m;
-        r.q_s = (G - am.dm_dt_kg_s * r.v / n) / m;
-      } else {
-        r.v = sv;
-        r.dv_ds = 1.0;
-        const ImpactForces f = EvaluateImpactForces(p, M, t, z, sv);
-        r.q = f.dv_dt_m_s2;
-        const double vn = n == 0 ? 1.0 : std::pow(std::max(sv, 1e-300), n);
-        r.q_z = (-k * u1 / vn - k) / m;
-        r.q_s = (-am.dm_dt_kg_s) / m;  // no v^-n term here (regular end)
-        r.q_t = (-am.d2m_dt2_kg_s2 * sv + am.dm_dt_kg_s * g - r.q * am.dm_dt_kg_s) / m;
-      }
-      return r;
-    };
-    end_sys.rhs = [&](double s, const Vec2& y) {
-      const QTerms q = qterms(s, y);
-      // singular: dt/ds = (dv/ds) / a = v / (n q); regular: dt/ds = 1 / a.
-      const double dtds = singular ? q.v / (n * q.q) : 1.0 / q.q;
-      return Vec2{dtds, q.v * dtds};
-    };
-    end_sys.jacobian = [&](double s, const Vec2& y, Mat2* J, Vec2* fs) {
-      const QTerms q = qterms(s, y);
-      double f1, f1_t, f1_z, f1_s;
-      if (singular) {
-        f1 = q.v / (n * q.q);
-        const double c = -q.v / (n * q.q * q.q);
-        f1_t = c * q.q_t;
-        f1_z = c * q.q_z;
-        f1_s = q.dv_ds / (n * q.q) + c * q.q_s;
-      } else {
-        f1 = 1.0 / q.q;
-        const double c = -1.0 / (q.q * q.q);
-        f1_t = c * q.q_t;
-        f1_z = c * q.q_z;
-        f1_s = c * q.q_s;
-      }
-      *J = {f1_t, f1_z, q.v * f1_t, q.v * f1_z};
-      *fs = {f1_s, q.dv_ds * f1 + q.v * f1_s};
-    };
-    end_sys.in_domain = [&](double s, const Vec2& y) {
-      const double q = qterms(s, y).q;
-      return q < 0.0 && std::isfinite(q);
-    };
-    double last_t = r1.x;
-    double last_dtds = 0.0;
-    OdeOptions eo;
-    eo.method = (method == "auto" && stiff_switch) ? "rodas3" : method;
-    eo.rtol = rtol;
-    eo.atol = atol;
-    eo.max_steps = options.max_steps;
-    // Never step over the sigmoid in time either (only matters if the switch came early).
-    eo.max_step_at = [&](double) {
-      if (last_t < tw1 && last_dtds != 0.0) return h_window / std::abs(last_dtds);
-      return kInf;
-    };
-    eo.stop_after_step = [&](double, const Vec2& y, const Vec2& f) {
-      last_t = y[0];
-      last_dtds = f[0];
+      sum->warnings.push_back(sum->stop_reason);
       return false;
-    };
-    const double s0 = std::pow(r1.y[1], pexp);
-    {
-      const Vec2 f0 = end_sys.rhs(s0, {r1.x, r1.y[0]});
-      last_dtds = f0[0];
-    }
-    const OdeResult r2 = IntegrateOde(end_sys, s0, {r1.x, r1.y[0]}, 0.0, eo, &sol.end_steps);
-    sum.steps += r2.steps;
-    sum.end_phase_steps = r2.steps;
-    sum.rejected_steps += r2.rejected_steps;
-    sum.rhs_evals += r2.rhs_evals + 1;
-    sum.jacobian_evals += r2.jacobian_evals;
-    if (r2.stiffness_detected && !stiff_switch) {
-      stiff_switch = true;
-      stiff_at = r2.y[0];
-    }
-    max_h_lambda = std::max(max_h_lambda, r2.max_h_lambda);
-    sol.t_end_s = r2.y[0];
-    sol.z_end_m = r2.y[1];
-    sol.v_end_m_s = std::pow(std::max(r2.x, 0.0), 1.0 / pexp);
-    if (r2.status == OdeStatus::kReachedEnd) {
-      sum.stopped = true;
-      sol.v_end_m_s = 0.0;
-    } else {
-      tolerance_trouble = true;
-      sum.stop_reason = fmt::format(
-          "tolerance not met: {} in the end phase at v = {} m/s (t = {} s); v = 0 not reached",
-          ToString(r2.status), Num(sol.v_end_m_s), Num(r2.y[0]));
-      sum.warnings.push_back(sum.stop_reason);
-    }
   }
+  return false;
+}
 
-  // ---- Summary.
-  if (sum.stopped) sum.stop_reason = "v = 0 reached";
-  if (sum.stop_reason.empty()) sum.stop_reason = "v = 0 not reached";
-  sum.t_reached_s = sol.t_end_s;
-  sum.t_end_s = sum.stopped ? sol.t_end_s : kNaN;
-  const double g_unit = g > 0 ? g : 9.81;
-  if (sum.stopped) {
-    sum.crater_depth_m = sol.z_end_m;
-    sum.relative_penetration = sol.z_end_m / p.width_m;
+// End phase: q = v^n dv/dt (singular end) or dv/dt (regular end) at (s, y = (t, z)), and its
+// partial derivatives.
+struct QTerms {
+  double q, q_t, q_z, q_s, v, dv_ds;
+};
+
+QTerms EndPhaseTerms(const Simulation& c, double s, const Vec2& y) {
+  QTerms r{};
+  const double t = y[0], z = y[1];
+  const double sv = std::max(s, 0.0);
+  const AddedMass am = AddedMassAt(c.M, c.b, c.T, t);
+  const double m = c.mp + am.m_add_kg;
+  const double n = c.n, k = c.k, u1 = c.u1, g = c.g;
+  if (c.singular) {
+    r.v = std::pow(sv, 1.0 / n);
+    r.dv_ds = std::pow(sv, 1.0 / n - 1.0) / n;
+    const double G = -am.dm_dt_kg_s * r.v - k * z + m * g;
+    const double P = sv * G - k * z * u1;
+    r.q = P / m;
+    const double P_t = sv * (-am.d2m_dt2_kg_s2 * r.v + am.dm_dt_kg_s * g);
+    r.q_t = P_t / m - P * am.dm_dt_kg_s / (m * m);
+    r.q_z = (-sv * k - k * u1) / m;
+    r.q_s = (G - am.dm_dt_kg_s * r.v / n) / m;
+  } else {
+    r.v = sv;
+    r.dv_ds = 1.0;
+    const ImpactForces f = EvaluateImpactForces(c.p, c.M, t, z, sv);
+    r.q = f.dv_dt_m_s2;
+    const double vn = n == 0 ? 1.0 : std::pow(std::max(sv, 1e-300), n);
+    r.q_z = (-k * u1 / vn - k) / m;
+    r.q_s = (-am.dm_dt_kg_s) / m;  // no v^-n term here (regular end)
+    r.q_t = (-am.d2m_dt2_kg_s2 * sv + am.dm_dt_kg_s * g - r.q * am.dm_dt_kg_s) / m;
   }
-  // Error estimate: sensitivity-weighted sum of the local error estimates.
-  {
-    double ez = 0.0, et = 0.0;
-    const double t_end = sol.t_end_s;
-    for (const OdeStep& st : sol.time_steps) {
-      const double te = st.x0 + st.h;
-      const double remaining = std::max(t_end - te, 0.0);
-      const double v = std::max(st.y1[1], 1e-300);
-      ez += std::abs(st.local_error[0]) + std::abs(st.local_error[1]) * remaining;
-      et += std::abs(st.local_error[1]) * remaining / v;
+  return r;
+}
+
+// End phase: y = (t, z), x = s = v^pexp, integrated from s0 down to 0; q < 0 is the domain.
+OdeSystem EndPhaseSystem(const Simulation& c) {
+  OdeSystem sys;
+  sys.rhs = [&c](double s, const Vec2& y) {
+    const QTerms q = EndPhaseTerms(c, s, y);
+    // singular: dt/ds = (dv/ds) / a = v / (n q); regular: dt/ds = 1 / a.
+    const double dtds = c.singular ? q.v / (c.n * q.q) : 1.0 / q.q;
+    return Vec2{dtds, q.v * dtds};
+  };
+  sys.jacobian = [&c](double s, const Vec2& y, Mat2* J, Vec2* fs) {
+    const QTerms q = EndPhaseTerms(c, s, y);
+    double f1, f1_t, f1_z, f1_s;
+    if (c.singular) {
+      f1 = q.v / (c.n * q.q);
+      const double d = -q.v / (c.n * q.q * q.q);
+      f1_t = d * q.q_t;
+      f1_z = d * q.q_z;
+      f1_s = q.dv_ds / (c.n * q.q) + d * q.q_s;
+    } else {
+      f1 = 1.0 / q.q;
+      const double d = -1.0 / (q.q * q.q);
+      f1_t = d * q.q_t;
+      f1_z = d * q.q_z;
+      f1_s = d * q.q_s;
     }
-    for (const OdeStep& st : sol.end_steps) {
-      et += std::abs(st.local_error[0]);
-      ez += std::abs(st.local_error[1]);
-    }
-    const double zref = std::abs(sol.z_end_m), tref = std::abs(t_end);
-    sum.error_estimate_local =
-        std::max({zref > 0 ? ez / zref : 0.0, tref > 0 && sum.stopped ? et / tref : 0.0,
-                  RoundOffFloor(sum.steps)});
-    sum.error_estimate = sum.error_estimate_local;
-    sum.error_estimator = "local";
+    *J = {f1_t, f1_z, q.v * f1_t, q.v * f1_z};
+    *fs = {f1_s, q.dv_ds * f1 + q.v * f1_s};
+  };
+  sys.in_domain = [&c](double s, const Vec2& y) {
+    const double q = EndPhaseTerms(c, s, y).q;
+    return q < 0.0 && std::isfinite(q);
+  };
+  return sys;
+}
+
+// Integrates the end phase from where the time phase stopped (r1) to v = 0.
+void IntegrateEndPhase(const Simulation& c, const OdeResult& r1, ImpactRun* run,
+                       IntegrationNotes* notes) {
+  ImpactSummary& sum = run->summary;
+  ImpactSolution& sol = run->solution;
+  sum.t_switch_s = r1.x;
+  const OdeSystem end_sys = EndPhaseSystem(c);
+  double last_t = r1.x;
+  double last_dtds = 0.0;
+  OdeOptions eo;
+  eo.method = (c.method == "auto" && notes->stiff_switch) ? "rodas3" : c.method;
+  eo.rtol = c.rtol;
+  eo.atol = c.atol;
+  eo.max_steps = c.options.max_steps;
+  // Never step over the sigmoid in time either (only matters if the switch came early).
+  eo.max_step_at = [&](double) {
+    if (last_t < c.tw1 && last_dtds != 0.0) return c.h_window / std::abs(last_dtds);
+    return kInf;
+  };
+  eo.stop_after_step = [&](double, const Vec2& y, const Vec2& f) {
+    last_t = y[0];
+    last_dtds = f[0];
+    return false;
+  };
+  const double s0 = std::pow(r1.y[1], c.pexp);
+  last_dtds = end_sys.rhs(s0, {r1.x, r1.y[0]})[0];
+  const OdeResult r2 = IntegrateOde(end_sys, s0, {r1.x, r1.y[0]}, 0.0, eo, &sol.end_steps);
+  sum.steps += r2.steps;
+  sum.end_phase_steps = r2.steps;
+  sum.rejected_steps += r2.rejected_steps;
+  sum.rhs_evals += r2.rhs_evals + 1;
+  sum.jacobian_evals += r2.jacobian_evals;
+  if (r2.stiffness_detected && !notes->stiff_switch) {
+    notes->stiff_switch = true;
+    notes->stiff_at = r2.y[0];
   }
-  // Peak.
-  const PeakResult peak = FindPeak(p, M, sol);
-  sum.peak_deceleration_g = peak.value / g_unit;
-  sum.t_peak_s = peak.t;
+  notes->max_h_lambda = std::max(notes->max_h_lambda, r2.max_h_lambda);
+  sol.t_end_s = r2.y[0];
+  sol.z_end_m = r2.y[1];
+  sol.v_end_m_s = std::pow(std::max(r2.x, 0.0), 1.0 / c.pexp);
+  if (r2.status == OdeStatus::kReachedEnd) {
+    sum.stopped = true;
+    sol.v_end_m_s = 0.0;
+  } else {
+    notes->tolerance_trouble = true;
+    sum.stop_reason = fmt::format(
+        "tolerance not met: {} in the end phase at v = {} m/s (t = {} s); v = 0 not reached",
+        ToString(r2.status), Num(sol.v_end_m_s), Num(r2.y[0]));
+    sum.warnings.push_back(sum.stop_reason);
+  }
+}
+
+// Error estimate: sensitivity-weighted sum of the local error estimates.
+void EstimateErrorFromLocalErrors(const ImpactSolution& sol, ImpactSummary* sum) {
+  double ez = 0.0, et = 0.0;
+  const double t_end = sol.t_end_s;
+  for (const OdeStep& st : sol.time_steps) {
+    const double te = st.x0 + st.h;
+    const double remaining = std::max(t_end - te, 0.0);
+    const double v = std::max(st.y1[1], 1e-300);
+    ez += std::abs(st.local_error[0]) + std::abs(st.local_error[1]) * remaining;
+    et += std::abs(st.local_error[1]) * remaining / v;
+  }
+  for (const OdeStep& st : sol.end_steps) {
+    et += std::abs(st.local_error[0]);
+    ez += std::abs(st.local_error[1]);
+  }
+  const double zref = std::abs(sol.z_end_m), tref = std::abs(t_end);
+  sum->error_estimate_local =
+      std::max({zref > 0 ? ez / zref : 0.0, tref > 0 && sum->stopped ? et / tref : 0.0,
+                RoundOffFloor(sum->steps)});
+  sum->error_estimate = sum->error_estimate_local;
+  sum->error_estimator = "local";
+}
+
+// Peak deceleration (FindPeak), plateau deceleration and momentum ratio at t1.
+void AddKeyFigures(const Simulation& c, const ImpactSolution& sol, double g_unit,
+                   ImpactSummary* sum) {
+  const PeakResult peak = FindPeak(c.p, c.M, sol);
+  sum->peak_deceleration_g = peak.value / g_unit;
+  sum->t_peak_s = peak.t;
   if (std::isnan(peak.value) && !sol.time_steps.empty()) {
-    sum.warnings.push_back(
-        sum.stopped
+    sum->warnings.push_back(
+        sum->stopped
             ? "no distinct peak: -dv/dt has no interior local maximum on (0, t_end) (the pounder "
               "is still accelerating during the peak stage); peak deceleration is NaN"
             : fmt::format("no distinct peak: -dv/dt has no interior local maximum on the part "
                           "solved, (0, {} s); peak deceleration is NaN",
                           Num(sol.t_end_s)));
   }
-  // Plateau and momentum ratio at t1 = T + 4 / b.
-  if (sum.stopped && t1 < sol.t_end_s) {
+  const double t1 = c.t1;
+  if (sum->stopped && t1 < sol.t_end_s) {
     ImpactState s1;
     bool exact = false;
     for (const OdeStep& st : sol.time_steps) {
@@ -587,60 +601,106 @@ ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOp
       }
     }
     if (!exact) s1 = sol.StateAt(t1);
-    sum.v_t1_m_s = s1.v_m_s;
-    sum.plateau_deceleration_g = s1.v_m_s / (sol.t_end_s - t1) / g_unit;
-    sum.momentum_ratio =
-        AddedMassAt(M, b, T, t1).m_add_kg * s1.v_m_s / (mp * p.impact_velocity_m_s);
-  } else if (sum.stopped) {
-    sum.warnings.push_back(fmt::format(
+    sum->v_t1_m_s = s1.v_m_s;
+    sum->plateau_deceleration_g = s1.v_m_s / (sol.t_end_s - t1) / g_unit;
+    sum->momentum_ratio =
+        AddedMassAt(c.M, c.b, c.T, t1).m_add_kg * s1.v_m_s / (c.mp * c.p.impact_velocity_m_s);
+  } else if (sum->stopped) {
+    sum->warnings.push_back(fmt::format(
         "the pounder stopped at t_end = {} s before t1 = T + 4/b = {} s: no plateau deceleration "
         "or momentum ratio",
         Num(sol.t_end_s), Num(t1)));
   }
-  // Physical warnings.
-  if (sum.stopped && singular) {
-    const double m_end = mp + AddedMassAt(M, b, T, sol.t_end_s).m_add_kg;
-    const double friction = k * sol.z_end_m, weight = m_end * g;
+}
+
+// Physical warnings: stopped only by the damping term, penetration beyond the bed.
+void AddPhysicalWarnings(const Simulation& c, const ImpactSolution& sol, ImpactSummary* sum) {
+  if (sum->stopped && c.singular) {
+    const double m_end = c.mp + AddedMassAt(c.M, c.b, c.T, sol.t_end_s).m_add_kg;
+    const double friction = c.k * sol.z_end_m, weight = m_end * c.g;
     if (friction < weight)
-      sum.warnings.push_back(fmt::format(
+      sum->warnings.push_back(fmt::format(
           "stopped only by the v^-n damping term: friction k z = {} N is below the weight "
           "(m_p + m_add) g = {} N at v = 0",
           Num(friction), Num(weight)));
   }
-  const double z_final = sum.stopped ? sum.crater_depth_m : sol.z_end_m;
-  if (z_final > p.bed_height_m)
-    sum.warnings.push_back(fmt::format(
+  const double z_final = sum->stopped ? sum->crater_depth_m : sol.z_end_m;
+  if (z_final > c.p.bed_height_m)
+    sum->warnings.push_back(fmt::format(
         "penetration {} m is beyond the bed height {} m (the model's soil is unbounded below)",
-        Num(z_final), Num(p.bed_height_m)));
-  if (tolerance_trouble) sum.error_estimate = std::numeric_limits<double>::infinity();
+        Num(z_final), Num(c.p.bed_height_m)));
+}
 
-  // Which solver ran and why.
-  if (method == "ode45") {
-    sum.solver = "ode45(dopri5)";
-    sum.solver_reason = fmt::format(
-        "requested --ode45-defaults: Dormand-Prince 5(4) with MATLAB ode45's error norm, initial "
+// Which solver ran and why.
+void DescribeSolver(const Simulation& c, const IntegrationNotes& notes, ImpactSummary* sum) {
+  if (c.method == "ode45") {
+    sum->solver = "ode45(dopri5)";
+    sum->solver_reason = fmt::format(
+        "requested ode45_defaults: Dormand-Prince 5(4) with MATLAB ode45's error norm, initial "
         "step and step factors, RelTol {}, AbsTol {}",
-        Num(rtol), Num(atol));
-  } else if (method == "rodas3") {
-    sum.solver = "rodas3";
-    sum.solver_reason = "requested: stiff solver (Rosenbrock Rodas3, analytic Jacobian)";
-  } else if (method == "dopri5") {
-    sum.solver = "dopri5";
-    sum.solver_reason = "requested: Dormand-Prince 5(4)";
-  } else if (stiff_switch) {
-    sum.solver = "auto(dopri5->rodas3)";
-    sum.solver_reason = fmt::format(
+        Num(c.rtol), Num(c.atol));
+  } else if (c.method == "rodas3") {
+    sum->solver = "rodas3";
+    sum->solver_reason = "requested: stiff solver (Rosenbrock Rodas3, analytic Jacobian)";
+  } else if (c.method == "dopri5") {
+    sum->solver = "dopri5";
+    sum->solver_reason = "requested: Dormand-Prince 5(4)";
+  } else if (notes.stiff_switch) {
+    sum->solver = "auto(dopri5->rodas3)";
+    sum->solver_reason = fmt::format(
         "Hairer's stiffness test fired (h|lambda| > 3.25 on 15 accepted Dormand-Prince steps) at "
         "t = {} s; the rest was integrated by Rodas3",
-        Num(stiff_at));
+        Num(notes.stiff_at));
   } else {
-    sum.solver = "auto(dopri5)";
-    sum.solver_reason = fmt::format(
+    sum->solver = "auto(dopri5)";
+    sum->solver_reason = fmt::format(
         "no stiffness detected (Hairer's test did not fire: it needs h|lambda| > 3.25 on 15 "
         "accepted Dormand-Prince steps without 6 below it; largest h|lambda| {:.3g}): the step "
         "limit {} s near the sigmoid keeps Dormand-Prince stable",
-        max_h_lambda, Num(h_window));
+        notes.max_h_lambda, Num(c.h_window));
   }
+}
+
+// One run with the local-sum estimate (no companion run, no tolerance warning): the time phase,
+// the end phase in s = v^pexp when the pounder is about to stop, then the key figures.
+ImpactRun SimulateOnce(const ImpactModelParameters& params, const ImpactSolverOptions& options) {
+  WallTimer timer;
+  const Simulation c(params, options);
+  ImpactRun run;
+  ImpactSummary& sum = run.summary;
+  ImpactSolution& sol = run.solution;
+  sol.end_exponent_p = c.pexp;
+  sum.added_mass_max_kg = c.M;
+  sum.t1_s = c.t1;
+
+  const OdeResult r1 = IntegrateTimePhase(c, &run);
+  sum.steps = r1.steps;
+  sum.rejected_steps = r1.rejected_steps;
+  sum.rhs_evals = r1.rhs_evals;
+  sum.jacobian_evals = r1.jacobian_evals;
+  IntegrationNotes notes;
+  notes.stiff_switch = r1.stiffness_detected;
+  notes.stiff_at = r1.stiffness_x;
+  notes.max_h_lambda = r1.max_h_lambda;
+  sol.t_end_s = r1.x;
+  sol.z_end_m = r1.y[0];
+  sol.v_end_m_s = r1.y[1];
+  if (TimePhaseEnded(c, r1, &sum, &notes)) IntegrateEndPhase(c, r1, &run, &notes);
+
+  if (sum.stopped) sum.stop_reason = "v = 0 reached";
+  if (sum.stop_reason.empty()) sum.stop_reason = "v = 0 not reached";
+  sum.t_reached_s = sol.t_end_s;
+  sum.t_end_s = sum.stopped ? sol.t_end_s : kNaN;
+  const double g_unit = c.g > 0 ? c.g : 9.81;
+  if (sum.stopped) {
+    sum.crater_depth_m = sol.z_end_m;
+    sum.relative_penetration = sol.z_end_m / params.width_m;
+  }
+  EstimateErrorFromLocalErrors(sol, &sum);
+  AddKeyFigures(c, sol, g_unit, &sum);
+  AddPhysicalWarnings(c, sol, &sum);
+  if (notes.tolerance_trouble) sum.error_estimate = std::numeric_limits<double>::infinity();
+  DescribeSolver(c, notes, &sum);
   sum.wall_time_s = timer.ElapsedSeconds();
   sum.primary_wall_time_s = sum.wall_time_s;
   return run;

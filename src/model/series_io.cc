@@ -23,7 +23,7 @@ void WriteImpactSeries(const std::string& path, const ImpactModelParameters& par
     return;
   }
   if (!EndsWithIgnoreCase(path, ".h5") && !EndsWithIgnoreCase(path, ".hdf5"))
-    throw Error(ErrorKind::kInvalidValue, "-o", path, "a file name ending in .csv, .h5 or .hdf5");
+    throw Error(ErrorKind::kInvalidValue, "path", path, "a file name ending in .csv, .h5 or .hdf5");
   const std::vector<std::string> units = {"s",    "m", "m/s", "m/s^2", "kg",
                                           "kg/s", "N", "N",   "N",     "N"};
   const std::vector<std::string> what = {"time since contact",
