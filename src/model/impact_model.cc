@@ -327,7 +327,7 @@ struct Simulation {
     tw0 = T - options.sigmoid_window / b;
     tw1 = T + options.sigmoid_window / b;
     h_window = options.sigmoid_step / b;
-    method = options.ode45_defaults                    ? "ode45"
+    method = options.ode45_defaults                   ? "ode45"
              : options.solver == ImpactSolver::kStiff ? "rodas3"
              : options.solver == ImpactSolver::kAuto  ? "auto"
                                                       : "dopri5";

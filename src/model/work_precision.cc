@@ -169,6 +169,140 @@ void WorkPrecisionOptions::Check() const {
              fmt::format("{}", timing_budget_s), ">= 0 s");
 }
 
+namespace {
+
+void FillCost(WorkPrecisionRow& row, const ImpactSummary& s, double time) {
+  row.solver_ran = s.solver;
+  row.error_estimate = s.error_estimate_companion;
+  row.error_estimate_local = s.error_estimate_local;
+  row.wall_time_s = time;
+  row.rhs_evals = s.rhs_evals;
+  row.steps = s.steps;
+  row.jacobian_evals = s.jacobian_evals;
+  row.warnings = static_cast<int>(s.warnings.size());
+}
+
+// The two cases with exact solutions and their exact figures.
+struct ExactCases {
+  // (a) conserved momentum (K = 0, g = 0), compared at a fixed end time.
+  ImpactModelParameters momentum;
+  double t_fixed = 0.02;
+  ImpactState momentum_state;
+  double momentum_peak_g = kNaN;
+  // (b) harmonic (M = 0, u = 1).
+  ImpactModelParameters harmonic;
+  HarmonicStop harmonic_stop;
+  double harmonic_plateau_g = kNaN;
+};
+
+ExactCases MakeExactCases() {
+  ExactCases e;
+  e.momentum = DefaultCase();
+  e.momentum.friction_K = 0.0;
+  e.momentum.gravity_m_s2 = 0.0;
+  e.momentum_state = ExactConservedMomentum(e.momentum, e.t_fixed);
+  {
+    // The exact peak of -dv/dt = p0 (dm/dt) / m^2 by golden-section search on the closed form.
+    const ImpactModelParameters& m = e.momentum;
+    const double M = m.AddedMassMax_kg(), mp = m.pounder_mass_kg;
+    const double b = m.sigmoid_rate_b_per_s, T = m.sigmoid_delay_T_s;
+    const double p0 = (mp + AddedMassAt(M, b, T, 0.0).m_add_kg) * m.impact_velocity_m_s;
+    auto decel = [&](double t) {
+      const AddedMass am = AddedMassAt(M, b, T, t);
+      return p0 * am.dm_dt_kg_s / ((mp + am.m_add_kg) * (mp + am.m_add_kg));
+    };
+    e.momentum_peak_g =
+        decel(GoldenSectionMaximize(decel, T - 5.0 / b, T + 5.0 / b, {.max_iterations = 300})) /
+        9.81;
+  }
+  e.harmonic = DefaultCase();
+  e.harmonic.added_mass_kg = 0.0;
+  e.harmonic.damping_factor_u = 1.0;
+  e.harmonic_stop = ExactHarmonicStop(e.harmonic);
+  {
+    const ImpactModelParameters& h = e.harmonic;
+    const double k = h.Stiffness_N_m(), m = h.pounder_mass_kg;
+    const double w = std::sqrt(k / m), delta = m * h.gravity_m_s2 / k;
+    const double t1 = h.sigmoid_delay_T_s + 4.0 / h.sigmoid_rate_b_per_s;
+    const double v1 = delta * w * std::sin(w * t1) + h.impact_velocity_m_s * std::cos(w * t1);
+    e.harmonic_plateau_g = v1 / (e.harmonic_stop.t_end_s - t1) / h.gravity_m_s2;
+  }
+  return e;
+}
+
+WorkPrecisionRow MomentumExactRow(const ExactCases& e, const std::string& solver, double tol,
+                                  const ImpactSolverOptions& so, double timing_budget_s) {
+  ImpactSolverOptions o = so;
+  o.t_max_s = e.t_fixed;
+  double time = 0;
+  const ImpactRun run = TimedRun(e.momentum, o, timing_budget_s, &time);
+  WorkPrecisionRow row{"momentum-exact", solver, "", tol};
+  row.depth_error = RelErr(run.solution.z_end_m, e.momentum_state.z_m);
+  row.t_end_error = RelErr(run.solution.v_end_m_s, e.momentum_state.v_m_s);
+  row.peak_error = RelErr(run.summary.peak_deceleration_g, e.momentum_peak_g);
+  row.plateau_error = kNaN;
+  FillCost(row, run.summary, time);  // Only warning expected: v does not reach 0 by t_max.
+  return row;
+}
+
+WorkPrecisionRow HarmonicExactRow(const ExactCases& e, const std::string& solver, double tol,
+                                  const ImpactSolverOptions& so, double timing_budget_s) {
+  double time = 0;
+  const ImpactRun run = TimedRun(e.harmonic, so, timing_budget_s, &time);
+  WorkPrecisionRow row{"harmonic-exact", solver, "", tol};
+  row.depth_error = RelErr(run.summary.crater_depth_m, e.harmonic_stop.crater_depth_m);
+  row.t_end_error = RelErr(run.summary.t_end_s, e.harmonic_stop.t_end_s);
+  row.peak_error = kNaN;
+  row.plateau_error = RelErr(run.summary.plateau_deceleration_g, e.harmonic_plateau_g);
+  FillCost(row, run.summary, time);
+  return row;
+}
+
+WorkPrecisionRow DefaultCaseRow(const ImpactSummary& ref, const std::string& solver, double tol,
+                                const ImpactSolverOptions& so, double timing_budget_s) {
+  double time = 0;
+  const ImpactRun run = TimedRun(DefaultCase(), so, timing_budget_s, &time);
+  WorkPrecisionRow row{"default", solver, "", tol};
+  row.depth_error = RelErr(run.summary.crater_depth_m, ref.crater_depth_m);
+  row.t_end_error = RelErr(run.summary.t_end_s, ref.t_end_s);
+  row.peak_error = RelErr(run.summary.peak_deceleration_g, ref.peak_deceleration_g);
+  row.plateau_error = RelErr(run.summary.plateau_deceleration_g, ref.plateau_deceleration_g);
+  FillCost(row, run.summary, time);
+  return row;
+}
+
+// The worst errors over the 27 combinations, costs summed.
+WorkPrecisionRow Table1MaxRow(const std::vector<Table1Combination>& combos,
+                              const std::vector<ImpactSummary>& refs, const std::string& solver,
+                              double tol, const ImpactSolverOptions& so, ProgressBar* bar) {
+  WorkPrecisionRow row{"table1-max", solver, "", tol};
+  row.error_estimate = 0.0;
+  for (std::size_t i = 0; i < combos.size(); ++i) {
+    double time = 0;
+    const ImpactRun run = TimedRun(combos[i].params, so, 0.0, &time);
+    const ImpactSummary& s = run.summary;
+    const ImpactSummary& ref = refs[i];
+    row.depth_error = std::max(row.depth_error, RelErr(s.crater_depth_m, ref.crater_depth_m));
+    row.t_end_error = std::max(row.t_end_error, RelErr(s.t_end_s, ref.t_end_s));
+    row.peak_error =
+        std::max(row.peak_error, RelErr(s.peak_deceleration_g, ref.peak_deceleration_g));
+    row.plateau_error =
+        std::max(row.plateau_error, RelErr(s.plateau_deceleration_g, ref.plateau_deceleration_g));
+    row.error_estimate = std::max(row.error_estimate, s.error_estimate_companion);
+    row.error_estimate_local = std::max(row.error_estimate_local, s.error_estimate_local);
+    row.wall_time_s += time;
+    row.rhs_evals += s.rhs_evals;
+    row.steps += s.steps;
+    row.jacobian_evals += s.jacobian_evals;
+    row.warnings += static_cast<int>(s.warnings.size());
+    row.solver_ran = s.solver;
+    bar->Advance();
+  }
+  return row;
+}
+
+}  // namespace
+
 std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& options) {
   options.Check();
   std::vector<WorkPrecisionRow> rows;
@@ -176,134 +310,31 @@ std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& optio
       (options.exact_cases ? 2 : 0) + (options.default_case ? 1 : 0) + (options.table1 ? 27 : 0);
   ProgressBar bar("work-precision",
                   per_setting * options.solvers.size() * options.tolerances.size());
-
-  auto fill_cost = [](WorkPrecisionRow& row, const ImpactSummary& s, double time) {
-    row.solver_ran = s.solver;
-    row.error_estimate = s.error_estimate_companion;
-    row.error_estimate_local = s.error_estimate_local;
-    row.wall_time_s = time;
-    row.rhs_evals = s.rhs_evals;
-    row.steps = s.steps;
-    row.jacobian_evals = s.jacobian_evals;
-    row.warnings = static_cast<int>(s.warnings.size());
-  };
-
-  // Exact case (a): conserved momentum (K = 0, g = 0), compared at a fixed end time.
-  ImpactModelParameters momentum = DefaultCase();
-  momentum.friction_K = 0.0;
-  momentum.gravity_m_s2 = 0.0;
-  const double t_fixed = 0.02;
-  const ImpactState exact_a = ExactConservedMomentum(momentum, t_fixed);
-  // The exact peak of -dv/dt = p0 (dm/dt) / m^2 by golden-section search on the closed form.
-  double exact_a_peak = kNaN;
-  {
-    const double M = momentum.AddedMassMax_kg(), mp = momentum.pounder_mass_kg;
-    const double b = momentum.sigmoid_rate_b_per_s, T = momentum.sigmoid_delay_T_s;
-    const double p0 = (mp + AddedMassAt(M, b, T, 0.0).m_add_kg) * momentum.impact_velocity_m_s;
-    auto decel = [&](double t) {
-      const AddedMass am = AddedMassAt(M, b, T, t);
-      return p0 * am.dm_dt_kg_s / ((mp + am.m_add_kg) * (mp + am.m_add_kg));
-    };
-    exact_a_peak =
-        decel(GoldenSectionMaximize(decel, T - 5.0 / b, T + 5.0 / b, {.max_iterations = 300})) /
-        9.81;
-  }
-  // Exact case (b): harmonic (M = 0, u = 1).
-  ImpactModelParameters harmonic = DefaultCase();
-  harmonic.added_mass_kg = 0.0;
-  harmonic.damping_factor_u = 1.0;
-  const HarmonicStop exact_b = ExactHarmonicStop(harmonic);
-  double exact_b_plateau = kNaN;
-  {
-    const double k = harmonic.Stiffness_N_m(), m = harmonic.pounder_mass_kg;
-    const double w = std::sqrt(k / m), delta = m * harmonic.gravity_m_s2 / k;
-    const double t1 = harmonic.sigmoid_delay_T_s + 4.0 / harmonic.sigmoid_rate_b_per_s;
-    const double v1 =
-        delta * w * std::sin(w * t1) + harmonic.impact_velocity_m_s * std::cos(w * t1);
-    exact_b_plateau = v1 / (exact_b.t_end_s - t1) / harmonic.gravity_m_s2;
-  }
+  const ExactCases exact = MakeExactCases();
   // References.
-  const ImpactModelParameters def = DefaultCase();
   ImpactSummary def_ref;
-  if (options.default_case) def_ref = Reference(def, 10.0);
+  if (options.default_case) def_ref = Reference(DefaultCase(), 10.0);
   std::vector<Table1Combination> combos;
   std::vector<ImpactSummary> combo_refs;
   if (options.table1) {
     combos = Table1Combinations();
     for (const Table1Combination& c : combos) combo_refs.push_back(Reference(c.params, 10.0));
   }
-
+  const double budget = options.timing_budget_s;
   for (const std::string& solver : options.solvers) {
     for (double tol : options.tolerances) {
       const ImpactSolverOptions so = SolverSetting(solver, tol);
       if (options.exact_cases) {
-        {
-          ImpactSolverOptions o = so;
-          o.t_max_s = t_fixed;
-          double time = 0;
-          const ImpactRun run = TimedRun(momentum, o, options.timing_budget_s, &time);
-          WorkPrecisionRow row{"momentum-exact", solver, "", tol};
-          row.depth_error = RelErr(run.solution.z_end_m, exact_a.z_m);
-          row.t_end_error = RelErr(run.solution.v_end_m_s, exact_a.v_m_s);
-          row.peak_error = RelErr(run.summary.peak_deceleration_g, exact_a_peak);
-          row.plateau_error = kNaN;
-          fill_cost(row, run.summary, time);
-          // Only warning expected: v does not reach 0 by t_max.
-          rows.push_back(row);
-          bar.Advance();
-        }
-        {
-          double time = 0;
-          const ImpactRun run = TimedRun(harmonic, so, options.timing_budget_s, &time);
-          WorkPrecisionRow row{"harmonic-exact", solver, "", tol};
-          row.depth_error = RelErr(run.summary.crater_depth_m, exact_b.crater_depth_m);
-          row.t_end_error = RelErr(run.summary.t_end_s, exact_b.t_end_s);
-          row.peak_error = kNaN;
-          row.plateau_error = RelErr(run.summary.plateau_deceleration_g, exact_b_plateau);
-          fill_cost(row, run.summary, time);
-          rows.push_back(row);
-          bar.Advance();
-        }
-      }
-      if (options.default_case) {
-        double time = 0;
-        const ImpactRun run = TimedRun(def, so, options.timing_budget_s, &time);
-        WorkPrecisionRow row{"default", solver, "", tol};
-        row.depth_error = RelErr(run.summary.crater_depth_m, def_ref.crater_depth_m);
-        row.t_end_error = RelErr(run.summary.t_end_s, def_ref.t_end_s);
-        row.peak_error = RelErr(run.summary.peak_deceleration_g, def_ref.peak_deceleration_g);
-        row.plateau_error =
-            RelErr(run.summary.plateau_deceleration_g, def_ref.plateau_deceleration_g);
-        fill_cost(row, run.summary, time);
-        rows.push_back(row);
+        rows.push_back(MomentumExactRow(exact, solver, tol, so, budget));
+        bar.Advance();
+        rows.push_back(HarmonicExactRow(exact, solver, tol, so, budget));
         bar.Advance();
       }
-      if (options.table1) {
-        WorkPrecisionRow row{"table1-max", solver, "", tol};
-        row.error_estimate = 0.0;
-        for (std::size_t i = 0; i < combos.size(); ++i) {
-          double time = 0;
-          const ImpactRun run = TimedRun(combos[i].params, so, 0.0, &time);
-          const ImpactSummary& s = run.summary;
-          const ImpactSummary& ref = combo_refs[i];
-          row.depth_error = std::max(row.depth_error, RelErr(s.crater_depth_m, ref.crater_depth_m));
-          row.t_end_error = std::max(row.t_end_error, RelErr(s.t_end_s, ref.t_end_s));
-          row.peak_error =
-              std::max(row.peak_error, RelErr(s.peak_deceleration_g, ref.peak_deceleration_g));
-          row.plateau_error = std::max(
-              row.plateau_error, RelErr(s.plateau_deceleration_g, ref.plateau_deceleration_g));
-          row.error_estimate = std::max(row.error_estimate, s.error_estimate_companion);
-          row.error_estimate_local = std::max(row.error_estimate_local, s.error_estimate_local);
-          row.wall_time_s += time;
-          row.rhs_evals += s.rhs_evals;
-          row.steps += s.steps;
-          row.jacobian_evals += s.jacobian_evals;
-          row.warnings += static_cast<int>(s.warnings.size());
-          row.solver_ran = s.solver;
-          bar.Advance();
-        }
-        rows.push_back(row);
+      if (options.default_case) {
+        rows.push_back(DefaultCaseRow(def_ref, solver, tol, so, budget));
+        bar.Advance();
       }
+      if (options.table1) rows.push_back(Table1MaxRow(combos, combo_refs, solver, tol, so, &bar));
     }
   }
   bar.Finish();
