@@ -154,7 +154,9 @@ struct Correlator::Impl {
   void BuildReference(int frame_index, const cv::Mat& raw, const BsplineImage* spline_in,
                       const cv::Mat& image32, FrameResult* timing);
   void MakeFrame(const cv::Mat& raw, int index, Frame* frame);
+  // Solves every tracked subset of `frame` against the current reference (FrameSolver).
   std::vector<Attempt> Solve(Frame& frame, FrameResult* out);
+  class FrameSolver;
   std::vector<char> RescuedByLastFrame(const std::vector<int>& which,
                                        const std::vector<Attempt>& at, const Frame& frame,
                                        FrameResult* out);
@@ -322,25 +324,55 @@ bool Correlator::Impl::Search(const SubsetRef& s, const cv::Mat& ref_image32, Fr
   return true;
 }
 
-std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
-  const int n = static_cast<int>(initial.size());
-  std::vector<Attempt> at(n);
-  std::vector<char> usable(n, 0);
-  for (int i = 0; i < n; ++i) {
-    usable[i] = active[i] && Usable(ref.subsets[i].status);
-    at[i].r.status =
-        active[i] ? (usable[i] ? SubsetStatus::kNotFound : ref.subsets[i].status) : permanent[i];
+// The steps of Solve: 1. every subset with a prediction from the previous increments; 2a.
+// reliability-guided propagation waves on the lattice of every second subset, with integer
+// searches at seeds, then the other subsets from the fit of their solved lattice neighbours; 2b.
+// waves over all subsets for what is left; then the orphans.
+class Correlator::Impl::FrameSolver {
+ public:
+  FrameSolver(Impl& m, Frame& frame, FrameResult* out)
+      : m_(m),
+        frame_(frame),
+        out_(out),
+        n_(static_cast<int>(m.initial.size())),
+        at_(n_),
+        usable_(n_, 0) {
+    for (int i = 0; i < n_; ++i) {
+      usable_[i] = m.active[i] && Usable(m.ref.subsets[i].status);
+      at_[i].r.status = m.active[i]
+                            ? (usable_[i] ? SubsetStatus::kNotFound : m.ref.subsets[i].status)
+                            : m.permanent[i];
+    }
   }
-  const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
-  auto icgn = [&](int i, const Params& p0) {
-    return internal::RunIcgn(shape, ref.images, ref.subsets[i], &ref.hinv[i * nn], frame.view,
-                             options.icgn, p0);
-  };
+
+  std::vector<Attempt> Run() {
+    SolveFromPredictions();
+    constexpr int kCoarse = 2;
+    if (m_.nx > kCoarse && m_.ny > kCoarse) {
+      Propagate(kCoarse);
+      FillFromLattice(kCoarse);
+    }
+    Propagate(1);
+    m_.SolveOrphans(frame_, at_, out_);
+    return std::move(at_);
+  }
+
+ private:
+  IcgnResult Icgn(int i, const Params& p0) const {
+    const std::size_t nn = static_cast<std::size_t>(m_.shape.n) * m_.shape.n;
+    return internal::RunIcgn(m_.shape, m_.ref.images, m_.ref.subsets[i], &m_.ref.hinv[i * nn],
+                             frame_.view, m_.options.icgn, p0);
+  }
+
   // Prediction of the displacement of subset i's tracked point (relative to the reference).
-  // The velocity (last increment) is averaged over the subset and its solved grid neighbours: the
-  // increments of neighbouring subsets share the motion but not all of the noise, so the mean is
-  // a better prediction (fewer IC-GN iterations) wherever the motion is smooth over 3x3 subsets.
-  auto predict = [&](int i, Params* p0) {
+  // The velocity (last increment) is averaged over the subset and its solved grid neighbours:
+  // the increments of neighbouring subsets share the motion but not all of the noise, so the mean
+  // is a better prediction (fewer IC-GN iterations) wherever the motion is smooth over 3x3
+  // subsets.
+  bool Predict(int i, Params* p0) const {
+    const int nx = m_.nx, ny = m_.ny;
+    const std::vector<cv::Point2d>& pos_last = m_.pos_last;
+    const std::vector<cv::Point2d>& pos_prev = m_.pos_prev;
     if (std::isnan(pos_last[i].x)) return false;
     cv::Point2d pred = pos_last[i];
     if (!std::isnan(pos_prev[i].x)) {
@@ -357,37 +389,42 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
       }
       pred += velocity / count;
     }
-    const SubsetRef& s = ref.subsets[i];
-    Params p = params_valid[i] ? params_last[i] : Params{};
+    const SubsetRef& s = m_.ref.subsets[i];
+    Params p = m_.params_valid[i] ? m_.params_last[i] : Params{};
     double du, dv;
-    internal::Displacement(shape, p, s.ox, s.oy, &du, &dv);
-    const cv::Point2d d = pred - ref_pos[i];
+    internal::Displacement(m_.shape, p, s.ox, s.oy, &du, &dv);
+    const cv::Point2d d = pred - m_.ref_pos[i];
     p[0] += d.x - du;
-    p[shape.nm] += d.y - dv;
+    p[m_.shape.nm] += d.y - dv;
     *p0 = p;
     return true;
-  };
+  }
 
   // 1. Prediction from previous increments, all subsets in parallel.
-  WallTimer timer;
-  std::vector<int> list;
-  for (int i = 0; i < n; ++i)
-    if (usable[i] && !std::isnan(pos_last[i].x)) list.push_back(i);
-  tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
-    const int i = list[k];
-    Params p0;
-    predict(i, &p0);
-    at[i].r = icgn(i, p0);
-    at[i].solved = at[i].r.status == SubsetStatus::kConverged;
-  });
-  out->seconds_icgn += timer.ElapsedSeconds();
+  void SolveFromPredictions() {
+    timer_.Restart();
+    std::vector<int> list;
+    for (int i = 0; i < n_; ++i)
+      if (usable_[i] && !std::isnan(m_.pos_last[i].x)) list.push_back(i);
+    tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
+      const int i = list[k];
+      Params p0;
+      Predict(i, &p0);
+      at_[i].r = Icgn(i, p0);
+      at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
+    });
+    out_->seconds_icgn += timer_.ElapsedSeconds();
+  }
 
-  // 2. Reliability-guided propagation in deterministic waves, with searches at seeds. The waves
-  // run on a lattice of every `stride`-th subset in x and y (neighbours `stride` nodes apart).
-  auto on_lattice = [&](int i, int stride) {
-    return (i / nx) % stride == 0 && (i % nx) % stride == 0;
-  };
-  auto solved_neighbour = [&](int i, int stride) {
+  // The waves run on a lattice of every `stride`-th subset in x and y (neighbours `stride` nodes
+  // apart).
+  bool OnLattice(int i, int stride) const {
+    return (i / m_.nx) % stride == 0 && (i % m_.nx) % stride == 0;
+  }
+
+  // The solved lattice neighbour of i with the highest ZNCC (lowest index on ties); -1 if none.
+  int SolvedNeighbour(int i, int stride) const {
+    const int nx = m_.nx, ny = m_.ny;
     const int r = i / nx, c = i % nx;
     int best = -1;
     for (int dr = -stride; dr <= stride; dr += stride) {
@@ -396,50 +433,53 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
         const int rr = r + dr, cc = c + dc;
         if (rr < 0 || rr >= ny || cc < 0 || cc >= nx) continue;
         const int j = rr * nx + cc;
-        if (!at[j].solved) continue;
-        if (best < 0 || at[j].r.zncc > at[best].r.zncc ||
-            (at[j].r.zncc == at[best].r.zncc && j < best))
+        if (!at_[j].solved) continue;
+        if (best < 0 || at_[j].r.zncc > at_[best].r.zncc ||
+            (at_[j].r.zncc == at_[best].r.zncc && j < best))
           best = j;
       }
     }
     return best;
-  };
-  auto search_and_solve = [&](int i, const Params* guess) {
-    cv::Mat& result = scratch.local();
+  }
+
+  // Integer-pixel search around `guess` (else the prediction, else no displacement), then IC-GN.
+  void SearchAndSolve(int i, const Params* guess) {
+    cv::Mat& result = m_.scratch.local();
     double gu = 0, gv = 0;
     Params p0;
     if (guess) {
       gu = (*guess)[0];
-      gv = (*guess)[shape.nm];
-    } else if (predict(i, &p0)) {
+      gv = (*guess)[m_.shape.nm];
+    } else if (Predict(i, &p0)) {
       gu = p0[0];
-      gv = p0[shape.nm];
+      gv = p0[m_.shape.nm];
     }
-    at[i].searched = true;
-    if (!Search(ref.subsets[i], ref.image32, frame, gu, gv, &result, &p0)) {
-      if (!at[i].propagated) at[i].r.status = SubsetStatus::kNotFound;
+    at_[i].searched = true;
+    if (!m_.Search(m_.ref.subsets[i], m_.ref.image32, frame_, gu, gv, &result, &p0)) {
+      if (!at_[i].propagated) at_[i].r.status = SubsetStatus::kNotFound;
       return;
     }
-    IcgnResult r = icgn(i, p0);
-    if (r.status == SubsetStatus::kConverged || !at[i].propagated) at[i].r = r;
-    at[i].solved = r.status == SubsetStatus::kConverged;
-  };
+    IcgnResult r = Icgn(i, p0);
+    if (r.status == SubsetStatus::kConverged || !at_[i].propagated) at_[i].r = r;
+    at_[i].solved = r.status == SubsetStatus::kConverged;
+  }
+
   // Guess for subset i from solved neighbours `from`: per displacement component, the affine
   // field a + g . (x - x_i) fitted by least squares to the neighbours' displacements at their
   // centres and to their gradients. The gradients are weighted by the variance of the subset
   // coordinate, (S^2 - 1) / 12, the ratio of the noise variances of a subset's displacement and
   // of its gradient. Second-order terms (quadratic shape) are averaged.
-  const double gradient_weight = (double(size) * size - 1) / 12;
-  auto FitGuess = [&](const SubsetRef& si, const int* from, int count,
-                      const std::vector<Attempt>& solved) {
+  Params FitGuess(const SubsetRef& si, const int* from, int count) const {
+    const double gradient_weight = (double(m_.size) * m_.size - 1) / 12;
+    const int nm = m_.shape.nm;
     Params p0{};
     for (int comp = 0; comp < 2; ++comp) {
-      const int o = comp * shape.nm;
+      const int o = comp * nm;
       double a[3][3] = {}, rhs[3] = {};
       for (int k = 0; k < count; ++k) {
-        const Params& pj = solved[from[k]].r.p;
-        const double d[3] = {1, double(ref.subsets[from[k]].cx - si.cx),
-                             double(ref.subsets[from[k]].cy - si.cy)};
+        const Params& pj = at_[from[k]].r.p;
+        const double d[3] = {1, double(m_.ref.subsets[from[k]].cx - si.cx),
+                             double(m_.ref.subsets[from[k]].cy - si.cy)};
         for (int row = 0; row < 3; ++row) {
           for (int col = 0; col < 3; ++col) a[row][col] += d[row] * d[col];
           rhs[row] += d[row] * pj[o];
@@ -448,7 +488,7 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
           a[q][q] += gradient_weight;
           rhs[q] += gradient_weight * pj[o + q];
         }
-        for (int q = 3; q < shape.nm; ++q) p0[o + q] += pj[o + q] / count;
+        for (int q = 3; q < nm; ++q) p0[o + q] += pj[o + q] / count;
       }
       // Solve the 3x3 system (symmetric positive definite: gradient rows always present).
       for (int col = 0; col < 3; ++col) {
@@ -465,113 +505,131 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
       }
     }
     return p0;
-  };
-  auto propagate = [&](int stride) {
-    const int spacing = std::max(1, options.init.seed_spacing / stride);
-    const int lattice_nx = (nx + stride - 1) / stride, lattice_ny = (ny + stride - 1) / stride;
-    while (true) {
-      // Solved neighbours are listed before the wave runs (the wave changes `at`).
-      std::vector<int> frontier, best, neighbour_count;
-      std::vector<std::array<int, 8>> neighbours;
-      for (int i = 0; i < n; ++i) {
-        if (!usable[i] || at[i].solved || at[i].propagated || !on_lattice(i, stride)) continue;
-        const int j = solved_neighbour(i, stride);
-        if (j < 0) continue;
-        frontier.push_back(i);
-        best.push_back(j);
-        if (stride > 1) {
-          std::array<int, 8> from;
-          int count = 0;
-          const int r = i / nx, c = i % nx;
-          for (int dr = -stride; dr <= stride; dr += stride) {
-            for (int dc = -stride; dc <= stride; dc += stride) {
-              const int rr = r + dr, cc = c + dc;
-              if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx && at[rr * nx + cc].solved)
-                from[count++] = rr * nx + cc;
-            }
-          }
-          neighbours.push_back(from);
-          neighbour_count.push_back(count);
-        }
-      }
-      if (!frontier.empty()) {
-        timer.Restart();
-        tbb::parallel_for(0, static_cast<int>(frontier.size()), [&](int k) {
-          const int i = frontier[k], j = best[k];
-          const SubsetRef& si = ref.subsets[i];
-          const SubsetRef& sj = ref.subsets[j];
-          at[i].propagated = true;
-          if (stride == 1) {
-            at[i].r = icgn(i, internal::Transfer(shape, at[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
-          } else {
-            // On the coarse lattice the neighbours are far apart: fit all solved ones.
-            at[i].r = icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k], at));
-          }
-          at[i].solved = at[i].r.status == SubsetStatus::kConverged;
-        });
-        out->seconds_icgn += timer.ElapsedSeconds();
-        // Subsets that failed from their neighbour get their own search around its guess.
-        std::vector<int> retry, from;
-        for (std::size_t k = 0; k < frontier.size(); ++k) {
-          const int i = frontier[k];
-          if (!at[i].solved && !at[i].searched && at[i].r.status != SubsetStatus::kOutOfImage) {
-            retry.push_back(i);
-            from.push_back(best[k]);
-          }
-        }
-        if (!retry.empty()) {
-          timer.Restart();
-          frame.Float();
-          tbb::parallel_for(0, static_cast<int>(retry.size()), [&](int k) {
-            const int i = retry[k], j = from[k];
-            const Params p0 =
-                internal::Transfer(shape, at[j].r.p, ref.subsets[i].cx - ref.subsets[j].cx,
-                                   ref.subsets[i].cy - ref.subsets[j].cy);
-            search_and_solve(i, &p0);
-          });
-          out->searches += static_cast<int>(retry.size());
-          out->seconds_initial_guess += timer.ElapsedSeconds();
-        }
-        continue;
-      }
-      std::vector<int> candidates, seeds;
-      for (int i = 0; i < n; ++i)
-        // Not those whose guess from a solved neighbour left the image: nothing to search for.
-        if (usable[i] && !at[i].solved && !at[i].searched && on_lattice(i, stride) &&
-            !(at[i].propagated && at[i].r.status == SubsetStatus::kOutOfImage))
-          candidates.push_back(i);
-      if (candidates.empty()) break;
-      for (int i : candidates) {
-        const int r = i / nx / stride, c = i % nx / stride;
-        if ((r % spacing == spacing / 2 || r == lattice_ny / 2) &&
-            (c % spacing == spacing / 2 || c == lattice_nx / 2))
-          seeds.push_back(i);
-      }
-      if (seeds.empty()) seeds = candidates;
-      timer.Restart();
-      frame.Float();
-      tbb::parallel_for(0, static_cast<int>(seeds.size()),
-                        [&](int k) { search_and_solve(seeds[k], nullptr); });
-      out->searches += static_cast<int>(seeds.size());
-      out->seconds_initial_guess += timer.ElapsedSeconds();
-    }
-  };
+  }
 
-  // 2a. Waves on the lattice of every second subset, then every other subset starts from the mean
-  // warp of its solved lattice neighbours (2 or 4, placed symmetrically about it; 1 at the grid
-  // edge), re-expressed about its own centre: for a smooth field this guess is more accurate than
-  // one neighbour's warp (the neighbours' errors average out), so IC-GN needs fewer iterations.
-  constexpr int kCoarse = 2;
-  if (nx > kCoarse && ny > kCoarse) {
-    propagate(kCoarse);
+  // 2. Reliability-guided propagation in deterministic waves on the lattice of `stride`, with
+  // searches at seeds when no wave can start.
+  void Propagate(int stride) {
+    while (PropagateWave(stride) || SearchSeeds(stride)) {
+    }
+  }
+
+  // One wave: every unsolved lattice subset with a solved neighbour starts from it (stride 1:
+  // its warp; coarser: the fit of all solved neighbours); those that fail get their own search
+  // around that guess. false if no subset had a solved neighbour.
+  bool PropagateWave(int stride) {
+    const int nx = m_.nx, ny = m_.ny;
+    // Solved neighbours are listed before the wave runs (the wave changes `at_`).
+    std::vector<int> frontier, best, neighbour_count;
+    std::vector<std::array<int, 8>> neighbours;
+    for (int i = 0; i < n_; ++i) {
+      if (!usable_[i] || at_[i].solved || at_[i].propagated || !OnLattice(i, stride)) continue;
+      const int j = SolvedNeighbour(i, stride);
+      if (j < 0) continue;
+      frontier.push_back(i);
+      best.push_back(j);
+      if (stride > 1) {
+        std::array<int, 8> from;
+        int count = 0;
+        const int r = i / nx, c = i % nx;
+        for (int dr = -stride; dr <= stride; dr += stride) {
+          for (int dc = -stride; dc <= stride; dc += stride) {
+            const int rr = r + dr, cc = c + dc;
+            if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx && at_[rr * nx + cc].solved)
+              from[count++] = rr * nx + cc;
+          }
+        }
+        neighbours.push_back(from);
+        neighbour_count.push_back(count);
+      }
+    }
+    if (frontier.empty()) return false;
+    const internal::Shape& shape = m_.shape;
+    const std::vector<SubsetRef>& subsets = m_.ref.subsets;
+    timer_.Restart();
+    tbb::parallel_for(0, static_cast<int>(frontier.size()), [&](int k) {
+      const int i = frontier[k], j = best[k];
+      const SubsetRef& si = subsets[i];
+      const SubsetRef& sj = subsets[j];
+      at_[i].propagated = true;
+      if (stride == 1) {
+        at_[i].r = Icgn(i, internal::Transfer(shape, at_[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+      } else {
+        // On the coarse lattice the neighbours are far apart: fit all solved ones.
+        at_[i].r = Icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k]));
+      }
+      at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
+    });
+    out_->seconds_icgn += timer_.ElapsedSeconds();
+    // Subsets that failed from their neighbour get their own search around its guess.
+    std::vector<int> retry, from;
+    for (std::size_t k = 0; k < frontier.size(); ++k) {
+      const int i = frontier[k];
+      if (!at_[i].solved && !at_[i].searched && at_[i].r.status != SubsetStatus::kOutOfImage) {
+        retry.push_back(i);
+        from.push_back(best[k]);
+      }
+    }
+    if (!retry.empty()) {
+      timer_.Restart();
+      frame_.Float();
+      tbb::parallel_for(0, static_cast<int>(retry.size()), [&](int k) {
+        const int i = retry[k], j = from[k];
+        const Params p0 = internal::Transfer(shape, at_[j].r.p, subsets[i].cx - subsets[j].cx,
+                                             subsets[i].cy - subsets[j].cy);
+        SearchAndSolve(i, &p0);
+      });
+      out_->searches += static_cast<int>(retry.size());
+      out_->seconds_initial_guess += timer_.ElapsedSeconds();
+    }
+    return true;
+  }
+
+  // Integer searches at the seeds among the unsolved, unsearched lattice subsets (every
+  // `seed_spacing`-th lattice node and the grid centre lines; all candidates if none is a seed).
+  // false if there is no candidate left.
+  bool SearchSeeds(int stride) {
+    const int nx = m_.nx, ny = m_.ny;
+    const int spacing = std::max(1, m_.options.init.seed_spacing / stride);
+    const int lattice_nx = (nx + stride - 1) / stride, lattice_ny = (ny + stride - 1) / stride;
+    std::vector<int> candidates, seeds;
+    for (int i = 0; i < n_; ++i)
+      // Not those whose guess from a solved neighbour left the image: nothing to search for.
+      if (usable_[i] && !at_[i].solved && !at_[i].searched && OnLattice(i, stride) &&
+          !(at_[i].propagated && at_[i].r.status == SubsetStatus::kOutOfImage))
+        candidates.push_back(i);
+    if (candidates.empty()) return false;
+    for (int i : candidates) {
+      const int r = i / nx / stride, c = i % nx / stride;
+      if ((r % spacing == spacing / 2 || r == lattice_ny / 2) &&
+          (c % spacing == spacing / 2 || c == lattice_nx / 2))
+        seeds.push_back(i);
+    }
+    if (seeds.empty()) seeds = candidates;
+    timer_.Restart();
+    frame_.Float();
+    tbb::parallel_for(0, static_cast<int>(seeds.size()),
+                      [&](int k) { SearchAndSolve(seeds[k], nullptr); });
+    out_->searches += static_cast<int>(seeds.size());
+    out_->seconds_initial_guess += timer_.ElapsedSeconds();
+    return true;
+  }
+
+  // 2a. After the waves on the lattice of every second subset, every other subset starts from
+  // the fit of its solved lattice neighbours (2 or 4, placed symmetrically about it; 1 at the
+  // grid edge), re-expressed about its own centre: for a smooth field this guess is more accurate
+  // than one neighbour's warp (the neighbours' errors average out), so IC-GN needs fewer
+  // iterations.
+  void FillFromLattice(int stride) {
+    const int nx = m_.nx, ny = m_.ny;
     std::vector<int> fill;
-    for (int i = 0; i < n; ++i)
-      if (usable[i] && !at[i].solved && !at[i].searched && !on_lattice(i, kCoarse))
+    for (int i = 0; i < n_; ++i)
+      if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride))
         fill.push_back(i);
-    timer.Restart();
+    timer_.Restart();
     tbb::parallel_for(0, static_cast<int>(fill.size()), [&](int k) {
       const int i = fill[k], r = i / nx, c = i % nx;
-      const SubsetRef& si = ref.subsets[i];
+      const SubsetRef& si = m_.ref.subsets[i];
       std::array<int, 8> from;
       int count = 0;
       for (int dr = -1; dr <= 1; ++dr) {
@@ -579,22 +637,30 @@ std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
           const int rr = r + dr, cc = c + dc;
           if (rr < 0 || rr >= ny || cc < 0 || cc >= nx) continue;
           const int j = rr * nx + cc;
-          if (on_lattice(j, kCoarse) && at[j].solved) from[count++] = j;
+          if (OnLattice(j, stride) && at_[j].solved) from[count++] = j;
         }
       }
       if (count == 0) return;
-      const IcgnResult r0 = icgn(i, FitGuess(si, from.data(), count, at));
+      const IcgnResult r0 = Icgn(i, FitGuess(si, from.data(), count));
       if (r0.status == SubsetStatus::kConverged) {
-        at[i].r = r0;
-        at[i].solved = true;
+        at_[i].r = r0;
+        at_[i].solved = true;
       }
     });
-    out->seconds_icgn += timer.ElapsedSeconds();
+    out_->seconds_icgn += timer_.ElapsedSeconds();
   }
-  // 2b. Everything still unsolved: waves over all subsets.
-  propagate(1);
-  SolveOrphans(frame, at, out);
-  return at;
+
+  Impl& m_;
+  Frame& frame_;
+  FrameResult* out_;
+  const int n_;
+  std::vector<Attempt> at_;
+  std::vector<char> usable_;
+  WallTimer timer_;
+};
+
+std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
+  return FrameSolver(*this, frame, out).Run();
 }
 
 // Orphans (lost at a reference update) are tried against the reference they were last found in.
