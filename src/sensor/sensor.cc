@@ -288,9 +288,10 @@ double DetectImpactOnset(const std::vector<double>& time_s, const std::vector<do
   return onset;
 }
 
-SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options) {
-  WallTimer timer;
-  options.Check();
+namespace {
+
+// The sample rate of the record: given, else from its time span.
+double SampleRate(const SensorRecord& record, const SensorOptions& options) {
   const std::size_t n = record.time_s.size();
   CheckValue(n >= 32 && record.accel_g.size() == n, "sensor record",
              fmt::format("{} times, {} readings", n, record.accel_g.size()),
@@ -303,24 +304,35 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
                 fmt::format("{} Hz", options.cutoff_hz),
                 fmt::format("below the Nyquist frequency {} Hz of this record", 0.5 * fs));
   }
-  const double g = options.g_m_s2;
+  return fs;
+}
+
+// The quiet part of the record before the impact.
+struct FreeFall {
+  std::size_t w = 0, guard = 0;   // Quiet window and guard [samples].
+  std::size_t ff0 = 0, ff1 = 0;   // The free-fall window [ff0, ff1) before the impact.
+  double first_mean = 0;          // Mean reading of the record's first window.
+  double window_level = 0;        // Mean reading of the free-fall window (~0 g + offset).
+  bool starts_at_rest = false;    // The first window reads ~1 g more than the free fall.
+  std::size_t release_index = 0;  // First sample after the release; n if not in the record.
+};
+
+// Coarse impact on the uncorrected reading (the threshold is far above any plausible offset),
+// the free-fall window before it and the release. The record starts at rest (reading ~1 g) when
+// its first window reads ~1 g more than the free fall before the impact. Release: the reading
+// steps from the rest level (1 g) to free fall (0 g); the zero-phase filter's kernel is
+// symmetric, so a step's instant is where the filtered reading crosses the midpoint between the
+// two levels (interpolated between samples).
+FreeFall FindFreeFall(const SensorRecord& record, const std::vector<double>& filtered_raw,
+                      const SensorOptions& options, double fs, SensorSummary* s) {
   const std::vector<double>& t = record.time_s;
-  const FirstOrderLowpass lp = DesignButterworthLowpass1(options.cutoff_hz, fs);
-  const std::vector<double> filtered_raw = FiltFilt(lp, record.accel_g);
-
-  SensorResult out;
-  SensorSummary& s = out.summary;
-  s.sample_rate_hz = fs;
-  s.samples = n;
-  s.cutoff_hz = options.cutoff_hz;
-
-  const auto w = static_cast<std::size_t>(std::lround(options.quiet_window_s * fs));
-  const auto guard = static_cast<std::size_t>(std::lround(options.quiet_guard_s * fs));
-  CheckValue(w >= 8 && w < n / 2, "sensor.quiet_window_s",
-             fmt::format("{} s = {} samples", options.quiet_window_s, w),
+  const std::size_t n = t.size();
+  FreeFall ff;
+  ff.w = static_cast<std::size_t>(std::lround(options.quiet_window_s * fs));
+  ff.guard = static_cast<std::size_t>(std::lround(options.quiet_guard_s * fs));
+  CheckValue(ff.w >= 8 && ff.w < n / 2, "sensor.quiet_window_s",
+             fmt::format("{} s = {} samples", options.quiet_window_s, ff.w),
              fmt::format("at least 8 samples and less than half the record ({} samples)", n));
-
-  // Coarse impact on the uncorrected reading (the threshold is far above any plausible offset).
   std::size_t ks = 0;
   while (ks < n && !(filtered_raw[ks] > options.impact_threshold_g)) ++ks;
   if (ks >= n) {
@@ -333,7 +345,7 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
                 "a record containing the impact (or a lower impact threshold)")
         .WithFile(record.path);
   }
-  if (ks < guard + w) {
+  if (ks < ff.guard + ff.w) {
     throw Error(ErrorKind::kInvalidValue, "sensor.quiet_window_s",
                 fmt::format("{} s of free fall needed before the impact at t = {:.6g} s, the "
                             "record has {:.6g} s",
@@ -341,64 +353,200 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
                 "a record with free fall before the impact, or a shorter quiet window")
         .WithFile(record.path);
   }
-  const std::size_t ff1 = ks - guard, ff0 = ff1 - w;
-  const double first_mean = Mean(record.accel_g, 0, w);
-  const double window_level = Mean(record.accel_g, ff0, ff1);  // ~0 g + offset (free fall)
-  // The record starts at rest (reading ~1 g) when its first window reads ~1 g more than the free
-  // fall before the impact.
-  const bool starts_at_rest = std::abs(first_mean - window_level - 1) < 0.5;
-  // Release: the reading steps from the rest level (1 g) to free fall (0 g). The zero-phase
-  // filter's kernel is symmetric, so a step's instant is where the filtered reading crosses the
-  // midpoint between the two levels (interpolated between samples).
-  std::size_t kr = n;
-  if (starts_at_rest) {
-    const double mid = window_level + 0.5 * (first_mean - window_level);
-    std::size_t k = w;
+  ff.ff1 = ks - ff.guard;
+  ff.ff0 = ff.ff1 - ff.w;
+  ff.first_mean = Mean(record.accel_g, 0, ff.w);
+  ff.window_level = Mean(record.accel_g, ff.ff0, ff.ff1);
+  ff.starts_at_rest = std::abs(ff.first_mean - ff.window_level - 1) < 0.5;
+  ff.release_index = n;
+  if (ff.starts_at_rest) {
+    const double mid = ff.window_level + 0.5 * (ff.first_mean - ff.window_level);
+    std::size_t k = ff.w;
     while (k < ks && filtered_raw[k] > mid) ++k;
     if (k > 0 && k < ks) {
       const double f = (filtered_raw[k - 1] - mid) / (filtered_raw[k - 1] - filtered_raw[k]);
-      s.release_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
-      kr = k;
+      s->release_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
+      ff.release_index = k;
     }
   }
-  std::size_t off0 = ff0, off1 = ff1;
+  return ff;
+}
+
+// The accelerometer offset by SensorOptions::offset_reference, its window, the noise level and
+// the warnings about both.
+void EstimateOffset(const SensorRecord& record, const FreeFall& ff, const SensorOptions& options,
+                    SensorSummary* s) {
+  const std::vector<double>& t = record.time_s;
+  const std::size_t n = t.size();
+  std::size_t off0 = ff.ff0, off1 = ff.ff1;
   switch (options.offset_reference) {
     case OffsetReference::kFreeFall:
       // The whole free fall (release + guard .. impact - guard) when the release is in the record:
       // the offset's statistical error shrinks with the square root of its length.
-      if (kr < n && kr + guard + w < ff1) off0 = kr + guard;
-      s.offset_g = Mean(record.accel_g, off0, off1);
+      if (ff.release_index < n && ff.release_index + ff.guard + ff.w < ff.ff1)
+        off0 = ff.release_index + ff.guard;
+      s->offset_g = Mean(record.accel_g, off0, off1);
       break;
-    case OffsetReference::kFreeFallWindow: s.offset_g = window_level; break;
+    case OffsetReference::kFreeFallWindow: s->offset_g = ff.window_level; break;
     case OffsetReference::kRest:
-      if (!starts_at_rest) {
-        throw Error(ErrorKind::kInvalidValue, "offset_reference = rest",
-                    fmt::format("a record whose first {} s read {:.3g} g, {:.3g} g above the free "
-                                "fall before the impact",
-                                options.quiet_window_s, first_mean, first_mean - window_level),
-                    "a record starting with the pounder at rest (1 g above free fall), or the "
-                    "free-fall offset reference")
+      if (!ff.starts_at_rest) {
+        throw Error(
+            ErrorKind::kInvalidValue, "offset_reference = rest",
+            fmt::format("a record whose first {} s read {:.3g} g, {:.3g} g above the free "
+                        "fall before the impact",
+                        options.quiet_window_s, ff.first_mean, ff.first_mean - ff.window_level),
+            "a record starting with the pounder at rest (1 g above free fall), or the "
+            "free-fall offset reference")
             .WithFile(record.path);
       }
       off0 = 0;
-      off1 = w;
-      s.offset_g = first_mean - 1;
+      off1 = ff.w;
+      s->offset_g = ff.first_mean - 1;
       break;
     case OffsetReference::kNone:
       off0 = off1 = 0;
-      s.offset_g = 0;
+      s->offset_g = 0;
       break;
   }
-  s.offset_window_s = {off1 > off0 ? t[off0] : kNaN, off1 > off0 ? t[off1 - 1] : kNaN};
-  s.noise_g = StdDev(record.accel_g, ff0, ff1);
-  if (std::abs(s.offset_g) > 0.2)
-    s.warnings.push_back(fmt::format("large accelerometer offset {:.3g} g", s.offset_g));
-  const double ff_level = window_level - s.offset_g;
-  if (std::abs(ff_level) > 0.1 + 5 * s.noise_g) {
-    s.warnings.push_back(fmt::format(
+  s->offset_window_s = {off1 > off0 ? t[off0] : kNaN, off1 > off0 ? t[off1 - 1] : kNaN};
+  s->noise_g = StdDev(record.accel_g, ff.ff0, ff.ff1);
+  if (std::abs(s->offset_g) > 0.2)
+    s->warnings.push_back(fmt::format("large accelerometer offset {:.3g} g", s->offset_g));
+  const double ff_level = ff.window_level - s->offset_g;
+  if (std::abs(ff_level) > 0.1 + 5 * s->noise_g) {
+    s->warnings.push_back(fmt::format(
         "the window before the impact reads {:.3g} g after offset correction, not 0 g (free fall)",
         ff_level));
   }
+}
+
+// Trapezoidal integration of a (downward acceleration) from sample i0 on, v and z given there.
+void IntegrateForward(const std::vector<double>& t, const std::vector<double>& a, std::size_t i0,
+                      std::vector<double>* v, std::vector<double>* z) {
+  for (std::size_t i = i0 + 1; i < t.size(); ++i) {
+    const double h = t[i] - t[i - 1];
+    (*v)[i] = (*v)[i - 1] + 0.5 * (a[i - 1] + a[i]) * h;
+    (*z)[i] = (*z)[i - 1] + 0.5 * ((*v)[i - 1] + (*v)[i]) * h;
+  }
+}
+
+// From the release: v = 0 at the release (given, else the record's start at rest), z relative to
+// the impact position; sets the impact velocity.
+void IntegrateFromRelease(const SensorRecord& record, const FreeFall& ff,
+                          const SensorOptions& options, const std::vector<double>& a,
+                          std::vector<double>* v, std::vector<double>* z, SensorSummary* s) {
+  const std::vector<double>& t = record.time_s;
+  const double g = options.g_m_s2;
+  std::size_t i0 = 0;
+  if (std::isfinite(options.release_time_s)) {
+    const double tr = options.release_time_s;
+    CheckValue(tr < s->impact_time_s, "release_time_s", fmt::format("{} s", tr),
+               fmt::format("before the detected impact at {:.6g} s", s->impact_time_s));
+    s->release_time_s = tr;
+    i0 = FirstIndexAtOrAfter(t, tr);
+    const double fall = t[i0] - tr;  // Free fall between the release and sample i0.
+    (*v)[i0] = g * fall;
+    (*z)[i0] = 0.5 * g * fall * fall;
+  } else if (!ff.starts_at_rest) {
+    throw Error(ErrorKind::kInvalidValue, "integrate_from = release",
+                fmt::format("a record starting at {:.3g} g (the first {} s), not at rest (1 g)",
+                            ff.first_mean - s->offset_g, options.quiet_window_s),
+                "a record that starts with the pounder held at rest, a release time, or "
+                "integration from the impact with a given impact velocity")
+        .WithFile(record.path);
+  }
+  IntegrateForward(t, a, i0, v, z);
+  s->impact_velocity_m_s = Interp(t, *v, s->impact_time_s);
+  const double zi = Interp(t, *z, s->impact_time_s);
+  for (double& zk : *z) zk -= zi;
+}
+
+// From the impact with the given impact velocity: forwards and backwards from there.
+void IntegrateFromImpact(const std::vector<double>& t, const std::vector<double>& a,
+                         const SensorOptions& options, std::vector<double>* v,
+                         std::vector<double>* z, SensorSummary* s) {
+  const double ti = s->impact_time_s, v0 = options.impact_velocity_m_s;
+  const std::size_t m = FirstIndexAtOrAfter(t, ti);
+  const double ai = Interp(t, a, ti);
+  (*v)[m] = v0 + 0.5 * (ai + a[m]) * (t[m] - ti);
+  (*z)[m] = 0.5 * (v0 + (*v)[m]) * (t[m] - ti);
+  IntegrateForward(t, a, m, v, z);
+  for (std::size_t i = m; i-- > 0;) {
+    const double h = t[i + 1] - t[i];
+    (*v)[i] = (*v)[i + 1] - 0.5 * (a[i] + a[i + 1]) * h;
+    (*z)[i] = (*z)[i + 1] - 0.5 * ((*v)[i] + (*v)[i + 1]) * h;
+  }
+  s->impact_velocity_m_s = v0;
+}
+
+// Stop: the first sample after the impact where v <= stop_velocity (the zero crossing located by
+// linear interpolation when v goes through 0 there); else the velocity minimum, with a warning.
+// Returns the stop's sample.
+std::size_t FindStop(const std::vector<double>& t, const std::vector<double>& v,
+                     const std::vector<double>& z, std::size_t ki, const SensorOptions& options,
+                     SensorSummary* s) {
+  const std::size_t n = t.size();
+  std::size_t k = ki + 1;
+  while (k < n && v[k] > options.stop_velocity_m_s) ++k;
+  if (k < n) {
+    s->stopped = true;
+    const double level = (v[k] <= 0 && v[k - 1] > 0) ? 0.0 : options.stop_velocity_m_s;
+    const double f = (v[k - 1] - level) / (v[k - 1] - v[k]);
+    s->stop_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
+    s->final_penetration_m = Interp(t, z, s->stop_time_s);
+    return k;
+  }
+  const auto it = std::min_element(v.begin() + static_cast<std::ptrdiff_t>(ki), v.end());
+  const auto kend = static_cast<std::size_t>(it - v.begin());
+  s->stop_time_s = t[kend];
+  s->final_penetration_m = z[kend];
+  s->warnings.push_back(fmt::format(
+      "the pounder velocity never fell to {} m/s after the impact (minimum {:.4g} m/s at "
+      "t = {:.6g} s); the final penetration is taken there",
+      options.stop_velocity_m_s, *it, t[kend]));
+  return kend;
+}
+
+// Peak deceleration (a_g - 1) between impact and stop, refined by a parabola through the largest
+// sample and its neighbours.
+void FindPeakDeceleration(const std::vector<double>& t, const std::vector<double>& acc,
+                          std::size_t ki, std::size_t kend, SensorSummary* s) {
+  const std::size_t n = t.size();
+  std::size_t kp = PeakDecelerationSample(t, acc, t[ki], 0.0, t[std::min(kend, n - 1)] - t[ki]);
+  if (kp >= n) kp = ki;
+  double tp = t[kp], peak = acc[kp] - 1;
+  if (kp > 0 && kp + 1 < n) {
+    const double ym = acc[kp - 1], y0 = acc[kp], yp = acc[kp + 1];
+    const double den = ym - 2 * y0 + yp;
+    if (den < 0) {
+      const double d = 0.5 * (ym - yp) / den;
+      tp = t[kp] + d * (t[kp + 1] - t[kp - 1]) / 2;
+      peak = y0 - 0.25 * (ym - yp) * d - 1;
+    }
+  }
+  s->peak_deceleration_g = peak;
+  s->peak_time_s = tp;
+  s->t_peak_s = tp - s->impact_time_s;
+}
+
+}  // namespace
+
+SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options) {
+  WallTimer timer;
+  options.Check();
+  const double fs = SampleRate(record, options);
+  const std::size_t n = record.time_s.size();
+  const std::vector<double>& t = record.time_s;
+  const FirstOrderLowpass lp = DesignButterworthLowpass1(options.cutoff_hz, fs);
+  const std::vector<double> filtered_raw = FiltFilt(lp, record.accel_g);
+
+  SensorResult out;
+  SensorSummary& s = out.summary;
+  s.sample_rate_hz = fs;
+  s.samples = n;
+  s.cutoff_hz = options.cutoff_hz;
+  const FreeFall ff = FindFreeFall(record, filtered_raw, options, fs, &s);
+  EstimateOffset(record, ff, options, &s);
 
   std::vector<double> raw(n), acc(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -417,95 +565,15 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   out.time_s = t;
   out.accel_g = acc;
   out.accel_down_m_s2.resize(n);
-  for (std::size_t i = 0; i < n; ++i) out.accel_down_m_s2[i] = g * (1 - acc[i]);
+  for (std::size_t i = 0; i < n; ++i) out.accel_down_m_s2[i] = options.g_m_s2 * (1 - acc[i]);
   const std::vector<double>& a = out.accel_down_m_s2;
   std::vector<double> v(n, 0.0), z(n, 0.0);
-
-  if (options.integrate_from == IntegrationStart::kRelease) {
-    std::size_t i0 = 0;
-    if (std::isfinite(options.release_time_s)) {
-      const double tr = options.release_time_s;
-      CheckValue(tr < s.impact_time_s, "release_time_s", fmt::format("{} s", tr),
-                 fmt::format("before the detected impact at {:.6g} s", s.impact_time_s));
-      s.release_time_s = tr;
-      i0 = FirstIndexAtOrAfter(t, tr);
-      const double fall = t[i0] - tr;  // Free fall between the release and sample i0.
-      v[i0] = g * fall;
-      z[i0] = 0.5 * g * fall * fall;
-    } else if (!starts_at_rest) {
-      throw Error(ErrorKind::kInvalidValue, "integrate_from = release",
-                  fmt::format("a record starting at {:.3g} g (the first {} s), not at rest (1 g)",
-                              first_mean - s.offset_g, options.quiet_window_s),
-                  "a record that starts with the pounder held at rest, a release time, or "
-                  "integration from the impact with a given impact velocity")
-          .WithFile(record.path);
-    }
-    for (std::size_t i = i0 + 1; i < n; ++i) {
-      const double h = t[i] - t[i - 1];
-      v[i] = v[i - 1] + 0.5 * (a[i - 1] + a[i]) * h;
-      z[i] = z[i - 1] + 0.5 * (v[i - 1] + v[i]) * h;
-    }
-    s.impact_velocity_m_s = Interp(t, v, s.impact_time_s);
-    const double zi = Interp(t, z, s.impact_time_s);
-    for (std::size_t i = 0; i < n; ++i) z[i] -= zi;
-  } else {
-    const double ti = s.impact_time_s, v0 = options.impact_velocity_m_s;
-    const std::size_t m = FirstIndexAtOrAfter(t, ti);
-    const double ai = Interp(t, a, ti);
-    v[m] = v0 + 0.5 * (ai + a[m]) * (t[m] - ti);
-    z[m] = 0.5 * (v0 + v[m]) * (t[m] - ti);
-    for (std::size_t i = m + 1; i < n; ++i) {
-      const double h = t[i] - t[i - 1];
-      v[i] = v[i - 1] + 0.5 * (a[i - 1] + a[i]) * h;
-      z[i] = z[i - 1] + 0.5 * (v[i - 1] + v[i]) * h;
-    }
-    for (std::size_t i = m; i-- > 0;) {
-      const double h = t[i + 1] - t[i];
-      v[i] = v[i + 1] - 0.5 * (a[i] + a[i + 1]) * h;
-      z[i] = z[i + 1] - 0.5 * (v[i] + v[i + 1]) * h;
-    }
-    s.impact_velocity_m_s = v0;
-  }
-
-  // Stop: the first sample after the impact where v <= stop_velocity (the zero crossing located
-  // by linear interpolation when v goes through 0 there).
-  std::size_t k = ki + 1;
-  while (k < n && v[k] > options.stop_velocity_m_s) ++k;
-  std::size_t kend;
-  if (k < n) {
-    s.stopped = true;
-    const double level = (v[k] <= 0 && v[k - 1] > 0) ? 0.0 : options.stop_velocity_m_s;
-    const double f = (v[k - 1] - level) / (v[k - 1] - v[k]);
-    s.stop_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
-    s.final_penetration_m = Interp(t, z, s.stop_time_s);
-    kend = k;
-  } else {
-    const auto it = std::min_element(v.begin() + static_cast<std::ptrdiff_t>(ki), v.end());
-    kend = static_cast<std::size_t>(it - v.begin());
-    s.stop_time_s = t[kend];
-    s.final_penetration_m = z[kend];
-    s.warnings.push_back(fmt::format(
-        "the pounder velocity never fell to {} m/s after the impact (minimum {:.4g} m/s at "
-        "t = {:.6g} s); the final penetration is taken there",
-        options.stop_velocity_m_s, *it, t[kend]));
-  }
-  // Peak deceleration (a_g - 1) between impact and stop, refined by a parabola through the
-  // largest sample and its neighbours.
-  std::size_t kp = PeakDecelerationSample(t, acc, t[ki], 0.0, t[std::min(kend, n - 1)] - t[ki]);
-  if (kp >= n) kp = ki;
-  double tp = t[kp], peak = acc[kp] - 1;
-  if (kp > 0 && kp + 1 < n) {
-    const double ym = acc[kp - 1], y0 = acc[kp], yp = acc[kp + 1];
-    const double den = ym - 2 * y0 + yp;
-    if (den < 0) {
-      const double d = 0.5 * (ym - yp) / den;
-      tp = t[kp] + d * (t[kp + 1] - t[kp - 1]) / 2;
-      peak = y0 - 0.25 * (ym - yp) * d - 1;
-    }
-  }
-  s.peak_deceleration_g = peak;
-  s.peak_time_s = tp;
-  s.t_peak_s = tp - s.impact_time_s;
+  if (options.integrate_from == IntegrationStart::kRelease)
+    IntegrateFromRelease(record, ff, options, a, &v, &z, &s);
+  else
+    IntegrateFromImpact(t, a, options, &v, &z, &s);
+  const std::size_t kend = FindStop(t, v, z, ki, options, &s);
+  FindPeakDeceleration(t, acc, ki, kend, &s);
   if (s.impact_time_s - t.front() < 0.01)
     s.warnings.push_back("less than 10 ms of record before the impact");
 
