@@ -354,6 +354,7 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
     paths.insert(paths.end(), listed.begin(), listed.end());
   }
   std::vector<cv::Mat> images;
+  images.reserve(paths.size());
   for (const std::string& path : paths) images.push_back(ReadGreyImage(path));
   CameraCalibration calibration = CalibrateCamera(images, paths, options, summary);
   if (!plane_path.empty())

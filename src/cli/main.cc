@@ -100,8 +100,7 @@ int Main(int argc, char** argv) {
     return 1;
   } catch (const Error& e) {
     WaitIfInterrupted();  // Not an error of its own: the interruption's message comes instead.
-    std::cerr << "impactdic: " << (e.kind() == ErrorKind::kNotImplemented ? "" : "error: ")
-              << e.what() << "\n";
+    std::cerr << "impactdic: error: " << e.what() << "\n";
     return ExitCode(e.kind());
   } catch (const std::exception& e) {
     WaitIfInterrupted();
@@ -114,10 +113,20 @@ int Main(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  impactdic::InstallInterruptCleanup();
-  const int exit_code = Main(argc, argv);
-  // An error caused by a signal (a write that failed as the cleanup removed its folder) must not
-  // race the cleanup: the cleanup thread ends the process with 128 + signal.
-  impactdic::WaitIfInterrupted();
-  return exit_code;
+  try {
+    impactdic::InstallInterruptCleanup();
+    const int exit_code = Main(argc, argv);
+    // An error caused by a signal (a write that failed as the cleanup removed its folder) must
+    // not race the cleanup: the cleanup thread ends the process with 128 + signal.
+    impactdic::WaitIfInterrupted();
+    return exit_code;
+  } catch (const std::exception& e) {
+    // Setting up the commands or the interrupt cleanup failed (a programming error or no memory):
+    // Main catches everything that runs a command.
+    std::cerr << "impactdic: internal error: " << e.what() << "\n";
+    return 1;
+  } catch (...) {
+    std::cerr << "impactdic: internal error\n";
+    return 1;
+  }
 }

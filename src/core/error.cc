@@ -13,12 +13,11 @@ const char* ToString(ErrorKind kind) {
     case ErrorKind::kFileFormat: return "bad file format";
     case ErrorKind::kIo: return "I/O error";
     case ErrorKind::kNumerical: return "numerical failure";
-    case ErrorKind::kNotImplemented: return "not implemented yet";
   }
   return "error";
 }
 
-int ExitCode(ErrorKind kind) { return kind == ErrorKind::kNotImplemented ? 2 : 1; }
+int ExitCode(ErrorKind /*kind*/) { return 1; }
 
 Error::Error(ErrorKind kind, std::string where, std::string found, std::string expected)
     : std::runtime_error(""),

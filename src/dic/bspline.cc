@@ -76,14 +76,14 @@ void FilterLines(double* c, int n, const Prefilter& p) {
     InitialCausalLanes(c, n, z, first);
     for (int l = 0; l < kLanes; ++l) c[l] = first[l];
     for (int k = 1; k < n; ++k) {
-      double* ck = c + k * kLanes;
+      double* ck = c + static_cast<std::ptrdiff_t>(k) * kLanes;
       const double* prev = ck - kLanes;
       for (int l = 0; l < kLanes; ++l) ck[l] += z * prev[l];
     }
-    double* last = c + (n - 1) * kLanes;
+    double* last = c + static_cast<std::ptrdiff_t>(n - 1) * kLanes;
     for (int l = 0; l < kLanes; ++l) last[l] = (z / (z * z - 1)) * (z * last[l - kLanes] + last[l]);
     for (int k = n - 2; k >= 0; --k) {
-      double* ck = c + k * kLanes;
+      double* ck = c + static_cast<std::ptrdiff_t>(k) * kLanes;
       const double* next = ck + kLanes;
       for (int l = 0; l < kLanes; ++l) ck[l] = z * (next[l] - ck[l]);
     }
@@ -142,10 +142,6 @@ Interpolation InterpolationFromString(const std::string& name) {
   if (name == "bicubic") return Interpolation::kBicubic;
   if (name == "biquintic") return Interpolation::kBiquintic;
   throw Error(ErrorKind::kInvalidValue, "interpolation", name, "bicubic or biquintic");
-}
-
-void QuinticWeights(double t, double w[6]) {
-  for (int k = -2; k <= 3; ++k) w[k + 2] = Beta(5, t - k);
 }
 
 void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect region, int guard_px) {

@@ -792,7 +792,8 @@ Shape MakeShape(ShapeFunction kind, int half) {
     // Normal equations of the 5x5 sample grid in coordinates scaled by 1/half, then unscaled.
     double a[36] = {}, m[25][6];
     for (int k = 0; k < 25; ++k) {
-      const double xi = (k % 5 - 2) * 0.5, eta = (k / 5 - 2) * 0.5;
+      const int column = k % 5, row = k / 5;  // The 5x5 sample grid.
+      const double xi = (column - 2) * 0.5, eta = (row - 2) * 0.5;
       Monomials(xi, eta, m[k]);
       for (int i = 0; i < 6; ++i)
         for (int j = 0; j < 6; ++j) a[i * 6 + j] += m[k][i] * m[k][j];
@@ -800,7 +801,7 @@ Shape MakeShape(ShapeFunction kind, int half) {
     double inv[36];
     [[maybe_unused]] const bool invertible = InvertSpd(a, 6, inv);
     assert(invertible && "the 5x5 sample grid determines every quadratic coefficient");
-    s.fit.assign(6 * 25, 0);
+    s.fit.assign(std::size_t{6} * 25, 0);
     const double scale[6] = {
         1, 1.0 / half, 1.0 / half, 1.0 / (half * half), 1.0 / (half * half), 1.0 / (half * half)};
     for (int i = 0; i < 6; ++i)
@@ -858,7 +859,8 @@ Params ComposeInverse(const Shape& s, const Params& p, const Params& dp) {
   const double h = s.half;
   double tu[25], tv[25];
   for (int k = 0; k < 25; ++k) {
-    const double xi = (k % 5 - 2) * 0.5 * h, eta = (k / 5 - 2) * 0.5 * h;
+    const int column = k % 5, row = k / 5;  // The 5x5 sample grid.
+    const double xi = (column - 2) * 0.5 * h, eta = (row - 2) * 0.5 * h;
     // Invert x = X + d_dp(X) by fixed-point iteration (|grad d_dp| << 1).
     double X = xi, Y = eta;
     for (int it = 0; it < 6; ++it) {
@@ -1010,7 +1012,8 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
     // The warped subset (corners, edge midpoints, 1 px margin) must stay in the valid region.
     for (int k = 0; k < 9; ++k) {
       if (k == 4) continue;
-      const double xi = (k % 3 - 1) * h, eta = (k / 3 - 1) * h;
+      const int column = k % 3, row = k / 3;  // Corners and edge midpoints.
+      const double xi = (column - 1) * h, eta = (row - 1) * h;
       double du, dv;
       Displacement(shape, p, xi, eta, &du, &dv);
       const double x = s.cx + xi + du, y = s.cy + eta + dv;

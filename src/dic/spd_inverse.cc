@@ -1,7 +1,9 @@
 // The dic module is compiled for the build machine (-march=native); with AVX-512, GCC 12 reports
 // false "may be used uninitialized" warnings inside Eigen's vectorised kernels (its intrinsics'
 // __Y placeholders), so this file holds only the Eigen code and silences that one warning.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>

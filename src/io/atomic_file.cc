@@ -71,9 +71,10 @@ void CheckNotAnInput(const std::string& output, const std::string& option,
   if (!fs::exists(output, ec)) return;  // Every input exists: a new file is none of them.
   for (const std::string& input : inputs) {
     if (!input.empty() && fs::equivalent(output, input, ec)) {
-      throw Error(ErrorKind::kInvalidValue, option,
-                  output + (input == output ? "" : " (the same file as " + input + ")") +
-                      ", which is one of the inputs",
+      std::string found = output;
+      if (input != output) found += " (the same file as " + input + ")";
+      found += ", which is one of the inputs";
+      throw Error(ErrorKind::kInvalidValue, option, found,
                   "an output that is not an input (it would be overwritten)");
     }
   }

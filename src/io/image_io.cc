@@ -540,7 +540,7 @@ std::string VideoReader::Finish(int max_frames) const {
   const auto wanted = static_cast<long long>(
       max_frames > 0 ? std::min(declared_, static_cast<double>(max_frames)) : declared_);
   if (declared_ <= 0 || frames_read_ >= wanted) return "";
-  const std::string text = fmt::format(
+  std::string text = fmt::format(
       "{}: decoded {} frames but the container declares {}: the video is truncated or "
       "damaged; the sequence ends after frame {}",
       path_, frames_read_, static_cast<long long>(declared_), frames_read_ - 1);

@@ -318,6 +318,7 @@ std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& optio
   std::vector<ImpactSummary> combo_refs;
   if (options.table1) {
     combos = Table1Combinations();
+    combo_refs.reserve(combos.size());
     for (const Table1Combination& c : combos) combo_refs.push_back(Reference(c.params, 10.0));
   }
   const double budget = options.timing_budget_s;
@@ -366,6 +367,7 @@ void WriteWorkPrecisionCsv(const std::string& path, const std::vector<WorkPrecis
       "wall_time_s", "rhs_evals",  "steps",         "jacobian_evals", "warnings"};
   auto num = [](double v) { return std::isnan(v) ? std::string("nan") : fmt::format("{:.6g}", v); };
   std::vector<std::vector<std::string>> cells;
+  cells.reserve(rows.size());
   for (const WorkPrecisionRow& r : rows)
     cells.push_back({r.case_name, r.solver, r.solver_ran, num(r.rtol), num(r.depth_error),
                      num(r.t_end_error), num(r.peak_error), num(r.plateau_error),

@@ -198,8 +198,49 @@ ImpactSceneSpec ImpactScenePreset(const std::string& name) {
 
 ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
   spec_.Check();
+  SetUpCamera();
+  // Where the pounder hits: the grid's middle column(s) straddle the axis, so with integer subset
+  // centres the axis sits on an integer or half-integer column.
+  const int cols = spec_.grid_cols, rows = spec_.grid_rows, step = spec_.step;
+  axis_px_ = std::floor(spec_.width / 2.0) + (((cols - 1) * step) % 2 ? 0.5 : 0.0);
+  surface_px_ = std::round(spec_.surface_fraction * spec_.height) - 0.5;
+  // Momentum grid mass.
+  momentum_.cols = cols;
+  momentum_.rows = rows;
+  momentum_.cell_area_mm2 = step * step * sx_ * sy_;
+  momentum_.grid_area_mm2 = cols * rows * momentum_.cell_area_mm2;
+  momentum_.m_grid_kg = spec_.density_kg_m3 * momentum_.grid_area_mm2 * 1e-6 * spec_.depth_m;
+  RunImpactModel();
+  FindPeakMomentum();
+  FindMomentumTruthAtTe();
+  LayOutGrids();
+  SetUpCoreGeometry();
+  // Frames.
+  if (spec_.frames > 0) {
+    frame_count_ = spec_.frames;
+  } else {
+    const double t_first = FrameTime(spec_.frames_before_impact);
+    frame_count_ = spec_.frames_before_impact +
+                   static_cast<int>(std::ceil((run_.summary.t_end_s - t_first) * spec_.fps)) + 1 +
+                   3;
+  }
+  // Speckle: the margin covers the largest material displacement into view.
+  const double max_disp_px = CoreDisplacement(1e9) * 1000 / std::min(sx_, sy_) +
+                             spec_.soil.wave_amplitude_mm / std::min(sx_, sy_);
+  pattern_ = std::make_shared<SpecklePattern>(spec_.speckle, spec_.width, spec_.height,
+                                              64 + std::ceil(max_disp_px));
+  MapPixelCorners();
+  // DAQ clock: starts pre_release before the release, shifted so frame 0 falls on a sample.
+  const double nominal = release_time_s() - spec_.sensor.pre_release_s;
+  const double t0 = FrameTime(0);
+  const double samples = std::ceil((t0 - nominal) * spec_.sensor.rate_hz - 1e-9);
+  daq_origin_s_ = t0 - samples / spec_.sensor.rate_hz;
+}
+
+// The camera: the sample lens scaled to the image size, or an ideal pinhole; the object-side
+// scale sx_, sy_ [mm/px] at the panel.
+void ImpactScene::SetUpCamera() {
   const double w = spec_.width, h = spec_.height;
-  // Camera.
   if (spec_.lens == SceneLens::kSample) {
     const SynthCamera base = SampleCamera();
     const double kx = w / base.width, ky = h / base.height;
@@ -220,22 +261,11 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
   const double distance_mm = spec_.mm_per_px * std::sqrt(camera_.fx * camera_.fy);
   sx_ = distance_mm / camera_.fx;
   sy_ = distance_mm / camera_.fy;
+}
 
-  // Where the pounder hits: the grid's middle column(s) straddle the axis, so with integer subset
-  // centres the axis sits on an integer or half-integer column.
-  const int cols = spec_.grid_cols, rows = spec_.grid_rows, step = spec_.step;
-  axis_px_ = std::floor(w / 2) + (((cols - 1) * step) % 2 ? 0.5 : 0.0);
-  surface_px_ = std::round(spec_.surface_fraction * h) - 0.5;
-  const double D_mm = spec_.width_m * 1000;
-
-  // Momentum grid mass.
-  momentum_.cols = cols;
-  momentum_.rows = rows;
-  momentum_.cell_area_mm2 = step * step * sx_ * sy_;
-  momentum_.grid_area_mm2 = cols * rows * momentum_.cell_area_mm2;
-  momentum_.m_grid_kg = spec_.density_kg_m3 * momentum_.grid_area_mm2 * 1e-6 * spec_.depth_m;
-
-  // Impact model.
+// The impact model (Eq. 9) of the spec, solved at rtol 1e-10; the added mass from the spec's
+// choice (the momentum grid's mass, Eq. 4 or given).
+void ImpactScene::RunImpactModel() {
   v0_ = spec_.ImpactVelocity();
   ImpactModelParameters& p = model_params_;
   p.pounder_mass_kg = spec_.pounder_mass_kg;
@@ -263,129 +293,125 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
     throw Error(ErrorKind::kNumerical,
                 fmt::format("the impact model did not stop the pounder ({}): {}",
                             run_.summary.stop_reason, run_.summary.BriefReport()));
+}
+
+// p_max: the maximum of m_p v_p(t) over t >= 0 (at t = 0 unless gravity still wins there),
+// sampled then refined by golden-section search.
+void ImpactScene::FindPeakMomentum() {
   const double mp = spec_.pounder_mass_kg, t_end = run_.summary.t_end_s;
-
-  // p_max: the maximum of m_p v_p(t) over t >= 0 (at t = 0 unless gravity still wins there).
-  {
-    const int n = 4000;
-    const double span = std::min(t_end, 2 * spec_.T_s + 20 / spec_.b_per_s);
-    int best = 0;
-    double best_v = run_.solution.StateAt(0).v_m_s;
-    for (int i = 1; i <= n; ++i) {
-      const double v = run_.solution.StateAt(span * i / n).v_m_s;
-      if (v > best_v) best_v = v, best = i;
-    }
-    double lo = span * std::max(0, best - 1) / n, hi = span * std::min(n, best + 1) / n;
-    if (best > 0) {  // Golden-section refinement of the maximum.
-      momentum_.t_pmax_s =
-          GoldenSectionMaximize([&](double t) { return run_.solution.StateAt(t).v_m_s; }, lo, hi,
-                                {.max_iterations = 80, .relative_tolerance = 1e-15});
-      best_v = std::max(best_v, run_.solution.StateAt(momentum_.t_pmax_s).v_m_s);
-    } else {
-      momentum_.t_pmax_s = 0;
-    }
-    momentum_.p_max_Ns = mp * best_v;
+  const int n = 4000;
+  const double span = std::min(t_end, 2 * spec_.T_s + 20 / spec_.b_per_s);
+  int best = 0;
+  double best_v = run_.solution.StateAt(0).v_m_s;
+  for (int i = 1; i <= n; ++i) {
+    const double v = run_.solution.StateAt(span * i / n).v_m_s;
+    if (v > best_v) best_v = v, best = i;
   }
-  // t_e: the first root of (m_p + m_grid) v_p(t) - p_max after t_pmax (bisection).
-  {
-    const double mg = momentum_.m_grid_kg, pmax = momentum_.p_max_Ns;
-    auto g = [&](double t) { return (mp + mg) * run_.solution.StateAt(t).v_m_s - pmax; };
-    const int n = 4000;
-    double lo = momentum_.t_pmax_s, hi = t_end;
-    for (int i = 1; i <= n; ++i) {
-      const double t = momentum_.t_pmax_s + (t_end - momentum_.t_pmax_s) * i / n;
-      if (g(t) <= 0) {
-        hi = t;
-        break;
-      }
-      lo = t;
-    }
-    for (int it = 0; it < 200 && hi - lo > 1e-16; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (g(mid) > 0)
-        lo = mid;
-      else
-        hi = mid;
-    }
-    momentum_.t_e_s = 0.5 * (lo + hi);
-    const ImpactState s = run_.solution.StateAt(momentum_.t_e_s);
-    momentum_.v_te_m_s = s.v_m_s;
-    momentum_.m_add_max_kg = pmax / s.v_m_s - mp;
-    z_te_m_ = s.z_m;
-    W_te_m_ = (pmax * momentum_.t_e_s - mp * s.z_m) / mg;
-    momentum_.relative_penetration_mm = (z_te_m_ - W_te_m_) * 1000;
-    momentum_.conservation_error =
-        std::abs(mp * s.v_m_s + mg * CoreVelocity(momentum_.t_e_s) - pmax) / pmax;
-  }
-
-  // DIC grid: subset centres at roi.x + half + i step; the ROI starts below the surface by more
-  // than the pounder's penetration relative to the core, so the grid is never covered above it.
-  const int half = spec_.subset_size / 2, margin = 8;
-  {
-    const double first_col = axis_px_ - 0.5 * (cols - 1) * step;  // integer by construction
-    int c0 = static_cast<int>(std::lround(first_col));
-    while (c0 - step - half >= margin) c0 -= step;
-    int c1 = c0;
-    while (c1 + step + half <= spec_.width - 1 - margin) c1 += step;
-    const int y0 =
-        static_cast<int>(std::ceil(surface_px_ + momentum_.relative_penetration_mm / sy_ + 2.0));
-    int r1 = y0 + half;
-    CheckValue(r1 + half <= spec_.height - 1 - margin, "camera.surface_fraction",
-               fmt::format("{}", spec_.surface_fraction),
-               "room for at least one subset row below the surface");
-    while (r1 + step + half <= spec_.height - 1 - margin) r1 += step;
-    dic_grid_.roi = {c0 - half, y0, c1 + half + 1, r1 + half + 1};
-    dic_grid_.cols = (c1 - c0) / step + 1;
-    dic_grid_.rows = (r1 - (y0 + half)) / step + 1;
-    for (int r = 0; r < dic_grid_.rows; ++r)
-      for (int c = 0; c < dic_grid_.cols; ++c)
-        dic_grid_.centres_px.emplace_back(c0 + c * step, y0 + half + r * step);
-    for (int r = 0; r < rows; ++r)
-      for (int c = 0; c < cols; ++c)
-        momentum_.centres_px.emplace_back(first_col + c * step, y0 + half + r * step);
-    CheckValue(
-        rows <= dic_grid_.rows, "momentum.grid_rows", std::to_string(rows),
-        fmt::format("at most the {} subset rows that fit below the surface", dic_grid_.rows));
-    const double half_width_mm = 0.5 * (cols - 1) * step * sx_;
-    CheckValue(half_width_mm <= D_mm / 2, "momentum.grid_cols", std::to_string(cols),
-               fmt::format("a grid whose subset centres lie under the {} mm wide footprint "
-                           "({} cols x dic.step {} px x {:.4g} mm/px is {:.4g} mm wide)",
-                           D_mm, cols, step, sx_, 2 * half_width_mm));
-  }
-  // Core geometry: the rigid core must contain the default grid's subset centres with room to
-  // spare (one step) so the grid mean is exact wherever the pipeline lays its 6 x 2 subsets.
-  {
-    const double grid_bottom_px = momentum_.centres_px.back().y + half + step;
-    const double needed_mm = (grid_bottom_px - surface_px_) * sy_;
-    if (spec_.soil.core_depth_mm > 0) {
-      CheckValue(spec_.soil.core_depth_mm >= needed_mm, "soil.core_depth_mm",
-                 fmt::format("{}", spec_.soil.core_depth_mm),
-                 fmt::format("a core depth >= {:.4g} mm (the momentum grid plus one step), or 0",
-                             needed_mm));
-      core_depth_mm_ = spec_.soil.core_depth_mm;
-    } else {
-      core_depth_mm_ = std::max(0.3 * D_mm, needed_mm);
-    }
-    cone_depth_mm_ = spec_.soil.cone_depth_mm > 0 ? spec_.soil.cone_depth_mm : D_mm / 2;
-    decay_mm_ = spec_.soil.decay_length_mm > 0 ? spec_.soil.decay_length_mm : 1.5 * D_mm;
-  }
-
-  // Frames.
-  if (spec_.frames > 0) {
-    frame_count_ = spec_.frames;
+  double lo = span * std::max(0, best - 1) / n, hi = span * std::min(n, best + 1) / n;
+  if (best > 0) {
+    momentum_.t_pmax_s =
+        GoldenSectionMaximize([&](double t) { return run_.solution.StateAt(t).v_m_s; }, lo, hi,
+                              {.max_iterations = 80, .relative_tolerance = 1e-15});
+    best_v = std::max(best_v, run_.solution.StateAt(momentum_.t_pmax_s).v_m_s);
   } else {
-    const double t_first = FrameTime(spec_.frames_before_impact);
-    frame_count_ = spec_.frames_before_impact +
-                   static_cast<int>(std::ceil((t_end - t_first) * spec_.fps)) + 1 + 3;
+    momentum_.t_pmax_s = 0;
   }
+  momentum_.p_max_Ns = mp * best_v;
+}
 
-  // Speckle: the margin covers the largest material displacement into view.
-  const double max_disp_px = CoreDisplacement(1e9) * 1000 / std::min(sx_, sy_) +
-                             spec_.soil.wave_amplitude_mm / std::min(sx_, sy_);
-  pattern_ = std::make_shared<SpecklePattern>(spec_.speckle, spec_.width, spec_.height,
-                                              64 + std::ceil(max_disp_px));
+// t_e: the first root of (m_p + m_grid) v_p(t) - p_max after t_pmax (bisection), and the truth
+// there: added mass, core displacement, relative penetration, momentum conservation.
+void ImpactScene::FindMomentumTruthAtTe() {
+  const double mp = spec_.pounder_mass_kg, t_end = run_.summary.t_end_s;
+  const double mg = momentum_.m_grid_kg, pmax = momentum_.p_max_Ns;
+  auto g = [&](double t) { return (mp + mg) * run_.solution.StateAt(t).v_m_s - pmax; };
+  const int n = 4000;
+  double lo = momentum_.t_pmax_s, hi = t_end;
+  for (int i = 1; i <= n; ++i) {
+    const double t = momentum_.t_pmax_s + (t_end - momentum_.t_pmax_s) * i / n;
+    if (g(t) <= 0) {
+      hi = t;
+      break;
+    }
+    lo = t;
+  }
+  for (int it = 0; it < 200 && hi - lo > 1e-16; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    if (g(mid) > 0)
+      lo = mid;
+    else
+      hi = mid;
+  }
+  momentum_.t_e_s = 0.5 * (lo + hi);
+  const ImpactState s = run_.solution.StateAt(momentum_.t_e_s);
+  momentum_.v_te_m_s = s.v_m_s;
+  momentum_.m_add_max_kg = pmax / s.v_m_s - mp;
+  z_te_m_ = s.z_m;
+  W_te_m_ = (pmax * momentum_.t_e_s - mp * s.z_m) / mg;
+  momentum_.relative_penetration_mm = (z_te_m_ - W_te_m_) * 1000;
+  momentum_.conservation_error =
+      std::abs(mp * s.v_m_s + mg * CoreVelocity(momentum_.t_e_s) - pmax) / pmax;
+}
 
-  // Ideal positions of the pixel corners (distorted pixel (c - 0.5, r - 0.5)).
+// DIC grid: subset centres at roi.x + half + i step; the ROI starts below the surface by more
+// than the pounder's penetration relative to the core, so the grid is never covered above it.
+// The momentum grid: cols x rows subsets centred on the axis, at the top of the DIC grid.
+void ImpactScene::LayOutGrids() {
+  const int cols = spec_.grid_cols, rows = spec_.grid_rows, step = spec_.step;
+  const int half = spec_.subset_size / 2, margin = 8;
+  const double D_mm = spec_.width_m * 1000;
+  const double first_col = axis_px_ - 0.5 * (cols - 1) * step;  // integer by construction
+  int c0 = static_cast<int>(std::lround(first_col));
+  while (c0 - step - half >= margin) c0 -= step;
+  int c1 = c0;
+  while (c1 + step + half <= spec_.width - 1 - margin) c1 += step;
+  const int y0 =
+      static_cast<int>(std::ceil(surface_px_ + momentum_.relative_penetration_mm / sy_ + 2.0));
+  int r1 = y0 + half;
+  CheckValue(r1 + half <= spec_.height - 1 - margin, "camera.surface_fraction",
+             fmt::format("{}", spec_.surface_fraction),
+             "room for at least one subset row below the surface");
+  while (r1 + step + half <= spec_.height - 1 - margin) r1 += step;
+  dic_grid_.roi = {c0 - half, y0, c1 + half + 1, r1 + half + 1};
+  dic_grid_.cols = (c1 - c0) / step + 1;
+  dic_grid_.rows = (r1 - (y0 + half)) / step + 1;
+  for (int r = 0; r < dic_grid_.rows; ++r)
+    for (int c = 0; c < dic_grid_.cols; ++c)
+      dic_grid_.centres_px.emplace_back(c0 + c * step, y0 + half + r * step);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      momentum_.centres_px.emplace_back(first_col + c * step, y0 + half + r * step);
+  CheckValue(rows <= dic_grid_.rows, "momentum.grid_rows", std::to_string(rows),
+             fmt::format("at most the {} subset rows that fit below the surface", dic_grid_.rows));
+  const double half_width_mm = 0.5 * (cols - 1) * step * sx_;
+  CheckValue(half_width_mm <= D_mm / 2, "momentum.grid_cols", std::to_string(cols),
+             fmt::format("a grid whose subset centres lie under the {} mm wide footprint "
+                         "({} cols x dic.step {} px x {:.4g} mm/px is {:.4g} mm wide)",
+                         D_mm, cols, step, sx_, 2 * half_width_mm));
+}
+
+// Core geometry: the rigid core must contain the default grid's subset centres with room to
+// spare (one step) so the grid mean is exact wherever the pipeline lays its 6 x 2 subsets.
+void ImpactScene::SetUpCoreGeometry() {
+  const int half = spec_.subset_size / 2, step = spec_.step;
+  const double D_mm = spec_.width_m * 1000;
+  const double grid_bottom_px = momentum_.centres_px.back().y + half + step;
+  const double needed_mm = (grid_bottom_px - surface_px_) * sy_;
+  if (spec_.soil.core_depth_mm > 0) {
+    CheckValue(spec_.soil.core_depth_mm >= needed_mm, "soil.core_depth_mm",
+               fmt::format("{}", spec_.soil.core_depth_mm),
+               fmt::format("a core depth >= {:.4g} mm (the momentum grid plus one step), or 0",
+                           needed_mm));
+    core_depth_mm_ = spec_.soil.core_depth_mm;
+  } else {
+    core_depth_mm_ = std::max(0.3 * D_mm, needed_mm);
+  }
+  cone_depth_mm_ = spec_.soil.cone_depth_mm > 0 ? spec_.soil.cone_depth_mm : D_mm / 2;
+  decay_mm_ = spec_.soil.decay_length_mm > 0 ? spec_.soil.decay_length_mm : 1.5 * D_mm;
+}
+
+// Ideal positions of the pixel corners (distorted pixel (c - 0.5, r - 0.5)).
+void ImpactScene::MapPixelCorners() {
   corner_map_.assign(static_cast<std::size_t>(spec_.width + 1) * (spec_.height + 1), {});
   tbb::parallel_for(0, spec_.height + 1, [&](int r) {
     for (int c = 0; c <= spec_.width; ++c) {
@@ -396,14 +422,6 @@ ImpactScene::ImpactScene(const ImpactSceneSpec& spec) : spec_(spec) {
       corner_map_[static_cast<std::size_t>(r) * (spec_.width + 1) + c] = camera_.Pinhole(n);
     }
   });
-
-  // DAQ clock: starts pre_release before the release, shifted so frame 0 falls on a sample.
-  {
-    const double nominal = release_time_s() - spec_.sensor.pre_release_s;
-    const double t0 = FrameTime(0);
-    const double samples = std::ceil((t0 - nominal) * spec_.sensor.rate_hz - 1e-9);
-    daq_origin_s_ = t0 - samples / spec_.sensor.rate_hz;
-  }
 }
 
 cv::Point2d ImpactScene::PanelFromIdeal(cv::Point2d q) const {

@@ -13,7 +13,6 @@ TEST(Error, NamesWhereFoundAndExpected) {
       "scene.yaml:12:3: dic.subset_size: invalid value (got 24); expected an odd integer >= 5");
   EXPECT_EQ(e.line(), 12);
   EXPECT_EQ(ExitCode(e.kind()), 1);
-  EXPECT_EQ(ExitCode(ErrorKind::kNotImplemented), 2);
 }
 
 TEST(Error, CheckValueThrowsOnlyWhenViolated) {

@@ -20,12 +20,11 @@ enum class ErrorKind {
   kFileFormat,      // A file exists but cannot be parsed (corrupt image, malformed CSV).
   kIo,              // Reading or writing failed (permissions, disk full).
   kNumerical,       // A computation failed in a way the input caused (no convergence, NaN).
-  kNotImplemented,  // A stage that does not exist yet.
 };
 
 const char* ToString(ErrorKind kind);
 
-// Process exit code for an error of this kind: 2 for kNotImplemented, 1 otherwise.
+// Process exit code for an error of this kind (1 for every kind: bad input or a failed run).
 int ExitCode(ErrorKind kind);
 
 class Error : public std::runtime_error {

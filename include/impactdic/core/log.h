@@ -35,11 +35,6 @@ void LogWarning(fmt::format_string<Args...> format, Args&&... args) {
   if (GetLogLevel() <= LogLevel::kWarning)
     LogMessage(LogLevel::kWarning, fmt::format(format, std::forward<Args>(args)...));
 }
-template <typename... Args>
-void LogError(fmt::format_string<Args...> format, Args&&... args) {
-  if (GetLogLevel() <= LogLevel::kError)
-    LogMessage(LogLevel::kError, fmt::format(format, std::forward<Args>(args)...));
-}
 
 }  // namespace impactdic
 

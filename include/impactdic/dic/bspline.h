@@ -78,9 +78,6 @@ inline void CubicWeights(float t, float w[4]) {
   w[2] = 1 - w[0] - w[1] - w[3];
 }
 
-// Quintic B-spline weights for taps floor(x) - 2 .. floor(x) + 3.
-void QuinticWeights(double t, double w[6]);
-
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_DIC_BSPLINE_H_

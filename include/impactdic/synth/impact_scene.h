@@ -263,6 +263,15 @@ class ImpactScene {
     double W_mm = 0;       // Core displacement.
     double Wdot_mm_s = 0;  // Core velocity (only needed for velocities).
   };
+  // The steps of the constructor, in order.
+  void SetUpCamera();
+  void RunImpactModel();
+  void FindPeakMomentum();
+  void FindMomentumTruthAtTe();
+  void LayOutGrids();
+  void SetUpCoreGeometry();
+  void MapPixelCorners();
+
   double DistanceToCore(double X, double Y, cv::Vec2d* gradient) const;
   cv::Vec2d EvalSoil(double X, double Y, const SoilTime& st, cv::Vec4d* grad, cv::Vec2d* vel) const;
 
