@@ -370,20 +370,20 @@ class Correlator::Impl::FrameSolver {
   // is a better prediction (fewer IC-GN iterations) wherever the motion is smooth over 3x3
   // subsets.
   bool Predict(int i, Params* p0) const {
-    const int nx = m_.nx, ny = m_.ny;
-    const std::vector<cv::Point2d>& pos_last = m_.pos_last;
-    const std::vector<cv::Point2d>& pos_prev = m_.pos_prev;
-    if (std::isnan(pos_last[i].x)) return false;
-    cv::Point2d pred = pos_last[i];
-    if (!std::isnan(pos_prev[i].x)) {
-      const int r = i / nx, c = i % nx;
+    const int grid_nx = m_.nx, grid_ny = m_.ny;
+    const std::vector<cv::Point2d>& last = m_.pos_last;
+    const std::vector<cv::Point2d>& prev = m_.pos_prev;
+    if (std::isnan(last[i].x)) return false;
+    cv::Point2d pred = last[i];
+    if (!std::isnan(prev[i].x)) {
+      const int r = i / grid_nx, c = i % grid_nx;
       cv::Point2d velocity(0, 0);
       int count = 0;
-      for (int rr = std::max(0, r - 1); rr <= std::min(ny - 1, r + 1); ++rr) {
-        for (int cc = std::max(0, c - 1); cc <= std::min(nx - 1, c + 1); ++cc) {
-          const int j = rr * nx + cc;
-          if (std::isnan(pos_last[j].x) || std::isnan(pos_prev[j].x)) continue;
-          velocity += pos_last[j] - pos_prev[j];
+      for (int rr = std::max(0, r - 1); rr <= std::min(grid_ny - 1, r + 1); ++rr) {
+        for (int cc = std::max(0, c - 1); cc <= std::min(grid_nx - 1, c + 1); ++cc) {
+          const int j = rr * grid_nx + cc;
+          if (std::isnan(last[j].x) || std::isnan(prev[j].x)) continue;
+          velocity += last[j] - prev[j];
           ++count;
         }
       }
@@ -424,15 +424,15 @@ class Correlator::Impl::FrameSolver {
 
   // The solved lattice neighbour of i with the highest ZNCC (lowest index on ties); -1 if none.
   int SolvedNeighbour(int i, int stride) const {
-    const int nx = m_.nx, ny = m_.ny;
-    const int r = i / nx, c = i % nx;
+    const int grid_nx = m_.nx, grid_ny = m_.ny;
+    const int r = i / grid_nx, c = i % grid_nx;
     int best = -1;
     for (int dr = -stride; dr <= stride; dr += stride) {
       for (int dc = -stride; dc <= stride; dc += stride) {
         if (!dr && !dc) continue;
         const int rr = r + dr, cc = c + dc;
-        if (rr < 0 || rr >= ny || cc < 0 || cc >= nx) continue;
-        const int j = rr * nx + cc;
+        if (rr < 0 || rr >= grid_ny || cc < 0 || cc >= grid_nx) continue;
+        const int j = rr * grid_nx + cc;
         if (!at_[j].solved) continue;
         if (best < 0 || at_[j].r.zncc > at_[best].r.zncc ||
             (at_[j].r.zncc == at_[best].r.zncc && j < best))
@@ -518,7 +518,7 @@ class Correlator::Impl::FrameSolver {
   // its warp; coarser: the fit of all solved neighbours); those that fail get their own search
   // around that guess. false if no subset had a solved neighbour.
   bool PropagateWave(int stride) {
-    const int nx = m_.nx, ny = m_.ny;
+    const int grid_nx = m_.nx, grid_ny = m_.ny;
     // Solved neighbours are listed before the wave runs (the wave changes `at_`).
     std::vector<int> frontier, best, neighbour_count;
     std::vector<std::array<int, 8>> neighbours;
@@ -531,12 +531,13 @@ class Correlator::Impl::FrameSolver {
       if (stride > 1) {
         std::array<int, 8> from;
         int count = 0;
-        const int r = i / nx, c = i % nx;
+        const int r = i / grid_nx, c = i % grid_nx;
         for (int dr = -stride; dr <= stride; dr += stride) {
           for (int dc = -stride; dc <= stride; dc += stride) {
             const int rr = r + dr, cc = c + dc;
-            if ((dr || dc) && rr >= 0 && rr < ny && cc >= 0 && cc < nx && at_[rr * nx + cc].solved)
-              from[count++] = rr * nx + cc;
+            if ((dr || dc) && rr >= 0 && rr < grid_ny && cc >= 0 && cc < grid_nx &&
+                at_[rr * grid_nx + cc].solved)
+              from[count++] = rr * grid_nx + cc;
           }
         }
         neighbours.push_back(from);
@@ -544,7 +545,7 @@ class Correlator::Impl::FrameSolver {
       }
     }
     if (frontier.empty()) return false;
-    const internal::Shape& shape = m_.shape;
+    const internal::Shape& warp = m_.shape;
     const std::vector<SubsetRef>& subsets = m_.ref.subsets;
     timer_.Restart();
     tbb::parallel_for(0, static_cast<int>(frontier.size()), [&](int k) {
@@ -553,7 +554,7 @@ class Correlator::Impl::FrameSolver {
       const SubsetRef& sj = subsets[j];
       at_[i].propagated = true;
       if (stride == 1) {
-        at_[i].r = Icgn(i, internal::Transfer(shape, at_[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+        at_[i].r = Icgn(i, internal::Transfer(warp, at_[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
       } else {
         // On the coarse lattice the neighbours are far apart: fit all solved ones.
         at_[i].r = Icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k]));
@@ -575,7 +576,7 @@ class Correlator::Impl::FrameSolver {
       frame_.Float();
       tbb::parallel_for(0, static_cast<int>(retry.size()), [&](int k) {
         const int i = retry[k], j = from[k];
-        const Params p0 = internal::Transfer(shape, at_[j].r.p, subsets[i].cx - subsets[j].cx,
+        const Params p0 = internal::Transfer(warp, at_[j].r.p, subsets[i].cx - subsets[j].cx,
                                              subsets[i].cy - subsets[j].cy);
         SearchAndSolve(i, &p0);
       });
@@ -589,9 +590,10 @@ class Correlator::Impl::FrameSolver {
   // `seed_spacing`-th lattice node and the grid centre lines; all candidates if none is a seed).
   // false if there is no candidate left.
   bool SearchSeeds(int stride) {
-    const int nx = m_.nx, ny = m_.ny;
+    const int grid_nx = m_.nx, grid_ny = m_.ny;
     const int spacing = std::max(1, m_.options.init.seed_spacing / stride);
-    const int lattice_nx = (nx + stride - 1) / stride, lattice_ny = (ny + stride - 1) / stride;
+    const int lattice_nx = (grid_nx + stride - 1) / stride,
+              lattice_ny = (grid_ny + stride - 1) / stride;
     std::vector<int> candidates, seeds;
     for (int i = 0; i < n_; ++i)
       // Not those whose guess from a solved neighbour left the image: nothing to search for.
@@ -600,7 +602,7 @@ class Correlator::Impl::FrameSolver {
         candidates.push_back(i);
     if (candidates.empty()) return false;
     for (int i : candidates) {
-      const int r = i / nx / stride, c = i % nx / stride;
+      const int r = i / grid_nx / stride, c = i % grid_nx / stride;
       if ((r % spacing == spacing / 2 || r == lattice_ny / 2) &&
           (c % spacing == spacing / 2 || c == lattice_nx / 2))
         seeds.push_back(i);
@@ -621,22 +623,22 @@ class Correlator::Impl::FrameSolver {
   // than one neighbour's warp (the neighbours' errors average out), so IC-GN needs fewer
   // iterations.
   void FillFromLattice(int stride) {
-    const int nx = m_.nx, ny = m_.ny;
+    const int grid_nx = m_.nx, grid_ny = m_.ny;
     std::vector<int> fill;
     for (int i = 0; i < n_; ++i)
       if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride))
         fill.push_back(i);
     timer_.Restart();
     tbb::parallel_for(0, static_cast<int>(fill.size()), [&](int k) {
-      const int i = fill[k], r = i / nx, c = i % nx;
+      const int i = fill[k], r = i / grid_nx, c = i % grid_nx;
       const SubsetRef& si = m_.ref.subsets[i];
       std::array<int, 8> from;
       int count = 0;
       for (int dr = -1; dr <= 1; ++dr) {
         for (int dc = -1; dc <= 1; ++dc) {
           const int rr = r + dr, cc = c + dc;
-          if (rr < 0 || rr >= ny || cc < 0 || cc >= nx) continue;
-          const int j = rr * nx + cc;
+          if (rr < 0 || rr >= grid_ny || cc < 0 || cc >= grid_nx) continue;
+          const int j = rr * grid_nx + cc;
           if (OnLattice(j, stride) && at_[j].solved) from[count++] = j;
         }
       }
@@ -786,7 +788,7 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
         im.gy.at<float>(r, c) = static_cast<float>(gy);
       }
     }
-    std::array<double, 12 * 12> hinv;  // At most 12 warp parameters (quadratic).
+    std::array<double, std::size_t{12} * 12> hinv;  // At most 12 warp parameters (quadratic).
     internal::PrepareSubset(shape, im, options.icgn, &s, hinv.data());
     if (!Usable(s.status)) return;
     // Guess: the displacement from the tracked point in the last frame to its expected position.
