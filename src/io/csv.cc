@@ -120,6 +120,102 @@ const std::vector<std::string>& CsvTable::TextColumn(const std::string& name) co
       .WithFile(path);
 }
 
+namespace {
+
+// The header row: column names (none empty or numeric), split into numeric and text columns.
+void ReadHeader(const std::vector<std::string>& cells, const std::string& line, int line_no,
+                const CsvReadOptions& options, CsvTable* table, std::vector<bool>* is_text) {
+  CheckSeparator(cells, line, table->path, line_no);
+  for (const auto& c : cells) {
+    double dummy;
+    if (c.empty() || ParseNumber(c, &dummy)) {
+      throw Error(ErrorKind::kFileFormat, "header", "'" + line + "'",
+                  "a header row of column names")
+          .WithFile(table->path, line_no);
+    }
+  }
+  for (const auto& c : cells) {
+    const bool text = std::find(options.text_columns.begin(), options.text_columns.end(), c) !=
+                      options.text_columns.end();
+    is_text->push_back(text);
+    (text ? table->text_names : table->names).push_back(c);
+  }
+  table->columns.assign(table->names.size(), {});
+  table->text_columns.assign(table->text_names.size(), {});
+}
+
+// One data row: as many cells as the header, numbers (finite unless allowed) in numeric columns.
+void AppendRow(const std::vector<std::string>& cells, int line_no, const CsvReadOptions& options,
+               const std::vector<bool>& is_text, CsvTable* table) {
+  if (cells.size() != is_text.size()) {
+    throw Error(ErrorKind::kFileFormat, "row", fmt::format("{} cells", cells.size()),
+                fmt::format("{} cells as in the header", is_text.size()))
+        .WithFile(table->path, line_no);
+  }
+  std::size_t numeric = 0, text = 0;
+  for (std::size_t cell = 0; cell < cells.size(); ++cell) {
+    if (is_text[cell]) {
+      table->text_columns[text++].push_back(cells[cell]);
+      continue;
+    }
+    const std::size_t c = numeric++;
+    double value;
+    if (!ParseNumber(cells[cell], &value)) {
+      throw Error(ErrorKind::kFileFormat, "column '" + table->names[c] + "'",
+                  "'" + cells[cell] + "'", "a number")
+          .WithFile(table->path, line_no, static_cast<int>(cell + 1));
+    }
+    if (!std::isfinite(value) && !options.allow_non_finite) {
+      throw Error(ErrorKind::kFileFormat, "column '" + table->names[c] + "'",
+                  cells[cell].empty() ? "an empty cell" : "'" + cells[cell] + "'",
+                  "a finite number")
+          .WithFile(table->path, line_no, static_cast<int>(cell + 1));
+    }
+    table->columns[c].push_back(value);
+  }
+}
+
+// The file line of data row `row` (0-based; data rows follow the header in order, skipping
+// comments and blank lines).
+int LineOfDataRow(const std::string& path, const CsvReadOptions& options, std::size_t row) {
+  std::ifstream again(path);
+  std::string line;
+  int ln = 0, data_row = -1;
+  bool header_seen = false;
+  while (std::getline(again, line)) {
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (Trim(line).empty() || line[0] == options.comment) continue;
+    if (!header_seen) {
+      header_seen = true;
+      continue;
+    }
+    if (++data_row == static_cast<int>(row)) break;
+  }
+  return ln;
+}
+
+// CsvReadOptions::increasing_column holds strictly increasing values; the error names the line
+// and the column's position in the file (1-based, counting text columns too).
+void CheckIncreasing(const CsvTable& table, const std::vector<bool>& is_text,
+                     const CsvReadOptions& options) {
+  const auto& t = table.Column(options.increasing_column);
+  std::size_t col = 0;
+  for (std::size_t i = 0, numeric = 0; i < is_text.size(); ++i) {
+    if (is_text[i]) continue;
+    if (table.names[numeric++] == options.increasing_column) col = i;
+  }
+  for (std::size_t i = 1; i < t.size(); ++i) {
+    if (!(t[i] > t[i - 1])) {
+      throw Error(ErrorKind::kFileFormat, "column '" + options.increasing_column + "'",
+                  fmt::format("{} after {}", t[i], t[i - 1]), "strictly increasing values")
+          .WithFile(table.path, LineOfDataRow(table.path, options, i), static_cast<int>(col + 1));
+    }
+  }
+}
+
+}  // namespace
+
 CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   CheckInputFile(path, kCsvWhat, kMaxCsvFileBytes);
   std::ifstream in(path, std::ios::binary);
@@ -131,60 +227,17 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   int line_no = 0;
   bool have_header = false;
   std::vector<bool> is_text;
-  std::size_t header_cells = 0;
   while (std::getline(in, line)) {
     ++line_no;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (Trim(line).empty() || line[0] == options.comment) continue;
     if (line_no == 1 && line.rfind(kUtf8Bom, 0) == 0) line.erase(0, kUtf8Bom.size());
-    std::vector<std::string> cells = SplitCells(line);
-    if (!have_header) {
-      CheckSeparator(cells, line, path, line_no);
-      for (const auto& c : cells) {
-        double dummy;
-        if (c.empty() || ParseNumber(c, &dummy)) {
-          throw Error(ErrorKind::kFileFormat, "header", "'" + line + "'",
-                      "a header row of column names")
-              .WithFile(path, line_no);
-        }
-      }
-      for (const auto& c : cells) {
-        const bool text = std::find(options.text_columns.begin(), options.text_columns.end(), c) !=
-                          options.text_columns.end();
-        is_text.push_back(text);
-        (text ? table.text_names : table.names).push_back(c);
-      }
-      header_cells = cells.size();
-      table.columns.assign(table.names.size(), {});
-      table.text_columns.assign(table.text_names.size(), {});
+    const std::vector<std::string> cells = SplitCells(line);
+    if (have_header) {
+      AppendRow(cells, line_no, options, is_text, &table);
+    } else {
+      ReadHeader(cells, line, line_no, options, &table, &is_text);
       have_header = true;
-      continue;
-    }
-    if (cells.size() != header_cells) {
-      throw Error(ErrorKind::kFileFormat, "row", fmt::format("{} cells", cells.size()),
-                  fmt::format("{} cells as in the header", header_cells))
-          .WithFile(path, line_no);
-    }
-    std::size_t numeric = 0, text = 0;
-    for (std::size_t cell = 0; cell < cells.size(); ++cell) {
-      if (is_text[cell]) {
-        table.text_columns[text++].push_back(cells[cell]);
-        continue;
-      }
-      const std::size_t c = numeric++;
-      double value;
-      if (!ParseNumber(cells[cell], &value)) {
-        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
-                    "'" + cells[cell] + "'", "a number")
-            .WithFile(path, line_no, static_cast<int>(cell + 1));
-      }
-      if (!std::isfinite(value) && !options.allow_non_finite) {
-        throw Error(ErrorKind::kFileFormat, "column '" + table.names[c] + "'",
-                    cells[cell].empty() ? "an empty cell" : "'" + cells[cell] + "'",
-                    "a finite number")
-            .WithFile(path, line_no, static_cast<int>(cell + 1));
-      }
-      table.columns[c].push_back(value);
     }
   }
   if (!have_header) {
@@ -192,37 +245,7 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
         .WithFile(path);
   }
   for (const auto& required : options.required_columns) table.Column(required);
-  if (!options.increasing_column.empty()) {
-    const auto& t = table.Column(options.increasing_column);
-    // Its position in the file (1-based), counting text columns too.
-    std::size_t col = 0;
-    for (std::size_t i = 0, numeric = 0; i < is_text.size(); ++i) {
-      if (is_text[i]) continue;
-      if (table.names[numeric++] == options.increasing_column) col = i;
-    }
-    // Reconstruct line numbers: data rows follow the header in order, skipping comments/blank
-    // lines; re-scan to report the exact line.
-    for (std::size_t i = 1; i < t.size(); ++i) {
-      if (!(t[i] > t[i - 1])) {
-        std::ifstream again(path);
-        int ln = 0, data_row = -1;
-        bool header_seen = false;
-        while (std::getline(again, line)) {
-          ++ln;
-          if (!line.empty() && line.back() == '\r') line.pop_back();
-          if (Trim(line).empty() || line[0] == options.comment) continue;
-          if (!header_seen) {
-            header_seen = true;
-            continue;
-          }
-          if (++data_row == static_cast<int>(i)) break;
-        }
-        throw Error(ErrorKind::kFileFormat, "column '" + options.increasing_column + "'",
-                    fmt::format("{} after {}", t[i], t[i - 1]), "strictly increasing values")
-            .WithFile(path, ln, static_cast<int>(col + 1));
-      }
-    }
-  }
+  if (!options.increasing_column.empty()) CheckIncreasing(table, is_text, options);
   return table;
 }
 

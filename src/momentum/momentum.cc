@@ -60,114 +60,154 @@ void MomentumOptions::Check() const {
   sigmoid.Check();
 }
 
+namespace {
+
+// The correlated grid's columns and rows of subset centres, their steps and a description for
+// messages.
+struct GridLayout {
+  std::vector<double> xs, ys;  // Distinct centre coordinates [mm], sorted.
+  double sx = 0, sy = 0;       // Median steps [mm] (NaN for a single column and row).
+  double tol = 0;              // Coordinates closer than this are the same [mm].
+  std::string region;
+};
+
+GridLayout LayoutOf(const KinematicsResult& kin) {
+  GridLayout g;
+  const auto [xmin_it, xmax_it] = std::minmax_element(kin.x_mm.begin(), kin.x_mm.end());
+  const auto [ymin_it, ymax_it] = std::minmax_element(kin.y_mm.begin(), kin.y_mm.end());
+  const double extent = std::max({1.0, *xmax_it - *xmin_it, *ymax_it - *ymin_it});
+  g.tol = 1e-6 * extent;
+  g.xs = UniqueSorted(kin.x_mm, g.tol);
+  g.ys = UniqueSorted(kin.y_mm, g.tol);
+  g.sx = MedianStep(g.xs);
+  g.sy = MedianStep(g.ys);
+  if (std::isnan(g.sx)) g.sx = g.sy;
+  if (std::isnan(g.sy)) g.sy = g.sx;
+  g.region = fmt::format(
+      "the correlated grid has subset centres x = [{:.3f}, {:.3f}] mm, y = [{:.3f}, {:.3f}] mm",
+      g.xs.front(), g.xs.back(), g.ys.front(), g.ys.back());
+  return g;
+}
+
+// The subsets inside MomentumOptions::rect_mm.
+MomentumGrid GridInRectangle(const KinematicsResult& kin, const MomentumOptions& options,
+                             const GridLayout& layout) {
+  const std::vector<double>& xs = layout.xs;
+  const std::vector<double>& ys = layout.ys;
+  const double sx = layout.sx, sy = layout.sy, tol = layout.tol;
+  const std::string& region = layout.region;
+  MomentumGrid grid;
+  const auto& r = *options.rect_mm;
+  const double hx = std::isnan(sx) ? 0 : 0.5 * sx, hy = std::isnan(sy) ? 0 : 0.5 * sy;
+  const bool inside = r[0] >= xs.front() - hx - tol && r[2] <= xs.back() + hx + tol &&
+                      r[1] >= ys.front() - hy - tol && r[3] <= ys.back() + hy + tol;
+  if (!inside) {
+    throw Error(ErrorKind::kInvalidValue, "momentum.rect_mm",
+                fmt::format("[{}, {}, {}, {}] mm", r[0], r[1], r[2], r[3]),
+                "a rectangle inside the correlated region (" + region +
+                    "): the grid lies outside the correlated region");
+  }
+  std::vector<double> cx, cy;
+  for (std::size_t i = 0; i < kin.subsets; ++i) {
+    if (kin.x_mm[i] >= r[0] && kin.x_mm[i] <= r[2] && kin.y_mm[i] >= r[1] && kin.y_mm[i] <= r[3]) {
+      grid.subset_ids.push_back(i);
+      cx.push_back(kin.x_mm[i]);
+      cy.push_back(kin.y_mm[i]);
+    }
+  }
+  if (grid.subset_ids.empty()) {
+    throw Error(
+        ErrorKind::kInvalidValue, "momentum.rect_mm",
+        fmt::format("[{}, {}, {}, {}] mm containing no subset centre", r[0], r[1], r[2], r[3]),
+        "a rectangle containing subset centres (" + region + ")");
+  }
+  grid.cols = static_cast<int>(UniqueSorted(cx, tol).size());
+  grid.rows = static_cast<int>(UniqueSorted(cy, tol).size());
+  grid.rect_mm = r;
+  grid.area_m2 = (r[2] - r[0]) * (r[3] - r[1]) * 1e-6;
+  return grid;
+}
+
+// grid_cols x grid_rows subsets under the pounder footprint, centred on it, from the first row
+// below its bottom edge.
+MomentumGrid GridUnderFootprint(const KinematicsResult& kin, const MomentumOptions& options,
+                                const GridLayout& layout) {
+  const std::vector<double>& xs = layout.xs;
+  const std::vector<double>& ys = layout.ys;
+  const double sx = layout.sx, sy = layout.sy, tol = layout.tol;
+  const std::string& region = layout.region;
+  MomentumGrid grid;
+  if (std::isnan(sx)) {
+    throw Error(ErrorKind::kInvalidValue, "correlated grid", "a single subset",
+                "at least two subsets (the grid step defines the cell area), or rect_mm");
+  }
+  PounderFootprint fp = options.footprint;
+  const double half_width = 500 * options.pounder_width_m;
+  const double centre_default = 0.5 * (xs.front() + xs.back());
+  if (std::isnan(fp.x_left_mm)) fp.x_left_mm = centre_default - half_width;
+  if (std::isnan(fp.x_right_mm)) fp.x_right_mm = centre_default + half_width;
+  if (std::isnan(fp.bottom_y_mm)) fp.bottom_y_mm = ys.front() - 0.5 * sy;
+  const double centre = 0.5 * (fp.x_left_mm + fp.x_right_mm);
+  std::vector<double> cols;
+  for (double x : xs)
+    if (x >= fp.x_left_mm - tol && x <= fp.x_right_mm + tol) cols.push_back(x);
+  if (cols.size() < static_cast<std::size_t>(options.grid_cols)) {
+    throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                fmt::format("{} subset columns under the pounder footprint x = [{:.3f}, {:.3f}] "
+                            "mm",
+                            cols.size(), fp.x_left_mm, fp.x_right_mm),
+                fmt::format("grid_cols = {} columns ({}): the grid lies outside the correlated "
+                            "region",
+                            options.grid_cols, region));
+  }
+  std::stable_sort(cols.begin(), cols.end(),
+                   [&](double a, double b) { return std::abs(a - centre) < std::abs(b - centre); });
+  cols.resize(static_cast<std::size_t>(options.grid_cols));
+  std::sort(cols.begin(), cols.end());
+  std::vector<double> rows;
+  for (double y : ys)
+    if (y > fp.bottom_y_mm + tol && rows.size() < static_cast<std::size_t>(options.grid_rows))
+      rows.push_back(y);
+  if (rows.size() < static_cast<std::size_t>(options.grid_rows)) {
+    throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                fmt::format("{} subset rows below the pounder's bottom edge y = {:.3f} mm",
+                            rows.size(), fp.bottom_y_mm),
+                fmt::format("grid_rows = {} rows ({}): the grid lies outside the correlated "
+                            "region",
+                            options.grid_rows, region));
+  }
+  for (double y : rows) {
+    for (double x : cols) {
+      std::size_t found = kin.subsets;
+      for (std::size_t i = 0; i < kin.subsets && found == kin.subsets; ++i)
+        if (std::abs(kin.x_mm[i] - x) <= tol && std::abs(kin.y_mm[i] - y) <= tol) found = i;
+      if (found == kin.subsets) {
+        throw Error(ErrorKind::kInvalidValue, "momentum grid",
+                    fmt::format("no correlated subset at x = {:.3f} mm, y = {:.3f} mm", x, y),
+                    "a complete grid of correlated subsets: the grid lies outside the "
+                    "correlated region (" +
+                        region + ")");
+      }
+      grid.subset_ids.push_back(found);
+    }
+  }
+  grid.cols = options.grid_cols;
+  grid.rows = options.grid_rows;
+  grid.rect_mm = {cols.front() - 0.5 * sx, rows.front() - 0.5 * sy, cols.back() + 0.5 * sx,
+                  rows.back() + 0.5 * sy};
+  grid.area_m2 = static_cast<double>(grid.subset_ids.size()) * sx * sy * 1e-6;
+  return grid;
+}
+
+}  // namespace
+
 MomentumGrid SelectMomentumGrid(const KinematicsResult& kin, const MomentumOptions& options) {
   options.Check();
   CheckValue(kin.subsets >= 1 && kin.x_mm.size() == kin.subsets, "kinematics",
              fmt::format("{} subsets", kin.subsets), "a correlated grid");
-  const auto [xmin_it, xmax_it] = std::minmax_element(kin.x_mm.begin(), kin.x_mm.end());
-  const auto [ymin_it, ymax_it] = std::minmax_element(kin.y_mm.begin(), kin.y_mm.end());
-  const double extent = std::max({1.0, *xmax_it - *xmin_it, *ymax_it - *ymin_it});
-  const double tol = 1e-6 * extent;
-  const std::vector<double> xs = UniqueSorted(kin.x_mm, tol), ys = UniqueSorted(kin.y_mm, tol);
-  double sx = MedianStep(xs), sy = MedianStep(ys);
-  if (std::isnan(sx)) sx = sy;
-  if (std::isnan(sy)) sy = sx;
-  const std::string region = fmt::format(
-      "the correlated grid has subset centres x = [{:.3f}, {:.3f}] mm, y = [{:.3f}, {:.3f}] mm",
-      xs.front(), xs.back(), ys.front(), ys.back());
-  MomentumGrid grid;
-  if (options.rect_mm) {
-    const auto& r = *options.rect_mm;
-    const double hx = std::isnan(sx) ? 0 : 0.5 * sx, hy = std::isnan(sy) ? 0 : 0.5 * sy;
-    const bool inside = r[0] >= xs.front() - hx - tol && r[2] <= xs.back() + hx + tol &&
-                        r[1] >= ys.front() - hy - tol && r[3] <= ys.back() + hy + tol;
-    if (!inside) {
-      throw Error(ErrorKind::kInvalidValue, "momentum.rect_mm",
-                  fmt::format("[{}, {}, {}, {}] mm", r[0], r[1], r[2], r[3]),
-                  "a rectangle inside the correlated region (" + region +
-                      "): the grid lies outside the correlated region");
-    }
-    std::vector<double> cx, cy;
-    for (std::size_t i = 0; i < kin.subsets; ++i) {
-      if (kin.x_mm[i] >= r[0] && kin.x_mm[i] <= r[2] && kin.y_mm[i] >= r[1] &&
-          kin.y_mm[i] <= r[3]) {
-        grid.subset_ids.push_back(i);
-        cx.push_back(kin.x_mm[i]);
-        cy.push_back(kin.y_mm[i]);
-      }
-    }
-    if (grid.subset_ids.empty()) {
-      throw Error(
-          ErrorKind::kInvalidValue, "momentum.rect_mm",
-          fmt::format("[{}, {}, {}, {}] mm containing no subset centre", r[0], r[1], r[2], r[3]),
-          "a rectangle containing subset centres (" + region + ")");
-    }
-    grid.cols = static_cast<int>(UniqueSorted(cx, tol).size());
-    grid.rows = static_cast<int>(UniqueSorted(cy, tol).size());
-    grid.rect_mm = r;
-    grid.area_m2 = (r[2] - r[0]) * (r[3] - r[1]) * 1e-6;
-  } else {
-    if (std::isnan(sx)) {
-      throw Error(ErrorKind::kInvalidValue, "correlated grid", "a single subset",
-                  "at least two subsets (the grid step defines the cell area), or rect_mm");
-    }
-    PounderFootprint fp = options.footprint;
-    const double half_width = 500 * options.pounder_width_m;
-    const double centre_default = 0.5 * (xs.front() + xs.back());
-    if (std::isnan(fp.x_left_mm)) fp.x_left_mm = centre_default - half_width;
-    if (std::isnan(fp.x_right_mm)) fp.x_right_mm = centre_default + half_width;
-    if (std::isnan(fp.bottom_y_mm)) fp.bottom_y_mm = ys.front() - 0.5 * sy;
-    const double centre = 0.5 * (fp.x_left_mm + fp.x_right_mm);
-    std::vector<double> cols;
-    for (double x : xs)
-      if (x >= fp.x_left_mm - tol && x <= fp.x_right_mm + tol) cols.push_back(x);
-    if (cols.size() < static_cast<std::size_t>(options.grid_cols)) {
-      throw Error(ErrorKind::kInvalidValue, "momentum grid",
-                  fmt::format("{} subset columns under the pounder footprint x = [{:.3f}, {:.3f}] "
-                              "mm",
-                              cols.size(), fp.x_left_mm, fp.x_right_mm),
-                  fmt::format("grid_cols = {} columns ({}): the grid lies outside the correlated "
-                              "region",
-                              options.grid_cols, region));
-    }
-    std::stable_sort(cols.begin(), cols.end(), [&](double a, double b) {
-      return std::abs(a - centre) < std::abs(b - centre);
-    });
-    cols.resize(static_cast<std::size_t>(options.grid_cols));
-    std::sort(cols.begin(), cols.end());
-    std::vector<double> rows;
-    for (double y : ys)
-      if (y > fp.bottom_y_mm + tol && rows.size() < static_cast<std::size_t>(options.grid_rows))
-        rows.push_back(y);
-    if (rows.size() < static_cast<std::size_t>(options.grid_rows)) {
-      throw Error(ErrorKind::kInvalidValue, "momentum grid",
-                  fmt::format("{} subset rows below the pounder's bottom edge y = {:.3f} mm",
-                              rows.size(), fp.bottom_y_mm),
-                  fmt::format("grid_rows = {} rows ({}): the grid lies outside the correlated "
-                              "region",
-                              options.grid_rows, region));
-    }
-    for (double y : rows) {
-      for (double x : cols) {
-        std::size_t found = kin.subsets;
-        for (std::size_t i = 0; i < kin.subsets && found == kin.subsets; ++i)
-          if (std::abs(kin.x_mm[i] - x) <= tol && std::abs(kin.y_mm[i] - y) <= tol) found = i;
-        if (found == kin.subsets) {
-          throw Error(ErrorKind::kInvalidValue, "momentum grid",
-                      fmt::format("no correlated subset at x = {:.3f} mm, y = {:.3f} mm", x, y),
-                      "a complete grid of correlated subsets: the grid lies outside the "
-                      "correlated region (" +
-                          region + ")");
-        }
-        grid.subset_ids.push_back(found);
-      }
-    }
-    grid.cols = options.grid_cols;
-    grid.rows = options.grid_rows;
-    grid.rect_mm = {cols.front() - 0.5 * sx, rows.front() - 0.5 * sy, cols.back() + 0.5 * sx,
-                    rows.back() + 0.5 * sy};
-    grid.area_m2 = static_cast<double>(grid.subset_ids.size()) * sx * sy * 1e-6;
-  }
+  const GridLayout layout = LayoutOf(kin);
+  MomentumGrid grid = options.rect_mm ? GridInRectangle(kin, options, layout)
+                                      : GridUnderFootprint(kin, options, layout);
   grid.mass_kg = options.density_kg_m3 * grid.area_m2 * options.depth_m;
   return grid;
 }
