@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -1021,7 +1022,7 @@ void Correlator::Impl::AddToSummary(const FrameResult& out) {
 
 FrameResult Correlator::Correlate(const cv::Mat& image) {
   Impl& m = *impl_;
-  CheckValue(!m.initial.empty(), "Correlator", "no reference", "SetReference() first");
+  assert(!m.initial.empty() && "Correlator::SetReference() must come before Correlate()");
   m.CheckImage(image, "deformed image");
   WallTimer total;
   FrameResult out;

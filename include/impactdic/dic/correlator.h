@@ -111,7 +111,8 @@ class Correlator {
 
   // Sets the first reference (8/16-bit or float, one channel) and lays out the subset grid.
   void SetReference(const cv::Mat& image);
-  // Correlates the next frame of the sequence (same size as the reference).
+  // Correlates the next frame of the sequence (same size as the reference; Error otherwise).
+  // SetReference must have been called (asserted).
   FrameResult Correlate(const cv::Mat& image);
 
   int subsets() const;
