@@ -9,6 +9,7 @@
 #include <set>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "test_util.h"
 
 namespace impactdic {
@@ -17,7 +18,6 @@ namespace {
 using test::IsPngOfSize;
 using test::ScratchDir;
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // (1, 2), (2, 3), (3, 5) and two tests without a value. By hand: mean x = 2, mean y = 10/3,
 // Sxx = 2, Sxy = 3, Syy = 14/3; slope = 3/2, intercept = 10/3 - 3 = 1/3,
