@@ -12,6 +12,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
@@ -19,11 +20,6 @@
 
 namespace impactdic {
 namespace {
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 std::string Number(double v) {
   if (std::isnan(v)) return "nan";
@@ -192,7 +188,7 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
 }
 
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options) {
-  const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  const std::string ext = ToLower(std::filesystem::path(path).extension().string());
   const std::size_t n = result.positions.size(), frames = result.frames.size();
   if (ext == ".csv") {
     std::vector<std::vector<std::string>> rows;

@@ -9,6 +9,7 @@
 #include <iterator>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 
 namespace impactdic {
 
@@ -22,10 +23,6 @@ std::string FileTypeName(mode_t mode) {
   if (S_ISFIFO(mode)) return "a pipe (FIFO)";
   if (S_ISSOCK(mode)) return "a socket";
   return "not a regular file";
-}
-
-bool StartsWith(std::string_view text, std::string_view prefix) {
-  return text.substr(0, prefix.size()) == prefix;
 }
 
 }  // namespace

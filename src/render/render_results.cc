@@ -9,6 +9,7 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/output_generation.h"
@@ -59,8 +60,7 @@ std::string Dims2Text(const Dims& d) {
 }
 
 double NumberAttribute(const H5Reader& r, const std::string& object, const std::string& name) {
-  return r.HasAttribute(object, name) ? r.ReadNumberAttribute(object, name)
-                                      : std::numeric_limits<double>::quiet_NaN();
+  return r.HasAttribute(object, name) ? r.ReadNumberAttribute(object, name) : kNaN;
 }
 
 std::vector<double> ReadIf(const H5Reader& r, const std::string& path) {
@@ -345,7 +345,7 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
   }
   const double t_e_s = reader.Exists(L::kMomentumGroup)
                            ? NumberAttribute(reader, L::kMomentumGroup, L::kTeAttr)
-                           : std::numeric_limits<double>::quiet_NaN();
+                           : kNaN;
 
   try {
     if (options.figures) {

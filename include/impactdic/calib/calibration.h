@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 
 namespace impactdic {
@@ -82,12 +83,12 @@ struct PlaneScale {
   // Homography from UNDISTORTED pixel coordinates (u, v, 1) to board-plane millimetres (X, Y, 1).
   // The axes are the board's: origin at the first detected inner corner.
   cv::Matx33d mm_from_px = cv::Matx33d::eye();
-  double mm_per_px = std::numeric_limits<double>::quiet_NaN();  // sqrt|det J| at the corners'
-                                                                // centroid [mm/px].
+  double mm_per_px = kNaN;  // sqrt|det J| at the corners'
+                            // centroid [mm/px].
   // 1-sigma uncertainty [mm/px]: the fit's statistical error (residuals over the corners' spread)
   // combined with the standard deviation of the local scale over the board (non-zero when the
   // board is not parallel to the sensor, i.e. one number is not the whole truth).
-  double mm_per_px_uncertainty = std::numeric_limits<double>::quiet_NaN();
+  double mm_per_px_uncertainty = kNaN;
   double local_scale_spread_rel = 0;  // std / mean of the local scale over the corners.
   double residual_rms_mm = 0;         // RMS distance of the corners from the fitted homography.
   int corners = 0;
@@ -98,7 +99,7 @@ struct PlaneScale {
 
 struct ViewRecord {
   std::string image;
-  double rms_px = std::numeric_limits<double>::quiet_NaN();  // Per-view reprojection RMS.
+  double rms_px = kNaN;  // Per-view reprojection RMS.
 };
 struct RejectedView {
   std::string image;
@@ -108,9 +109,9 @@ struct RejectedView {
 struct CameraCalibration {
   int image_width = 0;  // [px] The frames must have this size (CheckFrameSize).
   int image_height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;                     // [px]
-  std::array<double, 5> dist{0, 0, 0, 0, 0};                 // k1, k2, p1, p2, k3
-  double rms_px = std::numeric_limits<double>::quiet_NaN();  // Overall reprojection RMS.
+  double fx = 0, fy = 0, cx = 0, cy = 0;      // [px]
+  std::array<double, 5> dist{0, 0, 0, 0, 0};  // k1, k2, p1, p2, k3
+  double rms_px = kNaN;                       // Overall reprojection RMS.
   BoardSpec board;
   std::vector<ViewRecord> views;       // The views used, with their RMS.
   std::vector<RejectedView> rejected;  // The views not used, with the reason.
@@ -129,8 +130,8 @@ struct CalibrationSummary {
   int images_total = 0;
   int images_used = 0;
   int images_rejected = 0;
-  double rms_px = std::numeric_limits<double>::quiet_NaN();
-  double worst_view_rms_px = std::numeric_limits<double>::quiet_NaN();
+  double rms_px = kNaN;
+  double worst_view_rms_px = kNaN;
   std::string worst_view;
   double detection_seconds = 0;
   double calibration_seconds = 0;

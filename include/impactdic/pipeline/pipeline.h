@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/json.h"
 #include "impactdic/pipeline/output_writer.h"
@@ -63,7 +64,6 @@ struct StageReport {
 
 // The key figures of a scene (summary.json / summary.csv). NaN: not available.
 struct SceneFigures {
-  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   double impact_velocity_m_s = kNaN;  // From the sensor (else the scene's v0).
   double p_max_kg_m_s = kNaN;
   double t_end_peak_s = kNaN;                 // After impact.

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/render/gnuplot.h"
 
 namespace impactdic {
@@ -23,10 +24,10 @@ namespace impactdic {
 // One test. A point with a non-finite predicted or observed value is not drawn and not fitted
 // (ComparisonFit::skipped counts it).
 struct ComparisonPoint {
-  double predicted = std::numeric_limits<double>::quiet_NaN();  // x: model / Eq. 4
-  double observed = std::numeric_limits<double>::quiet_NaN();   // y: measured
-  double width_m = std::numeric_limits<double>::quiet_NaN();    // D: selects the marker
-  std::string label;                                             // test name (not drawn)
+  double predicted = kNaN;  // x: model / Eq. 4
+  double observed = kNaN;   // y: measured
+  double width_m = kNaN;    // D: selects the marker
+  std::string label;        // test name (not drawn)
 };
 
 struct ComparisonFigureData {
@@ -40,11 +41,11 @@ struct ComparisonFigureData {
 struct ComparisonFit {
   int n = 0;        // points fitted
   int skipped = 0;  // points with a non-finite value
-  double slope = std::numeric_limits<double>::quiet_NaN();
-  double intercept = std::numeric_limits<double>::quiet_NaN();
-  double r_squared = std::numeric_limits<double>::quiet_NaN();
-  double rms_relative_deviation = std::numeric_limits<double>::quiet_NaN();
-  double max_relative_deviation = std::numeric_limits<double>::quiet_NaN();
+  double slope = kNaN;
+  double intercept = kNaN;
+  double r_squared = kNaN;
+  double rms_relative_deviation = kNaN;
+  double max_relative_deviation = kNaN;
 };
 ComparisonFit FitComparison(const std::vector<ComparisonPoint>& points);
 

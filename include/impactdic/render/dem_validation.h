@@ -15,10 +15,11 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
+
 namespace impactdic {
 
 struct DemValidation {
-  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   // Per analysed frame (time since contact on the DEM clock).
   std::vector<double> t_s, p_gran_tool_Ns, p_gran_truth_Ns, p_pounder_tool_Ns, p_pounder_truth_Ns;
   std::vector<double> v_sand_tool_m_s, v_sand_truth_m_s, m_add_tool_kg, m_add_truth_kg;

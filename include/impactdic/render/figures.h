@@ -15,12 +15,13 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/render/gnuplot.h"
 
 namespace impactdic {
 
 // "No value" for the optional scalars below.
-inline constexpr double kFigureUnset = std::numeric_limits<double>::quiet_NaN();
+inline constexpr double kFigureUnset = kNaN;
 
 // Fig. 4: pounder, granular and total momentum [N s] over time, p_max line and t_e marker.
 // Any of the three series may be empty (not drawn); each non-empty one has t_s.size() values.

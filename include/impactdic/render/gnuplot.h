@@ -22,6 +22,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
+
 namespace impactdic {
 
 enum class SeriesStyle {
@@ -83,10 +85,10 @@ struct Plot {
   bool log_y = false;
   bool log_y2 = false;
   // Axis ranges; NaN = automatic.
-  double x_min = std::numeric_limits<double>::quiet_NaN();
-  double x_max = std::numeric_limits<double>::quiet_NaN();
-  double y_min = std::numeric_limits<double>::quiet_NaN();
-  double y_max = std::numeric_limits<double>::quiet_NaN();
+  double x_min = kNaN;
+  double x_max = kNaN;
+  double y_min = kNaN;
+  double y_max = kNaN;
   LegendPosition legend = LegendPosition::kTopRight;
   // gnuplot "enhanced" text in the title, labels and legend: a_{b} subscripts, x^{2}
   // superscripts. Off by default so that file names with underscores print as they are.

@@ -28,6 +28,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
+
 namespace impactdic {
 
 struct VelocityFieldSequence {
@@ -46,7 +48,7 @@ struct VelocityFieldSequence {
   // Direction of vy: true = along image rows (down, the image convention), false = up.
   bool vy_positive_down = true;
   // Scale of the panel plane [mm/px], for the scale bar; NaN or <= 0 = no scale bar.
-  double mm_per_px = std::numeric_limits<double>::quiet_NaN();
+  double mm_per_px = kNaN;
 
   std::size_t num_frames() const { return frames.size(); }
   bool lagrangian() const { return x_px.size() != num_subsets; }
@@ -72,7 +74,7 @@ struct VelocityOverlayOptions {
   double opacity = 0.7;  // alpha of the colour map over the frame, [0, 1]
   // Top of the colour scale [mm/s]; NaN = the 99th percentile of all valid speeds of the
   // sequence (one scale for every frame, so colours are comparable over time).
-  double max_speed_mm_s = std::numeric_limits<double>::quiet_NaN();
+  double max_speed_mm_s = kNaN;
   VelocityDisplayUnit unit = VelocityDisplayUnit::kAuto;
   bool arrows = true;
   // Minimum distance between drawn arrows in display pixels, [4, 500]: denser grids are thinned.

@@ -43,6 +43,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/synth/checkerboard.h"
 #include "impactdic/synth/speckle.h"
@@ -93,16 +94,16 @@ struct ImpactSceneSpec {
   std::string name = "synthetic_impact";
   // Test (paper Table 1; SI units). Defaults: the model's (ImpactModelParameters, defined once).
   double pounder_mass_kg = ImpactModelParameters{}.pounder_mass_kg;  // m_p, > 0.
-  double drop_height_m = 0.7;  // h, > 0 (unless impact_velocity_m_s is set).
-  double impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();  // v0; NaN: sqrt(2gh).
-  double width_m = ImpactModelParameters{}.width_m;                       // D, > 0.
-  double depth_m = ImpactModelParameters{}.depth_m;                       // t_z, > 0.
-  double density_kg_m3 = ImpactModelParameters{}.density_kg_m3;           // rho_d, > 0.
-  double bed_height_m = ImpactModelParameters{}.bed_height_m;             // > 0.
-  double g_m_s2 = ImpactModelParameters{}.gravity_m_s2;                   // > 0.
+  double drop_height_m = 0.7;                        // h, > 0 (unless impact_velocity_m_s is set).
+  double impact_velocity_m_s = kNaN;                 // v0; NaN: sqrt(2gh).
+  double width_m = ImpactModelParameters{}.width_m;  // D, > 0.
+  double depth_m = ImpactModelParameters{}.depth_m;  // t_z, > 0.
+  double density_kg_m3 = ImpactModelParameters{}.density_kg_m3;  // rho_d, > 0.
+  double bed_height_m = ImpactModelParameters{}.bed_height_m;    // > 0.
+  double g_m_s2 = ImpactModelParameters{}.gravity_m_s2;          // > 0.
   // Impact model: the paper's Table 2, as defined in ImpactModelParameters.
   SceneAddedMass added_mass = SceneAddedMass::kGrid;
-  double added_mass_kg = std::numeric_limits<double>::quiet_NaN();  // With kGiven, >= 0.
+  double added_mass_kg = kNaN;  // With kGiven, >= 0.
   double K = ImpactModelParameters{}.friction_K;
   double n = ImpactModelParameters{}.damping_exponent_n;
   double u = ImpactModelParameters{}.damping_factor_u;
