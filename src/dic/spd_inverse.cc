@@ -1,8 +1,10 @@
 // The dic module is compiled for the build machine (-march=native); with AVX-512, GCC 12 reports
 // false "may be used uninitialized" warnings inside Eigen's vectorised kernels (its intrinsics'
-// __Y placeholders), so this file holds only the Eigen code and silences that one warning.
+// __Y placeholders; "is used uninitialized" at -O1, the asan preset), so this file holds only the
+// Eigen code and silences those two warnings.
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
 #endif
 
 #include <Eigen/Cholesky>
