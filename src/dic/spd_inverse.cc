@@ -26,7 +26,12 @@ bool InvertSpd(const double* a, int n, double* inv) {
   const Matrix l = llt.matrixL();
   for (int j = 0; j < n; ++j)
     if (!(matrix(j, j) > 0) || !(l(j, j) * l(j, j) > 1e-10 * matrix(j, j))) return false;
-  Eigen::Map<Matrix>(inv, n, n) = llt.solve(Matrix::Identity(n, n));
+  // Solved in a local matrix, then copied: Eigen's vectorised kernels take paths that depend on
+  // the alignment of their operands, and `inv` may have any alignment, so solving in place there
+  // would make the rounding (and the correlation results) depend on where the caller's buffer
+  // happens to lie. The local matrices have fixed, aligned storage.
+  const Matrix inverse = llt.solve(Matrix::Identity(n, n));
+  Eigen::Map<Matrix>(inv, n, n) = inverse;
   return true;
 }
 
