@@ -151,6 +151,23 @@ RemoveOnInterrupt::RemoveOnInterrupt(std::string path) {
   Registry().emplace(id_, std::move(path));
 }
 
+void MakeFolders(const std::string& path, std::error_code& ec) {
+  {
+    const DeferInterrupts making;
+    if (!Interrupted()) {
+      fs::create_directories(path, ec);
+      return;
+    }
+  }
+  WaitIfInterrupted();
+}
+
+RemoveOnInterrupt::RemoveOnInterrupt(std::string path, const DeferInterrupts& /*held*/) {
+  std::lock_guard<std::mutex> lock(RegistryMutex());
+  id_ = g_next_id++;
+  Registry().emplace(id_, std::move(path));
+}
+
 RemoveOnInterrupt::~RemoveOnInterrupt() { Release(); }
 
 void RemoveOnInterrupt::Release() {

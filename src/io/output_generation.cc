@@ -215,8 +215,7 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
   const fs::path parent = dest.parent_path();
   // After a signal, a generation nested in a staging folder the cleanup is removing (a campaign
   // test's results/) must not make that folder again: wait for the exit instead.
-  WaitIfInterrupted();
-  fs::create_directories(parent, ec);
+  MakeFolders(parent.string(), ec);
   if (ec || !fs::is_directory(parent)) {
     throw Error(ErrorKind::kIo, "output folder",
                 "cannot create " + parent.string() + ": " +
@@ -245,8 +244,17 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
     }
   }
   staging_ = (parent / TemporaryName(dest.filename().string(), ".tmp-")).string();
-  staging_guard_.emplace(staging_);
-  fs::create_directory(staging_, ec);
+  {
+    // Registered and made as one step for a signal's cleanup, which waits for this block: it
+    // removes the staging folder, or (signal before the block) the folder is never made. Without
+    // the block a cleanup running between the two left it behind.
+    const DeferInterrupts creating;
+    if (!Interrupted()) {
+      staging_guard_.emplace(staging_, creating);
+      fs::create_directory(staging_, ec);
+    }
+  }
+  WaitIfInterrupted();
   if (ec) {
     throw Error(ErrorKind::kIo, "output folder", "cannot make " + staging_ + ": " + ec.message(),
                 "a writable folder")

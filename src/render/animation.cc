@@ -156,7 +156,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
 
   if (!options.png_frames_dir.empty()) {
     std::error_code ec;
-    fs::create_directories(options.png_frames_dir, ec);
+    MakeFolders(options.png_frames_dir, ec);
     if (ec || !fs::is_directory(options.png_frames_dir)) {
       throw Error(ErrorKind::kIo, "--png-frames folder", options.png_frames_dir,
                   "a folder that can be created: " + ec.message());

@@ -10,6 +10,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
@@ -255,7 +256,7 @@ void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequen
                  const std::vector<double>& model_g, const std::string& dir) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  fs::create_directories(dir, ec);
+  MakeFolders(dir, ec);
   if (ec || !fs::is_directory(dir, ec))
     throw Error(ErrorKind::kIo, "--figures", dir,
                 "a folder that can be created (" + ec.message() + ")");

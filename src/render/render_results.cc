@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
@@ -233,7 +234,7 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
     summary.animation.path = generation.FinalPath(summary.animation.path);
   } else {
     std::error_code ec;
-    fs::create_directories(out_dir, ec);
+    MakeFolders(out_dir, ec);
     if (!fs::is_directory(out_dir, ec)) {
       throw Error(ErrorKind::kIo, "output folder", OutputPathForMessages(out_dir),
                   "a folder that exists or can be created");

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 
@@ -348,7 +349,7 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
   options.Check();
   namespace fs = std::filesystem;
   std::error_code ec;
-  fs::create_directories(out_dir, ec);
+  MakeFolders(out_dir, ec);
   if (ec) throw Error(ErrorKind::kIo, "cannot create folder " + out_dir + ": " + ec.message());
 
   CalibrationSet set;

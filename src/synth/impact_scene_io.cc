@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
@@ -559,7 +560,7 @@ SceneFiles WriteSceneFiles(
   const fs::path dir(out_dir);
   SceneFiles files;
   std::error_code ec;
-  fs::create_directories(dir / "frames", ec);
+  MakeFolders((dir / "frames").string(), ec);
   if (ec)
     throw Error(ErrorKind::kIo, "-o", OutputPathForMessages(out_dir),
                 "a folder that can be created (" + ec.message() + ")");

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <system_error>
 
 namespace impactdic {
 
@@ -34,12 +35,23 @@ bool Interrupted();
 // interruption never races the cleanup with its own exit.
 void WaitIfInterrupted();
 
+// std::filesystem::create_directories as one step for a signal's cleanup (which waits for it):
+// after a signal it makes nothing and waits for the exit, so a folder inside a temporary the
+// cleanup removed (a staging folder's frames/ or results/) is never made again. Every folder made
+// inside outputs goes through it.
+void MakeFolders(const std::string& path, std::error_code& ec);
+
 // Registers `path` (a file or a folder) for removal if the process is interrupted, until Release()
 // or destruction. Does not remove anything itself: the owner removes its temporary as usual. A
 // thread registering a path after a signal arrived waits for the process to end instead.
+class DeferInterrupts;
+
 class RemoveOnInterrupt {
  public:
   explicit RemoveOnInterrupt(std::string path);
+  // Registers without waiting: the caller holds `held`, so no cleanup can run before it ends and
+  // the path can be registered and made as one step (the cleanup removes it, or it never exists).
+  RemoveOnInterrupt(std::string path, const DeferInterrupts& held);
   ~RemoveOnInterrupt();
   RemoveOnInterrupt(const RemoveOnInterrupt&) = delete;
   RemoveOnInterrupt& operator=(const RemoveOnInterrupt&) = delete;
