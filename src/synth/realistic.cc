@@ -324,7 +324,10 @@ RealisticTruth RealisticScene::Truth(const std::vector<cv::Point2d>& points, int
   for (std::size_t i = 0; i < n; ++i) {
     double X, Y;
     ReferencePoint(points[i].x, points[i].y, &X, &Y);
-    const cv::Vec2d d = MeanDisplacement(X, Y, k) - MeanDisplacement(X, Y, 0);
+    // Above the surface the pixel sees the static wall, not sand.
+    const bool wall = Y < surface_px();
+    const cv::Vec2d d =
+        wall ? cv::Vec2d(0, 0) : MeanDisplacement(X, Y, k) - MeanDisplacement(X, Y, 0);
     t.u_px[i] = d[0];
     t.v_px[i] = d[1];
     // Body edges: the sand surface (material) or the pounder (in the reference or in frame k).
