@@ -13,6 +13,7 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <tuple>
 
 #include "impactdic/core/error.h"
 #include "random.h"
@@ -321,21 +322,43 @@ RealisticTruth RealisticScene::Truth(const std::vector<cv::Point2d>& points, int
       spec_.glare_level > kGlareFlag
           ? p.glare_sigma * std::sqrt(2 * std::log(spec_.glare_level / kGlareFlag))
           : -1;
+  // Pounder depth: exposure mean (truth) and extremes (flags) in frame 0 and frame k.
+  double s_mean0 = 0, s_meank = 0;
+  for (int j = 0; j < spec_.blur_samples; ++j) {
+    const double dt = (j + 0.5) / spec_.blur_samples * spec_.exposure_s;
+    s_mean0 += Penetration(dt) / spec_.blur_samples;
+    s_meank += Penetration(k / spec_.fps + dt) / spec_.blur_samples;
+  }
+  const double s_min0 = Penetration(0), s_max0 = Penetration(spec_.exposure_s);
+  const double s_mink = Penetration(k / spec_.fps);
   for (std::size_t i = 0; i < n; ++i) {
+    const double x = points[i].x, y = points[i].y;
+    // A subset entirely on the pounder (in frame 0 and frame k) moves with it.
+    const bool on_pounder = std::abs(x - axis_px()) + half_px < p.b - 1 &&
+                            y + half_px < surface_px() + std::min(s_min0, s_mink) - 1;
+    // The centre on the pounder in frame 0: its truth is the pounder's motion (the subset is
+    // flagged below unless it lies entirely on the pounder).
+    const bool centre_on_pounder =
+        std::abs(x - axis_px()) < p.b && y < surface_px() + s_mean0;
+    if (on_pounder || centre_on_pounder) {
+      t.u_px[i] = 0;
+      t.v_px[i] = s_meank - s_mean0;
+      t.straddles_edge[i] = !on_pounder;
+      continue;
+    }
     double X, Y;
-    ReferencePoint(points[i].x, points[i].y, &X, &Y);
+    ReferencePoint(x, y, &X, &Y);
     // Above the surface the pixel sees the static wall, not sand.
     const bool wall = Y < surface_px();
     const cv::Vec2d d =
         wall ? cv::Vec2d(0, 0) : MeanDisplacement(X, Y, k) - MeanDisplacement(X, Y, 0);
     t.u_px[i] = d[0];
     t.v_px[i] = d[1];
-    // Body edges: the sand surface (material) or the pounder (in the reference or in frame k).
+    // Body edges: the sand surface (material), or the pounder covers part of the subset in frame
+    // 0 or in frame k.
     const double eta0 = Y - half_px - surface_px(), eta1 = Y + half_px - surface_px();
     bool edge = eta0 < 1 && eta1 > -1;
-    for (const double s : {Penetration(spec_.exposure_s), s_max}) {
-      const double cx = points[i].x + (s == s_max ? d[0] : 0);
-      const double cy = points[i].y + (s == s_max ? d[1] : 0);
+    for (const auto& [cx, cy, s] : {std::tuple{x, y, s_max0}, std::tuple{x + d[0], y + d[1], s_max}}) {
       const bool x_overlap = std::abs(cx - axis_px()) < p.b + half_px + 1;
       if (x_overlap && cy - half_px < surface_px() + s + 1) edge = true;
     }
