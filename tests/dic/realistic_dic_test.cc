@@ -53,6 +53,10 @@ Outcome Evaluate(const RealisticScene& scene, const Correlator& correlator, cons
     (f ? o.flagged_valid : o.clean_valid)++;
     const double e = std::hypot(r.u_px[i] - truth.u_px[i], r.v_px[i] - truth.v_px[i]);
     o.error[i] = e;
+    if (e > kGarbagePx && std::getenv("H7DBG"))
+      std::printf("  garbage %d at %.0f,%.0f e %.2f zncc %.4f edge %d band %d glare %d\n", i,
+                  correlator.positions()[i].x, correlator.positions()[i].y, e, r.zncc[i],
+                  truth.straddles_edge[i], truth.straddles_shear_band[i], truth.in_glare[i]);
     if (e > kGarbagePx) {
       ++o.garbage;
       o.garbage_flagged += f;
