@@ -76,7 +76,8 @@ Outcome Evaluate(const RealisticScene& scene, const Correlator& correlator, cons
 void MaybeWriteReport(const Correlator& correlator, const Outcome& o, const std::string& name) {
   const char* dir = std::getenv("IMPACTDIC_REALISTIC_REPORT_DIR");
   if (dir == nullptr) return;
-  const int cols = correlator.cols(), rows = correlator.rows(), cell = 8;
+  const int cols = correlator.cols(), rows = correlator.rows();
+  const int cell = cols > 200 ? 1 : 8;
   cv::Mat map(rows * cell, cols * cell, CV_8UC3);
   for (int i = 0; i < o.subsets; ++i) {
     const cv::Rect box((i % cols) * cell, (i / cols) * cell, cell, cell);
