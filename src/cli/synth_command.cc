@@ -85,8 +85,7 @@ void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGener
 
 // impactdic synth --realistic SPEC -o DIR: realistic footage (synth/realistic.h, docs/synth.md).
 void RunSynthRealistic(const SynthArgs& args) {
-  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() ||
-      args.frames != -1)
+  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() || args.frames != -1)
     throw Error(ErrorKind::kInvalidValue, "--realistic", args.realistic_spec,
                 "no SCENE_SPEC, --preset, --dem or --frames with --realistic (the realistic "
                 "spec has its own `realistic.frames`)");

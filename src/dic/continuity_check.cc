@@ -49,8 +49,8 @@ std::vector<std::uint8_t> Misfits(const FrameResult& r, int cols, int rows, doub
   return flag;
 }
 
-std::vector<std::uint8_t> Discontinuities(const FrameResult& r, int cols, int rows,
-                                          double limit_px, double jump_px) {
+std::vector<std::uint8_t> Discontinuities(const FrameResult& r, int cols, int rows, double limit_px,
+                                          double jump_px) {
   const int n = cols * rows;
   std::vector<std::uint8_t> flag(n, 0);
 
@@ -85,9 +85,8 @@ ContinuityFlags CheckContinuity(const FrameResult& result, int cols, int rows,
              "cols x rows == the frame's subsets");
   ContinuityFlags flags;
   flags.misfit = Misfits(result, cols, rows, options.misfit_ratio);
-  flags.discontinuous =
-      Discontinuities(result, cols, rows, options.max_second_difference_px,
-                      options.max_neighbour_difference_px);
+  flags.discontinuous = Discontinuities(result, cols, rows, options.max_second_difference_px,
+                                        options.max_neighbour_difference_px);
   for (std::size_t i = 0; i < flags.misfit.size(); ++i)
     flags.flagged += flags.misfit[i] || flags.discontinuous[i];
   return flags;

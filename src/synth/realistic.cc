@@ -338,8 +338,7 @@ RealisticTruth RealisticScene::Truth(const std::vector<cv::Point2d>& points, int
                             y + half_px < surface_px() + std::min(s_min0, s_mink) - 1;
     // The centre on the pounder in frame 0: its truth is the pounder's motion (the subset is
     // flagged below unless it lies entirely on the pounder).
-    const bool centre_on_pounder =
-        std::abs(x - axis_px()) < p.b && y < surface_px() + s_mean0;
+    const bool centre_on_pounder = std::abs(x - axis_px()) < p.b && y < surface_px() + s_mean0;
     if (on_pounder || centre_on_pounder) {
       t.u_px[i] = 0;
       t.v_px[i] = s_meank - s_mean0;
@@ -358,7 +357,8 @@ RealisticTruth RealisticScene::Truth(const std::vector<cv::Point2d>& points, int
     // 0 or in frame k.
     const double eta0 = Y - half_px - surface_px(), eta1 = Y + half_px - surface_px();
     bool edge = eta0 < 1 && eta1 > -1;
-    for (const auto& [cx, cy, s] : {std::tuple{x, y, s_max0}, std::tuple{x + d[0], y + d[1], s_max}}) {
+    for (const auto& [cx, cy, s] :
+         {std::tuple{x, y, s_max0}, std::tuple{x + d[0], y + d[1], s_max}}) {
       const bool x_overlap = std::abs(cx - axis_px()) < p.b + half_px + 1;
       if (x_overlap && cy - half_px < surface_px() + s + 1) edge = true;
     }

@@ -34,8 +34,7 @@ TEST(ContinuityCheck, AnAffineFieldIsNotFlagged) {
 TEST(ContinuityCheck, SubsetsMidwayAcrossAnEdgeAreFlagged) {
   // A body edge between columns 5 and 7: column 6 straddles it and reports a mixture (half the
   // jump): linear across the edge, so only the jump criterion sees it.
-  const FrameResult r =
-      Grid(12, 9, [](int c, int) { return c < 6 ? 0.0 : (c == 6 ? 1.0 : 2.0); });
+  const FrameResult r = Grid(12, 9, [](int c, int) { return c < 6 ? 0.0 : (c == 6 ? 1.0 : 2.0); });
   const ContinuityFlags flags = CheckContinuity(r, 12, 9, {});
   for (int row = 0; row < 9; ++row) {
     EXPECT_TRUE(flags.discontinuous[row * 12 + 6]) << row;

@@ -18,8 +18,8 @@
 // Call it after Correlator::Correlate on each frame (the pipeline's correlation stage and
 // `impactdic correlate`), before the displacements are used.
 //
-//   const ContinuityFlags flags = CheckContinuity(result, correlator.cols(), correlator.rows(), {});
-//   ApplyContinuityFlags(flags, &result);  // flagged subsets become kLowCorrelation, NaN
+//   const ContinuityFlags flags = CheckContinuity(result, correlator.cols(), correlator.rows(),
+//   {}); ApplyContinuityFlags(flags, &result);  // flagged subsets become kLowCorrelation, NaN
 #ifndef IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 #define IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 
@@ -31,7 +31,7 @@
 namespace impactdic {
 
 struct ContinuityCheckOptions {
-  double misfit_ratio = 2.5;  // > 1; +inf switches the misfit criterion off.
+  double misfit_ratio = 2.5;               // > 1; +inf switches the misfit criterion off.
   double max_second_difference_px = 0.25;  // > 0 [px]; +inf switches it off.
   // > 0 [px]; +inf switches it off. About the largest strain expected times the grid step
   // (0.08 x 10 px): a larger difference between adjacent subsets is a discontinuity between them.
