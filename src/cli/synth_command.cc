@@ -16,6 +16,7 @@
 #include "impactdic/io/output_generation.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
+#include "impactdic/synth/realistic.h"
 
 namespace impactdic::cli {
 namespace {
@@ -25,6 +26,7 @@ struct SynthArgs {
   std::string preset;
   std::string output;
   std::string dem_dir;
+  std::string realistic_spec;
   int frames = -1;
   bool calibrate = true;
 };
@@ -81,7 +83,34 @@ void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGener
   std::cout << "scene: " << report.scene_yaml << "\n";
 }
 
+// impactdic synth --realistic SPEC -o DIR: realistic footage (synth/realistic.h, docs/synth.md).
+void RunSynthRealistic(const SynthArgs& args) {
+  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() || args.frames != -1)
+    throw Error(ErrorKind::kInvalidValue, "--realistic", args.realistic_spec,
+                "no SCENE_SPEC, --preset, --dem or --frames with --realistic (the realistic "
+                "spec has its own `realistic.frames`)");
+  const RealisticSceneSpec spec = LoadRealisticSceneSpec(args.realistic_spec);
+  CheckNotAnInput((std::filesystem::path(args.output) / "spec.yaml").string(), "-o",
+                  {args.realistic_spec});
+  OutputGenerationOptions generation_options;
+  generation_options.command = "impactdic synth --realistic";
+  generation_options.own_names = {"frames", "spec.yaml", "truth.h5"};
+  OutputGeneration generation(args.output, generation_options);
+  const RealisticScene scene(spec);
+  const RealisticSceneReport report = WriteRealisticScene(scene, generation.staging_folder());
+  generation.Commit();
+  std::cout << fmt::format("realistic scene: {} frames of {}x{} px in {:.1f} s; truth {}\n",
+                           report.frames, spec.width, spec.height, report.render_seconds,
+                           generation.FinalPath(report.truth_h5));
+}
+
 void RunSynth(const SynthArgs& args) {
+  if (!args.realistic_spec.empty()) {
+    if (args.output.empty())
+      throw Error(ErrorKind::kInvalidValue, "-o", "nothing", "an output folder");
+    RunSynthRealistic(args);
+    return;
+  }
   // Validate everything before any work.
   if (args.spec_path.empty() && args.preset.empty())
     throw Error(ErrorKind::kInvalidValue, "SCENE_SPEC", "nothing",
@@ -152,6 +181,10 @@ void RegisterSynthCommand(CLI::App& app) {
                   "Film a DEM run instead (folder of validation/dem/run_case.sh: meta.txt, "
                   "grains.dump, near.dump, pounder.txt; docs/validation.md); the spec gives the "
                   "camera, noise, sensor and DIC settings");
+  cmd->add_option("--realistic", args->realistic_spec,
+                  "Render realistic footage instead (sand grains, uneven light, glare, motion "
+                  "blur, JPEG; bearing-capacity field with a shear band): a spec YAML with a "
+                  "`realistic:` section (docs/synth.md)");
   cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");

@@ -22,6 +22,7 @@
 #include "impactdic/io/yaml.h"
 #include "impactdic/synth/impact_scene.h"
 #include "scene_files.h"
+#include "spec_keys.h"
 
 namespace impactdic {
 namespace {
@@ -30,40 +31,9 @@ namespace fs = std::filesystem;
 
 constexpr const char* kSpecFileWhat = "a synthetic scene spec (YAML)";
 
-// Spec keys hold any value of their type; ImpactSceneSpec::Check() judges the values.
-void Number(YamlOptionTable& t, const std::string& key, double* field) {
-  t.AddCustom(
-      key, "a number", fmt::format("{}", *field),
-      [field](const YAML::Node& n) {
-        double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !std::isfinite(v))
-          return false;
-        *field = v;
-        return true;
-      },
-      "");
-}
-
-void Integer(YamlOptionTable& t, const std::string& key, int* field) {
-  t.AddCustom(
-      key, "an integer", std::to_string(*field),
-      [field](const YAML::Node& n) {
-        return n.IsScalar() && YAML::convert<int>::decode(n, *field);
-      },
-      "");
-}
-
-void Seed(YamlOptionTable& t, const std::string& key, std::uint64_t* field) {
-  t.AddCustom(
-      key, "a non-negative integer", std::to_string(*field),
-      [field](const YAML::Node& n) {
-        unsigned long long v = 0;
-        if (!n.IsScalar() || !YAML::convert<unsigned long long>::decode(n, v)) return false;
-        *field = v;
-        return true;
-      },
-      "");
-}
+using synth_detail::Integer;
+using synth_detail::Number;
+using synth_detail::Seed;
 
 YamlOptionTable TestAndModelKeys(ImpactSceneSpec* s, YamlOptionTable* model) {
   YamlOptionTable t("test");
