@@ -115,10 +115,8 @@ bool DecodeGreyPng(const std::string& bytes, cv::Mat* image) {
       }
     } else if (std::memcmp(type, "IEND", 4) == 0) {
       end = true;
-    } else if ((type[0] & 0x20) == 0) {  // a critical chunk (PLTE, or one we do not know)
-      return false;
-    } else if (std::memcmp(type, "tRNS", 4) == 0) {
-      return false;
+    } else if ((type[0] & 0x20) == 0 || std::memcmp(type, "tRNS", 4) == 0) {
+      return false;  // a critical chunk (PLTE, or one we do not know), or transparency
     }
   }
   if (!end || !stream_end || inflater.z.avail_out != 0) return false;

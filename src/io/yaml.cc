@@ -180,8 +180,8 @@ void YamlProblems::ThrowIfAny(const std::string& what, ErrorKind kind) const {
   throw Error(kind, text);
 }
 
-YamlSection::YamlSection(YAML::Node node, std::string prefix, YamlProblems* problems)
-    : node_(std::move(node)), prefix_(std::move(prefix)), problems_(problems) {
+YamlSection::YamlSection(const YAML::Node& node, std::string prefix, YamlProblems* problems)
+    : node_(node), prefix_(std::move(prefix)), problems_(problems) {
   if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
     problems_->Add(node_, prefix_.empty() ? "(top level)" : prefix_,
                    fmt::format("got {}; expected a map of keys", DescribeYaml(node_)));

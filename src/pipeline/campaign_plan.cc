@@ -16,9 +16,9 @@
 #include "campaign_internal.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/pipeline/campaign.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -65,8 +65,11 @@ void CheckKeys(const std::string& file, const YAML::Node& map, const std::string
     if (std::find(known.begin(), known.end(), key) != known.end()) continue;
     const std::string close = ClosestMatch(key, known);
     std::string expected = "one of: ";
-    for (std::size_t i = 0; i < known.size(); ++i) expected += (i ? ", " : "") + known[i];
-    if (!close.empty()) expected = "did you mean '" + close + "'? (" + expected + ")";
+    for (std::size_t i = 0; i < known.size(); ++i) {
+      if (i) expected += ", ";
+      expected += known[i];
+    }
+    if (!close.empty()) expected = fmt::format("did you mean '{}'? ({})", close, expected);
     Fail(file, kv.first, prefix + key, "an unknown key", expected);
   }
 }
@@ -194,7 +197,7 @@ std::vector<CampaignTest> MatrixTests(const std::string& file, const YAML::Node&
   if (node.IsMap())
     CheckKeys(file, node, "synthesise.",
               {"spec", "mass_kg", "drop_height_m", "width_m", "added_mass_noise", "seed"});
-  const auto list = [&](const char* key, std::vector<double> def) {
+  const auto list = [&](const char* key, const std::vector<double>& def) {
     return node.IsMap() && node[key] ? Numbers(file, node[key], std::string("synthesise.") + key)
                                      : def;
   };

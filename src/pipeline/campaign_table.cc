@@ -127,6 +127,7 @@ std::vector<std::string> RowCells(const CampaignRow& r) {
 
 void WriteRows(const std::string& csv_path, const std::vector<CampaignRow>& rows) {
   std::vector<std::vector<std::string>> cells;
+  cells.reserve(rows.size());
   for (const auto& r : rows) cells.push_back(RowCells(r));
   WriteCsvRows(csv_path, RowColumnNames(), cells);
 }

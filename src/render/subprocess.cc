@@ -69,6 +69,7 @@ ProcessResult RunProcess(const std::string& program, const std::vector<std::stri
   args_storage.push_back(program);
   args_storage.insert(args_storage.end(), arguments.begin(), arguments.end());
   std::vector<char*> argv;
+  argv.reserve(args_storage.size() + 1);
   for (auto& a : args_storage) argv.push_back(a.data());
   argv.push_back(nullptr);
 

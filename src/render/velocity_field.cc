@@ -55,8 +55,9 @@ void ShadeRect(cv::Mat* img, cv::Rect rect, const cv::Scalar& color, double alph
 
 double Percentile(std::vector<float> values, double percent) {
   if (values.empty()) return 0.0;
-  const std::size_t k = std::min(
-      values.size() - 1, static_cast<std::size_t>(percent / 100.0 * (values.size() - 1) + 0.5));
+  const std::size_t k =
+      std::min(values.size() - 1,
+               static_cast<std::size_t>(std::lround(percent / 100.0 * (values.size() - 1))));
   std::nth_element(values.begin(), values.begin() + k, values.end());
   return values[k];
 }
@@ -374,7 +375,7 @@ void VelocityFieldRenderer::DrawField(std::size_t frame, cv::Mat* display) const
     const float* a = alpha_d.ptr<float>(y);
     for (int x = 0; x < cols; ++x) {
       if (a[x] <= 0.f) continue;
-      const int idx = std::clamp(int(v[x] * to_index + 0.5f), 0, 255);
+      const int idx = std::clamp(static_cast<int>(std::lroundf(v[x] * to_index)), 0, 255);
       const cv::Vec3b c = lut_.at<cv::Vec3b>(idx);
       for (int k = 0; k < 3; ++k) {
         out[x][k] = cv::saturate_cast<unsigned char>(out[x][k] * (1.f - a[x]) + c[k] * a[x]);

@@ -75,7 +75,7 @@ class YamlProblems {
 // valid value was stored.
 class YamlSection {
  public:
-  YamlSection(YAML::Node node, std::string prefix, YamlProblems* problems);
+  YamlSection(const YAML::Node& node, std::string prefix, YamlProblems* problems);
 
   std::string PathOf(const std::string& key) const;
   bool Has(const std::string& key) const;

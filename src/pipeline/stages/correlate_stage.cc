@@ -33,7 +33,7 @@ class CorrelateStage : public Stage {
   const char* name() const override { return "correlate"; }
 
   std::string SkipReason(const StageContext& c) const override {
-    const std::string listed = NotListed(c.scene, name());
+    std::string listed = NotListed(c.scene, name());
     if (!listed.empty()) return listed;
     return c.data.frames.empty() ? "no frames" : "";
   }

@@ -13,6 +13,7 @@ namespace stages {
 
 std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& vertices) {
   std::vector<cv::Point> points;
+  points.reserve(vertices.size());
   for (const auto& v : vertices)
     points.emplace_back(static_cast<int>(std::lround(v[0])), static_cast<int>(std::lround(v[1])));
   return points;
