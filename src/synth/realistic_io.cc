@@ -122,7 +122,7 @@ RealisticSceneReport WriteRealisticScene(const RealisticScene& scene, const std:
     if (spec.jpeg_quality > 0) params = {cv::IMWRITE_JPEG_QUALITY, spec.jpeg_quality};
     WriteImage((dir / "frames" / FrameName(spec, k)).string(), image, params);
     const RealisticTruth t =
-        scene.Truth(grid, k, static_cast<double>(spec.subset_size / 2));  // half-width, odd size
+        scene.Truth(grid, k, 0.5 * (spec.subset_size - 1));  // half-width, odd size
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t j = k * n + i;
       u[j] = t.u_px[i];
