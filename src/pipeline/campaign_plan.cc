@@ -17,6 +17,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
 #include "impactdic/io/yaml.h"
+#include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/scene.h"
 
@@ -51,58 +52,93 @@ constexpr const char* kWhat = "a campaign file (YAML)";
   throw e;
 }
 
-std::string Describe(const YAML::Node& node) {
-  if (node.IsScalar()) return "'" + node.Scalar() + "'";
-  if (node.IsSequence()) return "a list";
-  if (node.IsMap()) return "a map";
-  return "nothing";
-}
-
-void CheckKeys(const std::string& file, const YAML::Node& map, const std::string& prefix,
-               const std::vector<std::string>& known) {
-  for (const auto& kv : map) {
-    const std::string key = kv.first.as<std::string>();
-    if (std::find(known.begin(), known.end(), key) != known.end()) continue;
-    const std::string close = ClosestMatch(key, known);
-    std::string expected = "one of: ";
-    for (std::size_t i = 0; i < known.size(); ++i) {
-      if (i) expected += ", ";
-      expected += known[i];
-    }
-    if (!close.empty()) expected = fmt::format("did you mean '{}'? ({})", close, expected);
-    Fail(file, kv.first, prefix + key, "an unknown key", expected);
+// A path or a non-empty list of paths at `key` (absent or null: none).
+std::vector<std::string> ReadPaths(YamlSection& section, const std::string& key) {
+  const YAML::Node node = section.Get(key);
+  if (!node.IsDefined() || node.IsNull()) return {};
+  if (node.IsScalar() && !node.Scalar().empty()) return {node.Scalar()};
+  if (!node.IsSequence() || node.size() == 0) {
+    section.Problem(key, fmt::format("got {}; expected a path or a non-empty list of paths",
+                                     DescribeYaml(node)));
+    return {};
   }
-}
-
-// A string or a list of strings.
-std::vector<std::string> Strings(const std::string& file, const YAML::Node& node,
-                                 const std::string& key) {
   std::vector<std::string> out;
-  if (node.IsScalar()) return {node.Scalar()};
-  if (!node.IsSequence() || node.size() == 0)
-    Fail(file, node, key, Describe(node), "a path or a non-empty list of paths");
   for (std::size_t i = 0; i < node.size(); ++i) {
-    if (!node[i].IsScalar() || node[i].Scalar().empty())
-      Fail(file, node[i], fmt::format("{}[{}]", key, i), Describe(node[i]), "a path");
-    out.push_back(node[i].Scalar());
+    if (node[i].IsScalar() && !node[i].Scalar().empty()) {
+      out.push_back(node[i].Scalar());
+    } else {
+      section.problems()->Add(node[i], fmt::format("{}[{}]", section.PathOf(key), i),
+                              fmt::format("got {}; expected a path", DescribeYaml(node[i])));
+    }
   }
   return out;
 }
 
-std::vector<double> Numbers(const std::string& file, const YAML::Node& node,
-                            const std::string& key) {
-  if (!node.IsSequence() || node.size() == 0)
-    Fail(file, node, key, Describe(node), "a non-empty list of positive numbers");
-  std::vector<double> out;
+// A non-empty list of positive numbers at `key`, stored in *out when every element is valid
+// (absent or null: *out unchanged).
+void ReadPositiveList(YamlSection& section, const std::string& key, std::vector<double>* out) {
+  const YAML::Node node = section.Get(key);
+  if (!node.IsDefined() || node.IsNull()) return;
+  if (!node.IsSequence() || node.size() == 0) {
+    section.Problem(key, fmt::format("got {}; expected a non-empty list of positive numbers",
+                                     DescribeYaml(node)));
+    return;
+  }
+  std::vector<double> values;
   for (std::size_t i = 0; i < node.size(); ++i) {
     double v = 0;
-    if (!node[i].IsScalar() || !YAML::convert<double>::decode(node[i], v) || !(v > 0) ||
-        !std::isfinite(v)) {
-      Fail(file, node[i], fmt::format("{}[{}]", key, i), Describe(node[i]), "a positive number");
+    if (node[i].IsScalar() && YAML::convert<double>::decode(node[i], v) && v > 0 &&
+        std::isfinite(v)) {
+      values.push_back(v);
+    } else {
+      section.problems()->Add(
+          node[i], fmt::format("{}[{}]", section.PathOf(key), i),
+          fmt::format("got {}; expected a positive number", DescribeYaml(node[i])));
     }
-    out.push_back(v);
   }
-  return out;
+  if (values.size() == node.size()) *out = std::move(values);
+}
+
+// The keys of `synthesise:` (lists left out: Table 1).
+struct MatrixKeys {
+  std::vector<double> masses{7, 10, 13}, heights{0.2, 0.7, 1.2}, widths{0.10, 0.15, 0.20};
+  double noise = 0.05;  // sd of ln(M / Eq. 4)
+  std::uint64_t seed = 1;
+  YAML::Node spec;  // synth spec keys shared by the tests (undefined: the campaign default)
+  YAML::Node node;  // the section, for the line of later errors
+};
+
+MatrixKeys ReadMatrixKeys(YamlSection& top) {
+  MatrixKeys k;
+  k.node = top.Get("synthesise");
+  YamlSection s = top.Sub("synthesise");
+  ReadPositiveList(s, "mass_kg", &k.masses);
+  ReadPositiveList(s, "drop_height_m", &k.heights);
+  ReadPositiveList(s, "width_m", &k.widths);
+  s.Read("added_mass_noise", &k.noise, ValueRange{0, 1, "", false, true},
+         "a standard deviation of ln(M / Eq. 4)");
+  s.Read("seed", &k.seed);
+  k.spec = s.Get("spec");
+  if (k.spec.IsDefined() && !k.spec.IsNull() && !k.spec.IsMap()) {
+    s.Problem("spec", fmt::format("got {}; expected a map of synth keys", DescribeYaml(k.spec)));
+  }
+  s.Finish();
+  return k;
+}
+
+// `outputs:` {animation, figures}: overrides of every test's scene outputs.
+struct OutputOverrides {
+  std::optional<bool> animation, figures;
+};
+
+OutputOverrides ReadOutputOverrides(YamlSection& top) {
+  OutputOverrides o;
+  YamlSection s = top.Sub("outputs");
+  bool v = false;
+  if (s.Read("animation", &v)) o.animation = v;
+  if (s.Read("figures", &v)) o.figures = v;
+  s.Finish();
+  return o;
 }
 
 std::string Resolve(const std::string& file, const std::string& path) {
@@ -169,8 +205,7 @@ ImpactSceneSpec SharedSpec(const std::string& file, const YAML::Node& node) {
   base.frames = 0;
   base.grid_cols = 4;
   base.grid_rows = 4;
-  if (!node.IsDefined()) return base;
-  if (!node.IsMap()) Fail(file, node, "synthesise.spec", Describe(node), "a map of synth keys");
+  if (!node.IsDefined() || node.IsNull()) return base;
   YAML::Node over = YAML::Clone(node);
   if (over["preset"]) {
     base = ImpactScenePreset(over["preset"].as<std::string>());
@@ -191,29 +226,12 @@ double GridScaleMmPerPx(const ImpactSceneSpec& s, double added_mass_kg) {
   return 1e3 * std::sqrt(area_m2 / (s.grid_cols * s.grid_rows)) / s.step;
 }
 
-std::vector<CampaignTest> MatrixTests(const std::string& file, const YAML::Node& node) {
-  if (!(node.IsMap() || node.IsNull()))
-    Fail(file, node, "synthesise", Describe(node), "a map (or nothing: Table 1 defaults)");
-  if (node.IsMap())
-    CheckKeys(file, node, "synthesise.",
-              {"spec", "mass_kg", "drop_height_m", "width_m", "added_mass_noise", "seed"});
-  const auto list = [&](const char* key, const std::vector<double>& def) {
-    return node.IsMap() && node[key] ? Numbers(file, node[key], std::string("synthesise.") + key)
-                                     : def;
-  };
-  const std::vector<double> masses = list("mass_kg", {7, 10, 13});
-  const std::vector<double> heights = list("drop_height_m", {0.2, 0.7, 1.2});
-  const std::vector<double> widths = list("width_m", {0.10, 0.15, 0.20});
-  double noise = 0.05;
-  std::uint64_t seed = 1;
-  if (node.IsMap() && node["added_mass_noise"]) {
-    const YAML::Node n = node["added_mass_noise"];
-    if (!n.IsScalar() || !YAML::convert<double>::decode(n, noise) || !(noise >= 0 && noise < 1))
-      Fail(file, n, "synthesise.added_mass_noise", Describe(n), "a number in [0, 1)");
-  }
-  if (node.IsMap() && node["seed"] && !YAML::convert<std::uint64_t>::decode(node["seed"], seed))
-    Fail(file, node["seed"], "synthesise.seed", Describe(node["seed"]), "an integer >= 0");
-  const ImpactSceneSpec shared = SharedSpec(file, node.IsMap() ? node["spec"] : YAML::Node());
+std::vector<CampaignTest> MatrixTests(const std::string& file, const MatrixKeys& keys) {
+  const YAML::Node& node = keys.node;
+  const std::vector<double>&masses = keys.masses, &heights = keys.heights, &widths = keys.widths;
+  const double noise = keys.noise;
+  const std::uint64_t seed = keys.seed;
+  const ImpactSceneSpec shared = SharedSpec(file, keys.spec);
   std::mt19937_64 rng(seed);
   std::vector<CampaignTest> tests;
   for (double m : masses) {
@@ -227,7 +245,7 @@ std::vector<CampaignTest> MatrixTests(const std::string& file, const YAML::Node&
         t.spec.drop_height_m = h;
         t.spec.impact_velocity_m_s = std::numeric_limits<double>::quiet_NaN();
         t.spec.width_m = d;
-        const double eq4 = Eq4AddedMass(m, t.spec.ImpactVelocity(), d * t.spec.depth_m);
+        const double eq4 = AddedMassMaxEq4(m, t.spec.ImpactVelocity(), d * t.spec.depth_m);
         t.spec.added_mass = SceneAddedMass::kGiven;
         t.spec.added_mass_kg = eq4 * std::exp(noise * StandardNormal(rng));
         t.spec.mm_per_px = GridScaleMmPerPx(t.spec, t.spec.added_mass_kg);
@@ -250,19 +268,9 @@ std::vector<CampaignTest> MatrixTests(const std::string& file, const YAML::Node&
   return tests;
 }
 
-// `outputs:` {animation, figures}: overrides of every test's scene outputs (part of its hash).
-void ApplyOutputs(const std::string& file, const YAML::Node& node,
-                  std::vector<CampaignTest>* tests) {
-  if (!node.IsMap()) Fail(file, node, "outputs", Describe(node), "a map (animation, figures)");
-  CheckKeys(file, node, "outputs.", {"animation", "figures"});
-  std::optional<bool> animation, figures;
-  for (auto [key, target] : {std::pair{"animation", &animation}, std::pair{"figures", &figures}}) {
-    if (!node[key]) continue;
-    bool v = false;
-    if (!node[key].IsScalar() || !YAML::convert<bool>::decode(node[key], v))
-      Fail(file, node[key], std::string("outputs.") + key, Describe(node[key]), "true or false");
-    *target = v;
-  }
+// The `outputs:` overrides applied to every test (part of its hash).
+void ApplyOutputs(const OutputOverrides& o, std::vector<CampaignTest>* tests) {
+  const std::optional<bool>&animation = o.animation, &figures = o.figures;
   for (auto& t : *tests) {
     t.animation = animation;
     t.figures = figures;
@@ -322,10 +330,6 @@ CampaignShard ParseShard(const std::string& text, const std::string& where) {
   return s;
 }
 
-double Eq4AddedMass(double mass_kg, double velocity_m_s, double area_m2) {
-  return 425.0 * std::pow(mass_kg, 0.1) * std::pow(velocity_m_s, 0.2) * std::pow(area_m2, 1.3);
-}
-
 bool IsCampaignFile(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path, "a campaign or scene file (YAML)");
   return root.IsMap() && !root["inputs"] &&
@@ -334,34 +338,37 @@ bool IsCampaignFile(const std::string& path) {
 
 CampaignPlan LoadCampaignFile(const std::string& path) {
   const YAML::Node root = LoadYamlFile(path, kWhat);
-  if (!root.IsMap()) Fail(path, root, "(top level)", Describe(root), "a map of campaign keys");
-  CheckKeys(path, root, "", {"scenes", "scene_glob", "synthesise", "outputs"});
+  YamlProblems problems(path);
+  YamlSection top(root, "", &problems);
+  const std::vector<std::string> files = ReadPaths(top, "scenes");
+  const std::vector<std::string> patterns = ReadPaths(top, "scene_glob");
+  const bool synthesise = top.Get("synthesise").IsDefined();  // null: Table 1 defaults
+  const MatrixKeys matrix = ReadMatrixKeys(top);
+  const bool has_outputs = top.Get("outputs").IsDefined();
+  const OutputOverrides outputs = ReadOutputOverrides(top);
+  top.Finish();
+  problems.ThrowIfAny(kWhat);
+
   CampaignPlan plan;
   plan.path = path;
   std::ifstream in(path);
   plan.yaml_text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  if (root["scenes"]) {
-    const auto files = Strings(path, root["scenes"], "scenes");
-    for (std::size_t i = 0; i < files.size(); ++i) {
-      plan.tests.push_back(
-          SceneFileTest(Resolve(path, files[i]), fmt::format("scenes[{}]", i), path));
-    }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    plan.tests.push_back(
+        SceneFileTest(Resolve(path, files[i]), fmt::format("scenes[{}]", i), path));
   }
-  if (root["scene_glob"]) {
-    const auto patterns = Strings(path, root["scene_glob"], "scene_glob");
-    for (const auto& pattern : patterns) {
-      for (const auto& f : GlobPaths(path, root["scene_glob"], "scene_glob", pattern))
-        plan.tests.push_back(SceneFileTest(f, "scene_glob '" + pattern + "'", path));
-    }
+  for (const auto& pattern : patterns) {
+    for (const auto& f : GlobPaths(path, root["scene_glob"], "scene_glob", pattern))
+      plan.tests.push_back(SceneFileTest(f, "scene_glob '" + pattern + "'", path));
   }
-  if (root["synthesise"]) {
-    for (auto& t : MatrixTests(path, root["synthesise"])) plan.tests.push_back(std::move(t));
+  if (synthesise) {
+    for (auto& t : MatrixTests(path, matrix)) plan.tests.push_back(std::move(t));
   }
   if (plan.tests.empty()) {
     Fail(path, root, "scenes / scene_glob / synthesise", "no test",
          "at least one scene file, glob match or synthesised test");
   }
-  if (root["outputs"]) ApplyOutputs(path, root["outputs"], &plan.tests);
+  if (has_outputs) ApplyOutputs(outputs, &plan.tests);
   AssignNamesAndIndices(&plan.tests, path);
   return plan;
 }

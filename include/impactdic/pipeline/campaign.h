@@ -105,9 +105,6 @@ CampaignPlan PlanFromSceneFiles(const std::vector<std::string>& scene_paths);
 // scene keys such as `inputs`), false for a scene file.
 bool IsCampaignFile(const std::string& path);
 
-// The Eq. 4 added mass [kg] for m_p [kg], v0 [m/s], A [m^2] with the paper's coefficients.
-double Eq4AddedMass(double mass_kg, double velocity_m_s, double area_m2);
-
 // One row of campaign.csv.
 struct CampaignRow {
   static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
