@@ -193,6 +193,21 @@ std::string YamlSection::PathOf(const std::string& key) const {
   return prefix_.empty() ? key : prefix_ + "." + key;
 }
 
+bool DecodeNumber(const YAML::Node& node, const ValueRange& range, double* out) {
+  double v = 0;
+  if (!node.IsScalar() || !YAML::convert<double>::decode(node, v) || !range.Contains(v))
+    return false;
+  *out = v;
+  return true;
+}
+
+bool DecodeNumber(const YAML::Node& node, const ValueRange& range, int* out) {
+  int v = 0;
+  if (!node.IsScalar() || !YAML::convert<int>::decode(node, v) || !range.Contains(v)) return false;
+  *out = v;
+  return true;
+}
+
 bool YamlSection::Has(const std::string& key) const {
   return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull();
 }
@@ -231,27 +246,14 @@ bool YamlSection::ReadWith(const std::string& key,
 bool YamlSection::Read(const std::string& key, double* out, const ValueRange& range,
                        const std::string& what) {
   return ReadWith(
-      key,
-      [&](const YAML::Node& n) {
-        double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
-          return false;
-        *out = v;
-        return true;
-      },
+      key, [&](const YAML::Node& n) { return DecodeNumber(n, range, out); },
       ExpectedText(what, range));
 }
 
 bool YamlSection::Read(const std::string& key, int* out, const ValueRange& range,
                        const std::string& what) {
   return ReadWith(
-      key,
-      [&](const YAML::Node& n) {
-        int v = 0;
-        if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !range.Contains(v)) return false;
-        *out = v;
-        return true;
-      },
+      key, [&](const YAML::Node& n) { return DecodeNumber(n, range, out); },
       ExpectedText("an integer " + what, range));
 }
 
@@ -326,27 +328,14 @@ YamlOptionTable& YamlOptionTable::Add(const std::string& key, double* field,
                                       const std::string& doc) {
   return AddCustom(
       key, ExpectedText(what, range), ValueText(*field),
-      [field, range](const YAML::Node& n) {
-        double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
-          return false;
-        *field = v;
-        return true;
-      },
-      doc);
+      [field, range](const YAML::Node& n) { return DecodeNumber(n, range, field); }, doc);
 }
 
 YamlOptionTable& YamlOptionTable::Add(const std::string& key, int* field, const ValueRange& range,
                                       const std::string& what, const std::string& doc) {
   return AddCustom(
       key, ExpectedText("an integer " + what, range), std::to_string(*field),
-      [field, range](const YAML::Node& n) {
-        int v = 0;
-        if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !range.Contains(v)) return false;
-        *field = v;
-        return true;
-      },
-      doc);
+      [field, range](const YAML::Node& n) { return DecodeNumber(n, range, field); }, doc);
 }
 
 YamlOptionTable& YamlOptionTable::Add(const std::string& key, bool* field, const std::string& doc) {

@@ -40,8 +40,7 @@ void AddOptional(YamlOptionTable& t, const std::string& key, std::optional<doubl
       key, ExpectedText(what, range), field->has_value() ? Num(**field) : "unset",
       [field, range](const YAML::Node& n) {
         double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
-          return false;
+        if (!DecodeNumber(n, range, &v)) return false;
         *field = v;
         return true;
       },
@@ -71,8 +70,7 @@ void AddOdd(YamlOptionTable& t, const std::string& key, int* field, const ValueR
       key, "an odd integer in " + range.Text(), std::to_string(*field),
       [field, range](const YAML::Node& n) {
         int v = 0;
-        if (!n.IsScalar() || !YAML::convert<int>::decode(n, v) || !range.Contains(v) || v % 2 == 0)
-          return false;
+        if (!DecodeNumber(n, range, &v) || v % 2 == 0) return false;
         *field = v;
         return true;
       },
@@ -248,8 +246,7 @@ void AddTolerance(YamlOptionTable& t, const std::string& key, double* field,
       key, ExpectedText(what, range), std::isnan(*field) ? unset_text : Num(*field),
       [field, range](const YAML::Node& n) {
         double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !range.Contains(v))
-          return false;
+        if (!DecodeNumber(n, range, &v)) return false;
         *field = v;
         return true;
       },
@@ -261,13 +258,7 @@ YamlOptionTable ModelTable(Scene* s) {
   ImpactModelParameters& m = s->model;
   t.AddCustom(
       "added_mass_kg", "an added mass M in " + kAddedMassRange.Text(), "Eq. 4",
-      [&m](const YAML::Node& n) {
-        double v = 0;
-        if (!n.IsScalar() || !YAML::convert<double>::decode(n, v) || !kAddedMassRange.Contains(v))
-          return false;
-        m.added_mass_kg = v;
-        return true;
-      },
+      [&m](const YAML::Node& n) { return DecodeNumber(n, kAddedMassRange, &m.added_mass_kg); },
       "Added mass M; unset: Eq. 4");
   t.Add("K", &m.friction_K, kFrictionKRange, "a friction coefficient K",
         "Friction coefficient K (Eq. 8, Table 2)");

@@ -40,6 +40,11 @@ std::string ExpectedText(const std::string& what, const ValueRange& range);
 // "nothing", "'abc'", "a list of 3", "a map": what a node holds, for messages.
 std::string DescribeYaml(const YAML::Node& node);
 
+// A scalar node holding a number (an integer) in `range`: stored in *out, true; otherwise false
+// and *out unchanged. The one number decoder of the YAML readers.
+bool DecodeNumber(const YAML::Node& node, const ValueRange& range, double* out);
+bool DecodeNumber(const YAML::Node& node, const ValueRange& range, int* out);
+
 // Every problem found in one YAML file, so the user sees all of them at once:
 //   "file:LINE: key.path: got 'x'; expected ...".
 class YamlProblems {
