@@ -65,7 +65,7 @@ BoardSpec ParseBoard(const std::string& text, double square_mm, const std::strin
   CheckValue(board.cols >= 2 && board.rows >= 2, where, "'" + text + "'",
              "at least 2x2 inner corners");
   board.square_mm = square_mm;
-  CheckRange(square_mm, BoardSpec::kSquareRange, "--square", "a square size");
+  CheckRange(square_mm, BoardSpec::kSquareRange, "board.square_mm", "a square size");
   return board;
 }
 
@@ -264,12 +264,13 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
   s.rms_px = result.rms_px;
   LogInfo("{}", s.BriefReport());
   if (!(result.rms_px <= options.max_rms_px))
-    throw Error(ErrorKind::kNumerical,
-                fmt::format("implausible calibration: reprojection RMS {:.3f} px exceeds the "
-                            "limit {:.3f} px (calibration.max_rms_px / --max-rms); worst view {} "
-                            "with {:.3f} px. Check the board size (--board, --square), blurred or "
-                            "mis-detected views",
-                            result.rms_px, options.max_rms_px, s.worst_view, s.worst_view_rms_px));
+    throw Error(
+        ErrorKind::kNumerical,
+        fmt::format("implausible calibration: reprojection RMS {:.3f} px exceeds the "
+                    "limit {:.3f} px (CalibrationOptions::max_rms_px); worst view {} "
+                    "with {:.3f} px. Check the board size (inner corners, square size), blurred or "
+                    "mis-detected views",
+                    result.rms_px, options.max_rms_px, s.worst_view, s.worst_view_rms_px));
   return result;
 }
 

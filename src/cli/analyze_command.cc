@@ -124,7 +124,13 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
     throw Error(ErrorKind::kFileNotFound, "--sensor", a.sensor, "an existing DAQ CSV file")
         .WithFile(a.sensor);
   }
-  const SensorResult r = AnalyzeSensorCsv(a.sensor, o);
+  const SensorResult r = [&] {
+    try {
+      return AnalyzeSensorCsv(a.sensor, o);
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"sensor.cutoff_hz", "--cutoff"}});
+    }
+  }();
   const SensorSummary& s = r.summary;
   if (!a.output.empty()) {
     // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.

@@ -108,7 +108,11 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->callback([args] {
     // Validate every option before any work.
     CalibrationOptions options;
-    options.board = ParseBoard(args->board, args->square_mm, "--board");
+    try {
+      options.board = ParseBoard(args->board, args->square_mm, "--board");
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"board.square_mm", "--square"}});
+    }
     CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
                "text or json");
     CheckValue(args->max_rms_px > 0 && std::isfinite(args->max_rms_px), "--max-rms",
@@ -131,8 +135,16 @@ void RegisterCalibrateCommand(CLI::App& app) {
     options.fix_k3 = args->fix_k3;
 
     CalibrationSummary summary;
-    const CameraCalibration calibration =
-        CalibrateFromFiles(args->images, args->plane, options, &summary);
+    const CameraCalibration calibration = [&] {
+      try {
+        return CalibrateFromFiles(args->images, args->plane, options, &summary);
+      } catch (const Error& e) {
+        if (e.kind() != ErrorKind::kNumerical) throw;
+        // The library names CalibrationOptions fields; here they are flags.
+        throw Error(e.kind(), std::string(e.what()) +
+                                  " (--max-rms sets the limit; --board and --square the board)");
+      }
+    }();
     SaveCalibration(calibration, args->output);
     if (args->format == "json")
       PrintJson(calibration, summary, args->output);

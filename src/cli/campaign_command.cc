@@ -74,7 +74,11 @@ void Run(const CampaignArgs& a) {
   if (!a.table.empty()) {
     summary = RegressCampaignTable(a.table, options);
   } else if (!a.merge.empty()) {
-    summary = MergeCampaigns(a.merge, options);
+    try {
+      summary = MergeCampaigns(a.merge, options);
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"merge folders", "--merge"}});
+    }
   } else {
     summary = RunCampaignPlan(PlanOf(a.files), options);
   }

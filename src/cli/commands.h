@@ -6,6 +6,10 @@
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <utility>
+#include <vector>
+
+#include "impactdic/core/error.h"
 
 namespace impactdic::cli {
 
@@ -19,6 +23,12 @@ void RegisterRenderCommand(CLI::App& app);
 void RegisterCampaignCommand(CLI::App& app);
 void RegisterValidateDemCommand(CLI::App& app);
 void RegisterVersionCommand(CLI::App& app);
+
+// Library errors name option struct fields and YAML keys ("sensor.cutoff_hz"); a command maps the
+// ones it exposes as flags ({"sensor.cutoff_hz", "--cutoff"}). Throws `e` again, naming the flag
+// (file and line kept) when its `where` is in `flags`, unchanged otherwise.
+using FlagNames = std::vector<std::pair<std::string, std::string>>;
+[[noreturn]] void RethrowWithFlagNames(const Error& e, const FlagNames& flags);
 
 }  // namespace impactdic::cli
 

@@ -43,20 +43,15 @@ struct CorrelateArgs {
   std::string output;
 };
 
-// The command-line flag of a DicOptions field named in a library error.
-std::string FlagOf(const std::string& field) {
-  static const std::vector<std::pair<std::string, std::string>> kFlags = {
-      {"dic.grid.subset_size", "--subset"},
-      {"dic.grid.step", "--step"},
-      {"dic.grid.roi", "--roi"},
-      {"dic.grid.mask", "--mask"},
-      {"dic.init.search_radius_px", "--search-radius"},
-      {"dic.icgn.min_zncc", "--min-zncc"},
-      {"dic.icgn.max_uncertainty_px", "--max-uncertainty"}};
-  for (const auto& [name, flag] : kFlags)
-    if (name == field) return flag;
-  return field;
-}
+// The command-line flags of the library fields named in errors.
+const FlagNames kCorrelateFlags = {{"dic.grid.subset_size", "--subset"},
+                                   {"dic.grid.step", "--step"},
+                                   {"dic.grid.roi", "--roi"},
+                                   {"dic.grid.mask", "--mask"},
+                                   {"dic.init.search_radius_px", "--search-radius"},
+                                   {"dic.icgn.min_zncc", "--min-zncc"},
+                                   {"dic.icgn.max_uncertainty_px", "--max-uncertainty"},
+                                   {"frames video", "--frames"}};
 
 cv::Rect ParseRoi(const std::string& text) {
   std::vector<int> v;
@@ -117,7 +112,7 @@ void Run(const CorrelateArgs& a) {
   try {
     options.Check();
   } catch (const Error& e) {
-    throw Error(e.kind(), FlagOf(e.where()), e.found(), e.expected());
+    RethrowWithFlagNames(e, kCorrelateFlags);
   }
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
@@ -147,7 +142,7 @@ void Run(const CorrelateArgs& a) {
     result = video ? CorrelateVideo(a.frames, options) : CorrelateFiles(paths, options);
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
-    throw;
+    RethrowWithFlagNames(e, kCorrelateFlags);
   }
   WriteDicResult(a.output, result, options);
   const double seconds = wall.ElapsedSeconds();

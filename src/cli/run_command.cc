@@ -9,8 +9,8 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/threads.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic::cli {
 

@@ -28,7 +28,13 @@ void RunValidateDem(const ValidateDemArgs& args) {
   // Before any work: the table is never written over an input (io/atomic_file.h).
   if (!args.csv.empty())
     CheckOutputLocation(args.csv, {"--csv", {".csv"}, {args.truth, args.results}});
-  const DemValidation v = ValidateDemRun(args.truth, args.results, args.figures);
+  const DemValidation v = [&] {
+    try {
+      return ValidateDemRun(args.truth, args.results, args.figures);
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"figures folder", "--figures"}});
+    }
+  }();
   std::cout << v.Report();
   if (!args.csv.empty()) {
     WriteCsv(

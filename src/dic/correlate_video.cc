@@ -13,7 +13,7 @@ DicResult CorrelateVideo(const std::string& path, const DicOptions& options) {
   cv::Mat reference, frame;
   const bool first = video.Read(&reference);
   if (!first || !video.Read(&frame)) {
-    throw Error(ErrorKind::kInvalidValue, "--frames",
+    throw Error(ErrorKind::kInvalidValue, "frames video",
                 fmt::format("{} decodable frame(s)", first ? 1 : 0),
                 "a video of at least two frames (the first is the reference)")
         .WithFile(path);

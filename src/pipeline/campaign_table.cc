@@ -387,20 +387,20 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
                                const CampaignOptions& options) {
   options.Check();
   if (folders.empty())
-    throw Error(ErrorKind::kInvalidValue, "--merge", "no folder", "shard output folders");
+    throw Error(ErrorKind::kInvalidValue, "merge folders", "no folder", "shard output folders");
   CampaignSummary summary;
   std::map<int, std::string> holder;  // test index -> folder
   for (const auto& folder : folders) {
     const std::string csv = (fs::path(folder) / kCampaignCsv).string();
     const std::string h5 = (fs::path(folder) / kCampaignH5).string();
     if (!fs::is_regular_file(csv) || !fs::is_regular_file(h5)) {
-      throw Error(ErrorKind::kFileNotFound, "--merge", folder,
+      throw Error(ErrorKind::kFileNotFound, "merge folders", folder,
                   "a campaign output folder (with campaign.csv and campaign.h5)");
     }
     const int total =
         static_cast<int>(H5Reader(h5).ReadNumberAttribute("/campaign", "tests_total"));
     if (summary.tests_total != 0 && total != summary.tests_total) {
-      throw Error(ErrorKind::kInvalidValue, "--merge",
+      throw Error(ErrorKind::kInvalidValue, "merge folders",
                   fmt::format("{} holds a campaign of {} tests", folder, total),
                   fmt::format("shards of one campaign ({} tests, as {})", summary.tests_total,
                               holder.begin()->second));
@@ -409,7 +409,7 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
     for (auto& r : ReadRows(csv)) {
       if (holder.count(r.index)) {
         throw Error(
-            ErrorKind::kInvalidValue, "--merge",
+            ErrorKind::kInvalidValue, "merge folders",
             fmt::format("test {} ({}) in both {} and {}", r.index, r.name, holder[r.index], folder),
             "each test in one shard only");
       }
@@ -422,7 +422,7 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
     if (!holder.count(k)) missing.push_back(std::to_string(k));
   if (!missing.empty()) {
     throw Error(
-        ErrorKind::kInvalidValue, "--merge",
+        ErrorKind::kInvalidValue, "merge folders",
         fmt::format("tests {} of {} missing", fmt::join(missing, ", "), summary.tests_total),
         "the output folders of all shards");
   }

@@ -158,7 +158,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
     std::error_code ec;
     MakeFolders(options.png_frames_dir, ec);
     if (ec || !fs::is_directory(options.png_frames_dir)) {
-      throw Error(ErrorKind::kIo, "--png-frames folder", options.png_frames_dir,
+      throw Error(ErrorKind::kIo, "png_frames_dir", options.png_frames_dir,
                   "a folder that can be created: " + ec.message());
     }
     summary.png_frames_dir = options.png_frames_dir;

@@ -258,7 +258,7 @@ void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequen
   std::error_code ec;
   MakeFolders(dir, ec);
   if (ec || !fs::is_directory(dir, ec))
-    throw Error(ErrorKind::kIo, "--figures", dir,
+    throw Error(ErrorKind::kIo, "figures folder", dir,
                 "a folder that can be created (" + ec.message() + ")");
   // Velocity fields at the frame nearest t_e / 2 of the grains, one colour scale.
   double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;

@@ -300,7 +300,7 @@ double SampleRate(const SensorRecord& record, const SensorOptions& options) {
                                               : static_cast<double>(n - 1) /
                                                     (record.time_s.back() - record.time_s.front());
   if (!(options.cutoff_hz < 0.5 * fs)) {
-    throw Error(ErrorKind::kInvalidValue, "sensor.cutoff_hz (--cutoff)",
+    throw Error(ErrorKind::kInvalidValue, "sensor.cutoff_hz",
                 fmt::format("{} Hz", options.cutoff_hz),
                 fmt::format("below the Nyquist frequency {} Hz of this record", 0.5 * fs));
   }

@@ -371,8 +371,8 @@ TEST(Calibration, ParseBoard) {
   ExpectErrorContaining([] { ParseBoard("9-6", 25); }, "--board");
   ExpectErrorContaining([] { ParseBoard("9x", 25); }, "COLSxROWS");
   ExpectErrorContaining([] { ParseBoard("1x6", 25); }, "at least 2x2");
-  ExpectErrorContaining([] { ParseBoard("9x6", 0); }, "--square");
-  ExpectErrorContaining([] { ParseBoard("9x6", -3); }, "--square");
+  ExpectErrorContaining([] { ParseBoard("9x6", 0); }, "board.square_mm");
+  ExpectErrorContaining([] { ParseBoard("9x6", -3); }, "board.square_mm");
 }
 
 TEST(Calibration, OptionsCheckNamesTheField) {
