@@ -22,6 +22,7 @@
 #include <fstream>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/videoio.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -31,6 +32,7 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/render/animation.h"
 
 namespace impactdic {
 namespace {
@@ -193,6 +195,37 @@ TEST_F(StreamingRun, OutputsFramesAllStoresEveryFrameAndNoneNone) {
   const H5Reader without(dir_->File("none/results.h5"));
   EXPECT_FALSE(without.Exists(L::kFrameImages));
   EXPECT_TRUE(std::filesystem::exists(dir_->File("none/velocity_field_te.png")));
+}
+
+// A video source is streamed too: decoded once to count its frames, then frame by frame while
+// correlating, and again (from its start) for the snapshot and the animation.
+TEST_F(StreamingRun, RunStreamsTheFramesOfAVideo) {
+  const std::string video = dir_->File("scene/clip.avi");
+  {
+    cv::VideoWriter writer(video, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'), 25,
+                           cv::Size(kWidth, kHeight), /*isColor=*/false);
+    ASSERT_TRUE(writer.isOpened()) << "OpenCV cannot write an MJPG AVI";
+    for (int k = 0; k < kFrames; ++k) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frames/frame_%04d.png", k);
+      writer.write(cv::imread(dir_->File("scene/") + name, cv::IMREAD_GRAYSCALE));
+    }
+  }
+  const std::string scene =
+      SceneVariant(*dir_, "video", {kShort, {"frames/frame_*.png", "clip.avi"}});
+  const CliResult run =
+      RunCli("-q run " + scene + " -o " + dir_->File("video") + " --allow-partial --threads 2");
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  const H5Reader in(dir_->File("video/results.h5"));
+  Dims time_dims;
+  in.ReadDouble(L::kTimeMs, &time_dims);
+  const std::vector<double> frame_index = in.ReadDouble(L::kTimeFrameIndex);
+  ASSERT_FALSE(frame_index.empty());
+  EXPECT_EQ(frame_index.back(), kShortLast);
+  std::string animation = dir_->File("video/velocity.mp4");
+  if (!std::filesystem::exists(animation)) animation = dir_->File("video/velocity.avi");
+  EXPECT_EQ(CountVideoFrames(animation), time_dims[0]);
+  EXPECT_TRUE(std::filesystem::exists(dir_->File("video/velocity_field_te.png")));
 }
 
 }  // namespace
