@@ -2,8 +2,11 @@
 # Peak memory and time per frame of `impactdic run` against the number of frames (issue 13,
 # item 5; docs/architecture.md "Memory"). Synthesises one impact sequence of COUNT frames of
 # WIDTHxHEIGHT (8-bit PNG, ideal lens), then runs the whole pipeline on its first N frames
-# (dic.last_frame) for each N given, as a child of /usr/bin/time, and prints one table row per N:
-#   frames | peak RSS [MB] | wall [s] | wall per frame [s] | correlate per frame [s]
+# (dic.last_frame = N + 1) for each N given, as a child of /usr/bin/time, and prints one table
+# row per N (analysed frames: from the last one before the impact, found from the sensor record,
+# to frame N + 1):
+#   analysed frames | peak RSS [MB] | wall [s] | wall per analysed frame [s] |
+#   correlate per correlated frame [s]
 # A benchmark, not a test: the times depend on the machine and its load; the memory does not.
 #
 #   bench/streaming_memory.sh [-b BINARY] [-w WIDTH] [-h HEIGHT] [-d DIR] N1 N2 ...
@@ -34,16 +37,16 @@ calibration: {render: false}
 EOF
   "$binary" -q synth "$dir/spec.yaml" -o "$dir/scene" > /dev/null
 fi
-echo "| frames | peak RSS [MB] | wall [s] | wall per frame [s] | correlate per frame [s] |"
+echo "| analysed frames | peak RSS [MB] | wall [s] | wall per frame [s] | correlate per frame [s] |"
 echo "|---|---|---|---|---|"
 for n in "$@"; do
-  # Frames 1..n+1 are analysed (frame 1: the last one before the impact).
   sed "s/^dic:$/dic:\n  last_frame: $((n + 1))/" "$dir/scene/scene.yaml" > "$dir/scene/n$n.yaml"
   rm -rf "$dir/out$n"
   /usr/bin/time -f "%M %e" -o "$dir/time$n.txt" "$binary" run "$dir/scene/n$n.yaml" \
     -o "$dir/out$n" --threads "$threads" --allow-partial > "$dir/run$n.txt" 2>&1
   read -r rss_kb wall < "$dir/time$n.txt"
-  correlate=$(awk '$1 == "correlate" {print $2}' "$dir/run$n.txt")
-  awk -v n="$n" -v r="$rss_kb" -v w="$wall" -v c="$correlate" 'BEGIN {
-    printf "| %d | %.0f | %.1f | %.3f | %.3f |\n", n, r / 1024, w, w / n, c / n }'
+  correlate=$(awk '$1 == "correlate" && $3 == "s" {print $2}' "$dir/run$n.txt")
+  analysed=$(awk '$1 == "frames" && $3 == "s" {print $4}' "$dir/run$n.txt")  # "frames 0.09 s 46 of 502 ..."
+  awk -v n="$analysed" -v r="$rss_kb" -v w="$wall" -v c="$correlate" 'BEGIN {
+    printf "| %d | %.0f | %.1f | %.3f | %.3f |\n", n, r / 1024, w, w / n, c / (n - 1) }'
 done
