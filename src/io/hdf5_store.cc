@@ -255,6 +255,46 @@ void H5Writer::Write(const std::string& path, const std::vector<std::uint16_t>& 
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT16,
                H5::PredType::STD_U16LE, units, description);
 }
+void H5Writer::WriteStack(const std::string& path, const Dims& dims, int bits,
+                          const std::function<void(std::size_t, void*)>& fill,
+                          const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (dims.size() != 3 || (bits != 8 && bits != 16)) {
+    throw Error(ErrorKind::kInvalidValue, "dataset " + name,
+                std::to_string(dims.size()) + " dims, " + std::to_string(bits) + " bits",
+                "[images x rows x cols] of 8 or 16 bits");
+  }
+  CreateGroup(ParentOf(path));
+  const H5::PredType& mem_type =
+      bits == 8 ? H5::PredType::NATIVE_UINT8 : H5::PredType::NATIVE_UINT16;
+  const H5::PredType& file_type = bits == 8 ? H5::PredType::STD_U8LE : H5::PredType::STD_U16LE;
+  const std::vector<hsize_t> h_dims(dims.begin(), dims.end());
+  H5::DataSpace space(3, h_dims.data());
+  H5::DSetCreatPropList props;
+  const hsize_t chunk[3] = {1, std::max<hsize_t>(1, h_dims[1]), std::max<hsize_t>(1, h_dims[2])};
+  const std::size_t per_image = dims[1] * dims[2];
+  if (dims[0] > 0 && per_image > 0) {
+    props.setChunk(3, chunk);
+    props.setShuffle();
+    props.setDeflate(kDeflateLevel);
+  }
+  std::vector<std::uint8_t> buffer(per_image * static_cast<std::size_t>(bits / 8));
+  Guard(final_path(), "dataset " + name, [&] {
+    if (impl_->file.nameExists(name)) impl_->file.unlink(name);
+    H5::DataSet ds = impl_->file.createDataSet(name, file_type, space, props);
+    const H5::DataSpace one(3, chunk);
+    for (std::size_t f = 0; f < dims[0] && per_image > 0; ++f) {
+      fill(f, buffer.data());
+      const hsize_t start[3] = {f, 0, 0};
+      H5::DataSpace slab = ds.getSpace();
+      slab.selectHyperslab(H5S_SELECT_SET, chunk, start);
+      ds.write(buffer.data(), mem_type, one, slab);
+    }
+    WriteStringAttribute(ds, "units", units);
+    WriteStringAttribute(ds, "description", description);
+  });
+}
+
 void H5Writer::Write(const std::string& path, const std::vector<double>& data,
                      const std::string& units, const std::string& description) {
   Write(path, data, Dims{data.size()}, units, description);

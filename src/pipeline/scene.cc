@@ -282,6 +282,25 @@ YamlOptionTable ModelTable(Scene* s) {
   return t;
 }
 
+}  // namespace
+
+const char* ToString(FrameStorage storage) {
+  switch (storage) {
+    case FrameStorage::kNone: return "none";
+    case FrameStorage::kPreview: return "preview";
+    case FrameStorage::kAll: return "all";
+  }
+  return "?";
+}
+
+FrameStorage FrameStorageFromString(const std::string& text) {
+  for (FrameStorage f : {FrameStorage::kNone, FrameStorage::kPreview, FrameStorage::kAll})
+    if (text == ToString(f)) return f;
+  throw Error(ErrorKind::kInvalidValue, "outputs.frames", text, "none, preview or all");
+}
+
+namespace {
+
 YamlOptionTable OutputsTable(Scene* s) {
   YamlOptionTable t("outputs");
   SceneOutputs& o = s->outputs;
@@ -291,6 +310,10 @@ YamlOptionTable OutputsTable(Scene* s) {
   t.Add("figures", &o.figures, "Figures (gnuplot)");
   t.Add("animation", &o.animation, "Animation");
   t.Add("png_frames", &o.png_frames, "The animation's frames as PNG files");
+  t.AddChoice(
+      "frames", {"none", "preview", "all"}, ToString(o.frames),
+      [&o](const std::string& v) { o.frames = FrameStorageFromString(v); },
+      "Frames stored in results.h5: none, a preview (at most 16, downsampled to <= 640 px) or all");
   return t;
 }
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <opencv2/imgproc.hpp>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
@@ -76,7 +77,30 @@ std::string FormatMs(double t_s) {
 
 }  // namespace
 
-VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_frames) {
+namespace {
+
+// The sequence's data at the given rows only (the frames are set by the caller).
+void KeepRows(VelocityFieldSequence& seq, const std::vector<std::size_t>& rows) {
+  const std::size_t n = seq.num_subsets;
+  auto keep = [&](std::vector<double>& per_row, std::size_t width) {
+    std::vector<double> kept;
+    for (std::size_t row : rows)
+      kept.insert(kept.end(), per_row.begin() + row * width, per_row.begin() + (row + 1) * width);
+    per_row = std::move(kept);
+  };
+  keep(seq.time_ms, 1);
+  keep(seq.vx_mm_s, n);
+  keep(seq.vy_mm_s, n);
+  if (seq.x_px.size() != n) {
+    keep(seq.x_px, n);
+    keep(seq.y_px, n);
+  }
+}
+
+}  // namespace
+
+VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_frames,
+                                                bool read_frames) {
   // The file name for messages is not exposed by H5Reader; the callers add it.
   const std::string file;
   VelocityFieldSequence seq;
@@ -138,6 +162,7 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
     }
     seq.vy_positive_down = dir == "down";
   }
+  if (!read_frames) return seq;
   if (!r.Exists(L::kFrameImages)) {
     if (require_frames) {
       throw Error(ErrorKind::kFileFormat, "dataset " + std::string(L::kFrameImages), "missing",
@@ -147,9 +172,20 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   }
   Dims di;
   const std::vector<float> pixels = r.ReadFloat(L::kFrameImages, &di);
-  if (di.size() != 3 || di[0] != f || di[1] == 0 || di[2] == 0) {
+  // A preview (`run` outputs.frames: preview) stores some rows, downsampled.
+  std::vector<std::size_t> rows;
+  if (r.Exists(L::kFrameRows)) {
+    for (double row : r.ReadDouble(L::kFrameRows)) {
+      if (!(row >= 0 && row < static_cast<double>(f) && row == std::floor(row)))
+        ShapeError(r, L::kFrameRows, file, Dims{f}, "row indices below " + std::to_string(f));
+      rows.push_back(static_cast<std::size_t>(row));
+    }
+  } else {
+    for (std::size_t i = 0; i < f; ++i) rows.push_back(i);
+  }
+  if (di.size() != 3 || di[0] != rows.size() || di[1] == 0 || di[2] == 0) {
     ShapeError(r, L::kFrameImages, file, di,
-               "[frames x rows x cols] with frames = " + std::to_string(f));
+               "[frames x rows x cols] with frames = " + std::to_string(rows.size()));
   }
   float max_value = 0.f;
   bool integral = true;
@@ -160,10 +196,15 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   double bit_depth = NumberAttribute(r, L::kFramesGroup, L::kBitDepthAttr);
   if (std::isnan(bit_depth) && integral)
     bit_depth = max_value <= 255.f ? 8 : max_value <= 65535.f ? 16 : 0;
-  const int rows = static_cast<int>(di[1]), cols = static_cast<int>(di[2]);
+  const int rows_px = static_cast<int>(di[1]), cols = static_cast<int>(di[2]);
   const std::size_t per_frame = di[1] * di[2];
-  for (std::size_t i = 0; i < f; ++i) {
-    cv::Mat as_float(rows, cols, CV_32F, const_cast<float*>(pixels.data() + i * per_frame));
+  const double full_w = NumberAttribute(r, L::kFramesGroup, L::kFrameWidthAttr);
+  const double full_h = NumberAttribute(r, L::kFramesGroup, L::kFrameHeightAttr);
+  const cv::Size full = std::isfinite(full_w) && std::isfinite(full_h) && full_w >= 1 && full_h >= 1
+                            ? cv::Size(static_cast<int>(full_w), static_cast<int>(full_h))
+                            : cv::Size(cols, rows_px);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    cv::Mat as_float(rows_px, cols, CV_32F, const_cast<float*>(pixels.data() + i * per_frame));
     cv::Mat frame;
     if (bit_depth == 8) {
       as_float.convertTo(frame, CV_8U);
@@ -172,8 +213,10 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
     } else {
       frame = as_float.clone();
     }
+    if (frame.size() != full) cv::resize(frame, frame, full, 0, 0, cv::INTER_LINEAR);
     seq.frames.push_back(frame);
   }
+  if (rows.size() != f) KeepRows(seq, rows);
   return seq;
 }
 
@@ -293,8 +336,14 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
     if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
     if (options.animation) skip(L::kAnimationName, reason);
   } else {
-    const VelocityFieldSequence seq = ReadVelocityFieldSequence(reader, /*require_frames=*/false);
-    if (seq.frames.empty()) {
+    const bool loaded = static_cast<bool>(options.frame_loader);
+    VelocityFieldSequence seq =
+        ReadVelocityFieldSequence(reader, /*require_frames=*/false, /*read_frames=*/!loaded);
+    if (loaded) {
+      seq.frame_count = seq.time_ms.size();
+      seq.load_frame = options.frame_loader;
+    }
+    if (seq.num_frames() == 0) {
       const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
       if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
       if (options.animation) skip(L::kAnimationName, reason);

@@ -81,10 +81,33 @@ VelocityDisplayUnit VelocityDisplayUnitFromString(const std::string& text) {
   throw Error(ErrorKind::kInvalidValue, "velocity unit", text, "one of auto, mm/s, m/s");
 }
 
+namespace {
+
+void CheckFrame(const cv::Mat& m, const cv::Mat& first, std::size_t i) {
+  CheckValue(!m.empty() && m.dims == 2, "VelocityFieldSequence.frames[" + std::to_string(i) + "]",
+             "an empty image", "a 2-D grey image");
+  CheckValue(m.type() == CV_8UC1 || m.type() == CV_16UC1 || m.type() == CV_32FC1,
+             "VelocityFieldSequence.frames[" + std::to_string(i) + "]",
+             "OpenCV type " + std::to_string(m.type()), "CV_8UC1, CV_16UC1 or CV_32FC1");
+  CheckValue(m.size() == first.size() && m.type() == first.type(),
+             "VelocityFieldSequence.frames[" + std::to_string(i) + "]",
+             std::to_string(m.cols) + "x" + std::to_string(m.rows), "the size and type of frame 0");
+}
+
+}  // namespace
+
+cv::Mat VelocityFieldSequence::Frame(std::size_t i) const {
+  if (!frames.empty() || !load_frame) return frames.at(i);
+  cv::Mat m = load_frame(i);
+  CheckFrame(m, m, i);
+  return m;
+}
+
 void VelocityFieldSequence::Check() const {
-  const std::size_t n = num_subsets, f = frames.size();
+  const std::size_t n = num_subsets, f = num_frames();
   CheckValue(f > 0, "VelocityFieldSequence.frames", "no frames", "at least one frame");
-  for (std::size_t i = 0; i < f; ++i) {
+  if (frames.empty()) CheckFrame(Frame(0), Frame(0), 0);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
     const cv::Mat& m = frames[i];
     CheckValue(!m.empty() && m.dims == 2, "VelocityFieldSequence.frames[" + std::to_string(i) + "]",
                "an empty image", "a 2-D grey image");
@@ -167,7 +190,8 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
     : seq_(sequence), options_(options), lut_(ViridisLut()) {
   seq_.Check();
   options_.Check();
-  const cv::Size image = seq_.frames[0].size();
+  frame0_ = seq_.Frame(0);
+  const cv::Size image = frame0_.size();
   const std::size_t n = seq_.num_subsets, f = seq_.num_frames();
 
   // Grid spacing: median nearest-neighbour distance of (up to 256) subsets of frame 0.
@@ -278,9 +302,9 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
   }
 
   // Grey contrast for 16-bit and float frames, from frame 0.
-  if (seq_.frames[0].type() != CV_8UC1) {
+  if (frame0_.type() != CV_8UC1) {
     cv::Mat as_float;
-    seq_.frames[0].convertTo(as_float, CV_32F);
+    frame0_.convertTo(as_float, CV_32F);
     std::vector<float> sample;
     const std::size_t total = as_float.total();
     const std::size_t sample_stride = std::max<std::size_t>(1, total / 200000);
@@ -296,7 +320,8 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
 
 cv::Mat VelocityFieldRenderer::DisplayGrey(std::size_t frame) const {
   cv::Mat grey8;
-  const cv::Mat& src = seq_.frames[frame];
+  const cv::Mat src = frame == 0 ? frame0_ : seq_.Frame(frame);
+  if (seq_.frames.empty()) CheckFrame(src, frame0_, frame);  // A loaded frame.
   if (src.type() == CV_8UC1) {
     grey8 = src;
   } else {
@@ -311,7 +336,7 @@ cv::Mat VelocityFieldRenderer::DisplayGrey(std::size_t frame) const {
 }
 
 void VelocityFieldRenderer::DrawField(std::size_t frame, cv::Mat* display) const {
-  const cv::Size image = seq_.frames[0].size();
+  const cv::Size image = frame0_.size();
   const std::size_t n = seq_.num_subsets;
   // Work grid of cells of about a quarter subset spacing.
   const double cell = std::max(1.0, spacing_px_ / 4.0);

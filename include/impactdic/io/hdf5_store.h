@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -69,6 +70,12 @@ class H5Writer {
              const std::string& units, const std::string& description);
   void Write(const std::string& path, const std::vector<std::uint16_t>& data, const Dims& dims,
              const std::string& units, const std::string& description);
+  // A stack of F images [F x R x C] (dims) of unsigned 8-bit (bits 8) or 16-bit (bits 16)
+  // values, written one image at a time: fill(f, buffer) fills the R*C values of image f into a
+  // buffer of that type. One image is in memory at a time; each is one deflate-compressed chunk.
+  void WriteStack(const std::string& path, const Dims& dims, int bits,
+                  const std::function<void(std::size_t, void*)>& fill, const std::string& units,
+                  const std::string& description);
   // 1-D convenience.
   void Write(const std::string& path, const std::vector<double>& data, const std::string& units,
              const std::string& description);

@@ -70,6 +70,15 @@ inline constexpr const char* kVyDirectionAttr = "vy_positive";
 // is accepted). Optional number attribute kBitDepthAttr (8 or 16) on kFramesGroup.
 inline constexpr const char* kFramesGroup = "/frames";
 inline constexpr const char* kFrameImages = "/frames/images";
+// Since 2026-11-25 (`run`, outputs.frames): the stored frames may be a subset of the analysed
+// ones, downsampled: kFrameRows [P] = the row of /time and /dic of each stored image (absent:
+// every row), number attributes on kFramesGroup: kDownsampleAttr (integer shrink factor, absent =
+// 1) and the full frame size kFrameWidthAttr x kFrameHeightAttr [px] (the subset positions'
+// frame).
+inline constexpr const char* kFrameRows = "/frames/row";
+inline constexpr const char* kDownsampleAttr = "downsample";
+inline constexpr const char* kFrameWidthAttr = "width_px";
+inline constexpr const char* kFrameHeightAttr = "height_px";
 inline constexpr const char* kBitDepthAttr = "bit_depth";
 
 // Momentum series (Fig. 4), [K] each; time since impact [s], momentum [N s].

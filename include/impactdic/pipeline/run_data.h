@@ -5,6 +5,7 @@
 #ifndef IMPACTDIC_PIPELINE_RUN_DATA_H_
 #define IMPACTDIC_PIPELINE_RUN_DATA_H_
 
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -16,6 +17,7 @@
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/sensor/sensor.h"
 
 namespace impactdic {
@@ -29,12 +31,14 @@ struct SceneRunData {
   // sensor: the accelerometer record analysed (impact time and velocity, pounder motion).
   std::optional<SensorResult> sensor;
 
-  // frames: the analysed frames first_frame..last_frame of the source's source_frames, after
-  // preprocessing; the DAQ time of every frame of the source (empty without a sensor record).
+  // frames: the analysed frames first_frame..last_frame of the source's source_frames, read on
+  // demand and preprocessed (pipeline/frame_stream.h: one frame in memory at a time; null = the
+  // stage did not run); the DAQ time of every frame of the source (empty without a sensor
+  // record).
   int source_frames = 0;
   int first_frame = 0, last_frame = -1;
   std::vector<double> frame_times_s;
-  std::vector<cv::Mat> frames;
+  std::shared_ptr<FrameStream> frames;
   std::string preprocess_note;  // What the preprocessing did (one line).
 
   // correlate: the correlation's rows (io/dic_results.h; row 0 = frame first_frame) and summary.

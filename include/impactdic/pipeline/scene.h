@@ -87,8 +87,22 @@ struct SceneMomentum {
   std::optional<double> max_sigma_px;
 };
 
+// Which analysed frames results.h5 stores in /frames/images (`outputs.frames`). The figures and
+// the animation re-read the frames from their source whatever this says.
+//  kNone:    none.
+//  kPreview: a decimated preview of bounded size (FramePreviewPlan, docs/architecture.md
+//            "Memory"): at most kPreviewFrames frames, evenly spaced, each downsampled by an
+//            integer factor to at most kPreviewLongSidePx on its longer side.
+//  kAll:     every analysed frame at full size, appended one chunk (frame) at a time; the file is
+//            built in memory until it is committed, so a run's memory grows with the compressed
+//            size of the frames.
+enum class FrameStorage { kNone, kPreview, kAll };
+const char* ToString(FrameStorage storage);  // "none", "preview", "all"
+FrameStorage FrameStorageFromString(const std::string& text);
+
 struct SceneOutputs {
   std::string folder = "results";  // Output folder; resolved path.
+  FrameStorage frames = FrameStorage::kPreview;
   bool hdf5 = true;
   bool csv = true;
   bool figures = true;

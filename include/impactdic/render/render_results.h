@@ -9,6 +9,8 @@
 #ifndef IMPACTDIC_RENDER_RENDER_RESULTS_H_
 #define IMPACTDIC_RENDER_RENDER_RESULTS_H_
 
+#include <functional>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,9 @@ struct RenderResultsOptions {
   // written by impactdic, and hold no results.h5 other than the one rendered. false: straight into
   // output_dir (for a caller that stages the folder itself, as `impactdic run` does).
   bool new_generation = true;
+  // The camera frame of each row of /time (e.g. `impactdic run` re-reading its frames from their
+  // source, one at a time) instead of /frames/images, which may be a preview or absent.
+  std::function<cv::Mat(std::size_t)> frame_loader;
   PlotOptions plot;
   AnimationOptions animation_options;       // png_frames_dir is set from png_frames
   VelocityOverlayOptions snapshot_overlay;  // the velocity-field figure at t_e
@@ -52,8 +57,11 @@ struct RenderResultsSummary {
 
 // The velocity-field data of a results file, or an Error kFileFormat naming the missing or
 // inconsistent dataset. `require_frames` = false allows files without /frames/images (then
-// `frames` is empty and the sequence cannot be rendered).
-VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool require_frames = true);
+// `frames` is empty and the sequence cannot be rendered); `read_frames` = false does not read
+// them. A preview (/frames/row present) gives the sequence of the stored rows only, each frame
+// scaled back to the full frame size (attributes of /frames).
+VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool require_frames = true,
+                                                bool read_frames = true);
 
 // Renders everything the file has data for. Errors: kFileNotFound / kFileFormat for a missing or
 // unreadable file, kFileFormat when the file has none of the data any output needs (naming what

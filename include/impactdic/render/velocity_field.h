@@ -23,6 +23,7 @@
 #define IMPACTDIC_RENDER_VELOCITY_FIELD_H_
 
 #include <cstddef>
+#include <functional>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <string>
@@ -36,6 +37,11 @@ struct VelocityFieldSequence {
   // One grey camera frame per analysed time step (CV_8UC1, CV_16UC1 or CV_32FC1; all the same
   // size and type). 16-bit and float frames are contrast-stretched for display.
   std::vector<cv::Mat> frames;
+  // Instead of `frames` (left empty): frame_count frames handed over one at a time by
+  // load_frame(i) (e.g. re-read from their source), so a long sequence is never held in memory;
+  // each must have the size and type of frame 0.
+  std::size_t frame_count = 0;
+  std::function<cv::Mat(std::size_t)> load_frame;
   std::vector<double> time_ms;  // time since impact of each frame [ms]; NaN = unknown
   std::size_t num_subsets = 0;
   // Subset centres in image pixels (x right, y down): num_subsets values (the same positions in
@@ -50,7 +56,11 @@ struct VelocityFieldSequence {
   // Scale of the panel plane [mm/px], for the scale bar; NaN or <= 0 = no scale bar.
   double mm_per_px = kNaN;
 
-  std::size_t num_frames() const { return frames.size(); }
+  std::size_t num_frames() const {
+    return frames.empty() && load_frame ? frame_count : frames.size();
+  }
+  // Frame i (stored or loaded); Error kInvalidValue if a loaded frame differs from frame 0.
+  cv::Mat Frame(std::size_t i) const;
   bool lagrangian() const { return x_px.size() != num_subsets; }
   double x(std::size_t frame, std::size_t subset) const {
     return lagrangian() ? x_px[frame * num_subsets + subset] : x_px[subset];
@@ -115,6 +125,7 @@ class VelocityFieldRenderer {
   void DrawDecorations(std::size_t frame, cv::Mat* canvas) const;
 
   const VelocityFieldSequence& seq_;
+  cv::Mat frame0_;  // The sequence's frame 0: size, grey contrast.
   VelocityOverlayOptions options_;
   double scale_ = 1.0;  // display px per image px
   cv::Size display_size_, canvas_size_;

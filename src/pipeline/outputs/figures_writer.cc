@@ -1,6 +1,6 @@
 // The figures (momentum, deceleration, added mass), the velocity snapshot at t_e and the
 // animation, drawn by render RenderResults from results.h5 (on disk, or held in memory when
-// outputs.hdf5 is false).
+// outputs.hdf5 is false), over the frames re-read from their source one at a time.
 #include "impactdic/io/results_layout.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/render/gnuplot.h"
@@ -35,6 +35,10 @@ class FiguresWriter : public OutputWriter {
     r.snapshot = scene.outputs.figures;
     r.animation = scene.outputs.animation;
     r.png_frames = c.options.png_frames || scene.outputs.png_frames;
+    if (c.data.frames) {  // Re-read from the source, one at a time (results.h5 holds a preview).
+      const std::shared_ptr<FrameStream> frames = c.data.frames;
+      r.frame_loader = [frames](std::size_t row) { return frames->Read(static_cast<int>(row)); };
+    }
     const RenderResultsSummary rendered =
         scene.outputs.hdf5
             ? RenderResults(c.results_path, r)

@@ -3,6 +3,7 @@
 // animation need it (OutputContext::results_in_memory), and not kept.
 #include <algorithm>
 #include <cstdint>
+#include <opencv2/imgproc.hpp>
 
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
@@ -33,28 +34,42 @@ void WriteFrameTimes(H5Writer& out, const Scene& scene, const SceneRunData& d) {
             "index of the analysed frame in the input sequence");
 }
 
-// /frames/images: the analysed frames after preprocessing, with their own depth (8 or 16 bit).
-void WriteFrames(H5Writer& out, const std::vector<cv::Mat>& frames) {
-  const std::size_t F = frames.size(), R = static_cast<std::size_t>(frames[0].rows),
-                    C = static_cast<std::size_t>(frames[0].cols);
-  auto write = [&](auto sample) {
-    using T = decltype(sample);
-    std::vector<T> pixels(F * R * C);
-    for (std::size_t f = 0; f < F; ++f) {
-      for (std::size_t y = 0; y < R; ++y) {
-        const T* row = frames[f].ptr<T>(static_cast<int>(y));
-        std::copy(row, row + C, pixels.begin() + (f * R + y) * C);
-      }
+// /frames/images: the analysed frames after preprocessing (outputs.frames: a preview, or all),
+// with their own depth (8 or 16 bit), re-read from their source one at a time; /frames/row: the
+// analysed row (index in /time) of each stored frame, and the preview's downsampling factor.
+void WriteFrames(H5Writer& out, FrameStream& frames, FrameStorage storage) {
+  const cv::Mat first = frames.Read(0);
+  FramePreviewPlan plan;
+  if (storage == FrameStorage::kPreview) {
+    plan = PlanFramePreview(frames.count(), first.size());
+  } else {
+    for (int k = 0; k < frames.count(); ++k) plan.rows.push_back(k);
+  }
+  const cv::Size size = plan.ImageSize(first.size());
+  const int bits = first.depth() == CV_16U ? 16 : 8;
+  auto fill = [&](std::size_t i, void* buffer) {
+    const int row = plan.rows[i];
+    const cv::Mat image = row == 0 ? first : frames.Read(row);
+    cv::Mat stored(size, image.type(), buffer);
+    if (plan.downsample == 1) {
+      image.copyTo(stored);
+    } else {
+      cv::resize(image, stored, size, 0, 0, cv::INTER_AREA);
     }
-    out.Write(L::kFrameImages, pixels, {F, R, C}, "grey level",
-              "analysed camera frames after preprocessing");
   };
-  const bool deep = frames[0].depth() == CV_16U;
-  if (deep)
-    write(std::uint16_t{});
-  else
-    write(std::uint8_t{});
-  out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, deep ? 16.0 : 8.0);
+  out.WriteStack(L::kFrameImages,
+                 {plan.rows.size(), static_cast<std::size_t>(size.height),
+                  static_cast<std::size_t>(size.width)},
+                 bits, fill, "grey level",
+                 storage == FrameStorage::kPreview
+                     ? "preview of the analysed camera frames after preprocessing"
+                     : "analysed camera frames after preprocessing");
+  std::vector<double> rows(plan.rows.begin(), plan.rows.end());
+  out.Write(L::kFrameRows, rows, "1", "row of /time and /dic of each stored frame");
+  out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, static_cast<double>(bits));
+  out.SetAttribute(L::kFramesGroup, L::kDownsampleAttr, static_cast<double>(plan.downsample));
+  out.SetAttribute(L::kFramesGroup, L::kFrameWidthAttr, static_cast<double>(first.cols));
+  out.SetAttribute(L::kFramesGroup, L::kFrameHeightAttr, static_cast<double>(first.rows));
 }
 
 // /kinematics, /sensor, /momentum.
@@ -117,7 +132,8 @@ class ResultsFileWriter : public OutputWriter {
       WriteFrameTimes(out, c.scene, d);
       WriteDicResults(out, *d.dic);
     }
-    if (!d.frames.empty()) WriteFrames(out, d.frames);
+    if (d.frames && c.scene.outputs.frames != FrameStorage::kNone)
+      WriteFrames(out, *d.frames, c.scene.outputs.frames);
     WriteMotion(out, d);
     if (d.model) WriteModel(out, d);
     WriteSummaryGroup(out, c.summary);

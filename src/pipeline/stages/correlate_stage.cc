@@ -5,7 +5,9 @@
 
 #include <optional>
 
+#include "impactdic/core/progress.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/pipeline/frame_stream.h"
 #include "scene_inputs.h"
 #include "stage.h"
 
@@ -28,6 +30,25 @@ std::string CorrelationProblem(const DicSummary& s, double min_zncc) {
       min_zncc);
 }
 
+// Correlates the analysed frames as a sequence, as dic CorrelateSequence does, reading each frame
+// when it is correlated: one frame in memory besides what the correlator keeps.
+DicResult CorrelateStream(FrameStream& frames, const Scene& scene, DicOptions& options) {
+  const cv::Mat reference = frames.Read(0);
+  options.grid.mask = SceneMask(scene, reference.size());
+  Correlator correlator(options);
+  correlator.SetReference(reference);
+  DicResult result;
+  result.positions = correlator.positions();
+  ProgressBar bar("correlate", static_cast<std::size_t>(frames.count() - 1));
+  for (int k = 1; k < frames.count(); ++k) {
+    result.frames.push_back(correlator.Correlate(frames.Read(k)));
+    bar.Advance();
+  }
+  bar.Finish();
+  result.summary = correlator.summary();
+  return result;
+}
+
 class CorrelateStage : public Stage {
  public:
   const char* name() const override { return "correlate"; }
@@ -35,20 +56,21 @@ class CorrelateStage : public Stage {
   std::string SkipReason(const StageContext& c) const override {
     std::string listed = NotListed(c.scene, name());
     if (!listed.empty()) return listed;
-    return c.data.frames.empty() ? "no frames" : "";
+    return c.data.frames ? "" : "no frames";
   }
 
   std::string Run(StageContext& c) const override {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     DicOptions options = MakeDicOptions(scene.dic);
-    options.grid.mask = SceneMask(scene, d.frames[0].size());
     const int threads = c.options.threads >= 0 ? c.options.threads : scene.dic.threads;
     std::optional<tbb::global_control> limit;
     if (threads > 0)
       limit.emplace(tbb::global_control::max_allowed_parallelism,
                     static_cast<std::size_t>(threads));
-    const DicResult dic = CorrelateSequence(d.frames, options);
+    const DicResult dic = CorrelateStream(*d.frames, scene, options);
+    for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
+    d.preprocess_note = d.frames->PreprocessNote();
     d.dic_summary = dic.summary;
     d.dic = MakeDicResultsTable(dic, options, d.first_frame);
     d.dic->text_attributes["preprocess"] = d.preprocess_note;

@@ -8,47 +8,13 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "scene_inputs.h"
 #include "stage.h"
 
 namespace impactdic::stages {
 namespace {
-
-// The frames of the scene: the sorted image files, or the frames of a video.
-struct FrameSource {
-  std::vector<std::string> files;     // Empty for a video.
-  std::vector<cv::Mat> video;         // Decoded video frames.
-  std::vector<std::string> warnings;  // A truncated video, a colour image in a grey sequence.
-  SequenceColourCheck colour;         // Image files, in the order read.
-  int count() const {
-    return files.empty() ? static_cast<int>(video.size()) : static_cast<int>(files.size());
-  }
-  std::string Name(int k) const {
-    return files.empty() ? fmt::format("video frame {}", k) : files[static_cast<std::size_t>(k)];
-  }
-  cv::Mat Read(int k) {
-    if (files.empty()) return video[static_cast<std::size_t>(k)];
-    const std::string& path = files[static_cast<std::size_t>(k)];
-    int channels = 1;
-    cv::Mat image = ReadGreyImage(path, &channels);
-    const std::string warning = colour.Check(path, channels);
-    if (!warning.empty()) warnings.push_back(warning);
-    return image;
-  }
-};
-
-FrameSource OpenFrames(const std::string& source) {
-  FrameSource frames;
-  if (IsVideoFile(source)) {
-    std::string warning;
-    frames.video = ReadVideoFrames(source, /*max_frames=*/0, &warning);
-    if (!warning.empty()) frames.warnings.push_back(warning);
-  } else {
-    frames.files = ListFrameSequence(source);  // A gap in the numbering is an error.
-  }
-  return frames;
-}
 
 // dic.first_frame and dic.last_frame against the n frames of the source: Error naming the key,
 // its value and the allowed range.
@@ -127,30 +93,21 @@ PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
   return o;
 }
 
-// Reads frames first..last, checks their size against the first (and the roi, the
-// calibration), preprocesses them.
-void ReadFrames(StageContext& c, FrameSource& source) {
-  SceneRunData& d = c.data;
-  const PreprocessOptions pre_options = ScenePreprocessOptions(c.scene);
-  std::vector<std::string> names;
-  std::optional<Preprocessor> pre;
-  ProgressBar bar("frames", static_cast<std::size_t>(d.last_frame - d.first_frame + 1));
-  for (int k = d.first_frame; k <= d.last_frame; ++k) {
-    cv::Mat image = source.Read(k);
-    if (d.frames.empty()) {
-      CheckSceneRoi(c.scene, image.size());
-      if (d.calibration) CheckFrameSize(*d.calibration, image.size(), source.Name(k));
-      pre.emplace(pre_options, d.calibration ? &*d.calibration : nullptr, image.size());
-    }
-    names.push_back(source.Name(k));
-    d.frames.push_back(image);
-    CheckSameSize({d.frames.front(), image}, {names.front(), names.back()});
-    d.frames.back() = pre->Apply(image);
+// Checks the first analysed frame (the roi, the calibration's size); without a correlation to
+// stream them, reads and preprocesses every frame once for the checks of the sequence (size,
+// depth, colour), keeping none.
+cv::Mat CheckFrames(StageContext& c, FrameStream& frames) {
+  const cv::Mat first = frames.ReadRaw(0);
+  CheckSceneRoi(c.scene, first.size());
+  if (c.data.calibration) CheckFrameSize(*c.data.calibration, first.size(), frames.Name(0));
+  const int checked = c.scene.HasStage("correlate") ? 1 : frames.count();
+  ProgressBar bar("frames", static_cast<std::size_t>(checked));
+  for (int k = 0; k < checked; ++k) {
+    frames.Read(k);
     bar.Advance();
   }
   bar.Finish();
-  for (const auto& w : source.warnings) c.summary.warnings.push_back("frames: " + w);
-  d.preprocess_note = pre->summary().BriefReport();
+  return first;
 }
 
 class FramesStage : public Stage {
@@ -164,8 +121,9 @@ class FramesStage : public Stage {
   std::string Run(StageContext& c) const override {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
-    FrameSource source = OpenFrames(scene.inputs.frames);
-    d.source_frames = source.count();
+    d.frames = std::make_shared<FrameStream>(scene.inputs.frames, ScenePreprocessOptions(scene),
+                                             d.calibration ? &*d.calibration : nullptr);
+    d.source_frames = d.frames->source_frames();
     CheckFrameRange(scene, d.source_frames);
     d.first_frame = scene.dic.first_frame;
     d.last_frame = scene.dic.last_frame < 0 ? d.source_frames - 1 : scene.dic.last_frame;
@@ -178,9 +136,13 @@ class FramesStage : public Stage {
           "at least 3 frames to correlate and differentiate")
           .WithFile(scene.inputs.frames);
     }
-    ReadFrames(c, source);
-    const cv::Mat& f0 = d.frames[0];
-    return fmt::format("{} of {} frames ({}x{}, {}-bit){}; {}", d.frames.size(), d.source_frames,
+    d.frames->SetRange(d.first_frame, d.last_frame);
+    const cv::Mat f0 = CheckFrames(c, *d.frames);
+    d.preprocess_note = d.frames->PreprocessNote();
+    if (!scene.HasStage("correlate")) {
+      for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
+    }
+    return fmt::format("{} of {} frames ({}x{}, {}-bit){}; {}", d.frames->count(), d.source_frames,
                        f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, skipped_note,
                        d.preprocess_note);
   }
