@@ -191,36 +191,44 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
   seq_.Check();
   options_.Check();
   frame0_ = seq_.Frame(0);
+  EstimateGridSpacing();
+  SetColourScale();
+  SetLayout();
+  ChooseArrowSubsets();
+  SetGreyContrast();
+}
+
+void VelocityFieldRenderer::EstimateGridSpacing() {
   const cv::Size image = frame0_.size();
-  const std::size_t n = seq_.num_subsets, f = seq_.num_frames();
-
+  const std::size_t n = seq_.num_subsets;
   // Grid spacing: median nearest-neighbour distance of (up to 256) subsets of frame 0.
-  {
-    std::vector<cv::Point2d> pts;
-    for (std::size_t s = 0; s < n; ++s) {
-      const double x = seq_.x(0, s), y = seq_.y(0, s);
-      if (std::isfinite(x) && std::isfinite(y)) pts.emplace_back(x, y);
-    }
-    std::vector<double> nn;
-    const std::size_t stride = std::max<std::size_t>(1, pts.size() / 256);
-    for (std::size_t i = 0; i < pts.size(); i += stride) {
-      double best = HUGE_VAL;
-      for (std::size_t j = 0; j < pts.size(); ++j) {
-        if (j == i) continue;
-        const double d = std::hypot(pts[i].x - pts[j].x, pts[i].y - pts[j].y);
-        if (d > 1e-6) best = std::min(best, d);
-      }
-      if (std::isfinite(best)) nn.push_back(best);
-    }
-    if (!nn.empty()) {
-      std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
-      spacing_px_ = nn[nn.size() / 2];
-    } else {
-      spacing_px_ = std::max(8.0, std::min(image.width, image.height) / 12.0);
-    }
-    spacing_px_ = std::clamp(spacing_px_, 2.0, 0.5 * std::max(image.width, image.height));
+  std::vector<cv::Point2d> pts;
+  for (std::size_t s = 0; s < n; ++s) {
+    const double x = seq_.x(0, s), y = seq_.y(0, s);
+    if (std::isfinite(x) && std::isfinite(y)) pts.emplace_back(x, y);
   }
+  std::vector<double> nn;
+  const std::size_t stride = std::max<std::size_t>(1, pts.size() / 256);
+  for (std::size_t i = 0; i < pts.size(); i += stride) {
+    double best = HUGE_VAL;
+    for (std::size_t j = 0; j < pts.size(); ++j) {
+      if (j == i) continue;
+      const double d = std::hypot(pts[i].x - pts[j].x, pts[i].y - pts[j].y);
+      if (d > 1e-6) best = std::min(best, d);
+    }
+    if (std::isfinite(best)) nn.push_back(best);
+  }
+  if (!nn.empty()) {
+    std::nth_element(nn.begin(), nn.begin() + nn.size() / 2, nn.end());
+    spacing_px_ = nn[nn.size() / 2];
+  } else {
+    spacing_px_ = std::max(8.0, std::min(image.width, image.height) / 12.0);
+  }
+  spacing_px_ = std::clamp(spacing_px_, 2.0, 0.5 * std::max(image.width, image.height));
+}
 
+void VelocityFieldRenderer::SetColourScale() {
+  const std::size_t n = seq_.num_subsets, f = seq_.num_frames();
   // Colour scale: one for the whole sequence.
   std::vector<float> speeds;
   speeds.reserve(f * n);
@@ -243,7 +251,10 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
   unit_factor_ = metres ? 1e-3 : 1.0;
   unit_label_ = metres ? "m/s" : "mm/s";
   reference_speed_mm_s_ = NiceFloor(0.8 * color_max_mm_s_ * unit_factor_) / unit_factor_;
+}
 
+void VelocityFieldRenderer::SetLayout() {
+  const cv::Size image = frame0_.size();
   // Display size.
   scale_ = 1.0;
   if (image.width < options_.min_width_px) scale_ = double(options_.min_width_px) / image.width;
@@ -268,39 +279,42 @@ VelocityFieldRenderer::VelocityFieldRenderer(const VelocityFieldSequence& sequen
   canvas_size_ =
       cv::Size(RoundUp8(display_size_.width + panel_width_), RoundUp8(display_size_.height));
   panel_width_ = canvas_size_.width - display_size_.width;
+}
 
+void VelocityFieldRenderer::ChooseArrowSubsets() {
+  const std::size_t n = seq_.num_subsets;
   // Arrows: every k-th subset along each grid direction, k chosen so that arrows are at least
   // arrow_spacing_display_px apart; cells of k x k grid spacings anchored at the grid's corner so
   // that a regular grid is thinned regularly. The selection uses frame 0, so the same subsets
   // carry arrows in every frame. The colour-scale top gets an arrow one cell long.
-  {
-    const double g = spacing_px_ * scale_;
-    const double k = std::max(1.0, std::ceil(options_.arrow_spacing_display_px / g - 1e-9));
-    const double cell = k * g;
-    arrow_px_per_mm_s_ = cell / color_max_mm_s_;
-    double min_x = HUGE_VAL, min_y = HUGE_VAL;
-    for (std::size_t s = 0; s < n; ++s) {
-      if (std::isfinite(seq_.x(0, s)) && std::isfinite(seq_.y(0, s))) {
-        min_x = std::min(min_x, seq_.x(0, s) * scale_);
-        min_y = std::min(min_y, seq_.y(0, s) * scale_);
-      }
+  const double g = spacing_px_ * scale_;
+  const double k = std::max(1.0, std::ceil(options_.arrow_spacing_display_px / g - 1e-9));
+  const double cell = k * g;
+  arrow_px_per_mm_s_ = cell / color_max_mm_s_;
+  double min_x = HUGE_VAL, min_y = HUGE_VAL;
+  for (std::size_t s = 0; s < n; ++s) {
+    if (std::isfinite(seq_.x(0, s)) && std::isfinite(seq_.y(0, s))) {
+      min_x = std::min(min_x, seq_.x(0, s) * scale_);
+      min_y = std::min(min_y, seq_.y(0, s) * scale_);
     }
-    const double ox = min_x - 0.5 * g, oy = min_y - 0.5 * g;
-    std::unordered_map<long long, std::pair<std::size_t, double>> chosen;
-    for (std::size_t s = 0; s < n; ++s) {
-      const double xd = seq_.x(0, s) * scale_, yd = seq_.y(0, s) * scale_;
-      if (!std::isfinite(xd) || !std::isfinite(yd)) continue;
-      const long long cx = static_cast<long long>(std::floor((xd - ox) / cell));
-      const long long cy = static_cast<long long>(std::floor((yd - oy) / cell));
-      const double d = std::hypot(xd - (ox + (cx + 0.5) * cell), yd - (oy + (cy + 0.5) * cell));
-      const long long key = cy * 1000003LL + cx;
-      auto it = chosen.find(key);
-      if (it == chosen.end() || d < it->second.second - 1e-9) chosen[key] = {s, d};
-    }
-    for (const auto& entry : chosen) arrow_subsets_.push_back(entry.second.first);
-    std::sort(arrow_subsets_.begin(), arrow_subsets_.end());  // deterministic drawing order
   }
+  const double ox = min_x - 0.5 * g, oy = min_y - 0.5 * g;
+  std::unordered_map<long long, std::pair<std::size_t, double>> chosen;
+  for (std::size_t s = 0; s < n; ++s) {
+    const double xd = seq_.x(0, s) * scale_, yd = seq_.y(0, s) * scale_;
+    if (!std::isfinite(xd) || !std::isfinite(yd)) continue;
+    const long long cx = static_cast<long long>(std::floor((xd - ox) / cell));
+    const long long cy = static_cast<long long>(std::floor((yd - oy) / cell));
+    const double d = std::hypot(xd - (ox + (cx + 0.5) * cell), yd - (oy + (cy + 0.5) * cell));
+    const long long key = cy * 1000003LL + cx;
+    auto it = chosen.find(key);
+    if (it == chosen.end() || d < it->second.second - 1e-9) chosen[key] = {s, d};
+  }
+  for (const auto& entry : chosen) arrow_subsets_.push_back(entry.second.first);
+  std::sort(arrow_subsets_.begin(), arrow_subsets_.end());  // deterministic drawing order
+}
 
+void VelocityFieldRenderer::SetGreyContrast() {
   // Grey contrast for 16-bit and float frames, from frame 0.
   if (frame0_.type() != CV_8UC1) {
     cv::Mat as_float;

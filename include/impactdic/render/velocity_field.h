@@ -119,6 +119,12 @@ class VelocityFieldRenderer {
   std::size_t valid_speed_count() const { return valid_speeds_; }  // over the whole sequence
 
  private:
+  // The constructor's steps, in order.
+  void EstimateGridSpacing();  // spacing_px_: median nearest-neighbour distance in frame 0
+  void SetColourScale();       // colour_max, unit, reference arrow speed (whole sequence)
+  void SetLayout();            // display scale and size, text scale, colour-bar panel, canvas
+  void ChooseArrowSubsets();   // one arrow per cell of k x k grid spacings
+  void SetGreyContrast();      // grey_low_/grey_high_ for 16-bit and float frames
   cv::Mat DisplayGrey(std::size_t frame) const;
   void DrawField(std::size_t frame, cv::Mat* canvas) const;
   void DrawArrows(std::size_t frame, cv::Mat* canvas) const;
