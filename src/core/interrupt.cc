@@ -23,23 +23,25 @@ std::atomic<bool> g_interrupted{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
 int g_pipe[2] = {-1, -1};  // The handler writes the signal number into g_pipe[1].
 
+// The cleanup thread may wake while the process exits (after main returned), so what it uses is
+// never destroyed: these are allocated once and left to the operating system.
 std::mutex& RegistryMutex() {
-  static std::mutex m;
-  return m;
+  static auto* m = new std::mutex;
+  return *m;
 }
 std::map<std::uint64_t, std::string>& Registry() {
-  static std::map<std::uint64_t, std::string> paths;
-  return paths;
+  static auto* paths = new std::map<std::uint64_t, std::string>;
+  return *paths;
 }
 std::uint64_t g_next_id = 1;             // Guarded by RegistryMutex().
 std::vector<std::string>& Completed() {  // Guarded by RegistryMutex().
-  static std::vector<std::string> paths;
-  return paths;
+  static auto* paths = new std::vector<std::string>;
+  return *paths;
 }
 
 std::mutex& DeferMutex() {
-  static std::mutex m;
-  return m;
+  static auto* m = new std::mutex;
+  return *m;
 }
 
 [[noreturn]] void ParkForever() {
