@@ -97,7 +97,7 @@ PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
 // stream them, reads and preprocesses every frame once for the checks of the sequence (size,
 // depth, colour), keeping none.
 cv::Mat CheckFrames(StageContext& c, FrameStream& frames) {
-  const cv::Mat first = frames.ReadRaw(0);
+  cv::Mat first = frames.ReadRaw(0);  // Not const: returned (moved).
   CheckSceneRoi(c.scene, first.size());
   if (c.data.calibration) CheckFrameSize(*c.data.calibration, first.size(), frames.Name(0));
   const int checked = c.scene.HasStage("correlate") ? 1 : frames.count();
