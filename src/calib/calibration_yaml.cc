@@ -17,7 +17,6 @@ namespace {
 
 constexpr const char* kFormat = "impactdic-calibration-1";
 
-
 constexpr ValueRange kAnyFinite{-1e300, 1e300, ""};
 constexpr ValueRange kPositive{0, 1e300, "", /*min_open=*/true};
 constexpr ValueRange kNonNegative{0, 1e300, ""};

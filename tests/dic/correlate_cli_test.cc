@@ -150,7 +150,8 @@ TEST_F(CorrelateCli, PairsModeAndUncertaintyLimit) {
   ExpectError(Pair() + " --max-uncertainty lots -o " + Path("x.csv"), "--max-uncertainty");
   // --help names the modes, the default and the uncertainty default.
   const CliResult help = RunCli("correlate --help");
-  for (const char* item : {"--mode TEXT=sequence", "sequence | pairs", "--max-uncertainty TEXT=0.025"})
+  for (const char* item :
+       {"--mode TEXT=sequence", "sequence | pairs", "--max-uncertainty TEXT=0.025"})
     EXPECT_NE(help.output.find(item), std::string::npos) << item << "\n" << help.output;
 }
 

@@ -37,7 +37,8 @@ TEST(CampaignFile, DefaultMatrixIsTable1WithEq4AddedMassInTheGridMass) {
     names.insert(t.name);
     EXPECT_TRUE(t.synthesise);
     const ImpactSceneSpec& s = t.spec;
-    const double eq4 = AddedMassMaxEq4(s.pounder_mass_kg, s.ImpactVelocity(), s.width_m * s.depth_m);
+    const double eq4 =
+        AddedMassMaxEq4(s.pounder_mass_kg, s.ImpactVelocity(), s.width_m * s.depth_m);
     EXPECT_EQ(s.added_mass, SceneAddedMass::kGiven);
     EXPECT_NEAR(s.added_mass_kg, eq4, 1e-12 * eq4) << t.name;
     // The synthetic soil makes the measured m_add,max equal the momentum grid's soil mass
@@ -69,8 +70,9 @@ TEST(CampaignFile, NoiseIsLogNormalSeededAndReproducible) {
     EXPECT_EQ(s.added_mass_kg, b.tests[i].spec.added_mass_kg);
     EXPECT_EQ(a.tests[i].hash_hex, b.tests[i].hash_hex);
     differs |= s.added_mass_kg != c.tests[i].spec.added_mass_kg;
-    const double z = std::log(s.added_mass_kg / AddedMassMaxEq4(s.pounder_mass_kg, s.ImpactVelocity(),
-                                                             s.width_m * s.depth_m));
+    const double z =
+        std::log(s.added_mass_kg /
+                 AddedMassMaxEq4(s.pounder_mass_kg, s.ImpactVelocity(), s.width_m * s.depth_m));
     sum += z;
     sum2 += z * z;
   }

@@ -12,8 +12,8 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace {

@@ -12,8 +12,8 @@
 
 #include "../io/test_dir.h"
 #include "impactdic/io/atomic_file.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace {

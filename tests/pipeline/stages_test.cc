@@ -8,8 +8,8 @@
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace {

@@ -9,8 +9,8 @@
 #include "../core/expect_error.h"
 #include "fault_util.h"
 #include "impactdic/core/range.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/model/impact_model.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace {

@@ -8,8 +8,8 @@
 #include "../core/expect_error.h"
 #include "fault_util.h"
 #include "impactdic/calib/calibration.h"
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/io/yaml.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {

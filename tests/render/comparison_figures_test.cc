@@ -18,7 +18,6 @@ namespace {
 using test::IsPngOfSize;
 using test::ScratchDir;
 
-
 // (1, 2), (2, 3), (3, 5) and two tests without a value. By hand: mean x = 2, mean y = 10/3,
 // Sxx = 2, Sxy = 3, Syy = 14/3; slope = 3/2, intercept = 10/3 - 3 = 1/3,
 // R^2 = Sxy^2 / (Sxx Syy) = 9 / (28/3) = 27/28; observed/predicted - 1 = 1, 1/2, 2/3, so the RMS

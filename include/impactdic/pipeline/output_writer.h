@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 
