@@ -15,11 +15,11 @@
 namespace impactdic {
 
 enum class ErrorKind {
-  kInvalidValue,    // A parameter or field holds a value outside its allowed range.
-  kFileNotFound,    // A named input does not exist.
-  kFileFormat,      // A file exists but cannot be parsed (corrupt image, malformed CSV).
-  kIo,              // Reading or writing failed (permissions, disk full).
-  kNumerical,       // A computation failed in a way the input caused (no convergence, NaN).
+  kInvalidValue,  // A parameter or field holds a value outside its allowed range.
+  kFileNotFound,  // A named input does not exist.
+  kFileFormat,    // A file exists but cannot be parsed (corrupt image, malformed CSV).
+  kIo,            // Reading or writing failed (permissions, disk full).
+  kNumerical,     // A computation failed in a way the input caused (no convergence, NaN).
 };
 
 const char* ToString(ErrorKind kind);
