@@ -1,5 +1,6 @@
 // Test helper: runs the built `impactdic` binary (path compiled in as IMPACTDIC_CLI_PATH) with
-// arguments through the shell and captures stdout+stderr and the exit code.
+// arguments through the shell and captures stdout+stderr and the exit code. `environment`
+// ("NAME=value ...") is set for the binary only.
 #ifndef IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
 #define IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
 
@@ -15,8 +16,9 @@ struct CliResult {
   std::string output;  // stdout and stderr interleaved
 };
 
-inline CliResult RunCli(const std::string& arguments) {
-  const std::string command = std::string(IMPACTDIC_CLI_PATH) + " " + arguments + " 2>&1";
+inline CliResult RunCli(const std::string& arguments, const std::string& environment = "") {
+  const std::string command = (environment.empty() ? "" : environment + " ") +
+                              std::string(IMPACTDIC_CLI_PATH) + " " + arguments + " 2>&1";
   CliResult result;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return result;

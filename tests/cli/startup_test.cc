@@ -56,17 +56,7 @@ class Startup : public ::testing::Test {
 
 // Runs the binary with one environment variable set (only for it, not for the shell).
 CliResult RunWith(const std::string& variable, const std::string& arguments) {
-  const std::string command =
-      variable + " " + std::string(IMPACTDIC_CLI_PATH) + " " + arguments + " 2>&1";
-  CliResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) result.output.append(buffer, n);
-  const int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return RunCli(arguments, variable);
 }
 
 // The libraries whose loading the trace shows ("file=NAME [0];  needed by ..." or "dlopen").
