@@ -94,6 +94,14 @@ std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& wher
   return excluded;
 }
 
+std::string ExcludeUncertainSamplesWithWarning(double max_sigma_px, const std::string& where,
+                                               CorrelationSeries* series) {
+  const std::size_t excluded = ExcludeUncertainSamples(max_sigma_px, where, series);
+  return fmt::format(
+      "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > {} = {} px)", excluded,
+      series->frames * series->subsets, where, max_sigma_px);
+}
+
 void KinematicsOptions::Check() const {
   CheckValue(std::isfinite(fps) && fps > 0, "kinematics.fps", fmt::format("{}", fps), "> 0 1/s");
 }

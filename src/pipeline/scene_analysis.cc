@@ -25,18 +25,13 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   long first = -1;
   CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
   if (scene.momentum.max_sigma_px) {
-    std::size_t excluded = 0;
     try {
-      excluded =
-          ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &dic);
+      LogWarning("{}", ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
+                                                          "momentum.max_sigma_px", &dic));
     } catch (Error& e) {
       e.WithFile(results_path);
       throw;
     }
-    LogWarning(
-        "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
-        "momentum.max_sigma_px = {} px)",
-        excluded, dic.frames * dic.subsets, *scene.momentum.max_sigma_px);
   }
   if (first < 0) first = scene.dic.first_frame;
   SceneAnalysisRun run;

@@ -61,6 +61,11 @@ struct CorrelationSeries {
 // series has no sigmas (results written before they existed).
 std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& where,
                                     CorrelationSeries* series);
+// ExcludeUncertainSamples, returning the warning the pipeline reports (`run` in summary.json,
+// `analyze` in its log): "kinematics: N of M subset samples left out (sigma_u or sigma_v > WHERE
+// = LIMIT px)".
+std::string ExcludeUncertainSamplesWithWarning(double max_sigma_px, const std::string& where,
+                                               CorrelationSeries* series);
 
 struct KinematicsOptions {
   double fps = 1600;  // Camera frame rate [1/s], > 0; dt = 1 / fps.

@@ -1,7 +1,5 @@
 // kinematics: subset motion on the panel (mm, mm/s) from the correlation rows, without the samples
 // above momentum.max_sigma_px.
-#include <fmt/format.h>
-
 #include "impactdic/core/error.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "stage.h"
@@ -15,12 +13,8 @@ CorrelationSeries AnalysedSeries(const DicResultsTable& dic, const Scene& scene,
                                  std::vector<std::string>* warnings) {
   CorrelationSeries s = CorrelationSeriesFromTable(dic);
   if (scene.momentum.max_sigma_px) {
-    const std::size_t n =
-        ExcludeUncertainSamples(*scene.momentum.max_sigma_px, "momentum.max_sigma_px", &s);
-    warnings->push_back(
-        fmt::format("kinematics: {} of {} subset samples left out (sigma_u or sigma_v > "
-                    "momentum.max_sigma_px = {} px)",
-                    n, s.frames * s.subsets, *scene.momentum.max_sigma_px));
+    warnings->push_back(ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
+                                                           "momentum.max_sigma_px", &s));
   }
   return s;
 }
