@@ -1,0 +1,419 @@
+#!/usr/bin/env python3
+"""DIC Challenge 1.0 (2D) Samples 3 and 14 through `impactdic correlate` (issue 13, items 1-2).
+
+    scripts/fetch_dic_challenge.sh                 # downloads + unpacks into DATA (see there)
+    bench/dic_challenge.py [DATA]                  # prints the two tables below
+
+DATA (default: ${XDG_CACHE_HOME:-~/.cache}/impactdic/dic_challenge, the fetch script's default)
+holds Sample3/ and Sample14/ as unpacked from the challenge's archives; files are found by name
+anywhere below those folders:
+  Sample 3:  "Sample3 Reference.tif" and "Sample3-NNN X<u> Y<v> N2 C0 R0.tif" (rigid shifts,
+             the imposed u, v in px read from the name: X0.30 Y0.30 -> u = v = +0.30 px).
+  Sample 14: "Sample14 Reference.tif" and "Sample14 L<k> Amp<A>[b].tif" (also "Sample 14 ...").
+
+Sample 3 (per interpolator, bicubic and biquintic; subset 25, step 10, --mode pairs, no
+uncertainty limit): one row per shifted image, each correlated against the reference:
+  shift u, v | bias u, v (mean error) | sd u, v | noise limit | mean reported sigma u, v | n
+The noise limit is the rms over the subsets of sqrt(2) sigma_n / sqrt(sum over the subset of
+(dI/dx)^2) (the sd of u that image noise alone gives, noise in both images; the v limit uses
+dI/dy and is printed as the second number), with dI/dx the central difference of the reference and
+sigma_n = sd(reference - zero-shift image) / sqrt(2) over the whole image (the X0.00 Y0.00 image
+shows the same pattern with its own noise). Without a zero-shift image, or when the TIFF cannot
+be decoded, the column is nan and the reason is printed.
+
+Sample 14 (subset 25, step 5, --mode pairs, --max-uncertainty none; bicubic unless --s14-interp):
+one row per deformed image: converged / all subsets, RMS error of u and v over ALL converged
+subsets, the fraction that would be `uncertain` at correlate's default limit (read from
+`correlate --help`), the rms of the reported sigma_u, sigma_v, and the fitted sinusoid.
+Truth (assumption, stated in docs/dic.md): u = A sin(2 pi X / L + phi), v = 0, X the reference
+x [px]; A from the file name (Amp0.1 -> 0.1 px); the period L (unless --s14-period) and the phase
+phi are fitted to the measured u by least squares (2 parameters + L against thousands of
+subsets). The fitted amplitude is printed next to A, so an attenuation shows.
+
+Images of unequal size (Sample 14's deformed images may be larger than its reference) are cropped
+to their common top-left size into the work folder first (pure-Python TIFF, bench/tiff_lite.py).
+
+Exit status: 0 tables printed; 2 bad arguments or missing/unreadable data (message names it);
+1 `impactdic correlate` failed (its output is printed).
+"""
+
+import argparse
+import csv
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import tiff_lite  # noqa: E402
+
+# Set when correlate has the option: the name of `impactdic correlate`'s Gaussian pre-filter
+# option (helper h4, issue 13 item 1), e.g. "--prefilter". While it is None, --prefilter SIGMA
+# is refused with a message saying so.
+CORRELATE_PREFILTER_OPTION = None
+
+DEFAULT_DATA = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"),
+                            "impactdic", "dic_challenge")
+S3_REFERENCE = re.compile(r"^sample\s*3 reference\.tiff?$", re.I)
+S3_DEFORMED = re.compile(r"^sample\s*3-(\d+) x(-?\d+(?:\.\d+)?) y(-?\d+(?:\.\d+)?)\b.*\.tiff?$", re.I)
+S14_REFERENCE = re.compile(r"^sample\s*14 reference\.tiff?$", re.I)
+S14_DEFORMED = re.compile(r"^sample\s*14 l(\d+) amp(\d+(?:\.\d+)?)[a-z]?\.tiff?$", re.I)
+
+
+class BenchError(Exception):
+    def __init__(self, message, status=2):
+        super().__init__(message)
+        self.status = status
+
+
+def find(folder, pattern):
+    hits = []
+    for root, _, files in os.walk(folder):
+        for name in files:
+            m = pattern.match(name)
+            if m:
+                hits.append((os.path.join(root, name), m))
+    return sorted(hits, key=lambda h: h[0])
+
+
+def one_reference(folder, pattern, what):
+    refs = find(folder, pattern)
+    if len(refs) != 1:
+        raise BenchError(f"{what}: expected one reference image matching '{pattern.pattern}' under "
+                         f"{folder}, found {len(refs)}" + (f": {[r[0] for r in refs]}" if refs else ""))
+    return refs[0][0]
+
+
+def default_limit(binary):
+    """correlate's default --max-uncertainty, from its --help (one definition: the library's)."""
+    out = subprocess.run([binary, "correlate", "--help"], capture_output=True, text=True).stdout
+    m = re.search(r"--max-uncertainty\s+TEXT=([0-9.eE+-]+)", out)
+    if not m:
+        raise BenchError(f"{binary} correlate --help does not show a --max-uncertainty default", 1)
+    return float(m.group(1)), out
+
+
+def correlate(binary, reference, deformed, out_csv, args, subset, step, interp, extra=()):
+    cmd = [binary, "-q", "correlate", "--reference", reference, "--deformed", deformed,
+           "--mode", "pairs", "--subset", str(subset), "--step", str(step), "--interp", interp,
+           "--max-uncertainty", "none", "--threads", str(args.threads), "-o", out_csv, *extra]
+    if args.prefilter is not None:
+        cmd += [CORRELATE_PREFILTER_OPTION, str(args.prefilter)]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BenchError(f"impactdic correlate failed (exit {proc.returncode}): "
+                         f"{' '.join(quote(c) for c in cmd)}\n{proc.stdout}{proc.stderr}", 1)
+    return cmd, read_results(out_csv)
+
+
+def quote(s):
+    return s if re.fullmatch(r"[\w./=:+-]+", s) else "'" + s.replace("'", "'\\''") + "'"
+
+
+def read_results(path):
+    """Rows of the last frame (the deformed image) of a correlate CSV."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    for col in ("frame", "x_px", "y_px", "u_px", "v_px", "status", "sigma_u_px", "sigma_v_px"):
+        if rows and col not in rows[0]:
+            raise BenchError(f"{path}: no column '{col}' (correlate's CSV contract changed?)", 1)
+    if not rows:
+        raise BenchError(f"{path}: no results", 1)
+    last = rows[-1]["frame"]
+    return [r for r in rows if r["frame"] == last]
+
+
+def mean(xs):
+    return sum(xs) / len(xs) if xs else math.nan
+
+
+def sd(xs):
+    if len(xs) < 2:
+        return math.nan
+    m = mean(xs)
+    return math.sqrt(sum((x - m) ** 2 for x in xs) / (len(xs) - 1))
+
+
+def rms(xs):
+    return math.sqrt(sum(x * x for x in xs) / len(xs)) if xs else math.nan
+
+
+def converged(rows):
+    return [r for r in rows if r["status"] == "converged"]
+
+
+def fmt(x, digits=4):
+    return "nan" if x is None or math.isnan(x) else f"{x:.{digits}f}"
+
+
+# ---------------------------------------------------------------- noise limit (Sample 3)
+
+class GradientSums:
+    """Summed-area tables of (dI/dx)^2 and (dI/dy)^2 (central differences) of an image."""
+
+    def __init__(self, img):
+        w, h, p = img.width, img.height, img.pixels
+        self.w, self.h = w, h
+        self.sx = [[0.0] * (w + 1) for _ in range(h + 1)]
+        self.sy = [[0.0] * (w + 1) for _ in range(h + 1)]
+        for y in range(h):
+            row, up, down = y * w, max(y - 1, 0) * w, min(y + 1, h - 1) * w
+            ax = ay = 0.0
+            sx0, sx1, sy0, sy1 = self.sx[y], self.sx[y + 1], self.sy[y], self.sy[y + 1]
+            for x in range(w):
+                gx = (p[row + min(x + 1, w - 1)] - p[row + max(x - 1, 0)]) * 0.5
+                gy = (p[down + x] - p[up + x]) * 0.5
+                ax += gx * gx
+                ay += gy * gy
+                sx1[x + 1] = sx0[x + 1] + ax
+                sy1[x + 1] = sy0[x + 1] + ay
+
+    def box(self, table, x0, y0, x1, y1):  # inclusive pixel box, clipped
+        x0, y0 = max(x0, 0), max(y0, 0)
+        x1, y1 = min(x1, self.w - 1), min(y1, self.h - 1)
+        t = table
+        return t[y1 + 1][x1 + 1] - t[y0][x1 + 1] - t[y1 + 1][x0] + t[y0][x0]
+
+
+def noise_sigma(reference, zero_shift):
+    a, b = tiff_lite.read_tiff(reference), tiff_lite.read_tiff(zero_shift)
+    if (a.width, a.height) != (b.width, b.height):
+        raise tiff_lite.TiffError(f"{zero_shift}: size differs from the reference")
+    return sd([p - q for p, q in zip(a.pixels, b.pixels)]) / math.sqrt(2), a
+
+
+def noise_limits(grad, rows, subset, sigma_n):
+    """rms over the subsets of the predicted sd of u and of v."""
+    half = subset // 2
+    vu, vv = [], []
+    for r in rows:
+        x, y = int(round(float(r["x_px"]))), int(round(float(r["y_px"])))
+        sxx = grad.box(grad.sx, x - half, y - half, x + half, y + half)
+        syy = grad.box(grad.sy, x - half, y - half, x + half, y + half)
+        if sxx > 0 and syy > 0:
+            vu.append(2 * sigma_n ** 2 / sxx)
+            vv.append(2 * sigma_n ** 2 / syy)
+    return (math.sqrt(mean(vu)), math.sqrt(mean(vv))) if vu else (math.nan, math.nan)
+
+
+def sample3(args, binary, work):
+    folder = os.path.join(args.data, "Sample3") if not args.sample3 else args.sample3
+    if not os.path.isdir(folder):
+        raise BenchError(f"Sample 3: no folder {folder} (run scripts/fetch_dic_challenge.sh, or "
+                         f"give --sample3 DIR)")
+    reference = one_reference(folder, S3_REFERENCE, "Sample 3")
+    deformed = [(path, float(m.group(2)), float(m.group(3))) for path, m in find(folder, S3_DEFORMED)]
+    if not deformed:
+        raise BenchError(f"Sample 3: no shifted images 'Sample3-NNN X.. Y.. ....tif' under {folder}")
+    print(f"## DIC Challenge 1.0 Sample 3: {len(deformed)} shifted images against "
+          f"'{os.path.basename(reference)}' ({folder})\n")
+    limit_note, grad, sigma_n = "", None, math.nan
+    zero = [d for d in deformed if d[1] == 0 and d[2] == 0]
+    try:
+        if not zero:
+            raise tiff_lite.TiffError("no zero-shift image (X0.00 Y0.00) to estimate the noise from")
+        sigma_n, ref_img = noise_sigma(reference, zero[0][0])
+        grad = GradientSums(ref_img)
+        limit_note = (f"noise sigma_n = {sigma_n:.3f} grey levels = sd(reference - "
+                      f"'{os.path.basename(zero[0][0])}') / sqrt(2)")
+    except (tiff_lite.TiffError, OSError, KeyError) as e:
+        limit_note = f"noise limit not computed (nan): {e}"
+    print(limit_note + "\n")
+    for interp in ("bicubic", "biquintic"):
+        print(f"### {interp}, subset {args.s3_subset}, step {args.s3_step}\n")
+        print("| shift u, v [px] | bias u [px] | bias v [px] | sd u [px] | sd v [px] | "
+              "noise limit u, v [px] | mean sigma u, v [px] | n |")
+        print("|---|---|---|---|---|---|---|---|")
+        max_bias, cmd = 0.0, None
+        for path, su, sv in deformed:
+            out = os.path.join(work, f"s3_{interp}_{os.path.basename(path)}.csv")
+            cmd, rows = correlate(binary, reference, path, out, args, args.s3_subset,
+                                  args.s3_step, interp)
+            ok = converged(rows)
+            eu = [float(r["u_px"]) - su for r in ok]
+            ev = [float(r["v_px"]) - sv for r in ok]
+            lu, lv = noise_limits(grad, ok, args.s3_subset, sigma_n) if grad else (math.nan,) * 2
+            bu, bv = mean(eu), mean(ev)
+            max_bias = max(max_bias, abs(bu), abs(bv)) if ok else max_bias
+            print(f"| {su:.2f}, {sv:.2f} | {fmt(bu)} | {fmt(bv)} | {fmt(sd(eu))} | {fmt(sd(ev))} | "
+                  f"{fmt(lu)}, {fmt(lv)} | {fmt(mean([float(r['sigma_u_px']) for r in ok]))}, "
+                  f"{fmt(mean([float(r['sigma_v_px']) for r in ok]))} | {len(ok)}/{len(rows)} |")
+            if ok and (su or sv) and abs(mean([float(r['u_px']) for r in ok]) + su) < abs(bu):
+                print(f"\nwarning: {os.path.basename(path)}: the measured shift is closer to the "
+                      f"opposite of the name's; the sign convention assumed here may be wrong\n")
+        print(f"\nmax |bias| {interp}: {max_bias:.4f} px\n")
+        print("command (per image): " + " ".join(quote(c) for c in cmd) + "\n")
+
+
+# ---------------------------------------------------------------- Sample 14
+
+def fit_sinusoid(xs, us, period):
+    """Least squares u = a sin(2 pi x / L) + b cos(2 pi x / L); returns (residual ss, a, b)."""
+    k = 2 * math.pi / period
+    ss = sc = cc = su = cu = 0.0
+    for x, u in zip(xs, us):
+        s, c = math.sin(k * x), math.cos(k * x)
+        ss += s * s
+        sc += s * c
+        cc += c * c
+        su += s * u
+        cu += c * u
+    det = ss * cc - sc * sc
+    if det <= 0:
+        return math.inf, 0.0, 0.0
+    a = (su * cc - cu * sc) / det
+    b = (cu * ss - su * sc) / det
+    res = sum((u - a * math.sin(k * x) - b * math.cos(k * x)) ** 2 for x, u in zip(xs, us))
+    return res, a, b
+
+
+def best_period(xs, us, width):
+    """Period minimising the residual: log grid on a subsample, then golden-section refinement."""
+    sub = max(1, len(xs) // 2000)
+    sx, su = xs[::sub], us[::sub]
+    lo, hi, n = 20.0, 4.0 * width, 240
+    grid = [lo * (hi / lo) ** (i / (n - 1)) for i in range(n)]
+    res = [fit_sinusoid(sx, su, p)[0] for p in grid]
+    i = min(range(n), key=res.__getitem__)
+    a, b = grid[max(i - 1, 0)], grid[min(i + 1, n - 1)]
+    g = (math.sqrt(5) - 1) / 2
+    c, d = b - g * (b - a), a + g * (b - a)
+    fc, fd = fit_sinusoid(xs, us, c)[0], fit_sinusoid(xs, us, d)[0]
+    for _ in range(40):
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = fit_sinusoid(xs, us, c)[0]
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = fit_sinusoid(xs, us, d)[0]
+    return (a + b) / 2
+
+
+def same_size(reference, deformed, work):
+    """Paths of the reference and deformed image with equal sizes (cropped copies if needed)."""
+    rw, rh = tiff_lite.read_size(reference)
+    dw, dh = tiff_lite.read_size(deformed)
+    if (rw, rh) == (dw, dh):
+        return reference, deformed, ""
+    w, h = min(rw, dw), min(rh, dh)
+    out = []
+    for path, (pw, ph) in ((reference, (rw, rh)), (deformed, (dw, dh))):
+        if (pw, ph) == (w, h):
+            out.append(path)
+            continue
+        cropped = os.path.join(work, f"crop_{w}x{h}_{os.path.basename(path)}")
+        tiff_lite.write_tiff(cropped, tiff_lite.crop(tiff_lite.read_tiff(path), w, h))
+        out.append(cropped)
+    note = f"sizes {rw}x{rh} (reference) and {dw}x{dh}: cropped to the common top-left {w}x{h}"
+    return out[0], out[1], note
+
+
+def sample14(args, binary, work, limit):
+    folder = os.path.join(args.data, "Sample14") if not args.sample14 else args.sample14
+    if not os.path.isdir(folder):
+        raise BenchError(f"Sample 14: no folder {folder} (run scripts/fetch_dic_challenge.sh, or "
+                         f"give --sample14 DIR)")
+    reference = one_reference(folder, S14_REFERENCE, "Sample 14")
+    deformed = [(path, int(m.group(1)), float(m.group(2))) for path, m in find(folder, S14_DEFORMED)]
+    if not deformed:
+        raise BenchError(f"Sample 14: no deformed images 'Sample14 L<k> Amp<A>.tif' under {folder}")
+    width = tiff_lite.read_size(reference)[0]
+    print(f"## DIC Challenge 1.0 Sample 14: {len(deformed)} deformed images against "
+          f"'{os.path.basename(reference)}' ({folder}); {args.s14_interp}, subset "
+          f"{args.s14_subset}, step {args.s14_step}, --max-uncertainty none\n")
+    print(f"Truth: u = A sin(2 pi X / L + phi), v = 0; A from the file name; L "
+          f"{'given' if args.s14_period else 'and phi fitted'}"
+          f"{'' if not args.s14_period else ', phi fitted'}. `uncertain at default`: converged "
+          f"subsets with sigma_u or sigma_v > {limit:g} px (correlate's default limit).\n")
+    print("| image | converged / all | RMS err u [px] | RMS err v [px] | RMS err 2-D [px] | "
+          "uncertain at default | rms sigma u, v [px] | L [px] | A name, fitted [px] |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    cmd, notes = None, []
+    for path, level, amp in deformed:
+        ref, dfm, note = same_size(reference, path, work)
+        if note:
+            notes.append(f"{os.path.basename(path)}: {note}")
+        out = os.path.join(work, f"s14_{os.path.basename(path)}.csv")
+        cmd, rows = correlate(binary, ref, dfm, out, args, args.s14_subset, args.s14_step,
+                              args.s14_interp)
+        ok = converged(rows)
+        xs = [float(r["x_px"]) for r in ok]
+        us = [float(r["u_px"]) for r in ok]
+        vs = [float(r["v_px"]) for r in ok]
+        if len(ok) < 10:
+            print(f"| {os.path.basename(path)} | {len(ok)}/{len(rows)} | nan | nan | nan | nan | "
+                  f"nan | nan | {amp:g}, nan |")
+            notes.append(f"{os.path.basename(path)}: fewer than 10 converged subsets, no fit")
+            continue
+        period = args.s14_period or best_period(xs, us, width)
+        _, a, b = fit_sinusoid(xs, us, period)
+        phase, fitted = math.atan2(b, a), math.hypot(a, b)
+        k = 2 * math.pi / period
+        eu = [u - amp * math.sin(k * x + phase) for x, u in zip(xs, us)]
+        su = [float(r["sigma_u_px"]) for r in ok]
+        sv = [float(r["sigma_v_px"]) for r in ok]
+        unc = sum(1 for p, q in zip(su, sv) if p > limit or q > limit)
+        print(f"| {os.path.basename(path)} | {len(ok)}/{len(rows)} | {fmt(rms(eu))} | {fmt(rms(vs))} | "
+              f"{fmt(math.sqrt(rms(eu) ** 2 + rms(vs) ** 2))} | {100.0 * unc / len(ok):.2f} % | "
+              f"{fmt(rms(su))}, {fmt(rms(sv))} | {period:.1f} | {amp:g}, {fitted:.4f} |")
+    print()
+    for n in notes:
+        print("note: " + n)
+    print("command (per image): " + " ".join(quote(c) for c in cmd) + "\n")
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", nargs="?", default=DEFAULT_DATA,
+                   help=f"folder with Sample3/ and Sample14/ (default {DEFAULT_DATA})")
+    here = os.path.dirname(os.path.abspath(__file__))
+    p.add_argument("--binary", default=os.path.join(here, "..", "build", "release", "src", "cli",
+                                                    "impactdic"), help="impactdic binary")
+    p.add_argument("--sample3", help="Sample 3 folder (default DATA/Sample3)")
+    p.add_argument("--sample14", help="Sample 14 folder (default DATA/Sample14)")
+    p.add_argument("--only", choices=("3", "14"), help="run one sample only")
+    p.add_argument("--threads", type=int, default=0, help="correlate --threads (0: all cores)")
+    p.add_argument("--work", help="folder for the CSVs and cropped images (default: a temporary one)")
+    p.add_argument("--s3-subset", type=int, default=25)
+    p.add_argument("--s3-step", type=int, default=10)
+    p.add_argument("--s14-subset", type=int, default=25)
+    p.add_argument("--s14-step", type=int, default=5)
+    p.add_argument("--s14-interp", default="bicubic", choices=("bicubic", "biquintic"))
+    p.add_argument("--s14-period", type=float, help="Sample 14 period L [px] (default: fitted)")
+    p.add_argument("--prefilter", type=float, metavar="SIGMA",
+                   help="pass correlate's Gaussian pre-filter (needs CORRELATE_PREFILTER_OPTION)")
+    args = p.parse_args()
+    try:
+        if args.prefilter is not None and CORRELATE_PREFILTER_OPTION is None:
+            raise BenchError("--prefilter: correlate has no pre-filter option known to this script "
+                             "yet; set CORRELATE_PREFILTER_OPTION in bench/dic_challenge.py")
+        binary = os.path.abspath(args.binary)
+        if not os.access(binary, os.X_OK):
+            raise BenchError(f"--binary: {binary} is not an executable (build it: cmake --build "
+                             f"--preset release --target impactdic)")
+        limit, help_text = default_limit(binary)
+        if args.prefilter is not None and CORRELATE_PREFILTER_OPTION not in help_text:
+            raise BenchError(f"--prefilter: {binary} correlate has no {CORRELATE_PREFILTER_OPTION}")
+        work = args.work or tempfile.mkdtemp(prefix="impactdic_dic_challenge_")
+        os.makedirs(work, exist_ok=True)
+        print(f"binary {binary}; results in {work}\n")
+        if args.only in (None, "3"):
+            sample3(args, binary, work)
+        if args.only in (None, "14"):
+            sample14(args, binary, work, limit)
+    except BenchError as e:
+        print(f"dic_challenge: error: {e}", file=sys.stderr)
+        return e.status
+    except (tiff_lite.TiffError, OSError) as e:
+        print(f"dic_challenge: error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
