@@ -24,11 +24,13 @@ be decoded, the column is nan and the reason is printed.
 Sample 14 (subset 25, step 5, --mode pairs, --max-uncertainty none; bicubic unless --s14-interp):
 one row per deformed image: converged / all subsets, RMS error of u and v over ALL converged
 subsets, the fraction that would be `uncertain` at correlate's default limit (read from
-`correlate --help`), the rms of the reported sigma_u, sigma_v, and the fitted sinusoid.
-Truth (assumption, stated in docs/dic.md): u = A sin(2 pi X / L + phi), v = 0, X the reference
-x [px]; A from the file name (Amp0.1 -> 0.1 px); the period L (unless --s14-period) and the phase
-phi are fitted to the measured u by least squares (2 parameters + L against thousands of
-subsets). The fitted amplitude is printed next to A, so an attenuation shows.
+`correlate --help`), and the rms of the reported sigma_u, sigma_v.
+Truth: Sample 14's u is not one sinusoid but a chirp of amplitude 0.1 px along x (zero up to
+x = 100 px, the frequency rising to the right; L1 lowest, L5 highest), v = 0. The commanded u per
+pixel column for L1, L3 and L5 is the table DATA/Sample14_command.csv (x, u_L1, exx_L1, u_L3,
+exx_L3, u_L5, exx_L5; the copy in Sandia's DICe repository, fetched by the fetch script;
+--s14-truth FILE to give another), interpolated linearly at the subset centre X. Levels without a
+column (L2, L4) get nan with a note; so do all without the table.
 
 Images of unequal size (Sample 14's deformed images may be larger than its reference) are cropped
 to their common top-left size into the work folder first (pure-Python TIFF, bench/tiff_lite.py).
@@ -249,48 +251,33 @@ def sample3(args, binary, work):
 
 # ---------------------------------------------------------------- Sample 14
 
-def fit_sinusoid(xs, us, period):
-    """Least squares u = a sin(2 pi x / L) + b cos(2 pi x / L); returns (residual ss, a, b)."""
-    k = 2 * math.pi / period
-    ss = sc = cc = su = cu = 0.0
-    for x, u in zip(xs, us):
-        s, c = math.sin(k * x), math.cos(k * x)
-        ss += s * s
-        sc += s * c
-        cc += c * c
-        su += s * u
-        cu += c * u
-    det = ss * cc - sc * sc
-    if det <= 0:
-        return math.inf, 0.0, 0.0
-    a = (su * cc - cu * sc) / det
-    b = (cu * ss - su * sc) / det
-    res = sum((u - a * math.sin(k * x) - b * math.cos(k * x)) ** 2 for x, u in zip(xs, us))
-    return res, a, b
+def read_truth(path):
+    """Commanded u of Sample 14 per level from a table x, u_L1, exx_L1, u_L3, exx_L3, u_L5,
+    exx_L5 (one row per integer x of the reference, no header; exx in microstrain, unused):
+    {level: [u at x = 0, 1, ...]}."""
+    columns = {1: 1, 3: 3, 5: 5}
+    table = {k: [] for k in columns}
+    with open(path, newline="") as f:
+        for n, row in enumerate(csv.reader(f), start=1):
+            try:
+                values = [float(c) for c in row]
+            except ValueError:
+                raise BenchError(f"--s14-truth {path}: line {n} is not numbers: {row[:3]}")
+            if len(values) < 7 or int(values[0]) != n - 1:
+                raise BenchError(f"--s14-truth {path}: line {n}: expected 7 columns x, u_L1, "
+                                 f"exx_L1, u_L3, exx_L3, u_L5, exx_L5 with x = {n - 1}")
+            for k, c in columns.items():
+                table[k].append(values[c])
+    if not table[1]:
+        raise BenchError(f"--s14-truth {path}: empty")
+    return table
 
 
-def best_period(xs, us, width):
-    """Period minimising the residual: log grid on a subsample, then golden-section refinement."""
-    sub = max(1, len(xs) // 2000)
-    sx, su = xs[::sub], us[::sub]
-    lo, hi, n = 20.0, 4.0 * width, 240
-    grid = [lo * (hi / lo) ** (i / (n - 1)) for i in range(n)]
-    res = [fit_sinusoid(sx, su, p)[0] for p in grid]
-    i = min(range(n), key=res.__getitem__)
-    a, b = grid[max(i - 1, 0)], grid[min(i + 1, n - 1)]
-    g = (math.sqrt(5) - 1) / 2
-    c, d = b - g * (b - a), a + g * (b - a)
-    fc, fd = fit_sinusoid(xs, us, c)[0], fit_sinusoid(xs, us, d)[0]
-    for _ in range(40):
-        if fc < fd:
-            b, d, fd = d, c, fc
-            c = b - g * (b - a)
-            fc = fit_sinusoid(xs, us, c)[0]
-        else:
-            a, c, fc = c, d, fd
-            d = a + g * (b - a)
-            fd = fit_sinusoid(xs, us, d)[0]
-    return (a + b) / 2
+def truth_at(column, x):
+    """Linear interpolation of a per-pixel column at x (clamped to the table)."""
+    x = min(max(x, 0.0), len(column) - 1.0)
+    i = min(int(x), len(column) - 2)
+    return column[i] + (x - i) * (column[i + 1] - column[i])
 
 
 def same_size(reference, deformed, work):
@@ -321,45 +308,46 @@ def sample14(args, binary, work, limit):
     deformed = [(path, int(m.group(1)), float(m.group(2))) for path, m in find(folder, S14_DEFORMED)]
     if not deformed:
         raise BenchError(f"Sample 14: no deformed images 'Sample14 L<k> Amp<A>.tif' under {folder}")
-    width = tiff_lite.read_size(reference)[0]
+    truth_path = args.s14_truth or os.path.join(args.data, "Sample14_command.csv")
+    truth = read_truth(truth_path) if os.path.isfile(truth_path) else {}
     print(f"## DIC Challenge 1.0 Sample 14: {len(deformed)} deformed images against "
           f"'{os.path.basename(reference)}' ({folder}); {args.s14_interp}, subset "
           f"{args.s14_subset}, step {args.s14_step}, --max-uncertainty none\n")
-    print(f"Truth: u = A sin(2 pi X / L + phi), v = 0; A from the file name; L "
-          f"{'given' if args.s14_period else 'and phi fitted'}"
-          f"{'' if not args.s14_period else ', phi fitted'}. `uncertain at default`: converged "
+    print(f"Truth: the commanded u(X) of the image's level from {truth_path}"
+          f"{'' if truth else ' (missing: no RMS error)'}, v = 0. `uncertain at default`: converged "
           f"subsets with sigma_u or sigma_v > {limit:g} px (correlate's default limit).\n")
     print("| image | converged / all | RMS err u [px] | RMS err v [px] | RMS err 2-D [px] | "
-          "uncertain at default | rms sigma u, v [px] | L [px] | A name, fitted [px] |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "uncertain at default | rms sigma u, v [px] | truth |")
+    print("|---|---|---|---|---|---|---|---|")
     cmd, notes = None, []
-    for path, level, amp in deformed:
+    for path, level, _ in deformed:
+        name = os.path.basename(path)
         ref, dfm, note = same_size(reference, path, work)
         if note:
-            notes.append(f"{os.path.basename(path)}: {note}")
-        out = os.path.join(work, f"s14_{os.path.basename(path)}.csv")
+            notes.append(f"{name}: {note}")
+        out = os.path.join(work, f"s14_{name}.csv")
         cmd, rows = correlate(binary, ref, dfm, out, args, args.s14_subset, args.s14_step,
                               args.s14_interp)
         ok = converged(rows)
-        xs = [float(r["x_px"]) for r in ok]
-        us = [float(r["u_px"]) for r in ok]
         vs = [float(r["v_px"]) for r in ok]
-        if len(ok) < 10:
-            print(f"| {os.path.basename(path)} | {len(ok)}/{len(rows)} | nan | nan | nan | nan | "
-                  f"nan | nan | {amp:g}, nan |")
-            notes.append(f"{os.path.basename(path)}: fewer than 10 converged subsets, no fit")
-            continue
-        period = args.s14_period or best_period(xs, us, width)
-        _, a, b = fit_sinusoid(xs, us, period)
-        phase, fitted = math.atan2(b, a), math.hypot(a, b)
-        k = 2 * math.pi / period
-        eu = [u - amp * math.sin(k * x + phase) for x, u in zip(xs, us)]
         su = [float(r["sigma_u_px"]) for r in ok]
         sv = [float(r["sigma_v_px"]) for r in ok]
         unc = sum(1 for p, q in zip(su, sv) if p > limit or q > limit)
-        print(f"| {os.path.basename(path)} | {len(ok)}/{len(rows)} | {fmt(rms(eu))} | {fmt(rms(vs))} | "
-              f"{fmt(math.sqrt(rms(eu) ** 2 + rms(vs) ** 2))} | {100.0 * unc / len(ok):.2f} % | "
-              f"{fmt(rms(su))}, {fmt(rms(sv))} | {period:.1f} | {amp:g}, {fitted:.4f} |")
+        err_u, source = math.nan, "none"
+        if level in truth and ok:
+            eu = [float(r["u_px"]) - truth_at(truth[level], float(r["x_px"])) for r in ok]
+            flipped = [float(r["u_px"]) + truth_at(truth[level], float(r["x_px"])) for r in ok]
+            err_u, source = rms(eu), f"L{level} of {os.path.basename(truth_path)}"
+            if rms(flipped) < 0.5 * err_u:
+                notes.append(f"{name}: u matches the opposite of the commanded displacement; "
+                             f"the sign convention assumed here may be wrong")
+        elif truth:
+            notes.append(f"{name}: no commanded displacement for level L{level} in {truth_path} "
+                         f"(it has L1, L3, L5): RMS error nan")
+        pct = f"{100.0 * unc / len(ok):.2f} %" if ok else "nan"
+        print(f"| {name} | {len(ok)}/{len(rows)} | {fmt(err_u)} | {fmt(rms(vs))} | "
+              f"{fmt(math.sqrt(err_u ** 2 + rms(vs) ** 2))} | {pct} | "
+              f"{fmt(rms(su))}, {fmt(rms(sv))} | {source} |")
     print()
     for n in notes:
         print("note: " + n)
@@ -384,7 +372,8 @@ def main():
     p.add_argument("--s14-subset", type=int, default=25)
     p.add_argument("--s14-step", type=int, default=5)
     p.add_argument("--s14-interp", default="bicubic", choices=("bicubic", "biquintic"))
-    p.add_argument("--s14-period", type=float, help="Sample 14 period L [px] (default: fitted)")
+    p.add_argument("--s14-truth", help="Sample 14 commanded displacement table (default "
+                   "DATA/Sample14_command.csv, fetched by scripts/fetch_dic_challenge.sh)")
     p.add_argument("--prefilter", type=float, metavar="SIGMA",
                    help="pass correlate's Gaussian pre-filter (needs CORRELATE_PREFILTER_OPTION)")
     args = p.parse_args()

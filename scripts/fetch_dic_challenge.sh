@@ -6,7 +6,8 @@
 #   bench/dic_challenge.py [DIR]
 #
 # DIR (default ${XDG_CACHE_HOME:-~/.cache}/impactdic/dic_challenge) receives Sample3.zip,
-# Sample14.zip, their unpacked folders Sample3/ and Sample14/, and SHA256SUMS.
+# Sample14.zip, their unpacked folders Sample3/ and Sample14/, Sample14_command.csv (the truth of
+# Sample 14) and SHA256SUMS.
 #
 # Sources. The challenge (SEM / iDICs, https://idics.org/challenge/) publishes its 2D 1.0 images
 # as a Google Drive folder: https://drive.google.com/drive/folders/1tNUKPJ7UJOm23JhERtkrIy5gSBiwV3Dj
@@ -16,6 +17,10 @@
 #   Sample3.zip   no id known to this script: it is looked up in the folder's public listing
 #                 (best effort: parses the page as gdown does); if that fails, the message says how
 #                 to give the link (--sample3-url, or the archive dropped into DIR by hand).
+#   Sample14_command.csv  the commanded u of Sample 14 per pixel column for L1, L3, L5 (x, u_L1,
+#                 exx_L1, u_L3, exx_L3, u_L5, exx_L5; exx in microstrain), as Sandia's DICe keeps it
+#                 in tests/regression/dic_challenge_14_nlvc/command.csv (github.com/dicengine/dice,
+#                 pinned to commit 27a780753c561c8518eddd2b675929795a1661d0).
 # Override any source with DIC_CHALLENGE_SAMPLE3_URL / DIC_CHALLENGE_SAMPLE14_URL or the options
 # --sample3-url / --sample14-url (a Drive "file/d/ID/view" link or any direct URL of the zip).
 #
@@ -32,6 +37,7 @@ set -euo pipefail
 
 FOLDER_URL="https://drive.google.com/drive/folders/1tNUKPJ7UJOm23JhERtkrIy5gSBiwV3Dj"
 SAMPLE14_ID="13lG8piOhYXqMdvIFmmmRq9wzodoCAXhX"
+TRUTH14_URL="https://raw.githubusercontent.com/dicengine/dice/27a780753c561c8518eddd2b675929795a1661d0/tests/regression/dic_challenge_14_nlvc/command.csv"
 
 dir=""
 sample3_url="${DIC_CHALLENGE_SAMPLE3_URL:-}"
@@ -78,7 +84,7 @@ download() {
       *) die "download of $url failed (curl exit $rc)" ;;
     esac
   fi
-  if [ "$(head -c 4 "$out.part" | od -An -tx1 | tr -d ' \n')" != "504b0304" ]; then
+  if [ "${3:-zip}" = zip ] && [ "$(head -c 4 "$out.part" | od -An -tx1 | tr -d ' \n')" != "504b0304" ]; then
     rm -f "$out.part"
     die "$url did not return a zip archive (Google Drive's HTML page: quota or confirmation?); download it in a browser into $dir/$(basename "$out") and rerun"
   fi
@@ -141,6 +147,14 @@ fetch() {  # fetch NAME URL PATTERN_REF PATTERN_DEF MIN_DEF
 status=0
 fetch Sample14 "${sample14_url:-https://drive.google.com/file/d/$SAMPLE14_ID/view}" \
   "Sample*14*Reference.tif" "Sample*14 L* Amp*.tif" 1
+truth="$dir/Sample14_command.csv"
+if [ ! -f "$truth" ]; then
+  download "${DIC_CHALLENGE_SAMPLE14_TRUTH_URL:-$TRUTH14_URL}" "$truth" csv
+fi
+rows="$(awk -F, 'NF == 7 && $1 == NR - 1' "$truth" | wc -l)"
+[ "$rows" -ge 2048 ] && [ "$rows" -eq "$(wc -l < "$truth")" ] ||
+  die "$truth: expected >= 2048 lines 'x,u_L1,exx_L1,u_L3,exx_L3,u_L5,exx_L5' with x = 0, 1, ..., found $rows such lines"
+check_sums "$truth"
 if [ -z "$sample3_url" ] && [ ! -f "$dir/Sample3.zip" ]; then
   if id="$(lookup_in_folder Sample3.zip)"; then
     sample3_url="https://drive.google.com/file/d/$id/view"
