@@ -56,6 +56,9 @@ dir="${dir:-${XDG_CACHE_HOME:-$HOME/.cache}/impactdic/dic_challenge}"
 mkdir -p "$dir"
 
 die() { echo "fetch_dic_challenge: error: $*" >&2; exit 1; }
+for tool in curl python3 sha256sum; do
+  command -v "$tool" > /dev/null || die "$tool is not installed (scripts/install_deps.sh installs it)"
+done
 
 # A Drive share link (".../file/d/ID/..." or "...?id=ID") -> the direct download URL.
 direct_url() {
