@@ -48,6 +48,7 @@ import subprocess
 import sys
 import tempfile
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import tiff_lite  # noqa: E402
 
@@ -228,7 +229,7 @@ def sample3(args, binary, work):
         print("| shift u, v [px] | bias u [px] | bias v [px] | sd u [px] | sd v [px] | "
               "noise limit u, v [px] | mean sigma u, v [px] | n |")
         print("|---|---|---|---|---|---|---|---|")
-        max_bias, cmd = 0.0, None
+        max_bias, cmd, warnings = 0.0, None, []
         for path, su, sv in deformed:
             out = os.path.join(work, f"s3_{interp}_{os.path.basename(path)}.csv")
             cmd, rows = correlate(binary, reference, path, out, args, args.s3_subset,
@@ -243,9 +244,12 @@ def sample3(args, binary, work):
                   f"{fmt(lu)}, {fmt(lv)} | {fmt(mean([float(r['sigma_u_px']) for r in ok]))}, "
                   f"{fmt(mean([float(r['sigma_v_px']) for r in ok]))} | {len(ok)}/{len(rows)} |")
             if ok and (su or sv) and abs(mean([float(r['u_px']) for r in ok]) + su) < abs(bu):
-                print(f"\nwarning: {os.path.basename(path)}: the measured shift is closer to the "
-                      f"opposite of the name's; the sign convention assumed here may be wrong\n")
+                warnings.append(f"warning: {os.path.basename(path)}: the measured shift is closer "
+                                f"to the opposite of the name's; the sign convention assumed here "
+                                f"may be wrong")
         print(f"\nmax |bias| {interp}: {max_bias:.4f} px\n")
+        for w in warnings:
+            print(w)
         print("command (per image): " + " ".join(quote(c) for c in cmd) + "\n")
 
 
