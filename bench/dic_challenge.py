@@ -98,25 +98,29 @@ def default_limit(binary):
     return float(m.group(1)), out
 
 
-def correlate(binary, reference, deformed, out_csv, args, subset, step, interp, extra=()):
-    cmd = [binary, "-q", "correlate", "--reference", reference, "--deformed", deformed,
+def correlate(binary, reference, deformed, out_csv, args, subset, step, interp):
+    """One `correlate --mode pairs` of `deformed` (a list of paths) against `reference`: the
+    command and the result rows of each deformed image, in order."""
+    cmd = [binary, "-q", "correlate", "--reference", reference, "--deformed", *deformed,
            "--mode", "pairs", "--subset", str(subset), "--step", str(step), "--interp", interp,
-           "--max-uncertainty", "none", "--threads", str(args.threads), "-o", out_csv, *extra]
+           "--max-uncertainty", "none", "--threads", str(args.threads), "-o", out_csv]
     if args.prefilter is not None:
         cmd += [CORRELATE_PREFILTER_OPTION, str(args.prefilter)]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise BenchError(f"impactdic correlate failed (exit {proc.returncode}): "
                          f"{' '.join(quote(c) for c in cmd)}\n{proc.stdout}{proc.stderr}", 1)
-    return cmd, read_results(out_csv)
+    return cmd, read_results(out_csv, len(deformed))
 
 
 def quote(s):
     return s if re.fullmatch(r"[\w./=:+-]+", s) else "'" + s.replace("'", "'\\''") + "'"
 
 
-def read_results(path):
-    """Rows of the last frame (the deformed image) of a correlate CSV."""
+def read_results(path, count):
+    """Rows of each of the `count` deformed images of a correlate CSV, in order. The `frame`
+    column is the position (reference = 0) when the names are not one numbered series, as the
+    challenge's are not (docs/dic.md); with one image, its rows are the last frame's."""
     with open(path, newline="") as f:
         rows = list(csv.DictReader(f))
     for col in ("frame", "x_px", "y_px", "u_px", "v_px", "status", "sigma_u_px", "sigma_v_px"):
@@ -124,8 +128,14 @@ def read_results(path):
             raise BenchError(f"{path}: no column '{col}' (correlate's CSV contract changed?)", 1)
     if not rows:
         raise BenchError(f"{path}: no results", 1)
-    last = rows[-1]["frame"]
-    return [r for r in rows if r["frame"] == last]
+    if count == 1:
+        last = rows[-1]["frame"]
+        return [[r for r in rows if r["frame"] == last]]
+    frames = sorted({int(r["frame"]) for r in rows} - {0})
+    if frames != list(range(1, count + 1)):
+        raise BenchError(f"{path}: frames {frames[:5]}... are not the positions 1..{count} of the "
+                         f"deformed images; cannot tell which result is which image", 1)
+    return [[r for r in rows if int(r["frame"]) == k] for k in frames]
 
 
 def mean(xs):
@@ -230,10 +240,10 @@ def sample3(args, binary, work):
               "noise limit u, v [px] | mean sigma u, v [px] | n |")
         print("|---|---|---|---|---|---|---|---|")
         max_bias, cmd, warnings = 0.0, None, []
-        for path, su, sv in deformed:
-            out = os.path.join(work, f"s3_{interp}_{os.path.basename(path)}.csv")
-            cmd, rows = correlate(binary, reference, path, out, args, args.s3_subset,
-                                  args.s3_step, interp)
+        cmd, results = correlate(binary, reference, [d[0] for d in deformed],
+                                 os.path.join(work, f"s3_{interp}.csv"), args, args.s3_subset,
+                                 args.s3_step, interp)
+        for (path, su, sv), rows in zip(deformed, results):
             ok = converged(rows)
             eu = [float(r["u_px"]) - su for r in ok]
             ev = [float(r["v_px"]) - sv for r in ok]
@@ -250,7 +260,7 @@ def sample3(args, binary, work):
         print(f"\nmax |bias| {interp}: {max_bias:.4f} px\n")
         for w in warnings:
             print(w)
-        print("command (per image): " + " ".join(quote(c) for c in cmd) + "\n")
+        print("command: " + " ".join(quote(c) for c in cmd) + "\n")
 
 
 # ---------------------------------------------------------------- Sample 14
@@ -330,8 +340,8 @@ def sample14(args, binary, work, limit):
         if note:
             notes.append(f"{name}: {note}")
         out = os.path.join(work, f"s14_{name}.csv")
-        cmd, rows = correlate(binary, ref, dfm, out, args, args.s14_subset, args.s14_step,
-                              args.s14_interp)
+        cmd, (rows,) = correlate(binary, ref, [dfm], out, args, args.s14_subset, args.s14_step,
+                                 args.s14_interp)
         ok = converged(rows)
         vs = [float(r["v_px"]) for r in ok]
         su = [float(r["sigma_u_px"]) for r in ok]

@@ -201,6 +201,9 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
       EXPECT_GE(std::stoi(r[7].substr(0, slash)), 100);
     }
   }
+  // Sample 3: one correlate per interpolator with all shifted images; Sample 14: one per image.
+  EXPECT_NE(run.output.find("command: "), std::string::npos);
+  EXPECT_NE(run.output.find("X0.50 Y0.50 N2 C0 R0.tif' '"), std::string::npos);
   EXPECT_NE(run.output.find("command (per image): "), std::string::npos);
   EXPECT_NE(run.output.find("--mode pairs"), std::string::npos);
   EXPECT_NE(run.output.find("--interp biquintic"), std::string::npos);
