@@ -29,6 +29,35 @@ function(impactdic_add_module)
   impactdic_target_defaults(${target})
 endfunction()
 
+# impactdic_registered_sources(VAR reference_update_policies.def) sets VAR to the source files named
+# by a registration list: each line `IMPACTDIC_<WHAT>(..., "file.cc")` of the list (a file included
+# by the C++ code to declare and table the built-ins) names the file defining that entry, relative
+# to the list's folder. So a built-in policy, ODE method or output writer is one new file and one
+# line in its list, with no CMake edit (docs/architecture.md, "Extension points"); CMake configures
+# again when the list changes, and a line naming a missing file stops the configuration.
+function(impactdic_registered_sources var list_file)
+  get_filename_component(list_path ${list_file} ABSOLUTE)
+  get_filename_component(list_dir ${list_path} DIRECTORY)
+  set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${list_path})
+  file(STRINGS ${list_path} lines REGEX "^IMPACTDIC_[A-Z_]+\\(")
+  set(sources)
+  foreach(line IN LISTS lines)
+    if(NOT line MATCHES ", *\"([^\"]+\\.cc)\"\\) *$")
+      message(FATAL_ERROR "${list_path}: '${line}' does not end with the source file: expected ..., \"file.cc\")")
+    endif()
+    set(source ${list_dir}/${CMAKE_MATCH_1})
+    if(NOT EXISTS ${source})
+      message(FATAL_ERROR "${list_path}: '${line}' names ${source}, which does not exist")
+    endif()
+    list(APPEND sources ${source})
+  endforeach()
+  if(NOT sources)
+    message(FATAL_ERROR "${list_path}: no registration line: expected IMPACTDIC_...(..., \"file.cc\")")
+  endif()
+  list(REMOVE_DUPLICATES sources)
+  set(${var} ${sources} PARENT_SCOPE)
+endfunction()
+
 # impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow]
 #                    [WHOLE])
 # Each test case is its own CTest test (run in parallel processes), unless WHOLE: then the program

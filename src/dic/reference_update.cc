@@ -13,10 +13,14 @@
 namespace impactdic {
 namespace {
 
-// The built-in policies, in the order messages list them. A new policy adds one line here.
+// The built-in policies, in the order of reference_update_policies.def (the order messages list
+// them). A new policy adds one line there.
 std::vector<ReferenceUpdatePolicyInfo> BuiltinPolicies() {
-  return {internal::FixedPolicy(), internal::IncrementalPolicy(), internal::AutoPolicy(),
-          internal::EveryNPolicy()};
+  return {
+#define IMPACTDIC_REFERENCE_UPDATE_POLICY(factory, file) internal::factory(),
+#include "reference_update_policies.def"
+#undef IMPACTDIC_REFERENCE_UPDATE_POLICY
+  };
 }
 
 struct Registry {
@@ -39,6 +43,10 @@ std::string Usage(const std::vector<ReferenceUpdatePolicyInfo>& policies) {
 }
 
 }  // namespace
+
+void internal::CheckNoArgument(const std::string& argument) {
+  CheckValue(argument.empty(), "reference update argument", argument, "none");
+}
 
 std::vector<int> ReferenceUpdatePolicy::RedoCandidates(const SolvedFrame& /*frame*/) const {
   return {};

@@ -1,5 +1,5 @@
-// The adaptive step driver of IntegrateOde; the methods are OdeSteppers (ode_stepper.h,
-// ode_dopri5.cc, ode_rodas3.cc, ode_auto.cc).
+// The adaptive step driver of IntegrateOde; the methods are OdeSteppers (ode_stepper.h), listed
+// in ode_methods.def.
 #include "impactdic/model/ode.h"
 
 #include <algorithm>
@@ -24,12 +24,14 @@ using internal::Axpy;
 using internal::Finite;
 using internal::RmsNorm;
 
-// The built-in methods, in the order messages list them. A new method adds one line here.
+// The built-in methods, in the order of ode_methods.def (the order messages list them). A new
+// method adds one line there.
 std::vector<std::pair<std::string, OdeStepperFactory>> BuiltinMethods() {
-  return {{"dopri5", internal::MakeDopri5Stepper},
-          {"ode45", internal::MakeOde45Stepper},
-          {"rodas3", internal::MakeRodas3Stepper},
-          {"auto", internal::MakeAutoStepper}};
+  return {
+#define IMPACTDIC_ODE_METHOD(name, factory, file) {name, internal::factory},
+#include "ode_methods.def"
+#undef IMPACTDIC_ODE_METHOD
+  };
 }
 
 struct MethodRegistry {

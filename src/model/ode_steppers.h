@@ -1,5 +1,5 @@
-// Internal: the built-in ODE methods (ode_stepper.h), one factory per file, listed in the
-// table of ode.cc.
+// Internal: the built-in ODE methods (ode_stepper.h), one factory each, declared from the list
+// ode_methods.def.
 #ifndef IMPACTDIC_SRC_MODEL_ODE_STEPPERS_H_
 #define IMPACTDIC_SRC_MODEL_ODE_STEPPERS_H_
 
@@ -14,10 +14,10 @@ namespace impactdic::internal {
 std::unique_ptr<OdeStepper> MakeDopri5(bool ode45_rules, bool detect_stiffness);
 // Whether the stiffness test of a stepper made by MakeDopri5 with detect_stiffness has fired.
 bool StiffnessDetected(const OdeStepper& dopri5);
-std::unique_ptr<OdeStepper> MakeDopri5Stepper();  // "dopri5"
-std::unique_ptr<OdeStepper> MakeOde45Stepper();   // "ode45"
-std::unique_ptr<OdeStepper> MakeRodas3Stepper();  // "rodas3" (ode_rodas3.cc)
-std::unique_ptr<OdeStepper> MakeAutoStepper();    // "auto" (ode_auto.cc)
+
+#define IMPACTDIC_ODE_METHOD(name, factory, file) std::unique_ptr<OdeStepper> factory();
+#include "ode_methods.def"
+#undef IMPACTDIC_ODE_METHOD
 
 }  // namespace impactdic::internal
 

@@ -88,6 +88,15 @@ TEST(ReferenceUpdate, RegistryListsPoliciesAndRefusesBadNames) {
   }
 }
 
+TEST(ReferenceUpdate, BuiltinPoliciesAreListedInTheOrderOfTheirRegistrationList) {
+  // src/dic/reference_update_policies.def: fixed, incremental, auto, every. A policy registered at
+  // run time comes after them (once:K, when this program's first tests ran in this process).
+  const std::string usage = ReferenceUpdatePolicyUsage();
+  EXPECT_TRUE(usage == "fixed, incremental, auto or every:N (N >= 1)" ||
+              usage == "fixed, incremental, auto, every:N (N >= 1) or once:K (K >= 1)")
+      << usage;
+}
+
 TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
   const std::vector<SubsetStatus> status = {SubsetStatus::kConverged, SubsetStatus::kConverged,
                                             SubsetStatus::kLowCorrelation, SubsetStatus::kMasked,

@@ -9,13 +9,13 @@ std::string OutputContext::Path(const std::string& name) const {
   return (std::filesystem::path(folder) / name).string();
 }
 
-// The registry of the built-in output formats: one line each, in the order they are written.
+// The built-in output formats, in the order of output_writers.def (the order they are written).
+// A new format adds one line there.
 OutputWriters BuiltInOutputWriters() {
   return {
-      outputs::MakeResultsFileWriter(),
-      outputs::MakeFiguresWriter(),
-      outputs::MakeSummaryJsonWriter(),
-      outputs::MakeSummaryCsvWriter(),
+#define IMPACTDIC_OUTPUT_WRITER(factory, file) outputs::factory(),
+#include "output_writers.def"
+#undef IMPACTDIC_OUTPUT_WRITER
   };
 }
 

@@ -1,5 +1,5 @@
-// The factories of the built-in output writers (pipeline/output_writer.h), one file each;
-// BuiltInOutputWriters() (output_writers.cc) lists them.
+// The factories of the built-in output writers (pipeline/output_writer.h), declared from the list
+// output_writers.def; BuiltInOutputWriters() (output_writers.cc) tables them in that order.
 #ifndef IMPACTDIC_SRC_PIPELINE_OUTPUTS_WRITERS_H_
 #define IMPACTDIC_SRC_PIPELINE_OUTPUTS_WRITERS_H_
 
@@ -9,10 +9,9 @@
 
 namespace impactdic::outputs {
 
-std::shared_ptr<const OutputWriter> MakeResultsFileWriter();  // results.h5
-std::shared_ptr<const OutputWriter> MakeFiguresWriter();      // figures, snapshot, animation
-std::shared_ptr<const OutputWriter> MakeSummaryJsonWriter();  // summary.json
-std::shared_ptr<const OutputWriter> MakeSummaryCsvWriter();   // summary.csv
+#define IMPACTDIC_OUTPUT_WRITER(factory, file) std::shared_ptr<const OutputWriter> factory();
+#include "output_writers.def"
+#undef IMPACTDIC_OUTPUT_WRITER
 
 }  // namespace impactdic::outputs
 
