@@ -5,9 +5,9 @@
 //
 // Adding an output format (docs/architecture.md, "How to add an output format"): write a class
 // deriving from OutputWriter in a new file src/pipeline/outputs/NAME_writer.cc with a factory
-// function, and add that factory to BuiltInOutputWriters() (src/pipeline/outputs/
-// output_writers.cc; one line, plus the declaration in src/pipeline/outputs/writers.h and the file
-// in src/pipeline/CMakeLists.txt). A caller can also pass writers of its own in
+// function, and add one line naming the factory and the file to the registration list
+// src/pipeline/outputs/output_writers.def, which declares the factory, puts it in
+// BuiltInOutputWriters() and has the file compiled. A caller can also pass writers of its own in
 // PipelineOptions::extra_output_writers (tests/pipeline/output_writer_test.cc does).
 //
 //   class FrameTimesCsvWriter : public OutputWriter {
