@@ -19,6 +19,7 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
 #include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/sensor/sensor.h"
@@ -196,7 +197,12 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   const std::string results =
       a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
                         : a.results;
-  const SceneAnalysisRun run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial);
+  SceneAnalysisRun run;
+  try {
+    run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial);
+  } catch (const PartialResultsError& e) {
+    RethrowWithPartialFlag(e, "analyze");
+  }
   const MomentumSummary& m = run.analysis.momentum.summary;
   if (!m.IsUsable())
     LogWarning("analyze: partial results (--allow-partial): t_e is not measurable: {}",
@@ -258,7 +264,7 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--output", args->output, "also write the sensor series to this HDF5 file");
   cmd->add_option("--results", args->results,
                   "correlation results HDF5 of the scene (default <outputs.folder>/results.h5)");
-  cmd->add_flag("--allow-partial", args->allow_partial,
+  cmd->add_flag(kAllowPartialFlag, args->allow_partial,
                 "SCENE form: write the results (exit 0) even when t_e is not measurable, with the "
                 "figures that depend on it NaN; without it such an analysis fails (exit 1) and "
                 "the results file is left as it was, as with `impactdic run`");

@@ -109,9 +109,9 @@ void RegisterCalibrateCommand(CLI::App& app) {
     // Validate every option before any work.
     CalibrationOptions options;
     try {
-      options.board = ParseBoard(args->board, args->square_mm, "--board");
+      options.board = ParseBoard(args->board, args->square_mm);
     } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"board.square_mm", "--square"}});
+      RethrowWithFlagNames(e, {{"board", "--board"}, {"board.square_mm", "--square"}});
     }
     CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
                "text or json");

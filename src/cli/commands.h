@@ -11,6 +11,10 @@
 
 #include "impactdic/core/error.h"
 
+namespace impactdic {
+class PartialResultsError;  // pipeline/pipeline.h
+}  // namespace impactdic
+
 namespace impactdic::cli {
 
 void RegisterRunCommand(CLI::App& app);
@@ -29,6 +33,14 @@ void RegisterVersionCommand(CLI::App& app);
 // (file and line kept) when its `where` is in `flags`, unchanged otherwise.
 using FlagNames = std::vector<std::pair<std::string, std::string>>;
 [[noreturn]] void RethrowWithFlagNames(const Error& e, const FlagNames& flags);
+
+// The flag of `run` and `analyze` that allows partial output (the library's allow_partial).
+inline constexpr const char* kAllowPartialFlag = "--allow-partial";
+
+// The library names the option that allows partial output by its field name (`allow_partial`);
+// `command` ("run", "analyze") exposes it as kAllowPartialFlag. Throws Error(kNumerical)
+// "PROBLEM; `impactdic COMMAND --allow-partial` REMEDY" (PartialResultsError's two texts).
+[[noreturn]] void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command);
 
 }  // namespace impactdic::cli
 

@@ -1,5 +1,9 @@
-// RethrowWithFlagNames (commands.h): library field names -> command-line flags.
+// RethrowWithFlagNames, RethrowWithPartialFlag (commands.h): library field names -> command-line
+// flags.
+#include <fmt/format.h>
+
 #include "commands.h"
+#include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic::cli {
 
@@ -11,6 +15,11 @@ void RethrowWithFlagNames(const Error& e, const FlagNames& flags) {
     throw renamed;
   }
   throw e;
+}
+
+void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command) {
+  throw Error(ErrorKind::kNumerical, fmt::format("{}; `impactdic {} {}` {}", e.problem(), command,
+                                                 kAllowPartialFlag, e.remedy()));
 }
 
 }  // namespace impactdic::cli

@@ -35,7 +35,7 @@ void RegisterRunCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads,
                   std::string("Correlation threads: ") + kThreadCountExpected +
                       " (default: the scene's dic.threads)");
-  cmd->add_flag("--allow-partial", args->allow_partial,
+  cmd->add_flag(kAllowPartialFlag, args->allow_partial,
                 "Write the outputs (exit 0) even when a stage produced nothing usable (no valid "
                 "subset, no measurable t_e, a model solve that did not stop): the figures that "
                 "depend on it are null, the reasons in summary.json's failures and warnings");
@@ -51,7 +51,12 @@ void RegisterRunCommand(CLI::App& app) {
     options.png_frames = args->png_frames;
     options.threads = args->threads.value_or(-1);
     options.allow_partial = args->allow_partial;
-    const PipelineSummary summary = RunScene(scene, options);
+    PipelineSummary summary;
+    try {
+      summary = RunScene(scene, options);
+    } catch (const PartialResultsError& e) {
+      RethrowWithPartialFlag(e, "run");
+    }
     if (!summary.IsUsable())
       LogWarning("run: partial results (--allow-partial): {}", summary.FailureText());
     if (args->format == "json") {

@@ -427,7 +427,7 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
         "the output folders of all shards");
   }
   OutputGeneration generation(options.output_folder,
-                              CampaignLevelGeneration("impactdic campaign --merge"));
+                              CampaignLevelGeneration("impactdic campaign (merge)"));
   std::string sources = "# merged from:\n";
   for (const auto& f : folders) sources += "#   " + f + "\n";
   FitAndWrite(&summary, options, generation.staging_folder(), sources);
@@ -476,7 +476,7 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
   }
   summary.tests_total = static_cast<int>(summary.rows.size());
   OutputGeneration generation(options.output_folder,
-                              CampaignLevelGeneration("impactdic campaign --from-table"));
+                              CampaignLevelGeneration("impactdic campaign (from a table)"));
   CampaignOptions o = options;
   o.figures = false;  // A table has no modelled values to compare.
   FitAndWrite(&summary, o, generation.staging_folder(), "# from table " + csv_path + "\n");

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -14,6 +15,12 @@
 
 namespace impactdic {
 namespace fs = std::filesystem;
+
+PartialResultsError::PartialResultsError(std::string problem, std::string remedy)
+    : Error(ErrorKind::kNumerical, fmt::format("{}; the option `{}` {}", problem, kOption, remedy)),
+      problem_(std::move(problem)),
+      remedy_(std::move(remedy)) {}
+
 namespace {
 
 // Throws when a stage produced nothing usable, unless the options allow a partial run.
@@ -22,13 +29,13 @@ void ThrowIfFailed(const PipelineSummary& summary, const PipelineOptions& option
   std::string stages;
   for (const StageFailure& f : summary.failures)
     stages += fmt::format("\n  {}: {}", f.stage, f.reason);
-  throw Error(ErrorKind::kNumerical,
-              fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was "
-                          "written (outputs of an earlier run in {} are kept); `impactdic run "
-                          "--allow-partial` writes them, with the figures that could not be "
-                          "measured as null and the reasons in summary.json",
-                          summary.scene_name, summary.failures.size(), stages,
-                          OutputPathForMessages(summary.output_folder)));
+  throw PartialResultsError(
+      fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was written "
+                  "(outputs of an earlier run in {} are kept)",
+                  summary.scene_name, summary.failures.size(), stages,
+                  OutputPathForMessages(summary.output_folder)),
+      "writes them, with the figures that could not be measured as null and the reasons in "
+      "summary.json");
 }
 
 // The writers of a run: the built-in ones, then the caller's.

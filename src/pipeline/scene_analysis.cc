@@ -8,6 +8,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {
 
@@ -54,12 +55,11 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   }
   const MomentumSummary& m = run.analysis.momentum.summary;
   if (!m.IsUsable() && !allow_partial) {
-    throw Error(ErrorKind::kNumerical,
-                fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
-                            "measurable: {}\nNothing was written ({} is as it was); `impactdic "
-                            "analyze --allow-partial` writes it, with the figures that could not "
-                            "be measured as NaN",
-                            scene.name, m.t_end_problem, results_path));
+    throw PartialResultsError(
+        fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
+                    "measurable: {}\nNothing was written ({} is as it was)",
+                    scene.name, m.t_end_problem, results_path),
+        "writes it, with the figures that could not be measured as NaN");
   }
   H5Writer out(results_path, H5Writer::Mode::kUpdate);
   WriteAnalysis(out, run.analysis, run.sensor);

@@ -372,7 +372,7 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
 
   set.board_path = (fs::path(out_dir) / "board.yaml").string();
   std::ostringstream yaml;
-  yaml << "# Checkerboard definition (impactdic calibrate --board COLSxROWS --square SQUARE_MM).\n"
+  yaml << "# Checkerboard definition (the board and square size `impactdic calibrate` needs).\n"
        << "# cols x rows count INNER corners; a 9x6 board has 10x7 squares.\n"
        << fmt::format("cols: {}\nrows: {}\nsquare_mm: {}\nmargin_squares: {}\n", board.cols,
                       board.rows, board.square_mm, board.margin_squares)

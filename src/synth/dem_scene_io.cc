@@ -211,7 +211,7 @@ void DemScene::ComputePeakStageTruth(const std::unordered_map<std::int64_t, doub
 }
 
 std::string DemSceneReport::BriefReport() const {
-  return fmt::format("synth --dem: {} frames of {} grains in {} ({:.1f} s rendering)", frames,
+  return fmt::format("synth (DEM): {} frames of {} grains in {} ({:.1f} s rendering)", frames,
                      grains, out_dir, render_seconds);
 }
 
@@ -227,7 +227,7 @@ void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
   const auto F = static_cast<std::size_t>(scene.frame_count());
   H5Writer out(path);
   out.WriteProvenance(spec_yaml);
-  out.SetAttribute("/", "generator", "impactdic synth --dem (LAMMPS DEM, validation/dem)");
+  out.SetAttribute("/", "generator", "impactdic synth (DEM footage: LAMMPS DEM, validation/dem)");
   out.SetAttribute("/", "conventions",
                    "t = 0 at contact; depths and velocities down positive; pixels are ideal "
                    "(undistorted) pixels of the first frame; panel mm origin at the pounder axis "

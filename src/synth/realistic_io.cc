@@ -94,7 +94,8 @@ RealisticSceneSpec LoadRealisticSceneSpec(const std::string& path) {
 std::string RealisticSceneSpecToYaml(const RealisticSceneSpec& spec) {
   RealisticSceneSpec copy = spec;
   std::ostringstream o;
-  o << "# impactdic synth --realistic spec (keys: docs/synth.md, \"Realistic mode\")\nrealistic:\n";
+  o << "# impactdic synth: realistic footage spec (keys: docs/synth.md, \"Realistic mode\")\n"
+       "realistic:\n";
   const YamlOptionTable table = RealisticKeys(&copy);
   for (const auto& entry : table.entries())
     o << "  " << entry.key << ": " << entry.default_text << "\n";

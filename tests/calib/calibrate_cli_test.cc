@@ -50,7 +50,8 @@ TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
     std::string args, message;
   };
   for (const Case& c : std::vector<Case>{
-           {"--board 9-6 --square 25 " + kViews + " -o " + out, "--board"},
+           {"--board 9-6 --square 25 " + kViews + " -o " + out,
+            "--board: invalid value (got '9-6')"},
            {"--board 9x6 --square 0 " + kViews + " -o " + out, "--square"},
            {"--board 9x6 --square 25 -o " + out, "IMAGES"},
            {"--board 9x6 --square 25 " + kViews + " -o " + out + " --format xml", "--format"},

@@ -259,7 +259,11 @@ TEST_F(FailedStageRun, EmptyCorrelationFailsNamingTheStagesAndWritesNothing) {
     EXPECT_TRUE(Contains(m, "correlate: no valid subset in any of the")) << m;
     EXPECT_TRUE(Contains(m, "dic.min_zncc = 0.99999")) << m;
     EXPECT_TRUE(Contains(m, "momentum: t_e is not measurable")) << m;
-    EXPECT_TRUE(Contains(m, "--allow-partial")) << m;
+    // The library names its option (PipelineOptions::allow_partial), never a command-line flag;
+    // `impactdic run` names its flag (RunCommandExitsNonZeroUnlessAllowPartial).
+    EXPECT_TRUE(Contains(m, "; the option `allow_partial` writes them, with the figures")) << m;
+    EXPECT_FALSE(Contains(m, "--")) << m;
+    EXPECT_TRUE(dynamic_cast<const PartialResultsError*>(&e) != nullptr);
   }
   EXPECT_EQ(ReadText(options.output_folder + "/summary.json"), "earlier run\n");
   EXPECT_FALSE(fs::exists(options.output_folder + "/results.h5"));
@@ -322,6 +326,9 @@ TEST_F(FailedStageRun, RunCommandExitsNonZeroUnlessAllowPartial) {
                        "impactdic: error: scene cli: 2 stage(s) produced nothing "
                        "usable"))
       << failed.output;
+  EXPECT_TRUE(Contains(failed.output, "; `impactdic run --allow-partial` writes them, with the"))
+      << failed.output;
+  EXPECT_FALSE(Contains(failed.output, "allow_partial")) << failed.output;
   EXPECT_FALSE(fs::exists(Out("cli")));
   const CliResult partial =
       RunCli("run " + scene + " -o " + Out("cli") + " --allow-partial --format json");

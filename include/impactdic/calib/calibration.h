@@ -49,10 +49,10 @@ struct BoardSpec {
 };
 
 // Parses "COLSxROWS" (e.g. "9x6", inner corners) into a board with the given square size.
-// Error(kInvalidValue, where, text, ...) for anything else and for fewer than 2 corners a side;
-// Error naming --square for a square_mm outside BoardSpec::kSquareRange.
-BoardSpec ParseBoard(const std::string& text, double square_mm,
-                     const std::string& where = "--board");
+// Error(kInvalidValue, where, text, ...) for anything else and for fewer than 2 corners a side
+// (`where`: CalibrationOptions::board); Error naming board.square_mm for a square_mm outside
+// BoardSpec::kSquareRange.
+BoardSpec ParseBoard(const std::string& text, double square_mm, const std::string& where = "board");
 
 struct DetectionOptions {
   bool adaptive_threshold = true;   // cv::CALIB_CB_ADAPTIVE_THRESH.

@@ -14,10 +14,10 @@
 // A stage that ran but produced nothing usable (no valid subset in any frame, no measurable t_e, a
 // model solve that did not reach v = 0) is a FAILURE (PipelineSummary::failures): the figures
 // that depend on it are NaN (null in summary.json) with the reasons in `warnings`, and RunScene
-// throws Error(kNumerical) naming each failed stage and why before writing any output -- as for
-// any failed run, nothing new is written and a previous run's outputs stay -- unless
-// options.allow_partial (`impactdic run --allow-partial`): then the outputs are written and
-// summary.json says "usable": false with the failures.
+// throws PartialResultsError (an Error of kind kNumerical) naming each failed stage and why before
+// writing any output -- as for any failed run, nothing new is written and a previous run's outputs
+// stay -- unless options.allow_partial (`impactdic run --allow-partial`): then the outputs are
+// written and summary.json says "usable": false with the failures.
 //
 // Outputs (folder: options.output_folder, else the scene's outputs.folder), one generation
 // (io/output_generation.h): written into a staging folder beside it and swapped in only when all
@@ -33,6 +33,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/json.h"
@@ -46,7 +47,7 @@ struct PipelineOptions {
   bool png_frames = false;  // Also write the animation frames as PNG (or scene outputs.png_frames).
   int threads = -1;         // Correlation threads; -1: the scene's dic.threads (0 = all cores).
   // Write the outputs and return even when a stage produced nothing usable (file comment);
-  // false: such a run throws Error(kNumerical) before writing anything.
+  // false: such a run throws PartialResultsError before writing anything.
   bool allow_partial = false;
   // Writers run after the built-in ones (results.h5, figures, summary.json, summary.csv) when the
   // scene has the outputs stage (pipeline/output_writer.h).
@@ -88,6 +89,23 @@ struct SceneFigures {
   // Column names and values of summary.csv, in the same order.
   std::vector<std::string> CsvNames() const;
   std::vector<double> CsvValues() const;
+};
+
+// A run (RunScene) or an analysis (AnalyzeSceneResults) in which a stage produced nothing usable,
+// with partial output not allowed: Error(kNumerical) reading "PROBLEM; the option `allow_partial`
+// REMEDY". problem() says what failed and what was kept, remedy() what the option would write. The
+// option is named by its library name (PipelineOptions::allow_partial, the allow_partial argument
+// of AnalyzeSceneResults); a front end names its own spelling of it with the same two texts.
+class PartialResultsError : public Error {
+ public:
+  static constexpr const char* kOption = "allow_partial";
+
+  PartialResultsError(std::string problem, std::string remedy);
+  const std::string& problem() const { return problem_; }
+  const std::string& remedy() const { return remedy_; }
+
+ private:
+  std::string problem_, remedy_;
 };
 
 // A stage that ran but produced nothing usable, and why.

@@ -23,8 +23,8 @@ struct SceneAnalysisRun {
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
 // and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
 // As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
-// Error(kNumerical) with the reason and nothing written, unless allow_partial (then written,
-// with NaN figures; the caller reports the run as partial).
+// PartialResultsError (pipeline/pipeline.h; kind kNumerical) with the reason and nothing written,
+// unless allow_partial (then written, with NaN figures; the caller reports the run as partial).
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
                                      double mm_per_px, bool allow_partial = false);
 

@@ -27,7 +27,7 @@ class CalibrateStage : public Stage {
     if (!d.calibration->plane) {
       throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px",
                   "0 and the calibration has no plane scale",
-                  "a scale > 0 [mm/px] or a calibration made with --plane")
+                  "a scale > 0 [mm/px] or a calibration with a plane scale")
           .WithFile(scene.path);
     }
     d.mm_per_px = d.calibration->plane->mm_per_px;
