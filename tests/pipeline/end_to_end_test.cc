@@ -1,8 +1,10 @@
 // End to end: `impactdic synth` renders a small impact scene with known truth, `impactdic run`
 // processes it, and the results are compared with the truth (issue 7's tolerances); the same
-// for the committed sample (sample_frames/, the README's first command) and its committed truth.
+// for the committed sample (sample_frames/, the README's first command) and its committed truth,
+// and the sample's summary.json against a committed reference ("behaviour unchanged").
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,10 +12,12 @@
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/yaml.h"
 #include "impactdic/render/animation.h"
 
 namespace impactdic {
@@ -198,6 +202,117 @@ TEST_P(EndToEnd, FiguresAndAnimationAreComplete) {
   // Nothing temporary is left behind.
   for (const auto& entry : fs::directory_iterator(p_->dir->File("out")))
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+}
+
+// "Behaviour unchanged" (issue 14): the committed sample's summary.json equals a committed
+// reference (tests/pipeline/data/sample_summary_reference.json, `impactdic -q run
+// sample_frames/scene.yaml` on main before the architecture redesign), except what legitimately
+// varies from run to run:
+constexpr const char* kVaryingKeys[] = {
+    "dic_subsets_per_s",  // Correlation throughput: a wall-time rate. (sigmoid_b_per_s is a fit
+                          // parameter, compared.) summary.json holds no path, version or time.
+};
+// Same keys at every level, same strings, nulls and booleans; numbers equal to a relative 1e-9, not
+// exactly: the release and ASan builds differ at ~1e-15, and Eigen's LLT (which replaced a
+// hand-written SPD inversion) moved three figures at ~1e-14; a change of behaviour moves them by
+// far more than 1e-9.
+constexpr double kRelativeTolerance = 1e-9;
+
+bool IsVaryingKey(const std::string& key) {
+  for (const char* varying : kVaryingKeys)
+    if (key == varying) return true;
+  return false;
+}
+
+// JSON read as YAML (JSON is YAML's flow style) by the project's one YAML loader. A plain
+// (unquoted) scalar that reads as a number is a number; a quoted one (tag "!") is a string.
+bool AsNumber(const YAML::Node& node, double* value) {
+  return node.IsScalar() && node.Tag() != "!" && YAML::convert<double>::decode(node, *value);
+}
+
+// The differences between `run` and `reference` (empty: equal), each naming the key path.
+void CompareJson(const YAML::Node& run, const YAML::Node& reference, const std::string& path,
+                 std::vector<std::string>* differences) {
+  const std::string at = path.empty() ? "(top)" : path;
+  if (run.Type() != reference.Type()) {
+    differences->push_back(at + ": a " + DescribeYaml(run) + " where the reference has " +
+                           DescribeYaml(reference));
+    return;
+  }
+  if (reference.IsMap()) {
+    for (const auto& entry : reference) {
+      const std::string key = entry.first.as<std::string>();
+      const std::string sub = path.empty() ? key : path + "." + key;
+      if (!run[key]) {
+        differences->push_back(sub + ": missing");
+      } else if (!IsVaryingKey(key)) {
+        CompareJson(run[key], entry.second, sub, differences);
+      }
+    }
+    for (const auto& entry : run)
+      if (!reference[entry.first.as<std::string>()])
+        differences->push_back((path.empty() ? "" : path + ".") + entry.first.as<std::string>() +
+                               ": not in the reference");
+  } else if (reference.IsSequence()) {
+    if (run.size() != reference.size()) {
+      differences->push_back(at + ": " + std::to_string(run.size()) + " entries, the reference " +
+                             std::to_string(reference.size()));
+      return;
+    }
+    for (std::size_t i = 0; i < reference.size(); ++i)
+      CompareJson(run[i], reference[i], path + "[" + std::to_string(i) + "]", differences);
+  } else if (reference.IsScalar()) {
+    double a = 0, b = 0;
+    if (AsNumber(run, &a) && AsNumber(reference, &b)) {
+      if (!(std::abs(a - b) <= kRelativeTolerance * std::max(std::abs(a), std::abs(b))))
+        differences->push_back(at + ": " + run.Scalar() + ", the reference " + reference.Scalar());
+    } else if (run.Scalar() != reference.Scalar() || run.Tag() != reference.Tag()) {
+      differences->push_back(at + ": '" + run.Scalar() + "', the reference '" + reference.Scalar() +
+                             "'");
+    }
+  }
+}
+
+std::vector<std::string> JsonDifferences(const YAML::Node& run, const YAML::Node& reference) {
+  std::vector<std::string> differences;
+  CompareJson(run, reference, "", &differences);
+  return differences;
+}
+
+std::string Lines(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const std::string& line : lines) text += "  " + line + "\n";
+  return text;
+}
+
+TEST(EndToEndSample, SummaryEqualsTheCommittedReference) {
+  const Prepared& p = Prepare(Source::kCommittedSample);  // The run of the EndToEnd tests.
+  ASSERT_TRUE(p.ok) << p.run_output;
+  const YAML::Node run = LoadYamlFile(p.Out("summary.json"), "summary.json");
+  const YAML::Node reference = LoadYamlFile(
+      std::string(IMPACTDIC_SOURCE_DIR) + "/tests/pipeline/data/sample_summary_reference.json",
+      "the reference summary");
+  ASSERT_TRUE(reference.IsMap());
+  ASSERT_GE(reference.size(), 20u);
+  const std::vector<std::string> differences = JsonDifferences(run, reference);
+  EXPECT_TRUE(differences.empty()) << "summary.json differs from the reference:\n"
+                                   << Lines(differences);
+
+  // The comparison ignores the wall-time rate and a figure within the tolerance, and catches one
+  // off by 10x the tolerance, a key missing or added, a list changed.
+  YAML::Node moved = YAML::Clone(reference);
+  const double m_add = reference["added_mass_max_kg"].as<double>();
+  moved["added_mass_max_kg"] = m_add * (1 + 0.1 * kRelativeTolerance);
+  moved["dic_subsets_per_s"] = 1.0;
+  EXPECT_TRUE(JsonDifferences(run, moved).empty()) << Lines(JsonDifferences(run, moved));
+  moved["added_mass_max_kg"] = m_add * (1 + 10 * kRelativeTolerance);
+  const std::vector<std::string> one = JsonDifferences(run, moved);
+  ASSERT_EQ(one.size(), 1u) << Lines(one);
+  EXPECT_EQ(one[0].rfind("added_mass_max_kg: ", 0), 0u) << one[0];
+  YAML::Node fewer = YAML::Clone(reference);
+  fewer.remove("t_end_model_s");
+  fewer["warnings"].push_back("a warning");
+  EXPECT_EQ(JsonDifferences(run, fewer).size(), 2u) << Lines(JsonDifferences(run, fewer));
 }
 
 }  // namespace
