@@ -212,11 +212,15 @@ constexpr const char* kVaryingKeys[] = {
     "dic_subsets_per_s",  // Correlation throughput: a wall-time rate. (sigmoid_b_per_s is a fit
                           // parameter, compared.) summary.json holds no path, version or time.
 };
-// Same keys at every level, same strings, nulls and booleans; numbers equal to a relative 1e-9, not
-// exactly: the release and ASan builds differ at ~1e-15, and Eigen's LLT (which replaced a
-// hand-written SPD inversion) moved three figures at ~1e-14; a change of behaviour moves them by
-// far more than 1e-9.
-constexpr double kRelativeTolerance = 1e-9;
+// Same keys at every level, same strings, nulls and booleans; numbers equal to a relative 1e-6, not
+// exactly. Measured on the sample: Eigen's LLT (which replaced a hand-written SPD inversion) moved
+// three figures at ~1e-14; the ASan preset (-O1) differs from the release build (-O3) by up to
+// 4.5e-8 (momentum_conservation_error, a small difference of two momenta; t_end_peak_s 6.9e-9,
+// added_mass_max_kg 3.2e-9: floating-point differences of ~1e-15 change where an iteration stops
+// and are amplified), the figures from the sensor and the model not at all. Small changes of
+// behaviour move figures by 1e-5 or more (measured: dic.convergence_px 0.001 -> 0.002 moves five
+// figures by 1e-5 to 5e-5, sensor.cutoff_hz 1500 -> 1499 eight, up to 1.2e-4).
+constexpr double kRelativeTolerance = 1e-6;
 
 bool IsVaryingKey(const std::string& key) {
   for (const char* varying : kVaryingKeys)
