@@ -14,13 +14,14 @@
 //
 //   dic_bias_benchmark [--pattern sharp|blob] [--size N] [--target-sd PX | --noise SIGMA]
 //                      [--prefilter S1,S2,...] [--kernel K] [--realisations R] [--threads N]
-//                      [--experiments]
+//                      [--dot-radius PX] [--psf SIGMA] [--experiments]
 //
 // --experiments runs the controlled experiments of the analysis instead (noise off / on, 8-bit
 // rounding, the pre-filter in floating point, the B-spline guard band) and a double-precision
 // translation-only IC-GN with three reference gradients (B-spline, central difference, 4th-order
 // difference) to separate precision and gradient source from the engine.
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -31,6 +32,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <opencv2/imgproc.hpp>
 
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/correlator.h"
@@ -53,13 +56,15 @@ struct Config {
   int kernel = 5;
   int realisations = 2;
   bool experiments = false;
+  double dot_radius = 2.0;  // SharpSpeckle dot radius [px].
+  double psf = 0;           // Lens blur of the noise-free pattern (Gaussian sigma [px], 0: none).
 };
 
 // The noise-free pattern in grey levels (CV_64F).
 cv::Mat BasePattern(const Config& c) {
   cv::Mat unit;
   if (c.pattern == "sharp") {
-    unit = SharpSpeckle(c.size, c.size, /*dot_radius_px=*/2.0, /*seed=*/3);
+    unit = SharpSpeckle(c.size, c.size, c.dot_radius, /*seed=*/3);
   } else {
     SpeckleOptions speckle;
     speckle.seed = 3;
@@ -70,6 +75,7 @@ cv::Mat BasePattern(const Config& c) {
     RenderImage(pattern, c.size, c.size, ZeroField(), render).convertTo(unit, CV_64F, 1 / 65535.0);
     cv::normalize(unit, unit, 0, 1, cv::NORM_MINMAX);
   }
+  if (c.psf > 0) cv::GaussianBlur(unit, unit, cv::Size(), c.psf, c.psf, cv::BORDER_REFLECT_101);
   return unit * (kBright - kDark) + kDark;
 }
 
@@ -172,6 +178,8 @@ std::vector<ShiftStats> CorrelateSeries(const std::vector<std::vector<cv::Mat>>&
   std::vector<ShiftStats> pooled(kShifts);
   for (const auto& images : sets) {
     const DicResult r = CorrelateSequence(images, PairOptions(interp));
+    if (r.summary.valid_fraction < 0.99)
+      std::fprintf(stderr, "warning: %s\n", r.summary.FullReport().c_str());
     for (int k = 0; k < kShifts; ++k) {
       const ShiftStats s = Stats(r.frames[k], 0.1 * k);
       pooled[k].bias_u += s.bias_u / sets.size();
@@ -226,9 +234,11 @@ void Tables(const Config& c) {
   std::vector<double> limits;
   for (int k = 0; k < kShifts; ++k)
     limits.push_back(NoiseLimit(GradientEnergy(series.clean[k], centres, 12), sigma));
-  std::printf("pattern %s, %dx%d px, grey levels %.0f..%.0f, noise sigma %.3f grey levels, "
-              "%zu subsets x %d realisations, pre-filter kernel %d\n",
-              c.pattern.c_str(), c.size, c.size, kDark, kBright, sigma, centres.size(),
+  std::printf("pattern %s (dot radius %.1f px, lens blur %.1f px), %dx%d px, grey levels "
+              "%.0f..%.0f, noise sigma %.3f grey levels, %zu subsets x %d realisations, "
+              "pre-filter kernel %d\n",
+              c.pattern.c_str(), c.dot_radius, c.psf, c.size, c.size, kDark, kBright, sigma,
+              centres.size(),
               c.realisations, c.kernel);
   std::vector<std::vector<cv::Mat>> noisy;
   for (int r = 0; r < c.realisations; ++r) noisy.push_back(Noisy(series, sigma, r));
@@ -253,6 +263,202 @@ void Tables(const Config& c) {
                     ToString(interp), pf, c.kernel);
       PrintTable(title, CorrelateSeries(sets, interp), limits);
     }
+  }
+}
+
+
+// One row of the experiments table: max |bias u| and the bias at 0.3 and 0.7 px, both
+// interpolators, and the mean sd.
+void ExperimentRow(const char* name, const std::vector<std::vector<cv::Mat>>& sets) {
+  std::printf("| %s |", name);
+  for (Interpolation interp : {Interpolation::kBicubic, Interpolation::kBiquintic}) {
+    const auto s = CorrelateSeries(sets, interp);
+    std::printf(" %.4f (%+.4f, %+.4f) | %.4f |", MaxBias(s), s[3].bias_u, s[7].bias_u, MeanSd(s));
+  }
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
+// The images without 8-bit rounding: grey levels and noise times 257 in 16-bit images (a rounding
+// step of 1/257 grey level). The engine takes float images too, but its contrast and featureless
+// limits are relative to the data's full scale, which float images do not have.
+constexpr double k16 = 257;
+std::vector<cv::Mat> Fine(const Series& s, double sigma, int realisation) {
+  std::vector<cv::Mat> out;
+  const std::uint64_t seed = 5000 * (realisation + 1);
+  out.push_back(QuantiseWithNoise(s.clean[0] * k16, sigma * k16, 16, seed));
+  for (int k = 0; k < kShifts; ++k)
+    out.push_back(QuantiseWithNoise(s.clean[k] * k16, sigma * k16, 16, seed + 1 + k));
+  return out;
+}
+
+// The Gaussian pre-filter without rounding the blurred images to 8 bits (16-bit output).
+std::vector<cv::Mat> FineBlur(const std::vector<cv::Mat>& images, double sigma, int kernel) {
+  std::vector<cv::Mat> out;
+  for (const cv::Mat& m : images) {
+    cv::Mat f, b, o;
+    m.convertTo(f, CV_32F, m.depth() == CV_8U ? k16 : 1.0);
+    cv::GaussianBlur(f, b, cv::Size(kernel, kernel), sigma, sigma, cv::BORDER_REFLECT_101);
+    b.convertTo(o, CV_16U);
+    out.push_back(o);
+  }
+  return out;
+}
+
+
+// A double-precision, translation-only IC-GN with the ZNSSD criterion, written for the
+// experiments only (the engine is affine, float): it separates precision and the source of the
+// reference gradients from the engine. The deformed image is interpolated with BsplineImage
+// (double arithmetic on its float coefficients).
+enum class GradientSource { kSpline, kCentral, kFourthOrder };
+const char* ToString(GradientSource g) {
+  return g == GradientSource::kSpline    ? "B-spline derivative"
+         : g == GradientSource::kCentral ? "central difference"
+                                         : "4th-order difference";
+}
+
+// Mean error of u over the subsets (every second one of the engine's grid in x and y).
+double ReferenceIcgnBias(const cv::Mat& ref8, const cv::Mat& def8,
+                         const std::vector<cv::Point2d>& centres, double shift, Interpolation interp,
+                         GradientSource source) {
+  cv::Mat f;
+  ref8.convertTo(f, CV_64F);
+  BsplineImage ref_spline, def_spline;
+  ref_spline.Build(ref8, interp);
+  def_spline.Build(def8, interp);
+  cv::Mat sgx, sgy;
+  ref_spline.NodeGradients(&sgx, &sgy);
+  auto gradient = [&](int x, int y, double* gx, double* gy) {
+    const auto at = [&](int xx, int yy) { return f.at<double>(yy, xx); };
+    switch (source) {
+      case GradientSource::kSpline:
+        *gx = sgx.at<float>(y, x);
+        *gy = sgy.at<float>(y, x);
+        break;
+      case GradientSource::kCentral:
+        *gx = (at(x + 1, y) - at(x - 1, y)) / 2;
+        *gy = (at(x, y + 1) - at(x, y - 1)) / 2;
+        break;
+      case GradientSource::kFourthOrder:
+        *gx = (-at(x + 2, y) + 8 * at(x + 1, y) - 8 * at(x - 1, y) + at(x - 2, y)) / 12;
+        *gy = (-at(x, y + 2) + 8 * at(x, y + 1) - 8 * at(x, y - 1) + at(x, y - 2)) / 12;
+        break;
+    }
+  };
+  constexpr int h = 12;
+  std::vector<double> errors(centres.size(), std::nan(""));
+  tbb::parallel_for(std::size_t{0}, centres.size(), [&](std::size_t i) {
+    const int cx = static_cast<int>(centres[i].x), cy = static_cast<int>(centres[i].y);
+    if ((cx / 10) % 2 || (cy / 10) % 2) return;
+    std::vector<double> fv, gxv, gyv;
+    double h11 = 0, h12 = 0, h22 = 0, fm = 0;
+    for (int y = cy - h; y <= cy + h; ++y) {
+      for (int x = cx - h; x <= cx + h; ++x) {
+        double gx = 0, gy = 0;
+        gradient(x, y, &gx, &gy);
+        fv.push_back(f.at<double>(y, x));
+        gxv.push_back(gx);
+        gyv.push_back(gy);
+        h11 += gx * gx;
+        h12 += gx * gy;
+        h22 += gy * gy;
+        fm += fv.back() / ((2 * h + 1) * (2 * h + 1));
+      }
+    }
+    double fn = 0;
+    for (double v : fv) fn += (v - fm) * (v - fm);
+    fn = std::sqrt(fn);
+    const double det = h11 * h22 - h12 * h12;
+    double u = shift + 0.05, v = 0.05;
+    std::vector<double> g(fv.size());
+    for (int it = 0; it < 50; ++it) {
+      double gm = 0;
+      std::size_t k = 0;
+      for (int y = cy - h; y <= cy + h; ++y)
+        for (int x = cx - h; x <= cx + h; ++x) gm += (g[k++] = def_spline.Value(x + u, y + v));
+      gm /= g.size();
+      double gn = 0;
+      for (double w : g) gn += (w - gm) * (w - gm);
+      gn = std::sqrt(gn);
+      double b1 = 0, b2 = 0;
+      for (k = 0; k < g.size(); ++k) {
+        const double r = (fn / gn) * (g[k] - gm) - (fv[k] - fm);
+        b1 += gxv[k] * r;
+        b2 += gyv[k] * r;
+      }
+      const double du = (h22 * b1 - h12 * b2) / det, dv = (h11 * b2 - h12 * b1) / det;
+      u -= du;
+      v -= dv;
+      if (std::hypot(du, dv) < 1e-7) break;
+    }
+    errors[i] = u - shift;
+  });
+  double sum = 0;
+  int n = 0;
+  for (double e : errors) {
+    if (std::isnan(e)) continue;
+    sum += e;
+    ++n;
+  }
+  return sum / std::max(n, 1);
+}
+
+// Max |bias| and the bias at 0.3 / 0.7 px of the reference IC-GN on noise-free 16-bit images.
+void ReferenceIcgnRows(const Series& series, const std::vector<cv::Point2d>& centres) {
+  const std::vector<cv::Mat> images = Fine(series, 0, 0);
+  for (GradientSource source :
+       {GradientSource::kSpline, GradientSource::kCentral, GradientSource::kFourthOrder}) {
+    std::printf("| double IC-GN (translation), no noise, %s |", ToString(source));
+    for (Interpolation interp : {Interpolation::kBicubic, Interpolation::kBiquintic}) {
+      double max_bias = 0, b3 = 0, b7 = 0;
+      for (int k = 1; k < kShifts - 1; ++k) {
+        const double b =
+            ReferenceIcgnBias(images[0], images[k + 1], centres, 0.1 * k, interp, source);
+        max_bias = std::max(max_bias, std::abs(b));
+        if (k == 3) b3 = b;
+        if (k == 7) b7 = b;
+      }
+      std::printf(" %.4f (%+.4f, %+.4f) | - |", max_bias, b3, b7);
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+}
+
+void Experiments(const Config& c) {
+  const Series series = MakeSeries(c);
+  const std::vector<cv::Point2d> centres = Centres(series.clean[0]);
+  const double sigma = c.noise >= 0
+                           ? c.noise
+                           : c.target_sd / NoiseLimit(GradientEnergy(series.clean[0], centres, 12),
+                                                      1.0);
+  std::printf("pattern %s, %dx%d px, noise sigma %.3f grey levels, %d realisations\n",
+              c.pattern.c_str(), c.size, c.size, sigma, c.realisations);
+  std::printf("\n| experiment | bicubic max abs bias (at 0.3, 0.7) [px] | bicubic sd [px] | "
+              "biquintic max abs bias (at 0.3, 0.7) [px] | biquintic sd [px] |\n"
+              "|---|---|---|---|---|\n");
+  auto sets = [&](auto make) {
+    std::vector<std::vector<cv::Mat>> out;
+    for (int r = 0; r < c.realisations; ++r) out.push_back(make(r));
+    return out;
+  };
+  ExperimentRow("no noise, no 8-bit rounding",
+                sets([&](int) { return Fine(series, 0, 0); }));
+  ReferenceIcgnRows(series, centres);
+  ExperimentRow("8-bit rounding, no noise", sets([&](int r) { return Noisy(series, 0, r); }));
+  ExperimentRow("noise, no 8-bit rounding",
+                sets([&](int r) { return Fine(series, sigma, r); }));
+  ExperimentRow("noise + 8-bit rounding", sets([&](int r) { return Noisy(series, sigma, r); }));
+  ExperimentRow("noise x2 + 8-bit rounding",
+                sets([&](int r) { return Noisy(series, 2 * sigma, r); }));
+  for (double pf : {0.6, 0.8}) {
+    char name[96];
+    std::snprintf(name, sizeof(name), "no noise, no rounding, pre-filter %.1f", pf);
+    ExperimentRow(name, sets([&](int) { return FineBlur(Fine(series, 0, 0), pf, c.kernel); }));
+    std::snprintf(name, sizeof(name), "noise + 8-bit, pre-filter %.1f (8-bit out)", pf);
+    ExperimentRow(name, sets([&](int r) { return Prefiltered(Noisy(series, sigma, r), pf, c.kernel); }));
+    std::snprintf(name, sizeof(name), "noise + 8-bit, pre-filter %.1f (16-bit out)", pf);
+    ExperimentRow(name, sets([&](int r) { return FineBlur(Noisy(series, sigma, r), pf, c.kernel); }));
   }
 }
 
@@ -291,6 +497,10 @@ int main(int argc, char** argv) {
       c.realisations = std::stoi(next());
     } else if (a == "--threads") {
       threads = std::stoi(next());
+    } else if (a == "--dot-radius") {
+      c.dot_radius = std::stod(next());
+    } else if (a == "--psf") {
+      c.psf = std::stod(next());
     } else if (a == "--experiments") {
       c.experiments = true;
     } else {
@@ -305,6 +515,10 @@ int main(int argc, char** argv) {
   }
   tbb::global_control control(tbb::global_control::max_allowed_parallelism,
                               static_cast<std::size_t>(threads));
-  Tables(c);
+  if (c.experiments) {
+    Experiments(c);
+  } else {
+    Tables(c);
+  }
   return 0;
 }
