@@ -13,7 +13,8 @@
 // limit sqrt(2) sigma / sqrt(sum over the subset of (dI/dx)^2) of the noise-free shifted image.
 //
 //   dic_bias_benchmark [--pattern sharp|blob] [--size N] [--target-sd PX | --noise SIGMA]
-//                      [--prefilter S1,S2,...] [--kernel K] [--realisations R] [--threads N]
+//                      [--prefilter S1,S2,...] [--per-shift S1,S2,...] [--kernel K] [--realisations
+//                      R] [--threads N]
 //                      [--dot-radius PX] [--psf SIGMA] [--experiments]
 //
 // --experiments runs the controlled experiments of the analysis instead (noise off / on, 8-bit
@@ -29,11 +30,10 @@
 #include <cstdlib>
 #include <memory>
 #include <numeric>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <opencv2/imgproc.hpp>
 
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/correlator.h"
@@ -53,6 +53,7 @@ struct Config {
   double target_sd = 0.005;
   double noise = -1;  // < 0: from target_sd.
   std::vector<double> prefilter = {0, 0.5, 0.6, 0.8, 1.0};
+  std::vector<double> per_shift = {0, 0.8};  // Pre-filters whose per-shift tables are printed.
   int kernel = 5;
   int realisations = 2;
   bool experiments = false;
@@ -122,7 +123,8 @@ ShiftStats Stats(const FrameResult& f, double shift) {
   if (eu.empty()) return s;
   s.bias_u = std::accumulate(eu.begin(), eu.end(), 0.0) / eu.size();
   s.bias_v = std::accumulate(ev.begin(), ev.end(), 0.0) / ev.size();
-  for (double e : eu) s.sd_u += (e - s.bias_u) * (e - s.bias_u) / std::max<double>(1, eu.size() - 1);
+  for (double e : eu)
+    s.sd_u += (e - s.bias_u) * (e - s.bias_u) / std::max<double>(1, eu.size() - 1);
   s.sd_u = std::sqrt(s.sd_u);
   return s;
 }
@@ -145,7 +147,8 @@ std::vector<cv::Mat> Noisy(const Series& s, double sigma, int realisation) {
   std::vector<cv::Mat> out;
   const std::uint64_t seed = 1000 * (realisation + 1);
   out.push_back(QuantiseWithNoise(s.clean[0], sigma, 8, seed));
-  for (int k = 0; k < kShifts; ++k) out.push_back(QuantiseWithNoise(s.clean[k], sigma, 8, seed + 1 + k));
+  for (int k = 0; k < kShifts; ++k)
+    out.push_back(QuantiseWithNoise(s.clean[k], sigma, 8, seed + 1 + k));
   return out;
 }
 
@@ -202,7 +205,8 @@ std::vector<cv::Point2d> Centres(const cv::Mat& image) {
 void PrintTable(const char* title, const std::vector<ShiftStats>& s,
                 const std::vector<double>& limits) {
   std::printf("\n%s\n", title);
-  std::printf("| shift [px] | bias u [px] | sd u [px] | noise limit [px] | bias v [px] | valid |\n");
+  std::printf(
+      "| shift [px] | bias u [px] | sd u [px] | noise limit [px] | bias v [px] | valid |\n");
   std::printf("|---|---|---|---|---|---|\n");
   double max_bias = 0, sd = 0;
   for (int k = 0; k < kShifts; ++k) {
@@ -234,16 +238,17 @@ void Tables(const Config& c) {
   std::vector<double> limits;
   for (int k = 0; k < kShifts; ++k)
     limits.push_back(NoiseLimit(GradientEnergy(series.clean[k], centres, 12), sigma));
-  std::printf("pattern %s (dot radius %.1f px, lens blur %.1f px), %dx%d px, grey levels "
-              "%.0f..%.0f, noise sigma %.3f grey levels, %zu subsets x %d realisations, "
-              "pre-filter kernel %d\n",
-              c.pattern.c_str(), c.dot_radius, c.psf, c.size, c.size, kDark, kBright, sigma,
-              centres.size(),
-              c.realisations, c.kernel);
+  std::printf(
+      "pattern %s (dot radius %.1f px, lens blur %.1f px), %dx%d px, grey levels "
+      "%.0f..%.0f, noise sigma %.3f grey levels, %zu subsets x %d realisations, "
+      "pre-filter kernel %d\n",
+      c.pattern.c_str(), c.dot_radius, c.psf, c.size, c.size, kDark, kBright, sigma, centres.size(),
+      c.realisations, c.kernel);
   std::vector<std::vector<cv::Mat>> noisy;
   for (int r = 0; r < c.realisations; ++r) noisy.push_back(Noisy(series, sigma, r));
-  std::printf("\n| pre-filter sigma [px] | bicubic max abs bias [px] | bicubic mean sd [px] | "
-              "biquintic max abs bias [px] | biquintic mean sd [px] |\n|---|---|---|---|---|\n");
+  std::printf(
+      "\n| pre-filter sigma [px] | bicubic max abs bias [px] | bicubic mean sd [px] | "
+      "biquintic max abs bias [px] | biquintic mean sd [px] |\n|---|---|---|---|---|\n");
   for (double pf : c.prefilter) {
     std::vector<std::vector<cv::Mat>> sets;
     for (const auto& n : noisy) sets.push_back(Prefiltered(n, pf, c.kernel));
@@ -253,19 +258,18 @@ void Tables(const Config& c) {
                 MaxBias(quintic), MeanSd(quintic));
     std::fflush(stdout);
   }
-  // The per-shift tables of no pre-filter and of 0.8 px (recomputed: cheap next to the images).
-  for (double pf : {0.0, 0.8}) {
+  // The per-shift tables (recomputed: cheap next to making the images).
+  for (double pf : c.per_shift) {
     std::vector<std::vector<cv::Mat>> sets;
     for (const auto& n : noisy) sets.push_back(Prefiltered(n, pf, c.kernel));
     for (Interpolation interp : {Interpolation::kBicubic, Interpolation::kBiquintic}) {
       char title[128];
-      std::snprintf(title, sizeof(title), "%s, pre-filter sigma %.1f px (kernel %d):",
-                    ToString(interp), pf, c.kernel);
+      std::snprintf(title, sizeof(title),
+                    "%s, pre-filter sigma %.1f px (kernel %d):", ToString(interp), pf, c.kernel);
       PrintTable(title, CorrelateSeries(sets, interp), limits);
     }
   }
 }
-
 
 // One row of the experiments table: max |bias u| and the bias at 0.3 and 0.7 px, both
 // interpolators, and the mean sd.
@@ -305,7 +309,6 @@ std::vector<cv::Mat> FineBlur(const std::vector<cv::Mat>& images, double sigma, 
   return out;
 }
 
-
 // A double-precision, translation-only IC-GN with the ZNSSD criterion, written for the
 // experiments only (the engine is affine, float): it separates precision and the source of the
 // reference gradients from the engine. The deformed image is interpolated with BsplineImage
@@ -319,8 +322,8 @@ const char* ToString(GradientSource g) {
 
 // Mean error of u over the subsets (every second one of the engine's grid in x and y).
 double ReferenceIcgnBias(const cv::Mat& ref8, const cv::Mat& def8,
-                         const std::vector<cv::Point2d>& centres, double shift, Interpolation interp,
-                         GradientSource source) {
+                         const std::vector<cv::Point2d>& centres, double shift,
+                         Interpolation interp, GradientSource source) {
   cv::Mat f;
   ref8.convertTo(f, CV_64F);
   BsplineImage ref_spline, def_spline;
@@ -428,26 +431,24 @@ void ReferenceIcgnRows(const Series& series, const std::vector<cv::Point2d>& cen
 void Experiments(const Config& c) {
   const Series series = MakeSeries(c);
   const std::vector<cv::Point2d> centres = Centres(series.clean[0]);
-  const double sigma = c.noise >= 0
-                           ? c.noise
-                           : c.target_sd / NoiseLimit(GradientEnergy(series.clean[0], centres, 12),
-                                                      1.0);
+  const double sigma =
+      c.noise >= 0 ? c.noise
+                   : c.target_sd / NoiseLimit(GradientEnergy(series.clean[0], centres, 12), 1.0);
   std::printf("pattern %s, %dx%d px, noise sigma %.3f grey levels, %d realisations\n",
               c.pattern.c_str(), c.size, c.size, sigma, c.realisations);
-  std::printf("\n| experiment | bicubic max abs bias (at 0.3, 0.7) [px] | bicubic sd [px] | "
-              "biquintic max abs bias (at 0.3, 0.7) [px] | biquintic sd [px] |\n"
-              "|---|---|---|---|---|\n");
+  std::printf(
+      "\n| experiment | bicubic max abs bias (at 0.3, 0.7) [px] | bicubic sd [px] | "
+      "biquintic max abs bias (at 0.3, 0.7) [px] | biquintic sd [px] |\n"
+      "|---|---|---|---|---|\n");
   auto sets = [&](auto make) {
     std::vector<std::vector<cv::Mat>> out;
     for (int r = 0; r < c.realisations; ++r) out.push_back(make(r));
     return out;
   };
-  ExperimentRow("no noise, no 8-bit rounding",
-                sets([&](int) { return Fine(series, 0, 0); }));
+  ExperimentRow("no noise, no 8-bit rounding", sets([&](int) { return Fine(series, 0, 0); }));
   ReferenceIcgnRows(series, centres);
   ExperimentRow("8-bit rounding, no noise", sets([&](int r) { return Noisy(series, 0, r); }));
-  ExperimentRow("noise, no 8-bit rounding",
-                sets([&](int r) { return Fine(series, sigma, r); }));
+  ExperimentRow("noise, no 8-bit rounding", sets([&](int r) { return Fine(series, sigma, r); }));
   ExperimentRow("noise + 8-bit rounding", sets([&](int r) { return Noisy(series, sigma, r); }));
   ExperimentRow("noise x2 + 8-bit rounding",
                 sets([&](int r) { return Noisy(series, 2 * sigma, r); }));
@@ -456,9 +457,11 @@ void Experiments(const Config& c) {
     std::snprintf(name, sizeof(name), "no noise, no rounding, pre-filter %.1f", pf);
     ExperimentRow(name, sets([&](int) { return FineBlur(Fine(series, 0, 0), pf, c.kernel); }));
     std::snprintf(name, sizeof(name), "noise + 8-bit, pre-filter %.1f (8-bit out)", pf);
-    ExperimentRow(name, sets([&](int r) { return Prefiltered(Noisy(series, sigma, r), pf, c.kernel); }));
+    ExperimentRow(name,
+                  sets([&](int r) { return Prefiltered(Noisy(series, sigma, r), pf, c.kernel); }));
     std::snprintf(name, sizeof(name), "noise + 8-bit, pre-filter %.1f (16-bit out)", pf);
-    ExperimentRow(name, sets([&](int r) { return FineBlur(Noisy(series, sigma, r), pf, c.kernel); }));
+    ExperimentRow(name,
+                  sets([&](int r) { return FineBlur(Noisy(series, sigma, r), pf, c.kernel); }));
   }
 }
 
@@ -491,6 +494,11 @@ int main(int argc, char** argv) {
       std::stringstream ss(next());
       std::string item;
       while (std::getline(ss, item, ',')) c.prefilter.push_back(std::stod(item));
+    } else if (a == "--per-shift") {
+      c.per_shift.clear();
+      std::stringstream ss(next());
+      std::string item;
+      while (std::getline(ss, item, ',')) c.per_shift.push_back(std::stod(item));
     } else if (a == "--kernel") {
       c.kernel = std::stoi(next());
     } else if (a == "--realisations") {

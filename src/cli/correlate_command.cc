@@ -193,8 +193,8 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
-    result = video ? CorrelateVideo(a.frames, options, filter)
-                   : CorrelateFiles(paths, options, filter);
+    result =
+        video ? CorrelateVideo(a.frames, options, filter) : CorrelateFiles(paths, options, filter);
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     RethrowWithFlagNames(e, kCorrelateFlags);

@@ -168,8 +168,7 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   for (std::size_t k = 1; k < paths.size(); ++k) {
     cv::Mat next;
     tbb::task_group prefetch;
-    if (k + 1 < paths.size())
-      prefetch.run([&next, &read, k] { next = read(k + 1); });
+    if (k + 1 < paths.size()) prefetch.run([&next, &read, k] { next = read(k + 1); });
     try {
       result.frames.push_back(correlator.Correlate(current));
     } catch (...) {
