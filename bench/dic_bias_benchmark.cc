@@ -8,7 +8,7 @@
 // subset 25 is --target-sd px, or given by --noise) and rounded to 8 bits, each image with its own
 // noise. Every image is correlated against the unshifted one (pairs mode, subset 25, step 10) with
 // the bicubic and the biquintic B-spline, without and with a Gaussian pre-filter of both images
-// (preprocess Gaussian blur, as `correlate --gaussian` and the scene's preprocess.gaussian_*
+// (preprocess Gaussian blur, as `correlate --gaussian` and the scene's preprocess.gaussian.*
 // apply it). Per shift it prints the bias (mean error) and sd of u over the subsets and the noise
 // limit sqrt(2) sigma / sqrt(sum over the subset of (dI/dx)^2) of the noise-free shifted image.
 //
