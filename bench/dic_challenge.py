@@ -52,10 +52,9 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import tiff_lite  # noqa: E402
 
-# Set when correlate has the option: the name of `impactdic correlate`'s Gaussian pre-filter
-# option (helper h4, issue 13 item 1), e.g. "--prefilter". While it is None, --prefilter SIGMA
-# is refused with a message saying so.
-CORRELATE_PREFILTER_OPTION = None
+# The name of `impactdic correlate`'s Gaussian pre-filter option (issue 13 item 1; docs/dic.md,
+# "Sub-pixel bias"): --prefilter SIGMA passes `--gaussian SIGMA` (kernel 5).
+CORRELATE_PREFILTER_OPTION = "--gaussian"
 
 DEFAULT_DATA = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"),
                             "impactdic", "dic_challenge")

@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <sstream>
@@ -18,6 +19,7 @@
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/preprocess/preprocess.h"
 
 namespace impactdic::cli {
 namespace {
@@ -40,6 +42,7 @@ struct CorrelateArgs {
   double min_zncc = DicOptions{}.icgn.min_zncc;
   std::string mode = ToString(DicOptions{}.mode);
   std::string max_uncertainty = fmt::format("{}", DicOptions{}.icgn.max_uncertainty_px);
+  std::string gaussian;  // SIGMA[,KERNEL]; empty: no pre-filter.
   std::string output;
 };
 
@@ -71,6 +74,56 @@ cv::Rect ParseRoi(const std::string& text) {
   CheckValue(v[0] >= 0 && v[1] >= 0 && v[2] > v[0] && v[3] > v[1], "--roi", text,
              "0 <= X0 < X1 and 0 <= Y0 < Y1");
   return cv::Rect(cv::Point(v[0], v[1]), cv::Point(v[2], v[3]));
+}
+
+// --gaussian SIGMA[,KERNEL]: the preprocess module's Gaussian blur (the scene's
+// preprocess.gaussian.*, same checks; KERNEL defaults to its kernel size) of every image, the
+// reference included, before correlation. The pre-filter against sub-pixel bias (docs/dic.md,
+// "Sub-pixel bias").
+GaussianBlurOptions ParseGaussian(const std::string& text) {
+  GaussianBlurOptions g;
+  g.enabled = true;
+  const std::string expected = fmt::format(
+      "SIGMA[,KERNEL]: sigma in (0, 20] px, kernel an odd size in [3, 201] px (default {})",
+      g.kernel_size);
+  const std::size_t comma = text.find(',');
+  const std::string sigma = text.substr(0, comma);
+  bool ok = !sigma.empty();
+  try {
+    std::size_t used = 0;
+    g.sigma_px = std::stod(sigma, &used);
+    ok = ok && used == sigma.size() && std::isfinite(g.sigma_px);
+    if (comma != std::string::npos) {
+      const std::string kernel = text.substr(comma + 1);
+      g.kernel_size = std::stoi(kernel, &used);
+      ok = ok && used == kernel.size();
+    }
+  } catch (const std::exception&) {
+    ok = false;
+  }
+  CheckValue(ok, "--gaussian", text, expected);
+  try {
+    g.Check();
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, "--gaussian", text, expected);
+  }
+  return g;
+}
+
+// The images' pre-filter of --gaussian (none if empty): a Preprocessor per image, so that the
+// reference and the first deformed image can be decoded and filtered at the same time.
+ImageFilter MakeImageFilter(const std::string& gaussian) {
+  if (gaussian.empty()) return {};
+  PreprocessOptions options;
+  options.undistort = false;
+  options.gaussian = ParseGaussian(gaussian);
+  return {[options](const cv::Mat& image) {
+            Preprocessor pre(options, /*calibration=*/nullptr, image.size());
+            return pre.Apply(image);
+          },
+          fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
+                      options.gaussian.sigma_px, options.gaussian.kernel_size,
+                      options.gaussian.kernel_size)};
 }
 
 void Run(const CorrelateArgs& a) {
@@ -109,6 +162,7 @@ void Run(const CorrelateArgs& a) {
   }
   options.icgn.max_uncertainty_px =
       MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
+  const ImageFilter filter = MakeImageFilter(a.gaussian);
   try {
     options.Check();
   } catch (const Error& e) {
@@ -139,12 +193,14 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
-    result = video ? CorrelateVideo(a.frames, options) : CorrelateFiles(paths, options);
+    result =
+        video ? CorrelateVideo(a.frames, options, filter) : CorrelateFiles(paths, options, filter);
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     RethrowWithFlagNames(e, kCorrelateFlags);
   }
   WriteDicResult(a.output, result, options);
+  if (!result.preprocess.empty()) LogInfo("correlate: pre-filter {}", result.preprocess);
   const double seconds = wall.ElapsedSeconds();
   LogInfo("correlate: {}", result.summary.FullReport());
   LogInfo(
@@ -200,6 +256,12 @@ void RegisterCorrelateCommand(CLI::App& app) {
                   "converged subset is `uncertain` (NaN); 0 or none: no limit, every "
                   "converged subset is reported with sigma_u_px, sigma_v_px")
       ->capture_default_str();
+  cmd->add_option("--gaussian", args->gaussian,
+                  "SIGMA[,KERNEL]: Gaussian pre-filter of every image, the reference included "
+                  "(as the scene's preprocess.gaussian.*; KERNEL odd, default " +
+                      std::to_string(GaussianBlurOptions{}.kernel_size) +
+                      "); reduces the sub-pixel bias of sharp or aliased speckle (docs/dic.md, "
+                      "\"Sub-pixel bias\"), e.g. 0.8");
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;

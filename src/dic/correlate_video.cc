@@ -7,7 +7,8 @@
 
 namespace impactdic {
 
-DicResult CorrelateVideo(const std::string& path, const DicOptions& options) {
+DicResult CorrelateVideo(const std::string& path, const DicOptions& options,
+                         const ImageFilter& filter) {
   options.Check();
   VideoReader video(path);
   cv::Mat reference, frame;
@@ -18,9 +19,13 @@ DicResult CorrelateVideo(const std::string& path, const DicOptions& options) {
                 "a video of at least two frames (the first is the reference)")
         .WithFile(path);
   }
+  auto prepared = [&filter](const cv::Mat& image) {
+    return filter.apply ? filter.apply(image) : image;
+  };
   Correlator correlator(options);
-  correlator.SetReference(reference);
+  correlator.SetReference(prepared(reference));
   DicResult result;
+  result.preprocess = filter.apply ? filter.description : "";
   result.positions = correlator.positions();
   // One frame decoded at a time: memory does not grow with the length of the video.
   const double declared = video.declared_frames();
@@ -28,7 +33,7 @@ DicResult CorrelateVideo(const std::string& path, const DicOptions& options) {
   do {
     CheckSameSize({reference, frame},
                   {path + " frame 0", fmt::format("{} frame {}", path, video.frames_read() - 1)});
-    result.frames.push_back(correlator.Correlate(frame));
+    result.frames.push_back(correlator.Correlate(prepared(frame)));
     bar.Advance();
   } while (video.Read(&frame));
   bar.Finish();

@@ -110,10 +110,12 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
                          {"valid_fraction", result.summary.valid_fraction},
                          {"mean_iterations", result.summary.mean_iterations},
                          {"reference_updates", result.summary.reference_updates}};
+  if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
   return t;
 }
 
-DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options) {
+DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options,
+                         const ImageFilter& filter) {
   options.Check();
   CheckValue(paths.size() >= 2, "images", std::to_string(paths.size()) + " image(s)",
              "a reference and at least one deformed image");
@@ -126,6 +128,7 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   Correlator correlator(options);
   DicResult result;
   result.frame_numbers = FrameNumbers(paths);
+  result.preprocess = filter.apply ? filter.description : "";
   // Colour layout of each file as decoded: read in parallel, compared in file order.
   SequenceColourCheck colour;
   std::vector<int> channels(paths.size(), 1);
@@ -133,19 +136,23 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
     const std::string warning = colour.Check(paths[k], channels[k]);
     if (!warning.empty()) result.warnings.push_back(warning);
   };
+  auto read = [&paths, &channels, &filter](std::size_t k) {
+    cv::Mat image = ReadGreyImage(paths[k], &channels[k]);
+    return filter.apply ? filter.apply(image) : image;
+  };
   cv::Mat reference, current;
   std::exception_ptr reference_error, deformed_error;  // Reported in this order (deterministic).
   tbb::parallel_invoke(
       [&] {
         try {
-          current = ReadGreyImage(paths[1], &channels[1]);
+          current = read(1);
         } catch (...) {
           deformed_error = std::current_exception();
         }
       },
       [&] {
         try {
-          reference = ReadGreyImage(paths[0], &channels[0]);
+          reference = read(0);
           correlator.SetReference(reference);
         } catch (...) {
           reference_error = std::current_exception();
@@ -161,9 +168,7 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   for (std::size_t k = 1; k < paths.size(); ++k) {
     cv::Mat next;
     tbb::task_group prefetch;
-    if (k + 1 < paths.size())
-      prefetch.run(
-          [&next, &paths, &channels, k] { next = ReadGreyImage(paths[k + 1], &channels[k + 1]); });
+    if (k + 1 < paths.size()) prefetch.run([&next, &read, k] { next = read(k + 1); });
     try {
       result.frames.push_back(correlator.Correlate(current));
     } catch (...) {

@@ -9,9 +9,11 @@
 #include <string>
 
 #include "../cli/cli_runner.h"
+#include "impactdic/dic/correlator.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/preprocess/preprocess.h"
 #include "impactdic/synth/speckle.h"
 
 namespace impactdic {
@@ -153,6 +155,57 @@ TEST_F(CorrelateCli, PairsModeAndUncertaintyLimit) {
   for (const char* item :
        {"--mode TEXT=sequence", "sequence | pairs", "--max-uncertainty TEXT=0.025"})
     EXPECT_NE(help.output.find(item), std::string::npos) << item << "\n" << help.output;
+}
+
+TEST_F(CorrelateCli, GaussianPrefilterBlursEveryImageAndBadValuesAreNamed) {
+  const std::string out = Path("prefiltered.h5");
+  const CliResult r =
+      RunCli(Pair() + " --mode pairs --max-uncertainty none --gaussian 0.8,5 -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pre-filter gaussian: sigma 0.8 px, kernel 5x5"), std::string::npos)
+      << r.output;
+  H5Reader h5(out);
+  EXPECT_NE(h5.ReadStringAttribute("dic", "preprocess").find("sigma 0.8 px"), std::string::npos);
+  // The same as the library on the three images blurred by the preprocess module: the reference
+  // is filtered as well as the deformed images (filtering one side only gives other results).
+  PreprocessOptions pre_options;
+  pre_options.gaussian.enabled = true;
+  pre_options.gaussian.sigma_px = 0.8;
+  std::vector<cv::Mat> images;
+  for (const char* name : {"ref.png", "def1.png", "def2.png"}) {
+    const cv::Mat image = ReadGreyImage(Path(name));
+    images.push_back(Preprocessor(pre_options, nullptr, image.size()).Apply(image));
+  }
+  DicOptions options;
+  options.mode = SequenceMode::kPairs;
+  options.icgn.max_uncertainty_px = 0;
+  const DicResult both = CorrelateSequence(images, options);
+  images[0] = ReadGreyImage(Path("ref.png"));
+  const DicResult deformed_only = CorrelateSequence(images, options);
+  Dims dims;
+  const std::vector<double> u = h5.ReadDouble("dic/u_px", &dims);
+  ASSERT_EQ(dims[0], 3u);
+  int compared = 0, differ = 0;
+  for (std::size_t k = 1; k < 3; ++k) {
+    for (std::size_t i = 0; i < dims[1]; ++i) {
+      const double cli = u[k * dims[1] + i], lib = both.frames[k - 1].u_px[i];
+      if (std::isnan(lib)) {
+        EXPECT_TRUE(std::isnan(cli));
+        continue;
+      }
+      ++compared;
+      EXPECT_NEAR(cli, lib, 1e-12);
+      differ += std::abs(cli - deformed_only.frames[k - 1].u_px[i]) > 1e-6;
+    }
+  }
+  EXPECT_GT(compared, 0);
+  EXPECT_GT(differ, compared / 2);
+  for (const char* bad : {"0", "-1", "25", "abc", "0.8,4", "0.8,2", "0.8,x", "0.8,", ",5"})
+    ExpectError(Pair() + " --gaussian " + bad + " -o " + Path("x.csv"), "--gaussian");
+  ExpectError(Pair() + " --gaussian 0.8,4 -o " + Path("x.csv"), "kernel an odd size");
+  EXPECT_FALSE(fs::exists(Path("x.csv")));
+  const CliResult help = RunCli("correlate --help");
+  EXPECT_NE(help.output.find("--gaussian"), std::string::npos) << help.output;
 }
 
 TEST_F(CorrelateCli, BadInputGivesClearErrors) {

@@ -207,6 +207,13 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
   EXPECT_NE(run.output.find("command (per image): "), std::string::npos);
   EXPECT_NE(run.output.find("--mode pairs"), std::string::npos);
   EXPECT_NE(run.output.find("--interp biquintic"), std::string::npos);
+  // --prefilter SIGMA passes correlate's Gaussian pre-filter (docs/dic.md, "Sub-pixel bias").
+  const ShellResult filtered = Shell(
+      "python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " + Quote(dir_ / "data") +
+      " --binary " + Quote(IMPACTDIC_CLI_PATH) + " --threads 2 --only 3 --prefilter 0.8");
+  ASSERT_EQ(filtered.exit_code, 0) << filtered.output;
+  EXPECT_NE(filtered.output.find("--gaussian 0.8"), std::string::npos) << filtered.output;
+  EXPECT_EQ(Rows(filtered.output, "### bicubic").size(), 11u) << filtered.output;
 
   const auto s14 = Rows(run.output, "## DIC Challenge 1.0 Sample 14");
   ASSERT_EQ(s14.size(), 2u);

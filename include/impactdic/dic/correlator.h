@@ -137,6 +137,9 @@ struct DicResult {
   // included, from the file names when they are one numbered series (io FrameNumbers, e.g. 12
   // for frame_0012.png); empty otherwise. frames[k] is image frames[k].frame.
   std::vector<long long> frame_numbers;
+  // What was done to the images before correlation (dic_io ImageFilter::description; the
+  // results' /dic attribute `preprocess`), "" if nothing.
+  std::string preprocess;
   // What the caller should know (e.g. a colour image in a grey sequence), also logged.
   std::vector<std::string> warnings;
 };
