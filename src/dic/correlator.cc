@@ -45,11 +45,18 @@ SubsetRef CentredSubset(cv::Point2d pos) {
 }
 
 // The saturation level of the first reference's data (io DataBits: 255, 4095 for 12-bit data in
-// 16-bit containers, 65535; none for float images). The contrast and featureless limits are
-// relative to it, so the same speckle as 12-bit or 16-bit data passes the same subsets.
+// 16-bit containers, 65535). The contrast and featureless limits are relative to it, so the same
+// speckle as 12-bit or 16-bit data passes the same subsets. Float data has no saturation level:
+// its largest magnitude in the first reference stands for it (just above it, so that no pixel
+// counts as saturated at the top), so float images scaled to 0..1 or to 0..255 pass the same
+// subsets as their 8-bit original.
 double FullScale(const cv::Mat& raw) {
   const int bits = DataBits(raw);
-  return bits > 0 ? static_cast<double>((1 << bits) - 1) : 1e300;
+  if (bits > 0) return static_cast<double>((1 << bits) - 1);
+  double lo = 0, hi = 0;
+  cv::minMaxLoc(raw.reshape(1), &lo, &hi);
+  const double magnitude = std::max(std::abs(lo), std::abs(hi));
+  return std::isfinite(magnitude) && magnitude > 0 ? magnitude * (1 + 1e-6) : 1.0;
 }
 
 struct Frame {

@@ -136,6 +136,29 @@ TEST(Icgn, ZnssdIgnoresABrightnessAndContrastChange) {
   EXPECT_LE(b.rms, a.rms / 0.7 * 1.1) << a.rms;
 }
 
+TEST(Icgn, FloatImagesPassTheSameSubsetsAsTheir8BitOriginal) {
+  // Float data has no saturation level: scaled to 0..1 or kept at 0..255 it must be correlated
+  // like the 8-bit images (before, every subset of a float pair was `singular_hessian`).
+  Scene scene(200, 200, /*noise_sigma=*/2);
+  const cv::Mat ref = scene.Render(ZeroField(), 1);
+  const DisplacementField shift = Translation(0.35, -0.45);
+  const cv::Mat def = scene.Render(shift, 2);
+  DicOptions options;
+  const DicResult bytes = CorrelatePair(ref, def, options);
+  const ErrorStats eight = Errors(bytes.positions, bytes.frames[0], shift);
+  ASSERT_EQ(eight.valid, static_cast<int>(bytes.positions.size()));
+  for (const double scale : {1.0 / 255, 1.0}) {
+    cv::Mat ref_f, def_f;
+    ref.convertTo(ref_f, CV_32F, scale);
+    def.convertTo(def_f, CV_32F, scale);
+    const DicResult floats = CorrelatePair(ref_f, def_f, options);
+    const ErrorStats f = Errors(floats.positions, floats.frames[0], shift);
+    EXPECT_EQ(f.valid, eight.valid) << "scale " << scale;
+    EXPECT_NEAR(f.rms, eight.rms, 1e-4) << "scale " << scale;
+    EXPECT_LE(f.rms, 0.02) << "scale " << scale;
+  }
+}
+
 TEST(Icgn, QuadraticShapeBeatsAffineOnAQuadraticField) {
   Scene scene(300, 300, /*noise_sigma=*/1);
   const cv::Mat ref = scene.Render(ZeroField(), 1);
