@@ -43,6 +43,16 @@ struct CorrelateArgs {
   std::string mode = ToString(DicOptions{}.mode);
   std::string max_uncertainty = fmt::format("{}", DicOptions{}.icgn.max_uncertainty_px);
   std::string gaussian;  // SIGMA[,KERNEL]; empty: no pre-filter.
+  // The continuity post-check (DicOptions::continuity), checked with the flags' names
+  // (ContinuityFromArgs).
+  std::string continuity = DicOptions{}.continuity.enabled ? "on" : "off";
+  std::string continuity_misfit = fmt::format("{}", DicOptions{}.continuity.misfit_ratio);
+  std::string continuity_second =
+      fmt::format("{}", DicOptions{}.continuity.max_second_difference_px);
+  std::string continuity_jump =
+      fmt::format("{}", DicOptions{}.continuity.max_neighbour_difference_px);
+  double continuity_min_misfit = DicOptions{}.continuity.min_misfit;
+  std::string continuity_local = fmt::format("{}", DicOptions{}.continuity.local_ratio);
   std::string output;
 };
 
@@ -54,6 +64,7 @@ const FlagNames kCorrelateFlags = {{"dic.grid.subset_size", "--subset"},
                                    {"dic.init.search_radius_px", "--search-radius"},
                                    {"dic.icgn.min_zncc", "--min-zncc"},
                                    {"dic.icgn.max_uncertainty_px", "--max-uncertainty"},
+                                   {"dic.continuity.min_misfit", "--continuity-min-misfit"},
                                    {"frames video", "--frames"}};
 
 cv::Rect ParseRoi(const std::string& text) {
@@ -126,6 +137,44 @@ ImageFilter MakeImageFilter(const std::string& gaussian) {
                       options.gaussian.kernel_size)};
 }
 
+ContinuityCheckOptions ContinuityFromArgs(const CorrelateArgs& a) {
+  ContinuityCheckOptions c;
+  c.enabled = OnOffFromString(a.continuity, "--continuity-check");
+  c.misfit_ratio =
+      ContinuityLimitFromString(a.continuity_misfit, "--continuity-misfit-ratio", 1, "");
+  c.max_second_difference_px =
+      ContinuityLimitFromString(a.continuity_second, "--continuity-max-second-difference", 0, "px");
+  c.max_neighbour_difference_px = ContinuityLimitFromString(
+      a.continuity_jump, "--continuity-max-neighbour-difference", 0, "px");
+  c.min_misfit = a.continuity_min_misfit;
+  c.local_ratio = ContinuityLimitFromString(a.continuity_local, "--continuity-local-ratio", 1, "");
+  return c;
+}
+
+void AddContinuityFlags(CLI::App* cmd, CorrelateArgs* args) {
+  cmd->add_option("--continuity-check", args->continuity,
+                  "on | off: post-check of each frame; converged subsets straddling a body edge "
+                  "or a shear band become `discontinuous` (NaN) (docs/dic.md)")
+      ->capture_default_str();
+  cmd->add_option("--continuity-misfit-ratio", args->continuity_misfit,
+                  "Flag 1 - ZNCC above this times its 7x7 neighbourhood's median; > 1, or none")
+      ->capture_default_str();
+  cmd->add_option("--continuity-min-misfit", args->continuity_min_misfit,
+                  "...and 1 - ZNCC above this as well, in " + kMinMisfitRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--continuity-max-second-difference", args->continuity_second,
+                  "Flag a second difference of u, v along a grid row/column above it [px]; > 0, "
+                  "or none")
+      ->capture_default_str();
+  cmd->add_option("--continuity-max-neighbour-difference", args->continuity_jump,
+                  "Flag a displacement differing from an adjacent subset's by more [px]; > 0, or "
+                  "none")
+      ->capture_default_str();
+  cmd->add_option("--continuity-local-ratio", args->continuity_local,
+                  "...and above this times the 7x7 neighbourhood's median of the same; > 1")
+      ->capture_default_str();
+}
+
 void Run(const CorrelateArgs& a) {
   // Validate every option before any work.
   const bool pair = !a.reference.empty() || !a.deformed.empty();
@@ -163,6 +212,7 @@ void Run(const CorrelateArgs& a) {
   options.icgn.max_uncertainty_px =
       MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
   const ImageFilter filter = MakeImageFilter(a.gaussian);
+  options.continuity = ContinuityFromArgs(a);
   try {
     options.Check();
   } catch (const Error& e) {
@@ -262,6 +312,7 @@ void RegisterCorrelateCommand(CLI::App& app) {
                       std::to_string(GaussianBlurOptions{}.kernel_size) +
                       "); reduces the sub-pixel bias of sharp or aliased speckle (docs/dic.md, "
                       "\"Sub-pixel bias\"), e.g. 0.8");
+  AddContinuityFlags(cmd, args.get());
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;

@@ -10,69 +10,70 @@
 
 namespace impactdic {
 
-void ContinuityCheckOptions::Check() const {
-  CheckValue(misfit_ratio > 1, "ContinuityCheckOptions.misfit_ratio", std::to_string(misfit_ratio),
-             "> 1");
-  CheckValue(max_neighbour_difference_px > 0, "ContinuityCheckOptions.max_neighbour_difference_px",
-             std::to_string(max_neighbour_difference_px), "> 0 px");
-  CheckValue(max_second_difference_px > 0, "ContinuityCheckOptions.max_second_difference_px",
-             std::to_string(max_second_difference_px), "> 0 px");
-}
-
 namespace {
 
-constexpr int kReach = 3;  // The misfit's neighbourhood: 7 x 7 subsets.
+constexpr int kReach = 3;  // The neighbourhood of the local medians: 7 x 7 subsets.
+constexpr double kNaNd = std::numeric_limits<double>::quiet_NaN();
 
 bool Valid(const FrameResult& r, int i) { return r.status[i] == SubsetStatus::kConverged; }
 
-std::vector<std::uint8_t> Misfits(const FrameResult& r, int cols, int rows, double ratio) {
+// flag[i] = q[i] > max(floor, ratio x the median of q over the finite values of the 7 x 7
+// neighbourhood, itself excluded); no flag with fewer than 6 such neighbours or a NaN q[i].
+// ratio = +inf: q[i] > floor alone.
+std::vector<std::uint8_t> AboveLocalMedian(const std::vector<double>& q, int cols, int rows,
+                                           double floor, double ratio) {
   const int n = cols * rows;
   std::vector<std::uint8_t> flag(n, 0);
-  if (!std::isfinite(ratio)) return flag;
+  if (!std::isfinite(floor)) return flag;
   std::vector<double> near;
   for (int i = 0; i < n; ++i) {
-    if (!Valid(r, i)) continue;
+    if (!(q[i] > floor)) continue;
+    if (!std::isfinite(ratio)) {
+      flag[i] = 1;
+      continue;
+    }
     near.clear();
     const int row = i / cols, col = i % cols;
-    for (int dr = -kReach; dr <= kReach; ++dr) {
-      for (int dc = -kReach; dc <= kReach; ++dc) {
-        const int rr = row + dr, cc = col + dc;
-        if ((dr == 0 && dc == 0) || rr < 0 || rr >= rows || cc < 0 || cc >= cols) continue;
-        if (Valid(r, rr * cols + cc)) near.push_back(1.0 - r.zncc[rr * cols + cc]);
+    for (int rr = std::max(0, row - kReach); rr <= std::min(rows - 1, row + kReach); ++rr) {
+      for (int cc = std::max(0, col - kReach); cc <= std::min(cols - 1, col + kReach); ++cc) {
+        const int j = rr * cols + cc;
+        if (j != i && std::isfinite(q[j])) near.push_back(q[j]);
       }
     }
     if (near.size() < 6) continue;
     std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
-    const double median = near[near.size() / 2];
-    flag[i] = (1.0 - r.zncc[i]) > ratio * std::max(median, 1e-6);
+    flag[i] = q[i] > ratio * near[near.size() / 2];
   }
   return flag;
 }
 
-std::vector<std::uint8_t> Discontinuities(const FrameResult& r, int cols, int rows, double limit_px,
-                                          double jump_px) {
+// Per converged subset: the largest second difference of (u, v) along its grid row or column
+// (both neighbours converged) and the largest difference to a converged adjacent subset [px];
+// NaN where not defined.
+void Differences(const FrameResult& r, int cols, int rows, std::vector<double>* second,
+                 std::vector<double>* jump) {
   const int n = cols * rows;
-  std::vector<std::uint8_t> flag(n, 0);
-
+  second->assign(n, kNaNd);
+  jump->assign(n, kNaNd);
+  const auto dist = [&r](int i, double u, double v) {
+    return std::hypot(r.u_px[i] - u, r.v_px[i] - v);
+  };
   for (int i = 0; i < n; ++i) {
     if (!Valid(r, i)) continue;
     const int row = i / cols, col = i % cols;
     const int pairs[2][2][2] = {{{row, col - 1}, {row, col + 1}}, {{row - 1, col}, {row + 1, col}}};
     for (const auto& p : pairs) {
-      const int ra = p[0][0], ca = p[0][1], rb = p[1][0], cb = p[1][1];
-      const bool a_in = ra >= 0 && ca >= 0, b_in = rb < rows && cb < cols;
-      const int a = a_in ? ra * cols + ca : i, b = b_in ? rb * cols + cb : i;
+      const bool a_in = p[0][0] >= 0 && p[0][1] >= 0, b_in = p[1][0] < rows && p[1][1] < cols;
+      const int a = a_in ? p[0][0] * cols + p[0][1] : -1, b = b_in ? p[1][0] * cols + p[1][1] : -1;
       for (const int j : {a, b}) {
-        if (Valid(r, j) && std::hypot(r.u_px[i] - r.u_px[j], r.v_px[i] - r.v_px[j]) > jump_px)
-          flag[i] = 1;
+        if (j >= 0 && Valid(r, j))
+          (*jump)[i] = std::fmax((*jump)[i], dist(i, r.u_px[j], r.v_px[j]));
       }
-      if (!a_in || !b_in || !Valid(r, a) || !Valid(r, b)) continue;
-      const double du = r.u_px[i] - 0.5 * (r.u_px[a] + r.u_px[b]);
-      const double dv = r.v_px[i] - 0.5 * (r.v_px[a] + r.v_px[b]);
-      if (std::hypot(du, dv) > limit_px) flag[i] = 1;
+      if (a < 0 || b < 0 || !Valid(r, a) || !Valid(r, b)) continue;
+      const double d2 = dist(i, 0.5 * (r.u_px[a] + r.u_px[b]), 0.5 * (r.v_px[a] + r.v_px[b]));
+      (*second)[i] = std::fmax((*second)[i], d2);
     }
   }
-  return flag;
 }
 
 }  // namespace
@@ -83,12 +84,26 @@ ContinuityFlags CheckContinuity(const FrameResult& result, int cols, int rows,
   CheckValue(cols > 0 && rows > 0 && static_cast<std::size_t>(cols) * rows == result.status.size(),
              "CheckContinuity grid", std::to_string(cols) + "x" + std::to_string(rows),
              "cols x rows == the frame's subsets");
+  const int n = cols * rows;
+  std::vector<double> misfit(n, kNaNd), second, jump;
+  for (int i = 0; i < n; ++i)
+    if (Valid(result, i)) misfit[i] = 1.0 - result.zncc[i];
+  Differences(result, cols, rows, &second, &jump);
   ContinuityFlags flags;
-  flags.misfit = Misfits(result, cols, rows, options.misfit_ratio);
-  flags.discontinuous = Discontinuities(result, cols, rows, options.max_second_difference_px,
-                                        options.max_neighbour_difference_px);
-  for (std::size_t i = 0; i < flags.misfit.size(); ++i)
+  // The median is taken at least 1e-6 (a perfect fit).
+  const double misfit_floor = std::max(options.min_misfit, options.misfit_ratio * 1e-6);
+  flags.misfit = std::isfinite(options.misfit_ratio)
+                     ? AboveLocalMedian(misfit, cols, rows, misfit_floor, options.misfit_ratio)
+                     : std::vector<std::uint8_t>(n, 0);
+  const std::vector<std::uint8_t> s2 =
+      AboveLocalMedian(second, cols, rows, options.max_second_difference_px, options.local_ratio);
+  const std::vector<std::uint8_t> jp =
+      AboveLocalMedian(jump, cols, rows, options.max_neighbour_difference_px, options.local_ratio);
+  flags.discontinuous.assign(n, 0);
+  for (int i = 0; i < n; ++i) {
+    flags.discontinuous[i] = s2[i] || jp[i];
     flags.flagged += flags.misfit[i] || flags.discontinuous[i];
+  }
   return flags;
 }
 
@@ -96,7 +111,7 @@ void ApplyContinuityFlags(const ContinuityFlags& flags, FrameResult* result) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (std::size_t i = 0; i < flags.misfit.size(); ++i) {
     if (!(flags.misfit[i] || flags.discontinuous[i])) continue;
-    result->status[i] = SubsetStatus::kLowCorrelation;
+    result->status[i] = SubsetStatus::kDiscontinuous;
     result->u_px[i] = result->v_px[i] = nan;
     if (i < result->sigma_px.size()) {
       result->sigma_u_px[i] = result->sigma_v_px[i] = result->sigma_px[i] =

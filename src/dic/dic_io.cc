@@ -103,13 +103,15 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
                        {"shape", ToString(options.icgn.shape)},
                        {"reference_update", ReferenceUpdateText(options.update)},
                        {"mode", ToString(options.mode)},
+                       {"continuity_check", ContinuityCheckText(options.continuity)},
                        {"summary", result.summary.BriefReport()}};
   t.number_attributes = {{"max_uncertainty_px", options.icgn.max_uncertainty_px},
                          {"subset_size_px", options.grid.subset_size},
                          {"step_px", options.grid.step},
                          {"valid_fraction", result.summary.valid_fraction},
                          {"mean_iterations", result.summary.mean_iterations},
-                         {"reference_updates", result.summary.reference_updates}};
+                         {"reference_updates", result.summary.reference_updates},
+                         {"discontinuous_results", double(result.summary.Discontinuous())}};
   if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
   return t;
 }

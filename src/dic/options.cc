@@ -15,7 +15,7 @@ namespace {
 const char* const kStatusNames[kSubsetStatusCount] = {
     "converged",    "max_iterations", "low_correlation", "singular_hessian",
     "out_of_image", "masked",         "low_contrast",    "saturated",
-    "not_found",    "lost",           "uncertain"};
+    "not_found",    "lost",           "uncertain",       "discontinuous"};
 
 std::string Num(double v) { return std::to_string(v); }
 
@@ -125,11 +125,55 @@ void UpdateOptions::Check() const {
              Num(auto_min_zncc), "in " + kAutoMinZnccRange.Text());
 }
 
+void ContinuityCheckOptions::Check() const {
+  CheckValue(misfit_ratio > 1, "dic.continuity.misfit_ratio", Num(misfit_ratio), "> 1 (+inf: off)");
+  CheckValue(kMinMisfitRange.Contains(min_misfit), "dic.continuity.min_misfit", Num(min_misfit),
+             "in " + kMinMisfitRange.Text());
+  CheckValue(max_second_difference_px > 0, "dic.continuity.max_second_difference_px",
+             Num(max_second_difference_px), "> 0 px (+inf: off)");
+  CheckValue(max_neighbour_difference_px > 0, "dic.continuity.max_neighbour_difference_px",
+             Num(max_neighbour_difference_px), "> 0 px (+inf: off)");
+  CheckValue(local_ratio > 1, "dic.continuity.local_ratio", Num(local_ratio),
+             "> 1 (+inf: the thresholds alone)");
+}
+
+double ContinuityLimitFromString(const std::string& text, const std::string& where, double above,
+                                 const std::string& unit) {
+  if (text == "none") return std::numeric_limits<double>::infinity();
+  double value = 0;
+  std::size_t used = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  CheckValue(used > 0 && used == text.size() && value > above && std::isfinite(value), where, text,
+             fmt::format("a number > {}{} or none (criterion off)", above,
+                         unit.empty() ? "" : " " + unit));
+  return value;
+}
+
+std::string ContinuityCheckText(const ContinuityCheckOptions& c) {
+  if (!c.enabled) return "off";
+  return fmt::format(
+      "on (misfit_ratio {}, min_misfit {}, max_second_difference_px {}, "
+      "max_neighbour_difference_px {}, local_ratio {})",
+      c.misfit_ratio, c.min_misfit, c.max_second_difference_px, c.max_neighbour_difference_px,
+      c.local_ratio);
+}
+
+bool OnOffFromString(const std::string& text, const std::string& where) {
+  if (text == "on" || text == "true") return true;
+  if (text == "off" || text == "false") return false;
+  throw Error(ErrorKind::kInvalidValue, where, text, "on or off");
+}
+
 void DicOptions::Check() const {
   grid.Check();
   init.Check();
   icgn.Check();
   update.Check();
+  continuity.Check();
 }
 
 }  // namespace impactdic

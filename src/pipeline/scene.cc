@@ -145,6 +145,40 @@ void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
         "Last frame (inclusive); -1 = the last frame");
 }
 
+// A continuity threshold of ContinuityCheckOptions: a number > `above`, or none (criterion off).
+void AddContinuityLimit(YamlOptionTable& t, const std::string& key, double* field, double above,
+                        const std::string& unit, const std::string& doc) {
+  const std::string expected = fmt::format("a number > {}{}, or none (criterion off)", above,
+                                           unit.empty() ? "" : " " + unit);
+  t.AddCustom(
+      key, expected, Num(*field),
+      [field, above, unit](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        try {
+          *field = ContinuityLimitFromString(n.Scalar(), "", above, unit);
+        } catch (const Error&) {
+          return false;
+        }
+        return true;
+      },
+      doc);
+}
+
+void AddContinuityKeys(YamlOptionTable& t, ContinuityCheckOptions* c) {
+  t.Add("continuity_check", &c->enabled,
+        "Post-check: subsets straddling a body edge or shear band become discontinuous (NaN)");
+  AddContinuityLimit(t, "continuity_misfit_ratio", &c->misfit_ratio, 1, "",
+                     "Flag 1 - ZNCC above this times its 7x7 neighbourhood's median");
+  t.Add("continuity_min_misfit", &c->min_misfit, kMinMisfitRange, "a 1 - ZNCC level",
+        "...and above this as well");
+  AddContinuityLimit(t, "continuity_max_second_difference_px", &c->max_second_difference_px, 0,
+                     "px", "Flag a second difference of u, v along a grid row or column above it");
+  AddContinuityLimit(t, "continuity_max_neighbour_difference_px", &c->max_neighbour_difference_px,
+                     0, "px", "Flag a displacement differing from an adjacent subset's by more");
+  AddContinuityLimit(t, "continuity_local_ratio", &c->local_ratio, 1, "",
+                     "...and above this times the 7x7 neighbourhood's median of the same");
+}
+
 YamlOptionTable DicTable(Scene* s) {
   YamlOptionTable t("dic");
   DicOptions& o = s->dic.options;
@@ -194,6 +228,7 @@ YamlOptionTable DicTable(Scene* s) {
         "IC-GN stops when the update moves no subset point more");
   t.Add("search_radius_px", &o.init.search_radius_px, kSearchRadiusRange, "search radius",
         "Integer-pixel initial-guess search radius");
+  AddContinuityKeys(t, &o.continuity);
   AddDicFrameKeys(t, s);
   return t;
 }

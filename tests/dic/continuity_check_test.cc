@@ -50,7 +50,7 @@ TEST(ContinuityCheck, APoorFitAmongGoodOnesIsFlaggedAndApplied) {
   EXPECT_TRUE(flags.misfit[40]);
   EXPECT_EQ(flags.flagged, 1);
   ApplyContinuityFlags(flags, &r);
-  EXPECT_EQ(r.status[40], SubsetStatus::kLowCorrelation);
+  EXPECT_EQ(r.status[40], SubsetStatus::kDiscontinuous);
   EXPECT_TRUE(std::isnan(r.u_px[40]));
   EXPECT_EQ(r.status[39], SubsetStatus::kConverged);
 }

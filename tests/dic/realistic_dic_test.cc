@@ -12,6 +12,9 @@
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "impactdic/dic/continuity_check.h"
 #include "impactdic/dic/correlator.h"
@@ -53,7 +56,7 @@ Outcome Evaluate(const RealisticScene& scene, const Correlator& correlator, cons
     (f ? o.flagged_valid : o.clean_valid)++;
     const double e = std::hypot(r.u_px[i] - truth.u_px[i], r.v_px[i] - truth.v_px[i]);
     o.error[i] = e;
-    if (e > kGarbagePx && std::getenv("H7DBG"))
+    if (e > kGarbagePx && std::getenv("IMPACTDIC_REALISTIC_LIST_GARBAGE"))
       std::printf("  garbage %d at %.0f,%.0f e %.2f zncc %.4f edge %d band %d glare %d\n", i,
                   correlator.positions()[i].x, correlator.positions()[i].y, e, r.zncc[i],
                   truth.straddles_edge[i], truth.straddles_shear_band[i], truth.in_glare[i]);
@@ -106,27 +109,51 @@ void Print(const char* what, int k, const Outcome& o) {
       o.flagged_valid, o.garbage, o.garbage_flagged, o.garbage_max);
 }
 
+// The seeds (IMPACTDIC_REALISTIC_SEEDS, e.g. "3,4"; default 1 and 2).
+std::vector<std::uint64_t> Seeds() {
+  const char* text = std::getenv("IMPACTDIC_REALISTIC_SEEDS");
+  if (text == nullptr) return {1, 2};
+  std::vector<std::uint64_t> seeds;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) seeds.push_back(std::stoull(item));
+  return seeds;
+}
+
 // Frames 1..3 against frame 0 (pairs: pounder 2, 4, 6 px further down), JPEG quality 90,
 // noise 1.5 grey levels, 4 exposure samples, glare, light fall-off and drift; seeds 1 and 2.
+// IMPACTDIC_REALISTIC_SPEC=spec.yaml (a `realistic:` spec, docs/synth.md) replaces the scene (its
+// seed by each of Seeds()), e.g. the 4096 x 3000 pair of docs/dic.md.
 TEST(RealisticDic, StraddlingSubsetsAreFlaggedAndTheRestIsAccurate) {
-  for (const std::uint64_t seed : {1u, 2u}) {
+  const char* spec_path = std::getenv("IMPACTDIC_REALISTIC_SPEC");
+  for (const std::uint64_t seed : Seeds()) {
     RealisticSceneSpec spec;  // 320 x 240.
     spec.frames = 4;
+    if (spec_path != nullptr) spec = LoadRealisticSceneSpec(spec_path);
     spec.seed = seed;
     const RealisticScene scene(spec);
     DicOptions options;
     options.grid.subset_size = 21;
     options.grid.step = 10;
     options.mode = SequenceMode::kPairs;
+    options.continuity.enabled = false;
     Correlator correlator(options);
-    correlator.SetReference(Jpeg(scene.RenderFrame(0), spec.jpeg_quality));
+    // The same with the continuity check in the correlator (the default): pairs are independent,
+    // so it must give what CheckContinuity gives afterwards.
+    options.continuity.enabled = true;
+    Correlator checking(options);
+    const cv::Mat reference = Jpeg(scene.RenderFrame(0), spec.jpeg_quality);
+    correlator.SetReference(reference);
+    checking.SetReference(reference);
+    long long counted = 0;
     for (int k = 1; k < spec.frames; ++k) {
       SCOPED_TRACE("seed " + std::to_string(seed) + " frame " + std::to_string(k));
-      FrameResult r = correlator.Correlate(Jpeg(scene.RenderFrame(k), spec.jpeg_quality));
+      const cv::Mat image = Jpeg(scene.RenderFrame(k), spec.jpeg_quality);
+      FrameResult r = correlator.Correlate(image);
       const Outcome engine = Evaluate(scene, correlator, r, k);
       Print("engine alone:      ", k, engine);
       // The engine alone: the clean subsets are accurate; only flagged subsets carry garbage.
-      EXPECT_GE(engine.clean_valid, 0.95 * engine.clean);
+      EXPECT_GE(engine.clean_valid, 0.9 * engine.clean);
       EXPECT_LT(engine.clean_rms, 0.05);
       EXPECT_EQ(engine.garbage, engine.garbage_flagged);
       // With the continuity post-check: no garbage left, the clean subsets still accurate.
@@ -137,6 +164,18 @@ TEST(RealisticDic, StraddlingSubsetsAreFlaggedAndTheRestIsAccurate) {
       EXPECT_EQ(checked.garbage, 0);
       EXPECT_GE(checked.clean_valid, 0.9 * checked.clean);
       EXPECT_LT(checked.clean_rms, 0.05);
+      const FrameResult wired = checking.Correlate(image);
+      EXPECT_EQ(wired.status, r.status);
+      int discontinuous = 0;
+      for (int i = 0; i < checking.subsets(); ++i) {
+        if (wired.status[i] != SubsetStatus::kDiscontinuous) continue;
+        ++discontinuous;
+        EXPECT_TRUE(std::isnan(wired.u_px[i]) && std::isnan(wired.v_px[i])) << i;
+      }
+      EXPECT_GT(discontinuous, 0);
+      counted += discontinuous;
+      EXPECT_EQ(checking.summary().Discontinuous(), counted);
+      EXPECT_EQ(correlator.summary().Discontinuous(), 0);
     }
   }
 }

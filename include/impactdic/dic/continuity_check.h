@@ -19,7 +19,7 @@
 // `impactdic correlate`), before the displacements are used.
 //
 //   const ContinuityFlags flags = CheckContinuity(result, correlator.cols(), correlator.rows(),
-//   {}); ApplyContinuityFlags(flags, &result);  // flagged subsets become kLowCorrelation, NaN
+//   {}); ApplyContinuityFlags(flags, &result);  // flagged subsets become kDiscontinuous, NaN
 #ifndef IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 #define IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 
@@ -27,17 +27,9 @@
 #include <vector>
 
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 
 namespace impactdic {
-
-struct ContinuityCheckOptions {
-  double misfit_ratio = 2.5;               // > 1; +inf switches the misfit criterion off.
-  double max_second_difference_px = 0.25;  // > 0 [px]; +inf switches it off.
-  // > 0 [px]; +inf switches it off. About the largest strain expected times the grid step
-  // (0.08 x 10 px): a larger difference between adjacent subsets is a discontinuity between them.
-  double max_neighbour_difference_px = 0.8;
-  void Check() const;
-};
 
 struct ContinuityFlags {
   std::vector<std::uint8_t> misfit, discontinuous;  // Per subset, 1 = flagged.
@@ -47,7 +39,7 @@ struct ContinuityFlags {
 // `result` of a grid of cols x rows subsets (row-major). Only converged subsets are flagged.
 ContinuityFlags CheckContinuity(const FrameResult& result, int cols, int rows,
                                 const ContinuityCheckOptions& options);
-// Sets the flagged subsets to kLowCorrelation with NaN displacement and sigmas.
+// Sets the flagged subsets to kDiscontinuous with NaN displacement and sigmas.
 void ApplyContinuityFlags(const ContinuityFlags& flags, FrameResult* result);
 
 }  // namespace impactdic

@@ -37,6 +37,7 @@ inline constexpr ValueRange kConvergenceRange{0, 1, "px", /*min_open=*/true};
 inline constexpr ValueRange kMaxIterationsRange{1, 200, ""};
 inline constexpr ValueRange kMinZnccRange{-1, 1, "", /*min_open=*/false, /*max_open=*/true};
 inline constexpr ValueRange kAutoMinZnccRange{-1, 1, "", /*min_open=*/true};
+inline constexpr ValueRange kMinMisfitRange{0, 1, "", /*min_open=*/false, /*max_open=*/true};
 
 struct GridOptions {
   int subset_size = 25;  // Subset side S [px], odd, kSubsetSizeRange.
@@ -121,12 +122,49 @@ SequenceMode SequenceModeFromString(const std::string& text, const std::string& 
 // "none" (no limit, +inf); an Error naming `where` otherwise.
 double MaxUncertaintyFromString(const std::string& text, const std::string& where);
 
+// The post-check of each correlated frame for subsets straddling a discontinuity (a body edge, a
+// shear band): converged subsets whose result is a mixture of both sides rather than the motion
+// of their centre become `discontinuous` (NaN). Criteria and evidence: dic/continuity_check.h,
+// docs/dic.md ("Realistic footage: straddling subsets"). Scene keys dic.continuity_*, flags
+// `correlate --continuity-*`.
+struct ContinuityCheckOptions {
+  bool enabled = true;  // Run the check on every correlated frame.
+  // Misfit: 1 - ZNCC above this many times the median 1 - ZNCC of the converged subsets in the
+  // 7 x 7 neighbourhood, > 1; +inf switches the criterion off.
+  double misfit_ratio = 2.5;
+  // ... and 1 - ZNCC above this as well, kMinMisfitRange: on clean speckle 1 - ZNCC is ~1e-3 and
+  // varies by more than misfit_ratio between subsets without any discontinuity (the committed
+  // sample).
+  double min_misfit = 0.02;
+  // A second difference of the displacement along a grid row or column,
+  // |d_i - (d_left + d_right) / 2|, above this [px], > 0; +inf switches it off.
+  double max_second_difference_px = 0.25;
+  // The displacements of adjacent subsets differ by more than this [px], > 0; +inf switches it
+  // off.
+  double max_neighbour_difference_px = 0.8;
+  // The two criteria above flag a value only above this many times its median over the converged
+  // 7 x 7 neighbourhood as well, > 1: a smooth field with a large strain at a coarse step has
+  // large differences everywhere around, a discontinuity only at the subsets next to it. +inf:
+  // the two thresholds alone (no comparison with the neighbourhood).
+  double local_ratio = 4;
+  void Check() const;
+};
+// A continuity threshold as written in a scene or on the command line: a number > `above`, or
+// "none" (+inf: the criterion is off); an Error naming `where` otherwise.
+double ContinuityLimitFromString(const std::string& text, const std::string& where, double above,
+                                 const std::string& unit);
+// "off", or "on (misfit_ratio 2.5, ...)" with the thresholds (inf: criterion off).
+std::string ContinuityCheckText(const ContinuityCheckOptions& continuity);
+// "on"/"off" (also true/false): an Error naming `where` otherwise.
+bool OnOffFromString(const std::string& text, const std::string& where);
+
 struct DicOptions {
   SequenceMode mode = SequenceMode::kSequence;
   GridOptions grid;
   InitialGuessOptions init;
   IcgnOptions icgn;
   UpdateOptions update;
+  ContinuityCheckOptions continuity;
   void Check() const;
 };
 
@@ -145,8 +183,10 @@ enum class SubsetStatus {
                          // against the reference it was last found in (tried every frame).
   kUncertain = 10,       // Converged, but the estimated standard deviation of the displacement
                          // exceeds IcgnOptions::max_uncertainty_px (e.g. few features).
+  kDiscontinuous = 11,   // Converged, but flagged by the continuity post-check
+                         // (ContinuityCheckOptions): it straddles a body edge or a shear band.
 };
-constexpr int kSubsetStatusCount = 11;
+constexpr int kSubsetStatusCount = 12;
 const char* ToString(SubsetStatus status);
 // "0=converged,1=max_iterations,...": every status code with its name (HDF5 attributes).
 std::string SubsetStatusCodes();
