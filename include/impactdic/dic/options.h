@@ -141,7 +141,7 @@ struct ContinuityCheckOptions {
   double max_second_difference_px = 0.25;
   // The displacements of adjacent subsets differ by more than this [px], > 0; +inf switches it
   // off.
-  double max_neighbour_difference_px = 0.8;
+  double max_neighbour_difference_px = 0.4;
   // The two criteria above flag a value only above this many times its median over the converged
   // 7 x 7 neighbourhood as well, > 1: a smooth field with a large strain at a coarse step has
   // large differences everywhere around, a discontinuity only at the subsets next to it. +inf:
