@@ -47,31 +47,35 @@ std::vector<std::uint8_t> AboveLocalMedian(const std::vector<double>& q, int col
   return flag;
 }
 
-// Per converged subset: the largest second difference of (u, v) along its grid row or column
-// (both neighbours converged) and the largest difference to a converged adjacent subset [px];
-// NaN where not defined.
-void Differences(const FrameResult& r, int cols, int rows, std::vector<double>* second,
-                 std::vector<double>* jump) {
+// Per converged subset and grid direction (0: along its row, 1: along its column): the second
+// difference of (u, v) (both neighbours converged) and the largest difference to a converged
+// adjacent subset [px]; NaN where not defined. Kept per direction so that a strong gradient along
+// one direction (the core under the pounder, whose displacement decays with depth) does not hide
+// a jump across the other (a vertical shear band).
+void Differences(const FrameResult& r, int cols, int rows, std::vector<double> second[2],
+                 std::vector<double> jump[2]) {
   const int n = cols * rows;
-  second->assign(n, kNaNd);
-  jump->assign(n, kNaNd);
   const auto dist = [&r](int i, double u, double v) {
     return std::hypot(r.u_px[i] - u, r.v_px[i] - v);
   };
+  for (int d = 0; d < 2; ++d) {
+    second[d].assign(n, kNaNd);
+    jump[d].assign(n, kNaNd);
+  }
   for (int i = 0; i < n; ++i) {
     if (!Valid(r, i)) continue;
     const int row = i / cols, col = i % cols;
     const int pairs[2][2][2] = {{{row, col - 1}, {row, col + 1}}, {{row - 1, col}, {row + 1, col}}};
-    for (const auto& p : pairs) {
+    for (int d = 0; d < 2; ++d) {
+      const auto& p = pairs[d];
       const bool a_in = p[0][0] >= 0 && p[0][1] >= 0, b_in = p[1][0] < rows && p[1][1] < cols;
       const int a = a_in ? p[0][0] * cols + p[0][1] : -1, b = b_in ? p[1][0] * cols + p[1][1] : -1;
       for (const int j : {a, b}) {
         if (j >= 0 && Valid(r, j))
-          (*jump)[i] = std::fmax((*jump)[i], dist(i, r.u_px[j], r.v_px[j]));
+          jump[d][i] = std::fmax(jump[d][i], dist(i, r.u_px[j], r.v_px[j]));
       }
       if (a < 0 || b < 0 || !Valid(r, a) || !Valid(r, b)) continue;
-      const double d2 = dist(i, 0.5 * (r.u_px[a] + r.u_px[b]), 0.5 * (r.v_px[a] + r.v_px[b]));
-      (*second)[i] = std::fmax((*second)[i], d2);
+      second[d][i] = dist(i, 0.5 * (r.u_px[a] + r.u_px[b]), 0.5 * (r.v_px[a] + r.v_px[b]));
     }
   }
 }
@@ -85,23 +89,25 @@ ContinuityFlags CheckContinuity(const FrameResult& result, int cols, int rows,
              "CheckContinuity grid", std::to_string(cols) + "x" + std::to_string(rows),
              "cols x rows == the frame's subsets");
   const int n = cols * rows;
-  std::vector<double> misfit(n, kNaNd), second, jump;
+  std::vector<double> misfit(n, kNaNd), second[2], jump[2];
   for (int i = 0; i < n; ++i)
     if (Valid(result, i)) misfit[i] = 1.0 - result.zncc[i];
-  Differences(result, cols, rows, &second, &jump);
+  Differences(result, cols, rows, second, jump);
   ContinuityFlags flags;
   // The median is taken at least 1e-6 (a perfect fit).
   const double misfit_floor = std::max(options.min_misfit, options.misfit_ratio * 1e-6);
   flags.misfit = std::isfinite(options.misfit_ratio)
                      ? AboveLocalMedian(misfit, cols, rows, misfit_floor, options.misfit_ratio)
                      : std::vector<std::uint8_t>(n, 0);
-  const std::vector<std::uint8_t> s2 =
-      AboveLocalMedian(second, cols, rows, options.max_second_difference_px, options.local_ratio);
-  const std::vector<std::uint8_t> jp =
-      AboveLocalMedian(jump, cols, rows, options.max_neighbour_difference_px, options.local_ratio);
   flags.discontinuous.assign(n, 0);
+  for (int d = 0; d < 2; ++d) {
+    const std::vector<std::uint8_t> s2 = AboveLocalMedian(
+        second[d], cols, rows, options.max_second_difference_px, options.local_ratio);
+    const std::vector<std::uint8_t> jp = AboveLocalMedian(
+        jump[d], cols, rows, options.max_neighbour_difference_px, options.local_ratio);
+    for (int i = 0; i < n; ++i) flags.discontinuous[i] |= s2[i] | jp[i];
+  }
   for (int i = 0; i < n; ++i) {
-    flags.discontinuous[i] = s2[i] || jp[i];
     flags.flagged += flags.misfit[i] || flags.discontinuous[i];
   }
   return flags;

@@ -50,6 +50,45 @@ TEST(DicOptions, SceneAndCorrelateShareTheUncertaintyLimitDefault) {
   }
 }
 
+ContinuityCheckOptions SceneContinuity(const std::string& dic_section) {
+  return MakeDicOptions(ParseScene("inputs: {frames: f}\n" + dic_section, "x/scene.yaml").dic)
+      .continuity;
+}
+
+// The scene's dic.continuity_* keys: the library's defaults, values reach ContinuityCheckOptions,
+// none switches a criterion off, bad values are refused naming the key.
+TEST(DicOptions, SceneContinuityKeysReachTheLibrary) {
+  const ContinuityCheckOptions d, s = SceneContinuity("");
+  EXPECT_EQ(s.enabled, d.enabled);
+  EXPECT_EQ(s.misfit_ratio, d.misfit_ratio);
+  EXPECT_EQ(s.min_misfit, d.min_misfit);
+  EXPECT_EQ(s.max_second_difference_px, d.max_second_difference_px);
+  EXPECT_EQ(s.max_neighbour_difference_px, d.max_neighbour_difference_px);
+  EXPECT_EQ(s.local_ratio, d.local_ratio);
+  const ContinuityCheckOptions set = SceneContinuity(
+      "dic: {continuity_check: false, continuity_misfit_ratio: 3, continuity_min_misfit: 0.05, "
+      "continuity_max_second_difference_px: none, continuity_max_neighbour_difference_px: 0.6, "
+      "continuity_local_ratio: 5}");
+  EXPECT_FALSE(set.enabled);
+  EXPECT_EQ(set.misfit_ratio, 3);
+  EXPECT_EQ(set.min_misfit, 0.05);
+  EXPECT_TRUE(std::isinf(set.max_second_difference_px));
+  EXPECT_EQ(set.max_neighbour_difference_px, 0.6);
+  EXPECT_EQ(set.local_ratio, 5);
+  for (const std::string bad :
+       {"continuity_check: maybe", "continuity_misfit_ratio: 1", "continuity_min_misfit: 1",
+        "continuity_max_second_difference_px: 0", "continuity_max_neighbour_difference_px: -1",
+        "continuity_local_ratio: 0.5", "continuity_misfit_ratio: x"}) {
+    const std::string key = "dic." + bad.substr(0, bad.find(':'));
+    try {
+      SceneContinuity("dic: {" + bad + "}");
+      ADD_FAILURE() << "no error for " << bad;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+}
+
 // The downstream limit (kinematics ExcludeUncertainSamples) is read from momentum.max_sigma_px.
 TEST(DicOptions, MomentumSigmaLimitIsAPositiveNumber) {
   EXPECT_FALSE(ParseScene("inputs: {frames: f}\n", "x/scene.yaml").momentum.max_sigma_px);

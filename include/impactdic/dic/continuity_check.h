@@ -3,23 +3,27 @@
 // displacement is then a mixture of both sides and not the motion of their centre.
 //
 // The correlator cannot see this by itself: on realistic footage (synth/realistic.h) a subset half
-// on the pounder and half on the static wall converges with ZNCC 0.998 and an error of 1 px. Two
-// criteria, both on the subset grid:
+// on the pounder and half on the static wall converges with ZNCC 0.998 and an error of 1 px.
+// Three criteria on the subset grid (ContinuityCheckOptions in options.h):
 //  * misfit: 1 - ZNCC above `misfit_ratio` times the median of 1 - ZNCC of the converged subsets
-//    in the 7 x 7 neighbourhood: one affine warp cannot fit both sides of a shear band, so the
-//    residual rises above what the noise and texture of the neighbourhood explain;
-//  * discontinuity: a second difference of the displacement along a grid row or column,
-//    |d_i - (d_left + d_right) / 2| (or up/down), above `max_second_difference_px`: a smooth field
-//    has second differences of about u'' step^2, a jump J between neighbours gives J / 2 on both
-//    sides of it;
-//  * a jump: the displacement of a subset and of an adjacent one differ by more than
-//    `max_neighbour_difference_px` (a subset midway across an edge interpolates linearly between
-//    both sides, which the second difference does not see).
-// Call it after Correlator::Correlate on each frame (the pipeline's correlation stage and
-// `impactdic correlate`), before the displacements are used.
+//    in the 7 x 7 neighbourhood and above `min_misfit`: one affine warp cannot fit both sides of
+//    a shear band, so the residual rises above what the noise and texture around explain;
+//  * second difference: |d_i - (d_left + d_right) / 2| along a grid row (or column) above
+//    `max_second_difference_px`: a smooth field has second differences of about u'' step^2, a
+//    jump J between neighbours gives J / 2 on both sides of it;
+//  * jump: the displacement of a subset and of an adjacent one along a row (or column) differ by
+//    more than `max_neighbour_difference_px` (a subset midway across an edge interpolates
+//    linearly between both sides, which the second difference does not see).
+// The last two also need the value above `local_ratio` times the median of the same quantity in
+// the same grid direction over the 7 x 7 neighbourhood: a smooth field with a large strain at a
+// coarse step has large differences everywhere around, a discontinuity only next to it; keeping
+// the directions apart stops a strong gradient along a band from hiding the jump across it.
+// Correlator::Correlate runs it on every frame when DicOptions::continuity.enabled (the default);
+// flagged subsets become `discontinuous`. By hand on a result of a correlator with it off:
 //
-//   const ContinuityFlags flags = CheckContinuity(result, correlator.cols(), correlator.rows(),
-//   {}); ApplyContinuityFlags(flags, &result);  // flagged subsets become kDiscontinuous, NaN
+//   const ContinuityFlags flags =
+//       CheckContinuity(result, correlator.cols(), correlator.rows(), ContinuityCheckOptions{});
+//   ApplyContinuityFlags(flags, &result);  // flagged subsets become kDiscontinuous, NaN
 #ifndef IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 #define IMPACTDIC_DIC_CONTINUITY_CHECK_H_
 

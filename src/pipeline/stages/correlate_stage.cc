@@ -81,6 +81,12 @@ class CorrelateStage : public Stage {
       c.summary.warnings.push_back(fmt::format(
           "correlation: only {:.1f} % of the subsets are valid", 100 * dic.summary.valid_fraction));
     }
+    if (dic.summary.Discontinuous() > 0) {
+      c.summary.warnings.push_back(fmt::format(
+          "correlation: {} subset results flagged as straddling a discontinuity (status "
+          "discontinuous, NaN; dic.continuity_check)",
+          dic.summary.Discontinuous()));
+    }
     const std::string problem = CorrelationProblem(dic.summary, scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
     return dic.summary.BriefReport();
