@@ -46,13 +46,13 @@ struct CorrelateArgs {
   // The continuity post-check (DicOptions::continuity), checked with the flags' names
   // (ContinuityFromArgs).
   std::string continuity = DicOptions{}.continuity.enabled ? "on" : "off";
-  std::string continuity_misfit = fmt::format("{}", DicOptions{}.continuity.misfit_ratio);
+  std::string continuity_misfit = ContinuityLimitText(DicOptions{}.continuity.misfit_ratio);
   std::string continuity_second =
-      fmt::format("{}", DicOptions{}.continuity.max_second_difference_px);
+      ContinuityLimitText(DicOptions{}.continuity.max_second_difference_px);
   std::string continuity_jump =
-      fmt::format("{}", DicOptions{}.continuity.max_neighbour_difference_px);
+      ContinuityLimitText(DicOptions{}.continuity.max_neighbour_difference_px);
   double continuity_min_misfit = DicOptions{}.continuity.min_misfit;
-  std::string continuity_local = fmt::format("{}", DicOptions{}.continuity.local_ratio);
+  std::string continuity_local = ContinuityLimitText(DicOptions{}.continuity.local_ratio);
   std::string output;
 };
 

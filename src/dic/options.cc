@@ -162,6 +162,10 @@ std::string ContinuityCheckText(const ContinuityCheckOptions& c) {
       c.local_ratio);
 }
 
+std::string ContinuityLimitText(double limit) {
+  return std::isfinite(limit) ? fmt::format("{}", limit) : "none";
+}
+
 bool OnOffFromString(const std::string& text, const std::string& where) {
   if (text == "on" || text == "true") return true;
   if (text == "off" || text == "false") return false;

@@ -151,7 +151,7 @@ void AddContinuityLimit(YamlOptionTable& t, const std::string& key, double* fiel
   const std::string expected = fmt::format("a number > {}{}, or none (criterion off)", above,
                                            unit.empty() ? "" : " " + unit);
   t.AddCustom(
-      key, expected, Num(*field),
+      key, expected, ContinuityLimitText(*field),
       [field, above, unit](const YAML::Node& n) {
         if (!n.IsScalar()) return false;
         try {
@@ -175,8 +175,9 @@ void AddContinuityKeys(YamlOptionTable& t, ContinuityCheckOptions* c) {
                      "px", "Flag a second difference of u, v along a grid row or column above it");
   AddContinuityLimit(t, "continuity_max_neighbour_difference_px", &c->max_neighbour_difference_px,
                      0, "px", "Flag a displacement differing from an adjacent subset's by more");
-  AddContinuityLimit(t, "continuity_local_ratio", &c->local_ratio, 1, "",
-                     "...and above this times the 7x7 neighbourhood's median of the same");
+  AddContinuityLimit(
+      t, "continuity_local_ratio", &c->local_ratio, 1, "",
+      "...and above this times the 7x7 median of the same (none: the thresholds alone)");
 }
 
 YamlOptionTable DicTable(Scene* s) {

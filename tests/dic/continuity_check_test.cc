@@ -90,8 +90,10 @@ TEST(ContinuityCheck, SmallVariationsOfAGoodFitAreNotMisfits) {
   FrameResult r = Grid(9, 9, [](int, int) { return 0.5; });
   r.zncc.assign(81, 0.9998f);
   r.zncc[40] = 0.999f;
-  EXPECT_EQ(CheckContinuity(r, 9, 9, {}).flagged, 0);
-  ContinuityCheckOptions no_floor;
+  ContinuityCheckOptions misfit;
+  misfit.misfit_ratio = 2.5;
+  EXPECT_EQ(CheckContinuity(r, 9, 9, misfit).flagged, 0);
+  ContinuityCheckOptions no_floor = misfit;
   no_floor.min_misfit = 0;
   EXPECT_TRUE(CheckContinuity(r, 9, 9, no_floor).misfit[40]);
 }
@@ -99,7 +101,11 @@ TEST(ContinuityCheck, SmallVariationsOfAGoodFitAreNotMisfits) {
 TEST(ContinuityCheck, APoorFitAmongGoodOnesIsFlaggedAndApplied) {
   FrameResult r = Grid(9, 9, [](int, int) { return 0.5; });
   r.zncc[40] = 0.95f;  // 1 - ZNCC five times the neighbours'.
-  const ContinuityFlags flags = CheckContinuity(r, 9, 9, {});
+  // The misfit criterion is off by default (ContinuityCheckOptions::misfit_ratio).
+  EXPECT_EQ(CheckContinuity(r, 9, 9, {}).flagged, 0);
+  ContinuityCheckOptions misfit;
+  misfit.misfit_ratio = 2.5;
+  const ContinuityFlags flags = CheckContinuity(r, 9, 9, misfit);
   EXPECT_TRUE(flags.misfit[40]);
   EXPECT_EQ(flags.flagged, 1);
   ApplyContinuityFlags(flags, &r);

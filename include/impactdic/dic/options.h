@@ -10,6 +10,7 @@
 #define IMPACTDIC_DIC_OPTIONS_H_
 
 #include <cmath>
+#include <limits>
 #include <opencv2/core.hpp>
 #include <string>
 
@@ -130,8 +131,11 @@ double MaxUncertaintyFromString(const std::string& text, const std::string& wher
 struct ContinuityCheckOptions {
   bool enabled = true;  // Run the check on every correlated frame.
   // Misfit: 1 - ZNCC above this many times the median 1 - ZNCC of the converged subsets in the
-  // 7 x 7 neighbourhood, > 1; +inf switches the criterion off.
-  double misfit_ratio = 2.5;
+  // 7 x 7 neighbourhood, > 1; +inf (the default) switches the criterion off: on low-contrast
+  // noisy speckle it flags accurate subsets whose texture is poorer than their neighbours'
+  // (Uncertainty.NoLimitReportsEverySubsetWithItsSigma), and on the realistic scenes the
+  // difference criteria catch every garbage subset without it (docs/dic.md). 2.5 when used.
+  double misfit_ratio = std::numeric_limits<double>::infinity();
   // ... and 1 - ZNCC above this as well, kMinMisfitRange: on clean speckle 1 - ZNCC is ~1e-3 and
   // varies by more than misfit_ratio between subsets without any discontinuity (the committed
   // sample).
@@ -155,6 +159,8 @@ double ContinuityLimitFromString(const std::string& text, const std::string& whe
                                  const std::string& unit);
 // "off", or "on (misfit_ratio 2.5, ...)" with the thresholds (inf: criterion off).
 std::string ContinuityCheckText(const ContinuityCheckOptions& continuity);
+// A continuity threshold as written: the number, or "none" for +inf.
+std::string ContinuityLimitText(double limit);
 // "on"/"off" (also true/false): an Error naming `where` otherwise.
 bool OnOffFromString(const std::string& text, const std::string& where);
 
