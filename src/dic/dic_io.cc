@@ -8,6 +8,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <type_traits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
@@ -43,8 +44,12 @@ bool FailsInReference(SubsetStatus status) {
          status == SubsetStatus::kLowContrast || status == SubsetStatus::kSaturated;
 }
 
-DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& options,
-                                    int first_frame) {
+namespace {
+
+// MakeDicResultsTable; a DicResult passed as non-const has each frame's arrays released once
+// they are in the table, so that the results are in memory once (plus a frame), not twice.
+template <typename Result>
+DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_frame) {
   DicResultsTable t;
   t.first_frame = first_frame;  // -1: unknown (the indices are then those of the images given).
   first_frame = std::max(first_frame, 0);
@@ -97,6 +102,7 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
       t.iterations[k] = f.iterations[i];
       t.status[k] = static_cast<std::int32_t>(f.status[i]);
     }
+    if constexpr (!std::is_const_v<Result>) result.frames[r - 1] = FrameResult{};
   }
   t.status_codes = SubsetStatusCodes();
   t.text_attributes = {{"interpolation", ToString(options.icgn.interpolation)},
@@ -114,6 +120,18 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
                          {"discontinuous_results", double(result.summary.Discontinuous())}};
   if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
   return t;
+}
+
+}  // namespace
+
+DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& options,
+                                    int first_frame) {
+  return MakeTable(result, options, first_frame);
+}
+
+DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& options,
+                                    int first_frame) {
+  return MakeTable(result, options, first_frame);
 }
 
 DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options,

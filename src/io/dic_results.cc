@@ -194,7 +194,7 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& t) {
   for (const auto& [name, value] : t.text_attributes) out.SetAttribute(L::kDicGroup, name, value);
 }
 
-DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file) {
+DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file, DicFields fields) {
   DicResultsTable t;
   ReadGrid(in, file, &t);
   t.layout_version = in.HasAttribute(L::kDicGroup, L::kLayoutVersionAttr)
@@ -212,12 +212,14 @@ DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file) {
   const auto ints = [&in](const std::string& p) { return in.ReadInt(p); };
   const auto floats = [&in](const std::string& p) { return in.ReadFloat(p); };
   const auto doubles = [&in](const std::string& p) { return in.ReadDouble(p); };
-  ReadOptional(in, file, L::kDicStatus, n, ints, &t.status);
-  ReadOptional(in, file, L::kDicIterations, n, ints, &t.iterations);
-  ReadOptional(in, file, L::kDicZncc, n, floats, &t.zncc);
-  ReadOptional(in, file, L::kDicSigmaU, n, floats, &t.sigma_u_px);
-  ReadOptional(in, file, L::kDicSigmaV, n, floats, &t.sigma_v_px);
-  ReadOptional(in, file, L::kDicSigma, n, floats, &t.sigma_px);
+  if (fields == DicFields::kAll) {
+    ReadOptional(in, file, L::kDicStatus, n, ints, &t.status);
+    ReadOptional(in, file, L::kDicIterations, n, ints, &t.iterations);
+    ReadOptional(in, file, L::kDicZncc, n, floats, &t.zncc);
+    ReadOptional(in, file, L::kDicSigmaU, n, floats, &t.sigma_u_px);
+    ReadOptional(in, file, L::kDicSigmaV, n, floats, &t.sigma_v_px);
+    ReadOptional(in, file, L::kDicSigma, n, floats, &t.sigma_px);
+  }
   if (t.sigma_u_px.empty() != t.sigma_v_px.empty()) {
     t.sigma_u_px.clear();  // Only both together are of use.
     t.sigma_v_px.clear();

@@ -1,10 +1,14 @@
 #include "impactdic/io/hdf5_store.h"
 
 #include <H5Cpp.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <limits>
@@ -94,8 +98,95 @@ std::string ImageName(const std::string& path) {
   return path + " (in memory " + std::to_string(getpid()) + "-" + std::to_string(counter++) + ")";
 }
 
+// The core driver's memory, allocated through file image callbacks (H5Pset_file_image_callbacks)
+// so that Commit() writes the file from where the driver keeps it: H5Fget_file_image would copy
+// it out first, holding the whole file in memory twice. The driver's own buffer (ops FILE_OPEN,
+// FILE_RESIZE, FILE_CLOSE) is an anonymous mapping: it grows by mremap without a copy, whatever
+// the allocator's thresholds, and its pages go back to the system when the file is closed. The
+// property lists' copies of an initial image (kUpdate) are plain allocations.
+struct CoreImage {
+  void* data = nullptr;    // The file's bytes; null before the first write.
+  std::size_t size = 0;    // Bytes the driver asked for (>= what the file uses).
+  std::size_t mapped = 0;  // Bytes mapped (size rounded up to pages).
+};
+
+std::size_t PageRounded(std::size_t size) {
+  const auto page = static_cast<std::size_t>(sysconf(_SC_PAGESIZE));
+  return (std::max<std::size_t>(size, 1) + page - 1) / page * page;
+}
+
+bool IsDriverBuffer(H5FD_file_image_op_t op) {
+  return op == H5FD_FILE_IMAGE_OP_FILE_OPEN || op == H5FD_FILE_IMAGE_OP_FILE_RESIZE ||
+         op == H5FD_FILE_IMAGE_OP_FILE_CLOSE;
+}
+
+void* ImageMalloc(std::size_t size, H5FD_file_image_op_t op, void* udata) {
+  if (!IsDriverBuffer(op)) return std::malloc(size);
+  auto* image = static_cast<CoreImage*>(udata);
+  if (image->data) return nullptr;  // One driver buffer per writer.
+  const std::size_t mapped = PageRounded(size);
+  void* p = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) return nullptr;
+  *image = {p, size, mapped};
+  return p;
+}
+
+void* ImageMemcpy(void* dest, const void* src, std::size_t size, H5FD_file_image_op_t, void*) {
+  return std::memcpy(dest, src, size);
+}
+
+void* ImageRealloc(void* ptr, std::size_t size, H5FD_file_image_op_t op, void* udata) {
+  auto* image = static_cast<CoreImage*>(udata);
+  if (!IsDriverBuffer(op)) return std::realloc(ptr, size);
+  if (!ptr) return ImageMalloc(size, op, udata);
+  if (ptr != image->data) return nullptr;
+  const std::size_t mapped = PageRounded(size);
+  void* p = mremap(ptr, image->mapped, mapped, MREMAP_MAYMOVE);
+  if (p == MAP_FAILED) return nullptr;
+  *image = {p, size, mapped};
+  return p;
+}
+
+herr_t ImageFree(void* ptr, H5FD_file_image_op_t, void* udata) {
+  auto* image = static_cast<CoreImage*>(udata);
+  if (ptr && ptr == image->data) {
+    munmap(ptr, image->mapped);
+    *image = {};
+  } else {
+    std::free(ptr);
+  }
+  return 0;
+}
+
+// What H5Fget_file_image does to its copy, done to the image itself before it is written: the
+// superblock's file consistency flags (set while the file is open for writing) cleared, so the
+// file on the disk is byte for byte the one H5Fget_file_image would give. The image is not used
+// afterwards (the file is closed). Superblock versions 0 and 1 (what HDF5 writes by default; HDF5
+// file format specification, "Superblock"): 4 bytes at offset 20. false for a superblock that is
+// not at the start (a user block) or of a later version (whose flags are under a checksum): the
+// image is then copied out by HDF5.
+bool ClearStatusFlags(unsigned char* image, std::size_t size) {
+  constexpr unsigned char kSignature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+  if (size < 24 || std::memcmp(image, kSignature, sizeof kSignature) != 0) return false;
+  if (image[8] > 1) return false;
+  std::memset(image + 20, 0, 4);
+  return true;
+}
+
+// The property lists copy the callbacks' udata: all copies share the writer's CoreImage.
+void* ImageUdataCopy(void* udata) { return udata; }
+herr_t ImageUdataFree(void*) { return 0; }
+
+void SetImageCallbacks(H5::FileAccPropList& access, CoreImage* image) {
+  H5FD_file_image_callbacks_t callbacks = {ImageMalloc,    ImageMemcpy,    ImageRealloc, ImageFree,
+                                           ImageUdataCopy, ImageUdataFree, image};
+  if (H5Pset_file_image_callbacks(access.getId(), &callbacks) < 0)
+    throw H5::PropListIException("H5Pset_file_image_callbacks", "cannot set the image callbacks");
+}
+
 struct H5Writer::Impl {
   std::string final_path;
+  CoreImage image;  // Before `file`: the file is closed (and its image freed) first.
   H5::H5File file;
   bool open = false;
 };
@@ -119,6 +210,7 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_u
   Guard(final_path, "open", [&] {
     H5::FileAccPropList access;
     access.setCore(kCoreIncrement, /*backing_store=*/false);
+    SetImageCallbacks(access, &impl_->image);  // Before the initial image (HDF5's rule).
     if (mode == Mode::kUpdate &&
         H5Pset_file_image(access.getId(), existing.data(), existing.size()) < 0)
       throw H5::PropListIException("H5Pset_file_image", "cannot use the file's bytes");
@@ -366,9 +458,31 @@ std::vector<char> H5Writer::CloseToImage() {
   return image;
 }
 
+// The bytes H5Fget_file_image would copy (the file's first `eoa` bytes; the driver reads zeros
+// past what it has allocated) are written from the driver's buffer, then the file is closed. Only
+// when HDF5 has allocated more than it has written (eoa beyond the buffer) is the image copied.
 void H5Writer::Commit() {
-  const std::vector<char> image = CloseToImage();
-  WriteFileAtomic(final_path(), image.data(), image.size());
+  const char* data = nullptr;
+  std::size_t size = 0;
+  Guard(final_path(), "close", [&] {
+    impl_->file.flush(H5F_SCOPE_GLOBAL);
+    const ssize_t bytes = H5Fget_file_image(impl_->file.getId(), nullptr, 0);
+    if (bytes < 0) throw H5::FileIException("H5Fget_file_image", "cannot size the file image");
+    size = static_cast<std::size_t>(bytes);
+    if (impl_->image.data && size <= impl_->image.size &&
+        ClearStatusFlags(static_cast<unsigned char*>(impl_->image.data), size))
+      data = static_cast<const char*>(impl_->image.data);
+  });
+  if (!data) {
+    const std::vector<char> image = CloseToImage();
+    WriteFileAtomic(final_path(), image.data(), image.size());
+    return;
+  }
+  WriteFileAtomic(final_path(), data, size);
+  Guard(final_path(), "close", [&] {
+    impl_->file.close();
+    impl_->open = false;
+  });
 }
 
 std::vector<char> H5Writer::CommitToMemory() { return CloseToImage(); }

@@ -138,17 +138,18 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
   // Lagrangian positions from the accumulated displacement, when stored (read by io
   // ReadDicResults, whatever the layout version).
   if (fixed && r.Exists(L::kDicU) && r.Exists(L::kDicV)) {
-    const DicResultsTable dic = ReadDicResults(r, file);
+    // The displacements only, turned into positions where they are read.
+    DicResultsTable dic = ReadDicResults(r, file, DicFields::kDisplacements);
     if (dic.rows != f || dic.subsets != n) {
       ShapeError(r, L::kDicU, file, Dims{dic.rows, dic.subsets},
                  "[frames x subsets] = " + Dims2Text(dvx));
     }
-    seq.x_px.assign(f * n, 0.0);
-    seq.y_px.assign(f * n, 0.0);
+    seq.x_px = std::move(dic.u_px);
+    seq.y_px = std::move(dic.v_px);
     for (std::size_t i = 0; i < f; ++i) {
       for (std::size_t s = 0; s < n; ++s) {
-        seq.x_px[i * n + s] = x[s] + dic.u_px[i * n + s];
-        seq.y_px[i * n + s] = y[s] + dic.v_px[i * n + s];
+        seq.x_px[i * n + s] = x[s] + seq.x_px[i * n + s];
+        seq.y_px[i * n + s] = y[s] + seq.y_px[i * n + s];
       }
     }
   }

@@ -238,7 +238,7 @@ void VelocityFieldRenderer::SetColourScale() {
   }
   valid_speeds_ = speeds.size();
   double top = options_.max_speed_mm_s;
-  if (std::isnan(top)) top = Percentile(speeds, 99.0);
+  if (std::isnan(top)) top = Percentile(std::move(speeds), 99.0);  // One array of f x n speeds.
   if (!(top > 0) || !std::isfinite(top)) {
     LogDebug("velocity field: no positive speed; colour scale 0..1 mm/s");
     top = 1.0;

@@ -60,6 +60,9 @@ bool FailsInReference(SubsetStatus status);
 // attribute is written); the options and the summary as attributes.
 DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& options,
                                     int first_frame);
+// The same from a result that is not needed afterwards: each frame's arrays are released once
+// copied, so the subsets x frames results are in memory once (plus one frame), not twice.
+DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& options, int first_frame);
 
 // Writes the result by extension:
 // .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status,sigma_u_px,sigma_v_px (one row

@@ -52,7 +52,12 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& table);
 // Reads the /dic group in any layout version (results_layout.h): the table in the current layout
 // (a correlate file of version 1 gets its reference row prepended). Error kFileFormat naming
 // `file` and the dataset when it is missing or its shape or frame indices are inconsistent.
-DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file);
+// kDisplacements reads the grid, u_px, v_px and the per-row indices only, not the per-sample
+// status and quality (status, iterations, zncc, sigmas stay empty): what a reader of the motion
+// needs, without four more arrays of rows x subsets in memory (render's velocity field).
+enum class DicFields { kAll, kDisplacements };
+DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file,
+                               DicFields fields = DicFields::kAll);
 
 }  // namespace impactdic
 

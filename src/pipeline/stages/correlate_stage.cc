@@ -4,6 +4,7 @@
 #include <tbb/global_control.h>
 
 #include <optional>
+#include <utility>
 
 #include "impactdic/core/progress.h"
 #include "impactdic/dic/dic_io.h"
@@ -68,28 +69,30 @@ class CorrelateStage : public Stage {
     if (threads > 0)
       limit.emplace(tbb::global_control::max_allowed_parallelism,
                     static_cast<std::size_t>(threads));
-    const DicResult dic = CorrelateStream(*d.frames, scene, options);
+    DicResult dic = CorrelateStream(*d.frames, scene, options);
     for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
     d.preprocess_note = d.frames->PreprocessNote();
     d.dic_summary = dic.summary;
-    d.dic = MakeDicResultsTable(dic, options, d.first_frame);
+    // Moved: the correlator's rows are released as the table fills (one copy in memory).
+    d.dic = MakeDicResultsTable(std::move(dic), options, d.first_frame);
     d.dic->text_attributes["preprocess"] = d.preprocess_note;
+    const DicSummary& summary = d.dic_summary;
     SceneFigures& fig = c.summary.figures;
-    fig.dic_valid_fraction = dic.summary.valid_fraction;
-    fig.dic_subsets_per_s = dic.summary.SubsetsPerSecond();
-    if (!dic.summary.IsUsable()) {
+    fig.dic_valid_fraction = summary.valid_fraction;
+    fig.dic_subsets_per_s = summary.SubsetsPerSecond();
+    if (!summary.IsUsable()) {
       c.summary.warnings.push_back(fmt::format(
-          "correlation: only {:.1f} % of the subsets are valid", 100 * dic.summary.valid_fraction));
+          "correlation: only {:.1f} % of the subsets are valid", 100 * summary.valid_fraction));
     }
-    if (dic.summary.Discontinuous() > 0) {
+    if (summary.Discontinuous() > 0) {
       c.summary.warnings.push_back(fmt::format(
           "correlation: {} subset results flagged as straddling a discontinuity (status "
           "discontinuous, NaN; dic.continuity_check)",
-          dic.summary.Discontinuous()));
+          summary.Discontinuous()));
     }
-    const std::string problem = CorrelationProblem(dic.summary, scene.dic.options.icgn.min_zncc);
+    const std::string problem = CorrelationProblem(summary, scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
-    return dic.summary.BriefReport();
+    return summary.BriefReport();
   }
 };
 
