@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <utility>
 
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/io/results_layout.h"
@@ -29,6 +30,31 @@ DicResult HandMadeResult() {
     r.frames.push_back(f);
   }
   return r;
+}
+
+// A result passed by move gives the same table and has its frames' arrays released (the
+// pipeline's correlate stage: the subsets x frames results in memory once, not twice).
+TEST(ResultsTable, MovedResultGivesTheSameTableAndReleasesItsRows) {
+  const DicResult kept = HandMadeResult();
+  const DicResultsTable from_copy = MakeDicResultsTable(kept, DicOptions{}, /*first_frame=*/4);
+  DicResult moved = HandMadeResult();
+  const DicResultsTable from_move =
+      MakeDicResultsTable(std::move(moved), DicOptions{}, /*first_frame=*/4);
+  EXPECT_EQ(from_move.status, from_copy.status);
+  EXPECT_EQ(from_move.iterations, from_copy.iterations);
+  EXPECT_EQ(from_move.frame, from_copy.frame);
+  EXPECT_EQ(from_move.reference_frame, from_copy.reference_frame);
+  ASSERT_EQ(from_move.u_px.size(), from_copy.u_px.size());
+  for (std::size_t k = 0; k < from_copy.u_px.size(); ++k) {
+    EXPECT_TRUE(from_move.u_px[k] == from_copy.u_px[k] ||
+                (std::isnan(from_move.u_px[k]) && std::isnan(from_copy.u_px[k])))
+        << k;
+  }
+  EXPECT_EQ(kept.frames[1].u_px.size(), 3u);  // A const result is left as it was.
+  // NOLINTNEXTLINE(bugprone-use-after-move): the rows' release is what is tested.
+  for (const FrameResult& f : moved.frames) {
+    EXPECT_TRUE(f.u_px.empty() && f.v_px.empty() && f.status.empty() && f.zncc.empty());
+  }
 }
 
 TEST(ResultsTable, OnlyConvergedIsValidAndReferenceFaultsShowInRowZero) {

@@ -88,6 +88,30 @@ TEST(DicResults, WrittenTableIsReadBackWithItsLayoutVersion) {
 
 // As `impactdic correlate -o X.h5` wrote it before layout versions: the deformed images only
 // (F - 1 rows), /dic/frame 1-based, u/v double, the codes under two names.
+
+// DicFields::kDisplacements (render's velocity field): the same grid, displacements and row
+// indices, without the four per-sample arrays of status and quality.
+TEST(DicResults, DisplacementsOnlyReadsTheMotionWithoutTheQualityArrays) {
+  TestDir dir;
+  const std::string path = dir.File("r.h5");
+  const DicResultsTable t = SmallTable();
+  {
+    H5Writer out(path);
+    WriteDicResults(out, t);
+    out.Commit();
+  }
+  const DicResultsTable r = ReadDicResults(H5Reader(path), path, DicFields::kDisplacements);
+  DicResultsTable expected = t;
+  expected.status.clear();
+  ExpectSameRows(expected, r);
+  EXPECT_EQ(r.reference_frame, t.reference_frame);
+  EXPECT_EQ(r.frame_number, t.frame_number);
+  EXPECT_EQ(r.first_frame, t.first_frame);
+  EXPECT_TRUE(r.status.empty());
+  EXPECT_TRUE(r.iterations.empty());
+  EXPECT_TRUE(r.zncc.empty());
+  EXPECT_TRUE(r.sigma_u_px.empty() && r.sigma_v_px.empty() && r.sigma_px.empty());
+}
 TEST(DicResults, ReadsTheVersion1CorrelateLayoutWithTheReferenceRowPrepended) {
   TestDir dir;
   const std::string path = dir.File("correlate_v1.h5");
