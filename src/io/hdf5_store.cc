@@ -458,9 +458,10 @@ std::vector<char> H5Writer::CloseToImage() {
   return image;
 }
 
-// The bytes H5Fget_file_image would copy (the file's first `eoa` bytes; the driver reads zeros
-// past what it has allocated) are written from the driver's buffer, then the file is closed. Only
-// when HDF5 has allocated more than it has written (eoa beyond the buffer) is the image copied.
+// The bytes H5Fget_file_image would copy (the file's first `eoa` bytes, consistency flags
+// cleared) are written from the driver's buffer, then the file is closed. Only when HDF5 has
+// allocated more than it has written (eoa beyond the buffer; the driver reads zeros there) or the
+// superblock is not one ClearStatusFlags knows is the image copied out first, as before.
 void H5Writer::Commit() {
   const char* data = nullptr;
   std::size_t size = 0;

@@ -8,7 +8,7 @@
 // WriteFileAtomic (atomic_file.h): a temporary sibling, renamed over the final name only when
 // complete. A writer destroyed without Commit() writes nothing; a full disk is one Error kIo
 // naming the file ("no space left on device") with no temporary file left. The price: the whole
-// file is held in memory until Commit() (briefly twice while it is copied out).
+// file is held in memory until Commit(), once (Commit() writes it from the driver's buffer).
 //
 //   H5Writer out("run/results.h5");
 //   out.WriteProvenance(scene_yaml_text);
