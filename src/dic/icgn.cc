@@ -12,6 +12,7 @@
 #include "icgn.h"
 
 #include <algorithm>
+#include <cstddef>
 #if defined(__AVX2__) && defined(__FMA__)
 #define IMPACTDIC_DIC_AVX2 1
 #include <immintrin.h>

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"

@@ -3,12 +3,14 @@
 #include <H5Cpp.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
 #include <limits>
 #include <numeric>
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"

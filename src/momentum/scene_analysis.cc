@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

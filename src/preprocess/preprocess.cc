@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"

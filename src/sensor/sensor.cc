@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

@@ -12,9 +12,11 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/synth/checkerboard.h"
 #include "lens_render.h"
 #include "random.h"
 

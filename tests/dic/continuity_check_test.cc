@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 
 namespace impactdic {
 namespace {

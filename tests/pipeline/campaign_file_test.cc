@@ -3,14 +3,19 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
+#include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {
 namespace {

@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"

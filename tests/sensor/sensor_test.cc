@@ -11,6 +11,7 @@
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/csv.h"
 #include "synthetic_record.h"
 
 namespace impactdic {

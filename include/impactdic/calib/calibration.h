@@ -22,6 +22,7 @@
 #ifndef IMPACTDIC_CALIB_CALIBRATION_H_
 #define IMPACTDIC_CALIB_CALIBRATION_H_
 
+#include <algorithm>
 #include <array>
 #include <limits>
 #include <opencv2/core.hpp>

@@ -41,14 +41,17 @@
 #ifndef IMPACTDIC_MOMENTUM_MOMENTUM_H_
 #define IMPACTDIC_MOMENTUM_MOMENTUM_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/fit.h"

@@ -35,10 +35,12 @@
 #ifndef IMPACTDIC_PIPELINE_CAMPAIGN_H_
 #define IMPACTDIC_PIPELINE_CAMPAIGN_H_
 
+#include <algorithm>
 #include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/io/json.h"

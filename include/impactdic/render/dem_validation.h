@@ -11,6 +11,7 @@
 #ifndef IMPACTDIC_RENDER_DEM_VALIDATION_H_
 #define IMPACTDIC_RENDER_DEM_VALIDATION_H_
 
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <vector>

@@ -18,6 +18,7 @@
 #ifndef IMPACTDIC_RENDER_GNUPLOT_H_
 #define IMPACTDIC_RENDER_GNUPLOT_H_
 
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <vector>

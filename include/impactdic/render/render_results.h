@@ -9,6 +9,7 @@
 #ifndef IMPACTDIC_RENDER_RENDER_RESULTS_H_
 #define IMPACTDIC_RENDER_RENDER_RESULTS_H_
 
+#include <cstddef>
 #include <functional>
 #include <opencv2/core.hpp>
 #include <string>

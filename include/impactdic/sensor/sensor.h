@@ -16,8 +16,10 @@
 #ifndef IMPACTDIC_SENSOR_SENSOR_H_
 #define IMPACTDIC_SENSOR_SENSOR_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <string>
 #include <vector>

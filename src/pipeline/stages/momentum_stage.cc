@@ -3,8 +3,18 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
+#include "impactdic/model/impact_model.h"
+#include "impactdic/momentum/fit.h"
+#include "impactdic/momentum/momentum.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "stage.h"
 
 namespace impactdic::stages {
