@@ -14,7 +14,6 @@
 #include <opencv2/core.hpp>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/strings.h"
 #include "impactdic/dic/bspline.h"

@@ -32,7 +32,6 @@
 #endif
 #include <cassert>
 #include <cmath>
-#include <limits>
 
 namespace impactdic::internal {
 namespace {

@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <limits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"

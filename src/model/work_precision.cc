@@ -6,14 +6,11 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
-#include <map>
-#include <set>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
-#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 
 namespace impactdic {

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <utility>
 

@@ -14,7 +14,6 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"

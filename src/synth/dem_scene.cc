@@ -3,7 +3,6 @@
 #include "impactdic/synth/dem_scene.h"
 
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -15,7 +14,6 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/synth/dem_scene.h"

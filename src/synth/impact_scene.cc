@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
-#include <numbers>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"

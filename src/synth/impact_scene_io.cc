@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <functional>
 #include <opencv2/core.hpp>
-#include <set>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -19,7 +18,6 @@
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"

@@ -14,7 +14,6 @@
 #include <cmath>
 #include <cstddef>
 #include <numbers>
-#include <random>
 #include <string>
 #include <utility>
 #include <vector>

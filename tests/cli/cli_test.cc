@@ -1,8 +1,6 @@
 // Runs the built impactdic binary and checks exit codes and messages.
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <regex>
 #include <sstream>

@@ -5,11 +5,8 @@
 // plugin, so the trace is known to work), and with the plugin made unavailable. Speed itself is
 // measured in bench/startup_benchmark.py, not here.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>

@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -17,7 +16,6 @@
 
 #include "../cli/cli_runner.h"
 #include "impactdic/dic/correlator.h"
-#include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/synth/speckle.h"

@@ -12,7 +12,6 @@
 
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/options.h"
-#include "impactdic/synth/fields.h"
 #include "impactdic/synth/speckle.h"
 
 namespace impactdic::testing {

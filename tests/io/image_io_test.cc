@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <opencv2/imgcodecs.hpp>
 
 #include "impactdic/core/error.h"
 #include "test_dir.h"

@@ -4,11 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <numbers>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 
 namespace impactdic {
 namespace {

@@ -9,12 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 
 #include "../cli/cli_runner.h"
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
-#include "impactdic/core/error.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/dic_results.h"

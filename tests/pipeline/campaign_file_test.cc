@@ -1,10 +1,8 @@
 // Campaign files (pipeline/campaign.h): the plan they give, and clear errors for bad ones.
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstddef>
-#include <filesystem>
 #include <optional>
 #include <set>
 #include <string>

@@ -19,7 +19,6 @@
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "../reliability/cli_process.h"
-#include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/synth/impact_scene.h"

@@ -6,7 +6,6 @@
 #include <opencv2/imgproc.hpp>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {

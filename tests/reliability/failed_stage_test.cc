@@ -35,7 +35,6 @@
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/pipeline/scene_analysis.h"
 
 namespace impactdic {
 namespace {

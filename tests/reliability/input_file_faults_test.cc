@@ -14,7 +14,6 @@
 #include "fault_util.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace {

@@ -9,12 +9,10 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "../cli/cli_runner.h"
-#include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/io/csv.h"

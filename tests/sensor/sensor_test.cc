@@ -2,10 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <functional>
 #include <string>
 
 #include "../core/expect_error.h"

@@ -4,7 +4,6 @@
 #include "impactdic/synth/dem_scene.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstddef>

@@ -19,7 +19,6 @@
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/synth/fields.h"
 
 namespace impactdic {
 namespace {

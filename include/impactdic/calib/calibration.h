@@ -24,7 +24,6 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>

@@ -19,7 +19,6 @@
 #define IMPACTDIC_MODEL_IMPACT_MODEL_H_
 
 #include <cstddef>
-#include <limits>
 #include <string>
 #include <vector>
 

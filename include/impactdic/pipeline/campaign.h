@@ -36,7 +36,6 @@
 #define IMPACTDIC_PIPELINE_CAMPAIGN_H_
 
 #include <algorithm>
-#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string>

@@ -12,7 +12,6 @@
 #define IMPACTDIC_RENDER_DEM_VALIDATION_H_
 
 #include <cstddef>
-#include <limits>
 #include <string>
 #include <vector>
 

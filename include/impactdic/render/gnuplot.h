@@ -19,7 +19,6 @@
 #define IMPACTDIC_RENDER_GNUPLOT_H_
 
 #include <cstddef>
-#include <limits>
 #include <string>
 #include <vector>
 

@@ -17,7 +17,6 @@
 
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/render/animation.h"
-#include "impactdic/render/figures.h"
 #include "impactdic/render/gnuplot.h"
 #include "impactdic/render/velocity_field.h"
 

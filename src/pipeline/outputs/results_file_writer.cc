@@ -3,7 +3,6 @@
 // animation need it (OutputContext::results_in_memory), and not kept.
 #include <algorithm>
 #include <cstddef>
-#include <cstdint>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>

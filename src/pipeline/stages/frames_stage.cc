@@ -17,14 +17,12 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/dic/options.h"
-#include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "impactdic/sensor/sensor.h"
-#include "scene_inputs.h"
 #include "stage.h"
 
 namespace impactdic::stages {

@@ -11,7 +11,6 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
-#include "scene_inputs.h"
 #include "stage.h"
 
 namespace impactdic::stages {

@@ -4,7 +4,6 @@
 #include <string>
 #include <vector>
 
-#include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"

@@ -7,7 +7,6 @@
 
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/output_writer.h"
