@@ -2,6 +2,7 @@
 // Compares a run on footage filmed from a DEM simulation (impactdic synth --dem) with the truth
 // measured on the grains (render/dem_validation.h, docs/validation.md) and prints the table.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>

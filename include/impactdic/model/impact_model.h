@@ -18,6 +18,7 @@
 #ifndef IMPACTDIC_MODEL_IMPACT_MODEL_H_
 #define IMPACTDIC_MODEL_IMPACT_MODEL_H_
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>

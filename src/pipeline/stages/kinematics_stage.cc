@@ -2,6 +2,7 @@
 // above momentum.max_sigma_px.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <optional>

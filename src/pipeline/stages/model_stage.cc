@@ -1,5 +1,6 @@
 // model: the impact model (Eq. 9) with the measured impact velocity (else the scene's v0); a solve
 // that does not reach v = 0 is a failure. Also the measured plateau deceleration over [t1, stop].
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>

@@ -2,6 +2,7 @@
 // t_e not measurable is a failure. Also the measured peak deceleration of the peak stage.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <optional>
