@@ -26,12 +26,13 @@ iwyu_tool -p "$build_dir" -j "$jobs" "${sources[@]}" -- \
   -Xiwyu --check_also="$root/tests/*" > "$log" 2>&1 || true
 if [ -n "${IMPACTDIC_IWYU_LOG:-}" ]; then cp "$log" "$IMPACTDIC_IWYU_LOG"; fi  # iwyu's full output
 
-# A header is reported once per file that includes it: keep each (file, line) once.
+# .def files (X-macro lists) are not checked. A header is reported once per file that includes
+# it: keep each (file, line) once.
 report() {  # report KIND: "add" or "remove" lines of our files, as "file: line"
   awk -v kind="$1" -v root="$root/" '
     / should (add|remove) these lines:$/ {
       file = $1; sub(root, "", file)
-      ours = index($1, root) == 1 && file ~ /^(src|include|tests|bench)\//
+      ours = index($1, root) == 1 && file ~ /^(src|include|tests|bench)\/.*\.(h|cc)$/
       in_section = ours && $3 == kind
       next
     }

@@ -1,7 +1,5 @@
 // kinematics: subset motion on the panel (mm, mm/s) from the correlation rows, without the samples
 // above momentum.max_sigma_px.
-#include <fmt/format.h>
-
 #include <algorithm>
 #include <cstddef>
 #include <memory>
