@@ -1,18 +1,13 @@
-<<<<<<< HEAD
 // RethrowWithFlagNames, RethrowWithPartialFlag (commands.h): library field names -> command-line
 // flags.
 #include <fmt/format.h>
 
-#include "commands.h"
-#include "impactdic/pipeline/pipeline.h"
-=======
-// RethrowWithFlagNames (commands.h): library field names -> command-line flags.
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
->>>>>>> 61b6928 (include what you use: the includes iwyu asked to add (578 lines in 174 files; scripts/iwyu.sh))
+#include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic::cli {
 
