@@ -6,14 +6,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 build_dir=${1:-build/release}
-if ! command -v clang-tidy > /dev/null 2>&1; then
-  echo "clang_tidy: clang-tidy is not installed (scripts/install_deps.sh installs it); skipped"
-  exit 0
-fi
-if [ ! -f "$build_dir/compile_commands.json" ]; then
-  echo "clang_tidy: $build_dir/compile_commands.json is missing: configure that build first" >&2
-  exit 1
-fi
+# shellcheck source=scripts/common.sh
+source scripts/common.sh
+require_tool clang_tidy clang-tidy clang-tidy
+require_compile_commands clang_tidy "$build_dir"
 
 jobs=${IMPACTDIC_TIDY_JOBS:-2}
 log=$(mktemp)

@@ -19,21 +19,6 @@ PACKAGES=(
   curl                                          # scripts/fetch_dic_challenge.sh (and its test)
 )
 
-missing=()
-for p in "${PACKAGES[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
-    missing+=("$p")
-  fi
-done
-
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install_deps: all ${#PACKAGES[@]} packages present, nothing to do"
-  exit 0
-fi
-
-echo "install_deps: installing ${missing[*]}"
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# shellcheck source=scripts/common.sh
+source "$(dirname "$0")/common.sh"
+install_missing_packages install_deps "${PACKAGES[@]}"

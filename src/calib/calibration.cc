@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

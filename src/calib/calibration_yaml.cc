@@ -2,13 +2,18 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <functional>
+#include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/yaml.h"
 

@@ -3,15 +3,21 @@
 // scale, and writes the calibration YAML (keys in docs/calibration.md).
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/json.h"

@@ -1,15 +1,18 @@
 // impactdic campaign CAMPAIGN.yaml | SCENE.yaml... [-o OUTDIR] [--shard I/N] [--jobs N] [--force]
 // | --merge DIR... | --from-table CSV: many tests, then the Eq. 4 power-law regression and the
 // comparison figures (pipeline/campaign.h, docs/campaign.md).
+#include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/threads.h"
+#include "impactdic/io/json.h"
 #include "impactdic/pipeline/campaign.h"
 
 namespace impactdic::cli {

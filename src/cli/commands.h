@@ -5,6 +5,7 @@
 #define IMPACTDIC_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <string>
 #include <utility>
 #include <vector>

@@ -2,10 +2,14 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <exception>
 #include <filesystem>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -13,9 +17,13 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/range.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/dic/bspline.h"
+#include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"

@@ -2,7 +2,11 @@
 // flags.
 #include <fmt/format.h>
 
+#include <string>
+#include <vector>
+
 #include "commands.h"
+#include "impactdic/core/error.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic::cli {

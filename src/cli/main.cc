@@ -3,8 +3,11 @@
 // SIGHUP remove the temporaries of the outputs in progress and exit with 128 + signal
 // (core/interrupt.h).
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cstddef>
 #include <exception>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 

@@ -1,7 +1,11 @@
 // impactdic render RESULTS.h5 [-o OUTDIR] [--png-frames] [--codec auto|h264|mjpg] [--fps F]
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <system_error>
 
 #include "commands.h"
 #include "impactdic/core/error.h"

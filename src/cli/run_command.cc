@@ -1,14 +1,18 @@
 // impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N] [--allow-partial]: the whole
 // pipeline on one scene (pipeline/pipeline.h). A stage that produced nothing usable makes the run
 // fail (exit 1, no output written) unless --allow-partial.
+#include <CLI/CLI.hpp>
 #include <iostream>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/threads.h"
+#include "impactdic/io/json.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 

@@ -4,9 +4,17 @@
 // DIR/calibration/camera.yaml), the scene YAML that processes it and the ground truth HDF5.
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <stdexcept>
 #include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
@@ -14,6 +22,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/model/impact_model.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 #include "impactdic/synth/realistic.h"

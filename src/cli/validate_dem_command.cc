@@ -1,9 +1,15 @@
 // impactdic validate-dem TRUTH.h5 RESULTS.h5 [--figures DIR]
 // Compares a run on footage filmed from a DEM simulation (impactdic synth --dem) with the truth
 // measured on the grains (render/dem_validation.h, docs/validation.md) and prints the table.
+#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "impactdic/core/error.h"

@@ -1,4 +1,6 @@
+#include <CLI/CLI.hpp>
 #include <iostream>
+#include <memory>
 
 #include "commands.h"
 #include "impactdic/core/version.h"

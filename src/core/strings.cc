@@ -2,6 +2,7 @@
 
 #include <cassert>
 #include <cctype>
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>

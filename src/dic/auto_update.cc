@@ -1,8 +1,12 @@
 // "auto": switch the reference when subsets decorrelate (docs/dic.md, "Reference updates").
+#include <cstddef>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "impactdic/dic/options.h"
+#include "impactdic/dic/reference_update.h"
 #include "reference_update_policies.h"
 
 namespace impactdic::internal {

@@ -5,6 +5,8 @@
 #include <string>
 #include <utility>
 
+#include "impactdic/dic/options.h"
+#include "impactdic/dic/reference_update.h"
 #include "reference_update_policies.h"
 
 namespace impactdic::internal {

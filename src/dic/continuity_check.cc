@@ -3,10 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 
 namespace impactdic {
 

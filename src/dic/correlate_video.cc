@@ -1,8 +1,16 @@
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cstddef>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
 #include "impactdic/core/error.h"
 #include "impactdic/core/progress.h"
+#include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/image_io.h"
 
 namespace impactdic {

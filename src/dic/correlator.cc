@@ -8,13 +8,18 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <opencv2/imgproc.hpp>
+#include <span>
+#include <utility>
 
 #include "icgn.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/dic/continuity_check.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/image_io.h"

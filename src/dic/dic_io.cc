@@ -6,14 +6,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <exception>
 #include <filesystem>
+#include <map>
+#include <opencv2/core.hpp>
 #include <type_traits>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/strings.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"

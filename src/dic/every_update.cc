@@ -1,10 +1,13 @@
 // "every:N": the frame N frames after the reference becomes the reference (docs/dic.md,
 // "Reference updates").
+#include <cstddef>
 #include <exception>
 #include <memory>
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/dic/reference_update.h"
 #include "reference_update_policies.h"
 
 namespace impactdic::internal {

@@ -12,6 +12,7 @@
 #include "icgn.h"
 
 #include <algorithm>
+#include <cstddef>
 #if defined(__AVX2__) && defined(__FMA__)
 #define IMPACTDIC_DIC_AVX2 1
 #include <immintrin.h>
@@ -31,7 +32,6 @@
 #endif
 #include <cassert>
 #include <cmath>
-#include <limits>
 
 namespace impactdic::internal {
 namespace {

@@ -2,6 +2,7 @@
 #ifndef IMPACTDIC_SRC_DIC_ICGN_H_
 #define IMPACTDIC_SRC_DIC_ICGN_H_
 
+#include <algorithm>
 #include <array>
 #include <opencv2/core.hpp>
 #include <vector>

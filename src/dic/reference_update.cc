@@ -1,6 +1,7 @@
 #include "impactdic/dic/reference_update.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <memory>
 #include <mutex>
 #include <string>

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/strings.h"

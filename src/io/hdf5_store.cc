@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <limits>
 #include <numeric>
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"

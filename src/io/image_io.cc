@@ -5,16 +5,19 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <opencv2/imgcodecs.hpp>  // flags only: the codecs are in the plugin (io/opencv_codecs.h)
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>  // property ids only
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

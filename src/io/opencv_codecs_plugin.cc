@@ -1,7 +1,10 @@
 // The OpenCV codecs plugin: the only code of ours linked against opencv_imgcodecs and
 // opencv_videoio (see include/impactdic/io/opencv_codecs.h for why).
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
+#include <string>
+#include <vector>
 
 #include "opencv_codecs_api.h"
 

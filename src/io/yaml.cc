@@ -4,7 +4,6 @@
 #include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
-#include <cmath>
 #include <map>
 #include <sstream>
 #include <vector>

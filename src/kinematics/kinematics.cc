@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"

@@ -2,6 +2,7 @@
 // interval is integrated by Rodas3 (Hairer, Norsett, Wanner, Solving ODEs I, sec. IV.2).
 #include <memory>
 
+#include "impactdic/model/ode.h"
 #include "impactdic/model/ode_stepper.h"
 #include "ode_steppers.h"
 

@@ -3,10 +3,12 @@
 // Wanner, Solving ODEs I, sec. II.5 and IV.2), or under MATLAB ode45's rules (Shampine &
 // Reichelt 1997, doi:10.1137/S1064827594276424).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 
+#include "impactdic/model/ode.h"
 #include "impactdic/model/ode_stepper.h"
 #include "ode_norms.h"
 #include "ode_steppers.h"

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <memory>
 
+#include "impactdic/model/ode.h"
 #include "impactdic/model/ode_stepper.h"
 #include "ode_norms.h"
 #include "ode_steppers.h"

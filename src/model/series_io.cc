@@ -1,4 +1,5 @@
 // Writing the model's time series (CSV or HDF5).
+#include <cstddef>
 #include <string>
 #include <vector>
 

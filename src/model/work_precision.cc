@@ -4,14 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <set>
+#include <cstddef>
+#include <limits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
-#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 
 namespace impactdic {

@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

@@ -10,9 +10,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstddef>
+#include <exception>
 #include <filesystem>
 #include <mutex>
 #include <optional>
+#include <system_error>
 #include <thread>
 
 #include "campaign_internal.h"
@@ -23,6 +26,7 @@
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/scene.h"
 
 namespace impactdic {

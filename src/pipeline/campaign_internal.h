@@ -3,7 +3,6 @@
 #ifndef IMPACTDIC_SRC_PIPELINE_CAMPAIGN_INTERNAL_H_
 #define IMPACTDIC_SRC_PIPELINE_CAMPAIGN_INTERNAL_H_
 
-#include <cstdint>
 #include <string>
 #include <vector>
 

@@ -2,24 +2,33 @@
 // synthesise) or scene files; their unique names and content hashes; shards.
 #include <fmt/format.h>
 #include <glob.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
+#include <optional>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "campaign_internal.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/core/version.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;

@@ -4,10 +4,15 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <iterator>
 #include <map>
-#include <set>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "campaign_internal.h"
 #include "impactdic/core/error.h"
@@ -15,8 +20,12 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/json.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/momentum/fit.h"
 #include "impactdic/pipeline/campaign.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/render/comparison_figures.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;

@@ -3,14 +3,18 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <memory>
 #include <optional>
+#include <system_error>
 #include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/pipeline/run_data.h"
 #include "stages/stage.h"
 
 namespace impactdic {

@@ -1,5 +1,10 @@
 #include <fmt/format.h>
 
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "impactdic/io/json.h"
 #include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {

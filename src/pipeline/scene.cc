@@ -1,14 +1,18 @@
 #include "impactdic/pipeline/scene.h"
 
 #include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/threads.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/input_file.h"
 

@@ -3,10 +3,14 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstddef>
+#include <optional>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 

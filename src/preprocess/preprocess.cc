@@ -2,8 +2,8 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

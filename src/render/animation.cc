@@ -1,14 +1,14 @@
 #include "impactdic/render/animation.h"
 
+#include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/videoio.hpp>  // ids only: the video code is in the plugin (io/opencv_codecs.h)
-#include <optional>
+#include <system_error>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"

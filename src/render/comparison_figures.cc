@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <map>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"

@@ -6,18 +6,21 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>  // flag values only (WriteImage encodes)
 #include <opencv2/imgproc.hpp>
+#include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/render/figures.h"
+#include "impactdic/render/gnuplot.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/velocity_field.h"
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/model/impact_model.h"

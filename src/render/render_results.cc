@@ -3,10 +3,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
+#include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
@@ -16,6 +19,7 @@
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/render/figures.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <opencv2/imgproc.hpp>
 #include <unordered_map>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

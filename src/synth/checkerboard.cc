@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <numbers>
 #include <opencv2/calib3d.hpp>
@@ -11,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 #include <random>
 #include <sstream>
+#include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"

@@ -3,7 +3,6 @@
 #include "impactdic/synth/dem_scene.h"
 
 #include <fmt/format.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,9 +11,11 @@
 #include <limits>
 #include <map>
 #include <sstream>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/synth/checkerboard.h"
 #include "lens_render.h"
 #include "random.h"
 

@@ -3,15 +3,21 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
+#include <cstddef>
+#include <cstdint>
 #include <limits>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
 #include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/synth/dem_scene.h"
+#include "impactdic/synth/impact_scene.h"
 #include "scene_files.h"
 
 namespace impactdic {

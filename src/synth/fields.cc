@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <opencv2/core.hpp>
+#include <string>
 
 #include "impactdic/core/error.h"
 

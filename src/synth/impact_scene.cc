@@ -7,7 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
+#include <cstddef>
+#include <functional>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"

@@ -3,14 +3,21 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
-#include <set>
+#include <functional>
+#include <opencv2/core.hpp>
 #include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
-#include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
@@ -20,7 +27,10 @@
 #include "impactdic/io/input_file.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/io/yaml.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/synth/checkerboard.h"
 #include "impactdic/synth/impact_scene.h"
+#include "impactdic/synth/speckle.h"
 #include "scene_files.h"
 #include "spec_keys.h"
 

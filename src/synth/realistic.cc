@@ -11,11 +11,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <functional>
 #include <numbers>
 #include <string>
 #include <tuple>
+#include <utility>
 
 #include "impactdic/core/error.h"
+#include "impactdic/synth/speckle.h"
 #include "random.h"
 
 namespace impactdic {

@@ -2,9 +2,15 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"

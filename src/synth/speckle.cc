@@ -12,9 +12,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
-#include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "random.h"

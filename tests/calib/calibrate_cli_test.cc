@@ -3,7 +3,9 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "impactdic/calib/calibration.h"

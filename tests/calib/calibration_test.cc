@@ -4,12 +4,9 @@
 
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
-#include <opencv2/imgproc.hpp>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {

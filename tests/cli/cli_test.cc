@@ -1,11 +1,11 @@
 // Runs the built impactdic binary and checks exit codes and messages.
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
 #include <filesystem>
 #include <regex>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "cli_runner.h"
 

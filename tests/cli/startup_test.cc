@@ -5,14 +5,12 @@
 // plugin, so the trace is known to work), and with the plugin made unavailable. Speed itself is
 // measured in bench/startup_benchmark.py, not here.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>

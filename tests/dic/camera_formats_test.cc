@@ -4,17 +4,19 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
 #include <string>
 #include <vector>
 
 #include "../cli/cli_runner.h"
 #include "impactdic/dic/correlator.h"
-#include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/synth/speckle.h"
 

@@ -18,11 +18,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "dic_test_util.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/synth/fields.h"
+#include "impactdic/synth/speckle.h"
 
 namespace impactdic {
 namespace {

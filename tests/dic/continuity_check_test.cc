@@ -8,6 +8,7 @@
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 
 namespace impactdic {
 namespace {

@@ -3,10 +3,14 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "impactdic/dic/correlator.h"

@@ -3,11 +3,15 @@
 // (known rigid shifts 0..1 px; a sinusoidal u), and its tables must give the known truth; and
 // scripts/fetch_dic_challenge.sh fails cleanly when its download host cannot be resolved.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <sstream>

@@ -2,11 +2,16 @@
 #ifndef IMPACTDIC_TESTS_DIC_DIC_TEST_UTIL_H_
 #define IMPACTDIC_TESTS_DIC_DIC_TEST_UTIL_H_
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "impactdic/dic/correlator.h"
-#include "impactdic/synth/fields.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/synth/speckle.h"
 
 namespace impactdic::testing {

@@ -4,11 +4,19 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "dic_test_util.h"
 #include "impactdic/core/error.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
+#include "impactdic/synth/fields.h"
+#include "impactdic/synth/speckle.h"
 
 namespace impactdic {
 namespace {

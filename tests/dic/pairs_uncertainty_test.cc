@@ -2,13 +2,20 @@
 // uncertainty (sigma_u, sigma_v) with its limit (docs/dic.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
-#include <opencv2/imgproc.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "dic_test_util.h"
 #include "impactdic/core/error.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/synth/fields.h"
+#include "impactdic/synth/speckle.h"
 
 namespace impactdic {
 namespace {

@@ -7,9 +7,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -18,6 +21,7 @@
 
 #include "impactdic/dic/continuity_check.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/synth/realistic.h"
 
 namespace impactdic {

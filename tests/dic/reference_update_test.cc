@@ -5,12 +5,15 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "dic_test_util.h"
 #include "impactdic/core/error.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/synth/fields.h"
+#include "impactdic/synth/speckle.h"
 
 namespace impactdic {
 namespace {

@@ -3,9 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <string>
 #include <utility>
+#include <vector>
 
+#include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/results_layout.h"
 
 namespace impactdic {

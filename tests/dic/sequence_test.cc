@@ -6,10 +6,17 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "dic_test_util.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/synth/fields.h"
+#include "impactdic/synth/speckle.h"
 
 namespace impactdic {
 namespace {

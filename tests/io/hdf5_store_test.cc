@@ -2,6 +2,7 @@
 
 #include <H5Cpp.h>
 #include <gtest/gtest.h>
+#include <stdio.h>
 #include <sys/wait.h>
 #include <unistd.h>
 

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
+#include <iterator>
 
 #include "impactdic/core/error.h"
 #include "test_dir.h"

@@ -8,13 +8,11 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <string>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/io/atomic_file.h"
 #include "test_dir.h"

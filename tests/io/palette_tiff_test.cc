@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 

@@ -2,12 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
-#include <functional>
 #include <numbers>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 
 namespace impactdic {
 namespace {

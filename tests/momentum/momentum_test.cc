@@ -3,15 +3,16 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <functional>
 
 #include "../cli/cli_runner.h"
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
-#include "impactdic/core/error.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/dic_results.h"

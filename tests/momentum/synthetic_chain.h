@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <iterator>
 #include <numbers>
+#include <vector>
 
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/momentum.h"

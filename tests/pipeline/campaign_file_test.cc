@@ -1,16 +1,19 @@
 // Campaign files (pipeline/campaign.h): the plan they give, and clear errors for bad ones.
-#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <filesystem>
+#include <cstddef>
+#include <optional>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
+#include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {
 namespace {

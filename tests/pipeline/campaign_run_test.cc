@@ -2,16 +2,23 @@
 // interruption, shards and their merge. Tests are tiny synthesised scenes (160 x 120 px).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <system_error>
+#include <utility>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "../reliability/cli_process.h"
-#include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/synth/impact_scene.h"

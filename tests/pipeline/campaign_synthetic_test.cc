@@ -23,11 +23,18 @@
 //    the peak deceleration by ~3 % (slope 0.97).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "../io/test_dir.h"
+#include "impactdic/momentum/fit.h"
 #include "impactdic/pipeline/campaign.h"
+#include "impactdic/render/comparison_figures.h"
 
 namespace impactdic {
 namespace {

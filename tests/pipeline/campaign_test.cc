@@ -5,12 +5,10 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
-#include "impactdic/io/csv.h"
 
 namespace impactdic {
 namespace {

@@ -6,12 +6,17 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <opencv2/core.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "impactdic/calib/calibration.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/dic/options.h"
+#include "impactdic/io/yaml.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/scene.h"

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "../cli/cli_runner.h"

@@ -4,6 +4,8 @@
 
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <opencv2/imgproc.hpp>
 
 #include "../core/expect_error.h"
-#include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {

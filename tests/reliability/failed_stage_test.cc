@@ -10,13 +10,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../cli/cli_runner.h"
@@ -24,10 +28,13 @@
 #include "../momentum/synthetic_chain.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/json.h"
+#include "impactdic/kinematics/kinematics.h"
+#include "impactdic/momentum/fit.h"
+#include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/campaign.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/pipeline/scene_analysis.h"
 
 namespace impactdic {
 namespace {

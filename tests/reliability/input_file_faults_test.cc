@@ -2,15 +2,18 @@
 // in io/csv.cc, the one image reader in io/image_io.cc, io/input_file.h for every reader).
 #include <gtest/gtest.h>
 
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "../core/expect_error.h"
+#include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/io/input_file.h"
 
 namespace impactdic {
 namespace {

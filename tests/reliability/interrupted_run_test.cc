@@ -7,12 +7,20 @@
 // gnuplot's files in TMPDIR) and exit with 128 + signal; what a SIGKILL leaves is removed by the
 // next run. The same for `synth -o`, `campaign -o` and `render`.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../io/test_dir.h"

@@ -4,6 +4,7 @@
 // an existing file of another kind under an .h5 name is kept.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <iterator>

@@ -3,13 +3,17 @@
 // SequenceColourCheck, ReadVideoFrames) and so agree.
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <filesystem>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 #include <set>
-#include <sstream>
 #include <string>
+#include <vector>
 
-#include "../core/expect_error.h"
+#include "../cli/cli_runner.h"
+#include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"

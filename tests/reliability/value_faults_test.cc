@@ -7,6 +7,7 @@
 #include <string>
 
 #include "../core/expect_error.h"
+#include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/core/range.h"
 #include "impactdic/model/impact_model.h"

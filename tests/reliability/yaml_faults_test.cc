@@ -2,10 +2,12 @@
 // broken in ways yaml-cpp alone accepts or reports poorly. All three go through io LoadYaml.
 #include <gtest/gtest.h>
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 
 #include "../core/expect_error.h"
+#include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/io/yaml.h"

@@ -4,12 +4,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <opencv2/core.hpp>
 
 #include "../synth/dem_test_record.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/synth/dem_scene.h"
+#include "impactdic/synth/impact_scene.h"
 
 namespace impactdic {
 namespace {

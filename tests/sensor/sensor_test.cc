@@ -2,15 +2,13 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <functional>
 #include <string>
 
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/csv.h"
 #include "synthetic_record.h"
 
 namespace impactdic {

@@ -10,7 +10,9 @@
 #ifndef IMPACTDIC_TESTS_SENSOR_SYNTHETIC_RECORD_H_
 #define IMPACTDIC_TESTS_SENSOR_SYNTHETIC_RECORD_H_
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <numbers>
 #include <random>
 #include <string>

@@ -4,9 +4,9 @@
 #include "impactdic/synth/dem_scene.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
 

@@ -5,17 +5,20 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 
 #include "../cli/cli_runner.h"
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/synth/fields.h"
 
 namespace impactdic {
 namespace {

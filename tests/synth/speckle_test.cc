@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "impactdic/core/error.h"
 #include "impactdic/synth/fields.h"

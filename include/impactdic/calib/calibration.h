@@ -22,8 +22,8 @@
 #ifndef IMPACTDIC_CALIB_CALIBRATION_H_
 #define IMPACTDIC_CALIB_CALIBRATION_H_
 
+#include <algorithm>
 #include <array>
-#include <limits>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>

@@ -55,6 +55,7 @@
 #ifndef IMPACTDIC_DIC_CORRELATOR_H_
 #define IMPACTDIC_DIC_CORRELATOR_H_
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <opencv2/core.hpp>

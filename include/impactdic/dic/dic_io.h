@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/dic_results.h"
 
 namespace impactdic {

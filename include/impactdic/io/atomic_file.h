@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 
 namespace impactdic {
 

@@ -16,6 +16,7 @@
 #ifndef IMPACTDIC_IO_CSV_H_
 #define IMPACTDIC_IO_CSV_H_
 
+#include <cstddef>
 #include <string>
 #include <vector>
 

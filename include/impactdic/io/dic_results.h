@@ -10,6 +10,7 @@
 #ifndef IMPACTDIC_IO_DIC_RESULTS_H_
 #define IMPACTDIC_IO_DIC_RESULTS_H_
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <map>

@@ -22,6 +22,7 @@
 #ifndef IMPACTDIC_IO_HDF5_STORE_H_
 #define IMPACTDIC_IO_HDF5_STORE_H_
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <functional>

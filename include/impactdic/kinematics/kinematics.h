@@ -20,6 +20,7 @@
 #ifndef IMPACTDIC_KINEMATICS_KINEMATICS_H_
 #define IMPACTDIC_KINEMATICS_KINEMATICS_H_
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>

@@ -18,7 +18,8 @@
 #ifndef IMPACTDIC_MODEL_IMPACT_MODEL_H_
 #define IMPACTDIC_MODEL_IMPACT_MODEL_H_
 
-#include <limits>
+#include <algorithm>
+#include <cstddef>
 #include <string>
 #include <vector>
 

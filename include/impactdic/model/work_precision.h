@@ -13,6 +13,7 @@
 #ifndef IMPACTDIC_MODEL_WORK_PRECISION_H_
 #define IMPACTDIC_MODEL_WORK_PRECISION_H_
 
+#include <algorithm>
 #include <string>
 #include <vector>
 

@@ -41,14 +41,16 @@
 #ifndef IMPACTDIC_MOMENTUM_MOMENTUM_H_
 #define IMPACTDIC_MOMENTUM_MOMENTUM_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/fit.h"

@@ -14,7 +14,9 @@
 #include <string>
 
 #include "impactdic/io/dic_results.h"
+#include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/momentum.h"
+#include "impactdic/sensor/sensor.h"
 
 namespace impactdic {
 

@@ -35,10 +35,11 @@
 #ifndef IMPACTDIC_PIPELINE_CAMPAIGN_H_
 #define IMPACTDIC_PIPELINE_CAMPAIGN_H_
 
-#include <cstdint>
+#include <algorithm>
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/io/json.h"

@@ -11,6 +11,7 @@
 #ifndef IMPACTDIC_PIPELINE_FRAME_STREAM_H_
 #define IMPACTDIC_PIPELINE_FRAME_STREAM_H_
 
+#include <algorithm>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>

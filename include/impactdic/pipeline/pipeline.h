@@ -29,7 +29,6 @@
 #ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
 #define IMPACTDIC_PIPELINE_PIPELINE_H_
 
-#include <limits>
 #include <string>
 #include <vector>
 

@@ -6,7 +6,6 @@
 #define IMPACTDIC_PIPELINE_RUN_DATA_H_
 
 #include <memory>
-#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>

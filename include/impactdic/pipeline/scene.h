@@ -19,6 +19,7 @@
 #ifndef IMPACTDIC_PIPELINE_SCENE_H_
 #define IMPACTDIC_PIPELINE_SCENE_H_
 
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <string>

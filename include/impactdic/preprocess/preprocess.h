@@ -20,6 +20,7 @@
 #ifndef IMPACTDIC_PREPROCESS_PREPROCESS_H_
 #define IMPACTDIC_PREPROCESS_PREPROCESS_H_
 
+#include <algorithm>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>

@@ -12,6 +12,7 @@
 #ifndef IMPACTDIC_RENDER_ANIMATION_H_
 #define IMPACTDIC_RENDER_ANIMATION_H_
 
+#include <algorithm>
 #include <cstddef>
 #include <opencv2/core.hpp>
 #include <string>

@@ -12,7 +12,6 @@
 #ifndef IMPACTDIC_RENDER_COMPARISON_FIGURES_H_
 #define IMPACTDIC_RENDER_COMPARISON_FIGURES_H_
 
-#include <limits>
 #include <string>
 #include <vector>
 

@@ -11,7 +11,7 @@
 #ifndef IMPACTDIC_RENDER_DEM_VALIDATION_H_
 #define IMPACTDIC_RENDER_DEM_VALIDATION_H_
 
-#include <limits>
+#include <cstddef>
 #include <string>
 #include <vector>
 

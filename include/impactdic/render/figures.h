@@ -11,7 +11,6 @@
 #ifndef IMPACTDIC_RENDER_FIGURES_H_
 #define IMPACTDIC_RENDER_FIGURES_H_
 
-#include <limits>
 #include <string>
 #include <vector>
 

@@ -18,7 +18,7 @@
 #ifndef IMPACTDIC_RENDER_GNUPLOT_H_
 #define IMPACTDIC_RENDER_GNUPLOT_H_
 
-#include <limits>
+#include <cstddef>
 #include <string>
 #include <vector>
 

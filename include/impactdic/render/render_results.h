@@ -9,6 +9,7 @@
 #ifndef IMPACTDIC_RENDER_RENDER_RESULTS_H_
 #define IMPACTDIC_RENDER_RENDER_RESULTS_H_
 
+#include <cstddef>
 #include <functional>
 #include <opencv2/core.hpp>
 #include <string>
@@ -16,7 +17,6 @@
 
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/render/animation.h"
-#include "impactdic/render/figures.h"
 #include "impactdic/render/gnuplot.h"
 #include "impactdic/render/velocity_field.h"
 

@@ -24,7 +24,6 @@
 
 #include <cstddef>
 #include <functional>
-#include <limits>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>

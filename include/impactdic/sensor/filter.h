@@ -16,6 +16,7 @@
 #ifndef IMPACTDIC_SENSOR_FILTER_H_
 #define IMPACTDIC_SENSOR_FILTER_H_
 
+#include <cstddef>
 #include <vector>
 
 namespace impactdic {

@@ -16,9 +16,10 @@
 #ifndef IMPACTDIC_SENSOR_SENSOR_H_
 #define IMPACTDIC_SENSOR_SENSOR_H_
 
+#include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
+#include <cstddef>
 #include <string>
 #include <vector>
 

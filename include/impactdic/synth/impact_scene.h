@@ -37,7 +37,6 @@
 
 #include <array>
 #include <cstdint>
-#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>

@@ -41,8 +41,6 @@
 #include <string>
 #include <vector>
 
-#include "impactdic/synth/speckle.h"
-
 namespace impactdic {
 
 struct RealisticSceneSpec {

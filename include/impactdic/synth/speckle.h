@@ -17,7 +17,6 @@
 #include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <vector>
 
 namespace impactdic {
 

@@ -1,8 +1,21 @@
 // The figures (momentum, deceleration, added mass), the velocity snapshot at t_e and the
 // animation, drawn by render RenderResults from results.h5 (on disk, or held in memory when
 // outputs.hdf5 is false), over the frames re-read from their source one at a time.
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/render/gnuplot.h"
 #include "impactdic/render/render_results.h"
 #include "writers.h"

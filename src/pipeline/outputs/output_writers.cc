@@ -1,4 +1,5 @@
 #include <filesystem>
+#include <string>
 
 #include "impactdic/pipeline/output_writer.h"
 #include "writers.h"

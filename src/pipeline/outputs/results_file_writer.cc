@@ -2,13 +2,25 @@
 // "HDF5 layout"). Without outputs.hdf5 it is still built, in memory, when the figures or the
 // animation need it (OutputContext::results_in_memory), and not kept.
 #include <algorithm>
-#include <cstdint>
+#include <cstddef>
+#include <memory>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/model/impact_model.h"
+#include "impactdic/momentum/momentum.h"
+#include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/sensor.h"
 #include "writers.h"
 
 namespace impactdic::outputs {

@@ -1,8 +1,16 @@
 // summary.json and summary.csv: the key figures of the run (PipelineSummary::ToJson, SceneFigures).
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/json.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "writers.h"
 
 namespace impactdic::outputs {

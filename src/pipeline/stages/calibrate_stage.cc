@@ -1,7 +1,14 @@
 // calibrate: the camera model (undistortion) and the panel scale.
 #include <fmt/format.h>
 
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "stage.h"
 
 namespace impactdic::stages {

@@ -3,12 +3,26 @@
 #include <fmt/format.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "impactdic/core/progress.h"
+#include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "scene_inputs.h"
 #include "stage.h"
 

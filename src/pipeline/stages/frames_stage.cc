@@ -3,14 +3,26 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
 
+#include "impactdic/calib/calibration.h"
+#include "impactdic/calib/undistort.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
-#include "impactdic/io/image_io.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/preprocess/preprocess.h"
-#include "scene_inputs.h"
+#include "impactdic/sensor/sensor.h"
 #include "stage.h"
 
 namespace impactdic::stages {

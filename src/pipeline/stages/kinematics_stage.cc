@@ -1,7 +1,19 @@
 // kinematics: subset motion on the panel (mm, mm/s) from the correlation rows, without the samples
 // above momentum.max_sigma_px.
+#include <algorithm>
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "impactdic/core/error.h"
+#include "impactdic/io/dic_results.h"
+#include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "stage.h"
 
 namespace impactdic::stages {

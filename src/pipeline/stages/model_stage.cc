@@ -1,9 +1,17 @@
 // model: the impact model (Eq. 9) with the measured impact velocity (else the scene's v0); a solve
 // that does not reach v = 0 is a failure. Also the measured plateau deceleration over [t1, stop].
+#include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
+#include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/scene_analysis.h"
-#include "scene_inputs.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "stage.h"
 
 namespace impactdic::stages {

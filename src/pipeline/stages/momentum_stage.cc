@@ -2,9 +2,20 @@
 // t_e not measurable is a failure. Also the measured peak deceleration of the peak stage.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
 
+#include "impactdic/model/impact_model.h"
+#include "impactdic/momentum/fit.h"
+#include "impactdic/momentum/momentum.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
 #include "stage.h"
 
 namespace impactdic::stages {

@@ -2,7 +2,14 @@
 // output generation, swapped in when all are complete.
 #include <fmt/format.h>
 
+#include <memory>
+#include <string>
+#include <vector>
+
 #include "impactdic/core/log.h"
+#include "impactdic/io/output_generation.h"
+#include "impactdic/pipeline/output_writer.h"
+#include "impactdic/pipeline/pipeline.h"
 #include "stage.h"
 
 namespace impactdic::stages {

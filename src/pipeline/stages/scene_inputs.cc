@@ -2,11 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/pipeline.h"
 
 namespace impactdic {
 namespace stages {

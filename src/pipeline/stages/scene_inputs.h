@@ -7,8 +7,6 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "impactdic/model/impact_model.h"
-#include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 
 namespace impactdic::stages {

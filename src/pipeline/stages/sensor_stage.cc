@@ -1,5 +1,13 @@
 // sensor: the accelerometer record (impact time and velocity, pounder motion, crater depth).
-#include "impactdic/momentum/scene_analysis.h"
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/sensor.h"
 #include "stage.h"
 
 namespace impactdic::stages {

@@ -1,5 +1,7 @@
 #include "stage.h"
 
+#include <vector>
+
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
 

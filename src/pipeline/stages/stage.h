@@ -7,9 +7,9 @@
 
 #include <memory>
 #include <string>
-#include <vector>
 
 #include "impactdic/io/output_generation.h"
+#include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
