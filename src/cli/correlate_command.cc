@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/range.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/bspline.h"
@@ -107,18 +109,13 @@ GaussianBlurOptions ParseGaussian(const std::string& text) {
       g.kernel_size);
   const std::size_t comma = text.find(',');
   const std::string sigma = text.substr(0, comma);
-  bool ok = !sigma.empty();
-  try {
-    std::size_t used = 0;
-    g.sigma_px = std::stod(sigma, &used);
-    ok = ok && used == sigma.size() && std::isfinite(g.sigma_px);
-    if (comma != std::string::npos) {
-      const std::string kernel = text.substr(comma + 1);
-      g.kernel_size = std::stoi(kernel, &used);
-      ok = ok && used == kernel.size();
-    }
-  } catch (const std::exception&) {
-    ok = false;
+  const std::optional<double> sigma_px = ParseNumber(sigma);
+  bool ok = sigma_px && std::isfinite(*sigma_px);
+  if (ok) g.sigma_px = *sigma_px;
+  if (ok && comma != std::string::npos) {
+    const std::optional<double> kernel = ParseNumber(text.substr(comma + 1));
+    ok = kernel && std::abs(*kernel) < 1e6 && *kernel == std::floor(*kernel);
+    if (ok) g.kernel_size = static_cast<int>(*kernel);
   }
   CheckValue(ok, "--gaussian", text, expected);
   try {

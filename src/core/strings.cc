@@ -3,6 +3,8 @@
 #include <cassert>
 #include <cctype>
 #include <cstddef>
+#include <exception>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -27,6 +29,16 @@ bool EndsWithIgnoreCase(std::string_view text, std::string_view suffix) {
   assert(ToLower(suffix) == suffix);
   return text.size() >= suffix.size() &&
          ToLower(text.substr(text.size() - suffix.size())) == suffix;
+}
+
+std::optional<double> ParseNumber(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    const double value = std::stod(text, &used);
+    if (used == text.size()) return value;
+  } catch (const std::exception&) {  // Not a number, or out of range.
+  }
+  return std::nullopt;
 }
 
 std::string Join(const std::vector<std::string>& items, std::string_view separator) {

@@ -4,11 +4,12 @@
 
 #include <cmath>
 #include <cstddef>
-#include <exception>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/dic/reference_update.h"
 
 namespace impactdic {
@@ -47,16 +48,10 @@ SequenceMode SequenceModeFromString(const std::string& text, const std::string& 
 
 double MaxUncertaintyFromString(const std::string& text, const std::string& where) {
   if (text == "none") return std::numeric_limits<double>::infinity();
-  double value = 0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  CheckValue(used > 0 && used == text.size() && value >= 0 && !std::isnan(value), where, text,
+  const std::optional<double> value = ParseNumber(text);
+  CheckValue(value && *value >= 0 && !std::isnan(*value), where, text,
              "an uncertainty limit >= 0 [px] (0 or none: no limit)");
-  return value;
+  return *value;
 }
 
 std::string SubsetStatusCodes() {
@@ -142,17 +137,11 @@ void ContinuityCheckOptions::Check() const {
 double ContinuityLimitFromString(const std::string& text, const std::string& where, double above,
                                  const std::string& unit) {
   if (text == "none") return std::numeric_limits<double>::infinity();
-  double value = 0;
-  std::size_t used = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  CheckValue(used > 0 && used == text.size() && value > above && std::isfinite(value), where, text,
+  const std::optional<double> value = ParseNumber(text);
+  CheckValue(value && *value > above && std::isfinite(*value), where, text,
              fmt::format("a number > {}{} or none (criterion off)", above,
                          unit.empty() ? "" : " " + unit));
-  return value;
+  return *value;
 }
 
 std::string ContinuityCheckText(const ContinuityCheckOptions& c) {

@@ -26,5 +26,16 @@ TEST(Strings, JoinSeparatesItems) {
   EXPECT_EQ(Join({}), "");
 }
 
+TEST(Strings, ParseNumberTakesTheWholeTextOnly) {
+  EXPECT_EQ(ParseNumber("0.25"), 0.25);
+  EXPECT_EQ(ParseNumber("-1e-3"), -1e-3);
+  EXPECT_EQ(ParseNumber("7"), 7.0);
+  EXPECT_FALSE(ParseNumber(""));
+  EXPECT_FALSE(ParseNumber("0.25px"));
+  EXPECT_FALSE(ParseNumber("px"));
+  EXPECT_FALSE(ParseNumber("1e999"));  // Out of range.
+  EXPECT_FALSE(ParseNumber(" "));
+}
+
 }  // namespace
 }  // namespace impactdic
