@@ -1,6 +1,6 @@
-// Test helper: runs the built `impactdic` binary (path compiled in as IMPACTDIC_CLI_PATH) with
-// arguments through the shell and captures stdout+stderr and the exit code. `environment`
-// ("NAME=value ...") is set for the binary only.
+// Test helper: runs a shell command (RunShell), or the built `impactdic` binary (path compiled in
+// as IMPACTDIC_CLI_PATH) with arguments (RunCli), and captures stdout+stderr and the exit code.
+// RunCli's `environment` ("NAME=value ...") is set for the binary only.
 #ifndef IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
 #define IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
 
@@ -16,11 +16,11 @@ struct CliResult {
   std::string output;  // stdout and stderr interleaved
 };
 
-inline CliResult RunCli(const std::string& arguments, const std::string& environment = "") {
-  const std::string command = (environment.empty() ? "" : environment + " ") +
-                              std::string(IMPACTDIC_CLI_PATH) + " " + arguments + " 2>&1";
+// Runs `command` through the shell; stdout and stderr interleaved, and the exit code (-1 if it
+// could not be started or did not exit normally).
+inline CliResult RunShell(const std::string& command) {
   CliResult result;
-  FILE* pipe = popen(command.c_str(), "r");
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
   if (!pipe) return result;
   char buffer[4096];
   std::size_t n;
@@ -28,6 +28,11 @@ inline CliResult RunCli(const std::string& arguments, const std::string& environ
   const int status = pclose(pipe);
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+inline CliResult RunCli(const std::string& arguments, const std::string& environment = "") {
+  return RunShell((environment.empty() ? "" : environment + " ") + std::string(IMPACTDIC_CLI_PATH) +
+                  " " + arguments);
 }
 
 }  // namespace impactdic

@@ -3,7 +3,6 @@
 // (known rigid shifts 0..1 px; a sinusoidal u), and its tables must give the known truth; and
 // scripts/fetch_dic_challenge.sh fails cleanly when its download host cannot be resolved.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -18,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "../cli/cli_runner.h"
 #include "impactdic/synth/fields.h"
 #include "impactdic/synth/speckle.h"
 
@@ -25,23 +25,6 @@ namespace impactdic {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct ShellResult {
-  int exit_code = -1;
-  std::string output;
-};
-
-ShellResult Shell(const std::string& command) {
-  ShellResult r;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  char buffer[4096];
-  std::size_t n;
-  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
 
 std::string Quote(const fs::path& p) {
   std::string quoted(1, '\'');
@@ -166,9 +149,9 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
   // The archives unpack into a sub-folder in some layouts: the bench searches below SampleN/.
   WriteSample3(dir_ / "data" / "Sample3" / "Sample3");
   WriteSample14(dir_ / "data" / "Sample14", dir_ / "data" / "Sample14_command.csv");
-  const ShellResult run = Shell("python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " +
-                                Quote(dir_ / "data") + " --binary " + Quote(IMPACTDIC_CLI_PATH) +
-                                " --threads 2 --work " + Quote(dir_ / "work"));
+  const CliResult run = RunShell("python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " +
+                                 Quote(dir_ / "data") + " --binary " + Quote(IMPACTDIC_CLI_PATH) +
+                                 " --threads 2 --work " + Quote(dir_ / "work"));
   ASSERT_EQ(run.exit_code, 0) << run.output;
   SCOPED_TRACE(run.output);
 
@@ -212,7 +195,7 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
   EXPECT_NE(run.output.find("--mode pairs"), std::string::npos);
   EXPECT_NE(run.output.find("--interp biquintic"), std::string::npos);
   // --prefilter SIGMA passes correlate's Gaussian pre-filter (docs/dic.md, "Sub-pixel bias").
-  const ShellResult filtered = Shell(
+  const CliResult filtered = RunShell(
       "python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " + Quote(dir_ / "data") +
       " --binary " + Quote(IMPACTDIC_CLI_PATH) + " --threads 2 --only 3 --prefilter 0.8");
   ASSERT_EQ(filtered.exit_code, 0) << filtered.output;
@@ -249,15 +232,15 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
   const fs::path zips = dir_ / "zips";
   fs::create_directories(zips);
   const std::string zip = "cd " + Quote(dir_ / "data") + " && python3 -m zipfile -c ";
-  ASSERT_EQ(Shell(zip + Quote(zips / "Sample3.zip") + " Sample3/Sample3").exit_code, 0);
-  ASSERT_EQ(Shell(zip + Quote(zips / "Sample14.zip") + " Sample14").exit_code, 0);
+  ASSERT_EQ(RunShell(zip + Quote(zips / "Sample3.zip") + " Sample3/Sample3").exit_code, 0);
+  ASSERT_EQ(RunShell(zip + Quote(zips / "Sample14.zip") + " Sample14").exit_code, 0);
   const std::string fetch =
       "DIC_CHALLENGE_SAMPLE3_URL=file://" + (zips / "Sample3.zip").string() +
       " DIC_CHALLENGE_SAMPLE14_URL=file://" + (zips / "Sample14.zip").string() +
       " DIC_CHALLENGE_SAMPLE14_TRUTH_URL=file://" +
       (dir_ / "data" / "Sample14_command.csv").string() + " " +
       Quote(source_ / "scripts" / "fetch_dic_challenge.sh") + " " + Quote(dir_ / "cache");
-  const ShellResult fetched = Shell(fetch);
+  const CliResult fetched = RunShell(fetch);
   ASSERT_EQ(fetched.exit_code, 0) << fetched.output;
   EXPECT_TRUE(fs::exists(dir_ / "cache" / "Sample3" / "Sample3" / "Sample3 Reference.tif"));
   EXPECT_TRUE(fs::exists(dir_ / "cache" / "Sample14" / "Sample14" / "Sample14 L1 Amp0.1.tif"));
@@ -265,18 +248,19 @@ TEST_F(DicChallengeScripts, BenchTablesGiveTheKnownTruthOfStandInSamples) {
   EXPECT_NE(fetched.output.find("1 reference + 11 deformed images"), std::string::npos);
   EXPECT_NE(fetched.output.find("1 reference + 2 deformed images"), std::string::npos);
   // A different archive under the same name (one file more).
-  ASSERT_EQ(
-      Shell(zip + Quote(dir_ / "cache" / "Sample3.zip") + " Sample3/Sample3 Sample14_command.csv")
-          .exit_code,
-      0);
-  const ShellResult refetched = Shell(fetch);
+  ASSERT_EQ(RunShell(zip + Quote(dir_ / "cache" / "Sample3.zip") +
+                     " Sample3/Sample3 Sample14_command.csv")
+                .exit_code,
+            0);
+  const CliResult refetched = RunShell(fetch);
   EXPECT_EQ(refetched.exit_code, 1) << refetched.output;
   EXPECT_NE(refetched.output.find("differs from the"), std::string::npos) << refetched.output;
 }
 
 TEST_F(DicChallengeScripts, BenchNamesTheMissingFolder) {
-  const ShellResult run = Shell("python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " +
-                                Quote(dir_ / "nothing") + " --binary " + Quote(IMPACTDIC_CLI_PATH));
+  const CliResult run =
+      RunShell("python3 " + Quote(source_ / "bench" / "dic_challenge.py") + " " +
+               Quote(dir_ / "nothing") + " --binary " + Quote(IMPACTDIC_CLI_PATH));
   EXPECT_EQ(run.exit_code, 2) << run.output;
   EXPECT_NE(run.output.find((dir_ / "nothing" / "Sample3").string()), std::string::npos)
       << run.output;
@@ -285,11 +269,11 @@ TEST_F(DicChallengeScripts, BenchNamesTheMissingFolder) {
 
 TEST_F(DicChallengeScripts, FetchFailsCleanlyWhenTheHostCannotBeResolved) {
   const std::string url = "https://impactdic-no-such-host.invalid/Sample14.zip";
-  const ShellResult run =
-      Shell("DIC_CHALLENGE_SAMPLE14_URL=" + url +
-            " DIC_CHALLENGE_SAMPLE3_URL=https://impactdic-no-such-host.invalid/"
-            "Sample3.zip " +
-            Quote(source_ / "scripts" / "fetch_dic_challenge.sh") + " " + Quote(dir_ / "cache"));
+  const CliResult run =
+      RunShell("DIC_CHALLENGE_SAMPLE14_URL=" + url +
+               " DIC_CHALLENGE_SAMPLE3_URL=https://impactdic-no-such-host.invalid/"
+               "Sample3.zip " +
+               Quote(source_ / "scripts" / "fetch_dic_challenge.sh") + " " + Quote(dir_ / "cache"));
   EXPECT_NE(run.exit_code, 0) << run.output;
   EXPECT_NE(run.output.find(url), std::string::npos) << run.output;
   EXPECT_NE(run.output.find("network"), std::string::npos) << run.output;

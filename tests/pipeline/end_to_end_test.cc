@@ -23,24 +23,12 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/render/animation.h"
+#include "small_scene_spec.h"
 
 namespace impactdic {
 namespace {
 
 namespace fs = std::filesystem;
-
-// A small scene: 320x240 px at 1.5 mm/px, ideal lens (the lens path is covered by the calib and
-// preprocess tests and by the committed sample), the sensor record running 50 ms past the last
-// frame so that it contains the stop (crater depth).
-constexpr const char* kSpec = R"(
-preset: small
-name: e2e
-camera: {lens: ideal, width: 320, height: 240, mm_per_px: 1.5}
-frames: {count: 14, before_impact: 2, supersampling: 2}
-sensor: {tail_s: 0.05}
-calibration: {render: false}
-dic: {subset_size: 21, step: 12}
-)";
 
 // What the tests compare: the generated scene above, or the committed sample (the scene the
 // README's first command runs; its truth is committed with it).
@@ -64,7 +52,7 @@ const Prepared& Prepare(Source source) {
   p.dir = std::make_unique<TestDir>(generated ? "EndToEnd" : "EndToEndSample");
   std::string scene;
   if (generated) {
-    const std::string spec = p.dir->Write("spec.yaml", kSpec);
+    const std::string spec = p.dir->Write("spec.yaml", kSmallSceneSpec);
     const CliResult synth = RunCli("synth " + spec + " -o " + p.dir->File("scene"));
     p.run_output = synth.output;
     scene = p.dir->File("scene/scene.yaml");

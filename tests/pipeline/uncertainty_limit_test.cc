@@ -19,19 +19,10 @@
 #include "impactdic/io/results_layout.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "small_scene_spec.h"
 
 namespace impactdic {
 namespace {
-
-constexpr const char* kSpec = R"(
-preset: small
-name: sigma_limit
-camera: {lens: ideal, width: 320, height: 240, mm_per_px: 1.5}
-frames: {count: 14, before_impact: 2, supersampling: 2}
-sensor: {tail_s: 0.05}
-calibration: {render: false}
-dic: {subset_size: 21, step: 12}
-)";
 
 std::string ReadText(const std::string& path) {
   std::ifstream in(path);
@@ -66,7 +57,7 @@ std::size_t CountNaN(const std::vector<double>& values) {
 TEST(SigmaLimit, RunAndAnalyzeLeaveOutExactlyTheSamplesAboveItAndKeepThemInDic) {
   TestDir dir;
   const CliResult synth =
-      RunCli("-q synth " + dir.Write("spec.yaml", kSpec) + " -o " + dir.File("scene"));
+      RunCli("-q synth " + dir.Write("spec.yaml", kSmallSceneSpec) + " -o " + dir.File("scene"));
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const std::string scene = dir.File("scene/scene.yaml");
   const CliResult plain = RunCli("-q run " + scene + " -o " + dir.File("plain"));
