@@ -69,7 +69,8 @@ function(impactdic_add_test)
   add_executable(${ARG_NAME} ${ARG_SOURCES})
   # Tests may read and write images with OpenCV directly (the library itself does not link it).
   target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} impactdic_deps::opencv_codecs GTest::gtest
-                                            GTest::gtest_main)
+                                            GTest::gtest_main impactdic_test_worker_threads
+                                            impactdic::core)
   target_compile_definitions(${ARG_NAME} PRIVATE
       IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
       IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")

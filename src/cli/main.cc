@@ -15,6 +15,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/threads.h"
 
 namespace {
 
@@ -117,6 +118,7 @@ int Main(int argc, char** argv) {
 
 int main(int argc, char** argv) {
   try {
+    const impactdic::WorkerThreadsJoinedAtExit workers;
     impactdic::InstallInterruptCleanup();
     const int exit_code = Main(argc, argv);
     // An error caused by a signal (a write that failed as the cleanup removed its folder) must

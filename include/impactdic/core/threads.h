@@ -5,6 +5,7 @@
 #ifndef IMPACTDIC_CORE_THREADS_H_
 #define IMPACTDIC_CORE_THREADS_H_
 
+#include <memory>
 #include <string>
 
 namespace impactdic {
@@ -16,6 +17,28 @@ inline bool IsValidThreadCount(int threads) { return threads >= 0; }
 
 // Error(kInvalidValue, where, threads, kThreadCountExpected) unless IsValidThreadCount(threads).
 void CheckThreadCount(int threads, const std::string& where);
+
+// Holds oneTBB's worker threads (ours and OpenCV's) for its lifetime and joins them when
+// destroyed, so that none is still exiting when exit-time code runs (a process's main, a test
+// program's environment). Otherwise only a static destructor tells them to stop, and
+// LeakSanitizer's stop-the-world at exit can read the stack of a worker being unmapped and crash:
+// a failure of the sanitizer, not of the program. At debug level it logs whether the workers
+// were joined and how many threads are still alive afterwards (from /proc; -1 without it).
+class WorkerThreadsJoinedAtExit {
+ public:
+  WorkerThreadsJoinedAtExit();
+  ~WorkerThreadsJoinedAtExit();
+  WorkerThreadsJoinedAtExit(const WorkerThreadsJoinedAtExit&) = delete;
+  WorkerThreadsJoinedAtExit& operator=(const WorkerThreadsJoinedAtExit&) = delete;
+
+  // Joins the workers now (once); false when oneTBB could not (a thread or an arena is still
+  // attached to it: the workers are then left to the library).
+  bool Join();
+
+ private:
+  struct Handle;  // oneTBB's task_scheduler_handle (its header stays out of ours).
+  std::unique_ptr<Handle> handle_;
+};
 
 }  // namespace impactdic
 

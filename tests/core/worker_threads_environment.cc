@@ -1,0 +1,27 @@
+// Linked into every test program (impactdic_add_test): a GoogleTest environment that holds
+// oneTBB's worker threads for the whole run and joins them when the tests are over, before
+// main returns, as the CLI's main does (core/threads.h, WorkerThreadsJoinedAtExit).
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "impactdic/core/threads.h"
+
+namespace impactdic {
+namespace {
+
+class WorkerThreadsEnvironment : public ::testing::Environment {
+ public:
+  void SetUp() override { workers_ = std::make_unique<WorkerThreadsJoinedAtExit>(); }
+  void TearDown() override { workers_.reset(); }
+
+ private:
+  std::unique_ptr<WorkerThreadsJoinedAtExit> workers_;
+};
+
+// GoogleTest owns and deletes the environment.
+[[maybe_unused]] ::testing::Environment* const kEnvironment =
+    ::testing::AddGlobalTestEnvironment(new WorkerThreadsEnvironment);
+
+}  // namespace
+}  // namespace impactdic
