@@ -94,10 +94,7 @@ GridLayout LayoutOf(const KinematicsResult& kin) {
 // The subsets inside MomentumOptions::rect_mm.
 MomentumGrid GridInRectangle(const KinematicsResult& kin, const MomentumOptions& options,
                              const GridLayout& layout) {
-  const std::vector<double>& xs = layout.xs;
-  const std::vector<double>& ys = layout.ys;
-  const double sx = layout.sx, sy = layout.sy, tol = layout.tol;
-  const std::string& region = layout.region;
+  const auto& [xs, ys, sx, sy, tol, region] = layout;
   MomentumGrid grid;
   const auto& r = *options.rect_mm;
   const double hx = std::isnan(sx) ? 0 : 0.5 * sx, hy = std::isnan(sy) ? 0 : 0.5 * sy;
@@ -134,10 +131,7 @@ MomentumGrid GridInRectangle(const KinematicsResult& kin, const MomentumOptions&
 // below its bottom edge.
 MomentumGrid GridUnderFootprint(const KinematicsResult& kin, const MomentumOptions& options,
                                 const GridLayout& layout) {
-  const std::vector<double>& xs = layout.xs;
-  const std::vector<double>& ys = layout.ys;
-  const double sx = layout.sx, sy = layout.sy, tol = layout.tol;
-  const std::string& region = layout.region;
+  const auto& [xs, ys, sx, sy, tol, region] = layout;
   MomentumGrid grid;
   if (std::isnan(sx)) {
     throw Error(ErrorKind::kInvalidValue, "correlated grid", "a single subset",
