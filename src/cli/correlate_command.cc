@@ -145,14 +145,17 @@ ImageFilter MakeImageFilter(const std::string& gaussian) {
 ContinuityCheckOptions ContinuityFromArgs(const CorrelateArgs& a) {
   ContinuityCheckOptions c;
   c.enabled = OnOffFromString(a.continuity, "--continuity-check");
-  c.misfit_ratio =
-      ContinuityLimitFromString(a.continuity_misfit, "--continuity-misfit-ratio", 1, "");
+  c.misfit_ratio = ContinuityLimitOf(&ContinuityCheckOptions::misfit_ratio)
+                       .FromString(a.continuity_misfit, "--continuity-misfit-ratio");
   c.max_second_difference_px =
-      ContinuityLimitFromString(a.continuity_second, "--continuity-max-second-difference", 0, "px");
-  c.max_neighbour_difference_px = ContinuityLimitFromString(
-      a.continuity_jump, "--continuity-max-neighbour-difference", 0, "px");
+      ContinuityLimitOf(&ContinuityCheckOptions::max_second_difference_px)
+          .FromString(a.continuity_second, "--continuity-max-second-difference");
+  c.max_neighbour_difference_px =
+      ContinuityLimitOf(&ContinuityCheckOptions::max_neighbour_difference_px)
+          .FromString(a.continuity_jump, "--continuity-max-neighbour-difference");
   c.min_misfit = a.continuity_min_misfit;
-  c.local_ratio = ContinuityLimitFromString(a.continuity_local, "--continuity-local-ratio", 1, "");
+  c.local_ratio = ContinuityLimitOf(&ContinuityCheckOptions::local_ratio)
+                      .FromString(a.continuity_local, "--continuity-local-ratio");
   return c;
 }
 
@@ -162,21 +165,25 @@ void AddContinuityFlags(CLI::App* cmd, CorrelateArgs* args) {
                   "or a shear band become `discontinuous` (NaN) (docs/dic.md)")
       ->capture_default_str();
   cmd->add_option("--continuity-misfit-ratio", args->continuity_misfit,
-                  "Flag 1 - ZNCC above this times its 7x7 neighbourhood's median; > 1, or none")
+                  "Flag 1 - ZNCC above this times its 7x7 neighbourhood's median; " +
+                      ContinuityLimitOf(&ContinuityCheckOptions::misfit_ratio).Expected())
       ->capture_default_str();
   cmd->add_option("--continuity-min-misfit", args->continuity_min_misfit,
                   "...and 1 - ZNCC above this as well, in " + kMinMisfitRange.Text())
       ->capture_default_str();
-  cmd->add_option("--continuity-max-second-difference", args->continuity_second,
-                  "Flag a second difference of u, v along a grid row/column above it [px]; > 0, "
-                  "or none")
+  cmd->add_option(
+         "--continuity-max-second-difference", args->continuity_second,
+         "Flag a second difference of u, v along a grid row/column above it; " +
+             ContinuityLimitOf(&ContinuityCheckOptions::max_second_difference_px).Expected())
       ->capture_default_str();
-  cmd->add_option("--continuity-max-neighbour-difference", args->continuity_jump,
-                  "Flag a displacement differing from an adjacent subset's by more [px]; > 0, or "
-                  "none")
+  cmd->add_option(
+         "--continuity-max-neighbour-difference", args->continuity_jump,
+         "Flag a displacement differing from an adjacent subset's by more; " +
+             ContinuityLimitOf(&ContinuityCheckOptions::max_neighbour_difference_px).Expected())
       ->capture_default_str();
   cmd->add_option("--continuity-local-ratio", args->continuity_local,
-                  "...and above this times the 7x7 neighbourhood's median of the same; > 1")
+                  "...and above this times the 7x7 neighbourhood's median of the same; " +
+                      ContinuityLimitOf(&ContinuityCheckOptions::local_ratio).Expected())
       ->capture_default_str();
 }
 

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -123,25 +125,32 @@ void UpdateOptions::Check() const {
 }
 
 void ContinuityCheckOptions::Check() const {
-  CheckValue(misfit_ratio > 1, "dic.continuity.misfit_ratio", Num(misfit_ratio), "> 1 (+inf: off)");
   CheckValue(kMinMisfitRange.Contains(min_misfit), "dic.continuity.min_misfit", Num(min_misfit),
              "in " + kMinMisfitRange.Text());
-  CheckValue(max_second_difference_px > 0, "dic.continuity.max_second_difference_px",
-             Num(max_second_difference_px), "> 0 px (+inf: off)");
-  CheckValue(max_neighbour_difference_px > 0, "dic.continuity.max_neighbour_difference_px",
-             Num(max_neighbour_difference_px), "> 0 px (+inf: off)");
-  CheckValue(local_ratio > 1, "dic.continuity.local_ratio", Num(local_ratio),
-             "> 1 (+inf: the thresholds alone)");
+  for (const ContinuityLimit& limit : kContinuityLimits) {
+    const double value = this->*limit.field;
+    CheckValue(value > limit.above, std::string("dic.continuity.") + limit.name, Num(value),
+               limit.Expected());
+  }
 }
 
-double ContinuityLimitFromString(const std::string& text, const std::string& where, double above,
-                                 const std::string& unit) {
+std::string ContinuityLimit::Expected() const {
+  return fmt::format("a number > {}{}, or none ({})", above,
+                     *unit == '\0' ? "" : std::string(" ") + unit, when_none);
+}
+
+double ContinuityLimit::FromString(const std::string& text, const std::string& where) const {
   if (text == "none") return std::numeric_limits<double>::infinity();
   const std::optional<double> value = ParseNumber(text);
-  CheckValue(value && *value > above && std::isfinite(*value), where, text,
-             fmt::format("a number > {}{} or none (criterion off)", above,
-                         unit.empty() ? "" : " " + unit));
+  CheckValue(value && *value > above && std::isfinite(*value), where, text, Expected());
   return *value;
+}
+
+const ContinuityLimit& ContinuityLimitOf(double ContinuityCheckOptions::*field) {
+  const auto* limit = std::find_if(kContinuityLimits.begin(), kContinuityLimits.end(),
+                                   [field](const ContinuityLimit& l) { return l.field == field; });
+  assert(limit != kContinuityLimits.end() && "not a threshold of ContinuityCheckOptions");
+  return *limit;
 }
 
 std::string ContinuityCheckText(const ContinuityCheckOptions& c) {

@@ -149,17 +149,17 @@ void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
         "Last frame (inclusive); -1 = the last frame");
 }
 
-// A continuity threshold of ContinuityCheckOptions: a number > `above`, or none (criterion off).
-void AddContinuityLimit(YamlOptionTable& t, const std::string& key, double* field, double above,
-                        const std::string& unit, const std::string& doc) {
-  const std::string expected = fmt::format("a number > {}{}, or none (criterion off)", above,
-                                           unit.empty() ? "" : " " + unit);
+// dic.continuity_<name>: a threshold of ContinuityCheckOptions (dic/options.h, kContinuityLimits).
+void AddContinuityLimit(YamlOptionTable& t, ContinuityCheckOptions* c,
+                        double ContinuityCheckOptions::*field, const std::string& doc) {
+  const ContinuityLimit& limit = ContinuityLimitOf(field);
+  double* value = &(c->*field);
   t.AddCustom(
-      key, expected, ContinuityLimitText(*field),
-      [field, above, unit](const YAML::Node& n) {
+      std::string("continuity_") + limit.name, limit.Expected(), ContinuityLimitText(*value),
+      [value, &limit](const YAML::Node& n) {
         if (!n.IsScalar()) return false;
         try {
-          *field = ContinuityLimitFromString(n.Scalar(), "", above, unit);
+          *value = limit.FromString(n.Scalar(), "");
         } catch (const Error&) {
           return false;
         }
@@ -171,17 +171,16 @@ void AddContinuityLimit(YamlOptionTable& t, const std::string& key, double* fiel
 void AddContinuityKeys(YamlOptionTable& t, ContinuityCheckOptions* c) {
   t.Add("continuity_check", &c->enabled,
         "Post-check: subsets straddling a body edge or shear band become discontinuous (NaN)");
-  AddContinuityLimit(t, "continuity_misfit_ratio", &c->misfit_ratio, 1, "",
+  AddContinuityLimit(t, c, &ContinuityCheckOptions::misfit_ratio,
                      "Flag 1 - ZNCC above this times its 7x7 neighbourhood's median");
   t.Add("continuity_min_misfit", &c->min_misfit, kMinMisfitRange, "a 1 - ZNCC level",
         "...and above this as well");
-  AddContinuityLimit(t, "continuity_max_second_difference_px", &c->max_second_difference_px, 0,
-                     "px", "Flag a second difference of u, v along a grid row or column above it");
-  AddContinuityLimit(t, "continuity_max_neighbour_difference_px", &c->max_neighbour_difference_px,
-                     0, "px", "Flag a displacement differing from an adjacent subset's by more");
-  AddContinuityLimit(
-      t, "continuity_local_ratio", &c->local_ratio, 1, "",
-      "...and above this times the 7x7 median of the same (none: the thresholds alone)");
+  AddContinuityLimit(t, c, &ContinuityCheckOptions::max_second_difference_px,
+                     "Flag a second difference of u, v along a grid row or column above it");
+  AddContinuityLimit(t, c, &ContinuityCheckOptions::max_neighbour_difference_px,
+                     "Flag a displacement differing from an adjacent subset's by more");
+  AddContinuityLimit(t, c, &ContinuityCheckOptions::local_ratio,
+                     "...and above this times the 7x7 median of the same");
 }
 
 YamlOptionTable DicTable(Scene* s) {

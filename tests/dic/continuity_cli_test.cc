@@ -12,6 +12,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../cli/cli_runner.h"
@@ -163,6 +164,18 @@ TEST_F(ContinuityCli, BadValuesAreRefusedNamingTheFlag) {
     EXPECT_NE(r.exit_code, 0) << flags << "\n" << r.output;
     EXPECT_NE(r.output.find(name), std::string::npos) << flags << "\n" << r.output;
     EXPECT_FALSE(fs::exists(Path("bad.h5"))) << flags;
+  }
+  // A threshold's expected values are its one definition's (kContinuityLimits), as in the scene.
+  const std::pair<std::string, double ContinuityCheckOptions::*> thresholds[] = {
+      {"--continuity-misfit-ratio", &ContinuityCheckOptions::misfit_ratio},
+      {"--continuity-max-second-difference", &ContinuityCheckOptions::max_second_difference_px},
+      {"--continuity-max-neighbour-difference",
+       &ContinuityCheckOptions::max_neighbour_difference_px},
+      {"--continuity-local-ratio", &ContinuityCheckOptions::local_ratio}};
+  for (const auto& [flag, field] : thresholds) {
+    const CliResult r = RunCli(Pair() + " " + flag + " x -o " + Path("bad.h5"));
+    EXPECT_NE(r.output.find(ContinuityLimitOf(field).Expected()), std::string::npos) << flag << "\n"
+                                                                                     << r.output;
   }
 }
 

@@ -89,6 +89,41 @@ TEST(DicOptions, SceneContinuityKeysReachTheLibrary) {
   }
 }
 
+// Each continuity threshold is defined once (kContinuityLimits): the library's check and the
+// scene refuse the value at its bound with the same expected text, and "none" is +inf in both.
+TEST(DicOptions, ContinuityThresholdsAreDefinedOnceForTheLibraryAndTheScene) {
+  ASSERT_EQ(kContinuityLimits.size(), 4u);
+  EXPECT_EQ(ContinuityLimitOf(&ContinuityCheckOptions::local_ratio).Expected(),
+            "a number > 1, or none (the thresholds alone)");
+  EXPECT_EQ(ContinuityLimitOf(&ContinuityCheckOptions::max_second_difference_px).Expected(),
+            "a number > 0 px, or none (criterion off)");
+  for (const ContinuityLimit& limit : kContinuityLimits) {
+    const std::string name = limit.name;
+    ContinuityCheckOptions at_bound;
+    at_bound.*limit.field = limit.above;
+    try {
+      at_bound.Check();
+      ADD_FAILURE() << "no error for " << name << " = " << limit.above;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("dic.continuity." + name), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(limit.Expected()), std::string::npos) << e.what();
+    }
+    try {
+      SceneContinuity("dic: {continuity_" + name + ": " + std::to_string(limit.above) + "}");
+      ADD_FAILURE() << "no error for the scene's " << name;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("dic.continuity_" + name), std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(limit.Expected()), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(std::isinf(SceneContinuity("dic: {continuity_" + name + ": none}").*limit.field))
+        << name;
+    EXPECT_TRUE(std::isinf(limit.FromString("none", "x")));
+    EXPECT_EQ(limit.FromString("7", "x"), 7);
+  }
+}
+
 // The downstream limit (kinematics ExcludeUncertainSamples) is read from momentum.max_sigma_px.
 TEST(DicOptions, MomentumSigmaLimitIsAPositiveNumber) {
   EXPECT_FALSE(ParseScene("inputs: {frames: f}\n", "x/scene.yaml").momentum.max_sigma_px);

@@ -9,6 +9,7 @@
 #ifndef IMPACTDIC_DIC_OPTIONS_H_
 #define IMPACTDIC_DIC_OPTIONS_H_
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <opencv2/core.hpp>
@@ -153,10 +154,32 @@ struct ContinuityCheckOptions {
   double local_ratio = 4;
   void Check() const;
 };
-// A continuity threshold as written in a scene or on the command line: a number > `above`, or
-// "none" (+inf: the criterion is off); an Error naming `where` otherwise.
-double ContinuityLimitFromString(const std::string& text, const std::string& where, double above,
-                                 const std::string& unit);
+// A threshold of ContinuityCheckOptions: the one definition of its name, bound, unit and what
+// "none" (+inf) means, read by Check(), the scene keys (dic.continuity_<name>) and the
+// `correlate --continuity-*` flags.
+struct ContinuityLimit {
+  double ContinuityCheckOptions::*field;
+  const char* name;       // The field's name, e.g. "max_second_difference_px".
+  double above;           // A value must be > this.
+  const char* unit;       // "px", or "" for a ratio.
+  const char* when_none;  // What none (+inf) does, e.g. "criterion off".
+  // "a number > 0 px, or none (criterion off)".
+  std::string Expected() const;
+  // The threshold as written in a scene or on the command line: a number > `above`, or "none"
+  // (+inf); an Error naming `where` with Expected() otherwise.
+  double FromString(const std::string& text, const std::string& where) const;
+};
+// The four thresholds, in the order of ContinuityCheckOptions.
+inline constexpr std::array<ContinuityLimit, 4> kContinuityLimits{{
+    {&ContinuityCheckOptions::misfit_ratio, "misfit_ratio", 1, "", "criterion off"},
+    {&ContinuityCheckOptions::max_second_difference_px, "max_second_difference_px", 0, "px",
+     "criterion off"},
+    {&ContinuityCheckOptions::max_neighbour_difference_px, "max_neighbour_difference_px", 0, "px",
+     "criterion off"},
+    {&ContinuityCheckOptions::local_ratio, "local_ratio", 1, "", "the thresholds alone"},
+}};
+// The entry of kContinuityLimits for `field`.
+const ContinuityLimit& ContinuityLimitOf(double ContinuityCheckOptions::*field);
 // "off", or "on (misfit_ratio 2.5, ...)" with the thresholds (inf: criterion off).
 std::string ContinuityCheckText(const ContinuityCheckOptions& continuity);
 // A continuity threshold as written: the number, or "none" for +inf.
