@@ -57,6 +57,16 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+// The library's names of the options `analyze --sensor` exposes as flags.
+const FlagNames kSensorFlags = {{"sensor.cutoff_hz", "--cutoff"},
+                                {"sensor.quiet_window_s", "--quiet-window"},
+                                {"sensor.impact_threshold_g", "--impact-threshold"},
+                                {"sensor.impact_velocity_m_s", "--impact-velocity"},
+                                {"sensor.release_time_s", "--release-time"},
+                                {"sensor.columns.time", "--time-column"},
+                                {"accel_unit", "--accel-unit"},
+                                {"offset_reference", "--offset-reference"}};
+
 // The sensor-only form: every option checked before the file is read.
 SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) {
   if (a.from_release == a.impact_velocity.has_value()) {
@@ -67,22 +77,6 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
   }
   if (a.impact_velocity)
     CheckRange(*a.impact_velocity, kImpactVelocityRange, "--impact-velocity", "an impact velocity");
-  if (!(std::isfinite(a.cutoff) && a.cutoff > 0)) {
-    throw Error(ErrorKind::kInvalidValue, "--cutoff", fmt::format("{}", a.cutoff),
-                "a cut-off frequency > 0 Hz (below the Nyquist frequency of the record)");
-  }
-  if (!(std::isfinite(a.quiet_window) && a.quiet_window > 0)) {
-    throw Error(ErrorKind::kInvalidValue, "--quiet-window", fmt::format("{}", a.quiet_window),
-                "> 0 s");
-  }
-  if (!(std::isfinite(a.impact_threshold) && a.impact_threshold > 1)) {
-    throw Error(ErrorKind::kInvalidValue, "--impact-threshold",
-                fmt::format("{}", a.impact_threshold), "> 1 g (above the rest reading)");
-  }
-  if (a.release_time && !std::isfinite(*a.release_time)) {
-    throw Error(ErrorKind::kInvalidValue, "--release-time", fmt::format("{}", *a.release_time),
-                "a finite time on the DAQ clock [s]");
-  }
   if (a.release_time && !a.from_release) {
     throw Error(ErrorKind::kInvalidValue, "--release-time", "without --from-release",
                 "--release-time only with --from-release");
@@ -97,17 +91,6 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
   SensorOptions o;
   o.columns.time = a.time_column;
   o.columns.accel = a.accel_column;
-  try {
-    o.columns.accel_unit = AccelUnitFromString(a.accel_unit);
-  } catch (const Error&) {
-    throw Error(ErrorKind::kInvalidValue, "--accel-unit", a.accel_unit, "auto, g or m/s^2");
-  }
-  try {
-    o.offset_reference = OffsetReferenceFromString(a.offset_reference);
-  } catch (const Error&) {
-    throw Error(ErrorKind::kInvalidValue, "--offset-reference", a.offset_reference,
-                "free-fall, free-fall-window, rest or none");
-  }
   o.columns.exposure = a.exposure_column;
   o.cutoff_hz = a.cutoff;
   o.quiet_window_s = a.quiet_window;
@@ -119,7 +102,14 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     o.integrate_from = IntegrationStart::kImpact;
     o.impact_velocity_m_s = *a.impact_velocity;
   }
-  o.Check();
+  // The library's parsers and checks (the allowed values are defined there), naming the flags.
+  try {
+    o.columns.accel_unit = AccelUnitFromString(a.accel_unit);
+    o.offset_reference = OffsetReferenceFromString(a.offset_reference);
+    o.Check();
+  } catch (const Error& e) {
+    RethrowWithFlagNames(e, kSensorFlags);
+  }
   return o;
 }
 
@@ -132,7 +122,7 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
     try {
       return AnalyzeSensorCsv(a.sensor, o);
     } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"sensor.cutoff_hz", "--cutoff"}});
+      RethrowWithFlagNames(e, kSensorFlags);
     }
   }();
   const SensorSummary& s = r.summary;

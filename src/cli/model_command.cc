@@ -70,10 +70,6 @@ void RequirePositive(const std::optional<double>& v, const char* option, const c
     throw Error(ErrorKind::kInvalidValue, option, Num(*v), what);
 }
 
-void RequireFinite(double v, bool ok, const char* option, const char* what) {
-  if (!std::isfinite(v) || !ok) throw Error(ErrorKind::kInvalidValue, option, Num(v), what);
-}
-
 // ImpactModelParameters::Check() (the allowed ranges are defined there), its errors naming the
 // command-line option instead of the library's field.
 void CheckNamingOptions(const ImpactModelParameters& p, const ModelArgs& a) {
@@ -172,24 +168,23 @@ ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
   o.solver = ImpactSolverFromString(a.solver);
   o.error_estimator = ErrorEstimatorFromString(a.error_estimate);
   o.ode45_defaults = a.ode45_defaults;
-  if (a.ode45_defaults && o.solver == ImpactSolver::kStiff)
-    throw Error(ErrorKind::kInvalidValue, "--ode45-defaults", "with --solver stiff",
-                "--solver auto or dopri5 (ode45's rules belong to the Dormand-Prince pair)");
-  if (a.rtol) {
-    RequireFinite(*a.rtol, *a.rtol > 0, "--rtol", "a relative tolerance > 0 (1e-14 .. 0.1)");
-    RequireFinite(*a.rtol, *a.rtol >= 1e-14 && *a.rtol <= 0.1, "--rtol",
-                  "a relative tolerance in [1e-14, 0.1]");
-    o.rtol = *a.rtol;
+  // A given tolerance or time must be a number: NaN means "unset" to the library.
+  for (const auto& [value, flag] :
+       {std::pair{a.rtol, "--rtol"}, std::pair{a.atol, "--atol"}, std::pair{a.t_max, "--t-max"}}) {
+    if (value) CheckValue(!std::isnan(*value), flag, Num(*value), "a number");
   }
-  if (a.atol) {
-    RequireFinite(*a.atol, *a.atol > 0, "--atol", "an absolute tolerance > 0");
-    o.atol = *a.atol;
+  if (a.rtol) o.rtol = *a.rtol;
+  if (a.atol) o.atol = *a.atol;
+  if (a.t_max) o.t_max_s = *a.t_max;
+  // The library's check (the allowed ranges are defined there), naming the flags.
+  try {
+    o.Check();
+  } catch (const Error& e) {
+    RethrowWithFlagNames(e, {{"rtol", "--rtol"},
+                             {"atol", "--atol"},
+                             {"t_max_s", "--t-max"},
+                             {"ode45_defaults", "--ode45-defaults"}});
   }
-  if (a.t_max) {
-    RequireFinite(*a.t_max, *a.t_max > 0, "--t-max", "a time > 0 s");
-    o.t_max_s = *a.t_max;
-  }
-  o.Check();
   return o;
 }
 

@@ -3,10 +3,14 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <functional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "impactdic/core/error.h"
+#include "impactdic/model/impact_model.h"
 
 namespace impactdic {
 namespace {
@@ -105,6 +109,36 @@ TEST(ModelCli, BadInputFailsWithExitCode1AndNamesTheOption) {
     EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
     EXPECT_NE(r.output.find(c.needle), std::string::npos) << c.args << "\n" << r.output;
   }
+}
+
+// The solver flags are checked by ImpactSolverOptions::Check() (the one definition of their
+// ranges), the error naming the flag: the CLI's expected text is the library's.
+TEST(ModelCli, SolverFlagsAreCheckedByTheLibraryNamingTheFlag) {
+  const std::vector<std::tuple<std::string, std::string, std::function<void(ImpactSolverOptions&)>>>
+      cases = {
+          {"--rtol 0", "--rtol", [](ImpactSolverOptions& o) { o.rtol = 0; }},
+          {"--atol -1", "--atol", [](ImpactSolverOptions& o) { o.atol = -1; }},
+          {"--t-max 0", "--t-max", [](ImpactSolverOptions& o) { o.t_max_s = 0; }},
+      };
+  for (const auto& [flags, flag, set] : cases) {
+    ImpactSolverOptions o;
+    set(o);
+    std::string expected;
+    try {
+      o.Check();
+    } catch (const Error& e) {
+      expected = e.expected();
+    }
+    ASSERT_FALSE(expected.empty()) << flags;
+    const CliResult r = RunCli("model --mass 10 --height 0.7 --width 0.15 " + flags);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(flag + ": invalid value"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("expected " + expected), std::string::npos) << r.output;
+  }
+  // NaN would mean "unset" to the library: a given NaN is refused.
+  const CliResult nan = RunCli("model --mass 10 --height 0.7 --width 0.15 --rtol nan");
+  EXPECT_EQ(nan.exit_code, 1) << nan.output;
+  EXPECT_NE(nan.output.find("--rtol"), std::string::npos) << nan.output;
 }
 
 }  // namespace

@@ -4,10 +4,15 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <string>
+#include <tuple>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
+#include "impactdic/core/error.h"
+#include "impactdic/sensor/sensor.h"
 #include "synthetic_record.h"
 
 namespace impactdic {
@@ -73,6 +78,33 @@ TEST_F(AnalyzeCli, JsonContract) {
   ASSERT_EQ(t.exit_code, 0) << t.output;
   EXPECT_NE(t.output.find("final penetration"), std::string::npos) << t.output;
   EXPECT_NE(t.output.find("1000.0 Hz"), std::string::npos) << t.output;
+}
+
+// The sensor flags are checked by SensorOptions::Check() (the one definition of their ranges),
+// the error naming the flag: the CLI's expected text is the library's.
+TEST_F(AnalyzeCli, SensorFlagsAreCheckedByTheLibraryNamingTheFlag) {
+  const std::vector<std::tuple<std::string, std::string, std::function<void(SensorOptions&)>>>
+      cases = {
+          {"--cutoff 0", "--cutoff", [](SensorOptions& o) { o.cutoff_hz = 0; }},
+          {"--quiet-window -1", "--quiet-window", [](SensorOptions& o) { o.quiet_window_s = -1; }},
+          {"--impact-threshold 1", "--impact-threshold",
+           [](SensorOptions& o) { o.impact_threshold_g = 1; }},
+      };
+  for (const auto& [flags, flag, set] : cases) {
+    SensorOptions o;
+    set(o);
+    std::string expected;
+    try {
+      o.Check();
+    } catch (const Error& e) {
+      expected = e.expected();
+    }
+    ASSERT_FALSE(expected.empty()) << flags;
+    const CliResult r = RunCli("analyze --sensor " + csv_ + " --from-release " + flags);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(flag + ": invalid value"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("expected " + expected), std::string::npos) << r.output;
+  }
 }
 
 TEST_F(AnalyzeCli, OptionsValidatedFirst) {
