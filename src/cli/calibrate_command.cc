@@ -121,9 +121,18 @@ void RegisterCalibrateCommand(CLI::App& app) {
     }
     CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
                "text or json");
-    CheckValue(args->max_rms_px > 0 && std::isfinite(args->max_rms_px), "--max-rms",
-               fmt::format("{}", args->max_rms_px), "a number > 0 px");
-    CheckValue(args->min_views >= 3, "--min-views", std::to_string(args->min_views), ">= 3");
+    options.max_rms_px = args->max_rms_px;
+    options.min_views = args->min_views;
+    options.fix_k3 = args->fix_k3;
+    // The library's check (the allowed values are defined there), naming the flags.
+    try {
+      options.Check();
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"calibration.max_rms_px", "--max-rms"},
+                               {"calibration.min_views", "--min-views"},
+                               {"board", "--board"},
+                               {"board.square_mm", "--square"}});
+    }
     CheckValue(
         !args->images.empty(), "IMAGES", "no calibration images",
         fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));
@@ -136,10 +145,6 @@ void RegisterCalibrateCommand(CLI::App& app) {
       inputs.insert(inputs.end(), listed.begin(), listed.end());
     }
     CheckOutputLocation(args->output, {"-o", {".yaml", ".yml"}, inputs});
-    options.max_rms_px = args->max_rms_px;
-    options.min_views = args->min_views;
-    options.fix_k3 = args->fix_k3;
-
     CalibrationSummary summary;
     const CameraCalibration calibration = [&] {
       try {

@@ -104,9 +104,9 @@ cv::Rect ParseRoi(const std::string& text) {
 GaussianBlurOptions ParseGaussian(const std::string& text) {
   GaussianBlurOptions g;
   g.enabled = true;
-  const std::string expected = fmt::format(
-      "SIGMA[,KERNEL]: sigma in (0, 20] px, kernel an odd size in [3, 201] px (default {})",
-      g.kernel_size);
+  const std::string expected =
+      fmt::format("SIGMA[,KERNEL]: sigma in {}, kernel an odd size in {} (default {})",
+                  kGaussianSigmaRange.Text(), kGaussianKernelRange.Text(), g.kernel_size);
   const std::size_t comma = text.find(',');
   const std::string sigma = text.substr(0, comma);
   const std::optional<double> sigma_px = ParseNumber(sigma);

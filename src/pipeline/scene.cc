@@ -118,15 +118,14 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
   GaussianBlurOptions& g = s->preprocess.gaussian;
   YamlOptionTable gauss("preprocess.gaussian");
   gauss.Add("enabled", &g.enabled, "Gaussian blur on/off");
-  gauss.Add("sigma", &g.sigma_px, ValueRange{0, 20, "px", /*min_open=*/true}, "a sigma",
-            "Standard deviation of the blur");
-  AddOdd(gauss, "kernel", &g.kernel_size, ValueRange{3, 201, "px"}, "Kernel size");
+  gauss.Add("sigma", &g.sigma_px, kGaussianSigmaRange, "a sigma", "Standard deviation of the blur");
+  AddOdd(gauss, "kernel", &g.kernel_size, kGaussianKernelRange, "Kernel size");
   ClaheOptions& c = s->preprocess.clahe;
   YamlOptionTable clahe("preprocess.clahe");
   clahe.Add("enabled", &c.enabled, "CLAHE on/off");
-  clahe.Add("clip_limit", &c.clip_limit, ValueRange{0, 1000, "", /*min_open=*/true}, "a clip limit",
+  clahe.Add("clip_limit", &c.clip_limit, kClaheClipLimitRange, "a clip limit",
             "Contrast limit relative to a flat histogram");
-  clahe.Add("tile_grid", &c.tile_grid, ValueRange{1, 64, ""}, "tile count", "Tiles per side");
+  clahe.Add("tile_grid", &c.tile_grid, kClaheTileGridRange, "tile count", "Tiles per side");
   return {gauss, clahe};
 }
 

@@ -12,18 +12,18 @@
 namespace impactdic {
 
 void GaussianBlurOptions::Check() const {
-  CheckValue(sigma_px > 0 && sigma_px <= 20, "preprocess.gaussian_sigma",
-             fmt::format("{}", sigma_px), "in (0, 20] px");
-  CheckValue(kernel_size >= 3 && kernel_size % 2 == 1 && kernel_size <= 201,
+  CheckValue(kGaussianSigmaRange.Contains(sigma_px), "preprocess.gaussian_sigma",
+             fmt::format("{}", sigma_px), "in " + kGaussianSigmaRange.Text());
+  CheckValue(kGaussianKernelRange.Contains(kernel_size) && kernel_size % 2 == 1,
              "preprocess.gaussian_kernel", std::to_string(kernel_size),
-             "an odd size in [3, 201] px");
+             "an odd size in " + kGaussianKernelRange.Text());
 }
 
 void ClaheOptions::Check() const {
-  CheckValue(clip_limit > 0 && clip_limit <= 1000, "preprocess.clahe_clip_limit",
-             fmt::format("{}", clip_limit), "in (0, 1000]");
-  CheckValue(tile_grid >= 1 && tile_grid <= 64, "preprocess.clahe_tile_grid",
-             std::to_string(tile_grid), "in [1, 64] tiles per side");
+  CheckValue(kClaheClipLimitRange.Contains(clip_limit), "preprocess.clahe_clip_limit",
+             fmt::format("{}", clip_limit), "in " + kClaheClipLimitRange.Text());
+  CheckValue(kClaheTileGridRange.Contains(tile_grid), "preprocess.clahe_tile_grid",
+             std::to_string(tile_grid), "in " + kClaheTileGridRange.Text() + " tiles per side");
 }
 
 void PreprocessOptions::Check() const {

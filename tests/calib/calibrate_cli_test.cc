@@ -63,6 +63,12 @@ TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
             "/no/such/plane.png"},
            {"--board 9x6 --square 25 " + kViews + " -o /no/such/folder/out.yaml",
             "/no/such/folder"},
+           // CalibrationOptions::Check() decides (the one definition), naming the flag.
+           {"--board 9x6 --square 25 --max-rms 0 " + kViews + " -o " + out,
+            "--max-rms: invalid value (got 0); expected > 0 px"},
+           {"--board 9x6 --square 25 --max-rms nan " + kViews + " -o " + out, "--max-rms"},
+           {"--board 9x6 --square 25 --min-views 2 " + kViews + " -o " + out,
+            "--min-views: invalid value (got 2); expected >= 3"},
        }) {
     const CliResult r = RunCli("calibrate " + c.args);
     EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;

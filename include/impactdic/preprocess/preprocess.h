@@ -28,21 +28,29 @@
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/calib/undistort.h"
+#include "impactdic/core/range.h"
 
 namespace impactdic {
 
+// The allowed values, defined once: read by Check(), the scene keys (preprocess.gaussian.*,
+// preprocess.clahe.*) and `correlate --gaussian`.
+inline constexpr ValueRange kGaussianSigmaRange{0, 20, "px", /*min_open=*/true};
+inline constexpr ValueRange kGaussianKernelRange{3, 201, "px"};  // And odd.
+inline constexpr ValueRange kClaheClipLimitRange{0, 1000, "", /*min_open=*/true};
+inline constexpr ValueRange kClaheTileGridRange{1, 64, ""};
+
 struct GaussianBlurOptions {
   bool enabled = false;
-  double sigma_px = 1.0;  // Standard deviation [px], in (0, 20].
-  int kernel_size = 5;    // Kernel side [px], odd, >= 3 (the scene's gaussian_kernel).
+  double sigma_px = 1.0;  // Standard deviation [px], kGaussianSigmaRange.
+  int kernel_size = 5;    // Kernel side [px], odd, kGaussianKernelRange (the scene's kernel).
   void Check() const;
 };
 
 struct ClaheOptions {
   bool enabled = false;
   double clip_limit = 2.0;  // Contrast limit (OpenCV's clipLimit, relative to a flat
-                            // histogram), in (0, 1000].
-  int tile_grid = 8;        // Tiles per side of the image, in [1, 64].
+                            // histogram), kClaheClipLimitRange.
+  int tile_grid = 8;        // Tiles per side of the image, kClaheTileGridRange.
   void Check() const;
 };
 
