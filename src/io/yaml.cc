@@ -150,14 +150,6 @@ std::string ClosestMatch(const std::string& word, const std::vector<std::string>
   return best_distance <= limit ? best : "";
 }
 
-std::string ExpectedText(const std::string& what, const ValueRange& range) {
-  constexpr double kUnbounded = 1e300;
-  const std::string unit = range.unit[0] ? std::string(" ") + range.unit : "";
-  if (range.max < kUnbounded) return what + " in " + range.Text();
-  if (range.min <= -kUnbounded) return what + (unit.empty() ? "" : " [" + unit.substr(1) + "]");
-  return fmt::format("{} {} {:g}{}", what, range.min_open ? ">" : ">=", range.min, unit);
-}
-
 std::string DescribeYaml(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "nothing";
   if (node.IsScalar()) return "'" + node.Scalar() + "'";

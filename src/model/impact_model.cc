@@ -140,8 +140,8 @@ ErrorEstimator ErrorEstimatorFromString(const std::string& name) {
 }
 
 void ImpactSolverOptions::Check() const {
-  Require(std::isnan(rtol) || (std::isfinite(rtol) && rtol >= 1e-14 && rtol <= 0.1), "rtol", rtol,
-          "a relative tolerance in [1e-14, 0.1] (or unset: 1e-6)");
+  CheckValue(std::isnan(rtol) || kRelativeToleranceRange.Contains(rtol), "rtol", Num(rtol),
+             "a relative tolerance in " + kRelativeToleranceRange.Text() + " (or unset: 1e-6)");
   Require(std::isnan(atol) || (std::isfinite(atol) && atol > 0), "atol", atol,
           "an absolute tolerance > 0 (or unset: 1e-3 * rtol)");
   Require(std::isfinite(t_max_s) && t_max_s > 0, "t_max_s", t_max_s, "a time > 0 s");

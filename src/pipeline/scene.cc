@@ -247,16 +247,16 @@ YamlOptionTable SensorTable(Scene* s) {
       "Unit of the acceleration column; auto = from its name");
   t.Add("exposure_column", &o.columns.exposure,
         "Camera exposure column (frame times from its rising edges); empty or absent = none");
-  t.Add("cutoff_hz", &o.cutoff_hz, ValueRange{0, 1e300, "Hz", /*min_open=*/true},
-        "a cut-off frequency", "Low-pass cut-off (< fs / 2)");
+  t.Add("cutoff_hz", &o.cutoff_hz, kCutoffRange, "a cut-off frequency",
+        "Low-pass cut-off (< fs / 2)");
   t.AddChoice(
       "integrate_from", {"release", "impact"}, ToString(o.integrate_from),
       [&o](const std::string& v) { o.integrate_from = IntegrationStartFromString(v); },
       "Integrate from the release (v = 0) or the impact (v0 of the test)");
   t.Add("frame_time_offset_s", &s->sensor.frame_time_offset_s, kAnyTime, "a time of frame 0",
         "Time of frame 0 on the DAQ clock (no exposure channel)");
-  t.Add("quiet_window_s", &o.quiet_window_s, ValueRange{0, 1e3, "s", /*min_open=*/true},
-        "a window length", "Offset/noise window length");
+  t.Add("quiet_window_s", &o.quiet_window_s, kQuietWindowRange, "a window length",
+        "Offset/noise window length");
   return t;
 }
 
@@ -313,7 +313,7 @@ YamlOptionTable ModelTable(Scene* s) {
   t.AddChoice(
       "solver", {"auto", "dopri5", "stiff"}, ToString(o.solver),
       [&o](const std::string& v) { o.solver = ImpactSolverFromString(v); }, "ODE solver");
-  AddTolerance(t, "rtol", &o.rtol, ValueRange{1e-14, 0.1, ""}, "a relative tolerance", "1e-6",
+  AddTolerance(t, "rtol", &o.rtol, kRelativeToleranceRange, "a relative tolerance", "1e-6",
                "Relative tolerance of the ODE solver");
   AddTolerance(t, "atol", &o.atol, kPositive, "an absolute tolerance", "1e-3 * rtol",
                "Absolute tolerance of the ODE solver");

@@ -99,10 +99,11 @@ void SensorOptions::Check() const {
   CheckValue(!columns.time.empty(), "sensor.columns.time", "an empty name", "a column name");
   CheckValue(std::isfinite(g_m_s2) && g_m_s2 > 0, "sensor.g_m_s2", fmt::format("{}", g_m_s2),
              "> 0");
-  CheckValue(std::isfinite(cutoff_hz) && cutoff_hz > 0, "sensor.cutoff_hz",
-             fmt::format("{}", cutoff_hz), "> 0 Hz and below the Nyquist frequency");
-  CheckValue(std::isfinite(quiet_window_s) && quiet_window_s > 0, "sensor.quiet_window_s",
-             fmt::format("{}", quiet_window_s), "> 0 s");
+  CheckValue(std::isfinite(cutoff_hz) && kCutoffRange.Contains(cutoff_hz), "sensor.cutoff_hz",
+             fmt::format("{}", cutoff_hz),
+             ExpectedText("a cut-off frequency", kCutoffRange) + ", below the Nyquist frequency");
+  CheckValue(kQuietWindowRange.Contains(quiet_window_s), "sensor.quiet_window_s",
+             fmt::format("{}", quiet_window_s), ExpectedText("a window length", kQuietWindowRange));
   CheckValue(std::isfinite(quiet_guard_s) && quiet_guard_s >= 0, "sensor.quiet_guard_s",
              fmt::format("{}", quiet_guard_s), ">= 0 s");
   if (integrate_from == IntegrationStart::kImpact) {

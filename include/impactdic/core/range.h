@@ -30,7 +30,11 @@ struct ValueRange {
   std::string Text() const;
 };
 
-// Error(kInvalidValue, where, value, what + " in " + range.Text()) unless range.Contains(value).
+// "a pounder mass in [0.01, 1e+05] kg"; a range without an upper end (max >= 1e300) reads
+// "a grid step >= 1 px", one without either end "a time [s]".
+std::string ExpectedText(const std::string& what, const ValueRange& range);
+
+// Error(kInvalidValue, where, value, ExpectedText(what, range)) unless range.Contains(value).
 void CheckRange(double value, const ValueRange& range, const std::string& where,
                 const std::string& what);
 

@@ -35,10 +35,6 @@ YAML::Node LoadYamlFile(const std::string& path, const std::string& what);
 // Closest candidate by edit distance, or "" when none is close (for "did you mean").
 std::string ClosestMatch(const std::string& word, const std::vector<std::string>& candidates);
 
-// "a pounder mass in [0.01, 1e+05] kg"; a range without an upper end (max >= 1e300) reads
-// "a grid step >= 1 px", one without either end "a time [s]".
-std::string ExpectedText(const std::string& what, const ValueRange& range);
-
 // "nothing", "'abc'", "a list of 3", "a map": what a node holds, for messages.
 std::string DescribeYaml(const YAML::Node& node);
 

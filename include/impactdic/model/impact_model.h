@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
 #include "impactdic/model/ode.h"
 
 namespace impactdic {
@@ -110,9 +111,12 @@ enum class ErrorEstimator {
 const char* ToString(ErrorEstimator estimator);
 ErrorEstimator ErrorEstimatorFromString(const std::string& name);  // "companion", "local"
 
+// The relative tolerances the solver accepts (ImpactSolverOptions::rtol; the scene's model.rtol).
+inline constexpr ValueRange kRelativeToleranceRange{1e-14, 0.1, ""};
+
 struct ImpactSolverOptions {
   ImpactSolver solver = ImpactSolver::kAuto;
-  // Relative tolerance, in [1e-14, 0.1]; NaN: 1e-6 (1e-3 with ode45_defaults).
+  // Relative tolerance, in kRelativeToleranceRange; NaN: 1e-6 (1e-3 with ode45_defaults).
   double rtol = kNaN;
   // Absolute tolerance (m, m/s; s in the end phase), > 0; NaN: 1e-3 * rtol (ode45's ratio).
   double atol = kNaN;

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
 
 namespace impactdic {
 
@@ -67,12 +68,18 @@ struct SensorColumns {
   std::vector<std::string> force;
 };
 
+// The allowed values, defined once: read by SensorOptions::Check(), the scene's sensor.* keys and
+// `analyze`'s flags. The cut-off must also lie below the record's Nyquist frequency (checked
+// with the record).
+inline constexpr ValueRange kCutoffRange{0, 1e300, "Hz", /*min_open=*/true};
+inline constexpr ValueRange kQuietWindowRange{0, 1e3, "s", /*min_open=*/true};
+
 struct SensorOptions {
   SensorColumns columns;
   double g_m_s2 = 9.81;     // Gravitational acceleration [m/s^2], > 0.
-  double cutoff_hz = 1500;  // Low-pass cut-off [Hz], 0 < f_c < f_s / 2 (paper: 1500 Hz).
+  double cutoff_hz = 1500;  // Low-pass cut-off [Hz], kCutoffRange, < f_s / 2 (paper: 1500 Hz).
   OffsetReference offset_reference = OffsetReference::kFreeFall;
-  double quiet_window_s = 0.005;  // Length of the offset / noise window [s], > 0.
+  double quiet_window_s = 0.005;  // Length of the offset / noise window [s], kQuietWindowRange.
   double quiet_guard_s = 0.001;   // Gap between the free-fall window and the impact [s], >= 0.
   IntegrationStart integrate_from = IntegrationStart::kRelease;
   // kImpact: the impact velocity [m/s], > 0 (NaN otherwise).
