@@ -43,13 +43,6 @@ CampaignOptions OptionsOf(const CampaignArgs& a) {
   if (a.format != "text" && a.format != "json")
     throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
   if (a.threads) CheckThreadCount(*a.threads, "--threads");
-  if (a.jobs < 0)
-    throw Error(ErrorKind::kInvalidValue, "--jobs", std::to_string(a.jobs),
-                "0 (auto) or a number of tests at a time >= 1");
-  if (!(a.confidence > 0 && a.confidence < 1)) {
-    throw Error(ErrorKind::kInvalidValue, "--confidence", std::to_string(a.confidence),
-                "a level in (0, 1)");
-  }
   CampaignOptions o;
   o.output_folder = a.output;
   o.threads = a.threads.value_or(-1);
@@ -58,6 +51,16 @@ CampaignOptions OptionsOf(const CampaignArgs& a) {
   o.force = a.force;
   o.figures = !a.no_figures;
   if (!a.shard.empty()) o.shard = ParseShard(a.shard, "--shard");
+  // The library's check (the allowed values are defined there), naming the flags.
+  try {
+    o.Check();
+  } catch (const Error& e) {
+    RethrowWithFlagNames(e, {{"output_folder", "-o"},
+                             {"threads", "--threads"},
+                             {"jobs", "--jobs"},
+                             {"confidence", "--confidence"},
+                             {"shard", "--shard"}});
+  }
   return o;
 }
 

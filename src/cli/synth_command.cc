@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -36,7 +37,7 @@ struct SynthArgs {
   std::string output;
   std::string dem_dir;
   std::string realistic_spec;
-  int frames = -1;
+  std::optional<int> frames;  // Overrides the spec's frames.count.
   bool calibrate = true;
 };
 
@@ -68,8 +69,8 @@ void CalibrateRendered(const ImpactSceneSpec& spec, const std::string& staging,
 
 // impactdic synth --dem DIR: films a DEM run (synth/dem_scene.h, docs/validation.md).
 void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGeneration& generation) {
-  if (args.frames != -1)
-    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(args.frames),
+  if (args.frames)
+    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(*args.frames),
                 "no --frames with --dem (the frames are the DEM's snapshots)");
   DemRecord record = ReadDemRecord(args.dem_dir);
   DemScene scene(std::move(record), spec);
@@ -94,7 +95,7 @@ void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGener
 
 // impactdic synth --realistic SPEC -o DIR: realistic footage (synth/realistic.h, docs/synth.md).
 void RunSynthRealistic(const SynthArgs& args) {
-  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() || args.frames != -1)
+  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() || args.frames)
     throw Error(ErrorKind::kInvalidValue, "--realistic", args.realistic_spec,
                 "no SCENE_SPEC, --preset, --dem or --frames with --realistic (the realistic "
                 "spec has its own `realistic.frames`)");
@@ -126,16 +127,19 @@ void RunSynth(const SynthArgs& args) {
                 "a scene spec YAML file or --preset small|full|tiny");
   if (args.output.empty())
     throw Error(ErrorKind::kInvalidValue, "-o", "nothing", "an output folder");
-  if (args.frames != -1 && args.frames < 3)
-    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(args.frames),
-                "a frame count >= 3 (or leave it out for the spec's value)");
   if (!args.preset.empty() && !args.spec_path.empty())
     throw Error(ErrorKind::kInvalidValue, "--preset", args.preset,
                 "no --preset together with a spec file (write `preset:` in the spec)");
   ImpactSceneSpec spec =
       args.spec_path.empty() ? ImpactScenePreset(args.preset) : LoadImpactSceneSpec(args.spec_path);
-  if (args.frames != -1) spec.frames = args.frames;
-  spec.Check();
+  if (args.frames) spec.frames = *args.frames;
+  // The spec's check (the allowed counts are defined there), naming --frames for the override.
+  try {
+    spec.Check();
+  } catch (const Error& e) {
+    if (!args.frames) throw;
+    RethrowWithFlagNames(e, {{"frames.count", "--frames"}});
+  }
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::exists(args.output, ec) && !fs::is_directory(args.output, ec))
@@ -194,7 +198,8 @@ void RegisterSynthCommand(CLI::App& app) {
                   "Render realistic footage instead (sand grains, uneven light, glare, motion "
                   "blur, JPEG; bearing-capacity field with a shear band): a spec YAML with a "
                   "`realistic:` section (docs/synth.md)");
-  cmd->add_option("--frames", args->frames, "Override the number of frames (>= 3)");
+  cmd->add_option("--frames", args->frames,
+                  "Override the spec's frames.count (0: auto, or at least before_impact + 2)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");
   cmd->callback([args] { RunSynth(*args); });

@@ -5,6 +5,10 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
@@ -83,6 +87,26 @@ TEST(Campaign, BadTablesAndOptionsAreClearErrors) {
   const CliResult conf = RunCli("campaign --from-table " + negative + " --confidence 1.5");
   EXPECT_EQ(conf.exit_code, 1);
   EXPECT_NE(conf.output.find("--confidence"), std::string::npos) << conf.output;
+  // The flags are checked by CampaignOptions::Check() (the one definition), naming the flag.
+  for (const auto& [flags, flag, set] :
+       std::vector<std::tuple<std::string, std::string, std::function<void(CampaignOptions&)>>>{
+           {"--confidence 1.5", "--confidence", [](CampaignOptions& o) { o.confidence = 1.5; }},
+           {"--jobs -2", "--jobs", [](CampaignOptions& o) { o.jobs = -2; }}}) {
+    CampaignOptions o;
+    o.output_folder = "out";
+    set(o);
+    std::string expected;
+    try {
+      o.Check();
+    } catch (const Error& e) {
+      expected = e.expected();
+    }
+    ASSERT_FALSE(expected.empty()) << flags;
+    const CliResult r = RunCli("campaign --from-table " + WriteEq4Table(dir) + " " + flags);
+    EXPECT_EQ(r.exit_code, 1) << r.output;
+    EXPECT_NE(r.output.find(flag + ": invalid value"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("expected " + expected), std::string::npos) << r.output;
+  }
   const CliResult json = RunCli("campaign --from-table " + WriteEq4Table(dir) + " -o " +
                                 dir.File("o2") + " --format json");
   EXPECT_EQ(json.exit_code, 0) << json.output;
