@@ -55,8 +55,8 @@ void RegisterRenderCommand(CLI::App& app) {
     RenderResultsOptions options;
     try {
       options.animation_options.codec = VideoCodecFromString(args->codec);
-    } catch (const Error&) {
-      throw Error(ErrorKind::kInvalidValue, "--codec", args->codec, "auto, h264 or mjpg");
+    } catch (const Error& e) {
+      RethrowWithFlagNames(e, {{"video codec", "--codec"}});
     }
     CheckRange(args->fps, AnimationOptions::kFpsRange, "--fps", "a playback frame rate");
     if (args->no_animation && args->png_frames) {
