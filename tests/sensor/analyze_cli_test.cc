@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../cli/expect_flag_error.h"
 #include "../io/test_dir.h"
-#include "impactdic/core/error.h"
 #include "impactdic/sensor/sensor.h"
 #include "synthetic_record.h"
 
@@ -91,19 +91,12 @@ TEST_F(AnalyzeCli, SensorFlagsAreCheckedByTheLibraryNamingTheFlag) {
            [](SensorOptions& o) { o.impact_threshold_g = 1; }},
       };
   for (const auto& [flags, flag, set] : cases) {
-    SensorOptions o;
-    set(o);
-    std::string expected;
-    try {
-      o.Check();
-    } catch (const Error& e) {
-      expected = e.expected();
-    }
-    ASSERT_FALSE(expected.empty()) << flags;
-    const CliResult r = RunCli("analyze --sensor " + csv_ + " --from-release " + flags);
-    EXPECT_EQ(r.exit_code, 1) << r.output;
-    EXPECT_NE(r.output.find(flag + ": invalid value"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("expected " + expected), std::string::npos) << r.output;
+    ExpectFlagRefusedAsTheLibraryDoes(
+        RunCli("analyze --sensor " + csv_ + " --from-release " + flags), flag, [&set = set] {
+          SensorOptions o;
+          set(o);
+          o.Check();
+        });
   }
 }
 
