@@ -103,13 +103,11 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     o.impact_velocity_m_s = *a.impact_velocity;
   }
   // The library's parsers and checks (the allowed values are defined there), naming the flags.
-  try {
+  WithFlagNames(kSensorFlags, [&] {
     o.columns.accel_unit = AccelUnitFromString(a.accel_unit);
     o.offset_reference = OffsetReferenceFromString(a.offset_reference);
     o.Check();
-  } catch (const Error& e) {
-    RethrowWithFlagNames(e, kSensorFlags);
-  }
+  });
   return o;
 }
 
@@ -118,13 +116,7 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
     throw Error(ErrorKind::kFileNotFound, "--sensor", a.sensor, "an existing DAQ CSV file")
         .WithFile(a.sensor);
   }
-  const SensorResult r = [&] {
-    try {
-      return AnalyzeSensorCsv(a.sensor, o);
-    } catch (const Error& e) {
-      RethrowWithFlagNames(e, kSensorFlags);
-    }
-  }();
+  const SensorResult r = WithFlagNames(kSensorFlags, [&] { return AnalyzeSensorCsv(a.sensor, o); });
   const SensorSummary& s = r.summary;
   if (!a.output.empty()) {
     // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.

@@ -114,25 +114,19 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->callback([args] {
     // Validate every option before any work.
     CalibrationOptions options;
-    try {
-      options.board = ParseBoard(args->board, args->square_mm);
-    } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"board", "--board"}, {"board.square_mm", "--square"}});
-    }
+    WithFlagNames({{"board", "--board"}, {"board.square_mm", "--square"}},
+                  [&] { options.board = ParseBoard(args->board, args->square_mm); });
     CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
                "text or json");
     options.max_rms_px = args->max_rms_px;
     options.min_views = args->min_views;
     options.fix_k3 = args->fix_k3;
     // The library's check (the allowed values are defined there), naming the flags.
-    try {
-      options.Check();
-    } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"calibration.max_rms_px", "--max-rms"},
-                               {"calibration.min_views", "--min-views"},
-                               {"board", "--board"},
-                               {"board.square_mm", "--square"}});
-    }
+    WithFlagNames({{"calibration.max_rms_px", "--max-rms"},
+                   {"calibration.min_views", "--min-views"},
+                   {"board", "--board"},
+                   {"board.square_mm", "--square"}},
+                  [&] { options.Check(); });
     CheckValue(
         !args->images.empty(), "IMAGES", "no calibration images",
         fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));

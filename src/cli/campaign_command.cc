@@ -52,15 +52,12 @@ CampaignOptions OptionsOf(const CampaignArgs& a) {
   o.figures = !a.no_figures;
   if (!a.shard.empty()) o.shard = ParseShard(a.shard, "--shard");
   // The library's check (the allowed values are defined there), naming the flags.
-  try {
-    o.Check();
-  } catch (const Error& e) {
-    RethrowWithFlagNames(e, {{"output_folder", "-o"},
-                             {"threads", "--threads"},
-                             {"jobs", "--jobs"},
-                             {"confidence", "--confidence"},
-                             {"shard", "--shard"}});
-  }
+  WithFlagNames({{"output_folder", "-o"},
+                 {"threads", "--threads"},
+                 {"jobs", "--jobs"},
+                 {"confidence", "--confidence"},
+                 {"shard", "--shard"}},
+                [&] { o.Check(); });
   return o;
 }
 
@@ -80,11 +77,8 @@ void Run(const CampaignArgs& a) {
   if (!a.table.empty()) {
     summary = RegressCampaignTable(a.table, options);
   } else if (!a.merge.empty()) {
-    try {
-      summary = MergeCampaigns(a.merge, options);
-    } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"merge folders", "--merge"}});
-    }
+    summary = WithFlagNames({{"merge folders", "--merge"}},
+                            [&] { return MergeCampaigns(a.merge, options); });
   } else {
     summary = RunCampaignPlan(PlanOf(a.files), options);
   }

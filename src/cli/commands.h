@@ -35,6 +35,19 @@ void RegisterVersionCommand(CLI::App& app);
 using FlagNames = std::vector<std::pair<std::string, std::string>>;
 [[noreturn]] void RethrowWithFlagNames(const Error& e, const FlagNames& flags);
 
+// Runs `f` (a library check, parser or stage) and returns what it returns; an Error it throws is
+// thrown again naming the flag (RethrowWithFlagNames). A flag's value is thus judged by the
+// library's one definition of the option:
+//   WithFlagNames({{"rtol", "--rtol"}}, [&] { options.Check(); });
+template <typename F>
+auto WithFlagNames(const FlagNames& flags, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const Error& e) {
+    RethrowWithFlagNames(e, flags);
+  }
+}
+
 // The flag of `run` and `analyze` that allows partial output (the library's allow_partial).
 inline constexpr const char* kAllowPartialFlag = "--allow-partial";
 

@@ -225,11 +225,7 @@ void Run(const CorrelateArgs& a) {
       MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
   const ImageFilter filter = MakeImageFilter(a.gaussian);
   options.continuity = ContinuityFromArgs(a);
-  try {
-    options.Check();
-  } catch (const Error& e) {
-    RethrowWithFlagNames(e, kCorrelateFlags);
-  }
+  WithFlagNames(kCorrelateFlags, [&] { options.Check(); });
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
   const bool video = !pair && IsVideoFile(a.frames);  // Its frames, as `run`'s inputs.frames.

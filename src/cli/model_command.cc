@@ -177,14 +177,11 @@ ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
   if (a.atol) o.atol = *a.atol;
   if (a.t_max) o.t_max_s = *a.t_max;
   // The library's check (the allowed ranges are defined there), naming the flags.
-  try {
-    o.Check();
-  } catch (const Error& e) {
-    RethrowWithFlagNames(e, {{"rtol", "--rtol"},
-                             {"atol", "--atol"},
-                             {"t_max_s", "--t-max"},
-                             {"ode45_defaults", "--ode45-defaults"}});
-  }
+  WithFlagNames({{"rtol", "--rtol"},
+                 {"atol", "--atol"},
+                 {"t_max_s", "--t-max"},
+                 {"ode45_defaults", "--ode45-defaults"}},
+                [&] { o.Check(); });
   return o;
 }
 

@@ -53,11 +53,8 @@ void RegisterRenderCommand(CLI::App& app) {
                   "an existing results .h5 file");
     }
     RenderResultsOptions options;
-    try {
-      options.animation_options.codec = VideoCodecFromString(args->codec);
-    } catch (const Error& e) {
-      RethrowWithFlagNames(e, {{"video codec", "--codec"}});
-    }
+    options.animation_options.codec = WithFlagNames(
+        {{"video codec", "--codec"}}, [&] { return VideoCodecFromString(args->codec); });
     CheckRange(args->fps, AnimationOptions::kFpsRange, "--fps", "a playback frame rate");
     if (args->no_animation && args->png_frames) {
       throw Error(ErrorKind::kInvalidValue, "--png-frames", "given with --no-animation",
