@@ -1,6 +1,6 @@
 #include "impactdic/core/threads.h"
 
-#include <oneapi/tbb/global_control.h>
+#include <tbb/global_control.h>
 
 #include <cstddef>
 #include <filesystem>

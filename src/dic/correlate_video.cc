@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>

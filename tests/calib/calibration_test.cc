@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "../core/expect_error.h"
+#include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
 namespace impactdic {

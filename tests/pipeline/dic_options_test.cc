@@ -2,6 +2,7 @@
 // the dic library's IcgnOptions default for the uncertainty limit.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <opencv2/core.hpp>
 #include <string>

@@ -3,6 +3,7 @@
 // for the committed sample (sample_frames/, the README's first command) and its committed truth,
 // and the sample's summary.json against a committed reference ("behaviour unchanged").
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>

@@ -29,6 +29,7 @@
 #ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
 #define IMPACTDIC_PIPELINE_PIPELINE_H_
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
