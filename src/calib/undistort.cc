@@ -95,18 +95,11 @@ void Remap(const cv::Mat& src, const cv::Mat& map_x, const cv::Mat& map_y, bool 
 }  // namespace
 
 const char* ToString(UndistortInterpolation interpolation) {
-  switch (interpolation) {
-    case UndistortInterpolation::kBilinear: return "bilinear";
-    case UndistortInterpolation::kBicubic: return "bicubic";
-  }
-  return "?";
+  return kUndistortInterpolationNames.Name(interpolation);
 }
 
 UndistortInterpolation UndistortInterpolationFromString(const std::string& text) {
-  if (text == "bilinear") return UndistortInterpolation::kBilinear;
-  if (text == "bicubic") return UndistortInterpolation::kBicubic;
-  throw Error(ErrorKind::kInvalidValue, "undistort.interpolation", "'" + text + "'",
-              "bilinear or bicubic");
+  return kUndistortInterpolationNames.Parse(text, "undistort.interpolation");
 }
 
 void UndistortOptions::Check() const {

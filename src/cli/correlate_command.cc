@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <exception>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -67,7 +68,9 @@ struct CorrelateArgs {
 };
 
 // The command-line flags of the library fields named in errors.
-const FlagNames kCorrelateFlags = {{"dic.grid.subset_size", "--subset"},
+const FlagNames kCorrelateFlags = {{"interpolation", "--interp"},
+                                   {"shape function", "--shape"},
+                                   {"dic.grid.subset_size", "--subset"},
                                    {"dic.grid.step", "--step"},
                                    {"dic.grid.roi", "--roi"},
                                    {"dic.grid.mask", "--mask"},
@@ -205,8 +208,10 @@ void Run(const CorrelateArgs& a) {
   options.grid.step = a.step;
   if (!a.roi.empty()) options.grid.roi = ParseRoi(a.roi);
   if (!a.mask.empty()) options.grid.mask = ReadGreyImage(a.mask) != 0;
-  options.icgn.interpolation = InterpolationFromString(a.interp);
-  options.icgn.shape = ShapeFunctionFromString(a.shape);
+  WithFlagNames(kCorrelateFlags, [&] {
+    options.icgn.interpolation = InterpolationFromString(a.interp);
+    options.icgn.shape = ShapeFunctionFromString(a.shape);
+  });
   options.update.policy = a.update;
   try {
     ReferenceUpdatePolicyFromString(a.update, options.update);
@@ -296,8 +301,10 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--mask", args->mask,
                   "Mask image of the reference's size: subsets are correlated only where their "
                   "centre pixel is non-zero (status `masked` elsewhere)");
-  cmd->add_option("--interp", args->interp, "bicubic | biquintic")->capture_default_str();
-  cmd->add_option("--shape", args->shape, "affine | quadratic")->capture_default_str();
+  cmd->add_option("--interp", args->interp, Join(kInterpolationNames.Names(), " | "))
+      ->capture_default_str();
+  cmd->add_option("--shape", args->shape, Join(kShapeFunctionNames.Names(), " | "))
+      ->capture_default_str();
   cmd->add_option("--reference-update", args->update, "fixed | incremental | every:N | auto")
       ->capture_default_str();
   cmd->add_option("--threads", args->threads,

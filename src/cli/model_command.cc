@@ -19,6 +19,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/range.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/json.h"
 #include "impactdic/model/impact_model.h"
@@ -165,8 +166,10 @@ ImpactModelParameters ValidatedParameters(const ModelArgs& a, bool single_run) {
 
 ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
   ImpactSolverOptions o;
-  o.solver = ImpactSolverFromString(a.solver);
-  o.error_estimator = ErrorEstimatorFromString(a.error_estimate);
+  WithFlagNames({{"solver", "--solver"}, {"error_estimator", "--error-estimate"}}, [&] {
+    o.solver = ImpactSolverFromString(a.solver);
+    o.error_estimator = ErrorEstimatorFromString(a.error_estimate);
+  });
   o.ode45_defaults = a.ode45_defaults;
   // A given tolerance or time must be a number: NaN means "unset" to the library.
   for (const auto& [value, flag] :
@@ -329,7 +332,8 @@ void RegisterModelCommand(CLI::App& app) {
   cmd->add_option("--bed-height", args->bed_height,
                   "sand bed height for the penetration warning, in " + kBedHeightRange.Text())
       ->capture_default_str();
-  cmd->add_option("--solver", args->solver, "auto | dopri5 | stiff")->capture_default_str();
+  cmd->add_option("--solver", args->solver, Join(kImpactSolverNames.Names(), " | "))
+      ->capture_default_str();
   cmd->add_option("--rtol", args->rtol, "relative tolerance, [1e-14, 0.1] (default 1e-6)");
   cmd->add_option("--atol", args->atol, "absolute tolerance, > 0 (default 1e-3 * rtol)");
   cmd->add_flag(

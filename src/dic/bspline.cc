@@ -137,13 +137,11 @@ double BetaDerivative(int degree, double d) {
 }  // namespace
 
 const char* ToString(Interpolation interpolation) {
-  return interpolation == Interpolation::kBicubic ? "bicubic" : "biquintic";
+  return kInterpolationNames.Name(interpolation);
 }
 
 Interpolation InterpolationFromString(const std::string& name) {
-  if (name == "bicubic") return Interpolation::kBicubic;
-  if (name == "biquintic") return Interpolation::kBiquintic;
-  throw Error(ErrorKind::kInvalidValue, "interpolation", name, "bicubic or biquintic");
+  return kInterpolationNames.Parse(name, "interpolation");
 }
 
 void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect region, int guard_px) {

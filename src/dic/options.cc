@@ -26,26 +26,18 @@ std::string Num(double v) { return std::to_string(v); }
 
 }  // namespace
 
-const char* ToString(ShapeFunction shape) {
-  return shape == ShapeFunction::kAffine ? "affine" : "quadratic";
-}
+const char* ToString(ShapeFunction shape) { return kShapeFunctionNames.Name(shape); }
 
 ShapeFunction ShapeFunctionFromString(const std::string& name) {
-  if (name == "affine") return ShapeFunction::kAffine;
-  if (name == "quadratic") return ShapeFunction::kQuadratic;
-  throw Error(ErrorKind::kInvalidValue, "shape function", name, "affine or quadratic");
+  return kShapeFunctionNames.Parse(name, "shape function");
 }
 
 std::string ReferenceUpdateText(const UpdateOptions& update) { return update.policy; }
 
-const char* ToString(SequenceMode mode) {
-  return mode == SequenceMode::kPairs ? "pairs" : "sequence";
-}
+const char* ToString(SequenceMode mode) { return kSequenceModeNames.Name(mode); }
 
 SequenceMode SequenceModeFromString(const std::string& text, const std::string& where) {
-  if (text == "sequence") return SequenceMode::kSequence;
-  if (text == "pairs") return SequenceMode::kPairs;
-  throw Error(ErrorKind::kInvalidValue, where, text, "sequence or pairs");
+  return kSequenceModeNames.Parse(text, where);
 }
 
 double MaxUncertaintyFromString(const std::string& text, const std::string& where) {

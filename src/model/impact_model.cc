@@ -113,30 +113,16 @@ ImpactForces EvaluateImpactForces(const ImpactModelParameters& p, double M_kg, d
   return f;
 }
 
-const char* ToString(ImpactSolver solver) {
-  switch (solver) {
-    case ImpactSolver::kAuto: return "auto";
-    case ImpactSolver::kDopri5: return "dopri5";
-    case ImpactSolver::kStiff: return "stiff";
-  }
-  return "?";
-}
+const char* ToString(ImpactSolver solver) { return kImpactSolverNames.Name(solver); }
 
 ImpactSolver ImpactSolverFromString(const std::string& name) {
-  if (name == "auto") return ImpactSolver::kAuto;
-  if (name == "dopri5") return ImpactSolver::kDopri5;
-  if (name == "stiff") return ImpactSolver::kStiff;
-  throw Error(ErrorKind::kInvalidValue, "solver", name, "one of auto, dopri5, stiff");
+  return kImpactSolverNames.Parse(name, "solver");
 }
 
-const char* ToString(ErrorEstimator estimator) {
-  return estimator == ErrorEstimator::kCompanion ? "companion" : "local";
-}
+const char* ToString(ErrorEstimator estimator) { return kErrorEstimatorNames.Name(estimator); }
 
 ErrorEstimator ErrorEstimatorFromString(const std::string& name) {
-  if (name == "companion") return ErrorEstimator::kCompanion;
-  if (name == "local") return ErrorEstimator::kLocalSum;
-  throw Error(ErrorKind::kInvalidValue, "error_estimator", name, "one of companion, local");
+  return kErrorEstimatorNames.Parse(name, "error_estimator");
 }
 
 void ImpactSolverOptions::Check() const {

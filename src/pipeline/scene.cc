@@ -188,11 +188,11 @@ YamlOptionTable DicTable(Scene* s) {
   AddOdd(t, "subset_size", &o.grid.subset_size, kSubsetSizeRange, "Subset side S");
   t.Add("step", &o.grid.step, kGridStepRange, "grid step", "Grid spacing");
   t.AddChoice(
-      "interpolation", {"bicubic", "biquintic"}, ToString(o.icgn.interpolation),
+      "interpolation", kInterpolationNames.Names(), ToString(o.icgn.interpolation),
       [&o](const std::string& v) { o.icgn.interpolation = InterpolationFromString(v); },
       "B-spline interpolation of the deformed image");
   t.AddChoice(
-      "shape", {"affine", "quadratic"}, ToString(o.icgn.shape),
+      "shape", kShapeFunctionNames.Names(), ToString(o.icgn.shape),
       [&o](const std::string& v) { o.icgn.shape = ShapeFunctionFromString(v); },
       "Subset shape function");
   t.AddCustom(
@@ -242,7 +242,7 @@ YamlOptionTable SensorTable(Scene* s) {
   t.Add("time_column", &o.columns.time, "Time column [s]");
   t.Add("accel_column", &o.columns.accel, "Acceleration column");
   t.AddChoice(
-      "accel_unit", {"auto", "g", "m/s^2"}, ToString(o.columns.accel_unit),
+      "accel_unit", kAccelUnitNames.Names(), ToString(o.columns.accel_unit),
       [&o](const std::string& v) { o.columns.accel_unit = AccelUnitFromString(v); },
       "Unit of the acceleration column; auto = from its name");
   t.Add("exposure_column", &o.columns.exposure,
@@ -250,7 +250,7 @@ YamlOptionTable SensorTable(Scene* s) {
   t.Add("cutoff_hz", &o.cutoff_hz, kCutoffRange, "a cut-off frequency",
         "Low-pass cut-off (< fs / 2)");
   t.AddChoice(
-      "integrate_from", {"release", "impact"}, ToString(o.integrate_from),
+      "integrate_from", kIntegrationStartNames.Names(), ToString(o.integrate_from),
       [&o](const std::string& v) { o.integrate_from = IntegrationStartFromString(v); },
       "Integrate from the release (v = 0) or the impact (v0 of the test)");
   t.Add("frame_time_offset_s", &s->sensor.frame_time_offset_s, kAnyTime, "a time of frame 0",
@@ -311,7 +311,7 @@ YamlOptionTable ModelTable(Scene* s) {
         "Sigmoid rate b (Eq. 6, Table 2)");
   ImpactSolverOptions& o = s->solver;
   t.AddChoice(
-      "solver", {"auto", "dopri5", "stiff"}, ToString(o.solver),
+      "solver", kImpactSolverNames.Names(), ToString(o.solver),
       [&o](const std::string& v) { o.solver = ImpactSolverFromString(v); }, "ODE solver");
   AddTolerance(t, "rtol", &o.rtol, kRelativeToleranceRange, "a relative tolerance", "1e-6",
                "Relative tolerance of the ODE solver");
@@ -322,19 +322,10 @@ YamlOptionTable ModelTable(Scene* s) {
 
 }  // namespace
 
-const char* ToString(FrameStorage storage) {
-  switch (storage) {
-    case FrameStorage::kNone: return "none";
-    case FrameStorage::kPreview: return "preview";
-    case FrameStorage::kAll: return "all";
-  }
-  return "?";
-}
+const char* ToString(FrameStorage storage) { return kFrameStorageNames.Name(storage); }
 
 FrameStorage FrameStorageFromString(const std::string& text) {
-  for (FrameStorage f : {FrameStorage::kNone, FrameStorage::kPreview, FrameStorage::kAll})
-    if (text == ToString(f)) return f;
-  throw Error(ErrorKind::kInvalidValue, "outputs.frames", text, "none, preview or all");
+  return kFrameStorageNames.Parse(text, "outputs.frames");
 }
 
 namespace {
@@ -349,7 +340,7 @@ YamlOptionTable OutputsTable(Scene* s) {
   t.Add("animation", &o.animation, "Animation");
   t.Add("png_frames", &o.png_frames, "The animation's frames as PNG files");
   t.AddChoice(
-      "frames", {"none", "preview", "all"}, ToString(o.frames),
+      "frames", kFrameStorageNames.Names(), ToString(o.frames),
       [&o](const std::string& v) { o.frames = FrameStorageFromString(v); },
       "Frames stored in results.h5: none, a preview (at most 16, downsampled to <= 640 px) or all");
   return t;

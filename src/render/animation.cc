@@ -24,20 +24,10 @@
 namespace impactdic {
 namespace fs = std::filesystem;
 
-const char* ToString(VideoCodec codec) {
-  switch (codec) {
-    case VideoCodec::kAuto: return "auto";
-    case VideoCodec::kH264: return "h264";
-    case VideoCodec::kMjpg: return "mjpg";
-  }
-  return "?";
-}
+const char* ToString(VideoCodec codec) { return kVideoCodecNames.Name(codec); }
 
 VideoCodec VideoCodecFromString(const std::string& text) {
-  for (auto c : {VideoCodec::kAuto, VideoCodec::kH264, VideoCodec::kMjpg}) {
-    if (text == ToString(c)) return c;
-  }
-  throw Error(ErrorKind::kInvalidValue, "video codec", text, "one of auto, h264, mjpg");
+  return kVideoCodecNames.Parse(text, "video codec");
 }
 
 void AnimationOptions::Check() const {

@@ -47,52 +47,22 @@ std::size_t FirstIndexAtOrAfter(const std::vector<double>& t, double tq) {
 
 }  // namespace
 
-const char* ToString(AccelUnit unit) {
-  switch (unit) {
-    case AccelUnit::kAuto: return "auto";
-    case AccelUnit::kG: return "g";
-    case AccelUnit::kMetrePerSecond2: return "m/s^2";
-  }
-  return "?";
-}
+const char* ToString(AccelUnit unit) { return kAccelUnitNames.Name(unit); }
 
 AccelUnit AccelUnitFromString(const std::string& text) {
-  const std::string t = ToLower(text);
-  if (t == "auto") return AccelUnit::kAuto;
-  if (t == "g") return AccelUnit::kG;
-  if (t == "m/s^2" || t == "m_s2" || t == "m/s2") return AccelUnit::kMetrePerSecond2;
-  throw Error(ErrorKind::kInvalidValue, "accel_unit", "'" + text + "'", "auto, g or m/s^2");
+  return kAccelUnitNames.Parse(text, "accel_unit");
 }
 
-const char* ToString(OffsetReference reference) {
-  switch (reference) {
-    case OffsetReference::kFreeFall: return "free-fall";
-    case OffsetReference::kFreeFallWindow: return "free-fall-window";
-    case OffsetReference::kRest: return "rest";
-    case OffsetReference::kNone: return "none";
-  }
-  return "?";
-}
+const char* ToString(OffsetReference reference) { return kOffsetReferenceNames.Name(reference); }
 
 OffsetReference OffsetReferenceFromString(const std::string& text) {
-  const std::string t = ToLower(text);
-  if (t == "free-fall" || t == "freefall" || t == "free_fall") return OffsetReference::kFreeFall;
-  if (t == "free-fall-window") return OffsetReference::kFreeFallWindow;
-  if (t == "rest") return OffsetReference::kRest;
-  if (t == "none") return OffsetReference::kNone;
-  throw Error(ErrorKind::kInvalidValue, "offset_reference", "'" + text + "'",
-              "free-fall, free-fall-window, rest or none");
+  return kOffsetReferenceNames.Parse(text, "offset_reference");
 }
 
-const char* ToString(IntegrationStart start) {
-  return start == IntegrationStart::kRelease ? "release" : "impact";
-}
+const char* ToString(IntegrationStart start) { return kIntegrationStartNames.Name(start); }
 
 IntegrationStart IntegrationStartFromString(const std::string& text) {
-  const std::string t = ToLower(text);
-  if (t == "release") return IntegrationStart::kRelease;
-  if (t == "impact") return IntegrationStart::kImpact;
-  throw Error(ErrorKind::kInvalidValue, "integrate_from", "'" + text + "'", "release or impact");
+  return kIntegrationStartNames.Parse(text, "integrate_from");
 }
 
 void SensorOptions::Check() const {

@@ -35,12 +35,10 @@ double SmoothStepDerivative(double x) {
 
 }  // namespace
 
-const char* ToString(SceneLens lens) { return lens == SceneLens::kSample ? "sample" : "ideal"; }
+const char* ToString(SceneLens lens) { return kSceneLensNames.Name(lens); }
 
 SceneLens SceneLensFromString(const std::string& text, const std::string& where) {
-  if (text == "sample") return SceneLens::kSample;
-  if (text == "ideal") return SceneLens::kIdeal;
-  throw Error(ErrorKind::kInvalidValue, where, "'" + text + "'", "sample or ideal");
+  return kSceneLensNames.Parse(text, where);
 }
 
 const char* ToString(SceneAddedMass mode) {

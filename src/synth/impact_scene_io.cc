@@ -84,7 +84,7 @@ YamlOptionTable TestAndModelKeys(ImpactSceneSpec* s, YamlOptionTable* model) {
 YamlOptionTable CameraKeys(ImpactSceneSpec* s) {
   YamlOptionTable t("camera");
   t.AddChoice(
-      "lens", {"sample", "ideal"}, ToString(s->lens),
+      "lens", kSceneLensNames.Names(), ToString(s->lens),
       [s](const std::string& v) { s->lens = SceneLensFromString(v, "camera.lens"); }, "");
   Integer(t, "width", &s->width);
   Integer(t, "height", &s->height);

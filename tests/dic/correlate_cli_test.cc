@@ -14,6 +14,7 @@
 
 #include "../cli/cli_runner.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
@@ -226,8 +227,10 @@ TEST_F(CorrelateCli, BadInputGivesClearErrors) {
   ExpectError(Pair() + " --subset 151 -o " + Path("x.csv"), "subset");
   ExpectError(Pair() + " --roi 50,50,300,90 -o " + Path("x.csv"), "ROI");
   ExpectError(Pair() + " --roi 5,5,2 -o " + Path("x.csv"), "--roi");
-  ExpectError(Pair() + " --interp bilinear -o " + Path("x.csv"), "bilinear");
-  ExpectError(Pair() + " --shape cubic -o " + Path("x.csv"), "cubic");
+  ExpectError(Pair() + " --interp bilinear -o " + Path("x.csv"),
+              "--interp: invalid value (got 'bilinear'); expected one of bicubic, biquintic");
+  ExpectError(Pair() + " --shape cubic -o " + Path("x.csv"),
+              "--shape: invalid value (got 'cubic')");
   ExpectError(Pair() + " --reference-update every:0 -o " + Path("x.csv"), "every:0");
   ExpectError(Pair() + " --threads -1 -o " + Path("x.csv"), "--threads");
   ExpectError(Pair() + " -o " + Path("x.txt"), ".csv, .h5 or .hdf5");

@@ -101,7 +101,8 @@ TEST(Pairs, ModeNamesConvertBothWays) {
     FAIL() << "no error for 'pair'";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("--mode"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("sequence or pairs"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected one of sequence, pairs"), std::string::npos)
+        << e.what();
   }
 }
 

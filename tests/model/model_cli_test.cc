@@ -6,6 +6,7 @@
 #include <functional>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "../cli/cli_runner.h"
@@ -95,7 +96,9 @@ TEST(ModelCli, BadInputFailsWithExitCode1AndNamesTheOption) {
       {"model --mass 10 --width 0.15", "--height/--velocity"},
       {"model --mass 10 --height 0.7 --width 0.15 --rtol 0", "--rtol"},
       {"model --mass 10 --height 0.7 --width 0.15 --rtol -1e-6", "--rtol"},
-      {"model --mass 10 --height 0.7 --width 0.15 --solver rk4", "solver"},
+      {"model --mass 10 --height 0.7 --width 0.15 --solver rk4",
+       "--solver: invalid value (got 'rk4'); expected one of auto, dopri5, stiff"},
+      {"model --mass 10 --height 0.7 --width 0.15 --error-estimate x", "--error-estimate"},
       {"model --mass 10 --height 0.7 --width 0.15 -o out.txt", "-o"},
       {"model --mass 10 --height 0.7 --width 0.15 --ode45-defaults --solver stiff",
        "--ode45-defaults"},

@@ -21,12 +21,16 @@
 #include <string>
 
 #include "impactdic/calib/calibration.h"
+#include "impactdic/core/enum_names.h"
 
 namespace impactdic {
 
 enum class UndistortInterpolation { kBilinear, kBicubic };
+inline constexpr EnumNames<UndistortInterpolation, 2> kUndistortInterpolationNames{
+    {{{UndistortInterpolation::kBilinear, "bilinear"},
+      {UndistortInterpolation::kBicubic, "bicubic"}}}};
 const char* ToString(UndistortInterpolation interpolation);
-// "bilinear" or "bicubic"; Error(kInvalidValue) otherwise.
+// A name of kUndistortInterpolationNames; Error(kInvalidValue) otherwise.
 UndistortInterpolation UndistortInterpolationFromString(const std::string& text);
 
 struct UndistortOptions {

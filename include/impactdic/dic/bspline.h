@@ -20,11 +20,15 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "impactdic/core/enum_names.h"
+
 namespace impactdic {
 
 enum class Interpolation { kBicubic, kBiquintic };
+inline constexpr EnumNames<Interpolation, 2> kInterpolationNames{
+    {{{Interpolation::kBicubic, "bicubic"}, {Interpolation::kBiquintic, "biquintic"}}}};
 const char* ToString(Interpolation interpolation);
-// Accepts "bicubic" / "biquintic"; Error(kInvalidValue) otherwise.
+// A name of kInterpolationNames; Error(kInvalidValue) otherwise.
 Interpolation InterpolationFromString(const std::string& name);
 
 class BsplineImage {

@@ -15,6 +15,7 @@
 #include <opencv2/core.hpp>
 #include <string>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/range.h"
 #include "impactdic/dic/bspline.h"
 
@@ -23,6 +24,8 @@ namespace impactdic {
 // Subset shape function: first order (affine: u, du/dx, du/dy, v, dv/dx, dv/dy; 6 parameters)
 // or second order (adds the 3 second derivatives of u and of v; 12 parameters).
 enum class ShapeFunction { kAffine, kQuadratic };
+inline constexpr EnumNames<ShapeFunction, 2> kShapeFunctionNames{
+    {{{ShapeFunction::kAffine, "affine"}, {ShapeFunction::kQuadratic, "quadratic"}}}};
 const char* ToString(ShapeFunction shape);
 ShapeFunction ShapeFunctionFromString(const std::string& name);
 
@@ -117,6 +120,8 @@ struct UpdateOptions {
 // kPairs: independent images, each correlated against the reference alone: no prediction from
 //   another image, no reference update (UpdateOptions does not apply), no subset is ever `lost`.
 enum class SequenceMode { kSequence, kPairs };
+inline constexpr EnumNames<SequenceMode, 2> kSequenceModeNames{
+    {{{SequenceMode::kSequence, "sequence"}, {SequenceMode::kPairs, "pairs"}}}};
 const char* ToString(SequenceMode mode);
 // "sequence" or "pairs"; an Error naming `where` otherwise.
 SequenceMode SequenceModeFromString(const std::string& text, const std::string& where);

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 #include "impactdic/model/ode.h"
@@ -89,8 +90,11 @@ enum class ImpactSolver {
   kDopri5,  // Dormand-Prince 5(4).
   kStiff,   // Rosenbrock Rodas3 with the analytic Jacobian.
 };
+inline constexpr EnumNames<ImpactSolver, 3> kImpactSolverNames{{{{ImpactSolver::kAuto, "auto"},
+                                                                 {ImpactSolver::kDopri5, "dopri5"},
+                                                                 {ImpactSolver::kStiff, "stiff"}}}};
 const char* ToString(ImpactSolver solver);
-// "auto", "dopri5", "stiff"; Error(kInvalidValue) otherwise.
+// A name of kImpactSolverNames; Error(kInvalidValue) otherwise.
 ImpactSolver ImpactSolverFromString(const std::string& name);
 
 // How a run estimates its own error (ImpactSummary::error_estimate).
@@ -108,8 +112,10 @@ enum class ErrorEstimator {
   // the error of the lower-order embedded solution, so it overestimates (see docs/model.md).
   kLocalSum,
 };
+inline constexpr EnumNames<ErrorEstimator, 2> kErrorEstimatorNames{
+    {{{ErrorEstimator::kCompanion, "companion"}, {ErrorEstimator::kLocalSum, "local"}}}};
 const char* ToString(ErrorEstimator estimator);
-ErrorEstimator ErrorEstimatorFromString(const std::string& name);  // "companion", "local"
+ErrorEstimator ErrorEstimatorFromString(const std::string& name);
 
 // The relative tolerances the solver accepts (ImpactSolverOptions::rtol; the scene's model.rtol).
 inline constexpr ValueRange kRelativeToleranceRange{1e-14, 0.1, ""};

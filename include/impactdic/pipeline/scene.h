@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/model/impact_model.h"
@@ -98,7 +99,11 @@ struct SceneMomentum {
 //            built in memory until it is committed, so a run's memory grows with the compressed
 //            size of the frames.
 enum class FrameStorage { kNone, kPreview, kAll };
-const char* ToString(FrameStorage storage);  // "none", "preview", "all"
+inline constexpr EnumNames<FrameStorage, 3> kFrameStorageNames{
+    {{{FrameStorage::kNone, "none"},
+      {FrameStorage::kPreview, "preview"},
+      {FrameStorage::kAll, "all"}}}};
+const char* ToString(FrameStorage storage);
 FrameStorage FrameStorageFromString(const std::string& text);
 
 struct SceneOutputs {

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/range.h"
 #include "impactdic/render/velocity_field.h"
 
@@ -28,7 +29,9 @@ enum class VideoCodec {
   kH264,  // H.264 MP4 or an error
   kMjpg,  // MJPG AVI
 };
-const char* ToString(VideoCodec codec);  // "auto", "h264", "mjpg"
+inline constexpr EnumNames<VideoCodec, 3> kVideoCodecNames{
+    {{{VideoCodec::kAuto, "auto"}, {VideoCodec::kH264, "h264"}, {VideoCodec::kMjpg, "mjpg"}}}};
+const char* ToString(VideoCodec codec);
 VideoCodec VideoCodecFromString(const std::string& text);
 
 struct AnimationOptions {

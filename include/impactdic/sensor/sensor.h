@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 
@@ -31,8 +32,13 @@ namespace impactdic {
 // Unit of the acceleration column. kAuto: from the column name ("..._g" = g, "..._m_s2" or
 // "...m/s^2" = m/s^2).
 enum class AccelUnit { kAuto, kG, kMetrePerSecond2 };
-const char* ToString(AccelUnit unit);                    // "auto", "g", "m/s^2"
-AccelUnit AccelUnitFromString(const std::string& text);  // also accepts "m_s2"
+inline constexpr EnumNames<AccelUnit, 3> kAccelUnitNames{
+    {{{AccelUnit::kAuto, "auto"},
+      {AccelUnit::kG, "g"},
+      {AccelUnit::kMetrePerSecond2, "m/s^2", "m_s2 m/s2"}}},
+    /*ignore_case=*/true};
+const char* ToString(AccelUnit unit);
+AccelUnit AccelUnitFromString(const std::string& text);
 
 // Which quiet window fixes the accelerometer's additive offset.
 //   kFreeFall: the free fall must read 0 g (default): the whole free fall from the release
@@ -44,7 +50,12 @@ AccelUnit AccelUnitFromString(const std::string& text);  // also accepts "m_s2"
 //   kRest:     the first window of the record (pounder held before release) must read 1 g;
 //   kNone:     no correction.
 enum class OffsetReference { kFreeFall, kFreeFallWindow, kRest, kNone };
-// "free-fall", "free-fall-window", "rest", "none"
+inline constexpr EnumNames<OffsetReference, 4> kOffsetReferenceNames{
+    {{{OffsetReference::kFreeFall, "free-fall", "freefall free_fall"},
+      {OffsetReference::kFreeFallWindow, "free-fall-window"},
+      {OffsetReference::kRest, "rest"},
+      {OffsetReference::kNone, "none"}}},
+    /*ignore_case=*/true};
 const char* ToString(OffsetReference reference);
 OffsetReference OffsetReferenceFromString(const std::string& text);
 
@@ -54,7 +65,10 @@ OffsetReference OffsetReferenceFromString(const std::string& text);
 //             free fall);
 //   kImpact:  v = impact_velocity_m_s at the detected impact time, z = 0 there.
 enum class IntegrationStart { kRelease, kImpact };
-const char* ToString(IntegrationStart start);  // "release", "impact"
+inline constexpr EnumNames<IntegrationStart, 2> kIntegrationStartNames{
+    {{{IntegrationStart::kRelease, "release"}, {IntegrationStart::kImpact, "impact"}}},
+    /*ignore_case=*/true};
+const char* ToString(IntegrationStart start);
 IntegrationStart IntegrationStartFromString(const std::string& text);
 
 struct SensorColumns {

@@ -42,6 +42,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/synth/checkerboard.h"
@@ -54,6 +55,8 @@ enum class SceneLens {
   kSample,  // SampleCamera() (the lens of calibration/ and sample_frames/), scaled to the size.
   kIdeal,   // Distortion-free pinhole, principal point at the image centre, f = 820 px * w / 640.
 };
+inline constexpr EnumNames<SceneLens, 2> kSceneLensNames{
+    {{{SceneLens::kSample, "sample"}, {SceneLens::kIdeal, "ideal"}}}};
 const char* ToString(SceneLens lens);
 SceneLens SceneLensFromString(const std::string& text, const std::string& where);
 
