@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/range.h"

@@ -16,6 +16,7 @@
 #include <system_error>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/progress.h"

@@ -10,7 +10,7 @@
 #define IMPACTDIC_CORE_ENUM_NAMES_H_
 
 #include <algorithm>
-#include <array>
+#include <array>  // IWYU pragma: export (EnumNames::entries)
 #include <cstddef>
 #include <string>
 #include <string_view>

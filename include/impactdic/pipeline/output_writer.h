@@ -25,6 +25,7 @@
 #ifndef IMPACTDIC_PIPELINE_OUTPUT_WRITER_H_
 #define IMPACTDIC_PIPELINE_OUTPUT_WRITER_H_
 
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
