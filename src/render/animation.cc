@@ -125,6 +125,60 @@ bool ContainerComplete(const std::string& path, const std::string& container) {
   return has_index && at == size;
 }
 
+// One encoding attempt: every frame rendered and written into `temp` with `attempt`'s codec (and
+// as PNG frames the first time, when asked), then the video read back. The result says what
+// failed; a full disk throws WriteError naming `final_path`. Adds the frame and timing counts
+// to `summary`.
+AttemptResult EncodeAttempt(const VelocityFieldRenderer& renderer, const Attempt& attempt,
+                            const std::string& temp, const std::string& final_path,
+                            const AnimationOptions& options, bool* png_done,
+                            AnimationSummary* summary) {
+  const std::size_t frames = summary->frames;
+  AttemptResult result;
+  opencv_codecs::VideoWriter writer;
+  try {
+    result.opened = writer.Open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
+                                renderer.canvas_size(), /*is_color=*/true);
+  } catch (const cv::Exception& e) {
+    result.failure = e.what();
+  }
+  if (!result.opened) {
+    if (result.failure.empty()) result.failure = "the OpenCV video writer did not open";
+    return result;
+  }
+  ProgressBar bar("animation", frames);
+  for (std::size_t i = 0; i < frames; ++i) {
+    WallTimer t;
+    const cv::Mat image = renderer.RenderFrame(i);
+    summary->render_s += t.ElapsedSeconds();
+    if (!*png_done) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05zu.png", i);
+      WriteImage((fs::path(options.png_frames_dir) / name).string(), image);
+      ++summary->png_frames;
+    }
+    t.Restart();
+    writer.Write(image);
+    summary->encode_s += t.ElapsedSeconds();
+    bar.Advance();
+  }
+  bar.Finish();
+  *png_done = true;
+  WallTimer t;
+  writer.Release();
+  // The writer does not report failed writes: a video cut short on a disk with no block left
+  // failed for want of space, and every other codec would fail alike.
+  if (DiskFull(temp) && !ContainerComplete(temp, attempt.container))
+    throw WriteError(final_path, ENOSPC);
+  result.read_back = CountVideoFrames(temp);
+  summary->encode_s += t.ElapsedSeconds();
+  if (result.read_back != frames) {
+    result.failure = "the written file reads back with " + std::to_string(result.read_back) +
+                     " frames instead of " + std::to_string(frames);
+  }
+  return result;
+}
+
 }  // namespace
 
 AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
@@ -163,7 +217,6 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
   const fs::path stem = fs::path(output_path).replace_extension();
   std::string h264_failures;
   bool png_done = options.png_frames_dir.empty();
-  double render_s = 0, encode_s = 0;
 
   for (const auto& attempt : attempts) {
     const std::string final_path = stem.string() + attempt.container;
@@ -177,50 +230,8 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
     } cleanup{temp};
     const RemoveOnInterrupt video_on_interrupt(temp);
 
-    AttemptResult result;
-    {
-      opencv_codecs::VideoWriter writer;
-      try {
-        result.opened = writer.Open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
-                                    renderer.canvas_size(), /*is_color=*/true);
-      } catch (const cv::Exception& e) {
-        result.failure = e.what();
-      }
-      if (!result.opened) {
-        if (result.failure.empty()) result.failure = "the OpenCV video writer did not open";
-      } else {
-        ProgressBar bar("animation", frames);
-        for (std::size_t i = 0; i < frames; ++i) {
-          WallTimer t;
-          const cv::Mat image = renderer.RenderFrame(i);
-          render_s += t.ElapsedSeconds();
-          if (!png_done) {
-            char name[32];
-            std::snprintf(name, sizeof name, "frame_%05zu.png", i);
-            WriteImage((fs::path(options.png_frames_dir) / name).string(), image);
-            ++summary.png_frames;
-          }
-          t.Restart();
-          writer.Write(image);
-          encode_s += t.ElapsedSeconds();
-          bar.Advance();
-        }
-        bar.Finish();
-        png_done = true;
-        WallTimer t;
-        writer.Release();
-        // The writer does not report failed writes: a video cut short on a disk with no block
-        // left failed for want of space, and every other codec would fail alike.
-        if (DiskFull(temp) && !ContainerComplete(temp, attempt.container))
-          throw WriteError(final_path, ENOSPC);
-        result.read_back = CountVideoFrames(temp);
-        encode_s += t.ElapsedSeconds();
-        if (result.read_back != frames) {
-          result.failure = "the written file reads back with " + std::to_string(result.read_back) +
-                           " frames instead of " + std::to_string(frames);
-        }
-      }
-    }
+    const AttemptResult result =
+        EncodeAttempt(renderer, attempt, temp, final_path, options, &png_done, &summary);
     if (result.failure.empty()) {
       std::error_code ec;
       fs::rename(temp, final_path, ec);
@@ -256,8 +267,6 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
                 options.codec == VideoCodec::kH264 ? "an OpenCV build with an H.264 encoder"
                                                    : "an OpenCV build with FFmpeg video writing");
   }
-  summary.render_s = render_s;
-  summary.encode_s = encode_s;
   summary.wall_s = wall.ElapsedSeconds();
   LogInfo("animation: {}", summary.BriefReport());
   return summary;

@@ -320,38 +320,19 @@ std::string ImpactSceneReport::BriefReport() const {
 
 namespace {
 
-void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
-                const std::string& path, const std::string& spec_yaml) {
-  const ImpactSceneSpec& s = scene.spec();
-  const SceneMomentumTruth& mt = scene.momentum();
-  const SceneDicGrid& grid = scene.dic_grid();
+// truth.h5, frames/ and pounder/: the frame times (returned), the pounder's path and the model's
+// end of motion.
+std::vector<double> WriteFrameTruth(const ImpactScene& scene, H5Writer& out) {
   const ImpactSummary& sum = scene.model_run().summary;
-  const int F = scene.frame_count();
-  const auto Fz = static_cast<std::size_t>(F);
-  H5Writer out(path);
-  out.WriteProvenance(spec_yaml);
-  out.SetAttribute("/", "generator", "impactdic synth");
-  out.SetAttribute("/", "conventions",
-                   "t = 0 at contact; depths and velocities down positive; pixels are ideal "
-                   "(undistorted) pixels of the first frame, x right, y down; panel mm origin at "
-                   "the pounder axis on the undisturbed surface");
-
-  // Frames.
-  std::vector<double> t(Fz), daq(Fz), z(Fz), v(Fz), bottom(Fz), W(Fz), vs(Fz), pp(Fz), pg(Fz),
-      ptot(Fz), madd(Fz);
-  for (int k = 0; k < F; ++k) {
-    t[k] = scene.FrameTime(k);
+  const auto F = static_cast<std::size_t>(scene.frame_count());
+  std::vector<double> t(F), daq(F), z(F), v(F), bottom(F);
+  for (std::size_t k = 0; k < F; ++k) {
+    t[k] = scene.FrameTime(static_cast<int>(k));
     daq[k] = scene.DaqTime(t[k]);
     const PounderState ps = scene.Pounder(t[k]);
     z[k] = ps.z_m;
     v[k] = ps.v_m_s;
     bottom[k] = scene.surface_px() + ps.z_m * 1000 / scene.sy_mm_per_px();
-    W[k] = scene.CoreDisplacement(t[k]);
-    vs[k] = scene.CoreVelocity(t[k]);
-    pp[k] = scene.PounderMomentum(t[k]);
-    pg[k] = scene.GranularMomentum(t[k]);
-    ptot[k] = pp[k] + pg[k];
-    madd[k] = t[k] > 0 ? scene.AddedMassEq3(t[k]) : std::nan("");
   }
   out.Write("frames/time_s", t, "s", "frame time since impact (rising exposure edge)");
   out.Write("frames/daq_time_s", daq, "s", "frame time on the DAQ clock of sensor.csv");
@@ -361,24 +342,30 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
   out.Write("pounder/crater_depth_m", std::vector<double>{sum.crater_depth_m}, "m",
             "final penetration (model)");
   out.Write("pounder/t_end_s", std::vector<double>{sum.t_end_s}, "s", "time the pounder stops");
+  return t;
+}
 
-  // Soil at the DIC grid.
-  const auto n = grid.centres_px.size();
+// truth.h5, soil/: the displacement and velocity of every DIC subset centre in every frame, and
+// which subsets the pounder covers.
+void WriteSoilTruth(const ImpactScene& scene, const std::vector<double>& t, H5Writer& out) {
+  const ImpactSceneSpec& s = scene.spec();
+  const SceneDicGrid& grid = scene.dic_grid();
+  const std::size_t F = t.size(), n = grid.centres_px.size();
   const Dims gdims{static_cast<std::size_t>(grid.rows), static_cast<std::size_t>(grid.cols)};
-  const Dims fdims{Fz, gdims[0], gdims[1]};
-  std::vector<double> gx(n), gy(n), u_px(Fz * n), v_px(Fz * n), vel_x(Fz * n), vel_y(Fz * n);
-  std::vector<std::int32_t> occluded(Fz * n);
+  const Dims fdims{F, gdims[0], gdims[1]};
+  std::vector<double> gx(n), gy(n), u_px(F * n), v_px(F * n), vel_x(F * n), vel_y(F * n);
+  std::vector<std::int32_t> occluded(F * n);
   const int half = s.subset_size / 2;
   for (std::size_t i = 0; i < n; ++i) {
     gx[i] = grid.centres_px[i].x;
     gy[i] = grid.centres_px[i].y;
   }
-  for (int k = 0; k < F; ++k) {
+  for (std::size_t k = 0; k < F; ++k) {
     for (std::size_t i = 0; i < n; ++i) {
       const cv::Point2d m = scene.PanelFromIdeal(grid.centres_px[i]);
       const cv::Vec2d d = scene.SoilDisplacementMm(m.x, m.y, t[k]);
       const cv::Vec2d vel = scene.SoilVelocityMmS(m.x, m.y, t[k]);
-      const std::size_t j = static_cast<std::size_t>(k) * n + i;
+      const std::size_t j = k * n + i;
       u_px[j] = d[0] / scene.sx_mm_per_px();
       v_px[j] = d[1] / scene.sy_mm_per_px();
       vel_x[j] = vel[0];
@@ -407,8 +394,22 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
   out.SetAttribute("soil", "wave_amplitude_mm", s.soil.wave_amplitude_mm);
   out.SetAttribute("soil", "wave_decay_length_mm", s.soil.wave_decay_length_mm);
   out.SetAttribute("soil", "wave_rise_time_s", s.soil.wave_rise_time_s);
+}
 
-  // Momentum over the default grid.
+// truth.h5, momentum/: the default momentum grid, the momenta in every frame and the peak-stage
+// figures (Eqs. 3, 11).
+void WriteMomentumTruth(const ImpactScene& scene, const std::vector<double>& t, H5Writer& out) {
+  const SceneMomentumTruth& mt = scene.momentum();
+  const std::size_t F = t.size();
+  std::vector<double> W(F), vs(F), pp(F), pg(F), ptot(F), madd(F);
+  for (std::size_t k = 0; k < F; ++k) {
+    W[k] = scene.CoreDisplacement(t[k]);
+    vs[k] = scene.CoreVelocity(t[k]);
+    pp[k] = scene.PounderMomentum(t[k]);
+    pg[k] = scene.GranularMomentum(t[k]);
+    ptot[k] = pp[k] + pg[k];
+    madd[k] = t[k] > 0 ? scene.AddedMassEq3(t[k]) : std::nan("");
+  }
   std::vector<double> mx, my;
   for (const auto& c : mt.centres_px) {
     mx.push_back(c.x);
@@ -444,8 +445,11 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
                    "grid_cols x grid_rows subsets of the DIC grid, centred on the pounder axis, "
                    "the first grid_rows rows below the surface; each subset stands for a step x "
                    "step cell; the soil velocity is uniform there (rigid core)");
+}
 
-  // Fine series at the DAQ rate from impact to the end of the record.
+// truth.h5, series/: fine series at the DAQ rate from 2 ms before impact to the end of the record.
+void WriteSeriesTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
+                      H5Writer& out) {
   std::vector<double> st, sz, sv, svs, sw, spp, spg, sm, sa;
   for (std::size_t i = 0; i < rec.time_s.size(); ++i) {
     const double ti = rec.time_s[i] - rec.impact_daq_time_s;
@@ -470,7 +474,13 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
   out.Write("series/p_gran_Ns", spg, "N s", "m_grid v_sand");
   out.Write("series/m_add_kg", sm, "kg", "Eq. 3 added mass");
   out.Write("series/accel_true_g", sa, "g", "noise-free accelerometer reading (sensor up)");
+}
 
+// truth.h5, the attributes of sensor/ (timing), model/ (parameters and summary) and camera/.
+void WriteSetupTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
+                     H5Writer& out) {
+  const ImpactSceneSpec& s = scene.spec();
+  const ImpactSummary& sum = scene.model_run().summary;
   // Sensor timing.
   out.CreateGroup("sensor");
   out.SetAttribute("sensor", "frame0_daq_time_s", rec.frame0_daq_time_s);
@@ -525,6 +535,22 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
   out.SetAttribute("camera", "pounder_axis_x_px", scene.axis_px());
   out.SetAttribute("camera", "surface_y_px", scene.surface_px());
   out.SetAttribute("camera", "fps", s.fps);
+}
+
+void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
+                const std::string& path, const std::string& spec_yaml) {
+  H5Writer out(path);
+  out.WriteProvenance(spec_yaml);
+  out.SetAttribute("/", "generator", "impactdic synth");
+  out.SetAttribute("/", "conventions",
+                   "t = 0 at contact; depths and velocities down positive; pixels are ideal "
+                   "(undistorted) pixels of the first frame, x right, y down; panel mm origin at "
+                   "the pounder axis on the undisturbed surface");
+  const std::vector<double> t = WriteFrameTruth(scene, out);
+  WriteSoilTruth(scene, t, out);
+  WriteMomentumTruth(scene, t, out);
+  WriteSeriesTruth(scene, rec, out);
+  WriteSetupTruth(scene, rec, out);
   out.Commit();
 }
 
