@@ -7,6 +7,7 @@
 #include <iterator>
 #include <memory>
 #include <new>
+#include <opencv2/core/utility.hpp>
 #include <system_error>
 
 #include "impactdic/core/error.h"
@@ -28,6 +29,10 @@ WorkerThreadsJoinedAtExit::~WorkerThreadsJoinedAtExit() { Join(); }
 
 bool WorkerThreadsJoinedAtExit::Join() {
   if (!handle_->scheduler) return true;  // Joined before.
+  // OpenCV's parallel_for_ (GaussianBlur, CLAHE, remap, ...) runs in OpenCV's own oneTBB
+  // task_arena, kept until OpenCV's static destructor: while it lives, finalize cannot join.
+  // Setting OpenCV to no threads terminates that arena (nothing of OpenCV runs after this).
+  cv::setNumThreads(0);
   const bool joined = tbb::finalize(handle_->scheduler, std::nothrow);
   if (GetLogLevel() > LogLevel::kDebug) return joined;
   std::error_code error;

@@ -20,10 +20,15 @@ void CheckThreadCount(int threads, const std::string& where);
 
 // Holds oneTBB's worker threads (ours and OpenCV's) for its lifetime and joins them when
 // destroyed, so that none is still exiting when exit-time code runs (a process's main, a test
-// program's environment). Otherwise only a static destructor tells them to stop, and
-// LeakSanitizer's stop-the-world at exit can read the stack of a worker being unmapped and crash:
-// a failure of the sanitizer, not of the program. At debug level it logs whether the workers
-// were joined and how many threads are still alive afterwards (from /proc; -1 without it).
+// program's environment). Otherwise only a static destructor tells them to stop, and at exit:
+//  - LeakSanitizer's stop-the-world can read the stack of a worker being unmapped and crash
+//    (a failure of the sanitizer, not of the program);
+//  - what a library keeps in a worker's thread-specific data is lost: libsrt (FFmpeg's, loaded
+//    with the OpenCV codecs plugin) keeps a 120-byte error object there for the thread that
+//    loaded it and frees it only when that thread exits, so a worker left running leaks it.
+// OpenCV's own task_arena is terminated first (cv::setNumThreads(0)): OpenCV must not be used
+// after Join. At debug level it logs whether the workers were joined and how many threads are
+// still alive afterwards (from /proc; -1 without it).
 class WorkerThreadsJoinedAtExit {
  public:
   WorkerThreadsJoinedAtExit();
@@ -31,8 +36,8 @@ class WorkerThreadsJoinedAtExit {
   WorkerThreadsJoinedAtExit(const WorkerThreadsJoinedAtExit&) = delete;
   WorkerThreadsJoinedAtExit& operator=(const WorkerThreadsJoinedAtExit&) = delete;
 
-  // Joins the workers now (once); false when oneTBB could not (a thread or an arena is still
-  // attached to it: the workers are then left to the library).
+  // Joins the workers now (once); false when oneTBB could not (a thread or an arena of another
+  // library is still attached to it: the workers are then left to the library).
   bool Join();
 
  private:
