@@ -75,6 +75,7 @@ struct Sums {
 };
 
 template <int kTaps, bool kQuad>
+// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
 void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
                 std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
   constexpr int kLow = kTaps == 4 ? 1 : 2;
@@ -298,6 +299,7 @@ inline float SampleScalar(const float* centre, int stride, float x, float y) {
 }
 
 template <int kTaps, bool kQuad>
+// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
 void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
                     std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
   constexpr int kLow = kTaps == 4 ? 1 : 2;
@@ -616,6 +618,7 @@ inline void WeightsAvx512(__m512 t, __m512 w[kTaps]) {
 }
 
 template <int kTaps, bool kQuad>
+// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
 void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef& s,
                       const float* coef, std::size_t stride, int dcx, int dcy, const Params& p,
                       Sums* out) {
