@@ -23,7 +23,7 @@ find_package(ZLIB 1.2 REQUIRED)
 # OpenCV by component, so that the binary loads only what it needs at start-up: core and imgproc
 # everywhere, calib3d where cameras are calibrated. imgcodecs and videoio (with GDAL, GDCM,
 # FFmpeg, GStreamer: ~230 shared libraries, ~0.09 s of dynamic loading per process) only in the
-# plugin that src/io loads on first use (io/opencv_codecs.h), and in tests and benchmarks.
+# two plugins that src/io loads on first use (io/opencv_codecs.h), and in tests and benchmarks.
 if(NOT TARGET impactdic_deps::opencv)
   add_library(impactdic_deps::opencv INTERFACE IMPORTED)
   target_include_directories(impactdic_deps::opencv SYSTEM INTERFACE ${OpenCV_INCLUDE_DIRS})
@@ -31,9 +31,15 @@ if(NOT TARGET impactdic_deps::opencv)
   add_library(impactdic_deps::opencv_calib3d INTERFACE IMPORTED)
   target_link_libraries(impactdic_deps::opencv_calib3d INTERFACE impactdic_deps::opencv
                                                                  opencv_calib3d)
+  add_library(impactdic_deps::opencv_imgcodecs INTERFACE IMPORTED)
+  target_link_libraries(impactdic_deps::opencv_imgcodecs INTERFACE impactdic_deps::opencv
+                                                                   opencv_imgcodecs)
+  add_library(impactdic_deps::opencv_videoio INTERFACE IMPORTED)
+  target_link_libraries(impactdic_deps::opencv_videoio INTERFACE impactdic_deps::opencv
+                                                                 opencv_videoio)
   add_library(impactdic_deps::opencv_codecs INTERFACE IMPORTED)
-  target_link_libraries(impactdic_deps::opencv_codecs INTERFACE impactdic_deps::opencv
-                                                                opencv_imgcodecs opencv_videoio)
+  target_link_libraries(impactdic_deps::opencv_codecs INTERFACE impactdic_deps::opencv_imgcodecs
+                                                                impactdic_deps::opencv_videoio)
 endif()
 if(NOT TARGET impactdic_deps::hdf5)
   add_library(impactdic_deps::hdf5 INTERFACE IMPORTED)

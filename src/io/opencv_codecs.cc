@@ -16,33 +16,48 @@
 namespace impactdic::opencv_codecs {
 namespace {
 
-using io_internal::OpenCvCodecsApi;
+using io_internal::OpenCvImagesApi;
+using io_internal::OpenCvVideoApi;
 
-// The places the plugin is looked for, in order (see the header).
-std::vector<std::string> Candidates() {
+// What tells one plugin apart (see the header).
+struct Plugin {
+  const char* file_name;
+  const char* environment;  // the variable naming its file instead
+  const char* entry;        // its one exported symbol
+  const char* needed_for;   // for the error when it cannot be loaded
+};
+
+const Plugin kImagesPlugin{kPluginFileName, "IMPACTDIC_OPENCV_CODECS", "ImpactdicOpenCvImagesApi",
+                           "needed to read images other than greyscale PNGs and to write images"};
+const Plugin kVideoPlugin{kVideoPluginFileName, "IMPACTDIC_OPENCV_VIDEO", "ImpactdicOpenCvVideoApi",
+                          "needed to read or write videos"};
+
+// The places a plugin is looked for, in order (see the header).
+std::vector<std::string> Candidates(const Plugin& plugin, const char* build_path) {
   std::vector<std::string> paths;
-  if (const char* env = std::getenv("IMPACTDIC_OPENCV_CODECS"); env != nullptr && *env != '\0')
+  if (const char* env = std::getenv(plugin.environment); env != nullptr && *env != '\0')
     return {env};  // the user's choice, and only it
   char exe[4096];
   const ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
   if (n > 0) {
     exe[n] = '\0';
-    paths.push_back((std::filesystem::path(exe).parent_path() / kPluginFileName).string());
+    paths.push_back((std::filesystem::path(exe).parent_path() / plugin.file_name).string());
   }
-#ifdef IMPACTDIC_OPENCV_CODECS_BUILD_PATH
-  paths.emplace_back(IMPACTDIC_OPENCV_CODECS_BUILD_PATH);
-#endif
+  paths.emplace_back(build_path);
   return paths;
 }
 
+// Loads the plugin and returns its table (of type Api, checked against `version`). Each plugin
+// is loaded once, its table kept for the whole process (*loaded, guarded by g_mutex).
 std::mutex g_mutex;
-const OpenCvCodecsApi* g_api = nullptr;  // guarded by g_mutex; never reset once set
 
-const OpenCvCodecsApi& Api() {
+template <typename Api>
+const Api& LoadPlugin(const Plugin& plugin, const char* build_path, int version,
+                      const Api** loaded) {
   std::lock_guard<std::mutex> lock(g_mutex);
-  if (g_api != nullptr) return *g_api;
+  if (*loaded != nullptr) return **loaded;
   std::string tried;
-  for (const auto& path : Candidates()) {
+  for (const auto& path : Candidates(plugin, build_path)) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) {
       tried += "\n  " + path + ": no such file";
@@ -55,86 +70,90 @@ const OpenCvCodecsApi& Api() {
       tried += "\n  " + path + ": " + (why ? why : "dlopen failed");
       continue;
     }
-    using Entry = const OpenCvCodecsApi* (*)();
-    auto entry = reinterpret_cast<Entry>(dlsym(library, "ImpactdicOpenCvCodecsApi"));
-    const OpenCvCodecsApi* api = entry ? entry() : nullptr;
-    if (api == nullptr || api->version != io_internal::kOpenCvCodecsApiVersion) {
+    using Entry = const Api* (*)();
+    auto entry = reinterpret_cast<Entry>(dlsym(library, plugin.entry));
+    const Api* api = entry ? entry() : nullptr;
+    if (api == nullptr || api->version != version) {
       tried += "\n  " + path + ": not a plugin of this build (rebuild impactdic)";
       continue;
     }
-    LogDebug("OpenCV codecs loaded from {}", path);
-    g_api = api;
-    return *g_api;
+    LogDebug("OpenCV plugin loaded from {}", path);
+    *loaded = api;
+    return *api;
   }
-  throw Error(ErrorKind::kFileNotFound,
-              std::string("the OpenCV codecs plugin ") + kPluginFileName +
-                  " (needed to read images other than greyscale PNGs, to write images and to "
-                  "read or write videos) could not be loaded; set IMPACTDIC_OPENCV_CODECS to "
-                  "its path. Tried:" +
-                  tried);
+  throw Error(ErrorKind::kFileNotFound, std::string("the OpenCV plugin ") + plugin.file_name +
+                                            " (" + plugin.needed_for +
+                                            ") could not be loaded; set " + plugin.environment +
+                                            " to its path. Tried:" + tried);
+}
+
+const OpenCvImagesApi* g_images = nullptr;  // guarded by g_mutex; never reset once set
+const OpenCvVideoApi* g_video = nullptr;    // guarded by g_mutex; never reset once set
+
+const OpenCvImagesApi& Images() {
+  return LoadPlugin(kImagesPlugin, IMPACTDIC_OPENCV_CODECS_BUILD_PATH,
+                    io_internal::kOpenCvImagesApiVersion, &g_images);
+}
+
+const OpenCvVideoApi& Video() {
+  return LoadPlugin(kVideoPlugin, IMPACTDIC_OPENCV_VIDEO_BUILD_PATH,
+                    io_internal::kOpenCvVideoApiVersion, &g_video);
 }
 
 }  // namespace
 
-void Load() { Api(); }
-
-bool IsLoaded() {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  return g_api != nullptr;
-}
-
 cv::Mat Decode(const std::string& bytes, int flags) {
-  const auto& api = Api();
+  const auto& api = Images();
   const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
   return api.decode(buffer, flags);
 }
 
 bool Encode(const std::string& extension, const cv::Mat& image, std::vector<uchar>* bytes,
             const std::vector<int>& params) {
-  return Api().encode(extension, image, bytes, params);
+  return Images().encode(extension, image, bytes, params);
 }
 
 VideoCapture::~VideoCapture() {
-  if (handle_ != nullptr) Api().capture_delete(handle_);
+  if (handle_ != nullptr) Video().capture_delete(handle_);
 }
 
 bool VideoCapture::Open(const std::string& path, int api) {
-  const auto& table = Api();
+  const auto& table = Video();
   if (handle_ == nullptr) handle_ = table.capture_new();
   return table.capture_open(handle_, path, api);
 }
 
 bool VideoCapture::IsOpened() const {
-  return handle_ != nullptr && Api().capture_is_opened(handle_);
+  return handle_ != nullptr && Video().capture_is_opened(handle_);
 }
 
 bool VideoCapture::Read(cv::Mat* frame) {
-  return handle_ != nullptr && Api().capture_read(handle_, frame);
+  return handle_ != nullptr && Video().capture_read(handle_, frame);
 }
 
-bool VideoCapture::Grab() { return handle_ != nullptr && Api().capture_grab(handle_); }
+bool VideoCapture::Grab() { return handle_ != nullptr && Video().capture_grab(handle_); }
 
 double VideoCapture::Get(int property) const {
-  return handle_ != nullptr ? Api().capture_get(handle_, property) : 0.0;
+  return handle_ != nullptr ? Video().capture_get(handle_, property) : 0.0;
 }
 
 VideoWriter::~VideoWriter() {
-  if (handle_ != nullptr) Api().writer_delete(handle_);
+  if (handle_ != nullptr) Video().writer_delete(handle_);
 }
 
 bool VideoWriter::Open(const std::string& path, int api, int fourcc, double fps, cv::Size size,
                        bool is_color) {
-  const auto& table = Api();
+  const auto& table = Video();
   if (handle_ == nullptr) handle_ = table.writer_new();
   return table.writer_open(handle_, path, api, fourcc, fps, size, is_color);
 }
 
 void VideoWriter::Write(const cv::Mat& frame) {
-  if (handle_ != nullptr) Api().writer_write(handle_, frame);
+  if (handle_ != nullptr) Video().writer_write(handle_, frame);
 }
 
 void VideoWriter::Release() {
-  if (handle_ != nullptr) Api().writer_release(handle_);
+  if (handle_ != nullptr) Video().writer_release(handle_);
 }
 
 // cv::VideoWriter::fourcc, without the plugin.

@@ -1,6 +1,9 @@
-// The table of functions the OpenCV codecs plugin (opencv_codecs_plugin.cc) hands to the loader
-// (opencv_codecs.cc). Both sides are built from this header in the same build, so the layout
-// matches; kOpenCvCodecsApiVersion guards against a stale plugin file from another build.
+// The tables of functions the two OpenCV plugins hand to the loader (opencv_codecs.cc):
+//  - the images plugin (opencv_codecs_plugin.cc, libimpactdic_opencv_codecs.so): imgcodecs;
+//  - the video plugin (opencv_video_plugin.cc, libimpactdic_opencv_video.so): videoio.
+// They are two so that decoding a TIFF or JPEG does not load FFmpeg and GStreamer (videoio's
+// ~100 further libraries) as well. Both sides are built from this header in the same build, so
+// the layouts match; the versions guard against a stale plugin file from another build.
 #ifndef IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_
 #define IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_
 
@@ -10,13 +13,18 @@
 
 namespace impactdic::io_internal {
 
-inline constexpr int kOpenCvCodecsApiVersion = 1;
+inline constexpr int kOpenCvImagesApiVersion = 2;
+inline constexpr int kOpenCvVideoApiVersion = 2;
 
-struct OpenCvCodecsApi {
-  int version = kOpenCvCodecsApiVersion;
+struct OpenCvImagesApi {
+  int version = kOpenCvImagesApiVersion;
   cv::Mat (*decode)(const cv::Mat& buffer, int flags) = nullptr;
   bool (*encode)(const std::string& ext, const cv::Mat& image, std::vector<uchar>* bytes,
                  const std::vector<int>& params) = nullptr;
+};
+
+struct OpenCvVideoApi {
+  int version = kOpenCvVideoApiVersion;
   void* (*capture_new)() = nullptr;
   void (*capture_delete)(void* capture) = nullptr;
   bool (*capture_open)(void* capture, const std::string& path, int api) = nullptr;
@@ -34,7 +42,8 @@ struct OpenCvCodecsApi {
 
 }  // namespace impactdic::io_internal
 
-// The plugin's one exported symbol.
-extern "C" const impactdic::io_internal::OpenCvCodecsApi* ImpactdicOpenCvCodecsApi();
+// Each plugin's one exported symbol.
+extern "C" const impactdic::io_internal::OpenCvImagesApi* ImpactdicOpenCvImagesApi();
+extern "C" const impactdic::io_internal::OpenCvVideoApi* ImpactdicOpenCvVideoApi();
 
 #endif  // IMPACTDIC_SRC_IO_OPENCV_CODECS_API_H_

@@ -1,9 +1,10 @@
 // The correlation path stays light (issue 13, item 6): `impactdic correlate` of greyscale PNGs
 // must not load OpenCV's image codecs or video I/O (with them the dynamic loader maps ~250
-// libraries, ~0.1-0.17 s per process). Checked on the real binary through the dynamic loader's own
-// trace (LD_DEBUG=files), with a TIFF pair as the positive control (it must load the codecs
-// plugin, so the trace is known to work), and with the plugin made unavailable. Speed itself is
-// measured in bench/startup_benchmark.py, not here.
+// libraries, ~0.1-0.17 s per process), and of TIFFs only the image codecs (the images plugin),
+// never the video I/O with FFmpeg and GStreamer. Checked on the real binary through the dynamic
+// loader's own trace (LD_DEBUG=files), with a TIFF pair and a video as the positive controls (they
+// must load the images or the video plugin, so the trace is known to work), and with each plugin
+// made unavailable. Speed itself is measured in bench/startup_benchmark.py, not here.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -13,6 +14,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
 #include <string>
 
 #include "cli_runner.h"
@@ -83,12 +85,16 @@ TEST_F(Startup, VersionLoadsNoImageCodecsOrVideo) {
   EXPECT_FALSE(Loads(r.output, "libopencv_videoio.so"));
 }
 
-TEST_F(Startup, ATiffPairLoadsTheCodecsPluginAndGivesTheSameResult) {
+TEST_F(Startup, ATiffPairLoadsTheImagesPluginButNoVideoAndGivesTheSameResult) {
   {
     const CliResult r = RunWith("LD_DEBUG=files", "-q " + Correlate(".tif"));
     ASSERT_EQ(r.exit_code, 0) << r.output.substr(0, 4000);
     EXPECT_TRUE(Loads(r.output, "libimpactdic_opencv_codecs.so")) << r.output.substr(0, 2000);
     EXPECT_TRUE(Loads(r.output, "libopencv_imgcodecs.so"));
+    for (const char* video : {"libimpactdic_opencv_video.so", "libopencv_videoio.so",
+                              "libavcodec.so", "libavformat.so", "libgstreamer-1.0.so"}) {
+      EXPECT_FALSE(Loads(r.output, video)) << video << " is loaded to decode a TIFF";
+    }
   }
   ASSERT_EQ(RunCli("-q " + Correlate(".png")).exit_code, 0);
   // Same pixels through either decoder: the same numbers.
@@ -111,6 +117,37 @@ TEST_F(Startup, WithoutThePluginPngsStillCorrelateAndTiffsSayWhatIsMissing) {
   EXPECT_NE(tif.output.find("libimpactdic_opencv_codecs.so"), std::string::npos) << tif.output;
   EXPECT_NE(tif.output.find("IMPACTDIC_OPENCV_CODECS"), std::string::npos) << tif.output;
   EXPECT_NE(tif.output.find(missing), std::string::npos) << tif.output;
+}
+
+TEST_F(Startup, AVideoLoadsTheVideoPluginAndWithoutItSaysWhatIsMissing) {
+  // Three frames, each shifted by one pixel; OpenCV's own MJPG writer (no FFmpeg needed here).
+  const std::string video = File("clip.avi");
+  {
+    cv::Mat noise(130, 170, CV_8UC1);
+    cv::RNG rng(5);
+    rng.fill(noise, cv::RNG::UNIFORM, 0, 256);
+    cv::GaussianBlur(noise, noise, cv::Size(0, 0), 1.5);
+    cv::VideoWriter writer(video, cv::CAP_OPENCV_MJPEG, cv::VideoWriter::fourcc('M', 'J', 'P', 'G'),
+                           25, cv::Size(160, 120), /*isColor=*/false);
+    ASSERT_TRUE(writer.isOpened());
+    for (int k = 0; k < 3; ++k) writer.write(noise(cv::Rect(k, k, 160, 120)).clone());
+  }
+  const std::string correlate =
+      "-q correlate --frames " + video + " --subset 21 --step 20 --threads 1 -o " + File("v.csv");
+  const CliResult r = RunWith("LD_DEBUG=files", correlate);
+  ASSERT_EQ(r.exit_code, 0) << r.output.substr(0, 4000);
+  EXPECT_TRUE(Loads(r.output, "libimpactdic_opencv_video.so")) << r.output.substr(0, 2000);
+  EXPECT_TRUE(Loads(r.output, "libopencv_videoio.so"));
+
+  const std::string missing = File("no_such_video_plugin.so");
+  const CliResult without = RunWith("IMPACTDIC_OPENCV_VIDEO=" + missing, correlate);
+  EXPECT_EQ(without.exit_code, 1) << without.output;
+  EXPECT_NE(without.output.find("libimpactdic_opencv_video.so"), std::string::npos)
+      << without.output;
+  EXPECT_NE(without.output.find("IMPACTDIC_OPENCV_VIDEO"), std::string::npos) << without.output;
+  EXPECT_NE(without.output.find(missing), std::string::npos) << without.output;
+  // Images need only the images plugin.
+  EXPECT_EQ(RunWith("IMPACTDIC_OPENCV_VIDEO=" + missing, "-q " + Correlate(".tif")).exit_code, 0);
 }
 
 }  // namespace
