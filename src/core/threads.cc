@@ -7,7 +7,7 @@
 #include <iterator>
 #include <memory>
 #include <new>
-#include <opencv2/core/utility.hpp>
+#include <opencv2/core.hpp>
 #include <system_error>
 
 #include "impactdic/core/error.h"
