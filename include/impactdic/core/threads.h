@@ -24,7 +24,7 @@ void CheckThreadCount(int threads, const std::string& where);
 //  - LeakSanitizer's stop-the-world can read the stack of a worker being unmapped and crash
 //    (a failure of the sanitizer, not of the program);
 //  - what a library keeps in a worker's thread-specific data is lost: libsrt (FFmpeg's, loaded
-//    with the OpenCV codecs plugin) keeps a 120-byte error object there for the thread that
+//    with the OpenCV video plugin) keeps a 120-byte error object there for the thread that
 //    loaded it and frees it only when that thread exits, so a worker left running leaks it.
 // OpenCV's own task_arena is terminated first (cv::setNumThreads(0)): OpenCV must not be used
 // after Join. At debug level it logs whether the workers were joined and how many threads are
