@@ -7,7 +7,11 @@
 //   calib_benchmark [benchmark flags]
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 #include "impactdic/calib/calibration.h"

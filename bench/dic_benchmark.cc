@@ -20,13 +20,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
 #include "impactdic/core/timer.h"
+#include "impactdic/dic/bspline.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/synth/fields.h"
 #include "impactdic/synth/speckle.h"

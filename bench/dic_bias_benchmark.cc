@@ -29,17 +29,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
 #include <numeric>
+#include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/correlator.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "impactdic/synth/fourier_shift.h"
 #include "impactdic/synth/speckle.h"

@@ -3,6 +3,8 @@
 // estimate's companion run is switched off so the time is that of one solution.
 #include <benchmark/benchmark.h>
 
+#include <map>
+
 #include "impactdic/model/impact_model.h"
 #include "impactdic/model/work_precision.h"
 

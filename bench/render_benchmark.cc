@@ -2,8 +2,13 @@
 // (640 x 480, subsets every 10 px) and at the camera's full size (1920 x 1440, every 20 px).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <map>
+#include <opencv2/core.hpp>
 #include <random>
+#include <vector>
 
 #include "impactdic/render/velocity_field.h"
 

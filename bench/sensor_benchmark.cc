@@ -2,9 +2,12 @@
 // (offset, filter, onset detection, integration) on records of realistic length (25 kHz).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "impactdic/sensor/filter.h"

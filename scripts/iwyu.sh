@@ -4,6 +4,9 @@
 # commands of a configured build (default build/release). Fails, listing them, if iwyu asks for an
 # include to be added to any of our files; what it would remove is printed but does not fail (it
 # also proposes dropping the dependencies' umbrella headers, which the code keeps on purpose).
+# The benchmarks (bench/*.cc) are checked too, with the compile commands of the bench preset's
+# build (default build/bench; IMPACTDIC_IWYU_BENCH_BUILD), when it is configured; otherwise the
+# script says they were skipped.
 # Alone: bash scripts/iwyu.sh [BUILD_DIR]. Installs the Debian package iwyu when it is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,6 +27,16 @@ iwyu_tool -p "$build_dir" -j "$jobs" "${sources[@]}" -- \
   -Xiwyu --mapping_file="$root/.iwyu.imp" -Xiwyu --no_fwd_decls \
   -Xiwyu --check_also="$root/include/*" -Xiwyu --check_also="$root/src/*" \
   -Xiwyu --check_also="$root/tests/*" > "$log" 2>&1 || true
+bench_build=${IMPACTDIC_IWYU_BENCH_BUILD:-build/bench}
+if [ -f "$bench_build/compile_commands.json" ]; then
+  mapfile -t bench_sources < <(find bench -name '*.cc' | sort)
+  echo "iwyu: and ${#bench_sources[@]} files of bench/ with the compile commands of $bench_build"
+  iwyu_tool -p "$bench_build" -j "$jobs" "${bench_sources[@]}" -- \
+    -Xiwyu --mapping_file="$root/.iwyu.imp" -Xiwyu --no_fwd_decls \
+    -Xiwyu --check_also="$root/include/*" -Xiwyu --check_also="$root/bench/*" >> "$log" 2>&1 || true
+else
+  echo "iwyu: bench/ skipped: $bench_build is not configured (cmake --preset bench)"
+fi
 if [ -n "${IMPACTDIC_IWYU_LOG:-}" ]; then cp "$log" "$IMPACTDIC_IWYU_LOG"; fi  # iwyu's full output
 
 # .def files (X-macro lists, expanded by a header) are not checked, nor asked for. A header is
