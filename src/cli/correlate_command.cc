@@ -53,7 +53,7 @@ struct CorrelateArgs {
   int search_radius = DicOptions{}.init.search_radius_px;
   double min_zncc = DicOptions{}.icgn.min_zncc;
   std::string mode = ToString(DicOptions{}.mode);
-  std::string max_uncertainty = fmt::format("{}", DicOptions{}.icgn.max_uncertainty_px);
+  std::string max_uncertainty = MaxUncertaintyText(DicOptions{}.icgn.max_uncertainty_px);
   std::string gaussian;  // SIGMA[,KERNEL]; empty: no pre-filter.
   // The continuity post-check (DicOptions::continuity), checked with the flags' names
   // (ContinuityFromArgs).
@@ -64,6 +64,11 @@ struct CorrelateArgs {
   std::string continuity_jump =
       ContinuityLimitText(DicOptions{}.continuity.max_neighbour_difference_px);
   double continuity_min_misfit = DicOptions{}.continuity.min_misfit;
+  // The normalized median test (DicOptions::outliers).
+  std::string outlier_check = DicOptions{}.outliers.enabled ? "on" : "off";
+  double outlier_threshold = DicOptions{}.outliers.threshold;
+  double outlier_noise = DicOptions{}.outliers.noise_px;
+  double outlier_sigma_factor = DicOptions{}.outliers.sigma_factor;
   std::string continuity_local = ContinuityLimitText(DicOptions{}.continuity.local_ratio);
   std::string output;
 };
@@ -79,6 +84,9 @@ const FlagNames kCorrelateFlags = {{"interpolation", "--interp"},
                                    {"dic.icgn.min_zncc", "--min-zncc"},
                                    {"dic.icgn.max_uncertainty_px", "--max-uncertainty"},
                                    {"dic.continuity.min_misfit", "--continuity-min-misfit"},
+                                   {"dic.outliers.threshold", "--outlier-threshold"},
+                                   {"dic.outliers.noise_px", "--outlier-noise"},
+                                   {"dic.outliers.sigma_factor", "--outlier-sigma-factor"},
                                    {"frames video", "--frames"}};
 
 cv::Rect ParseRoi(const std::string& text) {
@@ -163,6 +171,33 @@ ContinuityCheckOptions ContinuityFromArgs(const CorrelateArgs& a) {
   return c;
 }
 
+OutlierCheckOptions OutliersFromArgs(const CorrelateArgs& a) {
+  OutlierCheckOptions o;
+  o.enabled = OnOffFromString(a.outlier_check, "--outlier-check");
+  o.threshold = a.outlier_threshold;
+  o.noise_px = a.outlier_noise;
+  o.sigma_factor = a.outlier_sigma_factor;
+  return o;
+}
+
+void AddOutlierFlags(CLI::App* cmd, CorrelateArgs* args) {
+  cmd->add_option("--outlier-check", args->outlier_check,
+                  "on | off: normalized median test of each frame; spurious vectors become "
+                  "`outlier` (NaN) (docs/dic.md)")
+      ->capture_default_str();
+  cmd->add_option("--outlier-threshold", args->outlier_threshold,
+                  "Flag |d - neighbours' median| / (their median residual + noise) above it, in " +
+                      kOutlierThresholdRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--outlier-noise", args->outlier_noise,
+                  "The noise level of the normalized median test, in " + kOutlierNoiseRange.Text())
+      ->capture_default_str();
+  cmd->add_option("--outlier-sigma-factor", args->outlier_sigma_factor,
+                  "...and |d - median| above this times the subset's own sigma, in " +
+                      kOutlierSigmaFactorRange.Text())
+      ->capture_default_str();
+}
+
 void AddContinuityFlags(CLI::App* cmd, CorrelateArgs* args) {
   cmd->add_option("--continuity-check", args->continuity,
                   "on | off: post-check of each frame; converged subsets straddling a body edge "
@@ -231,6 +266,7 @@ void Run(const CorrelateArgs& a) {
       MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
   const ImageFilter filter = MakeImageFilter(a.gaussian);
   options.continuity = ContinuityFromArgs(a);
+  options.outliers = OutliersFromArgs(a);
   WithFlagNames(kCorrelateFlags, [&] { options.Check(); });
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   std::vector<std::string> paths;
@@ -329,6 +365,7 @@ void RegisterCorrelateCommand(CLI::App& app) {
                       "); reduces the sub-pixel bias of sharp or aliased speckle (docs/dic.md, "
                       "\"Sub-pixel bias\"), e.g. 0.8");
   AddContinuityFlags(cmd, args.get());
+  AddOutlierFlags(cmd, args.get());
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;

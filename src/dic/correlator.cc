@@ -21,6 +21,7 @@
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/continuity_check.h"
+#include "impactdic/dic/outlier_check.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/image_io.h"
 
@@ -116,13 +117,18 @@ double DicSummary::SubsetsPerSecond() const {
 std::string DicSummary::BriefReport() const {
   return fmt::format(
       "{} subsets x {} frames: {:.2f}% valid, {:.2f} iterations/subset, {} reference updates, "
-      "{:.3f} s ({:.0f} subsets/s){}{}",
+      "{:.3f} s ({:.0f} subsets/s){}{}{}",
       subsets, frames, 100 * valid_fraction, mean_iterations, reference_updates, seconds_total,
       SubsetsPerSecond(), data_bits == 12 ? "; 12-bit data in 16-bit images" : "",
       Discontinuous() > 0 ? fmt::format("; {} subset results flagged as straddling a "
                                         "discontinuity",
                                         Discontinuous())
-                          : "");
+                          : "",
+      Outliers() > 0 ? fmt::format("; {} subset results flagged as outliers", Outliers()) : "");
+}
+
+long long DicSummary::Outliers() const {
+  return status_counts[static_cast<int>(SubsetStatus::kOutlier)];
 }
 
 long long DicSummary::Discontinuous() const {
@@ -201,10 +207,13 @@ struct Correlator::Impl {
   // The results of `at` into out (displacements, ZNCC, sigma, status), the warps kept for the
   // next prediction; returns the tracked positions (NaN where not converged).
   std::vector<cv::Point2d> StoreResults(const std::vector<Attempt>& at, FrameResult* out);
-  // The continuity post-check (options.continuity) on the stored results: flagged subsets become
-  // `discontinuous` in out and `at`, untracked in this frame (NaN position) like other failures.
-  void FlagDiscontinuities(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
-                           FrameResult* out);
+  // The post-checks on the stored results: the continuity check (options.continuity), then the
+  // normalized median test (options.outliers). Flagged subsets become `discontinuous` or
+  // `outlier` in out and `at`, untracked in this frame (NaN position) like other failures.
+  void PostCheck(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos, FrameResult* out);
+  // Makes the subsets that a post-check set to `flagged` in out failures in `at` too.
+  void Untrack(SubsetStatus flagged, std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
+               const FrameResult& out);
   // Makes the frame the reference if the policy says so, else keeps it if the policy needs it.
   void AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
                         const std::vector<Attempt>& at, const std::vector<cv::Point2d>& pos,
@@ -1014,17 +1023,30 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attemp
   return pos;
 }
 
-void Correlator::Impl::FlagDiscontinuities(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
-                                           FrameResult* out) {
-  if (!options.continuity.enabled) return;
-  const ContinuityFlags flags = CheckContinuity(*out, nx, ny, options.continuity);
-  if (flags.flagged == 0) return;
-  ApplyContinuityFlags(flags, out);
+void Correlator::Impl::PostCheck(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
+                                 FrameResult* out) {
+  if (options.continuity.enabled) {
+    const ContinuityFlags flags = CheckContinuity(*out, nx, ny, options.continuity);
+    if (flags.flagged > 0) {
+      ApplyContinuityFlags(flags, out);
+      Untrack(SubsetStatus::kDiscontinuous, at, pos, *out);
+    }
+  }
+  if (options.outliers.enabled) {
+    const OutlierFlags flags = FindOutliers(*out, nx, ny, options.outliers);
+    if (flags.flagged > 0) {
+      ApplyOutlierFlags(flags, out);
+      Untrack(SubsetStatus::kOutlier, at, pos, *out);
+    }
+  }
+}
+
+void Correlator::Impl::Untrack(SubsetStatus flagged, std::vector<Attempt>* at,
+                               std::vector<cv::Point2d>* pos, const FrameResult& out) {
   for (std::size_t i = 0; i < at->size(); ++i) {
     IcgnResult& r = (*at)[i].r;
-    if (out->status[i] != SubsetStatus::kDiscontinuous || r.status != SubsetStatus::kConverged)
-      continue;
-    r.status = SubsetStatus::kDiscontinuous;
+    if (out.status[i] != flagged || r.status != SubsetStatus::kConverged) continue;
+    r.status = flagged;
     (*pos)[i] = cv::Point2d(kNaN, kNaN);
     params_valid[i] = 0;
     iteration_sum -= r.iterations;
@@ -1089,7 +1111,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
 
   // Results: tracked positions and accumulated displacements.
   std::vector<cv::Point2d> pos = m.StoreResults(at, &out);
-  m.FlagDiscontinuities(&at, &pos, &out);
+  m.PostCheck(&at, &pos, &out);
   m.pos_prev = m.pos_last;
   m.pos_last = pos;
   if (out.frame == 1) {

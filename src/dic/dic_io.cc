@@ -114,6 +114,7 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
                        {"reference_update", ReferenceUpdateText(options.update)},
                        {"mode", ToString(options.mode)},
                        {"continuity_check", ContinuityCheckText(options.continuity)},
+                       {"outlier_check", OutlierCheckText(options.outliers)},
                        {"summary", result.summary.BriefReport()}};
   t.number_attributes = {{"max_uncertainty_px", options.icgn.max_uncertainty_px},
                          {"subset_size_px", options.grid.subset_size},
@@ -121,7 +122,8 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
                          {"valid_fraction", result.summary.valid_fraction},
                          {"mean_iterations", result.summary.mean_iterations},
                          {"reference_updates", result.summary.reference_updates},
-                         {"discontinuous_results", double(result.summary.Discontinuous())}};
+                         {"discontinuous_results", double(result.summary.Discontinuous())},
+                         {"outlier_results", double(result.summary.Outliers())}};
   if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
   return t;
 }

@@ -32,6 +32,7 @@
 #endif
 #include <cassert>
 #include <cmath>
+#include <vector>
 
 namespace impactdic::internal {
 namespace {
@@ -997,6 +998,181 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
   s->status = SubsetStatus::kConverged;
 }
 
+namespace {
+
+// Half-width [px] of the lag window over which the residuals' spatial covariance is estimated.
+constexpr int kResidualLagPx = 2;
+
+// The variance of the B-spline node gradient (BsplineImage::NodeGradients, the reference
+// gradients of IC-GN) of unit white noise, divided by that of the central difference (1/2):
+// measured once per interpolator on the spline of a unit impulse.
+double NodeGradientNoiseRatio(Interpolation kind) {
+  const auto gain = [](Interpolation k) {
+    cv::Mat impulse = cv::Mat::zeros(65, 65, CV_32F);
+    impulse.at<float>(32, 32) = 1;
+    BsplineImage spline;
+    spline.Build(impulse, k);
+    cv::Mat gx, gy;
+    spline.NodeGradients(&gx, &gy);
+    return gx.dot(gx) / 0.5;
+  };
+  static const double cubic = gain(Interpolation::kBicubic);
+  static const double quintic = gain(Interpolation::kBiquintic);
+  return kind == Interpolation::kBicubic ? cubic : quintic;
+}
+
+// Standard deviations of the warp's translation (u, v) at the solution p, from the residuals
+// r = (f - f_m) - (f_n / g_n) (g - g_m). The least-squares figure sigma_r sqrt(H^-1) assumes
+// independent residuals and exact reference gradients; both fail on real images (2.4x too small
+// on real sand, issue 21), so two corrections are made (docs/dic.md, "Uncertainty per subset"):
+//  * Correlated residuals (noise after demosaicing, JPEG blocks or blur; texture the warp does
+//    not follow): the translation's error is du = -sum_i a_i r_i with a_i = (H'^-1 J_i)_u, so
+//    var(u) = sum_i sum_j a_i a_j cov(r_i, r_j). The residuals' covariance is taken as stationary
+//    over the subset, cov(r_i, r_j) = sigma_r^2 rho(d), d = j - i, with rho(d) estimated from the
+//    residual pairs at lag d for |dx|, |dy| <= kResidualLagPx (0 beyond), sigma_r^2 = sum r^2 /
+//    (N - n): var(u) = sigma_r^2 sum_d rho(d) A(d), A(d) = sum_i a_i a_(i+d).
+//  * Noise in the reference gradients (errors in variables): the Hessian H = sum J J^T of noisy
+//    gradients exceeds that of the true gradients, H' = H - s_x^2 M_x - s_y^2 M_y (M the sums of
+//    the shape monomials' products, s^2 the gradient noise variance), and IC-GN's fixed point
+//    has the error H'^-1 sum J r. s^2 is estimated from the residuals, which carry the noise of
+//    both images: half the variance of their central differences, times the node gradient's
+//    noise gain relative to the central difference (NodeGradientNoiseRatio). The correction is
+//    bounded: H' >= kMinTrueHessianFraction H (so it at most doubles sigma).
+// The variance is kept >= the least-squares sigma_r^2 (H^-1)_uu (the floor).
+constexpr double kMinTrueHessianFraction = 0.25;
+
+void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                             const double* hinv, const BsplineImage& spline, const Params& p,
+                             double var_r, float* sigma_u, float* sigma_v) {
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
+  const int count = size * size;
+  thread_local std::vector<double> r, au, av, jac;
+  r.resize(count);
+  au.resize(count);
+  av.resize(count);
+  jac.resize(static_cast<std::size_t>(count) * n);
+  const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
+  double gsum = 0;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      double du, dv;
+      Displacement(shape, p, i - h, j - h, &du, &dv);
+      const double g = spline.Value(s.cx + (i - h) + du, s.cy + (j - h) + dv);
+      r[j * size + i] = g;
+      gsum += g;
+    }
+  }
+  const double gm = gsum / count;
+  double gn2 = 0;
+  for (int k = 0; k < count; ++k) gn2 += (r[k] - gm) * (r[k] - gm);
+  const double ratio = gn2 > 0 ? s.f_norm / std::sqrt(gn2) : 0;
+  // Residuals, steepest-descent images J, and the monomial moments M (one block, both components).
+  double mom[6][6] = {};
+  for (int j = 0; j < size; ++j) {
+    const float* f = ref.f.ptr<float>(ry + j) + rx;
+    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
+    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
+    for (int i = 0; i < size; ++i) {
+      const int k = j * size + i;
+      r[k] = (f[i] - s.f_mean) - ratio * (r[k] - gm);
+      double m[6];
+      Monomials(i - h, j - h, m);
+      double* jk = &jac[static_cast<std::size_t>(k) * n];
+      for (int q = 0; q < nm; ++q) {
+        jk[q] = gx[i] * m[q];
+        jk[nm + q] = gy[i] * m[q];
+        for (int t = 0; t < nm; ++t) mom[q][t] += m[q] * m[t];
+      }
+    }
+  }
+  // Gradient noise variances from the residuals' central differences.
+  double dx2 = 0, dy2 = 0;
+  int nx = 0, ny = 0;
+  for (int j = 0; j < size; ++j) {
+    for (int i = 0; i < size; ++i) {
+      const int k = j * size + i;
+      if (i > 0 && i + 1 < size) {
+        const double d = 0.5 * (r[k + 1] - r[k - 1]);
+        dx2 += d * d;
+        ++nx;
+      }
+      if (j > 0 && j + 1 < size) {
+        const double d = 0.5 * (r[k + size] - r[k - size]);
+        dy2 += d * d;
+        ++ny;
+      }
+    }
+  }
+  const double gain = NodeGradientNoiseRatio(spline.kind());
+  const double noise2[2] = {nx ? 0.5 * gain * dx2 / nx : 0, ny ? 0.5 * gain * dy2 / ny : 0};
+  // H from J, and H' = H - lambda N with N = s_x^2 M_x + s_y^2 M_y, lambda <= 1 the largest value
+  // that keeps H' >= kMinTrueHessianFraction H (generalized eigenvalues of N against H).
+  double hh[144] = {}, nn[144] = {}, ht[144], htinv[144];
+  for (int k = 0; k < count; ++k) {
+    const double* jk = &jac[static_cast<std::size_t>(k) * n];
+    for (int a = 0; a < n; ++a)
+      for (int b = a; b < n; ++b) hh[a * n + b] += jk[a] * jk[b];
+  }
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      if (b < a) hh[a * n + b] = hh[b * n + a];
+      if (a / nm == b / nm) nn[a * n + b] = noise2[a / nm] * mom[a % nm][b % nm];
+    }
+  }
+  const double mu = MaxGeneralizedEigenvalue(nn, hh, n);
+  const double lambda = !(mu >= 0) ? 0.0
+                        : mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu
+                                                           : 1.0;
+  for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
+  const double* hi = InvertSpd(ht, n, htinv) ? htinv : hinv;
+  for (int k = 0; k < count; ++k) {
+    const double* jk = &jac[static_cast<std::size_t>(k) * n];
+    double a_u = 0, a_v = 0;
+    for (int q = 0; q < n; ++q) {
+      a_u += hi[q] * jk[q];
+      a_v += hi[nm * n + q] * jk[q];
+    }
+    au[k] = a_u;
+    av[k] = a_v;
+  }
+  double c0 = 0, a0u = 0, a0v = 0;
+  for (int k = 0; k < count; ++k) {
+    c0 += r[k] * r[k];
+    a0u += au[k] * au[k];
+    a0v += av[k] * av[k];
+  }
+  c0 /= count;
+  double su = 0, sv = 0;  // sum over d != 0 of rho(d) A(d).
+  if (c0 > 0) {
+    // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
+    for (int dy = 0; dy <= kResidualLagPx; ++dy) {
+      for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
+        if (dy == 0 && dx <= 0) continue;
+        double c = 0, pu = 0, pv = 0;
+        int pairs = 0;
+        for (int j = 0; j + dy < size; ++j) {
+          for (int i = std::max(0, -dx); i < size && i + dx < size; ++i) {
+            const int k = j * size + i, l = (j + dy) * size + i + dx;
+            c += r[k] * r[l];
+            pu += au[k] * au[l];
+            pv += av[k] * av[l];
+            ++pairs;
+          }
+        }
+        const double rho = c / pairs / c0;
+        su += 2 * rho * pu;
+        sv += 2 * rho * pv;
+      }
+    }
+  }
+  const double var_u = var_r * std::max(a0u + su, hinv[0]);
+  const double var_v = var_r * std::max(a0v + sv, hinv[nm * n + nm]);
+  *sigma_u = static_cast<float>(std::sqrt(var_u));
+  *sigma_v = static_cast<float>(std::sqrt(var_v));
+}
+
+}  // namespace
+
 IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s, const double* hinv,
                    const DeformedImage& def, const IcgnOptions& options, const Params& initial) {
   IcgnResult result;
@@ -1010,6 +1186,21 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
   const bool quad = shape.kind == ShapeFunction::kQuadratic;
   const bool cubic = spline.kind() == Interpolation::kBicubic;
   Params& p = result.p;
+  // The standard deviation of a subset corner's displacement per unit residual standard deviation
+  // (independent residuals), the largest over the four corners: sqrt(m^T H^-1_uu m + m^T H^-1_vv
+  // m) with m the shape monomials at the corner. The convergence test compares the increment's
+  // corner move with it.
+  double corner_sd = 0;
+  for (int k = 0; k < 4; ++k) {
+    double m[6];
+    Monomials((k & 1) ? h : -h, (k & 2) ? h : -h, m);
+    double var = 0;
+    for (int a = 0; a < 2; ++a) {
+      for (int i = 0; i < nm; ++i)
+        for (int j = 0; j < nm; ++j) var += m[i] * hinv[(a * nm + i) * n + a * nm + j] * m[j];
+    }
+    corner_sd = std::max(corner_sd, std::sqrt(std::max(0.0, var)));
+  }
   for (int it = 1; it <= options.max_iterations; ++it) {
     result.iterations = it;
     // The warped subset (corners, edge midpoints, 1 px margin) must stay in the valid region.
@@ -1071,13 +1262,16 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
       return result;
     }
     p = ComposeInverse(shape, p, dp);
-    if (move < options.convergence_px) {
-      // Least-squares covariance of the parameters: sigma_r^2 H^-1 with the residual variance
-      // sigma_r^2 = sum r^2 / (N - n), sum r^2 = f_n^2 * 2 (1 - ZNCC) (r in reference grey levels).
-      const double r2 = double(s.f_norm) * s.f_norm * 2 * std::max(0.0, 1.0 - result.zncc);
-      const double var_r = r2 / (count - n);
-      result.sigma_u_px = static_cast<float>(std::sqrt(var_r * hinv[0]));
-      result.sigma_v_px = static_cast<float>(std::sqrt(var_r * hinv[nm * n + nm]));
+    // The residual variance sigma_r^2 = sum r^2 / (N - n), sum r^2 = f_n^2 * 2 (1 - ZNCC) (r in
+    // reference grey levels). Converged once the increment moves no corner by more than
+    // convergence_px, or by far less than the corners' own least-squares standard deviation
+    // sigma_r corner_sd (IcgnOptions::convergence_sigma_fraction).
+    const double r2 = double(s.f_norm) * s.f_norm * 2 * std::max(0.0, 1.0 - result.zncc);
+    const double var_r = r2 / (count - n);
+    if (move < std::max(options.convergence_px,
+                        options.convergence_sigma_fraction * std::sqrt(var_r) * corner_sd)) {
+      CorrelatedResidualSigma(shape, ref, s, hinv, spline, p, var_r, &result.sigma_u_px,
+                              &result.sigma_v_px);
       result.sigma_px = std::max(result.sigma_u_px, result.sigma_v_px);
       if (result.zncc < options.min_zncc) {
         result.status = SubsetStatus::kLowCorrelation;

@@ -33,6 +33,10 @@ Shape MakeShape(ShapeFunction kind, int half);
 // L_jj^2 is not above 1e-10 of its diagonal entry A_jj (the data cannot determine a parameter).
 bool InvertSpd(const double* a, int n, double* inv);
 
+// The largest mu of A v = mu B v for symmetric A and symmetric positive definite B (n x n,
+// row-major, 1 <= n <= 12); NaN if B is not positive definite.
+double MaxGeneralizedEigenvalue(const double* a, const double* b, int n);
+
 // Displacement (du, dv) of the warp at (xi, eta).
 void Displacement(const Shape& s, const Params& p, double xi, double eta, double* du, double* dv);
 // The same warp expressed about a centre moved by (ox, oy).

@@ -21,7 +21,8 @@ namespace {
 const char* const kStatusNames[kSubsetStatusCount] = {
     "converged",    "max_iterations", "low_correlation", "singular_hessian",
     "out_of_image", "masked",         "low_contrast",    "saturated",
-    "not_found",    "lost",           "uncertain",       "discontinuous"};
+    "not_found",    "lost",           "uncertain",       "discontinuous",
+    "outlier"};
 
 std::string Num(double v) { return std::to_string(v); }
 
@@ -47,6 +48,12 @@ double MaxUncertaintyFromString(const std::string& text, const std::string& wher
   CheckValue(value && *value >= 0 && !std::isnan(*value), where, text,
              "an uncertainty limit >= 0 [px] (0 or none: no limit)");
   return *value;
+}
+
+std::string MaxUncertaintyText(double max_uncertainty_px) {
+  return max_uncertainty_px > 0 && std::isfinite(max_uncertainty_px)
+             ? fmt::format("{}", max_uncertainty_px)
+             : "none";
 }
 
 std::string SubsetStatusCodes() {
@@ -94,6 +101,9 @@ void InitialGuessOptions::Check() const {
 void IcgnOptions::Check() const {
   CheckValue(kConvergenceRange.Contains(convergence_px), "dic.icgn.convergence_px",
              Num(convergence_px), "in " + kConvergenceRange.Text());
+  CheckValue(kConvergenceSigmaFractionRange.Contains(convergence_sigma_fraction),
+             "dic.icgn.convergence_sigma_fraction", Num(convergence_sigma_fraction),
+             "in " + kConvergenceSigmaFractionRange.Text());
   CheckValue(kMaxIterationsRange.Contains(max_iterations), "dic.icgn.max_iterations",
              std::to_string(max_iterations), "in " + kMaxIterationsRange.Text());
   CheckValue(kMinZnccRange.Contains(min_zncc), "dic.icgn.min_zncc", Num(min_zncc),
@@ -115,6 +125,23 @@ void UpdateOptions::Check() const {
   }
   CheckValue(kAutoMinZnccRange.Contains(auto_min_zncc), "dic.update.auto_min_zncc",
              Num(auto_min_zncc), "in " + kAutoMinZnccRange.Text());
+}
+
+void OutlierCheckOptions::Check() const {
+  CheckValue(kOutlierThresholdRange.Contains(threshold), "dic.outliers.threshold", Num(threshold),
+             "in " + kOutlierThresholdRange.Text());
+  CheckValue(kOutlierNoiseRange.Contains(noise_px), "dic.outliers.noise_px", Num(noise_px),
+             "in " + kOutlierNoiseRange.Text());
+  CheckValue(kOutlierSigmaFactorRange.Contains(sigma_factor), "dic.outliers.sigma_factor",
+             Num(sigma_factor), "in " + kOutlierSigmaFactorRange.Text());
+  CheckValue(kOutlierNeighboursRange.Contains(min_neighbours), "dic.outliers.min_neighbours",
+             std::to_string(min_neighbours), "in " + kOutlierNeighboursRange.Text());
+}
+
+std::string OutlierCheckText(const OutlierCheckOptions& o) {
+  if (!o.enabled) return "off";
+  return fmt::format("on (threshold {}, noise_px {}, sigma_factor {}, min_neighbours {})",
+                     o.threshold, o.noise_px, o.sigma_factor, o.min_neighbours);
 }
 
 void ContinuityCheckOptions::Check() const {
@@ -171,6 +198,7 @@ void DicOptions::Check() const {
   icgn.Check();
   update.Check();
   continuity.Check();
+  outliers.Check();
 }
 
 }  // namespace impactdic

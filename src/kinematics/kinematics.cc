@@ -102,6 +102,45 @@ std::string ExcludeUncertainSamplesWithWarning(double max_sigma_px, const std::s
       series->frames * series->subsets, where, max_sigma_px);
 }
 
+std::size_t ExcludeSamplesAboveMedianSigma(double ratio, const std::string& where,
+                                           CorrelationSeries* series) {
+  CheckValue(ratio > 1, where, fmt::format("{}", ratio), "> 1");
+  CorrelationSeries& s = *series;
+  s.Check();
+  CheckValue(!s.sigma_u_px.empty(), where, "set, but the correlation results have no sigma_u_px",
+             "results with per-subset sigmas (correlate them again with this version)");
+  if (s.valid.empty()) s.valid.assign(s.frames * s.subsets, 1);
+  std::size_t excluded = 0;
+  std::vector<float> sigma;
+  for (std::size_t f = 0; f < s.frames; ++f) {
+    const std::size_t row = f * s.subsets;
+    sigma.clear();
+    for (std::size_t i = row; i < row + s.subsets; ++i) {
+      const float larger = std::max(s.sigma_u_px[i], s.sigma_v_px[i]);
+      if (s.valid[i] && larger > 0) sigma.push_back(larger);
+    }
+    if (sigma.size() < 3) continue;  // The reference frame (sigma 0), or too few to judge.
+    std::nth_element(sigma.begin(), sigma.begin() + sigma.size() / 2, sigma.end());
+    const double limit = ratio * sigma[sigma.size() / 2];
+    for (std::size_t i = row; i < row + s.subsets; ++i) {
+      if (!s.valid[i] || !(s.sigma_u_px[i] > limit || s.sigma_v_px[i] > limit)) continue;
+      s.valid[i] = 0;
+      s.u_px[i] = s.v_px[i] = kNaN;
+      ++excluded;
+    }
+  }
+  return excluded;
+}
+
+std::string ExcludeSamplesAboveMedianSigmaWithWarning(double ratio, const std::string& where,
+                                                      CorrelationSeries* series) {
+  const std::size_t excluded = ExcludeSamplesAboveMedianSigma(ratio, where, series);
+  return fmt::format(
+      "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > {} = {} x the frame's "
+      "median sigma)",
+      excluded, series->frames * series->subsets, where, ratio);
+}
+
 void KinematicsOptions::Check() const {
   CheckValue(std::isfinite(fps) && fps > 0, "kinematics.fps", fmt::format("{}", fps), "> 0 1/s");
 }

@@ -8,10 +8,13 @@
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
+#include <limits>
+#include <optional>
 #include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/reference_update.h"
@@ -183,6 +186,17 @@ void AddContinuityKeys(YamlOptionTable& t, ContinuityCheckOptions* c) {
                      "...and above this times the 7x7 median of the same");
 }
 
+void AddOutlierKeys(YamlOptionTable& t, OutlierCheckOptions* o) {
+  t.Add("outlier_check", &o->enabled,
+        "Normalized median test: spurious vectors become outlier (NaN)");
+  t.Add("outlier_threshold", &o->threshold, kOutlierThresholdRange, "a normalized residual",
+        "Flag |d - median| / (neighbours' median residual + noise) above it");
+  t.Add("outlier_noise_px", &o->noise_px, kOutlierNoiseRange, "a noise level",
+        "The noise level epsilon of the normalized median test");
+  t.Add("outlier_sigma_factor", &o->sigma_factor, kOutlierSigmaFactorRange, "a factor",
+        "...and |d - median| above this times the subset's own sigma");
+}
+
 YamlOptionTable DicTable(Scene* s) {
   YamlOptionTable t("dic");
   DicOptions& o = s->dic.options;
@@ -215,7 +229,7 @@ YamlOptionTable DicTable(Scene* s) {
         "reference_update auto: the reference moves on once a tracked subset falls below it");
   t.AddCustom(
       "max_uncertainty_px", "an uncertainty limit >= 0 [px], or none (0 and none: no limit)",
-      Num(o.icgn.max_uncertainty_px),
+      MaxUncertaintyText(o.icgn.max_uncertainty_px),
       [&o](const YAML::Node& n) {
         if (!n.IsScalar()) return false;
         try {
@@ -230,9 +244,13 @@ YamlOptionTable DicTable(Scene* s) {
         "IC-GN iteration cap");
   t.Add("convergence_px", &o.icgn.convergence_px, kConvergenceRange, "a convergence threshold",
         "IC-GN stops when the update moves no subset point more");
+  t.Add("convergence_sigma_fraction", &o.icgn.convergence_sigma_fraction,
+        kConvergenceSigmaFractionRange, "a fraction of sigma",
+        "...or less than this fraction of the subset's own sigma");
   t.Add("search_radius_px", &o.init.search_radius_px, kSearchRadiusRange, "search radius",
         "Integer-pixel initial-guess search radius");
   AddContinuityKeys(t, &o.continuity);
+  AddOutlierKeys(t, &o.outliers);
   AddDicFrameKeys(t, s);
   return t;
 }
@@ -274,6 +292,21 @@ YamlOptionTable MomentumTable(Scene* s) {
         "a fraction of the grid's subsets", "Per frame: p_gran only where this much is valid");
   AddOptional(t, "max_sigma_px", &m.max_sigma_px, kPositivePx, "a standard deviation limit",
               "Subset samples above it are left out of kinematics and p_gran");
+  t.AddCustom(
+      "max_sigma_ratio", "a ratio > 1, or none",
+      std::isfinite(m.max_sigma_ratio) ? Num(m.max_sigma_ratio) : std::string("none"),
+      [&m](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        if (n.Scalar() == "none") {
+          m.max_sigma_ratio = std::numeric_limits<double>::infinity();
+          return true;
+        }
+        const std::optional<double> value = ParseNumber(n.Scalar());
+        if (!value || !(*value > 1) || !std::isfinite(*value)) return false;
+        m.max_sigma_ratio = *value;
+        return true;
+      },
+      "Unless max_sigma_px: samples above this times the frame's median sigma are left out");
   return t;
 }
 

@@ -16,6 +16,16 @@
 
 namespace impactdic {
 
+std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series) {
+  if (scene.momentum.max_sigma_px) {
+    return ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
+                                              "momentum.max_sigma_px", series);
+  }
+  if (!std::isfinite(scene.momentum.max_sigma_ratio) || series->sigma_u_px.empty()) return "";
+  return ExcludeSamplesAboveMedianSigmaWithWarning(scene.momentum.max_sigma_ratio,
+                                                   "momentum.max_sigma_ratio", series);
+}
+
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
                                      double mm_per_px, bool allow_partial) {
   CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
@@ -29,14 +39,12 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   const MomentumOptions mopt = MakeMomentumOptions(scene, mm_per_px);
   long first = -1;
   CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
-  if (scene.momentum.max_sigma_px) {
-    try {
-      LogWarning("{}", ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
-                                                          "momentum.max_sigma_px", &dic));
-    } catch (Error& e) {
-      e.WithFile(results_path);
-      throw;
-    }
+  try {
+    const std::string warning = ExcludeUncertainSamplesOfScene(scene, &dic);
+    if (!warning.empty()) LogWarning("{}", warning);
+  } catch (Error& e) {
+    e.WithFile(results_path);
+    throw;
   }
   if (first < 0) first = scene.dic.first_frame;
   SceneAnalysisRun run;

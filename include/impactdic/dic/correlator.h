@@ -45,11 +45,13 @@
 //     they reappear. A subset not found in the frame that becomes the reference (any mode) is
 //     kept against the reference it was last found in, tried against it in every frame (`lost`
 //     while not found) and rejoins at the next update after it is found.
-//  5. The continuity post-check (DicOptions::continuity, dic/continuity_check.h) of the frame's
-//     results: subsets straddling a body edge or a shear band become `discontinuous` (NaN), are
-//     untracked in this frame as other failures are (no prediction from them; NaN at a reference
-//     update, so `lost` against the old reference until found again) and are counted in the
-//     summary. It runs after the `auto` redo: a newer reference does not make them continuous.
+//  5. The post-checks of the frame's results: the continuity check (DicOptions::continuity,
+//     dic/continuity_check.h; off by default): subsets straddling a body edge or a shear band
+//     become `discontinuous` (NaN); then the normalized median test (DicOptions::outliers,
+//     dic/outlier_check.h; on by default): spurious vectors become `outlier` (NaN). Flagged
+//     subsets are untracked in this frame as other failures are (no prediction from them; NaN at
+//     a reference update, so `lost` against the old reference until found again) and are counted
+//     in the summary. The checks run after the `auto` redo.
 //  Pairs (DicOptions::mode = kPairs): every image is correlated against the first reference as
 //  the first frame of a sequence is (steps 1-3, no prediction, no update).
 #ifndef IMPACTDIC_DIC_CORRELATOR_H_
@@ -105,6 +107,7 @@ struct DicSummary {
   double SubsetsPerSecond() const;
   // Results flagged by the continuity post-check (status_counts of kDiscontinuous).
   long long Discontinuous() const;
+  long long Outliers() const;  // Subset results flagged `outlier`.
   bool IsUsable() const { return frames > 0 && valid_fraction > 0.5; }
   std::string BriefReport() const;
   std::string FullReport() const;

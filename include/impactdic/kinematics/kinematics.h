@@ -68,6 +68,19 @@ std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& wher
 std::string ExcludeUncertainSamplesWithWarning(double max_sigma_px, const std::string& where,
                                                CorrelationSeries* series);
 
+// The default downstream use of the correlation's uncertainty (scene key
+// `momentum.max_sigma_ratio`, when `momentum.max_sigma_px` is not set): in each frame, marks the
+// samples whose sigma_u_px or sigma_v_px exceeds `ratio` times the median over the frame's valid
+// samples of max(sigma_u_px, sigma_v_px) invalid, as ExcludeUncertainSamples does: a limit
+// relative to what the texture allows in this recording, not a fixed one. Frames with fewer than
+// 3 valid samples are left as they are. Returns their count; Error naming `where` if ratio is not
+// > 1 or the series has no sigmas.
+std::size_t ExcludeSamplesAboveMedianSigma(double ratio, const std::string& where,
+                                           CorrelationSeries* series);
+// ExcludeSamplesAboveMedianSigma, returning the warning the pipeline reports.
+std::string ExcludeSamplesAboveMedianSigmaWithWarning(double ratio, const std::string& where,
+                                                      CorrelationSeries* series);
+
 struct KinematicsOptions {
   double fps = 1600;  // Camera frame rate [1/s], > 0; dt = 1 / fps.
   void Check() const;

@@ -87,6 +87,13 @@ struct SceneMomentum {
   // kinematics and the momentum grid mean (kinematics ExcludeUncertainSamples; /dic keeps them),
   // > 0; unset: none left out. Pairs with dic.max_uncertainty_px: none.
   std::optional<double> max_sigma_px;
+  // Unless max_sigma_px is set: in each frame, the samples whose sigma_u or sigma_v exceeds this
+  // many times the frame's median sigma are left out the same way (kinematics
+  // ExcludeSamplesAboveMedianSigma), > 1; +inf: none. A subset that far above its neighbours'
+  // uncertainty has almost no texture (glare, a featureless patch) and would only add noise to
+  // the grid mean.
+  double max_sigma_ratio = kDefaultMaxSigmaRatio;
+  static constexpr double kDefaultMaxSigmaRatio = 5;
 };
 
 // Which analysed frames results.h5 stores in /frames/images (`outputs.frames`). The figures and

@@ -20,6 +20,11 @@ struct SceneAnalysisRun {
   std::string results_path;
 };
 
+// Leaves the uncertain samples of the scene's correlation series out of its kinematics and
+// momentum (momentum.max_sigma_px if set, else momentum.max_sigma_ratio) and returns the warning
+// saying how many (empty when neither applies). The one rule of `run` and `analyze`.
+std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series);
+
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
 // and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
 // As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),

@@ -104,6 +104,12 @@ class CorrelateStage : public Stage {
           "discontinuous, NaN; dic.continuity_check)",
           summary.Discontinuous()));
     }
+    if (summary.Outliers() > 0) {
+      c.summary.warnings.push_back(fmt::format(
+          "correlation: {} subset results flagged as outliers by the normalized median test "
+          "(status outlier, NaN; dic.outlier_check)",
+          summary.Outliers()));
+    }
     const std::string problem = CorrelationProblem(summary, scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
     return summary.BriefReport();

@@ -1,5 +1,5 @@
 // kinematics: subset motion on the panel (mm, mm/s) from the correlation rows, without the samples
-// above momentum.max_sigma_px.
+// whose sigma is above momentum.max_sigma_px or momentum.max_sigma_ratio x the frame's median.
 #include <algorithm>
 #include <cstddef>
 #include <memory>
@@ -11,6 +11,7 @@
 #include "impactdic/io/dic_results.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
@@ -19,15 +20,13 @@
 namespace impactdic::stages {
 namespace {
 
-// The correlation series the kinematics and momentum use: without the samples above the scene's
-// momentum.max_sigma_px (if set; counted in a warning). /dic keeps them.
+// The correlation series the kinematics and momentum use: without the uncertain samples
+// (ExcludeUncertainSamplesOfScene; counted in a warning). /dic keeps them.
 CorrelationSeries AnalysedSeries(const DicResultsTable& dic, const Scene& scene,
                                  std::vector<std::string>* warnings) {
   CorrelationSeries s = CorrelationSeriesFromTable(dic);
-  if (scene.momentum.max_sigma_px) {
-    warnings->push_back(ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
-                                                           "momentum.max_sigma_px", &s));
-  }
+  const std::string warning = ExcludeUncertainSamplesOfScene(scene, &s);
+  if (!warning.empty()) warnings->push_back(warning);
   return s;
 }
 
