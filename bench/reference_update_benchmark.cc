@@ -40,50 +40,44 @@
 namespace impactdic {
 namespace {
 
-constexpr int kWidth = 200, kHeight = 160;
-
 struct Config {
+  int width = 200, height = 160;
+  double drift_u = 6, drift_v = -3;
   int frames = 201;
-  std::vector<double> fades = {0, 0.6};
+  std::vector<double> tones = {0, 2};
   int threads = 1;
   int realisations = 1;
   std::vector<std::string> schemes = {"sequential", "every:10", "leapfrog", "preconditioned"};
 };
 
-FieldSequence Fields(int frames) {
+FieldSequence Fields(const Config& c) {
   return LinearSequence(
-      Sum({Translation(6, -3), ExponentialCompression(/*surface_strain=*/0.03,
+      Sum({Translation(c.drift_u, c.drift_v), ExponentialCompression(/*surface_strain=*/0.03,
                                                       /*decay_length_px=*/80, /*y_surface_px=*/0,
-                                                      /*y_fixed_px=*/kHeight)}),
-      frames);
+                                                      /*y_fixed_px=*/c.height)}),
+      c.frames);
 }
 
-std::vector<cv::Mat> Images(const FieldSequence& fields, double fade, std::uint64_t noise_seed) {
+std::vector<cv::Mat> Images(const Config& c, const FieldSequence& fields, double tone,
+                            std::uint64_t noise_seed) {
   SpeckleOptions speckle;
   speckle.blob_radius_px = 2.0;
   speckle.seed = 21;
-  const SpecklePattern first(speckle, kWidth, kHeight);
-  speckle.seed = 22;
-  const SpecklePattern second(speckle, kWidth, kHeight);
+  const SpecklePattern pattern(speckle, c.width, c.height);
   RenderOptions render;
   render.supersampling = 2;
-  render.bits = 16;
+  render.bits = 16;  // Noise-free; the tone curve, the noise and 8-bit rounding follow.
   cv::RNG rng(noise_seed);
   std::vector<cv::Mat> images;
   for (int k = 0; k < fields.frames; ++k) {
-    const DisplacementField field = fields.at(k);
     cv::Mat image;
-    RenderImage(first, kWidth, kHeight, field, render).convertTo(image, CV_32F, 255.0 / 65535);
-    const double a = fade * k / (fields.frames - 1);
-    if (a > 0) {
-      cv::Mat other;
-      RenderImage(second, kWidth, kHeight, field, render).convertTo(other, CV_32F, 255.0 / 65535);
-      image = (1 - a) * image + a * other;
-    }
+    RenderImage(pattern, c.width, c.height, fields.at(k), render)
+        .convertTo(image, CV_32F, 1.0 / 65535);
+    cv::pow(image, 1 + tone * k / (fields.frames - 1), image);
     cv::Mat noise(image.size(), CV_32F);
     rng.fill(noise, cv::RNG::NORMAL, 0, 2);
     cv::Mat image8;
-    cv::Mat(image + noise).convertTo(image8, CV_8U);
+    cv::Mat(255 * image + noise).convertTo(image8, CV_8U);  // Rounds and saturates.
     images.push_back(image8);
   }
   return images;
@@ -133,16 +127,16 @@ double GrowthExponent(const Row& row, int frames) {
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-void Table(const Config& c, double fade) {
-  const FieldSequence fields = Fields(c.frames);
+void Table(const Config& c, double tone) {
+  const FieldSequence fields = Fields(c);
   std::vector<std::vector<cv::Mat>> sets;
-  for (int r = 0; r < c.realisations; ++r) sets.push_back(Images(fields, fade, 2021 + r));
+  for (int r = 0; r < c.realisations; ++r) sets.push_back(Images(c, fields, tone, 2021 + r));
   const int last = c.frames - 1;
   std::printf(
-      "\n%d frames, fade %.2f, %d realisation(s), %d thread(s)\n\n| scheme | reference updates | "
+      "\n%d frames, tone %.1f, %d realisation(s), %d thread(s)\n\n| scheme | reference updates | "
       "RMS error at frame 25 / 50 / 100 / %d [px] | growth exponent | min valid | time [s] |\n"
       "|---|---|---|---|---|---|\n",
-      c.frames, fade, c.realisations, c.threads, last);
+      c.frames, tone, c.realisations, c.threads, last);
   for (const std::string& scheme : c.schemes) {
     DicOptions options;
     options.grid.step = 10;
@@ -186,12 +180,16 @@ int main(int argc, char** argv) {
     const char* next = i + 1 < argc ? argv[i + 1] : nullptr;
     if (a == "--frames" && next) {
       c.frames = std::atoi(argv[++i]);
-    } else if (a == "--fade" && next) {
-      c.fades = {std::atof(argv[++i])};
+    } else if (a == "--tone" && next) {
+      c.tones = {std::atof(argv[++i])};
     } else if (a == "--threads" && next) {
       c.threads = std::atoi(argv[++i]);
     } else if (a == "--realisations" && next) {
       c.realisations = std::atoi(argv[++i]);
+    } else if (a == "--size" && next) {
+      std::sscanf(argv[++i], "%dx%d", &c.width, &c.height);
+    } else if (a == "--drift" && next) {
+      std::sscanf(argv[++i], "%lf,%lf", &c.drift_u, &c.drift_v);
     } else if (a == "--schemes" && next) {
       c.schemes = Split(argv[++i]);
     } else {
@@ -207,7 +205,7 @@ int main(int argc, char** argv) {
   }
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, c.threads);
   try {
-    for (double fade : c.fades) Table(c, fade);
+    for (double tone : c.tones) Table(c, tone);
   } catch (const Error& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 1;

@@ -95,52 +95,44 @@ TEST(GeopivSchemes, EachSchemeDecidesAsThePolicyItNames) {
 }
 
 // The long sequence of the random-walk comparison (bench/reference_update_benchmark.cc builds the
-// same one): a 200 x 160 px speckle image, kFrames frames; frame k has k/(kFrames-1) of the final
-// field, a drift of (6, -3) px plus a settlement-like vertical compression (3 % at the top,
-// decaying over 80 px; 2.1 px of settlement at the top); Gaussian noise sigma 2 grey levels, a new
-// realisation in every image. With `fade` > 0 the texture also evolves: the image is a blend
-// (1 - a_k) P1 + a_k P2 of two independent speckle patterns under the same field, a_k = fade k /
-// (kFrames - 1), so the correlation with the first image decays (grains rearranging) while the
-// last frame still resembles the previous one.
-constexpr int kFrames = 201;
+// same one with --size 240x160 --drift 20,-5): a 240 x 160 px speckle image; frame k has
+// k/(frames-1) of the final field, a drift of (20, -5) px (0.1 px per frame over 201 frames) plus
+// a settlement-like vertical compression (3 % at the top, decaying over 80 px; 2.1 px at the top);
+// Gaussian noise sigma 2 grey levels, a new realisation in every image. `tone` > 0 also changes
+// the tone curve, I -> I^(1 + tone k / (frames - 1)) on the normalised intensity (the texture
+// darkens non-linearly, as wetting sand does; the speckle stays in place), so that the
+// correlation with the first image decays while consecutive images still correlate.
+constexpr int kWidth = 240, kHeight = 160;
 
 struct LongSequence {
   FieldSequence fields;
   std::vector<cv::Mat> images;
 };
 
-LongSequence MakeLongSequence(double fade) {
-  constexpr int kWidth = 200, kHeight = 160;
+LongSequence MakeLongSequence(int frames, double tone) {
   LongSequence s;
   s.fields = LinearSequence(
-      Sum({Translation(6, -3), ExponentialCompression(/*surface_strain=*/0.03,
-                                                      /*decay_length_px=*/80, /*y_surface_px=*/0,
-                                                      /*y_fixed_px=*/kHeight)}),
-      kFrames);
+      Sum({Translation(20, -5), ExponentialCompression(/*surface_strain=*/0.03,
+                                                       /*decay_length_px=*/80, /*y_surface_px=*/0,
+                                                       /*y_fixed_px=*/kHeight)}),
+      frames);
   SpeckleOptions speckle;
   speckle.blob_radius_px = 2.0;
   speckle.seed = 21;
-  const SpecklePattern first(speckle, kWidth, kHeight);
-  speckle.seed = 22;
-  const SpecklePattern second(speckle, kWidth, kHeight);
+  const SpecklePattern pattern(speckle, kWidth, kHeight);
   RenderOptions render;
   render.supersampling = 2;
-  render.bits = 16;  // Noise-free renders blended in float, then noise and 8-bit rounding.
+  render.bits = 16;  // Noise-free; the tone curve, the noise and 8-bit rounding follow.
   cv::RNG rng(2021);
-  for (int k = 0; k < kFrames; ++k) {
-    const DisplacementField field = s.fields.at(k);
+  for (int k = 0; k < frames; ++k) {
     cv::Mat image;
-    RenderImage(first, kWidth, kHeight, field, render).convertTo(image, CV_32F, 255.0 / 65535);
-    const double a = fade * k / (kFrames - 1);
-    if (a > 0) {
-      cv::Mat other;
-      RenderImage(second, kWidth, kHeight, field, render).convertTo(other, CV_32F, 255.0 / 65535);
-      image = (1 - a) * image + a * other;
-    }
+    RenderImage(pattern, kWidth, kHeight, s.fields.at(k), render)
+        .convertTo(image, CV_32F, 1.0 / 65535);
+    cv::pow(image, 1 + tone * k / (frames - 1), image);
     cv::Mat noise(image.size(), CV_32F);
     rng.fill(noise, cv::RNG::NORMAL, 0, 2);
     cv::Mat image8;
-    cv::Mat(image + noise).convertTo(image8, CV_8U);  // Rounds and saturates.
+    cv::Mat(255 * image + noise).convertTo(image8, CV_8U);  // Rounds and saturates.
     s.images.push_back(image8);
   }
   return s;
@@ -162,11 +154,11 @@ struct SchemeRun {
   DicResult result;
 };
 
-SchemeRun Run(const LongSequence& s, const std::string& scheme) {
+SchemeRun RunScheme(const LongSequence& s, const std::string& scheme) {
   SchemeRun run;
   run.result = CorrelateSequence(s.images, LongSequenceOptions(scheme));
-  run.rms.assign(kFrames, 0);
-  run.valid.assign(kFrames, 1);
+  run.rms.assign(s.fields.frames, 0);
+  run.valid.assign(s.fields.frames, 1);
   for (const FrameResult& f : run.result.frames) {
     const ErrorStats e = Errors(run.result.positions, f, s.fields.at(f.frame));
     run.rms[f.frame] = e.rms;
@@ -176,13 +168,13 @@ SchemeRun Run(const LongSequence& s, const std::string& scheme) {
   return run;
 }
 
-// Least-squares slope of log(rms) against log(k) over frames 10..kFrames-1: 0.5 for a random walk,
-// 0 for an error that does not grow.
+// Least-squares slope of log(rms) against log(k) over frames 10..last: 0.5 for a random walk,
+// 1 for a drift, 0 for an error that does not grow.
 double GrowthExponent(const std::vector<double>& rms) {
   double sx = 0, sy = 0, sxx = 0, sxy = 0;
   int n = 0;
-  for (int k = 10; k < kFrames; ++k) {
-    const double x = std::log(k), y = std::log(rms[k]);
+  for (std::size_t k = 10; k < rms.size(); ++k) {
+    const double x = std::log(double(k)), y = std::log(rms[k]);
     sx += x;
     sy += y;
     sxx += x * x;
@@ -206,67 +198,79 @@ bool SameResults(const DicResult& a, const DicResult& b) {
 }
 
 TEST(GeopivSchemes, SequentialRandomWalksPreconditionedDoesNotOnALongSequence) {
-  const LongSequence s = MakeLongSequence(/*fade=*/0);
-  const SchemeRun sequential = Run(s, "sequential");
-  const SchemeRun leapfrog = Run(s, "leapfrog");
-  const SchemeRun preconditioned = Run(s, "preconditioned");
-  const int last = kFrames - 1;
+  // 201 frames, 200 increments of 0.1 px; measured (2026-11-27): sequential 0.0135 / 0.0158 /
+  // 0.0266 / 0.0484 px at frames 25 / 50 / 100 / 200 (exponent 0.60), preconditioned 0.0096 /
+  // 0.0098 / 0.0087 / 0.0101 px (exponent 0.04); docs/dic.md, "GeoPIV-RG's analysis schemes".
+  constexpr int kFrames = 201, kLast = kFrames - 1;
+  const LongSequence s = MakeLongSequence(kFrames, /*tone=*/0);
+  const SchemeRun sequential = RunScheme(s, "sequential");
+  const SchemeRun leapfrog = RunScheme(s, "leapfrog");
+  const SchemeRun preconditioned = RunScheme(s, "preconditioned");
   std::printf("scheme          updates  RMS error [px] at frame 25 / 50 / 100 / 200  exponent\n");
   const char* names[] = {"sequential", "leapfrog", "preconditioned"};
   const SchemeRun* runs[] = {&sequential, &leapfrog, &preconditioned};
   for (int j = 0; j < 3; ++j) {
     const SchemeRun& r = *runs[j];
     std::printf("%-15s %7d  %.4f / %.4f / %.4f / %.4f  %.2f\n", names[j], r.updates, r.rms[25],
-                r.rms[50], r.rms[100], r.rms[last], GrowthExponent(r.rms));
+                r.rms[50], r.rms[100], r.rms[kLast], GrowthExponent(r.rms));
   }
+  // The subsets that stay inside the image are tracked throughout (20 px of drift).
   for (int k = 1; k < kFrames; ++k) {
-    EXPECT_GT(sequential.valid[k], 0.95) << k;
-    EXPECT_GT(preconditioned.valid[k], 0.95) << k;
+    EXPECT_GT(sequential.valid[k], 0.8) << k;
+    EXPECT_GT(preconditioned.valid[k], 0.8) << k;
   }
   EXPECT_EQ(sequential.updates, kFrames - 1);  // Every frame becomes the reference.
   EXPECT_EQ(preconditioned.updates, 0);
-  // The texture does not change: nothing decorrelates, so leapfrog never leaps and is the
-  // preconditioned analysis, result for result.
+  // Nothing decorrelates: leapfrog never leaps, and is the preconditioned analysis, result for
+  // result.
   EXPECT_EQ(leapfrog.updates, 0);
   EXPECT_TRUE(SameResults(leapfrog.result, preconditioned.result));
   // Preconditioned: the error of one correlation, whatever the frame (no growth).
-  EXPECT_LT(preconditioned.rms[last], 0.02);
+  EXPECT_LT(preconditioned.rms[kLast], 0.02);
   EXPECT_LT(std::abs(GrowthExponent(preconditioned.rms)), 0.15);
-  // Sequential: the increments' errors add up; a random walk grows like sqrt(k) (exponent 0.5).
-  EXPECT_GT(GrowthExponent(sequential.rms), 0.3);
-  EXPECT_LT(GrowthExponent(sequential.rms), 0.8);
-  EXPECT_GT(sequential.rms[last], 1.5 * sequential.rms[50]);
-  EXPECT_GT(sequential.rms[last], 3 * preconditioned.rms[last]);
+  // Sequential: the increments' errors add up, at least as fast as a random walk's sqrt(k) over
+  // most of the range (exponent 0.5; the systematic part of the increments adds up linearly).
+  EXPECT_GT(GrowthExponent(sequential.rms), 0.4);
+  EXPECT_LT(GrowthExponent(sequential.rms), 1.0);
+  EXPECT_GT(sequential.rms[kLast], 2 * sequential.rms[25]);
+  EXPECT_GT(sequential.rms[kLast], 3 * preconditioned.rms[kLast]);
 }
 
-TEST(GeopivSchemes, LeapfrogLeapsOnlyWhenTheTextureDecorrelates) {
-  // The texture fades into another over the sequence (fade 0.6: ZNCC with the first image ~0.55
-  // at the end): the first image stops being a usable reference, the previous one never does.
-  const LongSequence s = MakeLongSequence(/*fade=*/0.6);
-  const SchemeRun sequential = Run(s, "sequential");
-  const SchemeRun leapfrog = Run(s, "leapfrog");
-  const SchemeRun preconditioned = Run(s, "preconditioned");
-  const int last = kFrames - 1;
-  std::printf(
-      "fading texture: updates sequential %d, leapfrog %d, preconditioned %d; RMS at frame "
-      "200: %.4f / %.4f / %.4f px; valid %.0f / %.0f / %.0f %%\n",
-      sequential.updates, leapfrog.updates, preconditioned.updates, sequential.rms[last],
-      leapfrog.rms[last], preconditioned.rms[last], 100 * sequential.valid[last],
-      100 * leapfrog.valid[last], 100 * preconditioned.valid[last]);
-  // A few leaps, each to the frame before the one that decorrelated.
+// The tone curve steepens to I^3 over 101 frames: the ZNCC with the first image falls below 0.95
+// near the end, consecutive frames stay above it. Made once for the tests below.
+const LongSequence& DecorrelatingSequence() {
+  static const LongSequence s = MakeLongSequence(/*frames=*/101, /*tone=*/2);
+  return s;
+}
+
+TEST(GeopivSchemes, LeapfrogLeapsToThePreviousFrameWhenTheFirstDecorrelates) {
+  const LongSequence& s = DecorrelatingSequence();
+  const SchemeRun leapfrog = RunScheme(s, "leapfrog");
+  const SchemeRun eager = RunScheme(s, "leapfrog:0.99");
+  std::printf("tone curve I^1..I^3: leapfrog %d leaps, leapfrog:0.99 %d leaps\n", leapfrog.updates,
+              eager.updates);
   EXPECT_GE(leapfrog.updates, 1);
-  EXPECT_LE(leapfrog.updates, 20);
-  for (int k = 1; k < kFrames; ++k) EXPECT_GT(leapfrog.valid[k], 0.95) << k;
-  // Only a few increments are summed: far less error than summing 200.
-  EXPECT_LT(leapfrog.rms[last], 0.5 * sequential.rms[last]);
-  // The fixed first image is lost to the fading texture.
-  EXPECT_LT(preconditioned.valid[last], 0.5);
+  EXPECT_LE(leapfrog.updates, 5);
+  EXPECT_GT(eager.updates, leapfrog.updates);  // A higher threshold leaps sooner and more often.
+  for (const SchemeRun* run : {&leapfrog, &eager}) {
+    int reference = 0, leaps = 0;
+    for (const FrameResult& f : run->result.frames) {
+      if (f.reference_updated) {
+        // The leap is to the last image that correlated, and this image is solved against it.
+        EXPECT_EQ(f.reference_frame, f.frame - 1);
+        reference = f.reference_frame;
+        ++leaps;
+      }
+      EXPECT_EQ(f.reference_frame, reference) << f.frame;  // Kept between leaps.
+      EXPECT_GT(run->valid[f.frame], 0.8) << f.frame;
+    }
+    EXPECT_EQ(leaps, run->updates);
+  }
 }
 
 TEST(GeopivSchemes, SchemesGiveTheResultsOfThePoliciesTheyName) {
-  // The first 41 frames of the fading sequence, where leapfrog/auto leap at least once.
-  LongSequence s = MakeLongSequence(/*fade=*/0.6);
-  s.images.resize(121);
+  // On the decorrelating sequence, where leapfrog and auto leap.
+  const LongSequence& s = DecorrelatingSequence();
   const struct {
     const char* scheme;
     const char* policy;
