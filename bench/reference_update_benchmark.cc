@@ -27,6 +27,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
@@ -133,6 +134,7 @@ double GrowthExponent(const Row& row, int frames) {
 void Table(const Config& c, double tone) {
   const FieldSequence fields = Fields(c);
   std::vector<std::vector<cv::Mat>> sets;
+  sets.reserve(c.realisations);
   for (int r = 0; r < c.realisations; ++r) sets.push_back(Images(c, fields, tone, 2021 + r));
   const int last = c.frames - 1;
   std::printf(

@@ -11,12 +11,14 @@
 // The aliases delegate every decision to the policy they name, so they cannot drift apart.
 #include <cstddef>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
 #include "reference_update_policies.h"

@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
+#include <functional>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <span>
 #include <string>
 #include <vector>
 
