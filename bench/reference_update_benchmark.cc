@@ -142,6 +142,7 @@ void Table(const Config& c, double tone) {
       "RMS error at frame 25 / 50 / 100 / %d [px] | growth exponent | min valid | time [s] |\n"
       "|---|---|---|---|---|---|\n",
       c.frames, tone, c.realisations, c.threads, last);
+  int subsets = 0;
   for (const std::string& scheme : c.schemes) {
     DicOptions options;
     options.grid.step = 10;
@@ -159,12 +160,14 @@ void Table(const Config& c, double tone) {
       row.subsets = r.summary.subsets;
       Accumulate(r, fields, &row);
     }
-    std::printf("| `%s` (%d subsets) | %d | %.4f / %.4f / %.4f / %.4f | %.2f | %.1f %% | %.2f |\n",
-                scheme.c_str(), row.subsets, row.updates, Rms(row, std::min(25, last)),
+    std::printf("| `%s` | %d | %.4f / %.4f / %.4f / %.4f | %.2f | %.1f %% | %.2f |\n",
+                scheme.c_str(), row.updates, Rms(row, std::min(25, last)),
                 Rms(row, std::min(50, last)), Rms(row, std::min(100, last)), Rms(row, last),
                 GrowthExponent(row, c.frames), 100 * row.min_valid, row.seconds);
+    subsets = row.subsets;
     std::fflush(stdout);
   }
+  std::printf("\n%d subsets (subset 25, step 10)\n", subsets);
 }
 
 std::vector<std::string> Split(const std::string& text) {
