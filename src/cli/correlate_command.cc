@@ -342,7 +342,7 @@ void RegisterCorrelateCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--shape", args->shape, Join(kShapeFunctionNames.Names(), " | "))
       ->capture_default_str();
-  cmd->add_option("--reference-update", args->update, "fixed | incremental | every:N | auto")
+  cmd->add_option("--reference-update", args->update, ReferenceUpdatePolicyUsage())
       ->capture_default_str();
   cmd->add_option("--threads", args->threads,
                   std::string("Worker threads: ") + kThreadCountExpected)

@@ -93,11 +93,14 @@ TEST(ReferenceUpdate, RegistryListsPoliciesAndRefusesBadNames) {
 }
 
 TEST(ReferenceUpdate, BuiltinPoliciesAreListedInTheOrderOfTheirRegistrationList) {
-  // src/dic/reference_update_policies.def: fixed, incremental, auto, every. A policy registered at
-  // run time comes after them (once:K, when this program's first tests ran in this process).
+  // src/dic/reference_update_policies.def: fixed, incremental, auto, every, then GeoPIV-RG's
+  // scheme names. A policy registered at run time comes after them (once:K, when this program's
+  // first tests ran in this process).
+  const std::string builtin =
+      "fixed, incremental, auto, every:N (N >= 1), sequential, leapfrog[:Z] (Z in (-1, 1])";
   const std::string usage = ReferenceUpdatePolicyUsage();
-  EXPECT_TRUE(usage == "fixed, incremental, auto or every:N (N >= 1)" ||
-              usage == "fixed, incremental, auto, every:N (N >= 1) or once:K (K >= 1)")
+  EXPECT_TRUE(usage == builtin + " or preconditioned" ||
+              usage == builtin + ", preconditioned or once:K (K >= 1)")
       << usage;
 }
 

@@ -1,11 +1,13 @@
 // Reference-update policies of the correlator: when the reference image of a sequence changes.
 //
-// A policy is chosen by name in UpdateOptions::policy ("fixed", "incremental", "auto", "every:N";
-// scene key dic.reference_update, `correlate --update`). The correlator asks it two questions per
+// A policy is chosen by name in UpdateOptions::policy ("fixed", "incremental", "auto", "every:N",
+// and GeoPIV-RG's scheme names "sequential", "leapfrog[:Z]" and "preconditioned", which are
+// incremental, auto and fixed under another name: src/dic/geopiv_update.cc; scene key
+// dic.reference_update, `correlate --reference-update`). The correlator asks it two questions per
 // frame: after solving, which subsets ask for the frame to be redone against the last solved frame
 // (only policies that keep that frame); and once the frame is final, whether it becomes the new
 // reference. Adding a policy: a class deriving from ReferenceUpdatePolicy in one new file and one
-// line in the table of src/dic/reference_update.cc (docs/architecture.md, "Extension points");
+// line in src/dic/reference_update_policies.def (docs/architecture.md, "Extension points");
 // RegisterReferenceUpdatePolicy adds one at run time (tests/dic/reference_update_test.cc).
 //
 //   DicOptions options;
