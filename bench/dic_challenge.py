@@ -285,7 +285,7 @@ def sample3(ctx):
     notes, out = [], {"subset": subset, "step": step, "interpolators": {}}
     # Noise limit: sigma_n from the zero-shift image (the same pattern with its own noise).
     limit_u = limit_v = None
-    zero = [d for d in find(folder, S3_DEFORMED) if float(d[1].group(2)) == 0 and float(d[1].group(3)) == 0]
+    zero = [d for d in deformed if d[1] == 0 and d[2] == 0]
     try:
         if not zero:
             raise tiff_lite.TiffError("no zero-shift image (X0.00 Y0.00) to estimate the noise from")
@@ -294,8 +294,14 @@ def sample3(ctx):
             raise tiff_lite.TiffError(f"{zero[0][0]}: size differs from the reference")
         sigma_n = float(np.std(ref_img - zero_img, ddof=1) / math.sqrt(2))
         sxx, syy = gradient_sums(ref_img, subset // 2)
-        limit_u = lambda fr: rms(np.sqrt(2) * sigma_n / np.sqrt(sxx[fr.y[fr.valid].astype(int), fr.x[fr.valid].astype(int)]))  # noqa: E731
-        limit_v = lambda fr: rms(np.sqrt(2) * sigma_n / np.sqrt(syy[fr.y[fr.valid].astype(int), fr.x[fr.valid].astype(int)]))  # noqa: E731
+
+        def limit(sums):
+            def at_valid(fr):
+                y, x = fr.y[fr.valid].astype(int), fr.x[fr.valid].astype(int)
+                return rms(np.sqrt(2) * sigma_n / np.sqrt(sums[y, x]))
+            return at_valid
+
+        limit_u, limit_v = limit(sxx), limit(syy)
         print(f"Image noise sigma_n = {sigma_n:.3f} grey levels = sd(reference - "
               f"'{os.path.basename(zero[0][0])}') / sqrt(2). Noise limit = rms over the valid "
               f"subsets of sqrt(2) sigma_n / sqrt(sum (dI/dx)^2) (dI/dy for v): the sd noise "

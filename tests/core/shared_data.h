@@ -29,7 +29,8 @@ namespace impactdic {
 inline std::filesystem::path SharedDataRoot() {
   const char* env = std::getenv("IMPACTDIC_SHARED_DATA");
   if (env && *env) return std::filesystem::path(env);
-  return (std::filesystem::path(IMPACTDIC_SOURCE_DIR) / ".." / "shared" / "data").lexically_normal();
+  return (std::filesystem::path(IMPACTDIC_SOURCE_DIR) / ".." / "shared" / "data")
+      .lexically_normal();
 }
 
 // True when a missing shared data folder must fail the test (IMPACTDIC_REQUIRE_SHARED_DATA).
@@ -67,7 +68,7 @@ inline SharedDataLookup FindSharedData(const std::string& sub) {
   if (!var##_lookup.missing.empty()) {                                                   \
     if (::impactdic::SharedDataRequired()) {                                             \
       FAIL() << var##_lookup.missing                                                     \
-             << "; IMPACTDIC_REQUIRE_SHARED_DATA is set (scripts/test.sh, CI), so this "  \
+             << "; IMPACTDIC_REQUIRE_SHARED_DATA is set (scripts/test.sh, CI), so this " \
                 "test fails instead of being skipped";                                   \
     }                                                                                    \
     GTEST_SKIP() << var##_lookup.missing;                                                \

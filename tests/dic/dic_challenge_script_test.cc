@@ -28,10 +28,10 @@ TEST(DicChallengeScript, MeasuresTheSharedSamplesAgainstTheirTruth) {
   SCOPED_TRACE(data.string());
   const BenchTempDir work("dic_challenge_script");
   const fs::path json = work.path() / "figures.json";
-  const CliResult run = RunDicChallengeBench(
-      "--quick --only s3,s14,s12 --data " + ShellQuote(SharedDataRoot()) + " --work " +
-      ShellQuote(work.path()) + " --json " + ShellQuote(json) +
-      " -- --max-uncertainty none --gaussian 0.8");
+  const CliResult run =
+      RunDicChallengeBench("--quick --only s3,s14,s12 --data " + ShellQuote(SharedDataRoot()) +
+                           " --work " + ShellQuote(work.path()) + " --json " + ShellQuote(json) +
+                           " -- --max-uncertainty none --gaussian 0.8");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   SCOPED_TRACE(run.output);
   // The extra flags reach every correlate command.
@@ -94,8 +94,8 @@ TEST(DicChallengeScript, MeasuresTheSharedSamplesAgainstTheirTruth) {
 TEST(DicChallengeScript, SaysWhyWhenTheDataIsAbsent) {
   const BenchTempDir work("dic_challenge_absent");
   const fs::path nothing = work.path() / "nothing";
-  const CliResult run = RunDicChallengeBench("--quick --data " + ShellQuote(nothing) +
-                                             " --work " + ShellQuote(work.path()));
+  const CliResult run = RunDicChallengeBench("--quick --data " + ShellQuote(nothing) + " --work " +
+                                             ShellQuote(work.path()));
   EXPECT_EQ(run.exit_code, 1) << run.output;
   for (const std::string section : {"s3", "s14", "s12", "sand"}) {
     EXPECT_NE(run.output.find("## " + section + ": n/a"), std::string::npos) << section;

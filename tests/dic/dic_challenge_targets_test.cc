@@ -38,9 +38,9 @@ class DicChallengeTargets : public ::testing::Test {
   // -> measured value (NaN for n/a).
   std::map<std::string, double> Run(const std::string& section, const std::string& data) {
     const BenchTempDir work("dic_targets_" + section);
-    const CliResult run = RunDicChallengeBench("--quick --check --only " + section + " --data " +
-                                               ShellQuote(data) + " --work " +
-                                               ShellQuote(work.path()));
+    const CliResult run =
+        RunDicChallengeBench("--quick --check --only " + section + " --data " + ShellQuote(data) +
+                             " --work " + ShellQuote(work.path()));
     output_ = run.output;
     EXPECT_EQ(run.exit_code, 0) << "the bench could not measure everything (notes below)";
     std::map<std::string, double> targets;
