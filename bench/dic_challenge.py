@@ -205,6 +205,7 @@ class Runner:
     def __init__(self, binary, extra, threads, work):
         self.binary, self.extra, self.threads, self.work = binary, extra, threads, work
         self.commands = []
+        self.warnings = []
 
     def correlate(self, name, inputs, flags, count):
         """Runs correlate; returns `count` Frames in file order (the reference has no rows)."""
@@ -232,7 +233,12 @@ class Runner:
             groups[r["frame"]].append(r)
         if len(order) != count:
             raise Unmeasurable(f"{out}: {len(order)} frames of results for {count} deformed images")
-        return [Frame(k, groups[k]) for k in order], seconds
+        frames = [Frame(k, groups[k]) for k in order]
+        no_sigma = sum(int((f.valid & ~(np.isfinite(f.su) & np.isfinite(f.sv))).sum()) for f in frames)
+        if no_sigma:
+            self.warnings.append(f"{name}: {no_sigma} valid subsets without a finite sigma_u/v: "
+                                 f"the sigma figures of that section are n/a")
+        return frames, seconds
 
 
 def notes_block(notes):
@@ -850,6 +856,8 @@ def main():
         print()
         results["targets"] = [{"target": n, "measured": v, "required": r, "pass": g}
                               for n, v, r, g in targets(results)]
+    for w in ctx.run.warnings:
+        print("warning: " + w + "\n")
     print("## Commands\n")
     for name, cmd, seconds in ctx.run.commands:
         print(f"- {name} ({seconds:.1f} s): `{cmd}`")
