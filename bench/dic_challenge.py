@@ -1,73 +1,163 @@
-#!/usr/bin/env python3
-"""DIC Challenge 1.0 (2D) Samples 3 and 14 through `impactdic correlate` (issue 13, items 1-2).
+#!/usr/bin/python3
+"""Public benchmark images through `impactdic correlate`: every figure of issue 21's "Done when".
 
-    scripts/fetch_dic_challenge.sh                 # downloads + unpacks into DATA (see there)
-    bench/dic_challenge.py [DATA]                  # prints the two tables below
+    bench/dic_challenge.py [--binary IMPACTDIC] [--data DIR] [--json FILE] [-- CORRELATE FLAGS...]
 
-DATA (default: ${XDG_CACHE_HOME:-~/.cache}/impactdic/dic_challenge, the fetch script's default)
-holds Sample3/ and Sample14/ as unpacked from the challenge's archives; files are found by name
-anywhere below those folders:
-  Sample 3:  "Sample3 Reference.tif" and "Sample3-NNN X<u> Y<v> N2 C0 R0.tif" (rigid shifts,
-             the imposed u, v in px read from the name: X0.30 Y0.30 -> u = v = +0.30 px).
-  Sample 14: "Sample14 Reference.tif" and "Sample14 L<k> Amp<A>[b].tif" (also "Sample 14 ...").
+    bench/dic_challenge.py                                          # defaults
+    bench/dic_challenge.py -- --max-uncertainty none --gaussian 0.8 # "best settings"
 
-Sample 3 (per interpolator, bicubic and biquintic; subset 25, step 10, --mode pairs, no
-uncertainty limit): one row per shifted image, each correlated against the reference:
-  shift u, v | bias u, v (mean error) | sd u, v | noise limit | mean reported sigma u, v | n
-The noise limit is the rms over the subsets of sqrt(2) sigma_n / sqrt(sum over the subset of
-(dI/dx)^2) (the sd of u that image noise alone gives, noise in both images; the v limit uses
-dI/dy and is printed as the second number), with dI/dx the central difference of the reference and
-sigma_n = sd(reference - zero-shift image) / sqrt(2) over the whole image (the X0.00 Y0.00 image
-shows the same pattern with its own noise). Without a zero-shift image, or when the TIFF cannot
-be decoded, the column is nan and the reason is printed.
+Everything after `--` is appended to every `impactdic correlate` command, so the same script
+measures the defaults and any other settings (do not repeat the flags the script sets itself:
+--mode, --subset, --step, --interp for Sample 3, --roi for Sample 12, --threads, -o).
 
-Sample 14 (subset 25, step 5, --mode pairs, --max-uncertainty none; bicubic unless --s14-interp):
-one row per deformed image: converged / all subsets, RMS error of u and v over ALL converged
-subsets, the fraction that would be `uncertain` at correlate's default limit (read from
-`correlate --help`), and the rms of the reported sigma_u, sigma_v.
-Truth: Sample 14's u is not one sinusoid but a chirp of amplitude 0.1 px along x (zero up to
-x = 100 px, the frequency rising to the right; L1 lowest, L5 highest), v = 0. The commanded u per
-pixel column for L1, L3 and L5 is the table DATA/Sample14_command.csv (x, u_L1, exx_L1, u_L3,
-exx_L3, u_L5, exx_L5; the copy in Sandia's DICe repository, fetched by the fetch script;
---s14-truth FILE to give another), interpolated linearly at the subset centre X. Levels without a
-column (L2, L4) get nan with a note; so do all without the table.
+DIR (default: $IMPACTDIC_SHARED_DATA, else ../shared/data beside the project root) is the public
+benchmark folder described in its README.md; nothing of it is copied. Sections (--only, comma
+separated: s3,s14,s12,sand,synth):
 
-Images of unequal size (Sample 14's deformed images may be larger than its reference) are cropped
-to their common top-left size into the work folder first (pure-Python TIFF, bench/tiff_lite.py).
+  s3    DIC Challenge 1.0 Sample 3 (dic-challenge/sample3): --mode pairs, subset 25, step 10, each
+        rigid shift against the reference, bicubic and biquintic. Per shift: valid %, bias (mean
+        error) and sd of u, v over the valid subsets, mean reported sigma, the ratio rms(sigma)/sd,
+        and the noise limit from the zero-shift image; then max |bias| over shifts and components.
+        Truth: the shift in the file name, X0.30 Y0.30 -> u = v = +0.30 px.
+  s14   Sample 14 (dic-challenge/sample14): --mode pairs, subset 25, step 5, L1/L3/L5 against the
+        reference. Truth: `Sample 14 Commanded Displacement.csv` (u per pixel column, linear in X
+        between columns; v = 0). Per level: valid %, RMS error of u, v and 2-D over the valid
+        subsets, the RMS over ALL subsets (n/a when any subset is invalid: an invalid subset has
+        no value, so an RMS over all of them does not exist; the valid % says how many), the rms
+        reported sigma and rms(sigma)/RMS(error) per component. v's error is noise alone; u's adds
+        the shape function's error on the chirp (largest for L5), so sigma/error of v is the
+        uncertainty check and that of u is a lower bound.
+  s12   Sample 12 (dic-challenge/sample12) against DICe's results (gold/DICe_solution_NN.txt, a
+        reference, not a truth): our grid placed on DICe's subset centres (its subset_size and
+        step_size from input.xml; --roi from the extreme centres), --mode sequence (DICe solves
+        each frame against image 00 from the previous frame's solution), oht_cfrp_00 the
+        reference. Per frame: valid % of DICe's points, RMS and max |difference| of u and v at the
+        points valid in both. DICe's settings differ (params.xml: Keys 4th-order interpolation,
+        shape function translation + normal strain); the difference is not our error.
+  sand  Real sand test48 (real-sand/test48, IMG_30..40, 4096x3000 JPEG): --mode sequence against
+        IMG_30, subset 25, step 50 (--sand-step; 50 keeps the run short and the subsets apart, so
+        that neighbouring results have independent noise), --roi 0,1400,4096,3000: the sand below
+        its surface (above y = 1280..1340 px the frames show the tank's back wall through the
+        glass, with glare; --sand-roi full for the whole image). Per frame: valid %, what the invalid
+        ones are, median |displacement|, and the observed scatter against the reported sigma.
+        There is no truth: each valid u (v) is compared with a quadratic least-squares fit of its
+        valid neighbours in the 5x5 grid window (at least 12 of 24, the point itself left out),
+        and the residual r is normalised by its predicted sd under the reported sigmas,
+        z = r / sqrt(sigma_i^2 + sum_j w_j^2 sigma_j^2) (w: the fit's weights at the centre).
+        rms(z) is observed scatter / reported sigma (1 = right, 2 = sigma half the scatter), with
+        |z| > 5 robust sd dropped as outliers (their share is printed) and 1.4826 MAD(z) beside
+        it; "scatter" is sqrt(mean r^2 / (1 + h)), h = sum w_j^2, the noise sd the residuals imply
+        if all subsets had the same one. Smooth motion (the pipe's uplift) is in the fit, not in r.
+  synth Synthetic noise, made here (numpy): a band-limited speckle (white noise through a Gaussian
+        of 1.5 px sd, 30 grey levels sd about 128), shifted exactly by the Fourier shift theorem,
+        Gaussian noise of 2 and 5 grey levels added to every image (reference too), 8-bit TIFF.
+        --mode pairs, subset 25, step 25 (independent subsets). Truth: the shift. Per image:
+        valid %, bias, sd, rms sigma, rms(sigma)/sd.
 
-Exit status: 0 tables printed; 2 bad arguments or missing/unreadable data (message names it);
-1 `impactdic correlate` failed (its output is printed).
+Where a figure cannot be measured (data absent, correlate failed, no valid subset) the cell says
+n/a and a note below the table says why; a number is never made up from a failure.
+--check prints the issue's targets (measured, required, PASS/FAIL); --quick leaves out what the
+targets test does not need (Sample 14 L3 and L5, the synthetic 5 grey levels; about 15 s instead
+of 30 s on 2 cores), with the same settings otherwise.
+
+Exit status: 0 every requested figure measured; 1 some could not be (the notes say why);
+2 bad arguments or no executable binary.
 """
 
 import argparse
 import csv
+import json
 import math
 import os
 import re
+import shlex
 import subprocess
 import sys
 import tempfile
+import time
 
 sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import tiff_lite  # noqa: E402
 
-# The name of `impactdic correlate`'s Gaussian pre-filter option (issue 13 item 1; docs/dic.md,
-# "Sub-pixel bias"): --prefilter SIGMA passes `--gaussian SIGMA` (kernel 5).
-CORRELATE_PREFILTER_OPTION = "--gaussian"
+try:
+    import numpy as np
+except ImportError:  # Debian's python3-numpy (scripts/install_deps.sh) is for /usr/bin/python3
+    sys.exit("dic_challenge: error: numpy is missing: run with /usr/bin/python3 (Debian's "
+             "python3-numpy, installed by scripts/install_deps.sh)")
 
-DEFAULT_DATA = os.path.join(os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"),
-                            "impactdic", "dic_challenge")
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DEFAULT_DATA = os.environ.get("IMPACTDIC_SHARED_DATA") or os.path.join(ROOT, "..", "shared", "data")
+SECTIONS = ("s3", "s14", "s12", "sand", "synth")
+
 S3_REFERENCE = re.compile(r"^sample\s*3 reference\.tiff?$", re.I)
 S3_DEFORMED = re.compile(r"^sample\s*3-(\d+) x(-?\d+(?:\.\d+)?) y(-?\d+(?:\.\d+)?)\b.*\.tiff?$", re.I)
 S14_REFERENCE = re.compile(r"^sample\s*14 reference\.tiff?$", re.I)
 S14_DEFORMED = re.compile(r"^sample\s*14 l(\d+) amp(\d+(?:\.\d+)?)[a-z]?\.tiff?$", re.I)
+S14_TRUTH = "Sample 14 Commanded Displacement.csv"
+
+# The issue's targets (issue 21, "Done when"; --check). The tests assert their own copy.
+TARGET_S3_MAX_BIAS_PX = 0.001
+TARGET_SIGMA_RATIO = (0.7, 1.3)  # reported sigma within +-30 % of the observed scatter
+TARGET_SAND_VALID_PERCENT = 98.0
+
+# Real sand test48: the sand below its surface (the frames' top 1280-1340 px show the tank's back
+# wall behind the glass, with glare, not sand).
+SAND_ROI = "0,1400,4096,3000"
 
 
-class BenchError(Exception):
-    def __init__(self, message, status=2):
-        super().__init__(message)
-        self.status = status
+class Unmeasurable(Exception):
+    """A section or figure that cannot be measured; the message says why."""
+
+
+# ---------------------------------------------------------------- small helpers
+
+NA = float("nan")
+
+
+def fmt(x, digits=4):
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "n/a"
+    return f"{x:.{digits}f}"
+
+
+def pct(x):
+    return "n/a" if x is None or math.isnan(x) else f"{x:.1f} %"
+
+
+def quote(s):
+    return shlex.quote(s)
+
+
+def rms(a):
+    a = np.asarray(a, float)
+    return float(np.sqrt(np.mean(a * a))) if a.size else NA
+
+
+def mean(a):
+    a = np.asarray(a, float)
+    return float(np.mean(a)) if a.size else NA
+
+
+def sd(a):
+    a = np.asarray(a, float)
+    return float(np.std(a, ddof=1)) if a.size >= 2 else NA
+
+
+def ratio(a, b):
+    return a / b if b and not math.isnan(a) and not math.isnan(b) else NA
+
+
+def jsonable(x):
+    if isinstance(x, dict):
+        return {k: jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [jsonable(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return None if math.isnan(x) else float(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
 
 
 def find(folder, pattern):
@@ -80,341 +170,702 @@ def find(folder, pattern):
     return sorted(hits, key=lambda h: h[0])
 
 
-def one_reference(folder, pattern, what):
-    refs = find(folder, pattern)
+def need_folder(path, what):
+    if not os.path.isdir(path):
+        raise Unmeasurable(f"{what}: no folder {path} (the shared benchmark data; --data DIR or "
+                           f"IMPACTDIC_SHARED_DATA)")
+    return path
+
+
+class Frame:
+    """One frame's results of a correlate CSV, as arrays."""
+
+    def __init__(self, label, rows):
+        self.label = label
+        self.x = np.array([float(r["x_px"]) for r in rows])
+        self.y = np.array([float(r["y_px"]) for r in rows])
+        self.u = np.array([float(r["u_px"]) for r in rows])
+        self.v = np.array([float(r["v_px"]) for r in rows])
+        self.su = np.array([float(r["sigma_u_px"]) for r in rows])
+        self.sv = np.array([float(r["sigma_v_px"]) for r in rows])
+        self.status = np.array([r["status"] for r in rows])
+        # Valid: status converged (the library's IsValidStatus) with finite values.
+        self.valid = (self.status == "converged") & np.isfinite(self.u) & np.isfinite(self.v)
+
+    @property
+    def valid_percent(self):
+        return 100.0 * self.valid.sum() / self.valid.size if self.valid.size else NA
+
+    def invalid_summary(self):
+        names, counts = np.unique(self.status[~self.valid], return_counts=True)
+        return ", ".join(f"{n} {c}" for n, c in sorted(zip(names, counts), key=lambda t: -t[1])) or "-"
+
+
+class Runner:
+    def __init__(self, binary, extra, threads, work):
+        self.binary, self.extra, self.threads, self.work = binary, extra, threads, work
+        self.commands = []
+        self.warnings = []
+
+    def correlate(self, name, inputs, flags, count):
+        """Runs correlate; returns `count` Frames in file order (the reference has no rows)."""
+        out = os.path.join(self.work, name + ".csv")
+        cmd = [self.binary, "-q", "correlate", *inputs, *flags, "--threads", str(self.threads),
+               *self.extra, "-o", out]
+        t0 = time.monotonic()
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        seconds = time.monotonic() - t0
+        shown = " ".join(quote(c) for c in cmd)
+        self.commands.append((name, shown, seconds))
+        if proc.returncode != 0:
+            tail = "\n".join((proc.stdout + proc.stderr).strip().splitlines()[-5:])
+            raise Unmeasurable(f"impactdic correlate failed (exit {proc.returncode}): {shown}\n{tail}")
+        with open(out, newline="") as f:
+            rows = list(csv.DictReader(f))
+        for col in ("frame", "x_px", "y_px", "u_px", "v_px", "status", "sigma_u_px", "sigma_v_px"):
+            if not rows or col not in rows[0]:
+                raise Unmeasurable(f"{out}: no column '{col}' or no rows (correlate's CSV changed?)")
+        groups, order = {}, []
+        for r in rows:
+            if r["frame"] not in groups:
+                groups[r["frame"]] = []
+                order.append(r["frame"])
+            groups[r["frame"]].append(r)
+        if len(order) != count:
+            raise Unmeasurable(f"{out}: {len(order)} frames of results for {count} deformed images")
+        frames = [Frame(k, groups[k]) for k in order]
+        no_sigma = sum(int((f.valid & ~(np.isfinite(f.su) & np.isfinite(f.sv))).sum()) for f in frames)
+        if no_sigma:
+            self.warnings.append(f"{name}: {no_sigma} valid subsets without a finite sigma_u/v: "
+                                 f"the sigma figures of that section are n/a")
+        return frames, seconds
+
+
+def notes_block(notes):
+    for n in notes:
+        print("note: " + n)
+    if notes:
+        print()
+
+
+# ---------------------------------------------------------------- Sample 3
+
+def gradient_sums(img, half):
+    """Per pixel: sums over the (2 half + 1)^2 box of (dI/dx)^2 and (dI/dy)^2 (central
+    differences), via summed-area tables (box clipped at the border)."""
+    gx = np.zeros_like(img)
+    gy = np.zeros_like(img)
+    gx[:, 1:-1] = (img[:, 2:] - img[:, :-2]) / 2
+    gy[1:-1, :] = (img[2:, :] - img[:-2, :]) / 2
+
+    def box(a):
+        s = np.zeros((a.shape[0] + 1, a.shape[1] + 1))
+        s[1:, 1:] = np.cumsum(np.cumsum(a, 0), 1)
+        h, w = a.shape
+        y0 = np.clip(np.arange(h) - half, 0, h)
+        y1 = np.clip(np.arange(h) + half + 1, 0, h)
+        x0 = np.clip(np.arange(w) - half, 0, w)
+        x1 = np.clip(np.arange(w) + half + 1, 0, w)
+        return s[y1][:, x1] - s[y0][:, x1] - s[y1][:, x0] + s[y0][:, x0]
+
+    return box(gx * gx), box(gy * gy)
+
+
+def read_grey(path):
+    img = tiff_lite.read_tiff(path)
+    return np.array(img.pixels, float).reshape(img.height, img.width)
+
+
+def sample3(ctx):
+    folder = need_folder(os.path.join(ctx.data, "dic-challenge", "sample3"), "Sample 3")
+    refs = find(folder, S3_REFERENCE)
     if len(refs) != 1:
-        raise BenchError(f"{what}: expected one reference image matching '{pattern.pattern}' under "
-                         f"{folder}, found {len(refs)}" + (f": {[r[0] for r in refs]}" if refs else ""))
-    return refs[0][0]
-
-
-def default_limit(binary):
-    """correlate's default --max-uncertainty, from its --help (one definition: the library's)."""
-    out = subprocess.run([binary, "correlate", "--help"], capture_output=True, text=True).stdout
-    m = re.search(r"--max-uncertainty\s+TEXT=([0-9.eE+-]+)", out)
-    if not m:
-        raise BenchError(f"{binary} correlate --help does not show a --max-uncertainty default", 1)
-    return float(m.group(1)), out
-
-
-def correlate(binary, reference, deformed, out_csv, args, subset, step, interp):
-    """One `correlate --mode pairs` of `deformed` (a list of paths) against `reference`: the
-    command and the result rows of each deformed image, in order."""
-    cmd = [binary, "-q", "correlate", "--reference", reference, "--deformed", *deformed,
-           "--mode", "pairs", "--subset", str(subset), "--step", str(step), "--interp", interp,
-           "--max-uncertainty", "none", "--threads", str(args.threads), "-o", out_csv]
-    if args.prefilter is not None:
-        cmd += [CORRELATE_PREFILTER_OPTION, str(args.prefilter)]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise BenchError(f"impactdic correlate failed (exit {proc.returncode}): "
-                         f"{' '.join(quote(c) for c in cmd)}\n{proc.stdout}{proc.stderr}", 1)
-    return cmd, read_results(out_csv, len(deformed))
-
-
-def quote(s):
-    return s if re.fullmatch(r"[\w./=:+-]+", s) else "'" + s.replace("'", "'\\''") + "'"
-
-
-def read_results(path, count):
-    """Rows of each of the `count` deformed images of a correlate CSV, in order. The `frame`
-    column is the position (reference = 0) when the names are not one numbered series, as the
-    challenge's are not (docs/dic.md); with one image, its rows are the last frame's."""
-    with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    for col in ("frame", "x_px", "y_px", "u_px", "v_px", "status", "sigma_u_px", "sigma_v_px"):
-        if rows and col not in rows[0]:
-            raise BenchError(f"{path}: no column '{col}' (correlate's CSV contract changed?)", 1)
-    if not rows:
-        raise BenchError(f"{path}: no results", 1)
-    if count == 1:
-        last = rows[-1]["frame"]
-        return [[r for r in rows if r["frame"] == last]]
-    frames = sorted({int(r["frame"]) for r in rows} - {0})
-    if frames != list(range(1, count + 1)):
-        raise BenchError(f"{path}: frames {frames[:5]}... are not the positions 1..{count} of the "
-                         f"deformed images; cannot tell which result is which image", 1)
-    return [[r for r in rows if int(r["frame"]) == k] for k in frames]
-
-
-def mean(xs):
-    return sum(xs) / len(xs) if xs else math.nan
-
-
-def sd(xs):
-    if len(xs) < 2:
-        return math.nan
-    m = mean(xs)
-    return math.sqrt(sum((x - m) ** 2 for x in xs) / (len(xs) - 1))
-
-
-def rms(xs):
-    return math.sqrt(sum(x * x for x in xs) / len(xs)) if xs else math.nan
-
-
-def converged(rows):
-    return [r for r in rows if r["status"] == "converged"]
-
-
-def fmt(x, digits=4):
-    return "nan" if x is None or math.isnan(x) else f"{x:.{digits}f}"
-
-
-# ---------------------------------------------------------------- noise limit (Sample 3)
-
-class GradientSums:
-    """Summed-area tables of (dI/dx)^2 and (dI/dy)^2 (central differences) of an image."""
-
-    def __init__(self, img):
-        w, h, p = img.width, img.height, img.pixels
-        self.w, self.h = w, h
-        self.sx = [[0.0] * (w + 1) for _ in range(h + 1)]
-        self.sy = [[0.0] * (w + 1) for _ in range(h + 1)]
-        for y in range(h):
-            row, up, down = y * w, max(y - 1, 0) * w, min(y + 1, h - 1) * w
-            ax = ay = 0.0
-            sx0, sx1, sy0, sy1 = self.sx[y], self.sx[y + 1], self.sy[y], self.sy[y + 1]
-            for x in range(w):
-                gx = (p[row + min(x + 1, w - 1)] - p[row + max(x - 1, 0)]) * 0.5
-                gy = (p[down + x] - p[up + x]) * 0.5
-                ax += gx * gx
-                ay += gy * gy
-                sx1[x + 1] = sx0[x + 1] + ax
-                sy1[x + 1] = sy0[x + 1] + ay
-
-    def box(self, table, x0, y0, x1, y1):  # inclusive pixel box, clipped
-        x0, y0 = max(x0, 0), max(y0, 0)
-        x1, y1 = min(x1, self.w - 1), min(y1, self.h - 1)
-        t = table
-        return t[y1 + 1][x1 + 1] - t[y0][x1 + 1] - t[y1 + 1][x0] + t[y0][x0]
-
-
-def noise_sigma(reference, zero_shift):
-    a, b = tiff_lite.read_tiff(reference), tiff_lite.read_tiff(zero_shift)
-    if (a.width, a.height) != (b.width, b.height):
-        raise tiff_lite.TiffError(f"{zero_shift}: size differs from the reference")
-    return sd([p - q for p, q in zip(a.pixels, b.pixels)]) / math.sqrt(2), a
-
-
-def noise_limits(grad, rows, subset, sigma_n):
-    """rms over the subsets of the predicted sd of u and of v."""
-    half = subset // 2
-    vu, vv = [], []
-    for r in rows:
-        x, y = int(round(float(r["x_px"]))), int(round(float(r["y_px"])))
-        sxx = grad.box(grad.sx, x - half, y - half, x + half, y + half)
-        syy = grad.box(grad.sy, x - half, y - half, x + half, y + half)
-        if sxx > 0 and syy > 0:
-            vu.append(2 * sigma_n ** 2 / sxx)
-            vv.append(2 * sigma_n ** 2 / syy)
-    return (math.sqrt(mean(vu)), math.sqrt(mean(vv))) if vu else (math.nan, math.nan)
-
-
-def sample3(args, binary, work):
-    folder = os.path.join(args.data, "Sample3") if not args.sample3 else args.sample3
-    if not os.path.isdir(folder):
-        raise BenchError(f"Sample 3: no folder {folder} (run scripts/fetch_dic_challenge.sh, or "
-                         f"give --sample3 DIR)")
-    reference = one_reference(folder, S3_REFERENCE, "Sample 3")
-    deformed = [(path, float(m.group(2)), float(m.group(3))) for path, m in find(folder, S3_DEFORMED)]
+        raise Unmeasurable(f"Sample 3: expected one 'Sample3 Reference.tif' under {folder}, found {len(refs)}")
+    reference = refs[0][0]
+    deformed = [(p, float(m.group(2)), float(m.group(3))) for p, m in find(folder, S3_DEFORMED)]
     if not deformed:
-        raise BenchError(f"Sample 3: no shifted images 'Sample3-NNN X.. Y.. ....tif' under {folder}")
-    print(f"## DIC Challenge 1.0 Sample 3: {len(deformed)} shifted images against "
-          f"'{os.path.basename(reference)}' ({folder})\n")
-    limit_note, grad, sigma_n = "", None, math.nan
+        raise Unmeasurable(f"Sample 3: no shifted images 'Sample3-NNN X.. Y.. ....tif' under {folder}")
+    subset, step = ctx.args.s3_subset, ctx.args.s3_step
+    interps = ("bicubic", "biquintic")
+    print(f"## DIC Challenge 1.0 Sample 3 (pairs, subset {subset}, step {step})\n")
+    notes, out = [], {"subset": subset, "step": step, "interpolators": {}}
+    # Noise limit: sigma_n from the zero-shift image (the same pattern with its own noise).
+    limit_u = limit_v = None
     zero = [d for d in deformed if d[1] == 0 and d[2] == 0]
     try:
         if not zero:
             raise tiff_lite.TiffError("no zero-shift image (X0.00 Y0.00) to estimate the noise from")
-        sigma_n, ref_img = noise_sigma(reference, zero[0][0])
-        grad = GradientSums(ref_img)
-        limit_note = (f"noise sigma_n = {sigma_n:.3f} grey levels = sd(reference - "
-                      f"'{os.path.basename(zero[0][0])}') / sqrt(2)")
+        ref_img, zero_img = read_grey(reference), read_grey(zero[0][0])
+        if ref_img.shape != zero_img.shape:
+            raise tiff_lite.TiffError(f"{zero[0][0]}: size differs from the reference")
+        sigma_n = float(np.std(ref_img - zero_img, ddof=1) / math.sqrt(2))
+        sxx, syy = gradient_sums(ref_img, subset // 2)
+
+        def limit(sums):
+            def at_valid(fr):
+                y, x = fr.y[fr.valid].astype(int), fr.x[fr.valid].astype(int)
+                return rms(np.sqrt(2) * sigma_n / np.sqrt(sums[y, x]))
+            return at_valid
+
+        limit_u, limit_v = limit(sxx), limit(syy)
+        print(f"Image noise sigma_n = {sigma_n:.3f} grey levels = sd(reference - "
+              f"'{os.path.basename(zero[0][0])}') / sqrt(2). Noise limit = rms over the valid "
+              f"subsets of sqrt(2) sigma_n / sqrt(sum (dI/dx)^2) (dI/dy for v): the sd noise "
+              f"alone gives. sigma/sd = rms(reported sigma) / sd of the error, per component.\n")
+        out["noise_sigma_grey"] = sigma_n
     except (tiff_lite.TiffError, OSError, KeyError) as e:
-        limit_note = f"noise limit not computed (nan): {e}"
-    print(limit_note + "\n")
-    for interp in ("bicubic", "biquintic"):
-        print(f"### {interp}, subset {args.s3_subset}, step {args.s3_step}\n")
-        print("| shift u, v [px] | bias u [px] | bias v [px] | sd u [px] | sd v [px] | "
-              "noise limit u, v [px] | mean sigma u, v [px] | n |")
-        print("|---|---|---|---|---|---|---|---|")
-        max_bias, cmd, warnings = 0.0, None, []
-        cmd, results = correlate(binary, reference, [d[0] for d in deformed],
-                                 os.path.join(work, f"s3_{interp}.csv"), args, args.s3_subset,
-                                 args.s3_step, interp)
-        for (path, su, sv), rows in zip(deformed, results):
-            ok = converged(rows)
-            eu = [float(r["u_px"]) - su for r in ok]
-            ev = [float(r["v_px"]) - sv for r in ok]
-            lu, lv = noise_limits(grad, ok, args.s3_subset, sigma_n) if grad else (math.nan,) * 2
-            bu, bv = mean(eu), mean(ev)
-            max_bias = max(max_bias, abs(bu), abs(bv)) if ok else max_bias
-            print(f"| {su:.2f}, {sv:.2f} | {fmt(bu)} | {fmt(bv)} | {fmt(sd(eu))} | {fmt(sd(ev))} | "
-                  f"{fmt(lu)}, {fmt(lv)} | {fmt(mean([float(r['sigma_u_px']) for r in ok]))}, "
-                  f"{fmt(mean([float(r['sigma_v_px']) for r in ok]))} | {len(ok)}/{len(rows)} |")
-            if ok and (su or sv) and abs(mean([float(r['u_px']) for r in ok]) + su) < abs(bu):
-                warnings.append(f"warning: {os.path.basename(path)}: the measured shift is closer "
-                                f"to the opposite of the name's; the sign convention assumed here "
-                                f"may be wrong")
-        print(f"\nmax |bias| {interp}: {max_bias:.4f} px\n")
-        for w in warnings:
-            print(w)
-        print("command: " + " ".join(quote(c) for c in cmd) + "\n")
+        notes.append(f"noise limit n/a: {e}")
+    ok = True
+    for interp in interps:
+        print(f"### Sample 3, {interp}\n")
+        print("| shift u, v [px] | valid | bias u [px] | bias v [px] | sd u [px] | sd v [px] | "
+              "mean sigma u, v [px] | sigma/sd u, v | noise limit u, v [px] |")
+        print("|---|---|---|---|---|---|---|---|---|")
+        rows_out = []
+        try:
+            frames, seconds = ctx.run.correlate(
+                f"s3_{interp}", ["--reference", reference, "--deformed", *[d[0] for d in deformed]],
+                ["--mode", "pairs", "--subset", str(subset), "--step", str(step), "--interp", interp],
+                len(deformed))
+        except Unmeasurable as e:
+            print("| n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a |\n")
+            notes.append(f"{interp}: {e}")
+            out["interpolators"][interp] = {"error": str(e)}
+            ok = False
+            continue
+        for (path, su, sv), fr in zip(deformed, frames):
+            m = fr.valid
+            eu, ev = fr.u[m] - su, fr.v[m] - sv
+            r = {"shift": [su, sv], "valid_percent": fr.valid_percent, "bias_u": mean(eu),
+                 "bias_v": mean(ev), "sd_u": sd(eu), "sd_v": sd(ev),
+                 "mean_sigma_u": mean(fr.su[m]), "mean_sigma_v": mean(fr.sv[m]),
+                 "ratio_u": ratio(rms(fr.su[m]), sd(eu)), "ratio_v": ratio(rms(fr.sv[m]), sd(ev)),
+                 "limit_u": limit_u(fr) if limit_u and m.any() else NA,
+                 "limit_v": limit_v(fr) if limit_v and m.any() else NA}
+            if not m.any():
+                notes.append(f"{interp} {os.path.basename(path)}: no valid subset ({fr.invalid_summary()})")
+            elif (su or sv) and abs(mean(fr.u[m]) + su) < abs(r["bias_u"]):
+                notes.append(f"{os.path.basename(path)}: the measured shift is closer to the "
+                             f"opposite of the name's: the sign convention assumed may be wrong")
+            rows_out.append(r)
+            print(f"| {su:.2f}, {sv:.2f} | {pct(r['valid_percent'])} | {fmt(r['bias_u'])} | "
+                  f"{fmt(r['bias_v'])} | {fmt(r['sd_u'])} | {fmt(r['sd_v'])} | "
+                  f"{fmt(r['mean_sigma_u'])}, {fmt(r['mean_sigma_v'])} | {fmt(r['ratio_u'], 2)}, "
+                  f"{fmt(r['ratio_v'], 2)} | {fmt(r['limit_u'])}, {fmt(r['limit_v'])} |")
+        biases = [abs(r[k]) for r in rows_out for k in ("bias_u", "bias_v")]
+        max_bias = NA if not biases or any(math.isnan(b) for b in biases) else max(biases)
+        ratios = [r[k] for r in rows_out for k in ("ratio_u", "ratio_v") if not math.isnan(r[k])]
+        valid = min((r["valid_percent"] for r in rows_out), default=NA)
+        print(f"\n{interp}: max |bias| {fmt(max_bias)} px"
+              f"{' (n/a: a shift without valid subsets)' if math.isnan(max_bias) else ''}; "
+              f"sigma/sd {fmt(min(ratios), 2) if ratios else 'n/a'}..{fmt(max(ratios), 2) if ratios else 'n/a'}; "
+              f"lowest valid {pct(valid)}; {seconds:.1f} s\n")
+        out["interpolators"][interp] = {"rows": rows_out, "max_abs_bias_px": max_bias,
+                                        "sigma_ratio_min": min(ratios) if ratios else NA,
+                                        "sigma_ratio_max": max(ratios) if ratios else NA,
+                                        "min_valid_percent": valid, "seconds": seconds}
+        if math.isnan(max_bias):
+            ok = False
+    notes_block(notes)
+    out["notes"] = notes
+    return out, ok
 
 
 # ---------------------------------------------------------------- Sample 14
 
-def read_truth(path):
-    """Commanded u of Sample 14 per level from a table x, u_L1, exx_L1, u_L3, exx_L3, u_L5,
-    exx_L5 (one row per integer x of the reference, no header; exx in microstrain, unused):
-    {level: [u at x = 0, 1, ...]}."""
-    columns = {1: 1, 3: 3, 5: 5}
-    table = {k: [] for k in columns}
+def read_s14_truth(path):
+    """{level: u per integer x} from the challenge's table: three header lines, then rows
+    x, L1 u, L1 exx, L3 u, L3 exx, L5 u, L5 exx (exx unused)."""
+    table, x_expected = {1: [], 3: [], 5: []}, 0
     with open(path, newline="") as f:
         for n, row in enumerate(csv.reader(f), start=1):
             try:
-                values = [float(c) for c in row]
+                values = [float(c) for c in row[:7]]
             except ValueError:
-                raise BenchError(f"--s14-truth {path}: line {n} is not numbers: {row[:3]}")
-            if len(values) < 7 or int(values[0]) != n - 1:
-                raise BenchError(f"--s14-truth {path}: line {n}: expected 7 columns x, u_L1, "
-                                 f"exx_L1, u_L3, exx_L3, u_L5, exx_L5 with x = {n - 1}")
-            for k, c in columns.items():
-                table[k].append(values[c])
-    if not table[1]:
-        raise BenchError(f"--s14-truth {path}: empty")
-    return table
+                continue  # header lines
+            if len(values) < 7 or int(values[0]) != x_expected:
+                raise Unmeasurable(f"{path}: line {n}: expected x = {x_expected} and 7 columns")
+            x_expected += 1
+            for level, col in ((1, 1), (3, 3), (5, 5)):
+                table[level].append(values[col])
+    if x_expected < 2:
+        raise Unmeasurable(f"{path}: no numeric rows")
+    return {k: np.array(v) for k, v in table.items()}
 
 
-def truth_at(column, x):
-    """Linear interpolation of a per-pixel column at x (clamped to the table)."""
-    x = min(max(x, 0.0), len(column) - 1.0)
-    i = min(int(x), len(column) - 2)
-    return column[i] + (x - i) * (column[i + 1] - column[i])
-
-
-def same_size(reference, deformed, work):
-    """Paths of the reference and deformed image with equal sizes (cropped copies if needed)."""
-    rw, rh = tiff_lite.read_size(reference)
-    dw, dh = tiff_lite.read_size(deformed)
-    if (rw, rh) == (dw, dh):
-        return reference, deformed, ""
-    w, h = min(rw, dw), min(rh, dh)
-    out = []
-    for path, (pw, ph) in ((reference, (rw, rh)), (deformed, (dw, dh))):
-        if (pw, ph) == (w, h):
-            out.append(path)
-            continue
-        cropped = os.path.join(work, f"crop_{w}x{h}_{os.path.basename(path)}")
-        tiff_lite.write_tiff(cropped, tiff_lite.crop(tiff_lite.read_tiff(path), w, h))
-        out.append(cropped)
-    note = f"sizes {rw}x{rh} (reference) and {dw}x{dh}: cropped to the common top-left {w}x{h}"
-    return out[0], out[1], note
-
-
-def sample14(args, binary, work, limit):
-    folder = os.path.join(args.data, "Sample14") if not args.sample14 else args.sample14
-    if not os.path.isdir(folder):
-        raise BenchError(f"Sample 14: no folder {folder} (run scripts/fetch_dic_challenge.sh, or "
-                         f"give --sample14 DIR)")
-    reference = one_reference(folder, S14_REFERENCE, "Sample 14")
-    deformed = [(path, int(m.group(1)), float(m.group(2))) for path, m in find(folder, S14_DEFORMED)]
+def sample14(ctx):
+    folder = need_folder(os.path.join(ctx.data, "dic-challenge", "sample14"), "Sample 14")
+    refs = find(folder, S14_REFERENCE)
+    if len(refs) != 1:
+        raise Unmeasurable(f"Sample 14: expected one 'Sample14 Reference.tif' under {folder}, found {len(refs)}")
+    deformed = [(p, int(m.group(1))) for p, m in find(folder, S14_DEFORMED)]
+    if ctx.quick:
+        deformed = [d for d in deformed if d[1] == 1]
     if not deformed:
-        raise BenchError(f"Sample 14: no deformed images 'Sample14 L<k> Amp<A>.tif' under {folder}")
-    truth_path = args.s14_truth or os.path.join(args.data, "Sample14_command.csv")
-    truth = read_truth(truth_path) if os.path.isfile(truth_path) else {}
-    print(f"## DIC Challenge 1.0 Sample 14: {len(deformed)} deformed images against "
-          f"'{os.path.basename(reference)}' ({folder}); {args.s14_interp}, subset "
-          f"{args.s14_subset}, step {args.s14_step}, --max-uncertainty none\n")
-    print(f"Truth: the commanded u(X) of the image's level from {truth_path}"
-          f"{'' if truth else ' (missing: no RMS error)'}, v = 0. `uncertain at default`: converged "
-          f"subsets with sigma_u or sigma_v > {limit:g} px (correlate's default limit).\n")
-    print("| image | converged / all | RMS err u [px] | RMS err v [px] | RMS err 2-D [px] | "
-          "uncertain at default | rms sigma u, v [px] | truth |")
-    print("|---|---|---|---|---|---|---|---|")
-    cmd, notes = None, []
-    for path, level, _ in deformed:
+        raise Unmeasurable(f"Sample 14: no 'Sample 14 L<k> Amp<A>.tif' under {folder}")
+    truth_path = os.path.join(folder, S14_TRUTH)
+    truth = read_s14_truth(truth_path)
+    subset, step = ctx.args.s14_subset, ctx.args.s14_step
+    roi = ctx.args.s14_roi
+    sizes = {tiff_lite.read_size(p) for p in [refs[0][0]] + [d[0] for d in deformed]}
+    if len(sizes) != 1:
+        raise Unmeasurable(f"Sample 14: images of different sizes {sorted(sizes)}")
+    flags = ["--mode", "pairs", "--subset", str(subset), "--step", str(step)]
+    if roi:
+        flags += ["--roi", roi]
+    print(f"## DIC Challenge 1.0 Sample 14 (pairs, subset {subset}, step {step}"
+          f"{', ROI ' + roi if roi else ''})\n")
+    print(f"Truth: u from '{S14_TRUTH}' (linear between pixel columns), v = 0. RMS over the valid "
+          f"subsets; `all` is the RMS over every subset of the grid, n/a when some are invalid. "
+          f"sigma/err = rms(reported sigma) / RMS error (v: noise alone; u: noise + the shape "
+          f"function's error on the chirp).\n")
+    print("| image | valid | RMS err u [px] | RMS err v [px] | RMS 2-D [px] | RMS 2-D all [px] | "
+          "rms sigma u, v [px] | sigma/err u | sigma/err v |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    notes, rows_out, ok = [], [], True
+    try:
+        frames, seconds = ctx.run.correlate("s14", ["--reference", refs[0][0], "--deformed",
+                                                    *[d[0] for d in deformed]], flags, len(deformed))
+    except Unmeasurable as e:
+        print("| n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a |\n")
+        notes_block([str(e)])
+        return {"error": str(e), "notes": [str(e)]}, False
+    for (path, level), fr in zip(deformed, frames):
         name = os.path.basename(path)
-        ref, dfm, note = same_size(reference, path, work)
-        if note:
-            notes.append(f"{name}: {note}")
-        out = os.path.join(work, f"s14_{name}.csv")
-        cmd, (rows,) = correlate(binary, ref, [dfm], out, args, args.s14_subset, args.s14_step,
-                                 args.s14_interp)
-        ok = converged(rows)
-        vs = [float(r["v_px"]) for r in ok]
-        su = [float(r["sigma_u_px"]) for r in ok]
-        sv = [float(r["sigma_v_px"]) for r in ok]
-        unc = sum(1 for p, q in zip(su, sv) if p > limit or q > limit)
-        err_u, source = math.nan, "none"
-        if level in truth and ok:
-            eu = [float(r["u_px"]) - truth_at(truth[level], float(r["x_px"])) for r in ok]
-            flipped = [float(r["u_px"]) + truth_at(truth[level], float(r["x_px"])) for r in ok]
-            err_u, source = rms(eu), f"L{level} of {os.path.basename(truth_path)}"
-            if rms(flipped) < 0.5 * err_u:
-                notes.append(f"{name}: u matches the opposite of the commanded displacement; "
-                             f"the sign convention assumed here may be wrong")
-        elif truth:
-            notes.append(f"{name}: no commanded displacement for level L{level} in {truth_path} "
-                         f"(it has L1, L3, L5): RMS error nan")
-        pct = f"{100.0 * unc / len(ok):.2f} %" if ok else "nan"
-        print(f"| {name} | {len(ok)}/{len(rows)} | {fmt(err_u)} | {fmt(rms(vs))} | "
-              f"{fmt(math.sqrt(err_u ** 2 + rms(vs) ** 2))} | {pct} | "
-              f"{fmt(rms(su))}, {fmt(rms(sv))} | {source} |")
+        m = fr.valid
+        if level in truth:
+            col = truth[level]
+            u_true = np.interp(fr.x, np.arange(col.size), col)
+            eu, ev = fr.u[m] - u_true[m], fr.v[m]
+        else:
+            eu, ev = np.array([]), fr.v[m]
+            notes.append(f"{name}: no commanded u for L{level} in the table (L1, L3, L5): u n/a")
+        if not m.any():
+            notes.append(f"{name}: no valid subset ({fr.invalid_summary()})")
+            ok = False
+        r = {"image": name, "level": level, "valid_percent": fr.valid_percent,
+             "rms_err_u": rms(eu), "rms_err_v": rms(ev),
+             "rms_err_2d": math.sqrt(rms(eu) ** 2 + rms(ev) ** 2),
+             "rms_sigma_u": rms(fr.su[m]), "rms_sigma_v": rms(fr.sv[m])}
+        r["rms_err_2d_all"] = r["rms_err_2d"] if m.all() else NA
+        if not m.all():
+            notes.append(f"{name}: RMS over all subsets n/a: {int((~m).sum())} of {m.size} "
+                         f"invalid ({fr.invalid_summary()})")
+        r["ratio_u"] = ratio(r["rms_sigma_u"], r["rms_err_u"])
+        r["ratio_v"] = ratio(r["rms_sigma_v"], r["rms_err_v"])
+        rows_out.append(r)
+        print(f"| {name} | {pct(r['valid_percent'])} | {fmt(r['rms_err_u'])} | "
+              f"{fmt(r['rms_err_v'])} | {fmt(r['rms_err_2d'])} | {fmt(r['rms_err_2d_all'])} | "
+              f"{fmt(r['rms_sigma_u'])}, {fmt(r['rms_sigma_v'])} | {fmt(r['ratio_u'], 2)} | "
+              f"{fmt(r['ratio_v'], 2)} |")
+    print(f"\n{seconds:.1f} s\n")
+    notes_block(notes)
+    return {"subset": subset, "step": step, "roi": roi, "rows": rows_out, "notes": notes,
+            "seconds": seconds}, ok
+
+
+# ---------------------------------------------------------------- Sample 12
+
+def read_dice_solution(path):
+    """Columns of a DICe_solution_NN.txt (comment lines '***', one header line, comma rows)."""
+    with open(path) as f:
+        lines = [ln.strip() for ln in f if ln.strip() and not ln.startswith("***")]
+    if not lines:
+        raise Unmeasurable(f"{path}: no header")
+    header = [h.strip() for h in lines[0].split(",")]
+    data = np.array([[float(c) for c in ln.split(",")] for ln in lines[1:]])
+    need = ("COORDINATE_X", "COORDINATE_Y", "DISPLACEMENT_X", "DISPLACEMENT_Y")
+    if any(n not in header for n in need) or data.ndim != 2 or data.shape[1] != len(header):
+        raise Unmeasurable(f"{path}: expected the columns {need} (found {header})")
+    return {h: data[:, i] for i, h in enumerate(header)}
+
+
+def xml_int(path, name):
+    with open(path) as f:
+        m = re.search(r'name="' + name + r'"[^>]*value="(-?\d+)"', f.read())
+    if not m:
+        raise Unmeasurable(f"{path}: no parameter {name}")
+    return int(m.group(1))
+
+
+def sample12(ctx):
+    folder = need_folder(os.path.join(ctx.data, "dic-challenge", "sample12"), "Sample 12")
+    images = sorted(os.path.join(folder, "images", n) for n in os.listdir(os.path.join(folder, "images"))
+                    if re.fullmatch(r"oht_cfrp_\d+\.tiff?", n))
+    subset = xml_int(os.path.join(folder, "input.xml"), "subset_size")
+    step = xml_int(os.path.join(folder, "input.xml"), "step_size")
+    ref_index = xml_int(os.path.join(folder, "input.xml"), "reference_image_index")
+    gold = {}
+    for n in sorted(os.listdir(os.path.join(folder, "gold"))):
+        m = re.fullmatch(r"DICe_solution_(\d+)\.txt", n)
+        if m:
+            gold[int(m.group(1))] = read_dice_solution(os.path.join(folder, "gold", n))
+    if not gold or len(images) <= max(gold):
+        raise Unmeasurable(f"Sample 12: {len(gold)} gold files for {len(images)} images in {folder}")
+    xs = np.concatenate([g["COORDINATE_X"] for g in gold.values()])
+    ys = np.concatenate([g["COORDINATE_Y"] for g in gold.values()])
+    half = subset // 2
+    x0, y0 = int(xs.min()) - half, int(ys.min()) - half
+    roi = f"{x0},{y0},{int(xs.max()) + half + 1},{int(ys.max()) + half + 1}"
+    frames_idx = sorted(gold)
+    deformed = [images[k] for k in frames_idx]
+    print(f"## DIC Challenge 1.0 Sample 12 against DICe's results (sequence, subset {subset}, "
+          f"step {step}, ROI {roi}: our grid on DICe's subset centres)\n")
+    print(f"Reference {os.path.basename(images[ref_index])}; DICe's solution NN is image NN against "
+          f"it. Differences at the points valid in both; valid = ours at DICe's points (DICe's "
+          f"own failures, MATCH != 0, are left out).\n")
+    print("| frame | DICe points | valid | RMS diff u [px] | RMS diff v [px] | max diff u [px] | "
+          "max diff v [px] | DICe max |u|, |v| [px] | rms sigma u, v [px] |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    notes, rows_out, ok = [], [], True
+    try:
+        frames, seconds = ctx.run.correlate(
+            "s12", ["--reference", images[ref_index], "--deformed", *deformed],
+            ["--mode", "sequence", "--subset", str(subset), "--step", str(step), "--roi", roi],
+            len(deformed))
+    except Unmeasurable as e:
+        print("| n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a |\n")
+        notes_block([str(e)])
+        return {"error": str(e), "notes": [str(e)]}, False
+    for k, fr in zip(frames_idx, frames):
+        g = gold[k]
+        good = g.get("MATCH", np.zeros_like(g["COORDINATE_X"])) == 0
+        ours = {(int(round(x)), int(round(y))): i for i, (x, y) in enumerate(zip(fr.x, fr.y))}
+        gx, gy = g["COORDINATE_X"][good], g["COORDINATE_Y"][good]
+        at = np.array([ours.get((int(round(x)), int(round(y))), -1) for x, y in zip(gx, gy)], int)
+        on = at >= 0
+        if not on.all():
+            notes.append(f"frame {k}: {int((~on).sum())} of DICe's points are not on our grid")
+        idx, gu, gv = at[on], g["DISPLACEMENT_X"][good][on], g["DISPLACEMENT_Y"][good][on]
+        v_ok = fr.valid[idx] if idx.size else np.array([], bool)
+        du = fr.u[idx][v_ok] - gu[v_ok]
+        dv = fr.v[idx][v_ok] - gv[v_ok]
+        valid = 100.0 * v_ok.sum() / good.sum() if good.sum() else NA
+        if not v_ok.any():
+            notes.append(f"frame {k}: no valid subset at DICe's points")
+            ok = False
+        r = {"frame": k, "dice_points": int(good.sum()), "valid_percent": valid,
+             "rms_diff_u": rms(du), "rms_diff_v": rms(dv),
+             "max_diff_u": float(np.max(np.abs(du))) if du.size else NA,
+             "max_diff_v": float(np.max(np.abs(dv))) if dv.size else NA,
+             "dice_max_u": float(np.max(np.abs(gu))), "dice_max_v": float(np.max(np.abs(gv))),
+             "rms_sigma_u": rms(fr.su[idx][v_ok]), "rms_sigma_v": rms(fr.sv[idx][v_ok])}
+        rows_out.append(r)
+        print(f"| {k} | {r['dice_points']} | {pct(valid)} | {fmt(r['rms_diff_u'])} | "
+              f"{fmt(r['rms_diff_v'])} | {fmt(r['max_diff_u'])} | {fmt(r['max_diff_v'])} | "
+              f"{fmt(r['dice_max_u'], 2)}, {fmt(r['dice_max_v'], 2)} | "
+              f"{fmt(r['rms_sigma_u'])}, {fmt(r['rms_sigma_v'])} |")
+    print(f"\n{seconds:.1f} s\n")
+    notes_block(notes)
+    return {"subset": subset, "step": step, "roi": roi, "rows": rows_out, "notes": notes,
+            "seconds": seconds}, ok
+
+
+# ---------------------------------------------------------------- real sand
+
+def local_fit_residuals(fr, values, sigmas, cache):
+    """Leave-one-out quadratic fit over the 5x5 grid window: (residual, normalised residual z,
+    1 + h) per point where at least 12 valid neighbours exist; NaN elsewhere."""
+    xs, ys = np.unique(fr.x), np.unique(fr.y)
+    nx, ny = xs.size, ys.size
+    if nx * ny != fr.x.size:
+        raise Unmeasurable("the results are not one rectangular grid")
+    col = np.searchsorted(xs, fr.x)
+    row = np.searchsorted(ys, fr.y)
+    grid = np.full((ny, nx), -1, int)
+    grid[row, col] = np.arange(fr.x.size)
+    n = fr.x.size
+    res, z, lev = np.full(n, NA), np.full(n, NA), np.full(n, NA)
+    for i in np.flatnonzero(fr.valid):
+        r, c = row[i], col[i]
+        nb, dxy = [], []
+        for dr in range(-2, 3):
+            for dc in range(-2, 3):
+                if (dr or dc) and 0 <= r + dr < ny and 0 <= c + dc < nx:
+                    j = grid[r + dr, c + dc]
+                    if fr.valid[j]:
+                        nb.append(j)
+                        dxy.append((dc, dr))
+        if len(nb) < 12:
+            continue
+        key = tuple(dxy)
+        if key not in cache:  # the weights depend on which neighbours are valid only
+            d = np.array(dxy, float)
+            a = np.column_stack([np.ones(len(nb)), d[:, 0], d[:, 1], d[:, 0] ** 2,
+                                 d[:, 0] * d[:, 1], d[:, 1] ** 2])
+            try:
+                cache[key] = np.linalg.solve(a.T @ a, a.T)[0]  # prediction at the centre = w . values
+            except np.linalg.LinAlgError:
+                cache[key] = None
+        w = cache[key]
+        if w is None:
+            continue
+        nb = np.array(nb)
+        res[i] = values[i] - w @ values[nb]
+        lev[i] = 1 + w @ w
+        z[i] = res[i] / math.sqrt(sigmas[i] ** 2 + (w * w) @ (sigmas[nb] ** 2))
+    return res, z, lev
+
+
+def scatter_stats(fr, values, sigmas):
+    res, z, lev = local_fit_residuals(fr, values, sigmas, {})
+    ok = np.isfinite(z)
+    if ok.sum() < 10:
+        return {"points": int(ok.sum()), "ratio": NA, "ratio_mad": NA, "scatter": NA,
+                "rms_sigma": NA, "outliers_percent": NA}
+    zz = z[ok]
+    mad = 1.4826 * float(np.median(np.abs(zz - np.median(zz))))
+    inl = np.abs(zz) <= 5 * mad
+    rr, ll = res[ok][inl], lev[ok][inl]
+    return {"points": int(inl.sum()), "ratio": rms(zz[inl]), "ratio_mad": mad,
+            "scatter": math.sqrt(float(np.mean(rr * rr / ll))), "rms_sigma": rms(sigmas[ok][inl]),
+            "outliers_percent": 100.0 * (1 - inl.mean())}
+
+
+def real_sand(ctx):
+    folder = need_folder(os.path.join(ctx.data, "real-sand", "test48"), "real sand")
+    names = sorted((n for n in os.listdir(folder) if re.fullmatch(r"IMG_\d+\.jpe?g", n, re.I)),
+                   key=lambda n: int(re.search(r"\d+", n).group()))
+    if len(names) < 2:
+        raise Unmeasurable(f"real sand: fewer than 2 IMG_NN.jpg in {folder}")
+    subset, step = ctx.args.sand_subset, ctx.args.sand_step
+    roi = None if ctx.args.sand_roi == "full" else ctx.args.sand_roi
+    flags = ["--mode", "sequence", "--subset", str(subset), "--step", str(step)]
+    if roi:
+        flags += ["--roi", roi]
+    print(f"## Real sand test48 (sequence against {names[0]}, subset {subset}, step {step}"
+          f"{', ROI ' + roi if roi else ', whole image'})\n")
+    if roi == SAND_ROI:
+        print("ROI: the sand below its surface (y 1280-1340 px in these frames); above it lies the "
+              "tank's back wall behind the glass, with glare (`--sand-roi full`: the whole "
+              "image).\n")
+    print("No truth: scatter/sigma = rms of the residual from a quadratic fit of the 5x5 grid "
+          "neighbours, normalised by its sd under the reported sigmas (1 = sigma right; "
+          "|z| > 5 robust sd dropped, their share in `out`; 1.4826 MAD in brackets). scatter = "
+          "the noise sd the residuals imply. Only valid subsets enter.\n")
+    if step < subset:
+        print(f"warning: step {step} < subset {subset}: neighbouring subsets overlap and share "
+              f"noise, so the scatter is underestimated.\n")
+    print("| frame | valid | invalid | median \\|d\\| [px] | scatter u, v [px] | rms sigma u, v [px] | "
+          "scatter/sigma u | scatter/sigma v | out |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    notes, rows_out, ok = [], [], True
+    paths = [os.path.join(folder, n) for n in names]
+    try:
+        frames, seconds = ctx.run.correlate("sand", ["--reference", paths[0], "--deformed", *paths[1:]],
+                                            flags, len(paths) - 1)
+    except Unmeasurable as e:
+        print("| n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a |\n")
+        notes_block([str(e)])
+        return {"error": str(e), "notes": [str(e)]}, False
+    for name, fr in zip(names[1:], frames):
+        try:
+            su = scatter_stats(fr, fr.u, fr.su)
+            sv = scatter_stats(fr, fr.v, fr.sv)
+        except Unmeasurable as e:
+            notes.append(f"{name}: scatter n/a: {e}")
+            su = sv = {"ratio": NA, "ratio_mad": NA, "scatter": NA, "rms_sigma": NA,
+                       "outliers_percent": NA, "points": 0}
+        if math.isnan(su["ratio"]):
+            notes.append(f"{name}: scatter n/a: fewer than 10 valid subsets with 12 valid neighbours")
+        if not fr.valid.any():
+            ok = False
+        med = float(np.median(np.hypot(fr.u, fr.v)[fr.valid])) if fr.valid.any() else NA
+        r = {"frame": name, "valid_percent": fr.valid_percent, "invalid": fr.invalid_summary(),
+             "median_displacement": med, "u": su, "v": sv}
+        rows_out.append(r)
+        print(f"| {name} | {pct(r['valid_percent'])} | {r['invalid']} | {fmt(med, 2)} | "
+              f"{fmt(su['scatter'])}, {fmt(sv['scatter'])} | {fmt(su['rms_sigma'])}, "
+              f"{fmt(sv['rms_sigma'])} | {fmt(su['ratio'], 2)} ({fmt(su['ratio_mad'], 2)}) | "
+              f"{fmt(sv['ratio'], 2)} ({fmt(sv['ratio_mad'], 2)}) | "
+              f"{fmt(su['outliers_percent'], 1)}, {fmt(sv['outliers_percent'], 1)} % |")
+    valid = [r["valid_percent"] for r in rows_out]
+    print(f"\nlowest valid {pct(min(valid))}; {seconds:.1f} s\n")
+    notes_block(notes)
+    return {"subset": subset, "step": step, "roi": roi, "rows": rows_out, "notes": notes,
+            "min_valid_percent": min(valid), "seconds": seconds}, ok
+
+
+# ---------------------------------------------------------------- synthetic noise
+
+def synthetic_images(size, shifts, noise, seed):
+    """Reference and shifted 8-bit images of one band-limited speckle: I_k(x) = I(x - shift_k)
+    exactly (Fourier shift of a periodic pattern), each with its own Gaussian noise."""
+    rng = np.random.default_rng(seed)
+    f = np.fft.fftfreq(size)
+    fx, fy = np.meshgrid(f, f)
+    blob_px = 1.5
+    spectrum = np.fft.fft2(rng.standard_normal((size, size))) * np.exp(
+        -2 * math.pi ** 2 * blob_px ** 2 * (fx ** 2 + fy ** 2))
+    base = np.real(np.fft.ifft2(spectrum))
+    scale = 30.0 / base.std()
+    images = []
+    for u, v in [(0.0, 0.0)] + list(shifts):
+        img = np.real(np.fft.ifft2(spectrum * np.exp(-2j * math.pi * (fx * u + fy * v))))
+        img = 128 + scale * img + rng.normal(0, noise, img.shape)
+        images.append(np.clip(np.rint(img), 0, 255).astype(np.uint8))
+    return images
+
+
+def synthetic(ctx):
+    size, subset, step = 512, 25, 25
+    shifts = [(0.3, 0.2), (0.5, -0.5), (0.85, 0.4)]
+    levels = (2.0,) if ctx.quick else (2.0, 5.0)
+    print(f"## Synthetic noise ({size}x{size}, speckle sd 30 grey levels, blob 1.5 px, exact "
+          f"Fourier shifts; pairs, subset {subset}, step {step})\n")
+    print("| noise [grey] | shift u, v [px] | valid | bias u, v [px] | sd u, v [px] | "
+          "rms sigma u, v [px] | sigma/sd u | sigma/sd v |")
+    print("|---|---|---|---|---|---|---|---|")
+    notes, rows_out, ok = [], [], True
+    for level in levels:
+        images = synthetic_images(size, shifts, level, seed=21)
+        paths = []
+        for k, img in enumerate(images):
+            p = os.path.join(ctx.work, f"synth_n{level:g}_{k}.tif")
+            tiff_lite.write_tiff(p, tiff_lite.Image(size, size, 8, img.tobytes()))
+            paths.append(p)
+        try:
+            frames, _ = ctx.run.correlate(f"synth_n{level:g}", ["--reference", paths[0], "--deformed", *paths[1:]],
+                                          ["--mode", "pairs", "--subset", str(subset), "--step", str(step)],
+                                          len(shifts))
+        except Unmeasurable as e:
+            print(f"| {level:g} | n/a | n/a | n/a | n/a | n/a | n/a | n/a |")
+            notes.append(str(e))
+            ok = False
+            continue
+        for (u, v), fr in zip(shifts, frames):
+            m = fr.valid
+            eu, ev = fr.u[m] - u, fr.v[m] - v
+            r = {"noise": level, "shift": [u, v], "valid_percent": fr.valid_percent,
+                 "bias_u": mean(eu), "bias_v": mean(ev), "sd_u": sd(eu), "sd_v": sd(ev),
+                 "rms_sigma_u": rms(fr.su[m]), "rms_sigma_v": rms(fr.sv[m])}
+            r["ratio_u"] = ratio(r["rms_sigma_u"], r["sd_u"])
+            r["ratio_v"] = ratio(r["rms_sigma_v"], r["sd_v"])
+            if m.sum() < 2:
+                notes.append(f"noise {level:g}, shift {u}, {v}: fewer than 2 valid subsets ({fr.invalid_summary()})")
+                ok = False
+            rows_out.append(r)
+            print(f"| {level:g} | {u:.2f}, {v:.2f} | {pct(r['valid_percent'])} | {fmt(r['bias_u'])}, "
+                  f"{fmt(r['bias_v'])} | {fmt(r['sd_u'])}, {fmt(r['sd_v'])} | "
+                  f"{fmt(r['rms_sigma_u'])}, {fmt(r['rms_sigma_v'])} | {fmt(r['ratio_u'], 2)} | "
+                  f"{fmt(r['ratio_v'], 2)} |")
     print()
-    for n in notes:
-        print("note: " + n)
-    print("command (per image): " + " ".join(quote(c) for c in cmd) + "\n")
+    notes_block(notes)
+    return {"size": size, "subset": subset, "step": step, "rows": rows_out, "notes": notes}, ok
+
+
+# ---------------------------------------------------------------- targets
+
+def targets(results):
+    """(name, measured, required, pass) of the issue's targets that the results cover."""
+    lo, hi = TARGET_SIGMA_RATIO
+    out = []
+
+    def add(name, value, required, good):
+        out.append((name, value, required, None if math.isnan(value) else bool(good(value))))
+
+    s3 = results.get("s3", {}).get("interpolators", {})
+    for interp, r in s3.items():
+        if "max_abs_bias_px" in r:
+            add(f"s3_{interp}_max_abs_bias_px", r["max_abs_bias_px"], f"<= {TARGET_S3_MAX_BIAS_PX}",
+                lambda x: x <= TARGET_S3_MAX_BIAS_PX)
+            for key in ("sigma_ratio_min", "sigma_ratio_max"):
+                add(f"s3_{interp}_{key}", r[key], f"in [{lo}, {hi}]", lambda x: lo <= x <= hi)
+    for r in results.get("s14", {}).get("rows", []):
+        for comp in ("u", "v"):
+            add(f"s14_L{r['level']}_sigma_over_error_{comp}", r[f"ratio_{comp}"], f"in [{lo}, {hi}]",
+                lambda x: lo <= x <= hi)
+    for r in results.get("sand", {}).get("rows", []):
+        add(f"sand_{r['frame']}_valid_percent", r["valid_percent"], f">= {TARGET_SAND_VALID_PERCENT}",
+            lambda x: x >= TARGET_SAND_VALID_PERCENT)
+    for r in results.get("synth", {}).get("rows", []):
+        for comp in ("u", "v"):
+            add(f"synth_noise{r['noise']:g}_shift{r['shift'][0]:g}_sigma_over_sd_{comp}",
+                r[f"ratio_{comp}"], f"in [{lo}, {hi}]", lambda x: lo <= x <= hi)
+    return out
+
+
+# ---------------------------------------------------------------- main
+
+class Context:
+    pass
 
 
 def main():
+    argv = sys.argv[1:]
+    extra = []
+    if "--" in argv:
+        i = argv.index("--")
+        argv, extra = argv[:i], argv[i + 1:]
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("data", nargs="?", default=DEFAULT_DATA,
-                   help=f"folder with Sample3/ and Sample14/ (default {DEFAULT_DATA})")
-    here = os.path.dirname(os.path.abspath(__file__))
-    p.add_argument("--binary", default=os.path.join(here, "..", "build", "release", "src", "cli",
-                                                    "impactdic"), help="impactdic binary")
-    p.add_argument("--sample3", help="Sample 3 folder (default DATA/Sample3)")
-    p.add_argument("--sample14", help="Sample 14 folder (default DATA/Sample14)")
-    p.add_argument("--only", choices=("3", "14"), help="run one sample only")
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    p.add_argument("--binary", default=os.path.join(ROOT, "build", "release", "src", "cli", "impactdic"),
+                   help="impactdic binary (default build/release/src/cli/impactdic)")
+    p.add_argument("--data", default=DEFAULT_DATA, help=f"shared benchmark data (default {DEFAULT_DATA})")
+    p.add_argument("--only", default=",".join(SECTIONS), help="sections, comma separated: " + ",".join(SECTIONS))
+    p.add_argument("--quick", action="store_true", help="the fast subset of the targets test")
+    p.add_argument("--check", action="store_true", help="print the issue's targets, PASS/FAIL")
+    p.add_argument("--json", help="also write every figure to this JSON file (n/a as null)")
     p.add_argument("--threads", type=int, default=0, help="correlate --threads (0: all cores)")
-    p.add_argument("--work", help="folder for the CSVs and cropped images (default: a temporary one)")
+    p.add_argument("--work", help="folder for the CSVs and synthetic images (default: temporary)")
     p.add_argument("--s3-subset", type=int, default=25)
     p.add_argument("--s3-step", type=int, default=10)
     p.add_argument("--s14-subset", type=int, default=25)
     p.add_argument("--s14-step", type=int, default=5)
-    p.add_argument("--s14-interp", default="bicubic", choices=("bicubic", "biquintic"))
-    p.add_argument("--s14-truth", help="Sample 14 commanded displacement table (default "
-                   "DATA/Sample14_command.csv, fetched by scripts/fetch_dic_challenge.sh)")
-    p.add_argument("--prefilter", type=float, metavar="SIGMA",
-                   help="pass correlate's Gaussian pre-filter (needs CORRELATE_PREFILTER_OPTION)")
-    args = p.parse_args()
-    try:
-        if args.prefilter is not None and CORRELATE_PREFILTER_OPTION is None:
-            raise BenchError("--prefilter: correlate has no pre-filter option known to this script "
-                             "yet; set CORRELATE_PREFILTER_OPTION in bench/dic_challenge.py")
-        binary = os.path.abspath(args.binary)
-        if not os.access(binary, os.X_OK):
-            raise BenchError(f"--binary: {binary} is not an executable (build it: cmake --build "
-                             f"--preset release --target impactdic)")
-        limit, help_text = default_limit(binary)
-        if args.prefilter is not None and CORRELATE_PREFILTER_OPTION not in help_text:
-            raise BenchError(f"--prefilter: {binary} correlate has no {CORRELATE_PREFILTER_OPTION}")
-        work = args.work or tempfile.mkdtemp(prefix="impactdic_dic_challenge_")
-        os.makedirs(work, exist_ok=True)
-        print(f"binary {binary}; results in {work}\n")
-        if args.only in (None, "3"):
-            sample3(args, binary, work)
-        if args.only in (None, "14"):
-            sample14(args, binary, work, limit)
-    except BenchError as e:
-        print(f"dic_challenge: error: {e}", file=sys.stderr)
-        return e.status
-    except (tiff_lite.TiffError, OSError) as e:
-        print(f"dic_challenge: error: {e}", file=sys.stderr)
+    p.add_argument("--s14-roi", help="X0,Y0,X1,Y1 (default: whole image)")
+    p.add_argument("--sand-subset", type=int, default=25)
+    p.add_argument("--sand-step", type=int, default=50)
+    p.add_argument("--sand-roi", default=SAND_ROI,
+                   help=f"X0,Y0,X1,Y1 or full (default {SAND_ROI}: the sand below its surface)")
+    args = p.parse_args(argv)
+    only = [s.strip() for s in args.only.split(",") if s.strip()]
+    bad = [s for s in only if s not in SECTIONS]
+    if bad:
+        p.error(f"--only: unknown section(s) {bad}; known: {', '.join(SECTIONS)}")
+    binary = os.path.abspath(args.binary)
+    if not os.access(binary, os.X_OK):
+        print(f"dic_challenge: error: --binary: {binary} is not an executable (build it: cmake "
+              f"--build --preset release --target impactdic)", file=sys.stderr)
         return 2
-    return 0
+    ctx = Context()
+    ctx.args, ctx.quick, ctx.data = args, args.quick, os.path.abspath(args.data)
+    ctx.work = args.work or tempfile.mkdtemp(prefix="impactdic_dic_challenge_")
+    os.makedirs(ctx.work, exist_ok=True)
+    ctx.run = Runner(binary, extra, args.threads, ctx.work)
+    version = subprocess.run([binary, "version"], capture_output=True, text=True).stdout.strip()
+    print(f"# impactdic on the public benchmark images\n\nbinary {binary} ({version}); data "
+          f"{ctx.data}; extra correlate flags: {' '.join(extra) if extra else '(none: defaults)'}"
+          f"{'; --quick' if ctx.quick else ''}; work folder {ctx.work}\n")
+    results, all_ok = {"binary": binary, "version": version, "extra_flags": extra,
+                       "quick": ctx.quick, "data": ctx.data}, True
+    runners = {"s3": sample3, "s14": sample14, "s12": sample12, "sand": real_sand, "synth": synthetic}
+    for name in only:
+        try:
+            results[name], ok = runners[name](ctx)
+        except (Unmeasurable, tiff_lite.TiffError, OSError) as e:
+            print(f"## {name}: n/a\n\nnote: {e}\n")
+            results[name], ok = {"error": str(e)}, False
+        all_ok = all_ok and ok
+    if args.check:
+        print("## Targets (issue 21, Done when)\n")
+        print("| target | measured | required | result |")
+        print("|---|---|---|---|")
+        for name, value, required, good in targets(results):
+            print(f"| {name} | {fmt(value)} | {required} | "
+                  f"{'n/a' if good is None else 'PASS' if good else 'FAIL'} |")
+        print()
+        results["targets"] = [{"target": n, "measured": v, "required": r, "pass": g}
+                              for n, v, r, g in targets(results)]
+    for w in ctx.run.warnings:
+        print("warning: " + w + "\n")
+    print("## Commands\n")
+    for name, cmd, seconds in ctx.run.commands:
+        print(f"- {name} ({seconds:.1f} s): `{cmd}`")
+    print()
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(jsonable(results), f, indent=1)
+    return 0 if all_ok else 1
 
 
 if __name__ == "__main__":

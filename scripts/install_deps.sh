@@ -16,7 +16,7 @@ PACKAGES=(
   gnuplot-nox                                   # figures (PNG through gnuplot's cairo/png terminal)
   python3-h5py                                  # tests check that h5py opens our files
   clang-tidy                                    # lint (.clang-tidy), run by scripts/test.sh
-  curl                                          # scripts/fetch_dic_challenge.sh (and its test)
+  python3-numpy                                 # bench/dic_challenge.py (and its tests)
 )
 
 # shellcheck source=scripts/common.sh
