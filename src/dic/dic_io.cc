@@ -123,6 +123,8 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
                          {"reference_updates", result.summary.reference_updates},
                          {"discontinuous_results", double(result.summary.Discontinuous())}};
   if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
+  for (const auto& [name, value] : result.text_attributes) t.text_attributes[name] = value;
+  for (const auto& [name, value] : result.number_attributes) t.number_attributes[name] = value;
   return t;
 }
 

@@ -26,7 +26,7 @@ TEST(FrameStream, GaussianPrefilterAppliesToTheReferenceAndEveryDeformedFrame) {
     raw.push_back(image);
   }
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.gaussian.sigma_px = 0.8;
   FrameStream frames(dir.File("frames"), options, /*calibration=*/nullptr);
   frames.SetRange(0, 2);
