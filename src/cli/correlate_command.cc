@@ -237,8 +237,7 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
-    const GaussianDecision prefilter =
-        DecidePrefilter(gaussian, video, paths, options.grid.roi);
+    const GaussianDecision prefilter = DecidePrefilter(gaussian, video, paths, options.grid.roi);
     const ImageFilter filter = MakeImageFilter(prefilter, gaussian);
     result =
         video ? CorrelateVideo(a.frames, options, filter) : CorrelateFiles(paths, options, filter);

@@ -133,8 +133,8 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
       "above auto_threshold_px (docs/dic.md, Sub-pixel bias)");
   gauss.Add("sigma", &g.sigma_px, kGaussianSigmaRange, "a sigma", "Standard deviation of the blur");
   AddOdd(gauss, "kernel", &g.kernel_size, kGaussianKernelRange, "Kernel size");
-  gauss.Add("auto_threshold_px", &g.auto_threshold_px, kNyquistBiasThresholdRange,
-            "a bias figure", "enabled auto: blur when the near-Nyquist bias figure is above it");
+  gauss.Add("auto_threshold_px", &g.auto_threshold_px, kNyquistBiasThresholdRange, "a bias figure",
+            "enabled auto: blur when the near-Nyquist bias figure is above it");
   ClaheOptions& c = s->preprocess.clahe;
   YamlOptionTable clahe("preprocess.clahe");
   clahe.Add("enabled", &c.enabled, "CLAHE on/off");

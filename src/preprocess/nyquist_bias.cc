@@ -36,9 +36,9 @@ std::vector<int> TileOrigins(int length, int side, int max_count) {
   const int count = std::min(fit, max_count);
   std::vector<int> origins;
   for (int i = 0; i < count; ++i) {
-    origins.push_back(count == 1 ? (length - side) / 2
-                                 : static_cast<int>(std::lround(double(i) * (length - side) /
-                                                                (count - 1))));
+    origins.push_back(
+        count == 1 ? (length - side) / 2
+                   : static_cast<int>(std::lround(double(i) * (length - side) / (count - 1))));
   }
   return origins;
 }

@@ -71,12 +71,9 @@ std::string GaussianDecision::Text() const {
   const std::string blur =
       fmt::format("Gaussian sigma {} px (kernel {}x{})", sigma_px, kernel_size, kernel_size);
   switch (mode) {
-    case GaussianMode::kOn:
-      return fmt::format("on (set), {} applied; {}", blur, measured);
-    case GaussianMode::kOff:
-      return fmt::format("off (set), skipped; {}", measured);
-    case GaussianMode::kAuto:
-      break;
+    case GaussianMode::kOn: return fmt::format("on (set), {} applied; {}", blur, measured);
+    case GaussianMode::kOff: return fmt::format("off (set), skipped; {}", measured);
+    case GaussianMode::kAuto: break;
   }
   if (!figure.measured()) return fmt::format("auto, skipped: {} (region too small)", measured);
   return applied ? fmt::format("auto, {} applied: {} above {} px", blur, measured, threshold_px)

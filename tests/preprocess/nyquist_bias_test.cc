@@ -41,8 +41,7 @@ TEST(NyquistBias, OneFrequencyMatchesTheEnginesBsplineInterpolant) {
         b += h * std::sin(phase);
       }
       const double phi = std::atan2(-b, a);  // h = |T| cos(phase + phi).
-      EXPECT_NEAR(PredictedBicubicBiasPx(power, kN, t), -phi / w, 1e-5)
-          << "k " << k << ", t " << t;
+      EXPECT_NEAR(PredictedBicubicBiasPx(power, kN, t), -phi / w, 1e-5) << "k " << k << ", t " << t;
     }
   }
 }
@@ -53,8 +52,7 @@ TEST(NyquistBias, ShapeOfThePrediction) {
   std::vector<double> low(kN / 2 + 1, 0.0), high = low;
   low[8] = high[24] = 1;
   EXPECT_NEAR(PredictedBicubicBiasPx(high, kN, 0.5), 0, 1e-12);
-  EXPECT_NEAR(PredictedBicubicBiasPx(high, kN, 0.3), -PredictedBicubicBiasPx(high, kN, 0.7),
-              1e-12);
+  EXPECT_NEAR(PredictedBicubicBiasPx(high, kN, 0.3), -PredictedBicubicBiasPx(high, kN, 0.7), 1e-12);
   EXPECT_GT(std::abs(PredictedBicubicBiasPx(high, kN, 0.25)),
             10 * std::abs(PredictedBicubicBiasPx(low, kN, 0.25)));
   EXPECT_EQ(PredictedBicubicBiasPx(std::vector<double>(kN / 2 + 1, 0.0), kN, 0.25), 0);

@@ -42,8 +42,7 @@ class PrefilterCli : public ::testing::Test {
     render.noise_sigma = 2;
     WriteImage(Path("smooth0.png"), RenderImage(pattern, 160, 140, ZeroField(), render));
     render.noise_seed = 8;
-    WriteImage(Path("smooth1.png"),
-               RenderImage(pattern, 160, 140, Translation(0.3, -0.2), render));
+    WriteImage(Path("smooth1.png"), RenderImage(pattern, 160, 140, Translation(0.3, -0.2), render));
   }
   static void TearDownTestSuite() { fs::remove_all(dir_); }
   static std::string Path(const std::string& name) { return (dir_ / name).string(); }
@@ -109,8 +108,7 @@ TEST_F(PrefilterCli, NoneAndOnWinAndASmoothPairIsLeftAlone) {
 
   r = RunCli(Pair("smooth") + " -o " + smooth);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("pre-filter: auto, skipped: near-Nyquist bias figure"),
-            std::string::npos)
+  EXPECT_NE(r.output.find("pre-filter: auto, skipped: near-Nyquist bias figure"), std::string::npos)
       << r.output;
   H5Reader h5_smooth(smooth);
   EXPECT_EQ(h5_smooth.ReadNumberAttribute("dic", "prefilter_applied"), 0);
