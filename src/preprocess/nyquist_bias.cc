@@ -35,6 +35,7 @@ std::vector<int> TileOrigins(int length, int side, int max_count) {
   const int fit = length / side;
   const int count = std::min(fit, max_count);
   std::vector<int> origins;
+  origins.reserve(static_cast<std::size_t>(std::max(count, 0)));
   for (int i = 0; i < count; ++i) {
     origins.push_back(
         count == 1 ? (length - side) / 2
