@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <vector>
 
 #include "impactdic/dic/correlator.h"
