@@ -71,7 +71,7 @@ void BM_PreprocessChain(benchmark::State& state) {
   SetLogLevel(LogLevel::kWarning);
   const CameraCalibration c = FullFrameCalibration();
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.clahe.enabled = true;
   Preprocessor pre(options, &c, c.ImageSize());
   const cv::Mat frame = Frame(state.range(0) == 8 ? CV_8U : CV_16U);

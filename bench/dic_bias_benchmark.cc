@@ -165,7 +165,7 @@ std::vector<cv::Mat> Noisy(const Series& s, double sigma, int realisation) {
 std::vector<cv::Mat> Prefiltered(const std::vector<cv::Mat>& images, double sigma, int kernel) {
   if (sigma <= 0) return images;
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.gaussian.sigma_px = sigma;
   options.gaussian.kernel_size = kernel;
   Preprocessor pre(options, /*calibration=*/nullptr, images[0].size());

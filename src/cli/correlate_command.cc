@@ -4,14 +4,12 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <cmath>
 #include <cstddef>
 #include <exception>
 #include <filesystem>
 #include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -54,7 +52,7 @@ struct CorrelateArgs {
   double min_zncc = DicOptions{}.icgn.min_zncc;
   std::string mode = ToString(DicOptions{}.mode);
   std::string max_uncertainty = MaxUncertaintyText(DicOptions{}.icgn.max_uncertainty_px);
-  std::string gaussian;  // SIGMA[,KERNEL]; empty: no pre-filter.
+  std::string gaussian = ToString(GaussianBlurOptions{}.mode);  // GaussianFromString.
   // The continuity post-check (DicOptions::continuity), checked with the flags' names
   // (ContinuityFromArgs).
   std::string continuity = DicOptions{}.continuity.enabled ? "on" : "off";
@@ -109,49 +107,31 @@ cv::Rect ParseRoi(const std::string& text) {
   return cv::Rect(cv::Point(v[0], v[1]), cv::Point(v[2], v[3]));
 }
 
-// --gaussian SIGMA[,KERNEL]: the preprocess module's Gaussian blur (the scene's
-// preprocess.gaussian.*, same checks; KERNEL defaults to its kernel size) of every image, the
-// reference included, before correlation. The pre-filter against sub-pixel bias (docs/dic.md,
-// "Sub-pixel bias").
-GaussianBlurOptions ParseGaussian(const std::string& text) {
-  GaussianBlurOptions g;
-  g.enabled = true;
-  const std::string expected =
-      fmt::format("SIGMA[,KERNEL]: sigma in {}, kernel an odd size in {} (default {})",
-                  kGaussianSigmaRange.Text(), kGaussianKernelRange.Text(), g.kernel_size);
-  const std::size_t comma = text.find(',');
-  const std::string sigma = text.substr(0, comma);
-  const std::optional<double> sigma_px = ParseNumber(sigma);
-  bool ok = sigma_px && std::isfinite(*sigma_px);
-  if (ok) g.sigma_px = *sigma_px;
-  if (ok && comma != std::string::npos) {
-    const std::optional<double> kernel = ParseNumber(text.substr(comma + 1));
-    ok = kernel && std::abs(*kernel) < 1e6 && *kernel == std::floor(*kernel);
-    if (ok) g.kernel_size = static_cast<int>(*kernel);
+// The pre-filter of --gaussian (auto | none | on | SIGMA[,KERNEL], preprocess
+// GaussianFromString): decided from the reference image (the first frame of a video) over the
+// ROI, as `run` decides from the first frame (docs/dic.md, "Sub-pixel bias"); logged.
+GaussianDecision DecidePrefilter(const GaussianBlurOptions& gaussian, bool video,
+                                 const std::vector<std::string>& paths, cv::Rect roi) {
+  cv::Mat reference;
+  if (video) {
+    VideoReader reader(paths[0]);
+    reader.Read(&reference);  // CorrelateVideo reports a video without frames.
+  } else {
+    CheckImageFileExists(paths[0]);
+    reference = ReadGreyImage(paths[0]);
   }
-  CheckValue(ok, "--gaussian", text, expected);
-  try {
-    g.Check();
-  } catch (const Error&) {
-    throw Error(ErrorKind::kInvalidValue, "--gaussian", text, expected);
-  }
-  return g;
+  const GaussianDecision decision = DecideGaussian(gaussian, reference, roi);
+  LogInfo("pre-filter: {}", decision.Text());
+  return decision;
 }
 
-// The images' pre-filter of --gaussian (none if empty): a Preprocessor per image, so that the
-// reference and the first deformed image can be decoded and filtered at the same time.
-ImageFilter MakeImageFilter(const std::string& gaussian) {
-  if (gaussian.empty()) return {};
-  PreprocessOptions options;
-  options.undistort = false;
-  options.gaussian = ParseGaussian(gaussian);
-  return {[options](const cv::Mat& image) {
-            Preprocessor pre(options, /*calibration=*/nullptr, image.size());
-            return pre.Apply(image);
-          },
+// The images' filter of a decision (none if not applied): the preprocess module's Gaussian blur
+// of every image, the reference included; callable from two threads at once.
+ImageFilter MakeImageFilter(const GaussianDecision& decision, const GaussianBlurOptions& options) {
+  if (!decision.applied) return {};
+  return {[options](const cv::Mat& image) { return GaussianBlurFrame(options, image); },
           fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
-                      options.gaussian.sigma_px, options.gaussian.kernel_size,
-                      options.gaussian.kernel_size)};
+                      options.sigma_px, options.kernel_size, options.kernel_size)};
 }
 
 ContinuityCheckOptions ContinuityFromArgs(const CorrelateArgs& a) {
@@ -264,7 +244,7 @@ void Run(const CorrelateArgs& a) {
   }
   options.icgn.max_uncertainty_px =
       MaxUncertaintyFromString(a.max_uncertainty, "--max-uncertainty");
-  const ImageFilter filter = MakeImageFilter(a.gaussian);
+  const GaussianBlurOptions gaussian = GaussianFromString(a.gaussian, "--gaussian");
   options.continuity = ContinuityFromArgs(a);
   options.outliers = OutliersFromArgs(a);
   WithFlagNames(kCorrelateFlags, [&] { options.Check(); });
@@ -293,8 +273,11 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
+    const GaussianDecision prefilter = DecidePrefilter(gaussian, video, paths, options.grid.roi);
+    const ImageFilter filter = MakeImageFilter(prefilter, gaussian);
     result =
         video ? CorrelateVideo(a.frames, options, filter) : CorrelateFiles(paths, options, filter);
+    PrefilterAttributes(prefilter, &result.text_attributes, &result.number_attributes);
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     RethrowWithFlagNames(e, kCorrelateFlags);
@@ -359,11 +342,15 @@ void RegisterCorrelateCommand(CLI::App& app) {
                   "converged subset is reported with sigma_u_px, sigma_v_px")
       ->capture_default_str();
   cmd->add_option("--gaussian", args->gaussian,
-                  "SIGMA[,KERNEL]: Gaussian pre-filter of every image, the reference included "
-                  "(as the scene's preprocess.gaussian.*; KERNEL odd, default " +
-                      std::to_string(GaussianBlurOptions{}.kernel_size) +
-                      "); reduces the sub-pixel bias of sharp or aliased speckle (docs/dic.md, "
-                      "\"Sub-pixel bias\"), e.g. 0.8");
+                  fmt::format("auto | none | on | SIGMA[,KERNEL]: Gaussian pre-filter of every "
+                              "image, the reference included (as the scene's "
+                              "preprocess.gaussian.*): auto = when the reference's near-Nyquist "
+                              "bias figure is above {} px; on = sigma {} px; KERNEL odd, default "
+                              "{}. Reduces the sub-pixel bias of sharp or aliased speckle "
+                              "(docs/dic.md, \"Sub-pixel bias\")",
+                              GaussianBlurOptions{}.auto_threshold_px,
+                              GaussianBlurOptions{}.sigma_px, GaussianBlurOptions{}.kernel_size))
+      ->capture_default_str();
   AddContinuityFlags(cmd, args.get());
   AddOutlierFlags(cmd, args.get());
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");

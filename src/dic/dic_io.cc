@@ -125,6 +125,8 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
                          {"discontinuous_results", double(result.summary.Discontinuous())},
                          {"outlier_results", double(result.summary.Outliers())}};
   if (!result.preprocess.empty()) t.text_attributes["preprocess"] = result.preprocess;
+  for (const auto& [name, value] : result.text_attributes) t.text_attributes[name] = value;
+  for (const auto& [name, value] : result.number_attributes) t.number_attributes[name] = value;
   return t;
 }
 

@@ -100,8 +100,15 @@ cv::Mat FrameStream::Read(int k) {
   if (!pre_) {
     if (calibration_) CheckFrameSize(*calibration_, image.size(), Name(k));
     pre_.emplace(options_, calibration_, image.size());
+    // The first analysed frame (the correlation's first reference) decides the automatic
+    // pre-filter for every frame.
+    pre_->DecideFrom(k == 0 ? image : ReadRaw(0));
   }
   return pre_->Apply(image);
+}
+
+const PreprocessSummary* FrameStream::preprocess_summary() const {
+  return pre_ ? &pre_->summary() : nullptr;
 }
 
 std::string FrameStream::PreprocessNote() const {

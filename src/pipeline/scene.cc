@@ -121,9 +121,23 @@ YamlOptionTable TestTable(Scene* s) {
 std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
   GaussianBlurOptions& g = s->preprocess.gaussian;
   YamlOptionTable gauss("preprocess.gaussian");
-  gauss.Add("enabled", &g.enabled, "Gaussian blur on/off");
+  gauss.AddCustom(
+      "enabled", "auto, true or false", ToString(g.mode),
+      [&g](const YAML::Node& n) {
+        if (!n.IsScalar()) return false;
+        try {
+          g.mode = GaussianModeFromString(n.Scalar(), "");
+        } catch (const Error&) {
+          return false;
+        }
+        return true;
+      },
+      "Gaussian blur: true, false, or auto = when the first frame's near-Nyquist bias figure is "
+      "above auto_threshold_px (docs/dic.md, Sub-pixel bias)");
   gauss.Add("sigma", &g.sigma_px, kGaussianSigmaRange, "a sigma", "Standard deviation of the blur");
   AddOdd(gauss, "kernel", &g.kernel_size, kGaussianKernelRange, "Kernel size");
+  gauss.Add("auto_threshold_px", &g.auto_threshold_px, kNyquistBiasThresholdRange, "a bias figure",
+            "enabled auto: blur when the near-Nyquist bias figure is above it");
   ClaheOptions& c = s->preprocess.clahe;
   YamlOptionTable clahe("preprocess.clahe");
   clahe.Add("enabled", &c.enabled, "CLAHE on/off");

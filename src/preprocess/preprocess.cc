@@ -2,14 +2,26 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstddef>
+#include <map>
 #include <opencv2/imgproc.hpp>
+#include <optional>
+#include <string>
 #include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
+
+const char* ToString(GaussianMode mode) { return kGaussianModeNames.Name(mode); }
+
+GaussianMode GaussianModeFromString(const std::string& text, const std::string& where) {
+  return kGaussianModeNames.Parse(text, where);
+}
 
 void GaussianBlurOptions::Check() const {
   CheckValue(kGaussianSigmaRange.Contains(sigma_px), "preprocess.gaussian_sigma",
@@ -17,6 +29,69 @@ void GaussianBlurOptions::Check() const {
   CheckValue(kGaussianKernelRange.Contains(kernel_size) && kernel_size % 2 == 1,
              "preprocess.gaussian_kernel", std::to_string(kernel_size),
              "an odd size in " + kGaussianKernelRange.Text());
+  CheckValue(kNyquistBiasThresholdRange.Contains(auto_threshold_px),
+             "preprocess.gaussian_auto_threshold_px", fmt::format("{}", auto_threshold_px),
+             "in " + kNyquistBiasThresholdRange.Text());
+}
+
+GaussianBlurOptions GaussianFromString(const std::string& text, const std::string& where) {
+  GaussianBlurOptions g;
+  const std::string expected = fmt::format(
+      "auto, none (no pre-filter), on (sigma {} px) or SIGMA[,KERNEL]: sigma in {}, kernel an "
+      "odd size in {} (default {})",
+      g.sigma_px, kGaussianSigmaRange.Text(), kGaussianKernelRange.Text(), g.kernel_size);
+  try {
+    g.mode = GaussianModeFromString(text, where);
+    return g;
+  } catch (const Error&) {  // Not a word: a number.
+  }
+  g.mode = GaussianMode::kOn;
+  const std::size_t comma = text.find(',');
+  const std::optional<double> sigma_px = ParseNumber(text.substr(0, comma));
+  bool ok = sigma_px && std::isfinite(*sigma_px);
+  if (ok) g.sigma_px = *sigma_px;
+  if (ok && comma != std::string::npos) {
+    const std::optional<double> kernel = ParseNumber(text.substr(comma + 1));
+    ok = kernel && std::abs(*kernel) < 1e6 && *kernel == std::floor(*kernel);
+    if (ok) g.kernel_size = static_cast<int>(*kernel);
+  }
+  CheckValue(ok, where, text, expected);
+  try {
+    g.Check();
+  } catch (const Error&) {
+    throw Error(ErrorKind::kInvalidValue, where, text, expected);
+  }
+  return g;
+}
+
+std::string GaussianDecision::Text() const {
+  const std::string measured =
+      figure.measured() ? fmt::format("near-Nyquist bias figure {:.4f} px", figure.bias_px)
+                        : std::string("near-Nyquist bias figure not measured");
+  const std::string blur =
+      fmt::format("Gaussian sigma {} px (kernel {}x{})", sigma_px, kernel_size, kernel_size);
+  switch (mode) {
+    case GaussianMode::kOn: return fmt::format("on (set), {} applied; {}", blur, measured);
+    case GaussianMode::kOff: return fmt::format("off (set), skipped; {}", measured);
+    case GaussianMode::kAuto: break;
+  }
+  if (!figure.measured()) return fmt::format("auto, skipped: {} (region too small)", measured);
+  return applied ? fmt::format("auto, {} applied: {} above {} px", blur, measured, threshold_px)
+                 : fmt::format("auto, skipped: {} not above {} px", measured, threshold_px);
+}
+
+GaussianDecision DecideGaussian(const GaussianBlurOptions& options, const cv::Mat& reference,
+                                cv::Rect roi) {
+  GaussianDecision d;
+  d.mode = options.mode;
+  d.sigma_px = options.sigma_px;
+  d.kernel_size = options.kernel_size;
+  d.threshold_px = options.auto_threshold_px;
+  if (!reference.empty()) d.figure = MeasureNyquistBias(reference, roi);
+  d.applied = options.mode == GaussianMode::kOn ||
+              (options.mode == GaussianMode::kAuto && d.figure.measured() &&
+               d.figure.bias_px > options.auto_threshold_px);
+  return d;
 }
 
 void ClaheOptions::Check() const {
@@ -28,7 +103,7 @@ void ClaheOptions::Check() const {
 
 void PreprocessOptions::Check() const {
   undistortion.Check();
-  if (gaussian.enabled) gaussian.Check();
+  if (gaussian.mode != GaussianMode::kOff) gaussian.Check();
   if (clahe.enabled) clahe.Check();
 }
 
@@ -71,12 +146,17 @@ Preprocessor::Preprocessor(const PreprocessOptions& options, const CameraCalibra
     if (undistorter->active()) undistorter_ = std::move(undistorter);
   }
   summary_.steps.push_back(undistort);
+  // The Gaussian step: on and off are known now, auto waits for the reference (DecideFrom or
+  // the first frame), which is measured in every mode.
+  summary_.gaussian = DecideGaussian(options.gaussian, cv::Mat());
+  blur_ = summary_.gaussian.applied;
   summary_.steps.push_back(
-      {"gaussian", options.gaussian.enabled,
-       options.gaussian.enabled
+      {"gaussian", blur_,
+       options.gaussian.mode == GaussianMode::kOn
            ? fmt::format("sigma {} px, kernel {}x{}", options.gaussian.sigma_px,
                          options.gaussian.kernel_size, options.gaussian.kernel_size)
-           : "off in the options"});
+       : options.gaussian.mode == GaussianMode::kOff ? "off in the options"
+                                                     : "auto, no frame seen yet"});
   summary_.steps.push_back(
       {"clahe", options.clahe.enabled,
        options.clahe.enabled ? fmt::format("clip limit {}, {}x{} tiles", options.clahe.clip_limit,
@@ -97,7 +177,24 @@ bool Preprocessor::active() const {
   return false;
 }
 
-cv::Mat Preprocessor::Apply(const cv::Mat& frame) {
+void PrefilterAttributes(const GaussianDecision& decision,
+                         std::map<std::string, std::string>* text_attributes,
+                         std::map<std::string, double>* number_attributes) {
+  (*text_attributes)["prefilter"] = decision.Text();
+  (*number_attributes)["prefilter_applied"] = decision.applied ? 1.0 : 0.0;
+  (*number_attributes)["nyquist_bias_px"] = decision.figure.bias_px;
+  (*number_attributes)["prefilter_threshold_px"] = decision.threshold_px;
+}
+
+cv::Mat GaussianBlurFrame(const GaussianBlurOptions& options, const cv::Mat& frame) {
+  cv::Mat blurred;
+  const int k = options.kernel_size;
+  cv::GaussianBlur(frame, blurred, cv::Size(k, k), options.sigma_px, options.sigma_px,
+                   cv::BORDER_REFLECT_101);
+  return blurred;
+}
+
+void Preprocessor::CheckFrame(const cv::Mat& frame) const {
   CheckValue(frame.channels() == 1 && (frame.depth() == CV_8U || frame.depth() == CV_16U),
              "frame type",
              fmt::format("{} channel(s), depth code {}", frame.channels(), frame.depth()),
@@ -106,16 +203,34 @@ cv::Mat Preprocessor::Apply(const cv::Mat& frame) {
     throw Error(ErrorKind::kInvalidValue,
                 fmt::format("frame has size {}x{} but the sequence's frames are {}x{}", frame.cols,
                             frame.rows, frame_size_.width, frame_size_.height));
+}
+
+void Preprocessor::Decide(const cv::Mat& undistorted_reference) {
+  WallTimer timer;
+  const GaussianMode mode = options_.gaussian.mode;
+  summary_.gaussian = DecideGaussian(options_.gaussian, undistorted_reference, options_.roi);
+  decided_ = true;
+  blur_ = summary_.gaussian.applied;
+  PreprocessStep& step = summary_.steps[1];
+  step.applied = blur_;
+  if (mode == GaussianMode::kAuto) step.reason = summary_.gaussian.Text();
+  summary_.setup_seconds += timer.ElapsedSeconds();
+  LogInfo("pre-filter: {}", summary_.gaussian.Text());
+}
+
+void Preprocessor::DecideFrom(const cv::Mat& reference_frame) {
+  if (decided_) return;
+  CheckFrame(reference_frame);
+  Decide(undistorter_ ? undistorter_->Apply(reference_frame) : reference_frame);
+}
+
+cv::Mat Preprocessor::Apply(const cv::Mat& frame) {
+  CheckFrame(frame);
   WallTimer timer;
   cv::Mat out = frame;
   if (undistorter_) out = undistorter_->Apply(out);
-  if (options_.gaussian.enabled) {
-    cv::Mat blurred;
-    const int k = options_.gaussian.kernel_size;
-    cv::GaussianBlur(out, blurred, cv::Size(k, k), options_.gaussian.sigma_px,
-                     options_.gaussian.sigma_px, cv::BORDER_REFLECT_101);
-    out = blurred;
-  }
+  if (!decided_) Decide(out);
+  if (blur_) out = GaussianBlurFrame(options_.gaussian, out);
   if (options_.clahe.enabled) {
     // A CLAHE object per call: cv::CLAHE keeps scratch buffers, so sharing one across threads
     // would race; its construction is cheap next to the equalisation.

@@ -174,7 +174,7 @@ TEST_F(CorrelateCli, GaussianPrefilterBlursEveryImageAndBadValuesAreNamed) {
   // The same as the library on the three images blurred by the preprocess module: the reference
   // is filtered as well as the deformed images (filtering one side only gives other results).
   PreprocessOptions pre_options;
-  pre_options.gaussian.enabled = true;
+  pre_options.gaussian.mode = GaussianMode::kOn;
   pre_options.gaussian.sigma_px = 0.8;
   std::vector<cv::Mat> images;
   for (const char* name : {"ref.png", "def1.png", "def2.png"}) {

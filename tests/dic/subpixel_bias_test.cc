@@ -52,7 +52,7 @@ std::vector<cv::Mat> Images(const cv::Mat& pattern, double noise) {
 
 std::vector<cv::Mat> Blurred(const std::vector<cv::Mat>& images, double sigma) {
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.gaussian.sigma_px = sigma;
   Preprocessor pre(options, /*calibration=*/nullptr, images[0].size());
   std::vector<cv::Mat> out;

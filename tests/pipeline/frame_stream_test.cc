@@ -8,9 +8,13 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "../io/test_dir.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/preprocess/nyquist_bias.h"
+#include "impactdic/preprocess/preprocess.h"
 
 namespace impactdic {
 namespace {
@@ -26,7 +30,7 @@ TEST(FrameStream, GaussianPrefilterAppliesToTheReferenceAndEveryDeformedFrame) {
     raw.push_back(image);
   }
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.gaussian.sigma_px = 0.8;
   FrameStream frames(dir.File("frames"), options, /*calibration=*/nullptr);
   frames.SetRange(0, 2);
@@ -37,6 +41,34 @@ TEST(FrameStream, GaussianPrefilterAppliesToTheReferenceAndEveryDeformedFrame) {
     EXPECT_EQ(cv::norm(read, expected, cv::NORM_INF), 0) << "frame " << k;
     EXPECT_GT(cv::norm(read, raw[k], cv::NORM_INF), 0) << "frame " << k;
   }
+}
+
+// The default (auto) decides from the first analysed frame, whichever frame is read first: a
+// sharp first frame (white noise) blurs every frame, also the smooth ones after it.
+TEST(FrameStream, AutoPrefilterIsDecidedByTheFirstAnalysedFrame) {
+  TestDir dir;
+  std::filesystem::create_directories(dir.path() / "frames");
+  std::vector<cv::Mat> raw;
+  for (int k = 0; k < 3; ++k) {
+    cv::Mat image(96, 128, CV_8U);
+    cv::randu(image, 0, 255);
+    if (k > 0) cv::GaussianBlur(image, image, cv::Size(0, 0), 2.0);  // Smooth later frames.
+    WriteImage(dir.File("frames/f" + std::to_string(k) + ".png"), image);
+    raw.push_back(image);
+  }
+  FrameStream frames(dir.File("frames"), PreprocessOptions{}, /*calibration=*/nullptr);
+  frames.SetRange(0, 2);
+  EXPECT_EQ(frames.preprocess_summary(), nullptr);
+  for (int k : {2, 0, 1}) {
+    cv::Mat expected;
+    cv::GaussianBlur(raw[k], expected, cv::Size(5, 5), GaussianBlurOptions{}.sigma_px,
+                     GaussianBlurOptions{}.sigma_px, cv::BORDER_REFLECT_101);
+    EXPECT_EQ(cv::norm(frames.Read(k), expected, cv::NORM_INF), 0) << "frame " << k;
+  }
+  ASSERT_NE(frames.preprocess_summary(), nullptr);
+  const GaussianDecision& d = frames.preprocess_summary()->gaussian;
+  EXPECT_TRUE(d.applied);
+  EXPECT_EQ(d.figure.bias_px, MeasureNyquistBias(raw[0]).bias_px);
 }
 
 }  // namespace

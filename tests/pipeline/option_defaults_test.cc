@@ -90,7 +90,8 @@ TEST(OptionDefaults, SceneModelAndTestKeysDefaultToImpactModelParameters) {
 TEST(OptionDefaults, ScenePreprocessSensorAndMomentumKeysDefaultToTheirLibraries) {
   const Scene scene = MinimalScene();
   const PreprocessOptions pd;
-  EXPECT_EQ(scene.preprocess.gaussian.enabled, pd.gaussian.enabled);
+  EXPECT_EQ(scene.preprocess.gaussian.mode, pd.gaussian.mode);
+  EXPECT_EQ(scene.preprocess.gaussian.auto_threshold_px, pd.gaussian.auto_threshold_px);
   EXPECT_EQ(scene.preprocess.gaussian.sigma_px, pd.gaussian.sigma_px);
   EXPECT_EQ(scene.preprocess.gaussian.kernel_size, pd.gaussian.kernel_size);
   EXPECT_EQ(scene.preprocess.clahe.enabled, pd.clahe.enabled);

@@ -43,7 +43,9 @@ class PreprocessDepth : public ::testing::TestWithParam<int> {};
 
 TEST_P(PreprocessDepth, EverythingOffIsAnExactNoOp) {
   const cv::Mat frame = TestFrame(GetParam());
-  Preprocessor pre(PreprocessOptions{}, /*calibration=*/nullptr, frame.size());
+  PreprocessOptions off;
+  off.gaussian.mode = GaussianMode::kOff;
+  Preprocessor pre(off, /*calibration=*/nullptr, frame.size());
   EXPECT_FALSE(pre.active());
   const cv::Mat out = pre.Apply(frame);
   EXPECT_EQ(out.data, frame.data);  // the input pixels themselves
@@ -58,7 +60,7 @@ TEST_P(PreprocessDepth, EverythingOffIsAnExactNoOp) {
 TEST_P(PreprocessDepth, GaussianIsOpenCvsGaussianBlurAsConfigured) {
   const cv::Mat frame = TestFrame(GetParam());
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.gaussian.sigma_px = 1.3;
   options.gaussian.kernel_size = 7;
   Preprocessor pre(options, nullptr, frame.size());
@@ -103,24 +105,79 @@ TEST_P(PreprocessDepth, OrderIsUndistortThenGaussianThenClahe) {
   const CameraCalibration calibration = FromCamera(camera);
   const cv::Mat frame = TestFrame(GetParam());
   PreprocessOptions options;
-  options.gaussian.enabled = true;
+  options.gaussian.mode = GaussianMode::kOn;
   options.clahe.enabled = true;
   Preprocessor pre(options, &calibration, frame.size());
   ASSERT_TRUE(pre.summary().steps[0].applied) << pre.summary().steps[0].reason;
   EXPECT_GT(pre.summary().max_distortion_px, 0.01);
   const cv::Mat out = pre.Apply(frame);
 
+  const double sigma = GaussianBlurOptions{}.sigma_px;
   cv::Mat expected = Undistorter(calibration, UndistortOptions{}).Apply(frame);
-  cv::GaussianBlur(expected, expected, cv::Size(5, 5), 1.0, 1.0, cv::BORDER_REFLECT_101);
+  cv::GaussianBlur(expected, expected, cv::Size(5, 5), sigma, sigma, cv::BORDER_REFLECT_101);
   cv::createCLAHE(2.0, cv::Size(8, 8))->apply(expected, expected);
   EXPECT_TRUE(Identical(out, expected));
   // The other order gives a different image, so the test can tell.
   cv::Mat reversed;
   cv::createCLAHE(2.0, cv::Size(8, 8))->apply(frame, reversed);
-  cv::GaussianBlur(reversed, reversed, cv::Size(5, 5), 1.0, 1.0, cv::BORDER_REFLECT_101);
+  cv::GaussianBlur(reversed, reversed, cv::Size(5, 5), sigma, sigma, cv::BORDER_REFLECT_101);
   reversed = Undistorter(calibration, UndistortOptions{}).Apply(reversed);
   EXPECT_FALSE(Identical(out, reversed));
   EXPECT_NE(pre.summary().FullReport().find("undistort"), std::string::npos);
+}
+
+// The default (auto) measures the first frame: a smooth one is left untouched, exactly.
+TEST_P(PreprocessDepth, AutoLeavesASmoothFrameUntouched) {
+  const cv::Mat frame = TestFrame(GetParam());  // Noise smoothed by a 1.5 px Gaussian.
+  Preprocessor pre(PreprocessOptions{}, /*calibration=*/nullptr, frame.size());
+  const cv::Mat out = pre.Apply(frame);
+  EXPECT_EQ(out.data, frame.data);
+  const GaussianDecision& d = pre.summary().gaussian;
+  EXPECT_EQ(d.mode, GaussianMode::kAuto);
+  EXPECT_FALSE(d.applied);
+  ASSERT_TRUE(d.figure.measured());
+  EXPECT_LT(d.figure.bias_px, GaussianBlurOptions{}.auto_threshold_px);
+  EXPECT_NE(pre.summary().steps[1].reason.find("auto, skipped: near-Nyquist bias figure"),
+            std::string::npos)
+      << pre.summary().steps[1].reason;
+  EXPECT_FALSE(pre.summary().steps[1].applied);
+}
+
+// ...and a sharp one (white noise, all of its content up to the Nyquist frequency) decides the
+// blur of every later frame, smooth or not, as `on` would.
+TEST_P(PreprocessDepth, AutoBlursEveryFrameWhenTheReferenceIsSharp) {
+  cv::Mat sharp(120, 160, GetParam());
+  cv::RNG rng(7);
+  rng.fill(sharp, cv::RNG::UNIFORM, 20, GetParam() == CV_8U ? 230 : 60000);
+  const cv::Mat smooth = TestFrame(GetParam());
+  Preprocessor pre(PreprocessOptions{}, /*calibration=*/nullptr, sharp.size());
+  pre.DecideFrom(sharp);
+  const GaussianDecision& d = pre.summary().gaussian;
+  EXPECT_TRUE(d.applied);
+  EXPECT_GT(d.figure.bias_px, d.threshold_px);
+  EXPECT_TRUE(pre.active());
+  EXPECT_NE(d.Text().find("auto, Gaussian sigma 0.7 px (kernel 5x5) applied: near-Nyquist bias "
+                          "figure "),
+            std::string::npos)
+      << d.Text();
+  GaussianBlurOptions on;
+  on.mode = GaussianMode::kOn;
+  for (const cv::Mat& frame : {sharp, smooth}) {
+    cv::Mat expected;
+    cv::GaussianBlur(frame, expected, cv::Size(5, 5), 0.7, 0.7, cv::BORDER_REFLECT_101);
+    EXPECT_TRUE(Identical(pre.Apply(frame), expected));
+    EXPECT_TRUE(Identical(GaussianBlurFrame(on, frame), expected));
+  }
+  // Switched off, the same frame is untouched; on and off still report the figure.
+  PreprocessOptions off;
+  off.gaussian.mode = GaussianMode::kOff;
+  Preprocessor pre_off(off, nullptr, sharp.size());
+  EXPECT_EQ(pre_off.Apply(sharp).data, sharp.data);
+  EXPECT_FALSE(pre_off.summary().gaussian.applied);
+  EXPECT_NEAR(pre_off.summary().gaussian.figure.bias_px, d.figure.bias_px, 1e-15);
+  EXPECT_EQ(pre_off.summary().steps[1].reason, "off in the options");
+  EXPECT_NE(pre_off.summary().gaussian.Text().find("off (set), skipped; near-Nyquist"),
+            std::string::npos);
 }
 
 INSTANTIATE_TEST_SUITE_P(EightAndSixteenBit, PreprocessDepth, ::testing::Values(CV_8U, CV_16U),
@@ -163,11 +220,11 @@ TEST(Preprocess, FramesMustMatchTheCalibrationAndEachOther) {
 TEST(Preprocess, OptionsCheckNamesTheField) {
   EXPECT_NO_THROW(PreprocessOptions{}.Check());
   PreprocessOptions o;
-  o.gaussian.enabled = true;
+  o.gaussian.mode = GaussianMode::kOn;
   o.gaussian.kernel_size = 4;
   ExpectErrorContaining([&] { o.Check(); }, "preprocess.gaussian_kernel");
   o = {};
-  o.gaussian.enabled = true;
+  o.gaussian.mode = GaussianMode::kOn;
   o.gaussian.sigma_px = 0;
   ExpectErrorContaining([&] { o.Check(); }, "preprocess.gaussian_sigma");
   o = {};
@@ -179,8 +236,33 @@ TEST(Preprocess, OptionsCheckNamesTheField) {
   o.clahe.tile_grid = 0;
   ExpectErrorContaining([&] { o.Check(); }, "preprocess.clahe_tile_grid");
   o = {};
+  o.gaussian.auto_threshold_px = -1;
+  ExpectErrorContaining([&] { o.Check(); }, "preprocess.gaussian_auto_threshold_px");
+  o.gaussian.mode = GaussianMode::kOff;  // Not checked when off.
+  EXPECT_NO_THROW(o.Check());
+  o = {};
   o.undistortion.skip_threshold_px = -0.5;
   ExpectErrorContaining([&] { o.Check(); }, "undistort.skip_threshold_px");
+}
+
+// `correlate --gaussian` and the scene's preprocess.gaussian.enabled read the same names.
+TEST(Preprocess, GaussianFlagAndModeNames) {
+  EXPECT_EQ(GaussianFromString("auto", "--gaussian").mode, GaussianMode::kAuto);
+  for (const char* off : {"none", "off", "false", "NONE"})
+    EXPECT_EQ(GaussianFromString(off, "--gaussian").mode, GaussianMode::kOff) << off;
+  const GaussianBlurOptions on = GaussianFromString("on", "--gaussian");
+  EXPECT_EQ(on.mode, GaussianMode::kOn);
+  EXPECT_EQ(on.sigma_px, GaussianBlurOptions{}.sigma_px);
+  const GaussianBlurOptions set = GaussianFromString("1.2,7", "--gaussian");
+  EXPECT_EQ(set.mode, GaussianMode::kOn);
+  EXPECT_EQ(set.sigma_px, 1.2);
+  EXPECT_EQ(set.kernel_size, 7);
+  EXPECT_EQ(GaussianFromString("0.6", "--gaussian").kernel_size, GaussianBlurOptions{}.kernel_size);
+  for (const char* bad : {"0", "-1", "25", "abc", "0.8,4", "0.8,x", "0.8,", ",5", ""})
+    ExpectErrorContaining([&] { GaussianFromString(bad, "--gaussian"); }, "--gaussian");
+  EXPECT_EQ(GaussianModeFromString("TRUE", "k"), GaussianMode::kOn);
+  EXPECT_STREQ(ToString(GaussianMode::kAuto), "auto");
+  EXPECT_EQ(GaussianBlurOptions{}.mode, GaussianMode::kAuto);  // The default.
 }
 
 }  // namespace

@@ -59,6 +59,7 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -151,6 +152,10 @@ struct DicResult {
   // What was done to the images before correlation (dic_io ImageFilter::description; the
   // results' /dic attribute `preprocess`), "" if nothing.
   std::string preprocess;
+  // Further /dic attributes set by the caller (e.g. the pre-filter's decision: preprocess
+  // PrefilterAttributes).
+  std::map<std::string, std::string> text_attributes;
+  std::map<std::string, double> number_attributes;
   // What the caller should know (e.g. a colour image in a grey sequence), also logged.
   std::vector<std::string> warnings;
 };

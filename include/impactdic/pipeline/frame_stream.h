@@ -71,6 +71,9 @@ class FrameStream {
   const std::vector<std::string>& warnings() const { return warnings_; }
   // The preprocessing applied (one line; its frame count includes re-reads).
   std::string PreprocessNote() const;
+  // The preprocessing's summary (its Gaussian decision made from the first analysed frame);
+  // null before the first Read.
+  const PreprocessSummary* preprocess_summary() const;
 
  private:
   cv::Mat ReadSource(int source_index);

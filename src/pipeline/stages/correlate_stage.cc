@@ -23,6 +23,7 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/preprocess/preprocess.h"
 #include "scene_inputs.h"
 #include "stage.h"
 
@@ -90,6 +91,8 @@ class CorrelateStage : public Stage {
     // Moved: the correlator's rows are released as the table fills (one copy in memory).
     d.dic = MakeDicResultsTable(std::move(dic), options, d.first_frame);
     d.dic->text_attributes["preprocess"] = d.preprocess_note;
+    if (const PreprocessSummary* pre = d.frames->preprocess_summary())
+      PrefilterAttributes(pre->gaussian, &d.dic->text_attributes, &d.dic->number_attributes);
     const DicSummary& summary = d.dic_summary;
     SceneFigures& fig = c.summary.figures;
     fig.dic_valid_fraction = summary.valid_fraction;

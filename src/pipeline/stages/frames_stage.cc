@@ -102,6 +102,7 @@ PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
   o.gaussian = scene.preprocess.gaussian;
   o.clahe = scene.preprocess.clahe;
   o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
+  o.roi = o.undistortion.roi;  // Where the automatic pre-filter measures the first frame.
   return o;
 }
 
