@@ -9,8 +9,10 @@
 #include <filesystem>
 #include <opencv2/core.hpp>
 
+#include "../cli/cli_runner.h"
 #include "../synth/dem_test_record.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 
@@ -87,6 +89,46 @@ TEST(DemValidation, KnownErrorsComeBack) {
   EXPECT_NE(v.notes.back().find("no sigmoid fit"), std::string::npos);
   // The DEM pounder's deceleration: F / (m_p g) - 1 in contact.
   EXPECT_NEAR(v.dem_peak_decel_g, dem_test::kForce / (dem_test::kMass * dem_test::kG) - 1, 1e-6);
+  fs::remove_all(dir);
+}
+
+// The figures of a real `impactdic run` on DEM footage, written with the default outputs: its
+// results.h5 stores a preview of the frames (outputs.frames: preview, <= 16 images of the
+// analysed frames, /frames/row), not one per analysed frame. Until 2026-11 the velocity-field
+// figure failed on such a file ("vx_mm_s/vy_mm_s ... got 11520 values; expected 2880"): only
+// hand-written results with every frame had been compared.
+TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
+  const std::string dir = dem_test::MakeDemDir("preview");
+  // 1 mm/px: the 4.8 mm lattice grains are ~5 px wide, a texture the DIC can follow.
+  ImpactSceneSpec spec = dem_test::TinySpec();
+  spec.width = 320;
+  spec.height = 160;
+  spec.mm_per_px = 1.0;
+  spec.subset_size = 21;
+  spec.step = 12;
+  DemScene scene(ReadDemRecord(dir), spec);
+  const DemSceneReport report = WriteDemScene(scene, dir + "/scene");
+  const std::string run = dir + "/run";
+  const CliResult r = RunCli("run " + report.scene_yaml + " -o " + run);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string results = run + "/results.h5";
+  {
+    const H5Reader in(results);
+    ASSERT_TRUE(in.Exists(results_layout::kFrameRows)) << "not a preview: the test needs one";
+    EXPECT_LT(in.ReadDouble(results_layout::kFrameRows).size(),
+              in.ReadDouble("/time/frame_index").size());
+  }
+  const std::string figures = dir + "/figures";
+  const DemValidation v = ValidateDemRun(report.truth_h5, results, figures);
+  EXPECT_GT(v.dic_samples, 100u);
+  for (const char* png : {"velocity_field_compare.png", "velocity_field_compare_small.png",
+                          "frame_small.png", "momentum_compare.png", "deceleration_compare.png"})
+    EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / png)) << png;
+  // The same through the command line, as docs/validation.md runs it.
+  const CliResult cli = RunCli("validate-dem " + report.truth_h5 + " " + results +
+                               " --figures " + dir + "/figures_cli");
+  EXPECT_EQ(cli.exit_code, 0) << cli.output;
+  EXPECT_TRUE(fs::is_regular_file(fs::path(dir) / "figures_cli/velocity_field_compare.png"));
   fs::remove_all(dir);
 }
 
