@@ -17,6 +17,7 @@ PACKAGES=(
   python3-h5py                                  # tests check that h5py opens our files
   clang-tidy                                    # lint (.clang-tidy), run by scripts/test.sh
   curl                                          # scripts/fetch_dic_challenge.sh (and its test)
+  lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
 )
 
 # shellcheck source=scripts/common.sh
