@@ -291,8 +291,7 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
     const double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
     std::size_t j_show = 0;
     for (std::size_t j = 0; j < image_rows.size(); ++j)
-      if (std::abs(v.t_s[image_rows[j]] - t_show) <
-          std::abs(v.t_s[image_rows[j_show]] - t_show))
+      if (std::abs(v.t_s[image_rows[j]] - t_show) < std::abs(v.t_s[image_rows[j_show]] - t_show))
         j_show = j;
     const std::size_t f_show = image_rows[j_show];
     const cv::Mat& frame = images[j_show];
@@ -390,8 +389,7 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
   CompareModel(t, &out, &model_t, &model_g);
   if (!figures_dir.empty()) {
     // The frames `run` stored (render_results.h): all, a preview (/frames/row) or none.
-    const VelocityFieldSequence stored =
-        ReadVelocityFieldSequence(res, /*require_frames=*/false);
+    const VelocityFieldSequence stored = ReadVelocityFieldSequence(res, /*require_frames=*/false);
     std::vector<std::size_t> image_rows;
     if (!stored.frames.empty()) {
       if (res.Exists(results_layout::kFrameRows)) {

@@ -125,8 +125,8 @@ TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
                           "frame_small.png", "momentum_compare.png", "deceleration_compare.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / png)) << png;
   // The same through the command line, as docs/validation.md runs it.
-  const CliResult cli = RunCli("validate-dem " + report.truth_h5 + " " + results +
-                               " --figures " + dir + "/figures_cli");
+  const CliResult cli = RunCli("validate-dem " + report.truth_h5 + " " + results + " --figures " +
+                               dir + "/figures_cli");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_TRUE(fs::is_regular_file(fs::path(dir) / "figures_cli/velocity_field_compare.png"));
   fs::remove_all(dir);
