@@ -34,6 +34,7 @@ constexpr const char* kCaseName = "m10_h0.7_D0.15";
 constexpr double kMassKg = 10, kHeightM = 0.7;
 constexpr double kTimeAfterContactS = 0.008;  // TAFTER: DEM time simulated after the contact
 constexpr double kFps = 1600;                 // validation/dem/camera_spec.yaml
+constexpr double kDaqHz = 25000;              // its accelerometer (the synthetic DAQ's default)
 
 // Linear interpolation of the series (t, y) at `at` (t increasing; clamped at the ends).
 double At(const std::vector<double>& t, const std::vector<double>& y, double at) {
@@ -94,18 +95,29 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   EXPECT_GE(v.t_e_truth_s * kFps, 2) << "the peak stage must span two frames";
   EXPECT_LE(v.t_e_truth_s, kTimeAfterContactS / 2) << "the record must outlast the peak stage";
 
-  // 1. p_gran through the peak stage: within 5 % of p_max at every analysed frame (issue 21).
+  // 1. p_gran through the peak stage: within 5 % of p_max of the grains' at every analysed
+  // frame (issue 21), and within 1 % of what a perfect DIC gives at this frame rate (the DIC's
+  // own error: 3 x its RMS velocity error against a perfect DIC, ~32 mm/s, over the grid's
+  // 2.1 kg, all 12 subsets erring together, is 0.5 % of p_max). p_max from the accelerometer
+  // within 1 % of the DEM pounder's.
   EXPECT_LE(v.p_gran_error_peak_rel, 0.05);
+  EXPECT_LE(v.p_gran_fd_error_peak_rel, 0.01);
   EXPECT_NEAR(v.p_max_tool_Ns, v.p_max_truth_Ns, 0.01 * v.p_max_truth_Ns);
 
-  // 2. t_e within half a frame interval of the grains' (judged on 25 kHz samples).
-  const double dt = 0.5 / kFps;
+  // 2. t_e within half a frame interval of the grains' (judged on 25 kHz samples): the frames,
+  // 0.625 ms apart, place the end of the peak stage no better.
+  const double half_frame = 0.5 / kFps;
   ASSERT_TRUE(std::isfinite(v.t_e_tool_s)) << "t_e not measured";
-  EXPECT_NEAR(v.t_e_tool_s, v.t_e_truth_s, dt);
+  EXPECT_NEAR(v.t_e_tool_s, v.t_e_truth_s, half_frame);
 
-  // 3. m_add,max (Eq. 3 at t_e) and 4. the conservation error at t_e: within what the grains
-  // give anywhere in that window, [t_e - dt, t_e + dt]; the conservation error also within the
-  // p_gran tolerance (5 % of p_max) of it, since the tool's p_total contains its p_gran.
+  // 3. m_add,max = p_max / v_p(t_e) - m_p (Eq. 3) and 4. the conservation error at t_e.
+  // (a) Within what the grains give anywhere in [t_e - half_frame, t_e + half_frame]: what the
+  // timing tolerance of 2. allows; the conservation error also within the p_gran tolerance of
+  // 1. (5 % of p_max) of that, since the tool's p_total contains its p_gran.
+  // (b) At the tool's own t_e, within what its p_max and v_p allow: p_max to 1 % (above), v_p
+  // to one DAQ sample of the impact time (the accelerometer places the contact to 1/25 kHz =
+  // 40 us, in which v_p changes by |dv_p/dt| x 40 us). So p_max / v_p = m_p + m_add to
+  // 1 % + that, and p_total / p_max to 5 % (p_gran) + 1 % + that.
   const std::vector<double> t = truth.ReadDouble("series/t_s");
   const std::vector<double> v_p = truth.ReadDouble("series/v_m_s");
   const std::vector<double> p_p = truth.ReadDouble("series/p_pounder_Ns");
@@ -115,18 +127,29 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
     m_add[i] = v.p_max_truth_Ns / v_p[i] - kMassKg;
     conservation[i] = std::abs(p_p[i] + p_gran[i] - v.p_max_truth_Ns) / v.p_max_truth_Ns;
   }
-  const double a = v.t_e_truth_s - dt, b = v.t_e_truth_s + dt;
+  const double a = v.t_e_truth_s - half_frame, b = v.t_e_truth_s + half_frame;
   const auto [m_lo, m_hi] = RangeOver(t, m_add, a, b);
   EXPECT_GE(v.m_add_max_tool_kg, m_lo);
   EXPECT_LE(v.m_add_max_tool_kg, m_hi);
   const auto [c_lo, c_hi] = RangeOver(t, conservation, a, b);
   EXPECT_GE(v.conservation_tool, c_lo - 0.05);
   EXPECT_LE(v.conservation_tool, c_hi + 0.05);
+
+  const double te = v.t_e_tool_s, daq_s = 1 / kDaqHz;
+  const double dv_p = std::abs(At(t, v_p, te + daq_s) - At(t, v_p, te - daq_s)) / 2;
+  const double v_p_rel = dv_p / At(t, v_p, te);
+  const double m_add_at_te = At(t, m_add, te), conservation_at_te = At(t, conservation, te);
+  EXPECT_NEAR(v.m_add_max_tool_kg, m_add_at_te, (kMassKg + m_add_at_te) * (0.01 + v_p_rel));
+  EXPECT_NEAR(v.conservation_tool, conservation_at_te, 0.05 + 0.01 + v_p_rel);
   std::printf(
-      "reduced DEM case: t_e %.3f ms (grains %.3f, +- %.3f); m_add,max %.3f kg (grains' range "
-      "%.3f..%.3f); conservation error %.1f %% (grains' range %.1f..%.1f %%, +- 5 points)\n",
-      1e3 * v.t_e_tool_s, 1e3 * v.t_e_truth_s, 1e3 * dt, v.m_add_max_tool_kg, m_lo, m_hi,
-      100 * v.conservation_tool, 100 * c_lo, 100 * c_hi);
+      "reduced DEM case: p_gran within %.1f %% of p_max (perfect DIC: %.1f %%); t_e %.3f ms "
+      "(grains %.3f +- %.3f); m_add,max %.3f kg (grains %.3f..%.3f over t_e +- half a frame, "
+      "%.3f at the tool's t_e +- %.3f); conservation error %.1f %% (grains %.1f..%.1f %%, %.1f "
+      "%% at the tool's t_e)\n",
+      100 * v.p_gran_error_peak_rel, 100 * v.p_gran_fd_error_peak_rel, 1e3 * te,
+      1e3 * v.t_e_truth_s, 1e3 * half_frame, v.m_add_max_tool_kg, m_lo, m_hi, m_add_at_te,
+      (kMassKg + m_add_at_te) * (0.01 + v_p_rel), 100 * v.conservation_tool, 100 * c_lo, 100 * c_hi,
+      100 * conservation_at_te);
 }
 
 }  // namespace
