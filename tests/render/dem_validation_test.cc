@@ -1,5 +1,6 @@
 // Tests of the DEM validation comparison (render/dem_validation.h): a results file that equals the
-// grains' truth plus known errors gives those errors back.
+// grains' truth plus known errors gives those errors back; the figures are drawn from results
+// without frames and from a real run's results with the default frame preview.
 #include "impactdic/render/dem_validation.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +9,8 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../synth/dem_test_record.h"
@@ -48,6 +51,9 @@ void WriteFakeResults(const DemScene& scene, const std::string& path, double dvx
   const std::size_t Fa = index.size();
   H5Writer out(path);
   out.Write("time/frame_index", index, Dims{Fa}, "1", "frame index");
+  std::vector<double> t_ms;
+  for (double k : index) t_ms.push_back(1e3 * t.frame_time_s[static_cast<std::size_t>(k)]);
+  out.Write("time/t_ms", t_ms, Dims{Fa}, "ms", "time since the impact");
   out.Write("dic/x_px", x, Dims{N}, "px", "x");
   out.Write("dic/y_px", y, Dims{N}, "px", "y");
   out.Write("dic/u_px", u, Dims{Fa, N}, "px", "u");
@@ -89,6 +95,25 @@ TEST(DemValidation, KnownErrorsComeBack) {
   EXPECT_NE(v.notes.back().find("no sigmoid fit"), std::string::npos);
   // The DEM pounder's deceleration: F / (m_p g) - 1 in contact.
   EXPECT_NEAR(v.dem_peak_decel_g, dem_test::kForce / (dem_test::kMass * dem_test::kG) - 1, 1e-6);
+  fs::remove_all(dir);
+}
+
+// A results file without camera frames (`outputs.frames: none`): the comparison figures that
+// need no frame are drawn, the velocity-field figure is skipped with a note.
+TEST(DemValidation, FiguresWithoutStoredFramesSkipTheVelocityField) {
+  const std::string dir = dem_test::MakeDemDir("no_frames");
+  DemScene scene(ReadDemRecord(dir), dem_test::TinySpec());
+  DemSceneReport report = WriteDemScene(scene, dir + "/scene");
+  const std::string results = dir + "/results.h5";
+  WriteFakeResults(scene, results, /*dvx=*/0, /*gran_factor=*/1);
+  const std::string figures = dir + "/figures";
+  const DemValidation v = ValidateDemRun(report.truth_h5, results, figures);
+  EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / "momentum_compare.png"));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / "deceleration_compare.png"));
+  EXPECT_FALSE(fs::exists(fs::path(figures) / "velocity_field_compare.png"));
+  EXPECT_TRUE(std::any_of(v.notes.begin(), v.notes.end(), [](const std::string& n) {
+    return n.find("no velocity-field figure") != std::string::npos;
+  }));
   fs::remove_all(dir);
 }
 
