@@ -7,8 +7,8 @@
 # left at the new walls and floor). So the grains under the pounder are the full bed's, in its
 # packing. The data file is then made small: positions and diameters rounded to 1 nm (contact
 # overlaps at rest are ~1 um), densities to 7 digits, no Velocities section (the settled grains
-# move at < 1 mm/s; the impact at 3.7 m/s), gzipped (LAMMPS reads a .gz data file through gzip).
-# Run once (the full bed ~9 min on one core if WORK_DIR has none, the window ~1 min); the result
+# move at ~2.5 mm/s rms; the impact at 3.7 m/s), gzipped (LAMMPS reads a .gz data file through
+# gzip): 198 KB. Run once (the full bed ~9 min on one core if WORK_DIR has none, the window ~1 min); the result
 # is committed as validation/dem/reduced_bed.data.gz.
 #
 #   validation/dem/make_reduced_bed.sh WORK_DIR
