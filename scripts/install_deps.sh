@@ -17,6 +17,7 @@ PACKAGES=(
   python3-h5py                                  # tests check that h5py opens our files
   clang-tidy                                    # lint (.clang-tidy), run by scripts/test.sh
   python3-numpy                                 # bench/dic_challenge.py (and its tests)
+  lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
 )
 
 # shellcheck source=scripts/common.sh

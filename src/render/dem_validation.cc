@@ -10,7 +10,6 @@
 #include <opencv2/imgcodecs.hpp>  // flag values only (WriteImage encodes)
 #include <opencv2/imgproc.hpp>
 #include <system_error>
-#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
@@ -254,47 +253,78 @@ void CompareModel(const TruthFile& t, DemValidation* out, std::vector<double>* m
   }
 }
 
-void DrawFigures(const TruthFile& t, const DemValidation& v, VelocityFieldSequence tool_seq,
-                 VelocityFieldSequence truth_seq, const std::vector<double>& model_t,
+// One analysed frame (row) of a sequence holding every row's velocities, over `image`.
+VelocityFieldSequence OneFrame(const VelocityFieldSequence& all, std::size_t row, double t_s,
+                               const cv::Mat& image) {
+  const std::size_t n = all.num_subsets;
+  VelocityFieldSequence one;
+  one.frames = {image};
+  one.time_ms = {1e3 * t_s};
+  one.num_subsets = n;
+  one.x_px = all.x_px;
+  one.y_px = all.y_px;
+  one.vx_mm_s.assign(all.vx_mm_s.begin() + row * n, all.vx_mm_s.begin() + (row + 1) * n);
+  one.vy_mm_s.assign(all.vy_mm_s.begin() + row * n, all.vy_mm_s.begin() + (row + 1) * n);
+  one.mm_per_px = all.mm_per_px;
+  return one;
+}
+
+// tool_seq, truth_seq: the velocities of every analysed frame (no images); `images` the camera
+// frames `run` stored (outputs.frames) and `image_rows` their analysed-frame rows: every row
+// (`all`), some (the default `preview`) or none (then no velocity-field figure, with a note).
+void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequence& tool_seq,
+                 const VelocityFieldSequence& truth_seq, const std::vector<cv::Mat>& images,
+                 const std::vector<std::size_t>& image_rows, const std::vector<double>& model_t,
                  const std::vector<double>& model_g, const std::string& dir) {
   namespace fs = std::filesystem;
+  const DemValidation& v = *out;
   std::error_code ec;
   MakeFolders(dir, ec);
   if (ec || !fs::is_directory(dir, ec))
     throw Error(ErrorKind::kIo, "figures folder", dir,
                 "a folder that can be created (" + ec.message() + ")");
-  // Velocity fields at the frame nearest t_e / 2 of the grains, one colour scale.
-  double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
-  std::size_t f_show = 0;
-  for (std::size_t f = 0; f < v.t_s.size(); ++f)
-    if (std::abs(v.t_s[f] - t_show) < std::abs(v.t_s[f_show] - t_show)) f_show = f;
-  VelocityOverlayOptions o;
-  double vmax = 0;
-  for (std::size_t i = 0; i < truth_seq.num_subsets; ++i) {
-    const double s = std::hypot(truth_seq.vx_mm_s[f_show * truth_seq.num_subsets + i],
-                                truth_seq.vy_mm_s[f_show * truth_seq.num_subsets + i]);
-    if (std::isfinite(s)) vmax = std::max(vmax, s);
+  if (image_rows.empty()) {
+    out->notes.push_back(
+        "the results hold no camera frames (outputs.frames: none): no velocity-field figure");
+  } else {
+    // Velocity fields at the stored frame nearest t_e / 2 of the grains, one colour scale.
+    const double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
+    std::size_t j_show = 0;
+    for (std::size_t j = 0; j < image_rows.size(); ++j)
+      if (std::abs(v.t_s[image_rows[j]] - t_show) < std::abs(v.t_s[image_rows[j_show]] - t_show))
+        j_show = j;
+    const std::size_t f_show = image_rows[j_show];
+    const cv::Mat& frame = images[j_show];
+    VelocityOverlayOptions o;
+    double vmax = 0;
+    for (std::size_t i = 0; i < truth_seq.num_subsets; ++i) {
+      const double s = std::hypot(truth_seq.vx_mm_s[f_show * truth_seq.num_subsets + i],
+                                  truth_seq.vy_mm_s[f_show * truth_seq.num_subsets + i]);
+      if (std::isfinite(s)) vmax = std::max(vmax, s);
+    }
+    o.max_speed_mm_s = vmax > 0 ? vmax : kNaN;
+    o.min_width_px = 640;
+    o.max_width_px = 640;
+    // The renderers keep a reference to their sequence.
+    const VelocityFieldSequence tool_one = OneFrame(tool_seq, f_show, v.t_s[f_show], frame);
+    const VelocityFieldSequence truth_one = OneFrame(truth_seq, f_show, v.t_s[f_show], frame);
+    const VelocityFieldRenderer a(tool_one, o), b(truth_one, o);
+    const std::string when = fmt::format("t = {:.2f} ms", 1e3 * v.t_s[f_show]);
+    cv::Mat left = a.RenderFrame(0, "impactdic DIC, " + when);
+    cv::Mat right = b.RenderFrame(0, "DEM grains (cell means), " + when);
+    cv::Mat both;
+    cv::hconcat(left, right, both);
+    // WriteImage: atomic, and a full disk is an error naming the file (cv::imwrite says nothing).
+    WriteImage((fs::path(dir) / "velocity_field_compare.png").string(), both);
+    // Small versions for the documentation: the upper part (where the soil moves), scaled.
+    cv::Mat top = both(cv::Rect(0, 0, both.cols, both.rows * 3 / 5)), small;
+    cv::resize(top, small, cv::Size(), 0.6, 0.6, cv::INTER_AREA);
+    WriteImage((fs::path(dir) / "velocity_field_compare_small.png").string(), small,
+               {cv::IMWRITE_PNG_COMPRESSION, 9});
+    WriteImage((fs::path(dir) / "frame_small.png").string(),
+               frame(cv::Rect(0, 0, frame.cols, frame.rows * 3 / 5)),
+               {cv::IMWRITE_PNG_COMPRESSION, 9});
   }
-  o.max_speed_mm_s = vmax > 0 ? vmax : kNaN;
-  o.min_width_px = 640;
-  o.max_width_px = 640;
-  const VelocityFieldRenderer a(tool_seq, o), b(truth_seq, o);
-  const std::string when = fmt::format("t = {:.2f} ms", 1e3 * v.t_s[f_show]);
-  cv::Mat left = a.RenderFrame(f_show, "impactdic DIC, " + when);
-  cv::Mat right = b.RenderFrame(f_show, "DEM grains (cell means), " + when);
-  cv::Mat both;
-  cv::hconcat(left, right, both);
-  // WriteImage: atomic, and a full disk is an error naming the file (cv::imwrite says nothing).
-  WriteImage((fs::path(dir) / "velocity_field_compare.png").string(), both);
-  // Small versions for the documentation: the upper part (where the soil moves), scaled.
-  cv::Mat top = both(cv::Rect(0, 0, both.cols, both.rows * 3 / 5)), small;
-  cv::resize(top, small, cv::Size(), 0.6, 0.6, cv::INTER_AREA);
-  WriteImage((fs::path(dir) / "velocity_field_compare_small.png").string(), small,
-             {cv::IMWRITE_PNG_COMPRESSION, 9});
-  const cv::Mat& frame = tool_seq.frames[f_show];
-  WriteImage((fs::path(dir) / "frame_small.png").string(),
-             frame(cv::Rect(0, 0, frame.cols, frame.rows * 3 / 5)),
-             {cv::IMWRITE_PNG_COMPRESSION, 9});
 
   std::vector<double> t_ms, fine_ms, model_ms, sensor_ms, sensor_g, p_tot_tool, p_tot_truth;
   for (double x : v.t_s) t_ms.push_back(1e3 * x);
@@ -358,11 +388,20 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
   std::vector<double> model_t, model_g;
   CompareModel(t, &out, &model_t, &model_g);
   if (!figures_dir.empty()) {
-    VelocityFieldSequence frames_only = ReadVelocityFieldSequence(res);
-    tool_seq.frames = truth_seq.frames = frames_only.frames;
-    tool_seq.time_ms = truth_seq.time_ms = frames_only.time_ms;
-    tool_seq.mm_per_px = truth_seq.mm_per_px = frames_only.mm_per_px;
-    DrawFigures(t, out, std::move(tool_seq), std::move(truth_seq), model_t, model_g, figures_dir);
+    // The frames `run` stored (render_results.h): all, a preview (/frames/row) or none.
+    const VelocityFieldSequence stored = ReadVelocityFieldSequence(res, /*require_frames=*/false);
+    std::vector<std::size_t> image_rows;
+    if (!stored.frames.empty()) {
+      if (res.Exists(results_layout::kFrameRows)) {
+        for (double row : res.ReadDouble(results_layout::kFrameRows))
+          image_rows.push_back(static_cast<std::size_t>(row));  // checked by the reader
+      } else {
+        for (std::size_t f = 0; f < frame.size(); ++f) image_rows.push_back(f);
+      }
+    }
+    tool_seq.mm_per_px = truth_seq.mm_per_px = stored.mm_per_px;
+    DrawFigures(t, &out, tool_seq, truth_seq, stored.frames, image_rows, model_t, model_g,
+                figures_dir);
   }
   return out;
 }

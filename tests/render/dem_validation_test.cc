@@ -1,5 +1,6 @@
 // Tests of the DEM validation comparison (render/dem_validation.h): a results file that equals the
-// grains' truth plus known errors gives those errors back.
+// grains' truth plus known errors gives those errors back; the figures are drawn from results
+// without frames and from a real run's results with the default frame preview.
 #include "impactdic/render/dem_validation.h"
 
 #include <gtest/gtest.h>
@@ -8,9 +9,13 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/core.hpp>
+#include <string>
+#include <vector>
 
+#include "../cli/cli_runner.h"
 #include "../synth/dem_test_record.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 
@@ -46,6 +51,9 @@ void WriteFakeResults(const DemScene& scene, const std::string& path, double dvx
   const std::size_t Fa = index.size();
   H5Writer out(path);
   out.Write("time/frame_index", index, Dims{Fa}, "1", "frame index");
+  std::vector<double> t_ms;
+  for (double k : index) t_ms.push_back(1e3 * t.frame_time_s[static_cast<std::size_t>(k)]);
+  out.Write("time/t_ms", t_ms, Dims{Fa}, "ms", "time since the impact");
   out.Write("dic/x_px", x, Dims{N}, "px", "x");
   out.Write("dic/y_px", y, Dims{N}, "px", "y");
   out.Write("dic/u_px", u, Dims{Fa, N}, "px", "u");
@@ -87,6 +95,65 @@ TEST(DemValidation, KnownErrorsComeBack) {
   EXPECT_NE(v.notes.back().find("no sigmoid fit"), std::string::npos);
   // The DEM pounder's deceleration: F / (m_p g) - 1 in contact.
   EXPECT_NEAR(v.dem_peak_decel_g, dem_test::kForce / (dem_test::kMass * dem_test::kG) - 1, 1e-6);
+  fs::remove_all(dir);
+}
+
+// A results file without camera frames (`outputs.frames: none`): the comparison figures that
+// need no frame are drawn, the velocity-field figure is skipped with a note.
+TEST(DemValidation, FiguresWithoutStoredFramesSkipTheVelocityField) {
+  const std::string dir = dem_test::MakeDemDir("no_frames");
+  DemScene scene(ReadDemRecord(dir), dem_test::TinySpec());
+  DemSceneReport report = WriteDemScene(scene, dir + "/scene");
+  const std::string results = dir + "/results.h5";
+  WriteFakeResults(scene, results, /*dvx=*/0, /*gran_factor=*/1);
+  const std::string figures = dir + "/figures";
+  const DemValidation v = ValidateDemRun(report.truth_h5, results, figures);
+  EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / "momentum_compare.png"));
+  EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / "deceleration_compare.png"));
+  EXPECT_FALSE(fs::exists(fs::path(figures) / "velocity_field_compare.png"));
+  EXPECT_TRUE(std::any_of(v.notes.begin(), v.notes.end(), [](const std::string& n) {
+    return n.find("no velocity-field figure") != std::string::npos;
+  }));
+  fs::remove_all(dir);
+}
+
+// The figures of a real `impactdic run` on DEM footage, written with the default outputs: its
+// results.h5 stores a preview of the frames (outputs.frames: preview, <= 16 images of the
+// analysed frames, /frames/row), not one per analysed frame. Until 2026-11 the velocity-field
+// figure failed on such a file ("vx_mm_s/vy_mm_s ... got 11520 values; expected 2880"): only
+// hand-written results with every frame had been compared.
+TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
+  const std::string dir = dem_test::MakeDemDir("preview");
+  // 1 mm/px: the 4.8 mm lattice grains are ~5 px wide, a texture the DIC can follow.
+  ImpactSceneSpec spec = dem_test::TinySpec();
+  spec.width = 320;
+  spec.height = 160;
+  spec.mm_per_px = 1.0;
+  spec.subset_size = 21;
+  spec.step = 12;
+  DemScene scene(ReadDemRecord(dir), spec);
+  const DemSceneReport report = WriteDemScene(scene, dir + "/scene");
+  const std::string run = dir + "/run";
+  const CliResult r = RunCli("run " + report.scene_yaml + " -o " + run);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string results = run + "/results.h5";
+  {
+    const H5Reader in(results);
+    ASSERT_TRUE(in.Exists(results_layout::kFrameRows)) << "not a preview: the test needs one";
+    EXPECT_LT(in.ReadDouble(results_layout::kFrameRows).size(),
+              in.ReadDouble("/time/frame_index").size());
+  }
+  const std::string figures = dir + "/figures";
+  const DemValidation v = ValidateDemRun(report.truth_h5, results, figures);
+  EXPECT_GT(v.dic_samples, 100u);
+  for (const char* png : {"velocity_field_compare.png", "velocity_field_compare_small.png",
+                          "frame_small.png", "momentum_compare.png", "deceleration_compare.png"})
+    EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / png)) << png;
+  // The same through the command line, as docs/validation.md runs it.
+  const CliResult cli = RunCli("validate-dem " + report.truth_h5 + " " + results + " --figures " +
+                               dir + "/figures_cli");
+  EXPECT_EQ(cli.exit_code, 0) << cli.output;
+  EXPECT_TRUE(fs::is_regular_file(fs::path(dir) / "figures_cli/velocity_field_compare.png"));
   fs::remove_all(dir);
 }
 

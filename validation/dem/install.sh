@@ -1,13 +1,8 @@
 #!/usr/bin/env bash
-# Installs the optional DEM engine of the validation (docs/validation.md): Debian's LAMMPS
-# (package lammps, 20220106, serial binary `lmp`, GRANULAR package included). Not needed by the
-# main build or CI. Run as root on Debian 12.
+# Installs the DEM engine of the validation (docs/validation.md): Debian's LAMMPS (package
+# lammps, 20220106, serial binary `lmp`, GRANULAR package included). It is one of the project's
+# dependencies (the reduced DEM case runs in CI), so this is scripts/install_deps.sh, which
+# installs whatever of them is missing. Run as root (or with sudo) on Debian 12.
 set -euo pipefail
-if command -v lmp >/dev/null 2>&1; then
-  echo "lmp already installed: $(command -v lmp)"
-  exit 0
-fi
-export DEBIAN_FRONTEND=noninteractive
-apt-get update -qq
-apt-get install -y -qq --no-install-recommends lammps
+bash "$(dirname "$0")/../../scripts/install_deps.sh"
 command -v lmp

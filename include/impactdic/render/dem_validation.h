@@ -57,7 +57,9 @@ struct DemValidation {
 
 // Reads both files (Error naming a missing dataset) and compares; figures_dir non-empty: writes
 // velocity_field_compare.png (DIC field next to the grains', same colour scale, at the frame
-// nearest t_e/2 of the grains), momentum_compare.png and deceleration_compare.png there.
+// nearest t_e/2 of the grains among those the results store: all with `outputs.frames: all`,
+// the <= 16 of the default preview; none with `none`, which skips this figure with a note),
+// momentum_compare.png and deceleration_compare.png there.
 DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
                              const std::string& figures_dir = "");
 
