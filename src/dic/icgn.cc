@@ -792,6 +792,14 @@ Shape MakeShape(ShapeFunction kind, int half) {
   s.half = half;
   s.nm = kind == ShapeFunction::kAffine ? 3 : 6;
   s.n = 2 * s.nm;
+  for (int j = -half; j <= half; ++j) {
+    for (int i = -half; i <= half; ++i) {
+      double m[6];
+      Monomials(i, j, m);
+      for (int q = 0; q < s.nm; ++q)
+        for (int t = 0; t < s.nm; ++t) s.monomial_moments[q * 6 + t] += m[q] * m[t];
+    }
+  }
   if (kind == ShapeFunction::kQuadratic) {
     // Normal equations of the 5x5 sample grid in coordinates scaled by 1/half, then unscaled.
     double a[36] = {}, m[25][6];
@@ -1021,6 +1029,52 @@ double NodeGradientNoiseRatio(Interpolation kind) {
   return kind == Interpolation::kBicubic ? cubic : quintic;
 }
 
+// The deformed image's spline at the warped subset's pixels (row-major into g), returning their
+// sum. Along a row the warped position is a polynomial of xi of degree <= 2.
+template <int kTaps>
+double SampleWarpedSubset(const Shape& shape, const BsplineImage& spline, const SubsetRef& s,
+                          const Params& p, double* g) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const int h = shape.half, size = 2 * h + 1;
+  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(spline.coefficients().step1());
+  const float* centre = spline.coefficients().ptr<float>() +
+                        static_cast<std::ptrdiff_t>(s.cy - spline.region().y) * stride +
+                        (s.cx - spline.region().x);
+  double sum = 0;
+  for (int j = 0; j < size; ++j) {
+    double du0, dv0, dup, dvp, dum, dvm;
+    Displacement(shape, p, 0, j - h, &du0, &dv0);
+    Displacement(shape, p, 1, j - h, &dup, &dvp);
+    Displacement(shape, p, -1, j - h, &dum, &dvm);
+    const double x0 = du0, x1 = 1 + 0.5 * (dup - dum), x2 = 0.5 * (dup + dum) - du0;
+    const double y0 = (j - h) + dv0, y1 = 0.5 * (dvp - dvm), y2 = 0.5 * (dvp + dvm) - dv0;
+    for (int i = 0; i < size; ++i) {
+      const double xi = i - h;
+      const double x = x0 + xi * (x1 + xi * x2), y = y0 + xi * (y1 + xi * y2);
+      const double fx = std::floor(x), fy = std::floor(y);
+      float wx[kTaps], wy[kTaps];
+      if constexpr (kTaps == 4) {
+        CubicWeights(static_cast<float>(x - fx), wx);
+        CubicWeights(static_cast<float>(y - fy), wy);
+      } else {
+        QuinticWeightsF(static_cast<float>(x - fx), wx);
+        QuinticWeightsF(static_cast<float>(y - fy), wy);
+      }
+      const float* c = centre + (static_cast<int>(fy) - kLow) * stride + (static_cast<int>(fx) - kLow);
+      float value = 0;
+      for (int row = 0; row < kTaps; ++row) {
+        const float* cr = c + row * stride;
+        float line = 0;
+        for (int k = 0; k < kTaps; ++k) line += wx[k] * cr[k];
+        value += wy[row] * line;
+      }
+      g[j * size + i] = value;
+      sum += value;
+    }
+  }
+  return sum;
+}
+
 // Standard deviations of the warp's translation (u, v) at the solution p, from the residuals
 // r = (f - f_m) - (f_n / g_n) (g - g_m). The least-squares figure sigma_r sqrt(H^-1) assumes
 // independent residuals and exact reference gradients; both fail on real images (2.4x too small
@@ -1052,95 +1106,112 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
                              double var_r, float* sigma_u, float* sigma_v) {
   const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
   const int count = size * size;
-  thread_local std::vector<double> r, au, av, jac;
+  thread_local std::vector<double> r, au, av;
   r.resize(count);
   au.resize(count);
   av.resize(count);
-  jac.resize(static_cast<std::size_t>(count) * n);
   const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
-  double gsum = 0;
-  for (int j = 0; j < size; ++j) {
-    for (int i = 0; i < size; ++i) {
-      double du, dv;
-      Displacement(shape, p, i - h, j - h, &du, &dv);
-      const double g = spline.Value(s.cx + (i - h) + du, s.cy + (j - h) + dv);
-      r[j * size + i] = g;
-      gsum += g;
-    }
-  }
+  // The warped subset g, sampled from the spline's coefficients in coordinates local to the
+  // subset centre (as IC-GN's pass does).
+  const double gsum = spline.kind() == Interpolation::kBicubic
+                          ? SampleWarpedSubset<4>(shape, spline, s, p, r.data())
+                          : SampleWarpedSubset<6>(shape, spline, s, p, r.data());
   const double gm = gsum / count;
   double gn2 = 0;
   for (int k = 0; k < count; ++k) gn2 += (r[k] - gm) * (r[k] - gm);
   const double ratio = gn2 > 0 ? s.f_norm / std::sqrt(gn2) : 0;
-  // Residuals, steepest-descent images J, and the monomial moments M (one block, both components).
-  double mom[6][6] = {};
   for (int j = 0; j < size; ++j) {
     const float* f = ref.f.ptr<float>(ry + j) + rx;
-    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
-    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
-    for (int i = 0; i < size; ++i) {
-      const int k = j * size + i;
-      r[k] = (f[i] - s.f_mean) - ratio * (r[k] - gm);
-      double m[6];
-      Monomials(i - h, j - h, m);
-      double* jk = &jac[static_cast<std::size_t>(k) * n];
-      for (int q = 0; q < nm; ++q) {
-        jk[q] = gx[i] * m[q];
-        jk[nm + q] = gy[i] * m[q];
-        for (int t = 0; t < nm; ++t) mom[q][t] += m[q] * m[t];
-      }
-    }
+    double* rj = &r[static_cast<std::size_t>(j) * size];
+    for (int i = 0; i < size; ++i) rj[i] = (f[i] - s.f_mean) - ratio * (rj[i] - gm);
   }
   // Gradient noise variances from the residuals' central differences.
   double dx2 = 0, dy2 = 0;
-  int nx = 0, ny = 0;
   for (int j = 0; j < size; ++j) {
-    for (int i = 0; i < size; ++i) {
-      const int k = j * size + i;
-      if (i > 0 && i + 1 < size) {
-        const double d = 0.5 * (r[k + 1] - r[k - 1]);
-        dx2 += d * d;
-        ++nx;
-      }
-      if (j > 0 && j + 1 < size) {
-        const double d = 0.5 * (r[k + size] - r[k - size]);
-        dy2 += d * d;
-        ++ny;
-      }
-    }
+    const double* rj = &r[static_cast<std::size_t>(j) * size];
+    for (int i = 1; i + 1 < size; ++i) dx2 += 0.25 * (rj[i + 1] - rj[i - 1]) * (rj[i + 1] - rj[i - 1]);
   }
+  for (int k = size; k + size < count; ++k)
+    dy2 += 0.25 * (r[k + size] - r[k - size]) * (r[k + size] - r[k - size]);
+  const double pairs_cd = double(size) * (size - 2);
   const double gain = NodeGradientNoiseRatio(spline.kind());
-  const double noise2[2] = {nx ? kGradientNoiseWeight * 0.5 * gain * dx2 / nx : 0,
-                            ny ? kGradientNoiseWeight * 0.5 * gain * dy2 / ny : 0};
-  // H from J, and H' = H - lambda N with N = s_x^2 M_x + s_y^2 M_y, lambda <= 1 the largest value
-  // that keeps H' >= kMinTrueHessianFraction H (generalized eigenvalues of N against H).
-  double hh[144] = {}, nn[144] = {}, ht[144], htinv[144];
-  for (int k = 0; k < count; ++k) {
-    const double* jk = &jac[static_cast<std::size_t>(k) * n];
-    for (int a = 0; a < n; ++a)
-      for (int b = a; b < n; ++b) hh[a * n + b] += jk[a] * jk[b];
-  }
-  for (int a = 0; a < n; ++a) {
-    for (int b = 0; b < n; ++b) {
-      if (b < a) hh[a * n + b] = hh[b * n + a];
-      if (a / nm == b / nm) nn[a * n + b] = noise2[a / nm] * mom[a % nm][b % nm];
+  const double noise2[2] = {kGradientNoiseWeight * 0.5 * gain * dx2 / pairs_cd,
+                            kGradientNoiseWeight * 0.5 * gain * dy2 / pairs_cd};
+  // H' = H - lambda N with N = s_x^2 M_x + s_y^2 M_y (M the sums of the monomials' products over
+  // the subset), lambda <= 1 the largest value that keeps H' >= kMinTrueHessianFraction H.
+  const std::array<double, 36>& mom = shape.monomial_moments;
+  double hh[144], nn[144] = {}, ht[144], htinv[144];
+  const bool have_h = InvertSpd(hinv, n, hh);
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b)
+      if (a / nm == b / nm) nn[a * n + b] = noise2[a / nm] * mom[(a % nm) * 6 + b % nm];
+  // The largest mu of N v = mu H v: the largest eigenvalue of H^-1 N (real, >= 0), by power
+  // iteration from the translation directions.
+  double mu = 0;
+  {
+    double v[12], w[12], t[12];
+    for (int a = 0; a < n; ++a) v[a] = (a % nm == 0) ? 1.0 : 0.0;
+    for (int it = 0; it < 30; ++it) {
+      for (int a = 0; a < n; ++a) {
+        t[a] = 0;
+        for (int b = 0; b < n; ++b) t[a] += nn[a * n + b] * v[b];
+      }
+      double norm = 0, dot = 0, vv = 0;
+      for (int a = 0; a < n; ++a) {
+        w[a] = 0;
+        for (int b = 0; b < n; ++b) w[a] += hinv[a * n + b] * t[b];
+        norm += w[a] * w[a];
+        dot += w[a] * v[a];
+        vv += v[a] * v[a];
+      }
+      mu = vv > 0 ? dot / vv : 0;
+      norm = std::sqrt(norm);
+      if (!(norm > 0)) break;
+      for (int a = 0; a < n; ++a) v[a] = w[a] / norm;
     }
   }
-  const double mu = MaxGeneralizedEigenvalue(nn, hh, n);
-  const double lambda = !(mu >= 0) ? 0.0
+  const double lambda = !(mu >= 0) || !have_h ? 0.0
                         : mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu
                                                            : 1.0;
-  for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
-  const double* hi = InvertSpd(ht, n, htinv) ? htinv : hinv;
-  for (int k = 0; k < count; ++k) {
-    const double* jk = &jac[static_cast<std::size_t>(k) * n];
-    double a_u = 0, a_v = 0;
-    for (int q = 0; q < n; ++q) {
-      a_u += hi[q] * jk[q];
-      a_v += hi[nm * n + q] * jk[q];
+  const double* hi = hinv;
+  if (lambda > 0) {
+    for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
+    if (InvertSpd(ht, n, htinv)) hi = htinv;
+  }
+  // a_i for u and v: the translation rows of H'^-1 times J_i.
+  // Along a row, sum_q H'^-1[t][q] m_q is a polynomial of xi of degree <= 2 (t: the u and v rows,
+  // times the x and y gradient): its coefficients from xi = 0, 1, -1.
+  for (int j = 0; j < size; ++j) {
+    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
+    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
+    double coef[4][3];
+    {
+      double m0[6], mp[6], mm[6];
+      Monomials(0, j - h, m0);
+      Monomials(1, j - h, mp);
+      Monomials(-1, j - h, mm);
+      const double* rows[4] = {hi, hi + nm, hi + nm * n, hi + nm * n + nm};
+      for (int t = 0; t < 4; ++t) {
+        double v0 = 0, vp = 0, vm = 0;
+        for (int q = 0; q < nm; ++q) {
+          v0 += rows[t][q] * m0[q];
+          vp += rows[t][q] * mp[q];
+          vm += rows[t][q] * mm[q];
+        }
+        coef[t][0] = v0;
+        coef[t][1] = 0.5 * (vp - vm);
+        coef[t][2] = 0.5 * (vp + vm) - v0;
+      }
     }
-    au[k] = a_u;
-    av[k] = a_v;
+    for (int i = 0; i < size; ++i) {
+      const double xi = i - h;
+      const double ux = coef[0][0] + xi * (coef[0][1] + xi * coef[0][2]);
+      const double uy = coef[1][0] + xi * (coef[1][1] + xi * coef[1][2]);
+      const double vx = coef[2][0] + xi * (coef[2][1] + xi * coef[2][2]);
+      const double vy = coef[3][0] + xi * (coef[3][1] + xi * coef[3][2]);
+      au[j * size + i] = ux * gx[i] + uy * gy[i];
+      av[j * size + i] = vx * gx[i] + vy * gy[i];
+    }
   }
   double c0 = 0, a0u = 0, a0v = 0;
   for (int k = 0; k < count; ++k) {
@@ -1155,18 +1226,19 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
     for (int dy = 0; dy <= kResidualLagPx; ++dy) {
       for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
         if (dy == 0 && dx <= 0) continue;
+        const int i0 = std::max(0, -dx), i1 = size - std::max(0, dx), off = dy * size + dx;
         double c = 0, pu = 0, pv = 0;
-        int pairs = 0;
         for (int j = 0; j + dy < size; ++j) {
-          for (int i = std::max(0, -dx); i < size && i + dx < size; ++i) {
-            const int k = j * size + i, l = (j + dy) * size + i + dx;
-            c += r[k] * r[l];
-            pu += au[k] * au[l];
-            pv += av[k] * av[l];
-            ++pairs;
+          const double* rk = &r[static_cast<std::size_t>(j) * size];
+          const double* uk = &au[static_cast<std::size_t>(j) * size];
+          const double* vk = &av[static_cast<std::size_t>(j) * size];
+          for (int i = i0; i < i1; ++i) {
+            c += rk[i] * rk[i + off];
+            pu += uk[i] * uk[i + off];
+            pv += vk[i] * vk[i + off];
           }
         }
-        const double rho = c / pairs / c0;
+        const double rho = c / (double(i1 - i0) * (size - dy)) / c0;
         su += 2 * rho * pu;
         sv += 2 * rho * pv;
       }

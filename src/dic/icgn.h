@@ -25,6 +25,9 @@ struct Shape {
   // Least-squares fit of quadratic parameters to displacements sampled on a 5x5 grid (quadratic
   // warp composition); 6 x 25, row-major.
   std::vector<double> fit;
+  // Sums over the subset's pixels of the products of the shape monomials (nm x nm of 6 x 6, the
+  // Hessian's structure per unit gradient): the gradient-noise term of the uncertainty model.
+  std::array<double, 36> monomial_moments{};
 };
 Shape MakeShape(ShapeFunction kind, int half);
 
@@ -32,10 +35,6 @@ Shape MakeShape(ShapeFunction kind, int half);
 // factorisation A = L L^T (Eigen::LLT). Returns false, leaving inv unspecified, if a pivot
 // L_jj^2 is not above 1e-10 of its diagonal entry A_jj (the data cannot determine a parameter).
 bool InvertSpd(const double* a, int n, double* inv);
-
-// The largest mu of A v = mu B v for symmetric A and symmetric positive definite B (n x n,
-// row-major, 1 <= n <= 12); NaN if B is not positive definite.
-double MaxGeneralizedEigenvalue(const double* a, const double* b, int n);
 
 // Displacement (du, dv) of the warp at (xi, eta).
 void Displacement(const Shape& s, const Params& p, double xi, double eta, double* du, double* dv);

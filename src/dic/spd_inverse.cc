@@ -9,9 +9,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <Eigen/Eigenvalues>
 #include <cassert>
-#include <limits>
 
 #include "icgn.h"
 
@@ -35,22 +33,6 @@ bool InvertSpd(const double* a, int n, double* inv) {
   const Matrix inverse = llt.solve(Matrix::Identity(n, n));
   Eigen::Map<Matrix>(inv, n, n) = inverse;
   return true;
-}
-
-double MaxGeneralizedEigenvalue(const double* a, const double* b, int n) {
-  assert(n >= 1 && n <= 12);
-  using Matrix =
-      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor, /*MaxRows=*/12,
-                    /*MaxCols=*/12>;
-  const Matrix am = Eigen::Map<const Matrix>(a, n, n), bm = Eigen::Map<const Matrix>(b, n, n);
-  const Eigen::LLT<Matrix> llt(bm);
-  if (llt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
-  // L^-1 A L^-T has the eigenvalues of A v = mu B v.
-  const Matrix half = llt.matrixL().solve(am);
-  const Matrix c = llt.matrixL().solve(half.transpose());
-  const Eigen::SelfAdjointEigenSolver<Matrix> eig(c, Eigen::EigenvaluesOnly);
-  if (eig.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
-  return eig.eigenvalues().maxCoeff();
 }
 
 }  // namespace impactdic::internal

@@ -135,6 +135,7 @@ std::size_t ExcludeSamplesAboveMedianSigma(double ratio, const std::string& wher
 std::string ExcludeSamplesAboveMedianSigmaWithWarning(double ratio, const std::string& where,
                                                       CorrelationSeries* series) {
   const std::size_t excluded = ExcludeSamplesAboveMedianSigma(ratio, where, series);
+  if (excluded == 0) return "";
   return fmt::format(
       "kinematics: {} of {} subset samples left out (sigma_u or sigma_v > {} = {} x the frame's "
       "median sigma)",

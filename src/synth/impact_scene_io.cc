@@ -286,7 +286,7 @@ std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibra
       "  width_m: {}\n  depth_m: {}\n  density_kg_m3: {}\n  bed_height_m: {}\n"
       "  g_m_s2: {}\n",
       s.width_m, s.depth_m, s.density_kg_m3, s.bed_height_m, s.g_m_s2);
-  o << "preprocess:\n  gaussian:\n    enabled: false\n  clahe:\n    enabled: false\n";
+  o << "preprocess:\n  gaussian:\n    enabled: auto\n  clahe:\n    enabled: false\n";
   o << fmt::format("dic:\n  subset_size: {}\n  step: {}\n  roi: [{}, {}, {}, {}]\n", s.subset_size,
                    s.step, grid.roi[0], grid.roi[1], grid.roi[2], grid.roi[3]);
   o << "  interpolation: bicubic\n  shape: affine\n  reference_update: auto\n"

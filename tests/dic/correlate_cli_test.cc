@@ -158,7 +158,7 @@ TEST_F(CorrelateCli, PairsModeAndUncertaintyLimit) {
   // --help names the modes, the default and the uncertainty default.
   const CliResult help = RunCli("correlate --help");
   for (const char* item :
-       {"--mode TEXT=sequence", "sequence | pairs", "--max-uncertainty TEXT=0.025"})
+       {"--mode TEXT=sequence", "sequence | pairs", "--max-uncertainty TEXT=none"})
     EXPECT_NE(help.output.find(item), std::string::npos) << item << "\n" << help.output;
 }
 

@@ -140,10 +140,14 @@ TEST(RealisticDic, StraddlingSubsetsAreFlaggedAndTheRestIsAccurate) {
     options.grid.subset_size = 21;
     options.grid.step = 10;
     options.mode = SequenceMode::kPairs;
+    // The engine of before issue 21, on which the check was designed: a 0.025 px uncertainty
+    // limit, no outlier test (the defaults now: no limit, the outlier test, the check off).
+    options.icgn.max_uncertainty_px = 0.025;
+    options.outliers.enabled = false;
     options.continuity.enabled = false;
     Correlator correlator(options);
-    // The same with the continuity check in the correlator (the default): pairs are independent,
-    // so it must give what CheckContinuity gives afterwards.
+    // The same with the continuity check in the correlator: pairs are independent, so it must give
+    // what CheckContinuity gives afterwards.
     options.continuity.enabled = true;
     Correlator checking(options);
     const cv::Mat reference = Jpeg(scene.RenderFrame(0), spec.jpeg_quality);

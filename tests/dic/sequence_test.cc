@@ -84,6 +84,10 @@ TEST(Sequence, RigidMotionAutoKeepsTheReferenceIncrementalRandomWalks) {
   EXPECT_GT(rms[1], 2 * rms[0]);
 }
 
+// Subsets the block covers are not silent garbage: mostly covered ones fail, and a partly covered
+// one that still converges (no uncertainty limit by default, issue 21) is reported with a sigma
+// that covers its error (measured: |error| / sigma up to 3.2, rms 1.1 over the 36 partly covered
+// subsets that converged; their sigma 0.06-0.9 px against 0.01 px for the clean ones).
 TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
   // The soil translates slowly; a dark rigid block (the pounder) slides in from the top, 8 px per
   // frame, in front of it.
@@ -97,6 +101,8 @@ TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
   options.update.policy = "fixed";
   const DicResult r = CorrelateSequence(images, options);
   const int h = options.grid.subset_size / 2;
+  int covered_valid = 0, mostly_covered = 0, mostly_covered_valid = 0;
+  double z2 = 0;
   for (int k = 1; k < frames; ++k) {
     const FrameResult& f = r.frames[k - 1];
     const DisplacementField truth = seq.at(k);
@@ -105,17 +111,31 @@ TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
       const double covered = Covered(r.positions[i], u, h, BlockInFrame(k));
       const bool valid = f.status[i] == SubsetStatus::kConverged;
       if (covered >= 0.25) {
-        EXPECT_FALSE(valid) << "frame " << k << " subset " << i;
+        ++mostly_covered;
+        mostly_covered_valid += valid;
       }
       if (covered == 0) {
         EXPECT_TRUE(valid) << "frame " << k << " subset " << i;
-      }
-      if (valid) {
-        EXPECT_NEAR(f.u_px[i], u[0], 0.05) << "frame " << k << " covered " << covered;
-        EXPECT_NEAR(f.v_px[i], u[1], 0.05) << "frame " << k << " covered " << covered;
+        if (valid) {
+          EXPECT_NEAR(f.u_px[i], u[0], 0.05) << "frame " << k;
+          EXPECT_NEAR(f.v_px[i], u[1], 0.05) << "frame " << k;
+        }
+      } else if (valid) {
+        const double zu = (f.u_px[i] - u[0]) / f.sigma_u_px[i];
+        const double zv = (f.v_px[i] - u[1]) / f.sigma_v_px[i];
+        EXPECT_LT(std::abs(zu), 4.5) << "frame " << k << " covered " << covered;
+        EXPECT_LT(std::abs(zv), 4.5) << "frame " << k << " covered " << covered;
+        z2 += zu * zu + zv * zv;
+        ++covered_valid;
       }
     }
   }
+  std::printf("partly covered and converged: %d, rms |error| / sigma %.2f; covered >= 25 %%: %d of %d "
+              "converged\n",
+              covered_valid, std::sqrt(z2 / (2.0 * std::max(1, covered_valid))),
+              mostly_covered_valid, mostly_covered);
+  EXPECT_LT(std::sqrt(z2 / (2.0 * std::max(1, covered_valid))), 1.5);
+  EXPECT_LT(mostly_covered_valid, mostly_covered / 10 + 1);
 }
 
 // The same results, bit for bit, with 1 and 2 threads.
@@ -150,6 +170,10 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
   PaintBlocks(&images);
   DicOptions options;
   options.grid.step = 10;
+  // The limit of the defaults before issue 21: the blurred frame defeats the subsets (they become
+  // `uncertain`), the case of `auto` this test is about; without it they converge with a larger
+  // sigma.
+  options.icgn.max_uncertainty_px = 0.025;
   const int h = options.grid.subset_size / 2;
   struct Run {
     std::string mode;
@@ -223,6 +247,10 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
   cv::GaussianBlur(images[bad], images[bad], cv::Size(0, 0), 3.0);
   DicOptions options;
   options.grid.step = 12;
+  // The limit of the defaults before issue 21: the blurred frame makes the subsets `uncertain`,
+  // the case of `auto` this test is about (without a limit they converge there with a larger
+  // sigma, and nothing is left to recover).
+  options.icgn.max_uncertainty_px = 0.025;
   for (const char* mode : {"fixed", "auto"}) {
     options.update.policy = mode;
     const DicResult r = CorrelateSequence(images, options);

@@ -77,7 +77,8 @@ std::string ExcludeUncertainSamplesWithWarning(double max_sigma_px, const std::s
 // > 1 or the series has no sigmas.
 std::size_t ExcludeSamplesAboveMedianSigma(double ratio, const std::string& where,
                                            CorrelationSeries* series);
-// ExcludeSamplesAboveMedianSigma, returning the warning the pipeline reports.
+// ExcludeSamplesAboveMedianSigma, returning the warning the pipeline reports (empty when no sample
+// was left out: the default rule speaks only when it acts).
 std::string ExcludeSamplesAboveMedianSigmaWithWarning(double ratio, const std::string& where,
                                                       CorrelationSeries* series);
 

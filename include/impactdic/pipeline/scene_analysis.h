@@ -22,7 +22,8 @@ struct SceneAnalysisRun {
 
 // Leaves the uncertain samples of the scene's correlation series out of its kinematics and
 // momentum (momentum.max_sigma_px if set, else momentum.max_sigma_ratio) and returns the warning
-// saying how many (empty when neither applies). The one rule of `run` and `analyze`.
+// saying how many (empty when neither applies, or the ratio rule left nothing out). The one rule
+// of `run` and `analyze`.
 std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series);
 
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
