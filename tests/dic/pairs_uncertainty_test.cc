@@ -274,7 +274,8 @@ TEST(Uncertainty, NoLimitReportsEverySubsetWithItsSigma) {
     for (std::size_t i = 0; i < a.status.size(); ++i) {
       if (a.status[i] == SubsetStatus::kUncertain) {
         ASSERT_EQ(b.status[i], SubsetStatus::kConverged) << i;
-        EXPECT_GT(b.sigma_px[i], kLimitPx) << i;
+        // Above the limit up to the start of IC-GN (its neighbours now guide it).
+        EXPECT_GT(b.sigma_px[i], 0.98 * kLimitPx) << i;
       } else if (a.status[i] == SubsetStatus::kConverged) {
         // The same up to the start of IC-GN (the uncertain subsets now guide their neighbours).
         EXPECT_EQ(b.status[i], SubsetStatus::kConverged) << i;

@@ -19,6 +19,7 @@
 #include "impactdic/io/results_layout.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/scene.h"
 #include "small_scene_spec.h"
 
 namespace impactdic {
@@ -62,18 +63,24 @@ TEST(SigmaLimit, RunAndAnalyzeLeaveOutExactlyTheSamplesAboveItAndKeepThemInDic) 
   const std::string scene = dir.File("scene/scene.yaml");
   const CliResult plain = RunCli("-q run " + scene + " -o " + dir.File("plain"));
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
-  // Without momentum.max_sigma_px the default rule applies: samples above 5 x the frame's median
-  // sigma (momentum.max_sigma_ratio, issue 21), named in the warning.
-  EXPECT_NE(plain.output.find("x the frame's median sigma"), std::string::npos) << plain.output;
-  EXPECT_EQ(plain.output.find("momentum.max_sigma_px"), std::string::npos) << plain.output;
-  const std::size_t left = plain.output.find("kinematics: ");
-  ASSERT_NE(left, std::string::npos) << plain.output;
-  const std::size_t left_out_by_default = std::stoul(plain.output.substr(left + 12));
 
   // The limit: the median of the larger sigma over the valid samples.
   long first = -1;
   const CorrelationSeries all = ReadCorrelationSeries(dir.File("plain/results.h5"), &first);
   ASSERT_FALSE(all.sigma_u_px.empty());
+  // Without momentum.max_sigma_px the default rule applied: samples above 50 x their frame's
+  // median sigma (momentum.max_sigma_ratio, issue 21), named in a warning when there are any.
+  CorrelationSeries by_default = all;
+  const std::size_t left_out_by_default = ExcludeSamplesAboveMedianSigma(
+      SceneMomentum::kDefaultMaxSigmaRatio, "momentum.max_sigma_ratio", &by_default);
+  EXPECT_EQ(plain.output.find("momentum.max_sigma_px"), std::string::npos) << plain.output;
+  if (left_out_by_default == 0) {
+    EXPECT_EQ(plain.output.find("left out"), std::string::npos) << plain.output;
+  } else {
+    EXPECT_NE(plain.output.find(fmt::format("kinematics: {} of", left_out_by_default)),
+              std::string::npos)
+        << plain.output;
+  }
   std::vector<double> sigmas;
   for (std::size_t j = 0; j < all.frames * all.subsets; ++j)
     if (all.valid[j]) sigmas.push_back(std::max(all.sigma_u_px[j], all.sigma_v_px[j]));
@@ -103,7 +110,7 @@ TEST(SigmaLimit, RunAndAnalyzeLeaveOutExactlyTheSamplesAboveItAndKeepThemInDic) 
   const std::vector<double> vy_plain = plain_h5.ReadDouble(results_layout::kVy);
   const std::vector<double> vy_limited = limited_h5.ReadDouble(results_layout::kVy);
   ASSERT_EQ(vy_plain.size(), vy_limited.size());
-  // The plain run left out its samples above 5 x the median, all of them above the median too.
+  // The plain run left out its samples above 50 x the median, all of them above the median too.
   EXPECT_GE(CountNaN(vy_limited), CountNaN(vy_plain) + above - left_out_by_default);
   // The momentum is still measured from the other samples, and differs from the unlimited one.
   const std::vector<double> p_plain = plain_h5.ReadDouble(results_layout::kPGran);
