@@ -1060,7 +1060,8 @@ double SampleWarpedSubset(const Shape& shape, const BsplineImage& spline, const 
         QuinticWeightsF(static_cast<float>(x - fx), wx);
         QuinticWeightsF(static_cast<float>(y - fy), wy);
       }
-      const float* c = centre + (static_cast<int>(fy) - kLow) * stride + (static_cast<int>(fx) - kLow);
+      const float* c =
+          centre + (static_cast<int>(fy) - kLow) * stride + (static_cast<int>(fx) - kLow);
       float value = 0;
       for (int row = 0; row < kTaps; ++row) {
         const float* cr = c + row * stride;
@@ -1129,7 +1130,8 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
   double dx2 = 0, dy2 = 0;
   for (int j = 0; j < size; ++j) {
     const double* rj = &r[static_cast<std::size_t>(j) * size];
-    for (int i = 1; i + 1 < size; ++i) dx2 += 0.25 * (rj[i + 1] - rj[i - 1]) * (rj[i + 1] - rj[i - 1]);
+    for (int i = 1; i + 1 < size; ++i)
+      dx2 += 0.25 * (rj[i + 1] - rj[i - 1]) * (rj[i + 1] - rj[i - 1]);
   }
   for (int k = size; k + size < count; ++k)
     dy2 += 0.25 * (r[k + size] - r[k - size]) * (r[k + size] - r[k - size]);
@@ -1170,7 +1172,7 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
       for (int a = 0; a < n; ++a) v[a] = w[a] / norm;
     }
   }
-  const double lambda = !(mu >= 0) || !have_h ? 0.0
+  const double lambda = !(mu >= 0) || !have_h              ? 0.0
                         : mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu
                                                            : 1.0;
   const double* hi = hinv;

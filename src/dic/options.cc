@@ -19,10 +19,9 @@ namespace impactdic {
 namespace {
 
 const char* const kStatusNames[kSubsetStatusCount] = {
-    "converged",    "max_iterations", "low_correlation", "singular_hessian",
-    "out_of_image", "masked",         "low_contrast",    "saturated",
-    "not_found",    "lost",           "uncertain",       "discontinuous",
-    "outlier"};
+    "converged", "max_iterations", "low_correlation", "singular_hessian", "out_of_image",
+    "masked",    "low_contrast",   "saturated",       "not_found",        "lost",
+    "uncertain", "discontinuous",  "outlier"};
 
 std::string Num(double v) { return std::to_string(v); }
 

@@ -18,8 +18,8 @@ namespace impactdic {
 
 std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series) {
   if (scene.momentum.max_sigma_px) {
-    return ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px,
-                                              "momentum.max_sigma_px", series);
+    return ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px, "momentum.max_sigma_px",
+                                              series);
   }
   if (!std::isfinite(scene.momentum.max_sigma_ratio) || series->sigma_u_px.empty()) return "";
   return ExcludeSamplesAboveMedianSigmaWithWarning(scene.momentum.max_sigma_ratio,

@@ -60,9 +60,9 @@ class ContinuityCli : public ::testing::Test {
   // pre-filter).
   static Correlated Run(const std::string& flags, const std::string& name, std::string* log) {
     const std::string out = Path(name + ".h5");
-    const CliResult r = RunCli(Pair() +
-                               " --max-uncertainty 0.025 --outlier-check off --gaussian none " +
-                               flags + " -o " + out);
+    const CliResult r =
+        RunCli(Pair() + " --max-uncertainty 0.025 --outlier-check off --gaussian none " + flags +
+               " -o " + out);
     *log = r.output;
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return r.exit_code == 0 ? Evaluate(out) : Correlated{};

@@ -75,8 +75,8 @@ TEST(OutlierCheck, KeepsCoherentHighGradientMotionAndShearBands) {
                                    return 12 * std::exp(-0.5 * x * x) * std::exp(-0.25 * r);
                                  });
   EXPECT_TRUE(Flagged(core).empty());
-  const FrameResult band =
-      Field([](int, int) { return 0.0; }, [](int c, int r) { return (c >= 6 ? 4.0 : 0.0) + 0.01 * r; });
+  const FrameResult band = Field([](int, int) { return 0.0; },
+                                 [](int c, int r) { return (c >= 6 ? 4.0 : 0.0) + 0.01 * r; });
   EXPECT_TRUE(Flagged(band).empty());
 }
 

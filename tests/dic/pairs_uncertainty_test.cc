@@ -289,9 +289,9 @@ TEST(Uncertainty, NoLimitReportsEverySubsetWithItsSigma) {
     std::printf(
         "%d subsets; limit %.3f px: %.2f%% uncertain, RMS over the rest %.4f px; "
         "limit %g: %.2f%% converged, RMS over all %.4f px (u %.4f, v %.4f), rms sigma %.4f px\n",
-        n, kLimitPx, 100.0 * uncertain / n, before.rms, none,
-        100.0 * after.valid / n, after.rms, std::hypot(after.bias_u, after.sd_u),
-        std::hypot(after.bias_v, after.sd_v), std::sqrt(sigma2 / after.valid));
+        n, kLimitPx, 100.0 * uncertain / n, before.rms, none, 100.0 * after.valid / n, after.rms,
+        std::hypot(after.bias_u, after.sd_u), std::hypot(after.bias_v, after.sd_v),
+        std::sqrt(sigma2 / after.valid));
   }
 }
 

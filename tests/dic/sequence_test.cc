@@ -130,10 +130,11 @@ TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
       }
     }
   }
-  std::printf("partly covered and converged: %d, rms |error| / sigma %.2f; covered >= 25 %%: %d of %d "
-              "converged\n",
-              covered_valid, std::sqrt(z2 / (2.0 * std::max(1, covered_valid))),
-              mostly_covered_valid, mostly_covered);
+  std::printf(
+      "partly covered and converged: %d, rms |error| / sigma %.2f; covered >= 25 %%: %d of %d "
+      "converged\n",
+      covered_valid, std::sqrt(z2 / (2.0 * std::max(1, covered_valid))), mostly_covered_valid,
+      mostly_covered);
   EXPECT_LT(std::sqrt(z2 / (2.0 * std::max(1, covered_valid))), 1.5);
   EXPECT_LT(mostly_covered_valid, mostly_covered / 10 + 1);
 }

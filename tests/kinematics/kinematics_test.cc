@@ -156,10 +156,10 @@ TEST(Kinematics, ExcludesSamplesFarAboveTheFramesMedianSigma) {
   dic.valid.assign(20, 1);
   // Frame 0: the reference; frame 1: median 0.03, samples at 0.3 and 0.15 (> 4 x 0.03); frame 2:
   // all poor alike (median 0.2, none left out), one failed; frame 3: one failed, 2 valid left.
-  dic.sigma_u_px = {0,     0,     0,     0,     0,     0.02f, 0.02f, 0.3f, 0.01f, 0.02f,
-                    0.2f,  0.2f,  0.3f,  0.2f,  NAN,   0.01f, 0.5f,  NAN,  NAN,   NAN};
-  dic.sigma_v_px = {0,     0,     0,     0,     0,     0.02f, 0.03f, 0.01f, 0.02f, 0.15f,
-                    0.2f,  0.2f,  0.2f,  0.2f,  NAN,   0.01f, 0.01f, NAN,   NAN,   NAN};
+  dic.sigma_u_px = {0,    0,    0,    0,    0,   0.02f, 0.02f, 0.3f, 0.01f, 0.02f,
+                    0.2f, 0.2f, 0.3f, 0.2f, NAN, 0.01f, 0.5f,  NAN,  NAN,   NAN};
+  dic.sigma_v_px = {0,    0,    0,    0,    0,   0.02f, 0.03f, 0.01f, 0.02f, 0.15f,
+                    0.2f, 0.2f, 0.2f, 0.2f, NAN, 0.01f, 0.01f, NAN,   NAN,   NAN};
   for (const std::size_t failed : {14, 17, 18, 19}) {
     dic.valid[failed] = 0;
     dic.u_px[failed] = dic.v_px[failed] = NAN;
@@ -168,8 +168,9 @@ TEST(Kinematics, ExcludesSamplesFarAboveTheFramesMedianSigma) {
   EXPECT_EQ(dic.valid, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 1, 0, 1, 0,
                                                   1, 1, 1, 1, 0, 1, 1, 0, 0, 0}));
   EXPECT_TRUE(std::isnan(dic.u_px[7]) && std::isnan(dic.v_px[9]));
-  ExpectErrorContaining([&] { ExcludeSamplesAboveMedianSigma(1, "momentum.max_sigma_ratio", &dic); },
-                        "momentum.max_sigma_ratio");
+  ExpectErrorContaining(
+      [&] { ExcludeSamplesAboveMedianSigma(1, "momentum.max_sigma_ratio", &dic); },
+      "momentum.max_sigma_ratio");
 }
 
 // A homography that is a scale + translation gives the same velocities as the scale.

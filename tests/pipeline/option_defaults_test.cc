@@ -158,7 +158,8 @@ TEST(OptionDefaults, CliCommandsShowTheLibraryDefaults) {
   ExpectHelpDefault(correlate.output, "--reference-update", ReferenceUpdateText(d.update));
   ExpectHelpDefault(correlate.output, "--search-radius", Shown(d.init.search_radius_px));
   ExpectHelpDefault(correlate.output, "--min-zncc", Shown(d.icgn.min_zncc));
-  ExpectHelpDefault(correlate.output, "--max-uncertainty", MaxUncertaintyText(d.icgn.max_uncertainty_px));
+  ExpectHelpDefault(correlate.output, "--max-uncertainty",
+                    MaxUncertaintyText(d.icgn.max_uncertainty_px));
   ExpectHelpDefault(correlate.output, "--outlier-check", d.outliers.enabled ? "on" : "off");
   ExpectHelpDefault(correlate.output, "--outlier-threshold", Shown(d.outliers.threshold));
   ExpectHelpDefault(correlate.output, "--outlier-noise", Shown(d.outliers.noise_px));

@@ -11,10 +11,10 @@
 #include "impactdic/io/dic_results.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
-#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/pipeline/scene_analysis.h"
 #include "stage.h"
 
 namespace impactdic::stages {
