@@ -12,6 +12,7 @@
 #include "icgn.h"
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #if defined(__AVX2__) && defined(__FMA__)
 #define IMPACTDIC_DIC_AVX2 1
@@ -1102,154 +1103,189 @@ constexpr double kMinTrueHessianFraction = 0.25;
 // static real sand pair at 1.03-1.06 (docs/dic.md, "Uncertainty per subset").
 constexpr double kGradientNoiseWeight = 0.5;
 
-void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const SubsetRef& s,
-                             const double* hinv, const BsplineImage& spline, const Params& p,
-                             double var_r, float* sigma_u, float* sigma_v) {
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
-  const int count = size * size;
-  thread_local std::vector<double> r, au, av;
-  r.resize(count);
-  au.resize(count);
-  av.resize(count);
+// The residuals r = (f - f_m) - (f_n / g_n) (g - g_m) of the warp p over the subset (row-major).
+void SubsetResiduals(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                     const BsplineImage& spline, const Params& p, std::vector<double>* r) {
+  const int h = shape.half, size = 2 * h + 1, count = size * size;
+  r->resize(count);
   const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
   // The warped subset g, sampled from the spline's coefficients in coordinates local to the
   // subset centre (as IC-GN's pass does).
   const double gsum = spline.kind() == Interpolation::kBicubic
-                          ? SampleWarpedSubset<4>(shape, spline, s, p, r.data())
-                          : SampleWarpedSubset<6>(shape, spline, s, p, r.data());
+                          ? SampleWarpedSubset<4>(shape, spline, s, p, r->data())
+                          : SampleWarpedSubset<6>(shape, spline, s, p, r->data());
   const double gm = gsum / count;
   double gn2 = 0;
-  for (int k = 0; k < count; ++k) gn2 += (r[k] - gm) * (r[k] - gm);
+  for (const double g : *r) gn2 += (g - gm) * (g - gm);
   const double ratio = gn2 > 0 ? s.f_norm / std::sqrt(gn2) : 0;
   for (int j = 0; j < size; ++j) {
     const float* f = ref.f.ptr<float>(ry + j) + rx;
-    double* rj = &r[static_cast<std::size_t>(j) * size];
+    double* rj = r->data() + static_cast<std::size_t>(j) * size;
     for (int i = 0; i < size; ++i) rj[i] = (f[i] - s.f_mean) - ratio * (rj[i] - gm);
   }
-  // Gradient noise variances from the residuals' central differences.
+}
+
+// The variances of the reference gradients' noise in x and y, estimated from the residuals
+// (which carry the noise of both images): half the variance of their central differences, times
+// the node gradient's noise gain relative to the central difference, times kGradientNoiseWeight.
+std::array<double, 2> GradientNoise(const std::vector<double>& r, int size, Interpolation kind) {
+  const int count = size * size;
   double dx2 = 0, dy2 = 0;
   for (int j = 0; j < size; ++j) {
-    const double* rj = &r[static_cast<std::size_t>(j) * size];
-    for (int i = 1; i + 1 < size; ++i)
-      dx2 += 0.25 * (rj[i + 1] - rj[i - 1]) * (rj[i + 1] - rj[i - 1]);
-  }
-  for (int k = size; k + size < count; ++k)
-    dy2 += 0.25 * (r[k + size] - r[k - size]) * (r[k + size] - r[k - size]);
-  const double pairs_cd = double(size) * (size - 2);
-  const double gain = NodeGradientNoiseRatio(spline.kind());
-  const double noise2[2] = {kGradientNoiseWeight * 0.5 * gain * dx2 / pairs_cd,
-                            kGradientNoiseWeight * 0.5 * gain * dy2 / pairs_cd};
-  // H' = H - lambda N with N = s_x^2 M_x + s_y^2 M_y (M the sums of the monomials' products over
-  // the subset), lambda <= 1 the largest value that keeps H' >= kMinTrueHessianFraction H.
-  const std::array<double, 36>& mom = shape.monomial_moments;
-  double hh[144], nn[144] = {}, ht[144], htinv[144];
-  const bool have_h = InvertSpd(hinv, n, hh);
-  for (int a = 0; a < n; ++a)
-    for (int b = 0; b < n; ++b)
-      if (a / nm == b / nm) nn[a * n + b] = noise2[a / nm] * mom[(a % nm) * 6 + b % nm];
-  // The largest mu of N v = mu H v: the largest eigenvalue of H^-1 N (real, >= 0), by power
-  // iteration from the translation directions.
-  double mu = 0;
-  {
-    double v[12], w[12], t[12];
-    for (int a = 0; a < n; ++a) v[a] = (a % nm == 0) ? 1.0 : 0.0;
-    for (int it = 0; it < 30; ++it) {
-      for (int a = 0; a < n; ++a) {
-        t[a] = 0;
-        for (int b = 0; b < n; ++b) t[a] += nn[a * n + b] * v[b];
-      }
-      double norm = 0, dot = 0, vv = 0;
-      for (int a = 0; a < n; ++a) {
-        w[a] = 0;
-        for (int b = 0; b < n; ++b) w[a] += hinv[a * n + b] * t[b];
-        norm += w[a] * w[a];
-        dot += w[a] * v[a];
-        vv += v[a] * v[a];
-      }
-      mu = vv > 0 ? dot / vv : 0;
-      norm = std::sqrt(norm);
-      if (!(norm > 0)) break;
-      for (int a = 0; a < n; ++a) v[a] = w[a] / norm;
+    const double* rj = r.data() + static_cast<std::size_t>(j) * size;
+    for (int i = 1; i + 1 < size; ++i) {
+      const double d = 0.5 * (rj[i + 1] - rj[i - 1]);
+      dx2 += d * d;
     }
   }
-  const double lambda = !(mu >= 0) || !have_h              ? 0.0
-                        : mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu
-                                                           : 1.0;
-  const double* hi = hinv;
-  if (lambda > 0) {
-    for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
-    if (InvertSpd(ht, n, htinv)) hi = htinv;
+  for (int k = size; k + size < count; ++k) {
+    const double d = 0.5 * (r[k + size] - r[k - size]);
+    dy2 += d * d;
   }
-  // a_i for u and v: the translation rows of H'^-1 times J_i.
-  // Along a row, sum_q H'^-1[t][q] m_q is a polynomial of xi of degree <= 2 (t: the u and v rows,
-  // times the x and y gradient): its coefficients from xi = 0, 1, -1.
+  const double pairs = double(size) * (size - 2);
+  const double scale = kGradientNoiseWeight * 0.5 * NodeGradientNoiseRatio(kind) / pairs;
+  return {scale * dx2, scale * dy2};
+}
+
+// The largest mu of N v = mu H v, i.e. the largest eigenvalue of H^-1 N (real, >= 0), by power
+// iteration from the translation directions (n x n, row-major).
+double LargestNoiseRatio(const double* hinv, const double* nn, int n, int nm) {
+  double v[12], w[12], t[12], mu = 0;
+  for (int a = 0; a < n; ++a) v[a] = (a % nm == 0) ? 1.0 : 0.0;
+  for (int it = 0; it < 30; ++it) {
+    for (int a = 0; a < n; ++a) {
+      t[a] = 0;
+      for (int b = 0; b < n; ++b) t[a] += nn[a * n + b] * v[b];
+    }
+    double norm = 0, dot = 0, vv = 0;
+    for (int a = 0; a < n; ++a) {
+      w[a] = 0;
+      for (int b = 0; b < n; ++b) w[a] += hinv[a * n + b] * t[b];
+      norm += w[a] * w[a];
+      dot += w[a] * v[a];
+      vv += v[a] * v[a];
+    }
+    mu = vv > 0 ? dot / vv : 0;
+    norm = std::sqrt(norm);
+    if (!(norm > 0)) break;
+    for (int a = 0; a < n; ++a) v[a] = w[a] / norm;
+  }
+  return mu;
+}
+
+// H'^-1 into htinv, H' = H - lambda N with N = s_x^2 M_x + s_y^2 M_y (M the sums of the monomials'
+// products over the subset) and lambda <= 1 the largest value that keeps
+// H' >= kMinTrueHessianFraction H. Returns hinv itself when no correction applies.
+const double* TrueHessianInverse(const Shape& shape, const double* hinv,
+                                 const std::array<double, 2>& noise2, double* htinv) {
+  const int n = shape.n, nm = shape.nm;
+  double hh[144], nn[144] = {}, ht[144];
+  if (!InvertSpd(hinv, n, hh)) return hinv;
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      if (a / nm == b / nm)
+        nn[a * n + b] = noise2[a / nm] * shape.monomial_moments[(a % nm) * 6 + b % nm];
+    }
+  }
+  const double mu = LargestNoiseRatio(hinv, nn, n, nm);
+  if (!(mu > 0)) return hinv;
+  const double lambda = mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu : 1.0;
+  for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
+  return InvertSpd(ht, n, htinv) ? htinv : hinv;
+}
+
+// a_i for u and v: the translation rows of hi (H'^-1) times J_i, over the subset (row-major). Along
+// a row, sum_q hi[t][q] m_q is a polynomial of xi of degree <= 2 (t: the u and v rows, times the
+// x and y gradient): its coefficients from xi = 0, 1, -1.
+void InfluenceOfEachPixel(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                          const double* hi, std::vector<double>* au, std::vector<double>* av) {
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
+  au->resize(static_cast<std::size_t>(size) * size);
+  av->resize(au->size());
+  const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
+  const double* rows[4] = {hi, hi + nm, hi + static_cast<std::ptrdiff_t>(nm) * n,
+                           hi + static_cast<std::ptrdiff_t>(nm) * n + nm};
   for (int j = 0; j < size; ++j) {
     const float* gx = ref.gx.ptr<float>(ry + j) + rx;
     const float* gy = ref.gy.ptr<float>(ry + j) + rx;
-    double coef[4][3];
-    {
-      double m0[6], mp[6], mm[6];
-      Monomials(0, j - h, m0);
-      Monomials(1, j - h, mp);
-      Monomials(-1, j - h, mm);
-      const double* rows[4] = {hi, hi + nm, hi + nm * n, hi + nm * n + nm};
-      for (int t = 0; t < 4; ++t) {
-        double v0 = 0, vp = 0, vm = 0;
-        for (int q = 0; q < nm; ++q) {
-          v0 += rows[t][q] * m0[q];
-          vp += rows[t][q] * mp[q];
-          vm += rows[t][q] * mm[q];
-        }
-        coef[t][0] = v0;
-        coef[t][1] = 0.5 * (vp - vm);
-        coef[t][2] = 0.5 * (vp + vm) - v0;
+    double m0[6], mp[6], mm[6], coef[4][3];
+    Monomials(0, j - h, m0);
+    Monomials(1, j - h, mp);
+    Monomials(-1, j - h, mm);
+    for (int t = 0; t < 4; ++t) {
+      double v0 = 0, vp = 0, vm = 0;
+      for (int q = 0; q < nm; ++q) {
+        v0 += rows[t][q] * m0[q];
+        vp += rows[t][q] * mp[q];
+        vm += rows[t][q] * mm[q];
       }
+      coef[t][0] = v0;
+      coef[t][1] = 0.5 * (vp - vm);
+      coef[t][2] = 0.5 * (vp + vm) - v0;
     }
+    double* uj = au->data() + static_cast<std::size_t>(j) * size;
+    double* vj = av->data() + static_cast<std::size_t>(j) * size;
     for (int i = 0; i < size; ++i) {
       const double xi = i - h;
       const double ux = coef[0][0] + xi * (coef[0][1] + xi * coef[0][2]);
       const double uy = coef[1][0] + xi * (coef[1][1] + xi * coef[1][2]);
       const double vx = coef[2][0] + xi * (coef[2][1] + xi * coef[2][2]);
       const double vy = coef[3][0] + xi * (coef[3][1] + xi * coef[3][2]);
-      au[j * size + i] = ux * gx[i] + uy * gy[i];
-      av[j * size + i] = vx * gx[i] + vy * gy[i];
+      uj[i] = ux * gx[i] + uy * gy[i];
+      vj[i] = vx * gx[i] + vy * gy[i];
     }
   }
+}
+
+// sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx (d = 0 included), for the
+// influences au and av: the variance of u and v per unit residual variance.
+std::array<double, 2> CorrelatedSums(const std::vector<double>& r, const std::vector<double>& au,
+                                     const std::vector<double>& av, int size) {
   double c0 = 0, a0u = 0, a0v = 0;
-  for (int k = 0; k < count; ++k) {
+  for (std::size_t k = 0; k < r.size(); ++k) {
     c0 += r[k] * r[k];
     a0u += au[k] * au[k];
     a0v += av[k] * av[k];
   }
-  c0 /= count;
-  double su = 0, sv = 0;  // sum over d != 0 of rho(d) A(d).
-  if (c0 > 0) {
-    // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
-    for (int dy = 0; dy <= kResidualLagPx; ++dy) {
-      for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
-        if (dy == 0 && dx <= 0) continue;
-        const int i0 = std::max(0, -dx), i1 = size - std::max(0, dx), off = dy * size + dx;
-        double c = 0, pu = 0, pv = 0;
-        for (int j = 0; j + dy < size; ++j) {
-          const double* rk = &r[static_cast<std::size_t>(j) * size];
-          const double* uk = &au[static_cast<std::size_t>(j) * size];
-          const double* vk = &av[static_cast<std::size_t>(j) * size];
-          for (int i = i0; i < i1; ++i) {
-            c += rk[i] * rk[i + off];
-            pu += uk[i] * uk[i + off];
-            pv += vk[i] * vk[i + off];
-          }
+  c0 /= static_cast<double>(r.size());
+  std::array<double, 2> sums{a0u, a0v};
+  if (!(c0 > 0)) return sums;
+  // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
+  for (int dy = 0; dy <= kResidualLagPx; ++dy) {
+    for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
+      if (dy == 0 && dx <= 0) continue;
+      const int i0 = std::max(0, -dx), i1 = size - std::max(0, dx);
+      const std::size_t off = static_cast<std::size_t>(dy) * size + dx;
+      double c = 0, pu = 0, pv = 0;
+      for (int j = 0; j + dy < size; ++j) {
+        const std::size_t row = static_cast<std::size_t>(j) * size;
+        for (int i = i0; i < i1; ++i) {
+          const std::size_t k = row + i;
+          c += r[k] * r[k + off];
+          pu += au[k] * au[k + off];
+          pv += av[k] * av[k + off];
         }
-        const double rho = c / (double(i1 - i0) * (size - dy)) / c0;
-        su += 2 * rho * pu;
-        sv += 2 * rho * pv;
       }
+      const double rho = c / (double(i1 - i0) * (size - dy)) / c0;
+      sums[0] += 2 * rho * pu;
+      sums[1] += 2 * rho * pv;
     }
   }
-  const double var_u = var_r * std::max(a0u + su, hinv[0]);
-  const double var_v = var_r * std::max(a0v + sv, hinv[nm * n + nm]);
-  *sigma_u = static_cast<float>(std::sqrt(var_u));
-  *sigma_v = static_cast<float>(std::sqrt(var_v));
+  return sums;
+}
+
+void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                             const double* hinv, const BsplineImage& spline, const Params& p,
+                             double var_r, float* sigma_u, float* sigma_v) {
+  const int size = 2 * shape.half + 1, nm = shape.nm, n = shape.n;
+  thread_local std::vector<double> r, au, av;
+  SubsetResiduals(shape, ref, s, spline, p, &r);
+  double htinv[144];
+  const double* hi = TrueHessianInverse(shape, hinv, GradientNoise(r, size, spline.kind()), htinv);
+  InfluenceOfEachPixel(shape, ref, s, hi, &au, &av);
+  const std::array<double, 2> sums = CorrelatedSums(r, au, av, size);
+  *sigma_u = static_cast<float>(std::sqrt(var_r * std::max(sums[0], hinv[0])));
+  *sigma_v = static_cast<float>(std::sqrt(var_r * std::max(sums[1], hinv[nm * n + nm])));
 }
 
 }  // namespace
