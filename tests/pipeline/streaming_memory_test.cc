@@ -6,8 +6,9 @@
 // time, so the test does not depend on the load of the machine.
 //
 // The bound: 23 more frames of 1024 x 768 are 18 MB of 8-bit pixels; the longer run may use at
-// most a third of that more (6 MB: the results of 23 more frames of about 300 subsets, the few
-// extra frames of the stored preview, allocator noise; measured: 0.8 MB). Keeping the frames, as
+// most a third of that more (6 MB; half under AddressSanitizer, below): the results of 23 more
+// frames of about 300 subsets, the few extra frames of the stored preview, allocator noise
+// (measured: 0.8 MB). Keeping the frames, as
 // `run` did before (the frames, their copy for results.h5 and the file image), grew by 64 MB and
 // fails it (main at ecf0ddb: 110.6 -> 175.0 MB). The animation is off: the H.264 encoder holds
 // its own lookahead of up to about 40 canvas frames (+80 MB at 1024 x 768 from 8 to 31 frames,
@@ -150,7 +151,16 @@ TEST_F(StreamingRun, PeakMemoryDoesNotGrowWithTheNumberOfFrames) {
   const double growth_mb = (b.peak_rss_kb - a.peak_rss_kb) / 1e3;
   RecordProperty("peak_rss_short_kb", std::to_string(a.peak_rss_kb));
   RecordProperty("peak_rss_long_kb", std::to_string(b.peak_rss_kb));
-  EXPECT_LT(growth_mb, extra_frames_mb / 3)
+  // Under AddressSanitizer (the asan preset, quarantine off) its allocator keeps more of the
+  // per-frame working memory resident: 5.8-6.3 MB measured on 2026-11-27 for the same runs that
+  // grow by 0.9 MB in the release build, at the edge of the release bound. There the bound is
+  // half the pixels (9 MB), still far below keeping the frames (64 MB).
+#if defined(__SANITIZE_ADDRESS__)
+  constexpr double kBoundShare = 1.0 / 2;
+#else
+  constexpr double kBoundShare = 1.0 / 3;
+#endif
+  EXPECT_LT(growth_mb, extra_frames_mb * kBoundShare)
       << "peak RSS " << a.peak_rss_kb << " kB with dic.last_frame " << kShortLast << ", "
       << b.peak_rss_kb << " kB for all " << kFrames << " (" << extra_frames_mb
       << " MB of 8-bit pixels more)";
