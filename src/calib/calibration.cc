@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
@@ -27,6 +30,122 @@ cv::Mat To8Bit(const cv::Mat& image) {
   cv::Mat out;
   cv::normalize(image, out, 0, 255, cv::NORM_MINMAX, CV_8U);
   return out;
+}
+
+// FNV-1a over the pixels, row by row (a Mat need not be continuous): finds repeated images.
+std::uint64_t PixelHash(const cv::Mat& image) {
+  std::uint64_t hash = 14695981039346656037ULL;
+  const std::size_t row_bytes = static_cast<std::size_t>(image.cols) * image.elemSize();
+  for (int y = 0; y < image.rows; ++y) {
+    const unsigned char* row = image.ptr<unsigned char>(y);
+    for (std::size_t i = 0; i < row_bytes; ++i) hash = (hash ^ row[i]) * 1099511628211ULL;
+  }
+  return hash;
+}
+
+// Largest distance between corresponding corners of two detections of one board [px], in either
+// order of the corners (the detector may number a near-identical view from the opposite corner).
+double MaxCornerDifference(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+  double forward = 0, backward = 0;
+  const std::size_t n = a.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    forward = std::max(forward, cv::norm(a[i] - b[i]));
+    backward = std::max(backward, cv::norm(a[i] - b[n - 1 - i]));
+  }
+  return std::min(forward, backward);
+}
+
+// The views the calibration uses: one per distinct pose of the board.
+struct DetectedViews {
+  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<std::string> names;
+  std::vector<std::size_t> image;  // Per view: its index in the images.
+  std::vector<int> repeats;  // Per view: how many other images repeated it (and were dropped).
+  int repeated = 0;          // Images dropped as repeats.
+};
+
+// Detects the board in every image. Rejected (logged, listed in result->rejected with the
+// reason): an image without the board; a repeat of an earlier view (identical pixels, or every
+// corner within options.duplicate_tolerance_px of that view's): a repeat adds no constraint on
+// the lens, but calibrateCamera would count it as another view, and a set of repeats fits a
+// wrong camera with a tiny RMS.
+DetectedViews DetectViews(const std::vector<cv::Mat>& images,
+                          const std::function<std::string(std::size_t)>& name_of,
+                          const CalibrationOptions& options, CameraCalibration* result) {
+  DetectedViews views;
+  std::map<std::uint64_t, std::size_t> view_of_hash;  // Pixel hash -> view.
+  const auto reject = [&](std::size_t k, const std::string& reason) {
+    LogWarning("calibration: rejected {}: {}", name_of(k), reason);
+    result->rejected.push_back({name_of(k), reason});
+  };
+  const auto repeat = [&](std::size_t k, std::size_t view, const std::string& why) {
+    if (name_of(k) == views.names[view]) {
+      reject(k, "given a second time; a view counts once");
+    } else {
+      reject(k, fmt::format("a repeat of {} ({}); a view counts once", views.names[view], why));
+    }
+    ++views.repeats[view];
+    ++views.repeated;
+  };
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const std::uint64_t hash = PixelHash(images[k]);
+    const auto same = view_of_hash.find(hash);
+    if (same != view_of_hash.end() &&
+        cv::norm(images[k], images[views.image[same->second]], cv::NORM_INF) == 0) {
+      repeat(k, same->second, "identical pixels");
+      continue;
+    }
+    auto corners = DetectBoard(images[k], options.board, options.detection);
+    if (!corners) {
+      reject(k, fmt::format("the {}x{} board (inner corners) was not found", options.board.cols,
+                            options.board.rows));
+      continue;
+    }
+    std::size_t view = 0;
+    double difference = kNaN;
+    for (; view < views.corners.size(); ++view) {
+      difference = MaxCornerDifference(*corners, views.corners[view]);
+      if (difference <= options.duplicate_tolerance_px) break;
+    }
+    if (view < views.corners.size()) {
+      repeat(k, view,
+             fmt::format("every corner within {:.3f} px of that view's, calibration."
+                         "duplicate_tolerance_px = {} px",
+                         difference, options.duplicate_tolerance_px));
+      continue;
+    }
+    view_of_hash.emplace(hash, views.corners.size());
+    views.corners.push_back(std::move(*corners));
+    views.names.push_back(name_of(k));
+    views.repeats.push_back(0);
+    views.image.push_back(k);
+  }
+  return views;
+}
+
+// "...; at least 6 distinct views are needed (...)": the text of too few distinct views.
+std::string TooFewViewsText(const DetectedViews& views, std::size_t images,
+                            const CalibrationOptions& options) {
+  const std::size_t found = views.corners.size() + static_cast<std::size_t>(views.repeated);
+  std::string text = fmt::format(
+      "too few calibration images: the board was found in {} of {} images", found, images);
+  if (views.repeated > 0) {
+    std::string repeated;
+    for (std::size_t v = 0; v < views.names.size(); ++v)
+      if (views.repeats[v] > 0)
+        repeated += fmt::format("{}{} repeated {} time{}", repeated.empty() ? "" : ", ",
+                                views.names[v], views.repeats[v], views.repeats[v] == 1 ? "" : "s");
+    text += fmt::format(
+        ", but {} of them repeat another view ({}), which leaves {} distinct view{}",
+        views.repeated, repeated, views.corners.size(), views.corners.size() == 1 ? "" : "s");
+  }
+  return text + fmt::format(
+                    "; at least {} distinct views are needed (calibration.min_views): each view "
+                    "of the flat board gives 2 constraints on the camera matrix (Zhang 2000), so "
+                    "fx, fy, cx, cy need 3 views at different tilts, and the distortion model "
+                    "(k1, k2, p1, p2, k3) needs more, with corners spread over the image; move "
+                    "and tilt the board between views",
+                    options.min_views);
 }
 
 void CheckImage(const cv::Mat& image, const std::string& name) {
@@ -86,6 +205,9 @@ void CalibrationOptions::Check() const {
   CheckValue(min_views >= 3, "calibration.min_views", std::to_string(min_views), ">= 3");
   CheckValue(max_rms_px > 0 && !std::isnan(max_rms_px), "calibration.max_rms_px",
              fmt::format("{}", max_rms_px), "> 0 px");
+  CheckValue(duplicate_tolerance_px >= 0 && duplicate_tolerance_px <= 100,
+             "calibration.duplicate_tolerance_px", fmt::format("{}", duplicate_tolerance_px),
+             "in [0, 100] px");
 }
 
 cv::Point2d PlaneScale::ToMm(cv::Point2d px) const {
@@ -116,10 +238,12 @@ std::vector<cv::Point2d> CameraCalibration::UndistortPixels(
 
 std::string CalibrationSummary::BriefReport() const {
   return fmt::format(
-      "calibration: {} of {} images used ({} rejected), RMS {:.4f} px (worst view {} {:.4f} px), "
+      "calibration: {} of {} images used ({} rejected{}), RMS {:.4f} px (worst view {} {:.4f} px), "
       "detection {:.2f} s, calibration {:.2f} s",
-      images_used, images_total, images_rejected, rms_px, worst_view, worst_view_rms_px,
-      detection_seconds, calibration_seconds);
+      images_used, images_total, images_rejected,
+      images_repeated > 0 ? fmt::format(", {} of them repeats of another view", images_repeated)
+                          : std::string(),
+      rms_px, worst_view, worst_view_rms_px, detection_seconds, calibration_seconds);
 }
 
 std::string CalibrationSummary::FullReport(const CameraCalibration& c) const {
@@ -190,23 +314,13 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
   result.image_height = images[0].rows;
 
   WallTimer timer;
-  std::vector<std::vector<cv::Point2f>> image_points;
-  std::vector<std::string> used_names;
-  for (std::size_t k = 0; k < images.size(); ++k) {
-    auto corners = DetectBoard(images[k], options.board, options.detection);
-    if (!corners) {
-      const std::string reason = fmt::format("the {}x{} board (inner corners) was not found",
-                                             options.board.cols, options.board.rows);
-      LogWarning("calibration: rejected {}: {}", name_of(k), reason);
-      result.rejected.push_back({name_of(k), reason});
-      continue;
-    }
-    image_points.push_back(std::move(*corners));
-    used_names.push_back(name_of(k));
-  }
+  const DetectedViews views = DetectViews(images, name_of, options, &result);
+  const std::vector<std::vector<cv::Point2f>>& image_points = views.corners;
+  const std::vector<std::string>& used_names = views.names;
   s.detection_seconds = timer.ElapsedSeconds();
   s.images_used = static_cast<int>(image_points.size());
   s.images_rejected = static_cast<int>(result.rejected.size());
+  s.images_repeated = views.repeated;
   if (image_points.empty())
     throw Error(ErrorKind::kInvalidValue,
                 fmt::format("no board found in any of the {} calibration images: none shows a "
@@ -214,10 +328,7 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
                             "corners: 9x6 for a board of 10x7 squares)",
                             images.size(), options.board.cols, options.board.rows));
   if (s.images_used < options.min_views)
-    throw Error(ErrorKind::kInvalidValue,
-                fmt::format("too few calibration images: the board was found in {} of {} images, "
-                            "at least {} are needed (calibration.min_views)",
-                            s.images_used, images.size(), options.min_views));
+    throw Error(ErrorKind::kInvalidValue, TooFewViewsText(views, images.size(), options));
 
   timer.Restart();
   const std::vector<std::vector<cv::Point3f>> object_points(image_points.size(),

@@ -76,6 +76,7 @@ void PrintJson(const CameraCalibration& c, const CalibrationSummary& s, const st
   for (const RejectedView& r : c.rejected) rejected.push_back(r.image);
   j.Add("images_used", s.images_used)
       .Add("images_rejected", s.images_rejected)
+      .Add("images_repeated", s.images_repeated)
       .Add("rejected_images", rejected)
       .Add("image_width", c.image_width)
       .Add("image_height", c.image_height)
@@ -144,10 +145,14 @@ void RegisterCalibrateCommand(CLI::App& app) {
       try {
         return CalibrateFromFiles(args->images, args->plane, options, &summary);
       } catch (const Error& e) {
-        if (e.kind() != ErrorKind::kNumerical) throw;
         // The library names CalibrationOptions fields; here they are flags.
-        throw Error(e.kind(), std::string(e.what()) +
-                                  " (--max-rms sets the limit; --board and --square the board)");
+        const std::string what = e.what();
+        if (e.kind() == ErrorKind::kNumerical)
+          throw Error(e.kind(),
+                      what + " (--max-rms sets the limit; --board and --square the board)");
+        if (what.find("calibration.min_views") != std::string::npos)
+          throw Error(e.kind(), what + " (--min-views sets the minimum)");
+        throw;
       }
     }();
     SaveCalibration(calibration, args->output);

@@ -4,6 +4,7 @@
 #include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -103,6 +104,27 @@ class DuplicateKeyFinder : public YAML::EventHandler {
   std::vector<Level> stack_;
 };
 
+// Records the line where a document starts (its '---', or its first node); reads nothing else.
+class DocumentStartFinder : public YAML::EventHandler {
+ public:
+  int line() const { return line_; }
+  void OnDocumentStart(const YAML::Mark& mark) override { line_ = mark.line + 1; }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  int line_ = 0;
+};
+
 // Optimal-string-alignment distance: insertions, deletions, substitutions and transpositions of
 // neighbouring letters each cost 1 (so "tset" is one edit from "test").
 std::size_t EditDistance(const std::string& a, const std::string& b) {
@@ -161,6 +183,7 @@ void YamlProblems::Add(const YAML::Node& at, const std::string& key_path, const 
   std::string where = file_;
   if (at.IsDefined() && at.Mark().line >= 0) where += fmt::format(":{}", at.Mark().line + 1);
   lines_.push_back(fmt::format("{}: {}: {}", where, key_path, text));
+  key_paths_.insert(key_path);
 }
 
 void YamlProblems::ThrowIfAny(const std::string& what, ErrorKind kind) const {
@@ -199,6 +222,13 @@ bool DecodeNumber(const YAML::Node& node, const ValueRange& range, int* out) {
   return true;
 }
 
+std::string NumberProblemText(const YAML::Node& node, const std::string& expected) {
+  double v = 0;
+  if (node.IsScalar() && YAML::convert<double>::decode(node, v) && !std::isfinite(v))
+    return fmt::format("got {}; must be a finite number: {}", DescribeYaml(node), expected);
+  return fmt::format("got {}; expected {}", DescribeYaml(node), expected);
+}
+
 bool YamlSection::Has(const std::string& key) const {
   return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull();
 }
@@ -234,16 +264,26 @@ bool YamlSection::ReadWith(const std::string& key,
   return false;
 }
 
+bool YamlSection::ReadNumberWith(const std::string& key,
+                                 const std::function<bool(const YAML::Node&)>& parse,
+                                 const std::string& expected) {
+  const YAML::Node n = Get(key);
+  if (!n.IsDefined() || n.IsNull()) return false;
+  if (parse(n)) return true;
+  problems_->Add(n, PathOf(key), NumberProblemText(n, expected));
+  return false;
+}
+
 bool YamlSection::Read(const std::string& key, double* out, const ValueRange& range,
                        const std::string& what) {
-  return ReadWith(
+  return ReadNumberWith(
       key, [&](const YAML::Node& n) { return DecodeNumber(n, range, out); },
       ExpectedText(what, range));
 }
 
 bool YamlSection::Read(const std::string& key, int* out, const ValueRange& range,
                        const std::string& what) {
-  return ReadWith(
+  return ReadNumberWith(
       key, [&](const YAML::Node& n) { return DecodeNumber(n, range, out); },
       ExpectedText("an integer " + what, range));
 }
@@ -317,14 +357,14 @@ std::string ValueText(double v) { return fmt::format("{}", v); }
 YamlOptionTable& YamlOptionTable::Add(const std::string& key, double* field,
                                       const ValueRange& range, const std::string& what,
                                       const std::string& doc) {
-  return AddCustom(
+  return AddNumber(
       key, ExpectedText(what, range), ValueText(*field),
       [field, range](const YAML::Node& n) { return DecodeNumber(n, range, field); }, doc);
 }
 
 YamlOptionTable& YamlOptionTable::Add(const std::string& key, int* field, const ValueRange& range,
                                       const std::string& what, const std::string& doc) {
-  return AddCustom(
+  return AddNumber(
       key, ExpectedText("an integer " + what, range), std::to_string(*field),
       [field, range](const YAML::Node& n) { return DecodeNumber(n, range, field); }, doc);
 }
@@ -376,11 +416,24 @@ YamlOptionTable& YamlOptionTable::AddCustom(const std::string& key, const std::s
   return *this;
 }
 
+YamlOptionTable& YamlOptionTable::AddNumber(const std::string& key, const std::string& expected,
+                                            const std::string& default_text,
+                                            std::function<bool(const YAML::Node&)> parse,
+                                            const std::string& doc) {
+  AddCustom(key, expected, default_text, std::move(parse), doc);
+  entries_.back().number = true;
+  return *this;
+}
+
 void YamlOptionTable::Read(YamlSection& section) const {
   for (const Entry& e : entries_) {
     const YAML::Node n = section.Get(e.key);
     const std::string hint = n.IsScalar() ? DidYouMean(n.Scalar(), e.choices) : "";
-    section.ReadWith(e.key, e.parse, e.expected + hint);
+    if (e.number) {
+      section.ReadNumberWith(e.key, e.parse, e.expected);
+    } else {
+      section.ReadWith(e.key, e.parse, e.expected + hint);
+    }
   }
 }
 
@@ -401,6 +454,17 @@ YAML::Node LoadYaml(const std::string& text, const std::string& path, const std:
     YAML::Parser parser(in);
     DuplicateKeyFinder finder(path);
     parser.HandleNextDocument(finder);
+    // yaml-cpp (YAML::Load) reads only the first document: what follows a '---' would be
+    // silently ignored.
+    DocumentStartFinder second;
+    if (parser.HandleNextDocument(second))
+      throw Error(ErrorKind::kFileFormat, "YAML",
+                  fmt::format("a second document starting at line {}", second.line()),
+                  "one document per file: impactdic reads only the first, so everything from "
+                  "line " +
+                      std::to_string(second.line()) +
+                      " on would be silently ignored; merge the two or delete the '---'")
+          .WithFile(path, second.line());
     return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw Error(ErrorKind::kFileFormat, "YAML", e.msg, what)

@@ -1,6 +1,7 @@
 #include "impactdic/pipeline/scene.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -8,7 +9,10 @@
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
+#include <functional>
+#include <initializer_list>
 #include <limits>
+#include <map>
 #include <optional>
 #include <utility>
 
@@ -29,7 +33,6 @@ constexpr const char* kSceneFileWhat = "a scene file (YAML)";
 // Ranges of scene-only keys (the library options' ranges are their structs').
 // A bound of 1e300 is none (ExpectedText, io/yaml.h).
 constexpr ValueRange kPositive{0, 1e300, "", /*min_open=*/true};
-constexpr ValueRange kNonNegative{0, 1e300, ""};
 constexpr ValueRange kPositivePx{0, 1e300, "px", /*min_open=*/true};
 constexpr ValueRange kNonNegativePx{0, 1e300, "px"};
 constexpr ValueRange kAnyTime{-1e300, 1e300, "s"};
@@ -44,7 +47,7 @@ std::string Num(double v) { return fmt::format("{}", v); }
 // A number in `range`, or null/absent: unset.
 void AddOptional(YamlOptionTable& t, const std::string& key, std::optional<double>* field,
                  const ValueRange& range, const std::string& what, const std::string& doc) {
-  t.AddCustom(
+  t.AddNumber(
       key, ExpectedText(what, range), field->has_value() ? Num(**field) : "unset",
       [field, range](const YAML::Node& n) {
         double v = 0;
@@ -74,7 +77,7 @@ void AddPath(YamlOptionTable& t, const std::string& key, std::string* field,
 // An odd integer in `range` (subset and kernel sizes).
 void AddOdd(YamlOptionTable& t, const std::string& key, int* field, const ValueRange& range,
             const std::string& doc) {
-  t.AddCustom(
+  t.AddNumber(
       key, "an odd integer in " + range.Text(), std::to_string(*field),
       [field, range](const YAML::Node& n) {
         int v = 0;
@@ -150,7 +153,7 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
 void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
   SceneDic& d = s->dic;
   AddPath(t, "mask", &d.mask, s->folder, "Mask image: subsets centred on non-zero pixels only");
-  t.AddCustom(
+  t.AddNumber(
       "threads", kThreadCountExpected, std::to_string(d.threads),
       [&d](const YAML::Node& n) {
         int v = 0;
@@ -241,7 +244,7 @@ YamlOptionTable DicTable(Scene* s) {
         "A converged subset below it is low_correlation (failed); not the auto threshold");
   t.Add("auto_min_zncc", &o.update.auto_min_zncc, kAutoMinZnccRange, "a ZNCC threshold",
         "reference_update auto: the reference moves on once a tracked subset falls below it");
-  t.AddCustom(
+  t.AddNumber(
       "max_uncertainty_px", "an uncertainty limit >= 0 [px], or none (0 and none: no limit)",
       MaxUncertaintyText(o.icgn.max_uncertainty_px),
       [&o](const YAML::Node& n) {
@@ -306,7 +309,7 @@ YamlOptionTable MomentumTable(Scene* s) {
         "a fraction of the grid's subsets", "Per frame: p_gran only where this much is valid");
   AddOptional(t, "max_sigma_px", &m.max_sigma_px, kPositivePx, "a standard deviation limit",
               "Subset samples above it are left out of kinematics and p_gran");
-  t.AddCustom(
+  t.AddNumber(
       "max_sigma_ratio", "a ratio > 1, or none",
       std::isfinite(m.max_sigma_ratio) ? Num(m.max_sigma_ratio) : std::string("none"),
       [&m](const YAML::Node& n) {
@@ -328,7 +331,7 @@ YamlOptionTable MomentumTable(Scene* s) {
 void AddTolerance(YamlOptionTable& t, const std::string& key, double* field,
                   const ValueRange& range, const std::string& what, const std::string& unset_text,
                   const std::string& doc) {
-  t.AddCustom(
+  t.AddNumber(
       key, ExpectedText(what, range), std::isnan(*field) ? unset_text : Num(*field),
       [field, range](const YAML::Node& n) {
         double v = 0;
@@ -342,7 +345,7 @@ void AddTolerance(YamlOptionTable& t, const std::string& key, double* field,
 YamlOptionTable ModelTable(Scene* s) {
   YamlOptionTable t("model");
   ImpactModelParameters& m = s->model;
-  t.AddCustom(
+  t.AddNumber(
       "added_mass_kg", "an added mass M in " + kAddedMassRange.Text(), "Eq. 4",
       [&m](const YAML::Node& n) { return DecodeNumber(n, kAddedMassRange, &m.added_mass_kg); },
       "Added mass M; unset: Eq. 4");
@@ -407,11 +410,24 @@ void ReadStages(YamlSection& top, Scene* scene) {
                 fmt::format("got {}; expected a list of stage names", DescribeYaml(stages)));
     return;
   }
-  std::vector<std::string> listed;
-  for (const auto& st : stages) {
+  if (stages.size() == 0) {
+    top.Problem("stages", "got an empty list; expected at least one of " + Join(all) +
+                              " (leave the key out to run them all)");
+    return;
+  }
+  std::map<std::string, std::size_t> first_index;  // Stage -> its first item.
+  for (std::size_t k = 0; k < stages.size(); ++k) {
+    const YAML::Node st = stages[k];
     const std::string name = st.IsScalar() ? st.Scalar() : "";
     if (std::find(all.begin(), all.end(), name) != all.end()) {
-      listed.push_back(name);
+      const auto [first, inserted] = first_index.emplace(name, k);
+      if (!inserted) {
+        top.problems()->Add(st, fmt::format("stages[{}]", k),
+                            fmt::format("got '{}' a second time (first as stages[{}]); expected "
+                                        "each stage at most once (they run once each, in "
+                                        "pipeline order)",
+                                        name, first->second));
+      }
       continue;
     }
     const std::string close = ClosestMatch(name, all);
@@ -420,73 +436,105 @@ void ReadStages(YamlSection& top, Scene* scene) {
                                     close.empty() ? "" : " (did you mean '" + close + "'?)"));
   }
   for (const auto& name : all)
-    if (std::find(listed.begin(), listed.end(), name) != listed.end())
-      scene->stages.push_back(name);
+    if (first_index.count(name)) scene->stages.push_back(name);
+}
+
+// A number of a list read by ReadList, reported by its own key path and value when bad
+// ("dic.roi[1]: got '.nan'; must be a finite number: ...").
+template <typename T>
+bool ReadElement(YamlProblems* problems, const YAML::Node& n, const std::string& path,
+                 const ValueRange& range, const std::string& expected, T* out) {
+  if (DecodeNumber(n, range, out)) return true;
+  problems->Add(n, path, NumberProblemText(n, expected));
+  return false;
+}
+
+// The list `n` at `path` (absent or null: false, nothing reported): `count` items (at least
+// `count` if `at_least`), else reported as a whole ("got a list of 3; expected `expected`"); each
+// item is read by `item(node, its path, index)`, which reports its own problems. True if valid.
+bool ReadList(YamlProblems* problems, const YAML::Node& n, const std::string& path,
+              std::size_t count, bool at_least, const std::string& expected,
+              const std::function<bool(const YAML::Node&, const std::string&, std::size_t)>& item) {
+  if (!n.IsDefined() || n.IsNull()) return false;
+  if (!n.IsSequence() || (at_least ? n.size() < count : n.size() != count)) {
+    problems->Add(n, path, fmt::format("got {}; expected {}", DescribeYaml(n), expected));
+    return false;
+  }
+  bool valid = true;
+  for (std::size_t i = 0; i < n.size(); ++i)
+    valid = item(n[i], fmt::format("{}[{}]", path, i), i) && valid;
+  return valid;
+}
+
+// A rectangle [x0, y0, x1, y1] at `key` of `section`: four numbers (ReadElement), then x0 < x1 and
+// y0 < y1 (reported with the four values). True if valid.
+template <typename T>
+bool ReadRectangle(YamlSection& section, const std::string& key, const ValueRange& range,
+                   const std::string& element_expected, const std::string& expected,
+                   std::array<T, 4>* rect) {
+  YamlProblems* problems = section.problems();
+  std::array<T, 4> r{};
+  if (!ReadList(problems, section.Get(key), section.PathOf(key), 4, /*at_least=*/false, expected,
+                [&](const YAML::Node& n, const std::string& path, std::size_t i) {
+                  return ReadElement(problems, n, path, range, element_expected, &r[i]);
+                }))
+    return false;
+  if (!(r[0] < r[2] && r[1] < r[3])) {
+    section.Problem(key, fmt::format("got [{}]; expected {}", fmt::join(r, ", "), expected));
+    return false;
+  }
+  *rect = r;
+  return true;
 }
 
 // The keys that are not one field: roi, roi_polygon (dic), rect_mm (momentum).
 void ReadDicRegions(YamlSection& dic, SceneDic* d) {
-  dic.ReadWith(
-      "roi",
-      [d](const YAML::Node& n) {
-        std::array<int, 4> r{};
-        if (!n.IsSequence() || n.size() != 4) return false;
-        for (std::size_t i = 0; i < 4; ++i)
-          if (!n[i].IsScalar() || !YAML::convert<int>::decode(n[i], r[i])) return false;
-        if (!(r[0] >= 0 && r[1] >= 0 && r[0] < r[2] && r[1] < r[3])) return false;
-        d->roi = r;
-        return true;
-      },
-      "[x0, y0, x1, y1] in pixels with 0 <= x0 < x1 and 0 <= y0 < y1");
-  dic.ReadWith(
-      "roi_polygon",
-      [d](const YAML::Node& n) {
-        if (!n.IsSequence() || n.size() < 3) return false;
-        std::vector<std::array<double, 2>> vertices;
-        for (const auto& p : n) {
-          std::array<double, 2> v{};
-          if (!p.IsSequence() || p.size() != 2 || !p[0].IsScalar() || !p[1].IsScalar() ||
-              !YAML::convert<double>::decode(p[0], v[0]) ||
-              !YAML::convert<double>::decode(p[1], v[1]) || !kNonNegative.Contains(v[0]) ||
-              !kNonNegative.Contains(v[1]))
-            return false;
-          vertices.push_back(v);
-        }
-        d->roi_polygon = vertices;
-        return true;
-      },
-      "a list of at least 3 vertices [x, y] in pixels (>= 0)");
+  std::array<int, 4> roi{};
+  if (ReadRectangle(dic, "roi", ValueRange{0, 1e300, "px"}, "an integer pixel coordinate >= 0",
+                    "[x0, y0, x1, y1] in pixels with 0 <= x0 < x1 and 0 <= y0 < y1", &roi))
+    d->roi = roi;
+  YamlProblems* problems = dic.problems();
+  std::vector<std::array<double, 2>> vertices;
+  const auto vertex = [&](const YAML::Node& n, const std::string& path, std::size_t) {
+    std::array<double, 2> v{};
+    const bool valid = ReadList(
+        problems, n, path, 2, /*at_least=*/false, "a vertex [x, y] in pixels (>= 0)",
+        [&](const YAML::Node& c, const std::string& c_path, std::size_t i) {
+          return ReadElement(problems, c, c_path, kNonNegativePx, "a pixel coordinate >= 0", &v[i]);
+        });
+    vertices.push_back(v);
+    return valid;
+  };
+  if (ReadList(problems, dic.Get("roi_polygon"), dic.PathOf("roi_polygon"), 3, /*at_least=*/true,
+               "a list of at least 3 vertices [x, y] in pixels (>= 0)", vertex))
+    d->roi_polygon = vertices;
 }
 
 void ReadMomentumRect(YamlSection& momentum, MomentumOptions* m) {
-  momentum.ReadWith(
-      "rect_mm",
-      [m](const YAML::Node& n) {
-        std::array<double, 4> r{};
-        if (!n.IsSequence() || n.size() != 4) return false;
-        for (std::size_t i = 0; i < 4; ++i) {
-          if (!n[i].IsScalar() || !YAML::convert<double>::decode(n[i], r[i]) ||
-              !std::isfinite(r[i]))
-            return false;
-        }
-        if (!(r[0] < r[2] && r[1] < r[3])) return false;
-        m->rect_mm = r;
-        return true;
-      },
-      "[x0, y0, x1, y1] in mm with x0 < x1 and y0 < y1");
+  std::array<double, 4> rect{};
+  if (ReadRectangle(momentum, "rect_mm", ValueRange{-1e300, 1e300, "mm"}, "a position in mm",
+                    "[x0, y0, x1, y1] in mm with x0 < x1 and y0 < y1", &rect))
+    m->rect_mm = rect;
 }
 
 // Rules across keys, and the library structs' own Check() as a last guard (it names the struct
-// field; every key's range above is the struct's, so it should never fire).
+// field; every key's range above is the struct's, so it should never fire). A key already
+// reported (a bad value) is not judged again: it is not also "missing".
 void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* problems) {
-  if (scene.inputs.frames.empty())
+  const auto reported = [problems](std::initializer_list<const char*> keys) {
+    return std::any_of(keys.begin(), keys.end(),
+                       [problems](const char* key) { return problems->Has(key); });
+  };
+  if (scene.inputs.frames.empty() && !reported({"inputs", "inputs.frames"}))
     problems->Add(root["inputs"], "inputs.frames",
                   "missing; expected a frames folder, glob or video file");
-  if (!scene.test.impact_velocity_m_s && scene.test.drop_height_m <= 0)
+  if (!scene.test.impact_velocity_m_s && scene.test.drop_height_m <= 0 &&
+      !reported({"test", "test.impact_velocity_m_s"}))
     problems->Add(root["test"], "test.drop_height_m",
                   "is 0 and no test.impact_velocity_m_s is given; expected one of them > 0");
   const SceneDic& d = scene.dic;
-  if (d.last_frame >= 0 && d.last_frame <= d.first_frame)
+  if (d.last_frame >= 0 && d.last_frame <= d.first_frame &&
+      !reported({"dic", "dic.first_frame", "dic.last_frame"}))
     problems->Add(
         root["dic"], "dic.last_frame",
         fmt::format("got {}; expected > dic.first_frame ({}) or -1", d.last_frame, d.first_frame));
@@ -495,7 +543,10 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
   const bool momentum_runs = !scene.inputs.sensor.empty() && scene.HasStage("correlate") &&
                              scene.HasStage("kinematics") && scene.HasStage("sensor") &&
                              scene.HasStage("momentum");
-  if (m.pounder_center_x_px.has_value() != m.surface_y_px.has_value()) {
+  if (reported({"momentum", "momentum.pounder_center_x_px", "momentum.surface_y_px",
+                "momentum.rect_mm", "inputs.sensor", "stages"})) {
+    // Judged once the keys themselves are valid.
+  } else if (m.pounder_center_x_px.has_value() != m.surface_y_px.has_value()) {
     problems->Add(root["momentum"],
                   m.pounder_center_x_px ? "momentum.surface_y_px" : "momentum.pounder_center_x_px",
                   "missing; expected both momentum.pounder_center_x_px and momentum.surface_y_px "

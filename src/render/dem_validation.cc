@@ -46,6 +46,44 @@ struct TruthFile {
   double sx = kNaN;
 };
 
+// What an HDF5 file is, by the groups and attributes impactdic's writers give it: "a DEM truth
+// file", "a run's results file", ... For messages naming the file that was expected instead.
+std::string DescribeFileKind(const H5Reader& in) {
+  if (in.Exists("/dem")) return "a DEM truth file (impactdic synth --dem)";
+  const std::string generator =
+      in.HasAttribute("/", "generator") ? in.ReadStringAttribute("/", "generator") : "";
+  if (generator.rfind("impactdic synth", 0) == 0 || in.Exists("/soil"))
+    return "the ground truth of a synthetic scene (impactdic synth without --dem: the analytic "
+           "soil field, no grains)";
+  if (in.Exists(results_layout::kTimeFrameIndex) || in.HasAttribute("/", "scene_name"))
+    return "a run's results file (impactdic run)";
+  if (in.Exists(results_layout::kDicGroup)) return "correlation results (impactdic correlate)";
+  if (in.Exists("/model")) return "a model series (impactdic model -o)";
+  if (in.Exists("/sensor")) return "sensor results (impactdic analyze --output)";
+  return "an HDF5 file impactdic did not write";
+}
+
+// The two files are what validate-dem compares, before anything is read from them (given
+// another file, the first missing dataset was named, not the file that was needed).
+void CheckFileKinds(const std::string& truth_h5, const std::string& results_h5) {
+  const std::string truth_kind = DescribeFileKind(H5Reader(truth_h5));
+  if (truth_kind.rfind("a DEM truth file", 0) != 0)
+    throw Error(ErrorKind::kFileFormat,
+                fmt::format("is {}, not a DEM truth file; validate-dem compares a run with the "
+                            "truth.h5 that `impactdic synth --dem` writes beside the DEM footage "
+                            "(the grains' measured velocities and momentum: /dem, /soil, "
+                            "/momentum); give it first, then the run's results.h5",
+                            truth_kind))
+        .WithFile(truth_h5);
+  const std::string results_kind = DescribeFileKind(H5Reader(results_h5));
+  if (results_kind.rfind("a run's results file", 0) != 0)
+    throw Error(ErrorKind::kFileFormat,
+                fmt::format("is {}, not a run's results file; validate-dem needs the results.h5 "
+                            "of `impactdic run` on the DEM footage as its second file",
+                            results_kind))
+        .WithFile(results_h5);
+}
+
 TruthFile ReadTruth(const std::string& path) {
   H5Reader in(path);
   TruthFile t;
@@ -370,6 +408,7 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
 
 DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
                              const std::string& figures_dir) {
+  CheckFileKinds(truth_h5, results_h5);
   const TruthFile t = ReadTruth(truth_h5);
   H5Reader res(results_h5);
   DemValidation out;

@@ -6,7 +6,9 @@
 // Besides YAML syntax errors (Error kFileFormat with file:line:column), it refuses
 //  - a key given twice in one map: yaml-cpp would silently keep the first value. The error names
 //    the key path and both lines ("test.mass_kg ... at line 9 (first at line 3)");
-//  - a file that is not text, e.g. an image given as the calibration: the error names its kind.
+//  - a file that is not text, e.g. an image given as the calibration: the error names its kind;
+//  - a second document (after '---'): yaml-cpp would silently read only the first. The error
+//    names the file and the line where the second one starts.
 // `what` says what the file should be, for messages ("a scene file (YAML)").
 #ifndef IMPACTDIC_IO_YAML_H_
 #define IMPACTDIC_IO_YAML_H_
@@ -26,7 +28,7 @@
 
 namespace impactdic {
 
-// Parses the first document of `text`, read from `path` (for messages).
+// Parses `text`, read from `path` (for messages), which must hold one YAML document.
 YAML::Node LoadYaml(const std::string& text, const std::string& path, const std::string& what);
 
 // ReadInputFile(path, what, kMaxTextFileBytes) (a regular file of at most 64 MiB), then LoadYaml.
@@ -43,6 +45,10 @@ std::string DescribeYaml(const YAML::Node& node);
 bool DecodeNumber(const YAML::Node& node, const ValueRange& range, double* out);
 bool DecodeNumber(const YAML::Node& node, const ValueRange& range, int* out);
 
+// The problem text of a node that should have been a number: "got '.nan'; must be a finite
+// number: `expected`" for YAML's .nan, .inf and -.inf, else "got X; expected `expected`".
+std::string NumberProblemText(const YAML::Node& node, const std::string& expected);
+
 // Every problem found in one YAML file, so the user sees all of them at once:
 //   "file:LINE: key.path: got 'x'; expected ...".
 class YamlProblems {
@@ -53,12 +59,16 @@ class YamlProblems {
   bool empty() const { return lines_.empty(); }
   std::size_t size() const { return lines_.size(); }
   const std::vector<std::string>& lines() const { return lines_; }
+  // Whether a problem was recorded for `key_path` ("momentum.surface_y_px"): rules across keys
+  // skip a key already reported (a bad value is not also "missing").
+  bool Has(const std::string& key_path) const { return key_paths_.count(key_path) > 0; }
   // Error(`kind`) "N problem(s) in `what` FILE:" and one line per problem, if any.
   void ThrowIfAny(const std::string& what, ErrorKind kind = ErrorKind::kInvalidValue) const;
 
  private:
   std::string file_;
   std::vector<std::string> lines_;
+  std::set<std::string> key_paths_;
 };
 
 // One map of a YAML file, read key by key: every accessor records the key as known, a wrong type
@@ -105,6 +115,9 @@ class YamlSection {
   // reported as "got ...; expected `expected`".
   bool ReadWith(const std::string& key, const std::function<bool(const YAML::Node&)>& parse,
                 const std::string& expected);
+  // The same for a number: a non-finite one is reported as such (NumberProblemText).
+  bool ReadNumberWith(const std::string& key, const std::function<bool(const YAML::Node&)>& parse,
+                      const std::string& expected);
 
   // Reports keys that no accessor asked for, with a "did you mean" suggestion.
   void Finish();
@@ -134,6 +147,7 @@ class YamlOptionTable {
     std::string default_text;                      // The bound field's value when bound.
     std::function<bool(const YAML::Node&)> parse;  // Stores a valid node; false if invalid.
     std::vector<std::string> choices;              // AddChoice: the names ("did you mean").
+    bool number = false;  // A number: .nan and .inf are "not a finite number" (AddNumber).
   };
 
   explicit YamlOptionTable(std::string section) : section_(std::move(section)) {}
@@ -153,6 +167,10 @@ class YamlOptionTable {
                              const std::string& doc);
   // Anything else: `parse` validates and stores.
   YamlOptionTable& AddCustom(const std::string& key, const std::string& expected,
+                             const std::string& default_text,
+                             std::function<bool(const YAML::Node&)> parse, const std::string& doc);
+  // AddCustom for a number (ReadNumberWith).
+  YamlOptionTable& AddNumber(const std::string& key, const std::string& expected,
                              const std::string& default_text,
                              std::function<bool(const YAML::Node&)> parse, const std::string& doc);
 

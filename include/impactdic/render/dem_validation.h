@@ -55,7 +55,9 @@ struct DemValidation {
   std::string Report() const;  // The table of docs/validation.md for this case, as text.
 };
 
-// Reads both files (Error naming a missing dataset) and compares; figures_dir non-empty: writes
+// Reads both files and compares. Error kFileFormat naming the file and what it is when the first
+// is not a DEM truth file (a synthetic scene's truth, a run's results, ...) or the second not a
+// run's results file; naming a missing dataset otherwise. figures_dir non-empty: writes
 // velocity_field_compare.png (DIC field next to the grains', same colour scale, at the frame
 // nearest t_e/2 of the grains among those the results store: all with `outputs.frames: all`,
 // the <= 16 of the default preview; none with `none`, which skips this figure with a note),
