@@ -140,6 +140,11 @@ TEST(SceneInputFaults, BadRoiElementIsNamedWithItsValue) {
   // A list of the wrong length is still described as a whole.
   m = SceneProblems(header + "dic: {roi: [1, 2, 3]}\n");
   EXPECT_NE(m.find("dic.roi: got a list of 3"), std::string::npos) << m;
+  // The CLI says the same.
+  TestDir dir;
+  const std::string scene = FrameScene(dir, "dic: {roi: [36, .nan, 605, 444]}\n");
+  ExpectCliFailure("run " + scene + " -o " + dir.File("out"),
+                   {scene + ":4: dic.roi[1]: got '.nan'; must be a finite number"});
 }
 
 // Before: "truth.h5: dataset momentum/p_gran_fd_Ns: bad file format (got missing)".
