@@ -189,9 +189,10 @@ void RunTests(const std::vector<const CampaignTest*>& todo, const std::string& f
     for (int j = 1; j < par.jobs; ++j) threads.emplace_back(guarded);
   } catch (...) {
     next = todo.size();
+    const std::lock_guard<std::mutex> lock(mutex);
     error = std::current_exception();
   }
-  if (!error) guarded();
+  if (next < todo.size()) guarded();
   for (auto& t : threads) t.join();
   if (error) std::rethrow_exception(error);
   bar.Finish();

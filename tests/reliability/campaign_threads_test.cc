@@ -3,6 +3,8 @@
 // input changed, and `analyze` of another scene's results or of a run folder's results.h5.
 // Scenes are tiny synthesised ones (160 x 120 px, no figures or video: a second or less a run).
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -11,12 +13,15 @@
 #include <fstream>
 #include <opencv2/core.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/io/hdf5_store.h"
@@ -96,6 +101,25 @@ TEST(ThreadCap, CampaignWithAHugeThreadCountRunsOnTheCoresAndLeavesNoTemporaries
   const CliResult run = RunCli("run " + scene + " -o " + dir.File("run") + " --threads 100000");
   ASSERT_EQ(run.exit_code, 0) << run.output;
   EXPECT_TRUE(Contains(run.output, "threads: 100000 threads requested")) << run.output;
+}
+
+// Whatever still ends the process through std::terminate (an exception nothing caught, e.g.
+// oneTBB's "pthread_create has failed" above) removes the registered temporaries before it aborts.
+TEST(ThreadCap, StdTerminateRemovesTheRegisteredTemporaries) {
+  TestDir dir;
+  const std::string staging = dir.File(".out.tmp-1-0123456789abcdef");
+  const pid_t child = fork();
+  if (child == 0) {
+    InstallInterruptCleanup();
+    fs::create_directories(staging + "/results");
+    const RemoveOnInterrupt guard(staging);
+    std::thread([] { throw std::runtime_error("an error no code caught"); }).join();
+    _exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT) << status;
+  EXPECT_FALSE(fs::exists(staging));
 }
 
 // ---- Item 11: a correlation or a campaign that produced nothing ------------------------------
