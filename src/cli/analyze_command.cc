@@ -214,6 +214,8 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
     CheckOutputLocation(a.output,
                         {"--output", {".h5", ".hdf5"}, {scene.path, scene.inputs.sensor, results}});
     CheckNotInAGeneration(a.output, "--output");
+    // Replaced whole by the analysis: never another scene's file (nor one that is not HDF5).
+    if (std::filesystem::exists(a.output)) CheckResultsAreOfScene(scene, a.output, "--output");
   }
   SceneAnalysisRun run;
   try {

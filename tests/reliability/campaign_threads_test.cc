@@ -238,7 +238,17 @@ TEST(AnalyzeResults, AnotherScenesResultsAndARunFoldersFileAreRefused) {
   EXPECT_TRUE(in.Exists("momentum/p_gran"));
   EXPECT_FALSE(in.Exists("summary"));
   EXPECT_EQ(in.ReadStringAttribute("/", "scene_name"), "synthetic_impact");
-  EXPECT_TRUE(ReadBytes(results) == before);  // Unchanged.
+  // An existing --output of another scene is not replaced by this analysis.
+  {
+    H5Writer file(dir.File("other.h5"));
+    file.SetAttribute("/", "scene_name", std::string("other_synthetic_impact"));
+    file.Commit();
+  }
+  ExpectCliFailure(
+      "analyze " + scene + " --results " + results + " --output " + dir.File("other.h5"),
+      {"--output", "holds the results of scene 'other_synthetic_impact'"});
+  EXPECT_FALSE(H5Reader(dir.File("other.h5")).Exists("momentum"));  // Left as it was.
+  EXPECT_TRUE(ReadBytes(results) == before);                        // Unchanged.
 }
 
 // ---- Messages: a deformed image given twice ---------------------------------------------------
