@@ -12,6 +12,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
@@ -21,6 +22,7 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
@@ -57,6 +59,25 @@ bool EndsWith(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
+// A folder of outputs written as one generation (`run`'s, a campaign test's results/: its
+// summary.json, figures and results.h5 describe one analysis) is never changed file by file:
+// analyze writes its own file instead. Error naming `option` if `path` (the file analyze would
+// write) lies in such a folder.
+void CheckNotInAGeneration(const std::string& path, const std::string& option) {
+  namespace fs = std::filesystem;
+  const fs::path folder = fs::absolute(path).parent_path();
+  std::error_code ec;
+  const bool summary = fs::exists(folder / "summary.json", ec);
+  if (!summary && !fs::exists(folder / kOutputMarkerName, ec)) return;
+  throw Error(ErrorKind::kInvalidValue, option,
+              path + ", in a folder of outputs written together by impactdic (" +
+                  (summary ? "with its summary.json" : "one generation") +
+                  "): writing one file of it alone would leave the other files describing another "
+                  "analysis",
+              "a file of its own for this analysis (--output NEW.h5 outside that folder), or "
+              "`impactdic run` to redo the whole folder");
+}
+
 // The library's names of the options `analyze --sensor` exposes as flags.
 const FlagNames kSensorFlags = {{"sensor.cutoff_hz", "--cutoff"},
                                 {"sensor.quiet_window_s", "--quiet-window"},
@@ -81,7 +102,10 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     throw Error(ErrorKind::kInvalidValue, "--release-time", "without --from-release",
                 "--release-time only with --from-release");
   }
-  if (!a.output.empty()) CheckOutputLocation(a.output, {"--output", {".h5", ".hdf5"}, {a.sensor}});
+  if (!a.output.empty()) {
+    CheckOutputLocation(a.output, {"--output", {".h5", ".hdf5"}, {a.sensor}});
+    CheckNotInAGeneration(a.output, "--output");
+  }
   for (const char* scene_only : {"--results", "--allow-partial"}) {
     if (cmd.count(scene_only) > 0) {
       throw Error(ErrorKind::kInvalidValue, scene_only, "with --sensor",
@@ -156,9 +180,9 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
 
 void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   for (const char* sensor_only :
-       {"--from-release", "--impact-velocity", "--cutoff", "--output", "--release-time",
-        "--accel-column", "--accel-unit", "--time-column", "--exposure-column",
-        "--offset-reference", "--quiet-window", "--impact-threshold"}) {
+       {"--from-release", "--impact-velocity", "--cutoff", "--release-time", "--accel-column",
+        "--accel-unit", "--time-column", "--exposure-column", "--offset-reference",
+        "--quiet-window", "--impact-threshold"}) {
     if (cmd.count(sensor_only) > 0) {
       throw Error(ErrorKind::kInvalidValue, sensor_only, "with SCENE.yaml",
                   "this option only with --sensor (the scene file sets the sensor options)");
@@ -182,9 +206,20 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   const std::string results =
       a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
                         : a.results;
+  const std::string results_option = a.results.empty() ? "outputs.folder" : "--results";
+  CheckResultsAreOfScene(scene, results, results_option);
+  if (a.output.empty()) {
+    CheckNotInAGeneration(results, results_option);
+  } else {
+    CheckOutputLocation(a.output,
+                        {"--output", {".h5", ".hdf5"}, {scene.path, scene.inputs.sensor, results}});
+    CheckNotInAGeneration(a.output, "--output");
+    // Replaced whole by the analysis: never another scene's file (nor one that is not HDF5).
+    if (std::filesystem::exists(a.output)) CheckResultsAreOfScene(scene, a.output, "--output");
+  }
   SceneAnalysisRun run;
   try {
-    run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial);
+    run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial, a.output);
   } catch (const PartialResultsError& e) {
     RethrowWithPartialFlag(e, "analyze");
   }
@@ -197,11 +232,11 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
     j.Add("impact_time_s", run.sensor.summary.impact_time_s)
         .Add("impact_velocity_m_s", run.sensor.summary.impact_velocity_m_s)
         .Add("final_penetration_m", run.sensor.summary.final_penetration_m)
-        .Add("results", results)
+        .Add("results", a.output.empty() ? results : a.output)
         .Add("usable", m.IsUsable());
     std::cout << j.Dump() << "\n";
   } else {
-    std::cout << "scene " << scene.path << " -> " << results << "\n"
+    std::cout << "scene " << scene.path << " -> " << (a.output.empty() ? results : a.output) << "\n"
               << run.sensor.summary.FullReport() << m.FullReport();
   }
 }
@@ -246,7 +281,10 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--impact-threshold", args->impact_threshold,
                   "reading [g] that is certainly the impact; the onset is found before it")
       ->capture_default_str();
-  cmd->add_option("--output", args->output, "also write the sensor series to this HDF5 file");
+  cmd->add_option("--output", args->output,
+                  "--sensor: also write the sensor series to this HDF5 file; SCENE: write the "
+                  "analysis into this new HDF5 file (a copy of the results file with /sensor, "
+                  "/kinematics, /momentum) instead of updating the results file");
   cmd->add_option("--results", args->results,
                   "correlation results HDF5 of the scene (default <outputs.folder>/results.h5)");
   cmd->add_flag(kAllowPartialFlag, args->allow_partial,

@@ -1,6 +1,6 @@
 // impactdic correlate: subset DIC of an image sequence (library: impactdic/dic/dic_io.h).
 #include <fmt/format.h>
-#include <tbb/global_control.h>
+#include <sys/stat.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -8,10 +8,12 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.h"
@@ -29,6 +31,7 @@
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/pipeline.h"
 #include "impactdic/preprocess/preprocess.h"
 
 namespace impactdic::cli {
@@ -69,6 +72,7 @@ struct CorrelateArgs {
   double outlier_sigma_factor = DicOptions{}.outliers.sigma_factor;
   std::string continuity_local = ContinuityLimitText(DicOptions{}.continuity.local_ratio);
   std::string output;
+  bool allow_partial = false;  // Write the results even when no subset is valid (as `run`).
 };
 
 // The command-line flags of the library fields named in errors.
@@ -132,6 +136,44 @@ ImageFilter MakeImageFilter(const GaussianDecision& decision, const GaussianBlur
   return {[options](const cv::Mat& image) { return GaussianBlurFrame(options, image); },
           fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
                       options.sigma_px, options.kernel_size, options.kernel_size)};
+}
+
+// Each image once: the same file given twice (under any spelling of its path, a symbolic or a
+// hard link) would be correlated twice and numbered alike. Error naming the option and both
+// spellings. Files that cannot be examined are left to the image reader's message.
+void CheckEachImageOnce(const std::vector<std::string>& paths) {
+  std::map<std::pair<dev_t, ino_t>, std::size_t> seen;
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    struct stat st {};
+    if (stat(paths[i].c_str(), &st) != 0) continue;
+    const auto [it, added] = seen.emplace(std::make_pair(st.st_dev, st.st_ino), i);
+    if (added) continue;
+    const std::string& first = paths[it->second];
+    const std::string found =
+        "'" + paths[i] + "', " +
+        (it->second == 0 ? "the --reference image" + (first == paths[i] ? "" : " '" + first + "'")
+         : first == paths[i] ? std::string("given twice")
+                             : "the same file as '" + first + "'");
+    throw Error(ErrorKind::kInvalidValue, "--deformed", found,
+                "each deformed image once, and none of them the reference");
+  }
+}
+
+// A correlation with no valid subset fails as `run`'s correlate stage does (DicSummary's one
+// rule), naming the flag of its ZNCC threshold, unless --allow-partial; nothing is written.
+void CheckSomethingUsable(const CorrelateArgs& a, const DicResult& result,
+                          const DicOptions& options) {
+  const std::string problem = result.summary.NothingUsable("--min-zncc", options.icgn.min_zncc);
+  if (problem.empty()) return;
+  if (a.allow_partial) {
+    LogWarning("correlate: partial results ({}): {}", kAllowPartialFlag, problem);
+    return;
+  }
+  RethrowWithPartialFlag(
+      PartialResultsError(
+          fmt::format("correlate: {}\nNothing was written ({} is as it was)", problem, a.output),
+          "writes it, every subset with its status"),
+      "correlate");
 }
 
 ContinuityCheckOptions ContinuityFromArgs(const CorrelateArgs& a) {
@@ -254,6 +296,7 @@ void Run(const CorrelateArgs& a) {
   if (pair) {
     paths.push_back(a.reference);
     paths.insert(paths.end(), a.deformed.begin(), a.deformed.end());
+    CheckEachImageOnce(paths);
   } else if (video) {
     paths.push_back(a.frames);  // Checked and decoded by CorrelateVideo.
   } else {
@@ -265,11 +308,7 @@ void Run(const CorrelateArgs& a) {
   std::vector<std::string> inputs = paths;
   inputs.push_back(a.mask);
   CheckOutputLocation(a.output, {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs});
-  std::unique_ptr<tbb::global_control> threads;
-  if (a.threads > 0) {
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    static_cast<std::size_t>(a.threads));
-  }
+  const ThreadLimit threads(a.threads, "--threads");
   WallTimer wall;
   DicResult result;
   try {
@@ -282,6 +321,7 @@ void Run(const CorrelateArgs& a) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     RethrowWithFlagNames(e, kCorrelateFlags);
   }
+  CheckSomethingUsable(a, result, options);
   WriteDicResult(a.output, result, options);
   if (!result.preprocess.empty()) LogInfo("correlate: pre-filter {}", result.preprocess);
   const double seconds = wall.ElapsedSeconds();
@@ -354,6 +394,9 @@ void RegisterCorrelateCommand(CLI::App& app) {
   AddContinuityFlags(cmd, args.get());
   AddOutlierFlags(cmd, args.get());
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
+  cmd->add_flag(kAllowPartialFlag, args->allow_partial,
+                "Write the output (exit 0) even when no subset is valid in any deformed image; "
+                "without it such a correlation fails (exit 1) and writes nothing, as `run` does");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;
     Run(*args);

@@ -8,6 +8,8 @@
 #include <cerrno>
 #include <chrono>
 #include <cstddef>
+#include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <iterator>
 #include <map>
@@ -119,6 +121,36 @@ bool RemoveWithRetries(const std::string& path) {
   _exit(128 + signal_number);
 }
 
+std::terminate_handler g_previous_terminate = nullptr;
+
+// std::terminate (an exception nothing caught: a library that could not start a thread, a
+// noexcept function that threw) ends the process without unwinding, so no destructor removes the
+// temporaries: remove the registered ones here, then let the previous handler report the error
+// and abort. A swap in progress (DeferInterrupts held, maybe by the failing thread itself) is
+// never torn apart: then nothing is removed (the next impactdic removes what a dead process
+// left, by its pid).
+[[noreturn]] void RemoveTemporariesOnTerminate() {
+  static std::atomic<bool> entered{false};
+  if (!entered.exchange(true) && DeferMutex().try_lock()) {
+    std::vector<std::string> paths;
+    for (int attempt = 0; attempt < 50 && paths.empty(); ++attempt) {
+      if (RegistryMutex().try_lock()) {
+        for (auto it = Registry().rbegin(); it != Registry().rend(); ++it)
+          paths.push_back(it->second);
+        RegistryMutex().unlock();
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    std::size_t removed = 0;
+    for (const auto& p : paths) removed += RemoveWithRetries(p);
+    WriteStderr("impactdic: internal error: removed " + std::to_string(removed) +
+                " temporary output(s)\n");
+  }
+  if (g_previous_terminate != nullptr) g_previous_terminate();
+  std::abort();
+}
+
 }  // namespace
 
 void InstallInterruptCleanup() {
@@ -140,6 +172,7 @@ void InstallInterruptCleanup() {
       action.sa_flags = SA_RESTART;  // Interrupted system calls resume; no EINTR failures.
       sigaction(signal_number, &action, nullptr);
     }
+    g_previous_terminate = std::set_terminate(RemoveTemporariesOnTerminate);
   });
 }
 

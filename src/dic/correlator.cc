@@ -127,6 +127,21 @@ std::string DicSummary::BriefReport() const {
       Outliers() > 0 ? fmt::format("; {} subset results flagged as outliers", Outliers()) : "");
 }
 
+std::string DicSummary::NothingUsable(const std::string& min_zncc_name, double min_zncc) const {
+  if (frames == 0 || valid_fraction > 0) return "";
+  std::size_t most = 0;
+  long long total = 0;
+  for (std::size_t i = 0; i < status_counts.size(); ++i) {
+    total += status_counts[i];
+    if (status_counts[i] > status_counts[most]) most = i;
+  }
+  return fmt::format(
+      "no valid subset in any of the {} frames after the reference ({} subsets; most common "
+      "status: {} in {} of {} results; {} = {})",
+      frames, subsets, ToString(static_cast<SubsetStatus>(most)), status_counts[most], total,
+      min_zncc_name, min_zncc);
+}
+
 long long DicSummary::Outliers() const {
   return status_counts[static_cast<int>(SubsetStatus::kOutlier)];
 }

@@ -194,11 +194,13 @@ struct H5Writer::Impl {
 
 H5Writer::H5Writer(const std::string& final_path) : H5Writer(final_path, Mode::kCreate) {}
 
-H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_unique<Impl>()) {
+H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& source_path)
+    : impl_(std::make_unique<Impl>()) {
   H5::Exception::dontPrint();
   impl_->final_path = final_path;
+  const std::string& source = source_path.empty() ? final_path : source_path;
   if (mode == Mode::kUpdate) {
-    H5Reader check(final_path);  // Error if missing or not HDF5.
+    H5Reader check(source);  // Error if missing or not HDF5.
   }
   CheckOutputLocation(final_path);
   // kUpdate starts from the existing file's bytes: HDF5 never opens the original, so readers of
@@ -206,8 +208,7 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode) : impl_(std::make_u
   // No size limit: the file is one impactdic wrote (results.h5 with /frames may be gigabytes).
   std::string existing;
   if (mode == Mode::kUpdate)
-    existing =
-        ReadInputFile(final_path, "an HDF5 file", std::numeric_limits<std::uintmax_t>::max());
+    existing = ReadInputFile(source, "an HDF5 file", std::numeric_limits<std::uintmax_t>::max());
   Guard(final_path, "open", [&] {
     H5::FileAccPropList access;
     access.setCore(kCoreIncrement, /*backing_store=*/false);

@@ -4,7 +4,6 @@
 #include "impactdic/pipeline/campaign.h"
 
 #include <fmt/format.h>
-#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -134,17 +133,17 @@ struct Parallelism {
   int test_threads = -1;  // Threads of each test: an arena's size, or -1 (the scene's dic.threads).
 };
 
+// Both counts follow the one thread rule (core ThreadsToUse: at most the machine's cores).
 Parallelism SplitThreads(const CampaignOptions& o, std::size_t tests) {
   Parallelism p;
   const int n = static_cast<int>(std::max<std::size_t>(tests, 1));
+  const int jobs = o.jobs > 0 ? ThreadsToUse(o.jobs, "campaign jobs") : 0;
   if (o.threads < 0) {
-    p.jobs = std::min(o.jobs > 0 ? o.jobs : 1, n);
+    p.jobs = std::min(jobs > 0 ? jobs : 1, n);
     return p;
   }
-  const int total = o.threads > 0
-                        ? o.threads
-                        : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  p.jobs = std::min(o.jobs > 0 ? o.jobs : total, n);
+  const int total = ThreadsToUse(o.threads, "campaign threads");
+  p.jobs = std::min(jobs > 0 ? jobs : total, n);
   p.test_threads = std::max(1, total / p.jobs);
   return p;
 }
@@ -172,10 +171,30 @@ void RunTests(const std::vector<const CampaignTest*>& todo, const std::string& f
       bar.Advance();
     }
   };
+  // A worker that cannot be started, or an error outside a test (the log, the progress bar),
+  // stops the others at their next test; the error is rethrown once all are joined, so the
+  // callers' temporaries are removed as for any error (never std::terminate on a joinable thread).
+  std::exception_ptr error;
+  const auto guarded = [&] {
+    try {
+      worker();
+    } catch (...) {
+      next = todo.size();
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (!error) error = std::current_exception();
+    }
+  };
   std::vector<std::thread> threads;
-  for (int j = 1; j < par.jobs; ++j) threads.emplace_back(worker);
-  worker();
+  try {
+    for (int j = 1; j < par.jobs; ++j) threads.emplace_back(guarded);
+  } catch (...) {
+    next = todo.size();
+    const std::lock_guard<std::mutex> lock(mutex);
+    error = std::current_exception();
+  }
+  if (next < todo.size()) guarded();
   for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
   bar.Finish();
 }
 
@@ -198,16 +217,24 @@ CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions&
   std::vector<const CampaignTest*> todo;
   CampaignSummary summary;
   summary.tests_total = static_cast<int>(plan.tests.size());
-  for (const CampaignTest& t : plan.tests) {
-    if (!options.shard.Selects(t.index)) continue;
-    // The campaign folder's generation keeps what it holds: still, no input may lie in it.
-    if (!t.synthesise)
-      CheckOutputFolderHoldsNoInput(LoadScene(t.scene_path), options.output_folder, "-o");
+  // The selected tests, each with the hash resuming compares: a scene file's hash with its
+  // inputs' (SceneInputsHash), so a replaced frame or sensor record re-runs the test.
+  std::vector<CampaignTest> selected;
+  selected.reserve(plan.tests.size());  // `todo` points into it.
+  for (const CampaignTest& planned : plan.tests) {
+    if (!options.shard.Selects(planned.index)) continue;
+    CampaignTest& t = selected.emplace_back(planned);
+    if (!t.synthesise) {
+      const Scene scene = LoadScene(t.scene_path);
+      // The campaign folder's generation keeps what it holds: still, no input may lie in it.
+      CheckOutputFolderHoldsNoInput(scene, options.output_folder, "-o");
+      t.hash_hex = ContentHash(t.hash_hex + " inputs " + SceneInputsHash(scene));
+    }
     std::optional<CampaignRow> done =
         options.force ? std::nullopt : CompleteRow(t, options.output_folder);
     if (done) {
-      LogInfo("campaign: test {} is complete in {} (same scene, same tool): not run again", t.name,
-              (fs::path(options.output_folder) / t.name).string());
+      LogInfo("campaign: test {} is complete in {} (same scene, inputs and tool): not run again",
+              t.name, (fs::path(options.output_folder) / t.name).string());
       summary.rows.push_back(std::move(*done));
       ++summary.resumed;
     } else {
@@ -217,10 +244,8 @@ CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions&
   // Checks the folder before any work; written at the end (the tests' folders commit on their own).
   OutputGeneration generation(options.output_folder, CampaignLevelGeneration("impactdic campaign"));
   const Parallelism par = SplitThreads(options, todo.size());
-  std::optional<tbb::global_control> limit;
-  if (options.threads > 0)
-    limit.emplace(tbb::global_control::max_allowed_parallelism,
-                  static_cast<std::size_t>(options.threads));
+  std::optional<ThreadLimit> limit;
+  if (options.threads >= 0) limit.emplace(options.threads, "campaign threads");
   LogInfo("campaign: {} tests to run ({} resumed, shard {}), {} at a time, {} threads each",
           todo.size(), summary.resumed, options.shard.ToString(), par.jobs,
           par.test_threads > 0 ? std::to_string(par.test_threads) : "scene's dic.threads");

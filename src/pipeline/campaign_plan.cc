@@ -17,6 +17,8 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -24,6 +26,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/version.h"
+#include "impactdic/io/image_io.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
@@ -34,10 +37,60 @@ namespace impactdic {
 namespace fs = std::filesystem;
 namespace campaign_internal {
 
+void ContentHasher::Add(std::string_view bytes) {
+  std::uint64_t h = h_;
+  for (const char c : bytes) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;  // Prime.
+  h_ = h;
+}
+
+std::string ContentHasher::Hex() const { return fmt::format("{:016x}", h_); }
+
 std::string ContentHash(const std::string& bytes) {
-  std::uint64_t h = 14695981039346656037ull;  // FNV-1a 64 offset basis and prime.
-  for (unsigned char c : bytes) h = (h ^ c) * 1099511628211ull;
-  return fmt::format("{:016x}", h);
+  ContentHasher h;
+  h.Add(bytes);
+  return h.Hex();
+}
+
+namespace {
+
+// One input file into the hash: its path, then its size and bytes, or why it cannot be read.
+void AddInputFile(const std::string& path, ContentHasher* h) {
+  h->Add(path);
+  h->Add(std::string_view("\0", 1));
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (!in || ec) {
+    h->Add("unreadable\n");
+    return;
+  }
+  h->Add(fmt::format("{} bytes\n", size));
+  std::vector<char> buffer(std::size_t{1} << 20);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    h->Add(std::string_view(buffer.data(), static_cast<std::size_t>(in.gcount())));
+  }
+}
+
+}  // namespace
+
+std::string SceneInputsHash(const Scene& scene) {
+  ContentHasher h;
+  h.Add("frames\n");
+  try {
+    for (const std::string& frame : IsVideoFile(scene.inputs.frames)
+                                        ? std::vector<std::string>{scene.inputs.frames}
+                                        : ListFrameSequence(scene.inputs.frames))
+      AddInputFile(frame, &h);
+  } catch (const Error& e) {
+    h.Add(std::string("not listed: ") + e.what());
+  }
+  for (const std::string* input :
+       {&scene.inputs.sensor, &scene.inputs.calibration, &scene.inputs.truth, &scene.dic.mask}) {
+    h.Add("\ninput\n");
+    if (!input->empty()) AddInputFile(*input, &h);
+  }
+  return h.Hex();
 }
 
 std::string ToolVersion() { return fmt::format("{}+{}", Version(), GitRevision()); }

@@ -26,8 +26,22 @@ std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries
                                                    "momentum.max_sigma_ratio", series);
 }
 
+void CheckResultsAreOfScene(const Scene& scene, const std::string& results_path,
+                            const std::string& option) {
+  const H5Reader in(results_path);
+  if (!in.HasAttribute("/", "scene_name")) return;
+  const std::string name = in.ReadStringAttribute("/", "scene_name");
+  if (name == scene.name) return;
+  throw Error(ErrorKind::kInvalidValue, option,
+              fmt::format("{}, which holds the results of scene '{}'", results_path, name),
+              fmt::format("the results of scene '{}' ({}); analysing another scene's results "
+                          "would mix two tests",
+                          scene.name, scene.path));
+}
+
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px, bool allow_partial) {
+                                     double mm_per_px, bool allow_partial,
+                                     const std::string& output_path) {
   CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
              fmt::format("{}", mm_per_px), "> 0 mm/px (or a calibration with a plane scale)");
   if (scene.inputs.sensor.empty()) {
@@ -35,6 +49,7 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
                 "the DAQ CSV (the momentum analysis needs the pounder velocity)")
         .WithFile(scene.path);
   }
+  CheckResultsAreOfScene(scene, results_path, "results file");
   const SensorOptions sopt = MakeSensorOptions(scene);
   const MomentumOptions mopt = MakeMomentumOptions(scene, mm_per_px);
   long first = -1;
@@ -73,7 +88,10 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
                     scene.name, m.t_end_problem, results_path),
         "writes it, with the figures that could not be measured as NaN");
   }
-  H5Writer out(results_path, H5Writer::Mode::kUpdate);
+  H5Writer out(output_path.empty() ? results_path : output_path, H5Writer::Mode::kUpdate,
+               results_path);
+  out.Remove("/summary");
+  out.SetAttribute("/", "scene_name", scene.name);
   WriteAnalysis(out, run.analysis, run.sensor);
   out.SetAttribute("kinematics", "mm_per_px", mm_per_px);
   out.Commit();

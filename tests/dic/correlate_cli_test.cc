@@ -278,11 +278,13 @@ TEST_F(CorrelateCli, MaskLimitsTheSubsetsAndAWrongSizedMaskIsNamed) {
 // still stops the run with its name, and no output file is left behind.
 TEST_F(CorrelateCli, BadImageLateInTheSequenceIsNamedAndNothingIsWritten) {
   const std::string out = Path("late.h5");
+  // A third deformed image: a copy (the same file twice is refused, CorrelateInputs).
+  fs::copy_file(Path("def1.png"), Path("def3.png"), fs::copy_options::overwrite_existing);
   for (const char* bad : {"corrupt.png", "small.png", "missing.png"}) {
-    ExpectError(Pair() + " " + Path("def1.png") + " " + Path(bad) + " -o " + out, bad);
+    ExpectError(Pair() + " " + Path("def3.png") + " " + Path(bad) + " -o " + out, bad);
     EXPECT_FALSE(fs::exists(out)) << bad;
   }
-  const CliResult ok = RunCli(Pair() + " " + Path("def1.png") + " -o " + out);
+  const CliResult ok = RunCli(Pair() + " " + Path("def3.png") + " -o " + out);
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_TRUE(fs::exists(out));
 }

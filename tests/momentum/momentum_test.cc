@@ -336,7 +336,9 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   // A grid outside the correlated region: the error names the scene file that places it.
   std::string text = ReadTextFile(scene);
   text.replace(text.find("pounder_center_x_px: 145"), 24, "pounder_center_x_px: 9000");
-  const std::string far = dir.Write("far.yaml", text);
+  // The same scene's name: the results file now carries it (scene_name), and another scene's
+  // results are refused (AnalyzeResults.AnotherScenesResultsAndARunFoldersFileAreRefused).
+  const std::string far = dir.Write("far.yaml", "name: scene\n" + text);
   const CliResult outside = RunCli("analyze " + far + " --format json");
   EXPECT_EQ(outside.exit_code, 1) << outside.output;
   EXPECT_NE(outside.output.find("far.yaml"), std::string::npos) << outside.output;

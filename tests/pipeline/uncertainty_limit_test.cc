@@ -120,8 +120,10 @@ TEST(SigmaLimit, RunAndAnalyzeLeaveOutExactlyTheSamplesAboveItAndKeepThemInDic) 
   EXPECT_NE(p_plain, p_limited);
 
   // `analyze` of the unlimited results with the limited scene leaves out the same samples.
-  const CliResult analyze = RunCli("-q analyze " + limited + " --results " +
-                                   dir.File("plain/results.h5") + " --format json");
+  // Into a file of its own: the run folder's results.h5 stays with its summary.json.
+  const CliResult analyze =
+      RunCli("-q analyze " + limited + " --results " + dir.File("plain/results.h5") + " --output " +
+             dir.File("analysis.h5") + " --format json");
   ASSERT_EQ(analyze.exit_code, 0) << analyze.output;
   EXPECT_NE(analyze.output.find(warning), std::string::npos) << warning << "\n" << analyze.output;
 }

@@ -13,6 +13,8 @@
 // signal that was ignored when the process started (nohup, `cmd &` in a script) stays ignored.
 // SIGKILL cannot be caught: what it leaves is recognised by the pid in the name and removed by the
 // next process that writes there (io/output_generation.h, RemoveStaleTemporaries).
+// std::terminate (an error nothing caught) removes the registered paths too, unless a swap is in
+// progress, then reports and aborts as before (exit by SIGABRT).
 #ifndef IMPACTDIC_CORE_INTERRUPT_H_
 #define IMPACTDIC_CORE_INTERRUPT_H_
 
@@ -23,8 +25,9 @@
 
 namespace impactdic {
 
-// Installs the handlers and starts the cleanup thread (idempotent). Without it (library use, tests)
-// signals keep their default action and the registrations below only cost a map entry.
+// Installs the handlers (signals, std::terminate) and starts the cleanup thread (idempotent).
+// Without it (library use, tests) signals keep their default action and the registrations below
+// only cost a map entry.
 void InstallInterruptCleanup();
 
 // True once a handled signal arrived: the cleanup thread is about to end the process.

@@ -18,6 +18,34 @@ inline bool IsValidThreadCount(int threads) { return threads >= 0; }
 // Error(kInvalidValue, where, threads, kThreadCountExpected) unless IsValidThreadCount(threads).
 void CheckThreadCount(int threads, const std::string& where);
 
+// The cores this process may run on (oneTBB's default concurrency: the CPU affinity mask), >= 1.
+int MachineCores();
+
+// The one rule of every command, option and scene key that asks for threads (`--threads`,
+// `dic.threads`, `campaign --jobs`): 0 gives MachineCores(); N gives min(N, MachineCores()). A
+// request above the cores is capped (more threads than cores only cost memory and switching, and
+// 100000 of them exhaust the process table), logged once per `where` and count at info level:
+// "WHERE: 100000 threads requested; this machine has 2 cores: using 2". `threads` must be valid
+// (asserted; CheckThreadCount first).
+int ThreadsToUse(int threads, const std::string& where);
+
+// While it lives, oneTBB runs at most ThreadsToUse(threads, where) threads (a
+// tbb::global_control); with threads 0 (all cores) it sets nothing. Use it wherever a command
+// limits its parallelism: the only place a thread count reaches oneTBB.
+class ThreadLimit {
+ public:
+  ThreadLimit(int threads, const std::string& where);
+  ~ThreadLimit();
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+  int threads() const { return threads_; }  // The threads allowed (MachineCores() with 0).
+
+ private:
+  struct Control;  // oneTBB's global_control (its header stays out of ours).
+  std::unique_ptr<Control> control_;
+  int threads_ = 0;
+};
+
 // Holds oneTBB's worker threads (ours and OpenCV's) for its lifetime and joins them when
 // destroyed, so that none is still exiting when exit-time code runs (a process's main, a test
 // program's environment). Otherwise only a static destructor tells them to stop, and at exit:

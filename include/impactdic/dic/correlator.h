@@ -110,6 +110,11 @@ struct DicSummary {
   long long Discontinuous() const;
   long long Outliers() const;  // Subset results flagged `outlier`.
   bool IsUsable() const { return frames > 0 && valid_fraction > 0.5; }
+  // Why the correlation produced nothing usable, "" if it did: no valid subset in any deformed
+  // frame. The one rule of `run` (a failed stage) and `correlate` (exit 1): "no valid subset in
+  // any of the F frames after the reference (N subsets; most common status: S in K of T results;
+  // MIN_ZNCC_NAME = Z)", `min_zncc_name` naming the setting as the caller's user knows it.
+  std::string NothingUsable(const std::string& min_zncc_name, double min_zncc) const;
   std::string BriefReport() const;
   std::string FullReport() const;
 };

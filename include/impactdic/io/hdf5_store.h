@@ -42,8 +42,10 @@ class H5Writer {
   // kUpdate: starts from the existing file at final_path, read into memory (Error if it is missing
   // or not HDF5), so groups can be added or replaced; the original stays untouched until Commit()
   // replaces it.
+  // With `source_path`, kUpdate starts from that file instead (it is never changed) and Commit()
+  // writes final_path: a changed copy (`analyze SCENE --output`).
   enum class Mode { kCreate, kUpdate };
-  H5Writer(const std::string& final_path, Mode mode);
+  H5Writer(const std::string& final_path, Mode mode, const std::string& source_path = "");
   // For a command that owns only `owned_groups` of a file it may share with others (correlate -o
   // owns /dic): a new file when final_path does not exist, else kUpdate with those groups removed,
   // so everything else in the file is kept. An existing file that is not HDF5 is an Error

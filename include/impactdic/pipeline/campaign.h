@@ -25,8 +25,8 @@
 //                      the campaign-level files, one generation written at the end (it keeps the
 //                      test folders, hard-linked).
 // So an interrupted campaign keeps every test that was complete; the next run with the same plan
-// finds them (same scene hash and tool version) and processes only the others (unless
-// options.force).
+// finds them (same scene hash -- the scene file and every input file it reads -- and tool
+// version) and processes only the others (unless options.force).
 //
 // A test whose pipeline throws is "failed": its error is in its campaign.csv row (status, error)
 // and the others go on. A test that ran but whose m_add,max is not usable (a stage produced
@@ -61,8 +61,9 @@ CampaignShard ParseShard(const std::string& text, const std::string& where);
 
 struct CampaignOptions {
   std::string output_folder = "results/campaign";
-  // Total worker threads of the campaign: 0 = all cores, N >= 1; -1 = each scene's dic.threads
-  // for its correlation (scenes one at a time unless `jobs` says otherwise).
+  // Total worker threads of the campaign: 0 = all cores, N >= 1 (capped at the cores, core
+  // ThreadsToUse, like `jobs`); -1 = each scene's dic.threads for its correlation (scenes one at a
+  // time unless `jobs` says otherwise).
   int threads = -1;
   // Tests processed at the same time: 0 = auto (threads / 2, at least 1, at most the number of
   // tests; bounded because each test holds its frames: peak memory ~ jobs x one test's peak,
@@ -85,7 +86,8 @@ struct CampaignTest {
   std::string source;    // Scene path, or "synthesised", for messages and the CSV.
   // The campaign file's `outputs:` (applied to the scene's outputs section); unset: the scene's.
   std::optional<bool> animation, figures;
-  // Hash of the scene file's bytes or of the spec's YAML (16 hex digits; resuming compares it).
+  // Hash of the scene file's bytes or of the spec's YAML (16 hex digits). Resuming compares it
+  // combined with the hash of the scene's input files (RunCampaignPlan; docs/campaign.md).
   std::string hash_hex;
 };
 

@@ -27,12 +27,22 @@ struct SceneAnalysisRun {
 std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series);
 
 // Reads the correlation results, analyses the sensor record, computes kinematics and momentum
-// and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically).
+// and writes /sensor, /kinematics and /momentum into results_path (update in place, atomically),
+// or, with output_path, into a copy of it written there (results_path unchanged). The file
+// written has the root attribute scene_name of the scene and no /summary group (a run's key
+// figures, which this analysis replaces). A results file of another scene (its scene_name) is
+// refused before any work: Error kInvalidValue naming both scene names.
 // As `impactdic run`: when the momentum analysis produced nothing usable (t_e not measurable),
 // PartialResultsError (pipeline/pipeline.h; kind kNumerical) with the reason and nothing written,
 // unless allow_partial (then written, with NaN figures; the caller reports the run as partial).
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px, bool allow_partial = false);
+                                     double mm_per_px, bool allow_partial = false,
+                                     const std::string& output_path = "");
+
+// Error kInvalidValue naming `option` unless the results file holds no scene name (correlate -o)
+// or the scene's: "R holds the results of scene 'A'; expected results of scene 'B' (S)".
+void CheckResultsAreOfScene(const Scene& scene, const std::string& results_path,
+                            const std::string& option);
 
 }  // namespace impactdic
 

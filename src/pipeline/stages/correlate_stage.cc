@@ -1,7 +1,6 @@
 // correlate: subset DIC of the analysed frames (dic CorrelateSequence), as the rows of the
 // results layout (dic MakeDicResultsTable). No valid subset in any frame is a failure.
 #include <fmt/format.h>
-#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <array>
@@ -9,12 +8,12 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "impactdic/core/progress.h"
+#include "impactdic/core/threads.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
@@ -29,22 +28,6 @@
 
 namespace impactdic::stages {
 namespace {
-
-// Why the correlation produced nothing usable ("" if it did): no valid subset in any frame.
-std::string CorrelationProblem(const DicSummary& s, double min_zncc) {
-  if (s.frames == 0 || s.valid_fraction > 0) return "";
-  std::size_t most = 0;
-  long long total = 0;
-  for (std::size_t i = 0; i < s.status_counts.size(); ++i) {
-    total += s.status_counts[i];
-    if (s.status_counts[i] > s.status_counts[most]) most = i;
-  }
-  return fmt::format(
-      "no valid subset in any of the {} frames after the reference ({} subsets; most common "
-      "status: {} in {} of {} results; dic.min_zncc = {})",
-      s.frames, s.subsets, ToString(static_cast<SubsetStatus>(most)), s.status_counts[most], total,
-      min_zncc);
-}
 
 // Correlates the analysed frames as a sequence, as dic CorrelateSequence does, reading each frame
 // when it is correlated: one frame in memory besides what the correlator keeps.
@@ -79,11 +62,9 @@ class CorrelateStage : public Stage {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     DicOptions options = MakeDicOptions(scene.dic);
-    const int threads = c.options.threads >= 0 ? c.options.threads : scene.dic.threads;
-    std::optional<tbb::global_control> limit;
-    if (threads > 0)
-      limit.emplace(tbb::global_control::max_allowed_parallelism,
-                    static_cast<std::size_t>(threads));
+    const bool given = c.options.threads >= 0;  // Else the scene's dic.threads.
+    const ThreadLimit limit(given ? c.options.threads : scene.dic.threads,
+                            given ? "threads" : "dic.threads");
     DicResult dic = CorrelateStream(*d.frames, scene, options);
     for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
     d.preprocess_note = d.frames->PreprocessNote();
@@ -113,7 +94,8 @@ class CorrelateStage : public Stage {
           "(status outlier, NaN; dic.outlier_check)",
           summary.Outliers()));
     }
-    const std::string problem = CorrelationProblem(summary, scene.dic.options.icgn.min_zncc);
+    const std::string problem =
+        summary.NothingUsable("dic.min_zncc", scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
     return summary.BriefReport();
   }
