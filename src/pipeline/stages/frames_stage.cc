@@ -75,11 +75,12 @@ std::string TimeFrames(StageContext& c) {
   SceneRunData& d = c.data;
   const int n = d.source_frames;
   std::size_t edges = 0;  // Exposure edges in the record.
+  RequireExposureChannel(*d.sensor, scene.sensor.options.columns.exposure);
   try {
     d.frame_times_s =
         FrameTimes(*d.sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s, &edges);
   } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
-    if (e.file().empty()) e.WithFile(scene.inputs.sensor);
+    if (e.file().empty()) e.WithFile(e.where() == "inputs.fps" ? scene.path : scene.inputs.sensor);
     throw;
   }
   if (edges > static_cast<std::size_t>(n)) {
