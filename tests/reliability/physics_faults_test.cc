@@ -225,6 +225,28 @@ TEST(PhysicsFaults, PeakStageNotAnalysedFromItsStartMakesTeNull) {
   EXPECT_NEAR(ok.added_mass_max_kg, c.Ms(), 0.01 * c.Ms());
 }
 
+// The other end: frames that stop inside the peak stage (chain: 70 frames, the last 1.9 ms after
+// the impact, t_e at 2.8 ms). No frame meets the t_e criteria, and the fallback, the frame of the
+// maximum soil velocity, was the last frame: t_e 1.9 ms "measured" with a warning. Now NaN with the
+// reason.
+TEST(PhysicsFaults, FramesEndingInsideThePeakStageMakeTeNull) {
+  Chain c;
+  c.frames = 70;
+  PanelMapping map;
+  map.mm_per_px = c.scale;
+  const SceneAnalysis a = AnalyzeCorrelation(MakeChainCorrelation(c), map, c.fps, c.offset,
+                                             MakeChainSensor(c), ChainOptions(c));
+  const MomentumSummary& s = a.momentum.summary;
+  EXPECT_FALSE(s.IsUsable());
+  EXPECT_TRUE(std::isnan(s.t_end_peak_s));
+  EXPECT_TRUE(std::isnan(s.added_mass_max_kg));
+  EXPECT_TRUE(Contains(s.t_end_problem,
+                       "no analysed frame meets the t_e criteria, and the frames "
+                       "end at 0.011900 s"))
+      << s.t_end_problem;
+  EXPECT_TRUE(Contains(s.t_end_problem, "before the pounder stops")) << s.t_end_problem;
+}
+
 // The same in a run of the sample (impact between frames 0 and 1): dic.first_frame 5 fails the
 // run naming the momentum stage and why.
 TEST(PhysicsFaults, RunWithTheFirstFrameAfterTheImpactFails) {
