@@ -174,6 +174,18 @@ TEST(PhysicsFaults, MissingExposureColumnIsNamedWithTheColumnsFound) {
                        {dir.File("daq.csv"), "column 'exposure' (sensor.exposure_column)",
                         "its columns are time_s, accel_g", "sensor.exposure_column: \"\""});
   EXPECT_FALSE(Contains(output, "got 1 frames")) << output;
+  // Without an exposure channel by choice, frames timed by the default offset 0 all lie before
+  // the impact (0.4278 s): the message says so.
+  const std::string no_channel =
+      SampleScene(dir,
+                  {{"sensor: " + kSample + "/sensor.csv", "sensor: " + dir.File("daq.csv")},
+                   {"exposure_column: exposure", "exposure_column: \"\""}},
+                  kNoCorrelation);
+  const std::string timing = ExpectCliFailure(
+      "-q run " + no_channel + " -o " + dir.File("out"),
+      {no_channel, "frame times", "frames 0..49 at 0 s .. 0.030625 s on the DAQ clock",
+       "sensor.frame_time_offset_s + k / inputs.fps", "before the impact at 0.42776 s"});
+  EXPECT_FALSE(Contains(timing, "got 1 frames")) << timing;
 }
 
 // ---- Item 7: a peak stage that was not analysed from its start --------------------------------
