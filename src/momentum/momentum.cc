@@ -262,6 +262,46 @@ void GridMomentum(const KinematicsResult& kin, const MomentumOptions& options, M
   }
 }
 
+// The peak stage is analysed from its start: the first analysed frame (the reference, where the
+// soil is at rest) is exposed at or before the impact, to within one DAQ sample (the onset's
+// resolution). Else (a dic.first_frame after the impact, a camera started late) t_e, the FIRST
+// frame meeting its criteria, may lie before the first frame, and the soil's velocity there and
+// its displacements are measured from a soil already in motion: false, *problem says why.
+bool PeakStageStartAnalysed(const std::vector<double>& frame_time_s, const SensorSummary& sensor,
+                            std::string* problem) {
+  const double sample_s = sensor.sample_rate_hz > 0 ? 1 / sensor.sample_rate_hz : 0;
+  if (frame_time_s.front() <= sensor.impact_time_s + sample_s) return true;
+  *problem = fmt::format(
+      "the first analysed frame, at {:.6f} s, is {:.3f} ms after the impact at {:.6f} s: the start "
+      "of the peak stage was not analysed (the first frame correlated must be exposed at or "
+      "before the impact; check dic.first_frame)",
+      frame_time_s.front(), 1e3 * (frame_time_s.front() - sensor.impact_time_s),
+      sensor.impact_time_s);
+  return false;
+}
+
+// When no frame meets the t_e criteria (criteria_met false), the fallback (the frame of the
+// maximum soil velocity) stands only if the analysed frames reach the pounder's stop: frames that
+// end earlier (dic.last_frame, a short recording) may end inside the peak stage, where the soil's
+// velocity still grows and its maximum is just the last frame. Else false, *problem says why.
+bool FallbackInsideTheAnalysedFrames(const std::vector<double>& frame_time_s,
+                                     const SensorSummary& sensor, bool criteria_met,
+                                     std::string* problem) {
+  const double last = frame_time_s.back();
+  if (criteria_met || (std::isfinite(sensor.stop_time_s) && last >= sensor.stop_time_s))
+    return true;
+  *problem = fmt::format(
+      "no analysed frame meets the t_e criteria, and the frames end at {:.6f} s, {}: the end of "
+      "the peak stage may lie after the last frame (check dic.last_frame and the recording's "
+      "length)",
+      last,
+      std::isfinite(sensor.stop_time_s)
+          ? fmt::format("{:.3f} ms before the pounder stops at {:.6f} s",
+                        1e3 * (sensor.stop_time_s - last), sensor.stop_time_s)
+          : std::string("and the pounder does not stop inside the sensor record"));
+  return false;
+}
+
 // The frame of t_e in [ki, kend] (file comment; *criteria_met: both criteria, not the fallback),
 // or none (returns false, *problem says why).
 bool FindEndOfPeakStage(const MomentumResult& r, std::size_t ki, std::size_t kend,
@@ -459,7 +499,9 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
                 "at least 3 frames in the peak and plateau stages");
   }
   std::size_t ke = nf;
-  if (!FindEndOfPeakStage(r, ki, kend, options, &ke, &s.t_end_found, &s.t_end_problem)) {
+  if (!PeakStageStartAnalysed(frame_time_s, ss, &s.t_end_problem) ||
+      !FindEndOfPeakStage(r, ki, kend, options, &ke, &s.t_end_found, &s.t_end_problem) ||
+      !FallbackInsideTheAnalysedFrames(frame_time_s, ss, s.t_end_found, &s.t_end_problem)) {
     s.t_end_found = false;
     s.warnings.push_back(
         "t_e is not measurable: " + s.t_end_problem +

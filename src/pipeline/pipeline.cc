@@ -87,6 +87,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   stages::AddMeasuredPeakDeceleration(context);
   stages::RunStage(*stages::MakeModelStage(), context);
   ThrowIfFailed(summary, options);
+  summary.seconds = total.ElapsedSeconds();  // timing.json: up to the outputs.
   stages::RunStage(*stages::MakeOutputsStage(writers, generation ? &*generation : nullptr),
                    context);
   summary.seconds = total.ElapsedSeconds();

@@ -13,7 +13,8 @@ JsonObject SceneFigures::ToJson() const {
   JsonObject j;
   const auto names = CsvNames();
   const auto values = CsvValues();
-  for (std::size_t i = 0; i < names.size(); ++i) j.Add(names[i], values[i]);
+  for (std::size_t i = 0; i < names.size(); ++i)
+    if (names[i] != "dic_subsets_per_s") j.Add(names[i], values[i]);
   return j;
 }
 
@@ -87,6 +88,17 @@ JsonObject PipelineSummary::ToJson() const {
   JsonObject failed;
   for (const StageFailure& f : failures) failed.Add(f.stage, f.reason);
   j.Add("usable", IsUsable()).Add("failures", failed).Add("warnings", warnings);
+  return j;
+}
+
+JsonObject PipelineSummary::TimingJson() const {
+  JsonObject by_stage;
+  for (const StageReport& s : stages)
+    if (s.ran) by_stage.Add(s.name, s.seconds);
+  JsonObject j;
+  j.Add("seconds", seconds)
+      .Add("stages", by_stage)
+      .Add("dic_subsets_per_s", figures.dic_subsets_per_s);
   return j;
 }
 

@@ -282,7 +282,8 @@ YamlOptionTable SensorTable(Scene* s) {
       [&o](const std::string& v) { o.columns.accel_unit = AccelUnitFromString(v); },
       "Unit of the acceleration column; auto = from its name");
   t.Add("exposure_column", &o.columns.exposure,
-        "Camera exposure column (frame times from its rising edges); empty or absent = none");
+        "Camera exposure column (frame times from its rising edges); must be in the CSV when "
+        "frames are timed; empty = none");
   t.Add("cutoff_hz", &o.cutoff_hz, kCutoffRange, "a cut-off frequency",
         "Low-pass cut-off (< fs / 2)");
   t.AddChoice(
@@ -633,6 +634,12 @@ SensorOptions MakeSensorOptions(const Scene& scene) {
   SensorOptions o = scene.sensor.options;
   o.g_m_s2 = scene.model.gravity_m_s2;
   if (o.integrate_from == IntegrationStart::kImpact) o.impact_velocity_m_s = scene.ImpactVelocity();
+  o.expected_impact_velocity_m_s = scene.ImpactVelocity();
+  o.expected_impact_velocity_source =
+      scene.test.impact_velocity_m_s
+          ? std::string("test.impact_velocity_m_s")
+          : fmt::format("a free fall from test.drop_height_m = {:.4g} m (sqrt(2 g h))",
+                        scene.test.drop_height_m);
   o.Check();
   return o;
 }

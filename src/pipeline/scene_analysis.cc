@@ -65,6 +65,7 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   SceneAnalysisRun run;
   run.results_path = results_path;
   run.sensor = AnalyzeSensorCsv(scene.inputs.sensor, sopt);
+  RequireExposureChannel(run.sensor, sopt.columns.exposure);
   PanelMapping mapping;
   mapping.mm_per_px = mm_per_px;
   try {

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include "impactdic/core/error.h"
@@ -94,6 +95,10 @@ void SensorOptions::Check() const {
   CheckValue(
       std::isfinite(max_step_deviation) && max_step_deviation > 0 && max_step_deviation <= 0.5,
       "sensor.max_step_deviation", fmt::format("{}", max_step_deviation), "in (0, 0.5]");
+  CheckValue(std::isnan(expected_impact_velocity_m_s) ||
+                 (std::isfinite(expected_impact_velocity_m_s) && expected_impact_velocity_m_s > 0),
+             "sensor.expected_impact_velocity_m_s", fmt::format("{}", expected_impact_velocity_m_s),
+             "> 0 m/s or NaN (not checked)");
 }
 
 SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns, double g_m_s2,
@@ -140,6 +145,7 @@ SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns
 
   SensorRecord r;
   r.path = path;
+  r.column_names = table.names;
   r.time_s = table.Column(columns.time);
   r.accel_g = table.Column(accel);
   if (unit == AccelUnit::kMetrePerSecond2)
@@ -402,8 +408,13 @@ void IntegrateForward(const std::vector<double>& t, const std::vector<double>& a
   }
 }
 
-// From the release: v = 0 at the release (given, else the record's start at rest), z relative to
-// the impact position; sets the impact velocity.
+// From the release: v = 0 at the release, z relative to the impact position; sets the impact
+// velocity. A given release time must lie inside the record, before the impact; else the release
+// detected in a record that starts at rest (FindFreeFall). The pounder is held still before the
+// release: v = z = 0 up to quiet_guard_s before the detected release (the filtered step has
+// settled there: 1 ms is 9 time constants of the 1500 Hz filter), then the trapezoidal integral.
+// Integrating the rest period as well would add its reading's error: a 1 % gain error reads
+// 1.01 g at rest, -0.098 m/s^2, i.e. -0.98 m/s after 10 s at rest.
 void IntegrateFromRelease(const SensorRecord& record, const FreeFall& ff,
                           const SensorOptions& options, const std::vector<double>& a,
                           std::vector<double>* v, std::vector<double>* z, SensorSummary* s) {
@@ -412,20 +423,32 @@ void IntegrateFromRelease(const SensorRecord& record, const FreeFall& ff,
   std::size_t i0 = 0;
   if (std::isfinite(options.release_time_s)) {
     const double tr = options.release_time_s;
-    CheckValue(tr < s->impact_time_s, "release_time_s", fmt::format("{} s", tr),
-               fmt::format("before the detected impact at {:.6g} s", s->impact_time_s));
+    if (!(tr >= t.front() && tr < s->impact_time_s)) {
+      throw Error(ErrorKind::kInvalidValue, "sensor.release_time_s", fmt::format("{} s", tr),
+                  fmt::format("a time inside the record, which spans [{:.6g} s, {:.6g} s], and "
+                              "before the detected impact at {:.6g} s",
+                              t.front(), t.back(), s->impact_time_s))
+          .WithFile(record.path);
+    }
     s->release_time_s = tr;
     i0 = FirstIndexAtOrAfter(t, tr);
     const double fall = t[i0] - tr;  // Free fall between the release and sample i0.
     (*v)[i0] = g * fall;
     (*z)[i0] = 0.5 * g * fall * fall;
-  } else if (!ff.starts_at_rest) {
+  } else if (!ff.starts_at_rest || ff.release_index >= t.size()) {
     throw Error(ErrorKind::kInvalidValue, "integrate_from = release",
-                fmt::format("a record starting at {:.3g} g (the first {} s), not at rest (1 g)",
-                            ff.first_mean - s->offset_g, options.quiet_window_s),
-                "a record that starts with the pounder held at rest, a release time, or "
-                "integration from the impact with a given impact velocity")
+                ff.starts_at_rest
+                    ? fmt::format("a record starting at rest in which no release was found "
+                                  "before the impact at {:.6g} s",
+                                  s->impact_time_s)
+                    : fmt::format("a record starting at {:.3g} g (the first {} s), not at rest "
+                                  "(1 g)",
+                                  ff.first_mean - s->offset_g, options.quiet_window_s),
+                "a record that starts with the pounder held at rest, a release time inside the "
+                "record, or integration from the impact with a given impact velocity")
         .WithFile(record.path);
+  } else {
+    i0 = FirstIndexAtOrAfter(t, s->release_time_s - options.quiet_guard_s);
   }
   IntegrateForward(t, a, i0, v, z);
   s->impact_velocity_m_s = Interp(t, *v, s->impact_time_s);
@@ -449,6 +472,37 @@ void IntegrateFromImpact(const std::vector<double>& t, const std::vector<double>
     (*z)[i] = (*z)[i + 1] - 0.5 * ((*v)[i] + (*v)[i + 1]) * h;
   }
   s->impact_velocity_m_s = v0;
+}
+
+// The integrated impact velocity against the expected one (SensorOptions): a warning beyond
+// kImpactVelocityWarnFraction, Error beyond kImpactVelocityAbsurdFactor.
+void CheckImpactVelocity(const SensorRecord& record, const SensorOptions& options,
+                         SensorSummary* s) {
+  const double expected = options.expected_impact_velocity_m_s;
+  const double v0 = s->impact_velocity_m_s;
+  if (std::isnan(expected) || options.integrate_from != IntegrationStart::kRelease) return;
+  const std::string source = options.expected_impact_velocity_source.empty()
+                                 ? std::string("the expected impact velocity")
+                                 : options.expected_impact_velocity_source;
+  const std::string integrated = fmt::format(
+      "an impact velocity of {:.4g} m/s integrated from the release at {:.6g} s to the "
+      "impact at {:.6g} s",
+      v0, s->release_time_s, s->impact_time_s);
+  if (!(v0 > expected / kImpactVelocityAbsurdFactor &&
+        v0 < expected * kImpactVelocityAbsurdFactor)) {
+    throw Error(ErrorKind::kInvalidValue, "sensor impact velocity", integrated,
+                fmt::format("within a factor {} of the {:.4g} m/s of {}: check the release time, "
+                            "the acceleration unit and the scene's test section",
+                            kImpactVelocityAbsurdFactor, expected, source))
+        .WithFile(record.path);
+  }
+  const double deviation = v0 / expected - 1;
+  if (std::abs(deviation) > kImpactVelocityWarnFraction) {
+    s->warnings.push_back(fmt::format(
+        "{} differs by {:+.1f} % from the {:.4g} m/s of {} (more than the {:.0f} % that the drop "
+        "height's measurement, air drag and guide friction explain)",
+        integrated, 100 * deviation, expected, source, 100 * kImpactVelocityWarnFraction));
+  }
 }
 
 // Stop: the first sample after the impact where v <= stop_velocity (the zero crossing located by
@@ -544,6 +598,7 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
     IntegrateFromRelease(record, ff, options, a, &v, &z, &s);
   else
     IntegrateFromImpact(t, a, options, &v, &z, &s);
+  CheckImpactVelocity(record, options, &s);
   const std::size_t kend = FindStop(t, v, z, ki, options, &s);
   FindPeakDeceleration(t, acc, ki, kend, &s);
   if (s.impact_time_s - t.front() < 0.01)
@@ -552,6 +607,8 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   out.velocity_m_s = std::move(v);
   out.penetration_m = std::move(z);
   out.exposure = record.exposure;
+  out.path = record.path;
+  out.column_names = record.column_names;
   out.force_names = record.force_names;
   for (const auto& f : record.force) out.force.push_back(FiltFilt(lp, f));
   s.seconds = timer.ElapsedSeconds();
@@ -611,6 +668,28 @@ std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
   return edges;
 }
 
+namespace {
+
+// The frame rate the exposure edges of the frames give, (n - 1) / (t_last - t_first), against the
+// given fps (not checked when fps is 0 or NaN, or with fewer than 2 frames): Error naming
+// inputs.fps with both rates beyond kFrameRateTolerance + one DAQ sample over the edges' span.
+void CheckFrameRateAgainstExposure(const std::vector<double>& edges_s, double fps,
+                                   double daq_rate_hz, const std::string& path) {
+  if (!(fps > 0) || !std::isfinite(fps) || edges_s.size() < 2) return;
+  const double span = edges_s.back() - edges_s.front();
+  const double rate = static_cast<double>(edges_s.size() - 1) / span;
+  const double tolerance = kFrameRateTolerance + (daq_rate_hz > 0 ? 1 / (daq_rate_hz * span) : 0);
+  if (std::abs(fps / rate - 1) <= tolerance) return;
+  throw Error(ErrorKind::kInvalidValue, "inputs.fps", fmt::format("{:.6g} 1/s", fps),
+              fmt::format("the frame rate of the exposure channel{}, {:.6g} 1/s ({} rising "
+                          "edges from {:.6g} s to {:.6g} s), within {:.2g} %: velocities scale "
+                          "with the frame rate",
+                          path.empty() ? "" : " in " + path, rate, edges_s.size(), edges_s.front(),
+                          edges_s.back(), 100 * tolerance));
+}
+
+}  // namespace
+
 std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
                                double offset_s, std::size_t* edges_found) {
   CheckValue(n_frames >= 1, "n_frames", fmt::format("{}", n_frames), ">= 1");
@@ -627,6 +706,7 @@ std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double 
                               n_frames));
     }
     times.resize(static_cast<std::size_t>(n_frames));
+    CheckFrameRateAgainstExposure(times, fps, result.summary.sample_rate_hz, result.path);
   } else {
     CheckValue(std::isfinite(fps) && fps > 0, "fps", fmt::format("{}", fps), "> 0");
     CheckValue(std::isfinite(offset_s), "frame_time_offset_s", fmt::format("{}", offset_s),
@@ -642,6 +722,19 @@ std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double 
                             t0, t1));
   }
   return times;
+}
+
+void RequireExposureChannel(const SensorResult& result, const std::string& column) {
+  if (column.empty() || !result.exposure.empty()) return;
+  std::string names;
+  for (const auto& n : result.column_names) names += (names.empty() ? "" : ", ") + n;
+  throw Error(
+      ErrorKind::kFileFormat, "column '" + column + "' (sensor.exposure_column)",
+      "a file without it; its columns are " + (names.empty() ? std::string("unknown") : names),
+      "the camera's exposure channel, whose rising edges time the frames; or "
+      "sensor.exposure_column: \"\" to time them by sensor.frame_time_offset_s + k / "
+      "inputs.fps")
+      .WithFile(result.path);
 }
 
 int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s) {

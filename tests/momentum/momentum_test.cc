@@ -295,14 +295,14 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
     out.Commit();
   }
   const double density = c.Ms() / (12 * 25e-6 * 0.192);
-  const std::string scene =
-      dir.Write("scene.yaml",
-                fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
-                            "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
-                            "  density_kg_m3: {:.17g}\nsensor:\n  frame_time_offset_s: {:.17g}\n"
-                            "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
-                            "outputs:\n  folder: results\n",
-                            c.fps, c.scale, c.mp, density, c.offset));
+  const std::string scene = dir.Write(
+      "scene.yaml", fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
+                                "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
+                                "  density_kg_m3: {:.17g}\nsensor:\n  exposure_column: \"\"\n  "
+                                "frame_time_offset_s: {:.17g}\n"
+                                "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
+                                "outputs:\n  folder: results\n",
+                                c.fps, c.scale, c.mp, density, c.offset));
   const CliResult r = RunCli("-q analyze " + scene + " --format json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string keys[] = {"p_max_kg_m_s",      "t_end_peak_s",    "momentum_conservation_error",
@@ -393,14 +393,14 @@ TEST(AnalyzeSceneCli, UnmeasurableTeFailsUnlessAllowPartial) {
     out.Commit();
   }
   const double density = c.Ms() / (12 * 25e-6 * 0.192);
-  const std::string scene =
-      dir.Write("scene.yaml",
-                fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
-                            "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
-                            "  density_kg_m3: {:.17g}\nsensor:\n  frame_time_offset_s: {:.17g}\n"
-                            "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
-                            "outputs:\n  folder: results\n",
-                            c.fps, c.scale, c.mp, density, c.offset));
+  const std::string scene = dir.Write(
+      "scene.yaml", fmt::format("inputs:\n  frames: frames/*.png\n  fps: {}\n  mm_per_px: {}\n"
+                                "  sensor: daq.csv\ntest:\n  mass_kg: {}\n  width_m: 0.03\n"
+                                "  density_kg_m3: {:.17g}\nsensor:\n  exposure_column: \"\"\n  "
+                                "frame_time_offset_s: {:.17g}\n"
+                                "momentum:\n  pounder_center_x_px: 145\n  surface_y_px: 296\n"
+                                "outputs:\n  folder: results\n",
+                                c.fps, c.scale, c.mp, density, c.offset));
   const CliResult failed = RunCli("-q analyze " + scene + " --format json");
   EXPECT_EQ(failed.exit_code, 1) << failed.output;
   EXPECT_NE(failed.output.find("t_e is not measurable"), std::string::npos) << failed.output;

@@ -120,9 +120,10 @@ TEST(Sensor, RestOffsetReference) {
   EXPECT_NEAR(r.summary.final_penetration_m, m.CraterDepth(), 0.01 * m.CraterDepth());
 }
 
-// A record that starts in free fall: integration from release needs the release time; with it,
-// v = g (t - t_release) at the first sample.
-TEST(Sensor, RecordStartingInFreeFallNeedsReleaseTime) {
+// A record that starts in free fall cannot be integrated from the release: the release is not in
+// it, and a release time before the record would assume a free fall nobody recorded (issue 22:
+// `--release-time -5` gave v0 = 52.8 m/s). A given release time inside a whole record is used.
+TEST(Sensor, RecordStartingInFreeFallNeedsTheImpactVelocity) {
   const PulseMotion m = Motion();
   const SyntheticRecord full = Record(m, 0.0, 0.01, 5);
   SensorRecord raw;
@@ -133,14 +134,27 @@ TEST(Sensor, RecordStartingInFreeFallNeedsReleaseTime) {
   SensorOptions opt;
   const std::string msg = ErrorText([&] { ProcessSensor(raw, opt); });
   EXPECT_NE(msg.find("not at rest"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("release time"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("release time inside the record"), std::string::npos) << msg;
   opt.offset_reference = OffsetReference::kRest;
   const std::string rest_msg = ErrorText([&] { ProcessSensor(raw, opt); });
   EXPECT_NE(rest_msg.find("offset_reference = rest"), std::string::npos) << rest_msg;
   opt.offset_reference = OffsetReference::kFreeFall;
   opt.release_time_s = m.t_release;
-  const SensorResult r = ProcessSensor(raw, opt);
-  EXPECT_NEAR(r.summary.impact_velocity_m_s, m.v0, 0.005 * m.v0);
+  const std::string before = ErrorText([&] { ProcessSensor(raw, opt); });
+  EXPECT_NE(before.find("sensor.release_time_s"), std::string::npos) << before;
+  EXPECT_NE(before.find("spans [0.2 s, 0.44724 s]"), std::string::npos) << before;
+  opt.release_time_s = kNaN;
+  opt.integrate_from = IntegrationStart::kImpact;
+  opt.impact_velocity_m_s = m.v0;
+  EXPECT_NEAR(ProcessSensor(raw, opt).summary.final_penetration_m, m.CraterDepth(),
+              0.01 * m.CraterDepth());
+  SensorRecord whole;
+  whole.time_s = full.time_s;
+  whole.accel_g = full.accel_g;
+  whole.sample_rate_hz = kFs;
+  SensorOptions given;
+  given.release_time_s = m.t_release;
+  EXPECT_NEAR(ProcessSensor(whole, given).summary.impact_velocity_m_s, m.v0, 0.005 * m.v0);
 }
 
 // Exposure rising edges give the frame times to within one DAQ sample.

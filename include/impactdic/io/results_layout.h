@@ -121,8 +121,11 @@ inline constexpr std::array<const char*, 7> kRenderOutputNames = {
 inline constexpr const char* kResultsFile = "results.h5";
 inline constexpr const char* kSummaryJson = "summary.json";
 inline constexpr const char* kSummaryCsv = "summary.csv";
-inline constexpr std::array<const char*, 3> kRunOnlyOutputNames = {kResultsFile, kSummaryJson,
-                                                                   kSummaryCsv};
+// The run's wall times and rates (PipelineSummary::TimingJson), kept out of summary.json so that
+// two runs of one scene give byte-identical summaries.
+inline constexpr const char* kTimingJson = "timing.json";
+inline constexpr std::array<const char*, 4> kRunOnlyOutputNames = {kResultsFile, kSummaryJson,
+                                                                   kSummaryCsv, kTimingJson};
 
 }  // namespace impactdic::results_layout
 

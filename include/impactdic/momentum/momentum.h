@@ -26,9 +26,12 @@
 //    e.g. a wave reflected by the floor, that gains less does not move t_e). Sub-frame t_e from
 //    the frames' displacements (RefineEndOfPeakStage in momentum.cc): where the soil overtook
 //    the pounder, the maximum of the gap between pounder and soil (v_p = v_sand). If no frame
-//    satisfies both, the frame of the maximum soil velocity, with a warning. t_e is NOT
+//    satisfies both, the frame of the maximum soil velocity, with a warning, provided the
+//    analysed frames reach the pounder's stop (else t_e is not measurable). t_e is NOT
 //    MEASURABLE (NaN, and with it the conservation error, m_add(t), m_add,max, the sigmoid fit,
-//    v_sand,max and the momentum ratio; MomentumSummary::t_end_problem says why) when no frame
+//    v_sand,max and the momentum ratio; MomentumSummary::t_end_problem says why) when the first
+//    analysed frame is exposed after the impact (more than one DAQ sample; the start of the peak
+//    stage was not analysed), when no frame
 //    between the impact and the stop has a measured p_gran, or when a frame from the impact to t_e
 //    has none (t_e is the FIRST frame meeting the criteria: an unmeasured frame before it could
 //    have been t_e).

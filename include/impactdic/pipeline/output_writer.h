@@ -1,7 +1,8 @@
 // The outputs of a run as writers: results.h5, the figures and animation, summary.json,
-// summary.csv. A writer is one class in one file; the run calls every registered writer in turn
-// on the finished run (after ThrowIfFailed), each writing into the staging folder of the run's
-// output generation (io/output_generation.h), so a failing writer leaves the previous outputs.
+// summary.csv, timing.json. A writer is one class in one file; the run calls every registered
+// writer in turn on the finished run (after ThrowIfFailed), each writing into the staging folder of
+// the run's output generation (io/output_generation.h), so a failing writer leaves the previous
+// outputs.
 //
 // Adding an output format (docs/architecture.md, "How to add an output format"): write a class
 // deriving from OutputWriter in a new file src/pipeline/outputs/NAME_writer.cc with a factory
@@ -73,8 +74,8 @@ class OutputWriter {
 
 using OutputWriters = std::vector<std::shared_ptr<const OutputWriter>>;
 
-// results.h5, figures + animation, summary.json, summary.csv: in this order (the figures are
-// drawn from results.h5; summary.json holds the figures' warnings).
+// results.h5, figures + animation, summary.json, summary.csv, timing.json: in this order (the
+// figures are drawn from results.h5; summary.json holds the figures' warnings).
 OutputWriters BuiltInOutputWriters();
 
 }  // namespace impactdic

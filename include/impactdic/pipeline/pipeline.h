@@ -25,6 +25,7 @@
 // previous outputs as they were. The folder must be new, empty or one impactdic wrote. Files:
 //   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
 //   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
+//   timing.json     wall times of the run and its stages, the correlation's subsets per second
 //   momentum.png, deceleration.png, added_mass.png, velocity_field_te.png, velocity.mp4 (or .avi)
 #ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
 #define IMPACTDIC_PIPELINE_PIPELINE_H_
@@ -83,8 +84,10 @@ struct SceneFigures {
   double crater_depth_model_m = kNaN;
   double t_end_model_s = kNaN;
   double dic_valid_fraction = kNaN;
-  double dic_subsets_per_s = kNaN;
+  double dic_subsets_per_s = kNaN;  // A wall-time rate: in timing.json and summary.csv only.
 
+  // summary.json's figures: every one of CsvNames() but the wall-time rate dic_subsets_per_s, so
+  // that two runs of one scene give the same bytes.
   JsonObject ToJson() const;
   // Column names and values of summary.csv, in the same order.
   std::vector<std::string> CsvNames() const;
@@ -129,8 +132,12 @@ struct PipelineSummary {
   std::string BriefReport() const;
   std::string FullReport() const;
   // summary.json: the figures' keys (SceneFigures::ToJson), then "usable", "failures" (stage ->
-  // reason) and "warnings".
+  // reason) and "warnings". Nothing that varies between runs of one scene (no time, rate, path
+  // or version).
   JsonObject ToJson() const;
+  // timing.json: "seconds" (the run up to its outputs), "stages" (name -> seconds, the stages that
+  // ran) and "dic_subsets_per_s" (null without a correlation).
+  JsonObject TimingJson() const;
 };
 
 // The output folder must not hold an input: a run replaces the files it wrote there before

@@ -1,4 +1,5 @@
-// summary.json and summary.csv: the key figures of the run (PipelineSummary::ToJson, SceneFigures).
+// summary.json and summary.csv: the key figures of the run (PipelineSummary::ToJson, SceneFigures);
+// timing.json: its wall times and rates (PipelineSummary::TimingJson).
 #include <memory>
 #include <string>
 #include <vector>
@@ -45,8 +46,23 @@ class SummaryCsvWriter : public OutputWriter {
   }
 };
 
+class TimingJsonWriter : public OutputWriter {
+ public:
+  std::string name() const override { return L::kTimingJson; }
+  std::vector<std::string> FileNames() const override { return {L::kTimingJson}; }
+  std::string SkipReason(const Scene&, const SceneRunData&) const override { return ""; }
+  void Write(OutputContext& c) const override {
+    const std::string path = c.Path(L::kTimingJson);
+    WriteTextFileAtomic(path, c.summary.TimingJson().Dump() + "\n");
+    c.summary.outputs.push_back(path);
+  }
+};
+
 }  // namespace
 
+std::shared_ptr<const OutputWriter> MakeTimingJsonWriter() {
+  return std::make_shared<TimingJsonWriter>();
+}
 std::shared_ptr<const OutputWriter> MakeSummaryJsonWriter() {
   return std::make_shared<SummaryJsonWriter>();
 }

@@ -75,11 +75,12 @@ std::string TimeFrames(StageContext& c) {
   SceneRunData& d = c.data;
   const int n = d.source_frames;
   std::size_t edges = 0;  // Exposure edges in the record.
+  RequireExposureChannel(*d.sensor, scene.sensor.options.columns.exposure);
   try {
     d.frame_times_s =
         FrameTimes(*d.sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s, &edges);
   } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
-    if (e.file().empty()) e.WithFile(scene.inputs.sensor);
+    if (e.file().empty()) e.WithFile(e.where() == "inputs.fps" ? scene.path : scene.inputs.sensor);
     throw;
   }
   if (edges > static_cast<std::size_t>(n)) {
@@ -92,7 +93,21 @@ std::string TimeFrames(StageContext& c) {
     c.summary.warnings.push_back("sensor: " + w);
   }
   if (scene.dic.first_frame != 0) return "";
-  d.first_frame = ReferenceFrameForImpact(d.frame_times_s, d.sensor->summary.impact_time_s);
+  const double impact_s = d.sensor->summary.impact_time_s;
+  d.first_frame = ReferenceFrameForImpact(d.frame_times_s, impact_s);
+  if (d.last_frame - d.first_frame < 2) {  // Was "frames: got 1 frames from 49 to 49".
+    throw Error(ErrorKind::kInvalidValue, "frame times",
+                fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
+                            "fewer than 3 of them from the last one before the impact at "
+                            "{:.6g} s on",
+                            0, n - 1, d.frame_times_s.front(), d.frame_times_s.back(),
+                            edges > 0 ? "the exposure edges of " + scene.inputs.sensor
+                                      : std::string("sensor.frame_time_offset_s + k / inputs.fps"),
+                            impact_s),
+                "frames that film the impact: check sensor.frame_time_offset_s, the exposure "
+                "channel and dic.last_frame")
+        .WithFile(scene.path);
+  }
   if (d.first_frame == 0) return "";
   return fmt::format("; frames 0..{} before the impact are not correlated", d.first_frame - 1);
 }
