@@ -652,7 +652,12 @@ VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>
     throw Error(ErrorKind::kFileFormat, fmt::format("is empty (0 bytes); expected {}", kVideoWhat))
         .WithFile(path);
   }
-  if (!impl_->capture.Open(path)) {
+  // FFmpeg alone where OpenCV has it (the animation is written with it too): with any backend,
+  // a file FFmpeg cannot open goes on to the others, GStreamer printing its own warnings and an
+  // assertion ("uridecodebin"), and LeakSanitizer finding libusb device lists left behind.
+  const int api =
+      opencv_codecs::HasVideoBackend(cv::CAP_FFMPEG) ? int{cv::CAP_FFMPEG} : int{cv::CAP_ANY};
+  if (!impl_->capture.Open(path, api)) {
     throw Error(ErrorKind::kFileFormat, "video", "a file OpenCV cannot open",
                 "a video OpenCV can decode (.mp4, .avi, ...)")
         .WithFile(path);

@@ -136,6 +136,8 @@ bool Encode(const std::string& extension, const cv::Mat& image, std::vector<ucha
   return Images().encode(extension, image, bytes, params);
 }
 
+bool HasVideoBackend(int api) { return Video().has_backend(api); }
+
 VideoCapture::~VideoCapture() {
   if (handle_ != nullptr) Video().capture_delete(handle_);
 }

@@ -14,7 +14,7 @@
 namespace impactdic::io_internal {
 
 inline constexpr int kOpenCvImagesApiVersion = 3;
-inline constexpr int kOpenCvVideoApiVersion = 2;
+inline constexpr int kOpenCvVideoApiVersion = 3;
 
 struct OpenCvImagesApi {
   int version = kOpenCvImagesApiVersion;
@@ -28,6 +28,7 @@ struct OpenCvImagesApi {
 
 struct OpenCvVideoApi {
   int version = kOpenCvVideoApiVersion;
+  bool (*has_backend)(int api) = nullptr;  // cv::videoio_registry::hasBackend
   void* (*capture_new)() = nullptr;
   void (*capture_delete)(void* capture) = nullptr;
   bool (*capture_open)(void* capture, const std::string& path, int api) = nullptr;

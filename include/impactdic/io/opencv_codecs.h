@@ -40,6 +40,10 @@ cv::Mat Decode(const std::string& bytes, int flags, std::string* messages = null
 bool Encode(const std::string& extension, const cv::Mat& image, std::vector<uchar>* bytes,
             const std::vector<int>& params);
 
+// Whether OpenCV was built with the video backend `api` (cv::CAP_FFMPEG, ...); loads the video
+// plugin.
+bool HasVideoBackend(int api);
+
 // cv::VideoCapture (the video plugin), with the API preference (cv::CAP_ANY, cv::CAP_FFMPEG, ...).
 class VideoCapture {
  public:
