@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <fnmatch.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <atomic>
@@ -18,6 +19,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>  // property ids only
 #include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
@@ -268,6 +270,138 @@ std::string PngStructureProblem(const std::string& bytes) {
   return fmt::format("a truncated PNG: the file ends at byte {} before its IEND chunk", n);
 }
 
+// A JPEG's marker structure (ITU-T T.81, annex B): marker segments, each scan's entropy-coded
+// data up to the next marker, until the end-of-image marker FF D9. libjpeg decodes a JPEG that
+// stops early with the missing blocks flat grey and only a warning on stderr ("Premature end of
+// JPEG file") that OpenCV does not pass on; walking the markers first finds the truncation.
+// Bytes after FF D9 are not looked at (cameras append their own data there). Returns "" when
+// the structure is sound, else what is wrong.
+std::string JpegStructureProblem(const std::string& bytes) {
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
+  const std::size_t n = bytes.size();
+  const auto truncated = [n](const std::string& where) {
+    return fmt::format(
+        "a truncated JPEG: the file ends at byte {}, {}, before its end-of-image marker (FF D9)", n,
+        where);
+  };
+  int scans = 0;
+  std::size_t at = 2;  // after the start-of-image marker FF D8
+  while (true) {
+    if (at >= n) return truncated("after its last complete segment");
+    if (p[at] != 0xFF) {
+      return fmt::format("a corrupt JPEG: byte {} should start a marker (FF) but is {:02X}", at,
+                         p[at]);
+    }
+    while (at + 1 < n && p[at + 1] == 0xFF) ++at;  // fill bytes
+    if (at + 1 >= n) return truncated("inside a marker");
+    const unsigned char marker = p[at + 1];
+    if (marker == 0xD9) return "";
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // TEM, RSTn: no length
+      at += 2;
+      continue;
+    }
+    if (at + 4 > n) return truncated(fmt::format("inside the marker FF {:02X}", marker));
+    const std::size_t length = std::size_t{p[at + 2]} << 8 | p[at + 3];
+    if (length < 2)
+      return fmt::format("a corrupt JPEG: the segment at byte {} has length {}", at, length);
+    if (at + 2 + length > n) {
+      return truncated(fmt::format("inside the segment FF {:02X} at byte {}, which ends at byte {}",
+                                   marker, at, at + 2 + length));
+    }
+    at += 2 + length;
+    if (marker != 0xDA) continue;
+    // Start of scan: its entropy-coded data run to the next marker other than a stuffed zero
+    // byte (FF 00) or a restart marker (FF D0..D7).
+    ++scans;
+    while (at + 1 < n && !(p[at] == 0xFF && p[at + 1] != 0x00 && p[at + 1] != 0xFF &&
+                           (p[at + 1] < 0xD0 || p[at + 1] > 0xD7))) {
+      ++at;
+    }
+    if (at + 1 >= n) {
+      return truncated(fmt::format("inside the compressed image data of its scan {}", scans));
+    }
+  }
+}
+
+// What can be told of an image file before decoding it: Error naming the file when it is
+// empty, when its header claims more than the size limits (image_io.h), or when a PNG's chunks or
+// a JPEG's markers show it truncated or corrupt.
+void CheckImageBytes(const std::string& path, const std::string& bytes) {
+  if (bytes.empty()) {
+    throw Error(ErrorKind::kFileFormat, fmt::format("is empty (0 bytes); expected {}", kImageWhat))
+        .WithFile(path);
+  }
+  long long width = 0, height = 0;
+  if (HeaderReader(bytes).Size(&width, &height) &&
+      (width < 1 || height < 1 || width > kMaxImageSidePx || height > kMaxImageSidePx ||
+       width * height > kMaxImagePixels)) {
+    throw Error(ErrorKind::kFileFormat, "image size",
+                fmt::format("{}x{} px in its header", width, height),
+                fmt::format("at most {} px a side and {} pixels in all (e.g. 16384x16384)",
+                            kMaxImageSidePx, kMaxImagePixels))
+        .WithFile(path);
+  }
+  if (bytes.rfind("\x89PNG", 0) == 0) {
+    const std::string problem = PngStructureProblem(bytes);
+    if (!problem.empty())
+      throw Error(ErrorKind::kFileFormat, "image", problem, "a complete PNG file").WithFile(path);
+  }
+  if (bytes.rfind("\xFF\xD8", 0) == 0) {
+    const std::string problem = JpegStructureProblem(bytes);
+    if (!problem.empty()) {
+      throw Error(ErrorKind::kFileFormat, "image", problem,
+                  "a complete JPEG file (data after its end-of-image marker are ignored)")
+          .WithFile(path);
+    }
+  }
+}
+
+// The path of a directory entry that is to be a frame (its name has an image extension or
+// matches the frames glob): Error naming it and what it is when it is not a regular file (a
+// folder, a dangling symbolic link, a FIFO, a device), which would otherwise be left out of the
+// list and reported as a missing frame. Judged by stat(), so a FIFO is never opened.
+std::string CheckedFrame(const fs::directory_entry& entry) {
+  std::string path = entry.path().string();
+  std::error_code ec;
+  if (!entry.is_regular_file(ec)) CheckImageFileExists(path);
+  return path;
+}
+
+// Error when two names of a frame sequence are the same file (a symbolic or hard link, e.g.
+// one made to fill a gap in the numbering): the repeated image would read as no motion over that
+// frame interval. Files that cannot be stat()ed are left to the reader's message.
+void CheckDistinctFiles(const std::vector<std::string>& files) {
+  std::map<std::pair<dev_t, ino_t>, std::size_t> seen;
+  for (std::size_t k = 0; k < files.size(); ++k) {
+    struct stat info {};
+    if (stat(files[k].c_str(), &info) != 0) continue;
+    const auto [it, added] = seen.emplace(std::make_pair(info.st_dev, info.st_ino), k);
+    if (added) continue;
+    throw Error(
+        ErrorKind::kInvalidValue, "frames",
+        fmt::format("the same file as {} (a symbolic or hard link to it)", files[it->second]),
+        "each frame of a sequence its own image: a repeated image reads as no motion "
+        "over one frame interval")
+        .WithFile(files[k]);
+  }
+}
+
+// The reason in what OpenCV's imgcodecs printed about a file it could not decode, e.g.
+// "imdecode_(''): can't read data: OpenCV(4.6.0) .../bitstrm.cpp:102: error: (-2:Unspecified
+// error) Unexpected end of input stream in function 'readBlock'" -> "Unexpected end of input
+// stream in function 'readBlock'"; "" when it printed nothing.
+std::string DecoderReason(const std::string& messages) {
+  std::string text = messages;
+  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
+  const std::size_t line = text.rfind('\n');
+  if (line != std::string::npos) text = text.substr(line + 1);
+  const std::size_t error = text.find("error: (");
+  const std::size_t end = error == std::string::npos ? error : text.find(") ", error);
+  if (end != std::string::npos) return text.substr(end + 2);
+  const std::size_t colon = text.find("): ");
+  return colon == std::string::npos ? text : text.substr(colon + 3);
+}
+
 // A palette TIFF whose palette is not grey: converted to grey like a colour frame, with one
 // warning per process (a sequence of such frames would otherwise repeat it for every frame).
 void WarnColourPalette(const std::string& path) {
@@ -343,34 +477,29 @@ void CheckImageFileExists(const std::string& path) {
 
 cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
   const std::string bytes = ReadInputFile(path, kImageWhat, kMaxImageFileBytes);
-  long long width = 0, height = 0;
-  if (HeaderReader(bytes).Size(&width, &height) &&
-      (width < 1 || height < 1 || width > kMaxImageSidePx || height > kMaxImageSidePx ||
-       width * height > kMaxImagePixels)) {
-    throw Error(ErrorKind::kFileFormat, "image size",
-                fmt::format("{}x{} px in its header", width, height),
-                fmt::format("at most {} px a side and {} pixels in all (e.g. 16384x16384)",
-                            kMaxImageSidePx, kMaxImagePixels))
-        .WithFile(path);
-  }
-  if (bytes.rfind("\x89PNG", 0) == 0) {
-    const std::string problem = PngStructureProblem(bytes);
-    if (!problem.empty())
-      throw Error(ErrorKind::kFileFormat, "image", problem, "a complete PNG file").WithFile(path);
-  }
+  CheckImageBytes(path, bytes);
   cv::Mat image;
+  std::string messages;  // what OpenCV's decoder printed instead of throwing
   try {
     // Greyscale PNGs without OpenCV's codecs (loading them costs more than decoding a frame).
-    if (!DecodeGreyPng(bytes, &image))
-      image = opencv_codecs::Decode(bytes, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR);
+    // Any other PNG's image data are checked first, so that libpng has nothing to complain of.
+    if (!DecodeGreyPng(bytes, &image)) {
+      const std::string problem = PngImageDataProblem(bytes);
+      if (!problem.empty())
+        throw Error(ErrorKind::kFileFormat, "image", problem, "a valid PNG file").WithFile(path);
+      image = opencv_codecs::Decode(bytes, cv::IMREAD_ANYDEPTH | cv::IMREAD_ANYCOLOR, &messages);
+    }
   } catch (const cv::Exception& e) {
     throw Error(ErrorKind::kFileFormat, "image", "a file OpenCV cannot decode: " + e.err,
                 kImageWhat)
         .WithFile(path);
   }
   if (image.empty()) {
+    const std::string why = DecoderReason(messages);
     throw Error(ErrorKind::kFileFormat, "image",
-                "a file OpenCV cannot decode (corrupt or truncated?)", kImageWhat)
+                why.empty() ? "a file OpenCV cannot decode (corrupt or truncated?)"
+                            : "a file OpenCV cannot decode: " + why,
+                kImageWhat)
         .WithFile(path);
   }
   // OpenCV expands a palette TIFF into BGR colour. A grey palette (red = green = blue) gives three
@@ -462,8 +591,7 @@ std::vector<std::string> ListFrames(const std::string& source) {
   std::error_code ec;
   if (fs::is_directory(source, ec)) {
     for (const auto& entry : fs::directory_iterator(source)) {
-      if (entry.is_regular_file() && IsImageFile(entry.path()))
-        files.push_back(entry.path().string());
+      if (IsImageFile(entry.path())) files.push_back(CheckedFrame(entry));
     }
   } else if (source.find_first_of("*?[") != std::string::npos) {
     const fs::path pattern(source);
@@ -476,12 +604,14 @@ std::vector<std::string> ListFrames(const std::string& source) {
     }
     const std::string name_pattern = pattern.filename().string();
     for (const auto& entry : fs::directory_iterator(folder)) {
-      if (entry.is_regular_file() &&
-          fnmatch(name_pattern.c_str(), entry.path().filename().c_str(), 0) == 0) {
-        files.push_back(entry.path().string());
-      }
+      if (fnmatch(name_pattern.c_str(), entry.path().filename().c_str(), 0) != 0) continue;
+      if (entry.is_regular_file(ec) || IsImageFile(entry.path()))
+        files.push_back(CheckedFrame(entry));
     }
   } else if (fs::is_regular_file(source, ec)) {
+    files.push_back(source);
+  } else if (fs::exists(fs::symlink_status(source, ec))) {
+    CheckImageFileExists(source);  // a dangling link, a FIFO, a device: named as such
     files.push_back(source);
   } else {
     throw Error(ErrorKind::kFileNotFound, "frames", "", "an existing folder, glob or image file")
@@ -499,6 +629,7 @@ std::vector<std::string> ListFrames(const std::string& source) {
 std::vector<std::string> ListFrameSequence(const std::string& source) {
   std::vector<std::string> files = ListFrames(source);
   CheckFrameNumbering(files);
+  CheckDistinctFiles(files);
   return files;
 }
 
@@ -513,9 +644,20 @@ struct VideoReader::Impl {
 };
 
 VideoReader::VideoReader(const std::string& path) : impl_(std::make_unique<Impl>()), path_(path) {
-  CheckInputFile(path, "a video file OpenCV can decode (.mp4, .avi, ...)",
-                 std::numeric_limits<std::uintmax_t>::max());
-  if (!impl_->capture.Open(path)) {
+  static constexpr const char* kVideoWhat = "a video file OpenCV can decode (.mp4, .avi, ...)";
+  CheckInputFile(path, kVideoWhat, std::numeric_limits<std::uintmax_t>::max());
+  // An empty file: FFmpeg and GStreamer would each try it and fail with messages of their own.
+  std::error_code ec;
+  if (fs::file_size(path, ec) == 0 && !ec) {
+    throw Error(ErrorKind::kFileFormat, fmt::format("is empty (0 bytes); expected {}", kVideoWhat))
+        .WithFile(path);
+  }
+  // FFmpeg alone where OpenCV has it (the animation is written with it too): with any backend,
+  // a file FFmpeg cannot open goes on to the others, GStreamer printing its own warnings and an
+  // assertion ("uridecodebin"), and LeakSanitizer finding libusb device lists left behind.
+  const int api =
+      opencv_codecs::HasVideoBackend(cv::CAP_FFMPEG) ? int{cv::CAP_FFMPEG} : int{cv::CAP_ANY};
+  if (!impl_->capture.Open(path, api)) {
     throw Error(ErrorKind::kFileFormat, "video", "a file OpenCV cannot open",
                 "a video OpenCV can decode (.mp4, .avi, ...)")
         .WithFile(path);

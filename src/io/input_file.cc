@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
@@ -25,6 +26,17 @@ std::string FileTypeName(mode_t mode) {
   return "not a regular file";
 }
 
+// Where `path` points when it is a symbolic link whose target does not exist; "" otherwise.
+std::string DanglingLinkTarget(const std::string& path) {
+  struct stat info {};
+  if (lstat(path.c_str(), &info) != 0 || !S_ISLNK(info.st_mode)) return "";
+  std::string target(4096, '\0');
+  const ssize_t n = readlink(path.c_str(), target.data(), target.size());
+  if (n <= 0) return "(unreadable link)";
+  target.resize(static_cast<std::size_t>(n));
+  return target;
+}
+
 }  // namespace
 
 std::string FormatBytes(std::uintmax_t bytes) {
@@ -42,8 +54,17 @@ std::string FormatBytes(std::uintmax_t bytes) {
 void CheckInputFile(const std::string& path, const std::string& what, std::uintmax_t max_bytes) {
   struct stat info {};
   if (stat(path.c_str(), &info) != 0) {
-    if (errno == ENOENT || errno == ENOTDIR)
+    if (errno == ENOENT || errno == ENOTDIR) {
+      const std::string target = DanglingLinkTarget(path);
+      if (!target.empty()) {
+        throw Error(ErrorKind::kFileNotFound,
+                    fmt::format("is a dangling symbolic link to {}, which does not exist; "
+                                "expected {}",
+                                target, what))
+            .WithFile(path);
+      }
       throw Error(ErrorKind::kFileNotFound, "", "", what).WithFile(path);
+    }
     throw Error(ErrorKind::kIo, "", std::strerror(errno), what).WithFile(path);
   }
   if (!S_ISREG(info.st_mode)) {

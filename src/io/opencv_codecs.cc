@@ -7,7 +7,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
+#include <opencv2/core/utils/logger.hpp>
 #include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
@@ -47,6 +49,19 @@ std::vector<std::string> Candidates(const Plugin& plugin, const char* build_path
   return paths;
 }
 
+// OpenCV's log and FFmpeg's (through OpenCV's FFmpeg backend) go to stderr beside our own
+// message about the same file: a video that cannot be opened gave "[mov,mp4,...] moov atom not
+// found", "[ WARN:0@0.16] ... GStreamer warning: ..." and "[ERROR:0@0.16] ... raised OpenCV
+// exception" before ours. Both are silenced before the first plugin is loaded, unless the user
+// asks for them: impactdic --verbose, or their own OPENCV_LOG_LEVEL / OPENCV_FFMPEG_LOGLEVEL.
+void QuietLibraries() {
+  if (GetLogLevel() <= LogLevel::kDebug) return;
+  if (std::getenv("OPENCV_LOG_LEVEL") == nullptr)
+    cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT);
+  // Read by OpenCV's FFmpeg backend when it first opens a file; -8 is AV_LOG_QUIET.
+  setenv("OPENCV_FFMPEG_LOGLEVEL", "-8", /*overwrite=*/0);
+}
+
 // Loads the plugin and returns its table (of type Api, checked against `version`). Each plugin
 // is loaded once, its table kept for the whole process (*loaded, guarded by g_mutex).
 std::mutex g_mutex;
@@ -56,6 +71,11 @@ const Api& LoadPlugin(const Plugin& plugin, const char* build_path, int version,
                       const Api** loaded) {
   std::lock_guard<std::mutex> lock(g_mutex);
   if (*loaded != nullptr) return **loaded;
+  static bool quiet = false;  // guarded by g_mutex
+  if (!quiet) {
+    QuietLibraries();
+    quiet = true;
+  }
   std::string tried;
   for (const auto& path : Candidates(plugin, build_path)) {
     std::error_code ec;
@@ -102,16 +122,21 @@ const OpenCvVideoApi& Video() {
 
 }  // namespace
 
-cv::Mat Decode(const std::string& bytes, int flags) {
+cv::Mat Decode(const std::string& bytes, int flags, std::string* messages) {
   const auto& api = Images();
   const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data()));
-  return api.decode(buffer, flags);
+  std::string captured;
+  cv::Mat image = api.decode(buffer, flags, &captured);
+  if (messages != nullptr) *messages = std::move(captured);
+  return image;
 }
 
 bool Encode(const std::string& extension, const cv::Mat& image, std::vector<uchar>* bytes,
             const std::vector<int>& params) {
   return Images().encode(extension, image, bytes, params);
 }
+
+bool HasVideoBackend(int api) { return Video().has_backend(api); }
 
 VideoCapture::~VideoCapture() {
   if (handle_ != nullptr) Video().capture_delete(handle_);

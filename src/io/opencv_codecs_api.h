@@ -13,18 +13,22 @@
 
 namespace impactdic::io_internal {
 
-inline constexpr int kOpenCvImagesApiVersion = 2;
-inline constexpr int kOpenCvVideoApiVersion = 2;
+inline constexpr int kOpenCvImagesApiVersion = 3;
+inline constexpr int kOpenCvVideoApiVersion = 3;
 
 struct OpenCvImagesApi {
   int version = kOpenCvImagesApiVersion;
-  cv::Mat (*decode)(const cv::Mat& buffer, int flags) = nullptr;
+  // cv::imdecode; what OpenCV writes to std::cerr meanwhile on this thread (its imgcodecs print
+  // a decoder's exception there, "imdecode_(''): can't read data: ...") goes to `messages`
+  // instead of the terminal.
+  cv::Mat (*decode)(const cv::Mat& buffer, int flags, std::string* messages) = nullptr;
   bool (*encode)(const std::string& ext, const cv::Mat& image, std::vector<uchar>* bytes,
                  const std::vector<int>& params) = nullptr;
 };
 
 struct OpenCvVideoApi {
   int version = kOpenCvVideoApiVersion;
+  bool (*has_backend)(int api) = nullptr;  // cv::videoio_registry::hasBackend
   void* (*capture_new)() = nullptr;
   void (*capture_delete)(void* capture) = nullptr;
   bool (*capture_open)(void* capture, const std::string& path, int api) = nullptr;

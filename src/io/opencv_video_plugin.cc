@@ -2,6 +2,7 @@
 // include/impactdic/io/opencv_codecs.h for why).
 #include <opencv2/core.hpp>
 #include <opencv2/videoio.hpp>
+#include <opencv2/videoio/registry.hpp>
 #include <string>
 
 #include "opencv_codecs_api.h"
@@ -15,6 +16,9 @@ cv::VideoWriter* Writer(void* p) { return static_cast<cv::VideoWriter*>(p); }
 
 OpenCvVideoApi MakeApi() {
   OpenCvVideoApi api;
+  api.has_backend = [](int backend) {
+    return cv::videoio_registry::hasBackend(static_cast<cv::VideoCaptureAPIs>(backend));
+  };
   api.capture_new = []() -> void* { return new cv::VideoCapture(); };
   api.capture_delete = [](void* c) { delete Capture(c); };
   api.capture_open = [](void* c, const std::string& path, int pref) {

@@ -1,11 +1,14 @@
 #include "impactdic/io/png_grey.h"
 
+#include <fmt/format.h>
 #include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace impactdic {
@@ -62,7 +65,152 @@ struct Inflater {
   }
 };
 
+// Samples per pixel of a PNG colour type (0 grey, 2 RGB, 3 palette, 4 grey + alpha, 6 RGBA);
+// 0 for an invalid type.
+int PngChannels(int colour) {
+  switch (colour) {
+    case 0:
+    case 3: return 1;
+    case 2: return 3;
+    case 4: return 2;
+    case 6: return 4;
+    default: return 0;
+  }
+}
+
+// The bit depths the PNG specification (section 11.2.2) allows for a colour type.
+bool PngDepthAllowed(int colour, int depth) {
+  if (colour == 0) return depth == 1 || depth == 2 || depth == 4 || depth == 8 || depth == 16;
+  if (colour == 3) return depth == 1 || depth == 2 || depth == 4 || depth == 8;
+  return depth == 8 || depth == 16;
+}
+
+// The filtered rows of a PNG's image data in order: (rows, bytes per row without the filter
+// byte) of the whole image, or of each non-empty Adam7 pass when interlaced (section 8.2).
+std::vector<std::pair<std::size_t, std::size_t>> PngRowLayout(std::size_t width, std::size_t height,
+                                                              std::size_t bits_per_pixel,
+                                                              bool interlaced) {
+  if (!interlaced) return {{height, (width * bits_per_pixel + 7) / 8}};
+  static constexpr std::size_t kX0[7] = {0, 4, 0, 2, 0, 1, 0}, kY0[7] = {0, 0, 4, 0, 2, 0, 1};
+  static constexpr std::size_t kDx[7] = {8, 8, 4, 4, 2, 2, 1}, kDy[7] = {8, 8, 8, 4, 4, 2, 2};
+  std::vector<std::pair<std::size_t, std::size_t>> passes;
+  for (int p = 0; p < 7; ++p) {
+    const std::size_t w = width > kX0[p] ? (width - kX0[p] + kDx[p] - 1) / kDx[p] : 0;
+    const std::size_t h = height > kY0[p] ? (height - kY0[p] + kDy[p] - 1) / kDy[p] : 0;
+    if (w > 0 && h > 0) passes.emplace_back(h, (w * bits_per_pixel + 7) / 8);
+  }
+  return passes;
+}
+
+// Follows the inflated image data byte by byte through the rows of PngRowLayout and checks each
+// row's filter type.
+class PngRowWalk {
+ public:
+  explicit PngRowWalk(std::vector<std::pair<std::size_t, std::size_t>> passes)
+      : passes_(std::move(passes)) {}
+
+  bool done() const { return pass_ >= passes_.size(); }
+  std::size_t bytes_seen() const { return seen_; }
+  // Where the data stops: "row 12" or "row 3 of interlace pass 5".
+  std::string Where() const {
+    return passes_.size() > 1 ? fmt::format("row {} of interlace pass {}", row_, pass_ + 1)
+                              : fmt::format("row {}", row_);
+  }
+
+  // Takes the next `n` bytes (those past the last row are ignored); "" or the problem.
+  std::string Feed(const unsigned char* data, std::size_t n) {
+    std::size_t i = 0;
+    while (i < n && !done()) {
+      const std::size_t row_bytes = passes_[pass_].second;
+      if (in_row_ == 0 && data[i] > 4) {
+        return fmt::format("a corrupt PNG: {} has filter type {}; the PNG filter types are 0-4",
+                           Where(), data[i]);
+      }
+      const std::size_t take = std::min(n - i, row_bytes + 1 - in_row_);
+      i += take;
+      seen_ += take;
+      in_row_ += take;
+      if (in_row_ == row_bytes + 1) {
+        in_row_ = 0;
+        if (++row_ == passes_[pass_].first) {
+          row_ = 0;
+          ++pass_;
+        }
+      }
+    }
+    return "";
+  }
+
+ private:
+  std::vector<std::pair<std::size_t, std::size_t>> passes_;
+  std::size_t pass_ = 0, row_ = 0, in_row_ = 0, seen_ = 0;
+};
+
+// The PNG's IHDR checked as libpng does; "" when valid, else the problem. Sets the row layout.
+std::string PngHeaderProblem(const unsigned char* data, std::size_t size,
+                             std::vector<std::pair<std::size_t, std::size_t>>* passes) {
+  if (size < 8 + 25 || BigEndian32(data + 8) != 13 || std::memcmp(data + 12, "IHDR", 4) != 0)
+    return "a corrupt PNG: its first chunk is not a 13-byte IHDR header";
+  const unsigned char* h = data + 16;
+  const std::size_t width = BigEndian32(h), height = BigEndian32(h + 4);
+  const int depth = h[8], colour = h[9], channels = PngChannels(colour);
+  if (width == 0 || height == 0 || width > 0x7FFFFFFFu || height > 0x7FFFFFFFu || channels == 0 ||
+      !PngDepthAllowed(colour, depth) || h[10] != 0 || h[11] != 0 || h[12] > 1) {
+    return fmt::format(
+        "an invalid PNG header (IHDR: {}x{} px, bit depth {}, colour type {}, compression {}, "
+        "filter method {}, interlace {})",
+        width, height, depth, colour, h[10], h[11], h[12]);
+  }
+  *passes = PngRowLayout(width, height,
+                         static_cast<std::size_t>(channels) * static_cast<std::size_t>(depth),
+                         h[12] == 1);
+  return "";
+}
+
 }  // namespace
+
+std::string PngImageDataProblem(const std::string& bytes) {
+  static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
+  const std::size_t size = bytes.size();
+  if (size < 8 || std::memcmp(data, kSignature, 8) != 0) return "";
+  std::vector<std::pair<std::size_t, std::size_t>> passes;
+  std::string header = PngHeaderProblem(data, size, &passes);
+  if (!header.empty()) return header;
+  std::size_t needed = 0;
+  for (const auto& [rows, row_bytes] : passes) needed += rows * (row_bytes + 1);
+  PngRowWalk walk(passes);
+  Inflater inflater;
+  if (!inflater.ok) return "";
+  std::vector<unsigned char> out(std::size_t{1} << 16);
+  bool stream_end = false;
+  for (std::size_t at = 8; at + 12 <= size && !walk.done() && !stream_end;) {
+    const std::uint32_t length = BigEndian32(data + at);
+    if (length > size - at - 12) break;  // the chunk check (image_io.cc) names this
+    const unsigned char* type = data + at + 4;
+    inflater.z.next_in = const_cast<unsigned char*>(data + at + 8);
+    inflater.z.avail_in = length;
+    at += 12 + std::size_t{length};
+    if (std::memcmp(type, "IEND", 4) == 0) break;
+    if (std::memcmp(type, "IDAT", 4) != 0) continue;
+    while (inflater.z.avail_in > 0 && !walk.done() && !stream_end) {
+      inflater.z.next_out = out.data();
+      inflater.z.avail_out = static_cast<uInt>(out.size());
+      const int r = inflate(&inflater.z, Z_NO_FLUSH);
+      std::string problem = walk.Feed(out.data(), out.size() - inflater.z.avail_out);
+      if (!problem.empty()) return problem;
+      stream_end = r == Z_STREAM_END;
+      if (r != Z_OK && r != Z_STREAM_END && !walk.done()) {
+        return fmt::format("a corrupt PNG: its compressed image data are damaged in {} (zlib: {})",
+                           walk.Where(), inflater.z.msg ? inflater.z.msg : "error");
+      }
+    }
+  }
+  if (walk.done()) return "";
+  return fmt::format(
+      "a corrupt PNG: its image data end in {}, after {} of the {} bytes its header needs",
+      walk.Where(), walk.bytes_seen(), needed);
+}
 
 bool DecodeGreyPng(const std::string& bytes, cv::Mat* image) {
   static constexpr unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};

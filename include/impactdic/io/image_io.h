@@ -25,9 +25,12 @@ void CheckImageFileExists(const std::string& path);
 // `file_channels` if given). A palette (indexed colour) TIFF whose palette is grey (red = green =
 // blue in every entry) reads as its palette's grey values and counts as one channel; any other
 // palette is converted to grey like a colour image, with one warning per process.
-// Error kFileNotFound when missing; kFileFormat for a folder or device, a header beyond the size
-// limits above, a truncated or corrupt PNG (checked chunk by chunk before decoding, so libpng
-// prints nothing), or anything else OpenCV cannot decode.
+// Error kFileNotFound when missing (or a dangling symbolic link); kFileFormat for a folder,
+// device or FIFO, an empty file, a header beyond the size limits above, a truncated or corrupt
+// PNG (chunks, header and the image data's rows checked before decoding, so libpng prints
+// nothing), a JPEG that ends before its end-of-image marker FF D9 (libjpeg would decode the rest
+// flat grey; data after FF D9 are ignored), or anything else OpenCV cannot decode (with the
+// reason OpenCV printed, kept off the terminal).
 cv::Mat ReadGreyImage(const std::string& path, int* file_channels = nullptr);
 
 // The dynamic range of an image's data in bits: 8 for 8-bit images; for 16-bit images 12 when no
@@ -60,8 +63,10 @@ void WriteImage(const std::string& path, const cv::Mat& image, const std::vector
 bool IsCompletePng(const std::string& path);
 
 // Expands a frames source into a sorted list of image files: a folder (all image files in it), a
-// glob pattern ("frames/img_*.tif") or a single file. Error if nothing matches. Names are
-// sorted naturally: runs of digits by value, so unpadded "f_9.png" comes before "f_10.png".
+// glob pattern ("frames/img_*.tif") or a single file. Error if nothing matches, and naming the
+// entry when one that would be a frame (an image name in the folder, or a match of the glob) is
+// not a regular file: a folder, a dangling symbolic link, a FIFO (never opened), a device. Names
+// are sorted naturally: runs of digits by value, so unpadded "f_9.png" comes before "f_10.png".
 std::vector<std::string> ListFrames(const std::string& source);
 
 // The numbers in the names of a numbered image series (names that differ only in their last run
@@ -75,8 +80,9 @@ std::vector<long long> FrameNumbers(const std::vector<std::string>& files);
 // checked.
 void CheckFrameNumbering(const std::vector<std::string>& files);
 
-// The frames of one sequence: ListFrames, then CheckFrameNumbering (a gap is an error). Used by
-// `run` (inputs.frames) and `correlate --frames` alike.
+// The frames of one sequence: ListFrames, then CheckFrameNumbering (a gap is an error), then an
+// Error when two of its names are the same file (a symbolic or hard link: the repeated image
+// would read as no motion). Used by `run` (inputs.frames) and `correlate --frames` alike.
 std::vector<std::string> ListFrameSequence(const std::string& source);
 
 // True if `path` names a video container OpenCV should read (.mp4, .avi, .mov, .mkv).
@@ -85,7 +91,7 @@ bool IsVideoFile(const std::string& path);
 // Reads the frames of a video one at a time, as greyscale, so that a long recording need not be
 // held in memory:
 //
-//   VideoReader video("clip.avi");          // Error naming the file if OpenCV cannot open it
+//   VideoReader video("clip.avi");          // Error naming the file if empty or unopenable
 //   cv::Mat frame;
 //   while (video.Read(&frame)) { ... }
 //   std::string warning = video.Finish();   // "" unless the video was truncated (then logged)

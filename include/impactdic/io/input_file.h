@@ -22,8 +22,10 @@ inline constexpr std::uintmax_t kMaxCsvFileBytes = std::uintmax_t{2} << 30;  // 
 inline constexpr std::uintmax_t kMaxImageFileBytes = std::uintmax_t{1} << 30;  // 1 GiB
 
 // Error naming `path` unless it is an existing regular file (symbolic links followed) of at most
-// `max_bytes`: kFileNotFound when it does not exist, kFileFormat for a folder, device, pipe or
-// socket and for a file above the limit. `what` says what was expected ("the sensor CSV").
+// `max_bytes`: kFileNotFound when it does not exist ("is a dangling symbolic link to X, which
+// does not exist" for a link to nowhere), kFileFormat for a folder, device, pipe or socket
+// (judged by stat(), so a FIFO is never opened and cannot block) and for a file above the limit.
+// `what` says what was expected ("the sensor CSV").
 void CheckInputFile(const std::string& path, const std::string& what, std::uintmax_t max_bytes);
 
 // CheckInputFile, then the whole file as bytes; Error kIo naming the file if reading fails.

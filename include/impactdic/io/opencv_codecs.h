@@ -32,10 +32,17 @@ namespace impactdic::opencv_codecs {
 inline constexpr const char* kPluginFileName = "libimpactdic_opencv_codecs.so";  // images
 inline constexpr const char* kVideoPluginFileName = "libimpactdic_opencv_video.so";
 
-// cv::imdecode / cv::imencode (the images plugin).
-cv::Mat Decode(const std::string& bytes, int flags);
+// cv::imdecode / cv::imencode (the images plugin). What OpenCV writes to std::cerr while this
+// thread decodes (imgcodecs prints a decoder's exception there instead of throwing it, e.g.
+// "imdecode_(''): can't read data: ... Unexpected end of input stream") is kept from the terminal
+// and returned in `messages` if given, for the caller's own error.
+cv::Mat Decode(const std::string& bytes, int flags, std::string* messages = nullptr);
 bool Encode(const std::string& extension, const cv::Mat& image, std::vector<uchar>* bytes,
             const std::vector<int>& params);
+
+// Whether OpenCV was built with the video backend `api` (cv::CAP_FFMPEG, ...); loads the video
+// plugin.
+bool HasVideoBackend(int api);
 
 // cv::VideoCapture (the video plugin), with the API preference (cv::CAP_ANY, cv::CAP_FFMPEG, ...).
 class VideoCapture {

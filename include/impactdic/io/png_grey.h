@@ -21,6 +21,16 @@ namespace impactdic {
 
 bool DecodeGreyPng(const std::string& bytes, cv::Mat* image);
 
+// For any PNG (every colour type and bit depth, interlaced or not) whose chunks are whole: its
+// header and image data as libpng reads them, so that a damaged file is reported in one message
+// of ours instead of a "libpng error: ..." line that libpng (through OpenCV, which keeps libpng's
+// default handler) prints to stderr: an invalid IHDR, a corrupt zlib stream, less data than the
+// rows of its header need, a row filter type other than 0-4 ("bad adaptive filter value"). Data
+// after the last row is not looked at (libpng only warns about it). "" when sound or not a PNG;
+// else what is wrong, e.g. "a corrupt PNG: row 40 has filter type 7; the PNG filter types are
+// 0-4". Costs one inflate of the image data (no pixels are kept).
+std::string PngImageDataProblem(const std::string& bytes);
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_IO_PNG_GREY_H_
