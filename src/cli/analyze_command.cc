@@ -274,8 +274,8 @@ void RegisterAnalyzeCommand(CLI::App& app) {
                   "record start reads 1 g) or none")
       ->capture_default_str();
   cmd->add_option("--release-time", args->release_time,
-                  "release time on the DAQ clock [s] (with --from-release, when the record does "
-                  "not start at rest)");
+                  "release time on the DAQ clock [s] (with --from-release, instead of the "
+                  "detected one; inside the record and before the impact)");
   cmd->add_option("--quiet-window", args->quiet_window, "length of the offset/noise window [s]")
       ->capture_default_str();
   cmd->add_option("--impact-threshold", args->impact_threshold,
