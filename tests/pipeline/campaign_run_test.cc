@@ -31,7 +31,7 @@ namespace fs = std::filesystem;
 std::string QuickCampaign(const TestDir& dir, const std::string& name, const std::string& widths) {
   return dir.Write(name,
                    "synthesise:\n  mass_kg: [10]\n  drop_height_m: [0.7]\n  width_m: " + widths +
-                       "\n  spec:\n    frames:\n      count: 8\n"
+                       "\n  spec:\n    frames:\n      count: 10\n"
                        "outputs:\n  animation: false\n  figures: false\n");
 }
 
