@@ -28,6 +28,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/preprocess/preprocess.h"
 
@@ -264,7 +265,9 @@ void Run(const CorrelateArgs& a) {
   }
   std::vector<std::string> inputs = paths;
   inputs.push_back(a.mask);
-  CheckOutputLocation(a.output, {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs});
+  CheckOutputLocation(
+      a.output,
+      {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs, {CsvHeaderLine(DicCsvColumns())}});
   std::unique_ptr<tbb::global_control> threads;
   if (a.threads > 0) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -135,10 +135,12 @@ TEST(OutputGeneration, AcceptsEmptyOlderAndNestedOutputFolders) {
   dir.Write("older/b.txt", "old");
   WriteGeneration(dir.File("older"), {{"a.txt", "new"}});
   EXPECT_EQ(Entries(dir.path() / "older"), (std::set<std::string>{".impactdic-output", "a.txt"}));
-  // A folder holding a generation of its own (e.g. a run's results inside a synth folder).
+  // A folder holding a generation of a kind it nests (e.g. a campaign's test folders).
   WriteGeneration(dir.File("outer"), {{"a.txt", "outer"}});
   WriteGeneration(dir.File("outer/inner"), {{"a.txt", "inner"}});
-  WriteGeneration(dir.File("outer"), {{"b.txt", "outer 2"}});
+  OutputGenerationOptions nesting = RunLike();
+  nesting.nested_kinds = {"test"};
+  WriteGeneration(dir.File("outer"), {{"b.txt", "outer 2"}}, nesting);
   EXPECT_EQ(Entries(dir.path() / "outer"), (std::set<std::string>{".impactdic-output", "b.txt"}));
 }
 
