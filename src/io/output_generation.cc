@@ -441,13 +441,29 @@ void OutputGeneration::CheckReplaceable() {
   }
   if (!options_.force) CheckKinds(marker);
   CheckRemovable();
-  const std::string entries = SomeEntries(destination_);
-  if (!marker.present && !entries.empty()) {
-    LogWarning(
-        "{} has no {} (an impactdic older than 2026-11-25 wrote it, or files are named like its "
-        "outputs): {} taken for impactdic's outputs and replaced",
-        folder_, kOutputMarkerName, entries);
+  if (!marker.present) WarnOfUnmarkedEntries();
+}
+
+void OutputGeneration::WarnOfUnmarkedEntries() const {
+  // Entries replaced although no marker says impactdic wrote them: named, never silently.
+  std::vector<std::string> replaced;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(destination_, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code e2;
+    if (IsTemporaryName(name) ||
+        (entry.is_directory(e2) && fs::exists(entry.path() / kOutputMarkerName, e2)) ||
+        (options_.keep_other_entries && !Contains(options_.own_names, name))) {
+      continue;
+    }
+    replaced.push_back(name);
   }
+  if (replaced.empty()) return;
+  std::sort(replaced.begin(), replaced.end());
+  LogWarning(
+      "{} has no {} (an impactdic older than 2026-11-25 wrote it, or files are named like its "
+      "outputs): {} taken for impactdic's outputs and replaced",
+      folder_, kOutputMarkerName, Quoted(replaced, 5));
 }
 
 void OutputGeneration::CheckKinds(const OutputMarker& marker) const {

@@ -162,6 +162,7 @@ TEST(OutputGeneration, KeepOtherEntriesCarriesThemOverAsHardLinks) {
   render.command = "render";
   render.own_names = {"a.txt", "b.txt"};
   render.keep_other_entries = true;
+  render.replaces_kinds = {"test"};  // Into the folder of a "test" command.
   WriteGeneration(out, {{"b.txt", "new figure"}}, render);
   // a.txt is render's own: not carried over (it was not drawn this time).
   EXPECT_EQ(Entries(out), (std::set<std::string>{".impactdic-output", "b.txt", "results.h5"}));
@@ -171,6 +172,7 @@ TEST(OutputGeneration, KeepOtherEntriesCarriesThemOverAsHardLinks) {
   EXPECT_EQ(Read(fs::path(out) / "results.h5"), "data");
   const std::string marker = Read(fs::path(out) / ".impactdic-output");
   EXPECT_NE(marker.find("\nresults.h5\n"), std::string::npos) << marker;
+  EXPECT_NE(marker.find("\n# kind: test\n"), std::string::npos) << marker;  // Still its kind.
 }
 
 TEST(OutputGeneration, SwapByTwoRenamesWhereTheFileSystemCannotExchange) {

@@ -14,6 +14,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "../core/expect_error.h"
@@ -118,6 +119,22 @@ TEST(OutputOwnership, AnotherCommandsFolderIsRefusedUnlessForce) {
   EXPECT_EQ(RunCli("-q run " + s.quick + " -o " + camp).exit_code, 0);
 }
 
+// Item 1: a folder without a marker holding only names the command writes (an impactdic older
+// than the marker) is still replaced, but never silently: a warning names what goes.
+TEST(OutputOwnership, AnUnmarkedFolderIsReplacedWithAWarningNamingWhatGoes) {
+  const Scenes& s = Prepare();
+  ASSERT_TRUE(s.error.empty()) << s.error;
+  TestDir dir;
+  fs::create_directories(dir.path() / "out");
+  dir.Write("out/summary.json", "{}\n");
+  const CliResult r = RunCli("-q run " + s.quick + " -o " + dir.File("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("has no .impactdic-output"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("'summary.json' taken for impactdic's outputs and replaced"),
+            std::string::npos)
+      << r.output;
+}
+
 // Item 2: a second writer of a folder is refused, naming the first one's pid. The test process
 // holds the lock itself (as a running command does), so nothing depends on timing.
 TEST(OutputOwnership, ASecondWriterIsRefusedNamingTheFirstOnesPid) {
@@ -214,7 +231,8 @@ TEST(OutputOwnership, AFolderWhoseOutputsCannotBeRemovedIsRefusedBeforeAnyWork) 
   WriteBytes(out + "/" + kOutputMarkerName,
              ReadBytes(out + "/" + kOutputMarkerName) + std::string("kept\n"));
   const CliResult r = RunShell(as_user + IMPACTDIC_CLI_PATH + " -q run " + s.quick + " -o " + out);
-  fs::permissions(out + "/kept", fs::perms::owner_all);
+  std::error_code ec;  // (Gone if the folder was replaced.)
+  fs::permissions(out + "/kept", fs::perms::owner_all, ec);
   ExpectRefused(r, {out, "cannot replace it", "kept"});
   EXPECT_TRUE(TemporariesOf(dir.path(), "out").empty());
   EXPECT_TRUE(fs::exists(out + "/results.h5"));

@@ -147,6 +147,7 @@ class OutputGeneration {
   void CheckReplaceable();
   void CheckKinds(const OutputMarker& marker) const;
   void CheckRemovable() const;
+  void WarnOfUnmarkedEntries() const;
   void CarryOverPrevious() const;
   void WriteMarker() const;
   void SwapIn(bool had_previous);
