@@ -163,8 +163,8 @@ std::string KindOfCommand(const std::string& command) {
   constexpr std::string_view kPrefix = "impactdic ";
   if (command.rfind(kPrefix, 0) != 0) return command;
   const std::string rest = command.substr(kPrefix.size());
-  const std::string word = rest.substr(0, rest.find(' '));
-  if (rest.find("(test ") != std::string::npos) return word + " test";
+  std::string word = rest.substr(0, rest.find(' '));
+  if (rest.find("(test ") != std::string::npos) word += " test";
   return word;
 }
 
