@@ -37,12 +37,11 @@ std::string Replace(std::string text, const std::string& from, const std::string
   return text;
 }
 
-// Two tiny synthetic scenes, made once: `scene` (8 frames; quick.yaml without figures and
-// animation, a run takes a fraction of a second) and `preview` (20 frames, more than the 16 a
-// results.h5 stores by default, with its animation).
+// A tiny synthetic scene, made once per process: 8 frames; quick.yaml without figures and
+// animation (a run takes a fraction of a second).
 struct Scenes {
   std::unique_ptr<TestDir> dir;
-  std::string quick, preview, error;
+  std::string quick, error;
 };
 
 const Scenes& Prepare() {
@@ -50,16 +49,14 @@ const Scenes& Prepare() {
     Scenes q;
     q.dir = std::make_unique<TestDir>("OutputOwnershipScenes");
     const CliResult a = RunCli("-q synth --preset tiny -o " + q.dir->File("scene"));
-    const CliResult b = RunCli("-q synth --preset tiny --frames 20 -o " + q.dir->File("preview"));
-    if (a.exit_code != 0 || b.exit_code != 0) {
-      q.error = "synth failed:\n" + a.output + b.output;
+    if (a.exit_code != 0) {
+      q.error = "synth failed:\n" + a.output;
       return q;
     }
     const std::string text = ReadTextFile(q.dir->File("scene/scene.yaml"));
     q.quick =
         q.dir->Write("scene/quick.yaml", Replace(Replace(text, "figures: true", "figures: false"),
                                                  "animation: true", "animation: false"));
-    q.preview = q.dir->File("preview/scene.yaml");
     return q;
   }();
   return s;
@@ -242,11 +239,12 @@ TEST(OutputOwnership, AFolderWhoseOutputsCannotBeRemovedIsRefusedBeforeAnyWork) 
 // 20 frames): it writes its animation under its own name and keeps the run's, drawn from every
 // frame.
 TEST(OutputOwnership, RenderOfAPreviewKeepsTheRunsAnimation) {
-  const Scenes& s = Prepare();
-  ASSERT_TRUE(s.error.empty()) << s.error;
   TestDir dir;
+  // 20 frames: more than the 16 a results.h5 stores by default; with its animation.
+  const CliResult synth = RunCli("-q synth --preset tiny --frames 20 -o " + dir.File("scene"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const std::string run = dir.File("run");
-  ASSERT_EQ(RunCli("-q run " + s.preview + " -o " + run).exit_code, 0);
+  ASSERT_EQ(RunCli("-q run " + dir.File("scene/scene.yaml") + " -o " + run).exit_code, 0);
   const auto before = Fingerprint(run);
   ASSERT_EQ(before.count("velocity.mp4"), 1u);
   const CliResult r = RunCli("render " + run + "/results.h5 --no-figures");
