@@ -139,7 +139,7 @@ void RegisterCalibrateCommand(CLI::App& app) {
       const std::vector<std::string> listed = ListFrames(source);
       inputs.insert(inputs.end(), listed.begin(), listed.end());
     }
-    CheckOutputLocation(args->output, {"-o", {".yaml", ".yml"}, inputs});
+    CheckOutputLocation(args->output, {"-o", {".yaml", ".yml"}, inputs, {kCalibrationFirstLine}});
     CalibrationSummary summary;
     const CameraCalibration calibration = [&] {
       try {

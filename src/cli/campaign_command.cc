@@ -83,9 +83,9 @@ void Run(const CampaignArgs& a) {
                 "a campaign file or scene files, --from-table CSV, or --merge DIR...: one of them");
   }
   const CampaignOptions options = OptionsOf(a);
-  if ((!a.table.empty() || !a.merge.empty()) && (!a.shard.empty() || a.force)) {
-    throw Error(ErrorKind::kInvalidValue, "--shard / --force", "with --from-table or --merge",
-                "--shard and --force only when running tests");
+  if ((!a.table.empty() || !a.merge.empty()) && !a.shard.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "--shard", "with --from-table or --merge",
+                "--shard only when running tests");
   }
   CampaignSummary summary;
   if (!a.table.empty()) {
@@ -128,7 +128,10 @@ void RegisterCampaignCommand(CLI::App& app) {
   cmd->add_option("--threads", args->threads,
                   std::string("Threads of the whole campaign: ") + kThreadCountExpected +
                       " (default: each scene's dic.threads, one test at a time)");
-  cmd->add_flag("--force", args->force, "Reprocess tests whose complete results exist");
+  cmd->add_flag("--force", args->force,
+                "Reprocess tests whose complete results exist, and replace an output folder "
+                "another command wrote (a run, a synth scene); files impactdic did not write "
+                "are never replaced");
   cmd->add_flag("--no-figures", args->no_figures, "Skip the comparison figures");
   cmd->add_option("--confidence", args->confidence,
                   "Confidence level of the intervals (default 0.95)");

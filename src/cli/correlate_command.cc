@@ -30,6 +30,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/preprocess/preprocess.h"
@@ -307,7 +308,9 @@ void Run(const CorrelateArgs& a) {
   }
   std::vector<std::string> inputs = paths;
   inputs.push_back(a.mask);
-  CheckOutputLocation(a.output, {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs});
+  CheckOutputLocation(
+      a.output,
+      {"-o/--output", {".csv", ".h5", ".hdf5"}, inputs, {CsvHeaderLine(DicCsvColumns())}});
   const ThreadLimit threads(a.threads, "--threads");
   WallTimer wall;
   DicResult result;

@@ -22,6 +22,7 @@
 #include "impactdic/core/range.h"
 #include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
 #include "impactdic/io/json.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/model/work_precision.h"
@@ -192,7 +193,10 @@ ImpactSolverOptions ValidatedSolverOptions(const ModelArgs& a) {
 void RunSingle(const ModelArgs& a) {
   const ImpactModelParameters p = ValidatedParameters(a, /*single_run=*/true);
   const ImpactSolverOptions o = ValidatedSolverOptions(a);
-  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv", ".h5", ".hdf5"}, {}});
+  if (!a.output.empty()) {
+    CheckOutputLocation(
+        a.output, {"-o", {".csv", ".h5", ".hdf5"}, {}, {CsvHeaderLine(ImpactSeriesColumns())}});
+  }
   const ImpactRun run = SimulateImpact(p, o);
   const ImpactSummary& s = run.summary;
   for (const std::string& w : s.warnings) LogWarning("model: {}", w);
@@ -269,7 +273,8 @@ void RunWorkPrecisionCommand(const ModelArgs& a) {
                                                 : "table1-max";
   if (!w.exact_cases && !w.default_case && !w.table1)
     throw Error(ErrorKind::kInvalidValue, "--wp-cases", a.wp_cases, "at least one case");
-  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv"}, {}});
+  if (!a.output.empty())
+    CheckOutputLocation(a.output, {"-o", {".csv"}, {}, {CsvHeaderLine(WorkPrecisionCsvColumns())}});
   if (!a.plot.empty()) CheckOutputLocation(a.plot, {"--plot", {".png"}, {}});
   const std::vector<WorkPrecisionRow> rows = RunWorkPrecision(w);
   std::cout << FormatWorkPrecision(rows);
@@ -286,7 +291,8 @@ void RunWorkPrecisionCommand(const ModelArgs& a) {
 void RunTable1Command(const ModelArgs& a) {
   const ImpactModelParameters base = ValidatedParameters(a, /*single_run=*/false);
   const ImpactSolverOptions o = ValidatedSolverOptions(a);
-  if (!a.output.empty()) CheckOutputLocation(a.output, {"-o", {".csv"}, {}});
+  if (!a.output.empty())
+    CheckOutputLocation(a.output, {"-o", {".csv"}, {}, {CsvHeaderLine(Table1CsvColumns())}});
   const std::vector<Table1Row> rows = RunTable1(o, base);
   std::cout << FormatTable1(rows);
   for (const Table1Row& r : rows)

@@ -1,4 +1,5 @@
 // impactdic render RESULTS.h5 [-o OUTDIR] [--png-frames] [--codec auto|h264|mjpg] [--fps F]
+// [--force]
 #include <CLI/CLI.hpp>
 #include <filesystem>
 #include <iostream>
@@ -10,6 +11,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/render/animation.h"
 #include "impactdic/render/render_results.h"
 
@@ -26,27 +28,35 @@ void RegisterRenderCommand(CLI::App& app) {
     bool png_frames = false;
     bool no_animation = false;
     bool no_figures = false;
+    bool force = false;
     std::string codec = ToString(AnimationOptions{}.codec);  // Defaults: the render library's.
     double fps = AnimationOptions{}.fps;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("RESULTS", args->results, "results.h5 written by `impactdic run`")->required();
-  cmd->add_option("-o,--output", args->output_dir,
-                  "output folder (created if missing; default: the folder of RESULTS). The "
-                  "figures and animation replace the earlier ones together when all are drawn; "
-                  "the folder's other files (results.h5, summaries) stay");
+  auto* output = cmd->add_option(
+      "-o,--output", args->output_dir,
+      "output folder (created if missing; default: the folder of RESULTS). The "
+      "figures and animation replace the earlier ones together when all are drawn; "
+      "the folder's other files (results.h5, summaries) stay; from a preview of the "
+      "frames (outputs.frames: preview) into the run's folder, the snapshot and "
+      "animation are named *_preview and the run's own stay");
   cmd->add_flag("--png-frames", args->png_frames,
                 "also write every animation frame as PNG (OUTDIR/velocity_frames)");
   cmd->add_flag("--no-animation", args->no_animation, "skip the animation");
   cmd->add_flag("--no-figures", args->no_figures, "skip the gnuplot figures");
+  cmd->add_flag("--force", args->force,
+                "replace an output folder another command wrote (a campaign, a synth scene); "
+                "files impactdic did not write are never replaced");
   cmd->add_option("--codec", args->codec,
                   "video codec: auto (H.264 MP4, else MJPG AVI), h264 (or fail), mjpg")
       ->capture_default_str();
   cmd->add_option("--fps", args->fps,
                   "playback frame rate of the animation, in " + AnimationOptions::kFpsRange.Text())
       ->capture_default_str();
-  cmd->callback([args] {
+  cmd->callback([args, output] {
     // Validate every option before any work.
+    if (output->count() > 0) CheckOutputFolderName(args->output_dir, "-o");
     std::error_code ec;
     if (!std::filesystem::is_regular_file(args->results, ec)) {
       throw Error(ErrorKind::kFileNotFound, "RESULTS", args->results,
@@ -65,6 +75,7 @@ void RegisterRenderCommand(CLI::App& app) {
     options.png_frames = args->png_frames;
     options.animation = !args->no_animation;
     options.figures = !args->no_figures;
+    options.force = args->force;
     const RenderResultsSummary summary = RenderResults(args->results, options);
     std::cout << summary.FullReport();
   });

@@ -1,6 +1,6 @@
-// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N] [--allow-partial]: the whole
-// pipeline on one scene (pipeline/pipeline.h). A stage that produced nothing usable makes the run
-// fail (exit 1, no output written) unless --allow-partial.
+// impactdic run SCENE.yaml [-o OUTDIR] [--png-frames] [--threads N] [--allow-partial] [--force]:
+// the whole pipeline on one scene (pipeline/pipeline.h). A stage that produced nothing usable makes
+// the run fail (exit 1, no output written) unless --allow-partial.
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>
@@ -13,6 +13,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/threads.h"
 #include "impactdic/io/json.h"
+#include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 
@@ -24,6 +25,7 @@ void RegisterRunCommand(CLI::App& app) {
     bool png_frames = false;
     std::optional<int> threads;  // Unset: the scene's dic.threads.
     bool allow_partial = false;
+    bool force = false;
     std::string format = "text";
   };
   auto args = std::make_shared<Args>();
@@ -33,8 +35,8 @@ void RegisterRunCommand(CLI::App& app) {
       "kinematics -> momentum -> model -> outputs; the sensor comes first because its impact "
       "time decides the first frame to correlate)");
   cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
-  cmd->add_option("-o,--output", args->output,
-                  "Output folder (default: the scene's outputs.folder)");
+  auto* output = cmd->add_option("-o,--output", args->output,
+                                 "Output folder (default: the scene's outputs.folder)");
   cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG");
   cmd->add_option("--threads", args->threads,
                   std::string("Correlation threads: ") + kThreadCountExpected +
@@ -43,8 +45,13 @@ void RegisterRunCommand(CLI::App& app) {
                 "Write the outputs (exit 0) even when a stage produced nothing usable (no valid "
                 "subset, no measurable t_e, a model solve that did not stop): the figures that "
                 "depend on it are null, the reasons in summary.json's failures and warnings");
+  cmd->add_flag("--force", args->force,
+                "Replace an output folder another command wrote (a synth scene, a campaign) or "
+                "that holds other commands' outputs; files impactdic did not write are never "
+                "replaced");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
-  cmd->callback([args] {
+  cmd->callback([args, output] {
+    if (output->count() > 0) CheckOutputFolderName(args->output, "-o");
     if (args->threads) CheckThreadCount(*args->threads, "--threads");
     if (args->format != "text" && args->format != "json") {
       throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
@@ -55,6 +62,7 @@ void RegisterRunCommand(CLI::App& app) {
     options.png_frames = args->png_frames;
     options.threads = args->threads.value_or(-1);
     options.allow_partial = args->allow_partial;
+    options.force = args->force;
     PipelineSummary summary;
     try {
       summary = RunScene(scene, options);

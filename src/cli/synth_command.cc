@@ -1,4 +1,4 @@
-// impactdic synth [SCENE_SPEC.yaml] [--preset small|full|tiny] -o DIR
+// impactdic synth [SCENE_SPEC.yaml] [--preset small|full|tiny] -o DIR [--force]
 // Renders a synthetic impact scene (synth/impact_scene.h, docs/synth.md): frames, sensor CSV,
 // calibration images through the same lens (calibrated here with the calib module into
 // DIR/calibration/camera.yaml), the scene YAML that processes it and the ground truth HDF5.
@@ -39,6 +39,7 @@ struct SynthArgs {
   std::string realistic_spec;
   std::optional<int> frames;  // Overrides the spec's frames.count.
   bool calibrate = true;
+  bool force = false;  // Replace a folder another command wrote (io/output_generation.h).
 };
 
 // The scene points at calibration/camera.yaml: make it from the rendered images in `staging` (the
@@ -105,6 +106,8 @@ void RunSynthRealistic(const SynthArgs& args) {
   OutputGenerationOptions generation_options;
   generation_options.command = "impactdic synth --realistic";
   generation_options.own_names = {"frames", "spec.yaml", "truth.h5"};
+  generation_options.force = args.force;
+  generation_options.nested_kinds = {"run", "render"};  // Runs of the scene it replaces.
   OutputGeneration generation(args.output, generation_options);
   const RealisticScene scene(spec);
   const RealisticSceneReport report = WriteRealisticScene(scene, generation.staging_folder());
@@ -154,6 +157,8 @@ void RunSynth(const SynthArgs& args) {
   for (const char* name : kImpactSceneOutputNames) generation_options.own_names.emplace_back(name);
   generation_options.known_names = {"results"};  // The scene's outputs.folder, run by an older
                                                  // impactdic (newer runs leave a marker in it).
+  generation_options.force = args.force;
+  generation_options.nested_kinds = {"run", "render"};  // Runs of the scene it replaces.
   OutputGeneration generation(args.output, generation_options);
 
   if (!args.dem_dir.empty()) {
@@ -202,6 +207,9 @@ void RegisterSynthCommand(CLI::App& app) {
                   "Override the spec's frames.count (0: auto, or at least before_impact + 2)");
   cmd->add_flag("!--no-calibrate", args->calibrate,
                 "Do not calibrate the rendered checkerboard images");
+  cmd->add_flag("--force", args->force,
+                "Replace an output folder another command wrote (a run, a campaign); files "
+                "impactdic did not write are never replaced");
   cmd->callback([args] { RunSynth(*args); });
 }
 

@@ -220,6 +220,11 @@ DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions
   return result;
 }
 
+std::vector<std::string> DicCsvColumns() {
+  return {"frame", "x_px",       "y_px",   "u_px",       "v_px",
+          "zncc",  "iterations", "status", "sigma_u_px", "sigma_v_px"};
+}
+
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options) {
   const std::string ext = ToLower(std::filesystem::path(path).extension().string());
   const std::size_t n = result.positions.size(), frames = result.frames.size();
@@ -236,10 +241,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
                         Number(f.sigma_u_px[i]), Number(f.sigma_v_px[i])});
       }
     }
-    WriteCsvRows(path,
-                 {"frame", "x_px", "y_px", "u_px", "v_px", "zncc", "iterations", "status",
-                  "sigma_u_px", "sigma_v_px"},
-                 rows);
+    WriteCsvRows(path, DicCsvColumns(), rows);
     return;
   }
   if (ext != ".h5" && ext != ".hdf5") {

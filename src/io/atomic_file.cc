@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <system_error>
 #include <utility>
 
@@ -21,6 +22,21 @@
 
 namespace impactdic {
 namespace fs = std::filesystem;
+namespace {
+
+// The first line of a file (at most 4 KiB, without a UTF-8 byte order mark or the line end).
+std::string FirstLine(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text(4096, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) text.erase(0, 3);
+  text = text.substr(0, text.find('\n'));
+  if (!text.empty() && text.back() == '\r') text.pop_back();
+  return text;
+}
+
+}  // namespace
 
 AtomicFile::AtomicFile(std::string final_path) : final_path_(std::move(final_path)) {
   fs::path final_fs(final_path_);
@@ -106,6 +122,19 @@ void CheckOutputLocation(const std::string& path, const OutputRules& rules) {
                   path + ", an existing file that is not HDF5 (it is kept)",
                   "a new file name, or an HDF5 file to write the command's groups into");
     }
+  }
+  if (ext == ".csv" || ext == ".json" || ext == ".yaml" || ext == ".yml") {
+    const std::string first = FirstLine(path);
+    for (const std::string& own : rules.own_first_lines)
+      if (!own.empty() && first.rfind(own, 0) == 0) return;
+    std::string shown = first.substr(0, 60);
+    for (char& c : shown)
+      if (static_cast<unsigned char>(c) < 0x20) c = '?';
+    throw Error(ErrorKind::kInvalidValue, rules.option,
+                path + ", an existing file this command did not write (it is kept; it begins '" +
+                    shown + (first.size() > 60 ? "...'" : "'") + ")",
+                "a new file name, or one this command wrote (to replace it); move the file away "
+                "first if it should go");
   }
 }
 

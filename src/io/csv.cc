@@ -250,6 +250,12 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options) {
   return table;
 }
 
+std::string CsvHeaderLine(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + names[c];
+  return text;
+}
+
 void WriteCsv(const std::string& path, const std::vector<std::string>& names,
               const std::vector<std::vector<double>>& columns, int precision) {
   if (names.size() != columns.size()) {
@@ -264,9 +270,7 @@ void WriteCsv(const std::string& path, const std::vector<std::string>& names,
                   "equal-length columns");
     }
   }
-  std::string text;
-  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + names[c];
-  text += "\n";
+  std::string text = CsvHeaderLine(names) + "\n";
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < columns.size(); ++c) {
       if (c) text += ",";
@@ -280,9 +284,7 @@ void WriteCsv(const std::string& path, const std::vector<std::string>& names,
 
 void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
                   const std::vector<std::vector<std::string>>& rows) {
-  std::string text;
-  for (std::size_t c = 0; c < names.size(); ++c) text += (c ? "," : "") + names[c];
-  text += "\n";
+  std::string text = CsvHeaderLine(names) + "\n";
   for (const auto& row : rows) {
     for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + row[c];
     text += "\n";

@@ -2,10 +2,13 @@
 
 #include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -63,15 +66,32 @@ bool Contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-// The entries a marker lists (empty if there is none).
-std::set<std::string> ReadMarker(const fs::path& folder) {
-  std::set<std::string> listed;
-  std::ifstream in(folder / kOutputMarkerName);
-  std::string line;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] != '#') listed.insert(line);
+constexpr std::string_view kLockSuffix = ".lock";
+constexpr std::string_view kKindLine = "# kind: ";
+
+// ".<name>.lock", <name> not empty: an output folder's lock file (OutputLockPath).
+bool IsLockName(const std::string& name) {
+  return name.size() > 1 + kLockSuffix.size() && name[0] == '.' &&
+         std::string_view(name).substr(name.size() - kLockSuffix.size()) == kLockSuffix;
+}
+
+// "'a', 'b' and 3 more" of the folder's entries, without the marker and temporaries.
+std::string SomeEntries(const fs::path& folder) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name != kOutputMarkerName && !IsTemporaryName(name)) names.push_back(name);
   }
-  return listed;
+  std::sort(names.begin(), names.end());
+  return Quoted(names, 4);
+}
+
+// "a run folder, written by `impactdic run` on 2026-11-27T10:00:00Z"
+std::string WrittenBy(const OutputMarker& m) {
+  return "a " + (m.kind.empty() ? std::string("impactdic") : m.kind) + " folder, written by `" +
+         (m.command.empty() ? std::string("impactdic") : m.command) + "`" +
+         (m.written_utc.empty() ? "" : " on " + m.written_utc);
 }
 
 // Hard links of `from` (a file, or a folder recursively) at `to`; copies where a link cannot be
@@ -136,7 +156,74 @@ std::string TemporaryName(const std::string& base, const char* kind) {
 }
 
 bool IsTemporaryName(const std::string& name) {
-  return ParseTemporary(name).kind != TemporaryKind::kNone;
+  return ParseTemporary(name).kind != TemporaryKind::kNone || IsLockName(name);
+}
+
+std::string KindOfCommand(const std::string& command) {
+  constexpr std::string_view kPrefix = "impactdic ";
+  if (command.rfind(kPrefix, 0) != 0) return command;
+  const std::string rest = command.substr(kPrefix.size());
+  std::string word = rest.substr(0, rest.find(' '));
+  if (rest.find("(test ") != std::string::npos) word += " test";
+  return word;
+}
+
+OutputMarker ReadOutputMarker(const std::string& folder) {
+  OutputMarker m;
+  std::ifstream in(fs::path(folder) / kOutputMarkerName);
+  m.present = static_cast<bool>(in);
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind(kKindLine, 0) == 0) {
+      m.kind = line.substr(kKindLine.size());
+    } else if (const std::size_t by = line.find("written by `");
+               line.rfind('#', 0) == 0 && by != std::string::npos && m.command.empty()) {
+      const std::size_t start = by + 12, end = line.find('`', start);
+      if (end == std::string::npos) continue;
+      m.command = line.substr(start, end - start);
+      const std::size_t on = line.find(" on ", end);
+      if (on != std::string::npos) {
+        m.written_utc = line.substr(on + 4);
+        if (!m.written_utc.empty() && m.written_utc.back() == '.') m.written_utc.pop_back();
+      }
+    } else if (!line.empty() && line[0] != '#') {
+      m.entries.push_back(line);
+    }
+  }
+  if (m.kind.empty() && !m.command.empty()) m.kind = KindOfCommand(m.command);
+  return m;
+}
+
+void CheckOutputFolderName(const std::string& path, const std::string& option) {
+  if (path.empty()) {
+    throw Error(ErrorKind::kInvalidValue, option, "an empty name",
+                "an output folder (leave the option out for the default)");
+  }
+  // ".<name>.tmp-<pid: at most 7 digits>-<16 hex digits>" beside the folder.
+  constexpr std::size_t kStagingExtra = 1 + 5 + 7 + 1 + 16;
+  const fs::path p = fs::path(path).lexically_normal();
+  fs::path last = p.filename();
+  if (last.empty()) last = p.parent_path().filename();
+  for (const auto& part : p) {
+    const std::size_t limit = part == last ? NAME_MAX - kStagingExtra : NAME_MAX;
+    if (part.string().size() <= limit) continue;
+    throw Error(ErrorKind::kInvalidValue, option,
+                fmt::format("a name of {} bytes ('{}...')", part.string().size(),
+                            part.string().substr(0, 24)),
+                part == last ? fmt::format("an output folder name of at most {} bytes (the file "
+                                           "system allows {}; impactdic stages the outputs "
+                                           "beside it as .NAME.tmp-<pid>-<hex>)",
+                                           limit, NAME_MAX)
+                             : fmt::format("folder names of at most {} bytes (NAME_MAX)", limit));
+  }
+}
+
+std::string OutputLockPath(const std::string& folder) {
+  fs::path dest = fs::path(folder).lexically_normal();
+  if (dest.filename().empty()) dest = dest.parent_path();
+  std::string name = ".";  // (Appended: GCC 12 warns wrongly on "." + ...)
+  name.append(dest.filename().string()).append(kLockSuffix);
+  return (dest.parent_path() / name).string();
 }
 
 std::vector<std::string> RemoveStaleTemporaries(const std::string& folder) {
@@ -192,10 +279,68 @@ std::vector<std::string> RemoveStaleSystemTemporaries() {
   return removed;
 }
 
+OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string& command)
+    : path_(OutputLockPath(folder)) {
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    const int fd = open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) {
+      throw Error(ErrorKind::kIo, "output folder",
+                  "cannot make its lock file " + path_ + ": " + std::strerror(errno),
+                  "a writable parent folder")
+          .WithFile(folder);
+    }
+    if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int error = errno;
+      char text[256] = {};
+      const ssize_t n = pread(fd, text, sizeof text - 1, 0);
+      close(fd);
+      if (error != EWOULDBLOCK) {  // A file system without flock (some network ones).
+        LogWarning(
+            "{}: cannot lock {} ({}); two commands writing this folder at once are not "
+            "detected",
+            folder, path_, std::strerror(error));
+        return;
+      }
+      std::string holder(text, n > 0 ? static_cast<std::size_t>(n) : 0);
+      while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+      throw Error(ErrorKind::kIo, "output folder",
+                  "being written by another command: " +
+                      (holder.empty() ? std::string("a process that is starting") : holder) +
+                      " (lock " + path_ + ")",
+                  "one command writing a folder at a time: wait until it has finished, or choose "
+                  "another output folder")
+          .WithFile(folder);
+    }
+    struct stat by_fd {};
+    struct stat by_path {};
+    if (fstat(fd, &by_fd) == 0 && stat(path_.c_str(), &by_path) == 0 &&
+        by_fd.st_ino == by_path.st_ino && by_fd.st_dev == by_path.st_dev) {
+      fd_ = fd;
+      guard_.emplace(path_);
+      const std::string text = fmt::format("process {} (`{}`, since {})\n",
+                                           static_cast<long>(getpid()), command, UtcNow());
+      if (ftruncate(fd, 0) == 0) {
+        [[maybe_unused]] const ssize_t written = pwrite(fd, text.data(), text.size(), 0);
+      }
+      return;
+    }
+    close(fd);  // Its holder removed it meanwhile: lock the one that replaced it.
+  }
+  throw Error(ErrorKind::kIo, "output folder", "cannot lock " + path_,
+              "a lock file that stays in place")
+      .WithFile(folder);
+}
+
+OutputFolderLock::~OutputFolderLock() {
+  if (fd_ < 0) return;
+  // Removed while held: a writer that opened it meanwhile sees it gone and locks a new one.
+  unlink(path_.c_str());
+  close(fd_);
+}
+
 OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOptions options)
     : folder_(folder), options_(std::move(options)) {
-  if (folder.empty())
-    throw Error(ErrorKind::kInvalidValue, "output folder", "an empty path", "a folder");
+  CheckOutputFolderName(folder, "output folder");
   std::error_code ec;
   fs::path dest = fs::absolute(folder, ec).lexically_normal();
   if (dest.filename().empty()) dest = dest.parent_path();
@@ -229,20 +374,11 @@ OutputGeneration::OutputGeneration(const std::string& folder, OutputGenerationOp
                 "renamed)")
         .WithFile(folder);
   }
+  lock_.emplace(destination_, options_.command);
   RemoveStaleTemporaries(parent.string());
   RemoveStaleSystemTemporaries();
-  if (fs::is_directory(dest, ec)) {
-    const std::vector<std::string> foreign = ForeignEntries();
-    if (!foreign.empty()) {
-      throw Error(ErrorKind::kInvalidValue, "output folder",
-                  fmt::format("{} entr{} impactdic did not write: {}", foreign.size(),
-                              foreign.size() == 1 ? "y" : "ies", Quoted(foreign, 5)),
-                  "a new or empty folder, or one impactdic wrote (its " +
-                      std::string(kOutputMarkerName) +
-                      " lists what it may replace); move those entries or choose another folder")
-          .WithFile(folder);
-    }
-  }
+  kind_ = OwnKind();
+  if (fs::is_directory(dest, ec)) CheckReplaceable();
   staging_ = (parent / TemporaryName(dest.filename().string(), ".tmp-")).string();
   {
     // Registered and made as one step for a signal's cleanup, which waits for this block: it
@@ -270,9 +406,129 @@ OutputGeneration::~OutputGeneration() {
     const std::lock_guard<std::mutex> lock(staged_mutex);
     std::erase_if(staged_folders, [&](const auto& s) { return s.first == staging_; });
   }
-  if (committed_) return;
+  if (!committed_ && !staging_.empty()) {
+    std::error_code ec;
+    fs::remove_all(staging_, ec);
+  }
+}
+
+std::string OutputGeneration::OwnKind() const {
+  return options_.kind.empty() ? KindOfCommand(options_.command) : options_.kind;
+}
+
+void OutputGeneration::CheckReplaceable() {
+  const std::vector<std::string> foreign = ForeignEntries();
+  if (!foreign.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "output folder",
+                fmt::format("{} entr{} impactdic did not write: {}", foreign.size(),
+                            foreign.size() == 1 ? "y" : "ies", Quoted(foreign, 5)),
+                "a new or empty folder, or one impactdic wrote (its " +
+                    std::string(kOutputMarkerName) +
+                    " lists what it may replace); move those entries or choose another folder")
+        .WithFile(folder_);
+  }
+  const OutputMarker marker = ReadOutputMarker(destination_);
+  if (marker.present && options_.keep_other_entries &&
+      Contains(options_.replaces_kinds, marker.kind)) {
+    kind_ = marker.kind;  // Render into a run's folder: still a run's folder.
+  }
+  // A folder of another kind replaced by --force: nothing of it is kept.
+  if (marker.present && !marker.kind.empty() && marker.kind != kind_ &&
+      !Contains(options_.replaces_kinds, marker.kind)) {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(destination_, ec))
+      dropped_entries_.push_back(entry.path().filename().string());
+  }
+  if (!options_.force) CheckKinds(marker);
+  CheckRemovable();
+  if (!marker.present) WarnOfUnmarkedEntries();
+}
+
+void OutputGeneration::WarnOfUnmarkedEntries() const {
+  // Entries replaced although no marker says impactdic wrote them: named, never silently.
+  std::vector<std::string> replaced;
   std::error_code ec;
-  fs::remove_all(staging_, ec);
+  for (const auto& entry : fs::directory_iterator(destination_, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code e2;
+    if (IsTemporaryName(name) ||
+        (entry.is_directory(e2) && fs::exists(entry.path() / kOutputMarkerName, e2)) ||
+        (options_.keep_other_entries && !Contains(options_.own_names, name))) {
+      continue;
+    }
+    replaced.push_back(name);
+  }
+  if (replaced.empty()) return;
+  std::sort(replaced.begin(), replaced.end());
+  LogWarning(
+      "{} has no {} (an impactdic older than 2026-11-25 wrote it, or files are named like its "
+      "outputs): {} taken for impactdic's outputs and replaced",
+      folder_, kOutputMarkerName, Quoted(replaced, 5));
+}
+
+void OutputGeneration::CheckKinds(const OutputMarker& marker) const {
+  std::string kinds = OwnKind();
+  for (const std::string& k : options_.replaces_kinds) kinds += " or " + k;
+  const std::string expected = fmt::format(
+      "a new or empty folder, or a {} folder (what `{}` replaces); --force replaces it anyway",
+      kinds, options_.command);
+  if (marker.present && !marker.kind.empty() && marker.kind != kind_ &&
+      !Contains(options_.replaces_kinds, marker.kind)) {
+    throw Error(ErrorKind::kInvalidValue, "output folder",
+                fmt::format("{}: {}", WrittenBy(marker), SomeEntries(destination_)), expected)
+        .WithFile(folder_);
+  }
+  // Generations nested in it that are not part of it (results/t10 under `run -o results`).
+  std::vector<std::string> nested;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(destination_, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::error_code e2;
+    if (!entry.is_directory(e2) || !fs::exists(entry.path() / kOutputMarkerName, e2) ||
+        Contains(marker.entries, name) || Contains(options_.own_names, name) ||
+        Contains(options_.known_names, name)) {
+      continue;
+    }
+    const OutputMarker inner = ReadOutputMarker(entry.path().string());
+    if (Contains(options_.nested_kinds, inner.kind)) continue;
+    nested.push_back(fmt::format("'{}' ({})", name, WrittenBy(inner)));
+  }
+  if (nested.empty()) return;
+  std::sort(nested.begin(), nested.end());
+  std::string listed;
+  for (std::size_t i = 0; i < nested.size() && i < 4; ++i) listed += (i ? ", " : "") + nested[i];
+  if (nested.size() > 4) listed += fmt::format(" and {} more", nested.size() - 4);
+  throw Error(ErrorKind::kInvalidValue, "output folder",
+              fmt::format("a folder holding the outputs of other commands: {}", listed), expected)
+      .WithFile(folder_);
+}
+
+void OutputGeneration::CheckRemovable() const {
+  // Replacing the folder removes the previous generation: every folder in it must let us remove
+  // its entries, else the swap would leave it behind under a hidden name.
+  std::error_code ec;
+  std::vector<std::string> locked;
+  // A folder with entries needs write permission for them to be removed (an empty one goes with
+  // its parent's).
+  const auto removable = [](const fs::path& dir) {
+    std::error_code e2;
+    return fs::is_empty(dir, e2) || access(dir.c_str(), W_OK | X_OK) == 0;
+  };
+  if (!removable(destination_)) locked.push_back(folder_);
+  for (auto it = fs::recursive_directory_iterator(destination_, ec);
+       !ec && it != fs::recursive_directory_iterator() && locked.size() < 3; it.increment(ec)) {
+    std::error_code e2;
+    if (it->is_symlink(e2) || !it->is_directory(e2) || removable(it->path())) continue;
+    locked.push_back((fs::path(folder_) / fs::relative(it->path(), destination_, e2)).string());
+  }
+  if (ec) locked.push_back(folder_ + " (" + ec.message() + ")");
+  if (locked.empty()) return;
+  throw Error(
+      ErrorKind::kIo, "output folder",
+      fmt::format("cannot replace it: you may not remove the entries of {}", Quoted(locked, 3)),
+      "a folder whose earlier outputs you may remove (check the owner and permissions), "
+      "or another output folder")
+      .WithFile(folder_);
 }
 
 std::string OutputGeneration::Path(const std::string& name) const {
@@ -304,13 +560,13 @@ std::string OutputGeneration::FinalPath(const std::string& path) const {
 
 std::vector<std::string> OutputGeneration::ForeignEntries() const {
   const fs::path dest(destination_);
-  const std::set<std::string> listed = ReadMarker(dest);
+  const std::vector<std::string> listed = ReadOutputMarker(destination_).entries;
   std::vector<std::string> foreign;
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(dest, ec)) {
     const std::string name = entry.path().filename().string();
     std::error_code e2;
-    if (name == kOutputMarkerName || listed.count(name) > 0 || Contains(options_.own_names, name) ||
+    if (name == kOutputMarkerName || Contains(listed, name) || Contains(options_.own_names, name) ||
         Contains(options_.known_names, name) || IsTemporaryName(name) ||
         (entry.is_directory(e2) && fs::exists(entry.path() / kOutputMarkerName, e2))) {
       continue;
@@ -332,6 +588,7 @@ void OutputGeneration::CarryOverPrevious() const {
     const std::string name = entry.path().filename().string();
     std::error_code e2;
     if (name == kOutputMarkerName || IsTemporaryName(name) || Contains(options_.own_names, name) ||
+        Contains(dropped_entries_, name) ||
         fs::exists(fs::symlink_status(fs::path(staging_) / name, e2))) {
       continue;
     }
@@ -348,8 +605,8 @@ void OutputGeneration::WriteMarker() const {
   }
   std::sort(names.begin(), names.end());
   std::string text = "# impactdic output folder, written by `" + options_.command + "` on " +
-                     UtcNow() +
-                     ".\n# Its entries are one generation: impactdic replaces them together "
+                     UtcNow() + ".\n" + std::string(kKindLine) + kind_ +
+                     "\n# Its entries are one generation: impactdic replaces them together "
                      "(and only them).\n";
   for (const auto& n : names) text += n + "\n";
   WriteTextFileAtomic(Path(kOutputMarkerName), text);
@@ -411,6 +668,12 @@ void OutputGeneration::Commit() {
   committed_ = true;
   // The previous generation, if any, is under the staging name.
   fs::remove_all(staging_, ec);
+  if (ec) {
+    LogWarning(
+        "{} holds its new outputs, but its previous ones could not all be removed ({}): they are "
+        "left in {}; remove that folder by hand",
+        folder_, ec.message(), staging_);
+  }
   staging_guard_->Release();
   if (replaces_cwd) {
     LogWarning(

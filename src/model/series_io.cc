@@ -10,12 +10,15 @@
 #include "impactdic/model/impact_model.h"
 
 namespace impactdic {
+std::vector<std::string> ImpactSeriesColumns() {
+  return {"t_s",       "z_m",       "v_m_s",      "dv_dt_m_s2", "m_add_kg", "dm_add_dt_kg_s",
+          "inertia_N", "dynamic_N", "friction_N", "gravity_N"};
+}
+
 void WriteImpactSeries(const std::string& path, const ImpactModelParameters& params,
                        const ImpactRun& run) {
   const ImpactSeries s = MakeImpactSeries(params, run);
-  const std::vector<std::string> names = {
-      "t_s",       "z_m",       "v_m_s",      "dv_dt_m_s2", "m_add_kg", "dm_add_dt_kg_s",
-      "inertia_N", "dynamic_N", "friction_N", "gravity_N"};
+  const std::vector<std::string> names = ImpactSeriesColumns();
   const std::vector<std::vector<double>> columns = {
       s.t_s,       s.z_m,       s.v_m_s,      s.dv_dt_m_s2, s.m_add_kg, s.dm_add_dt_kg_s,
       s.inertia_N, s.dynamic_N, s.friction_N, s.gravity_N};

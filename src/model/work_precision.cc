@@ -106,24 +106,28 @@ std::string FormatTable1(const std::vector<Table1Row>& rows) {
   return out;
 }
 
+std::vector<std::string> Table1CsvColumns() {
+  return {"pounder_mass_kg",
+          "height_m",
+          "width_m",
+          "impact_velocity_m_s",
+          "added_mass_max_kg",
+          "t_end_s",
+          "crater_depth_m",
+          "relative_penetration",
+          "peak_deceleration_g",
+          "t_peak_s",
+          "plateau_deceleration_g",
+          "momentum_ratio",
+          "steps",
+          "rhs_evals",
+          "error_estimate",
+          "solver",
+          "warnings"};
+}
+
 void WriteTable1Csv(const std::string& path, const std::vector<Table1Row>& rows) {
-  std::vector<std::string> names = {"pounder_mass_kg",
-                                    "height_m",
-                                    "width_m",
-                                    "impact_velocity_m_s",
-                                    "added_mass_max_kg",
-                                    "t_end_s",
-                                    "crater_depth_m",
-                                    "relative_penetration",
-                                    "peak_deceleration_g",
-                                    "t_peak_s",
-                                    "plateau_deceleration_g",
-                                    "momentum_ratio",
-                                    "steps",
-                                    "rhs_evals",
-                                    "error_estimate",
-                                    "solver",
-                                    "warnings"};
+  const std::vector<std::string> names = Table1CsvColumns();
   std::vector<std::vector<std::string>> cells;
   auto num = [](double v) { return std::isfinite(v) ? fmt::format("{:.17g}", v) : "nan"; };
   for (const Table1Row& r : rows) {
@@ -359,11 +363,14 @@ std::string FormatWorkPrecision(const std::vector<WorkPrecisionRow>& rows) {
   return out;
 }
 
+std::vector<std::string> WorkPrecisionCsvColumns() {
+  return {"case",        "solver",     "solver_ran",    "rtol",           "depth_error",
+          "t_end_error", "peak_error", "plateau_error", "error_estimate", "error_estimate_local",
+          "wall_time_s", "rhs_evals",  "steps",         "jacobian_evals", "warnings"};
+}
+
 void WriteWorkPrecisionCsv(const std::string& path, const std::vector<WorkPrecisionRow>& rows) {
-  const std::vector<std::string> names = {
-      "case",        "solver",     "solver_ran",    "rtol",           "depth_error",
-      "t_end_error", "peak_error", "plateau_error", "error_estimate", "error_estimate_local",
-      "wall_time_s", "rhs_evals",  "steps",         "jacobian_evals", "warnings"};
+  const std::vector<std::string> names = WorkPrecisionCsvColumns();
   auto num = [](double v) { return std::isnan(v) ? std::string("nan") : fmt::format("{:.6g}", v); };
   std::vector<std::vector<std::string>> cells;
   cells.reserve(rows.size());

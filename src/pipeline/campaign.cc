@@ -85,7 +85,7 @@ std::optional<CampaignRow> CompleteRow(const CampaignTest& t, const std::string&
 // Synthesises (if needed) and runs one test into its folder (a generation of its own, complete or
 // absent). `threads`: PipelineOptions::threads. Never throws for the test's own errors: they
 // become status "failed" with the message.
-CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int threads) {
+CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int threads, bool force) {
   WallTimer timer;
   CampaignRow row;
   row.index = t.index;
@@ -96,6 +96,7 @@ CampaignRow ProcessTest(const CampaignTest& t, const std::string& folder, int th
     OutputGenerationOptions go;
     go.command = "impactdic campaign (test " + t.name + ")";
     go.own_names = {"results", "synth", kRowCsv};
+    go.force = force;
     OutputGeneration generation((fs::path(folder) / t.name).string(), go);
     std::string scene_path = t.scene_path;
     if (t.synthesise) {
@@ -150,7 +151,7 @@ Parallelism SplitThreads(const CampaignOptions& o, std::size_t tests) {
 
 // Runs the selected tests with `par.jobs` workers; rows in `rows` (by position in `todo`).
 void RunTests(const std::vector<const CampaignTest*>& todo, const std::string& folder,
-              const Parallelism& par, std::vector<CampaignRow>* rows) {
+              const Parallelism& par, bool force, std::vector<CampaignRow>* rows) {
   rows->resize(todo.size());
   ProgressBar bar("campaign", todo.size());
   std::mutex mutex;
@@ -162,9 +163,9 @@ void RunTests(const std::vector<const CampaignTest*>& todo, const std::string& f
       CampaignRow row;
       if (par.test_threads > 0) {
         tbb::task_arena arena(par.test_threads);
-        arena.execute([&] { row = ProcessTest(*todo[i], folder, /*threads=*/0); });
+        arena.execute([&] { row = ProcessTest(*todo[i], folder, /*threads=*/0, force); });
       } else {
-        row = ProcessTest(*todo[i], folder, /*threads=*/-1);
+        row = ProcessTest(*todo[i], folder, /*threads=*/-1, force);
       }
       const std::lock_guard<std::mutex> lock(mutex);
       (*rows)[i] = std::move(row);
@@ -242,7 +243,8 @@ CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions&
     }
   }
   // Checks the folder before any work; written at the end (the tests' folders commit on their own).
-  OutputGeneration generation(options.output_folder, CampaignLevelGeneration("impactdic campaign"));
+  OutputGeneration generation(options.output_folder,
+                              CampaignLevelGeneration("impactdic campaign", options.force));
   const Parallelism par = SplitThreads(options, todo.size());
   std::optional<ThreadLimit> limit;
   if (options.threads >= 0) limit.emplace(options.threads, "campaign threads");
@@ -250,7 +252,7 @@ CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions&
           todo.size(), summary.resumed, options.shard.ToString(), par.jobs,
           par.test_threads > 0 ? std::to_string(par.test_threads) : "scene's dic.threads");
   std::vector<CampaignRow> rows;
-  RunTests(todo, options.output_folder, par, &rows);
+  RunTests(todo, options.output_folder, par, options.force, &rows);
   for (auto& r : rows) {
     summary.failed += r.status == "failed";
     summary.rows.push_back(std::move(r));

@@ -72,8 +72,9 @@ void FitAndWrite(CampaignSummary* summary, const CampaignOptions& options,
                  const std::string& folder, const std::string& plan_text);
 
 // The campaign folder's generation for the campaign-level files: it replaces those and keeps the
-// test folders (and anything else impactdic wrote there), hard-linked.
-OutputGenerationOptions CampaignLevelGeneration(const std::string& command);
+// test folders (and anything else impactdic wrote there), hard-linked. `force`: also replace a
+// folder another kind of command wrote (OutputGenerationOptions::force).
+OutputGenerationOptions CampaignLevelGeneration(const std::string& command, bool force);
 
 }  // namespace impactdic::campaign_internal
 

@@ -382,9 +382,11 @@ std::string CampaignSummary::FullReport() const {
 
 namespace campaign_internal {
 
-OutputGenerationOptions CampaignLevelGeneration(const std::string& command) {
+OutputGenerationOptions CampaignLevelGeneration(const std::string& command, bool force) {
   OutputGenerationOptions o;
   o.command = command;
+  o.nested_kinds = {"campaign test"};  // Its tests' folders, each a generation of its own.
+  o.force = force;
   o.own_names = CampaignFileNames();
   o.keep_other_entries = true;  // The test folders (and anything else impactdic wrote there).
   return o;
@@ -436,7 +438,7 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
         "the output folders of all shards");
   }
   OutputGeneration generation(options.output_folder,
-                              CampaignLevelGeneration("impactdic campaign (merge)"));
+                              CampaignLevelGeneration("impactdic campaign (merge)", options.force));
   std::string sources = "# merged from:\n";
   for (const auto& f : folders) sources += "#   " + f + "\n";
   FitAndWrite(&summary, options, generation.staging_folder(), sources);
@@ -484,8 +486,9 @@ CampaignSummary RegressCampaignTable(const std::string& csv_path, const Campaign
     summary.rows.push_back(r);
   }
   summary.tests_total = static_cast<int>(summary.rows.size());
-  OutputGeneration generation(options.output_folder,
-                              CampaignLevelGeneration("impactdic campaign (from a table)"));
+  OutputGeneration generation(
+      options.output_folder,
+      CampaignLevelGeneration("impactdic campaign (from a table)", options.force));
   CampaignOptions o = options;
   o.figures = false;  // A table has no modelled values to compare.
   FitAndWrite(&summary, o, generation.staging_folder(), "# from table " + csv_path + "\n");

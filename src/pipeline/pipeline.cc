@@ -54,11 +54,15 @@ OutputWriters RunOutputWriters(const PipelineOptions& options) {
 // A run's outputs are one generation of its output folder (io/output_generation.h): written into
 // a staging folder beside it and swapped in when all are complete. Opened, and the writers
 // checked, before any stage runs: a folder that cannot be written fails the run at once.
-void OpenOutputs(const Scene& scene, const std::string& folder, const OutputWriters& writers,
-                 std::optional<OutputGeneration>* generation) {
+void OpenOutputs(const Scene& scene, const PipelineOptions& options, const std::string& folder,
+                 const OutputWriters& writers, std::optional<OutputGeneration>* generation) {
   if (!scene.HasStage("outputs")) return;
   OutputGenerationOptions o;
   o.command = "impactdic run";
+  // Figures drawn by `render -o` into a folder of their own, or nested in the run's folder.
+  o.replaces_kinds = {"render"};
+  o.nested_kinds = {"render"};
+  o.force = options.force;
   for (const auto& writer : writers)
     for (const std::string& name : writer->FileNames()) o.own_names.push_back(name);
   generation->emplace(folder, o);
@@ -76,7 +80,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
       options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
   const OutputWriters writers = RunOutputWriters(options);
   std::optional<OutputGeneration> generation;  // Removed again unless committed at the end.
-  OpenOutputs(scene, summary.output_folder, writers, &generation);
+  OpenOutputs(scene, options, summary.output_folder, writers, &generation);
   SceneRunData data;
   data.mm_per_px = scene.inputs.mm_per_px;
   stages::StageContext context{scene, options, data, summary};
@@ -109,8 +113,10 @@ void CheckSceneStages(const Scene& scene) {
 
 void CheckOutputFolderHoldsNoInput(const Scene& scene, const std::string& folder,
                                    const std::string& option) {
+  CheckOutputFolderName(folder, option);
   std::error_code ec;
   const fs::path out = fs::weakly_canonical(fs::absolute(folder, ec), ec);
+  if (ec || out.empty()) return;  // The generation names what is wrong with the folder.
   // A glob's folder is the input (its files may be written later); a video or a folder is itself.
   std::string frames = scene.inputs.frames;
   if (frames.find_first_of("*?[") != std::string::npos)

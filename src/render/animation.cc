@@ -43,13 +43,16 @@ void AnimationOptions::Check() const {
 
 std::string AnimationSummary::BriefReport() const {
   char buf[512];
+  // Named as the user will find it (never a staging folder that is gone by then).
+  const std::string shown = OutputPathForMessages(path);
   std::snprintf(buf, sizeof buf, "%s: %zu frames (%zu read back), %s (%s), %dx%d at %.3g fps",
-                path.c_str(), frames, frames_read_back, codec.c_str(), fourcc.c_str(), size.width,
+                shown.c_str(), frames, frames_read_back, codec.c_str(), fourcc.c_str(), size.width,
                 size.height, fps);
   std::string text = buf;
   if (fell_back) text += "; fell back to MJPG AVI because " + fallback_reason;
   if (png_frames > 0)
-    text += "; " + std::to_string(png_frames) + " PNG frames in " + png_frames_dir;
+    text += "; " + std::to_string(png_frames) + " PNG frames in " +
+            OutputPathForMessages(png_frames_dir);
   return text;
 }
 

@@ -240,19 +240,61 @@ void RefuseOtherResults(const std::string& out_dir, const std::string& results_p
       .WithFile(out_dir);
 }
 
+// The names of the outputs drawn from the camera frames.
+struct FrameOutputNames {
+  const char* snapshot = L::kVelocitySnapshotPng;
+  const char* animation = L::kAnimationName;
+  const char* animation_avi = L::kAnimationAviName;
+  const char* png_frames = L::kPngFramesDir;
+  bool preview = false;
+};
+
+// The preview names (RenderResultsOptions::frame_loader's comment) when `out_dir` is the folder of
+// the results file and that stores a preview of the frames; the usual names otherwise.
+FrameOutputNames FrameOutputsOf(const H5Reader& r, const std::string& results_path,
+                                const std::string& out_dir, const RenderResultsOptions& options) {
+  std::error_code ec;
+  if (options.frame_loader || !r.Exists(L::kFrameRows) || !r.Exists(L::kTimeMs) ||
+      !fs::equivalent(fs::path(out_dir) / L::kResultsFile, results_path, ec)) {
+    return {};
+  }
+  const std::size_t stored = r.Dimensions(L::kFrameRows)[0], analysed = r.Dimensions(L::kTimeMs)[0];
+  const double downsample = NumberAttribute(r, L::kFramesGroup, L::kDownsampleAttr);
+  if (stored >= analysed && !(downsample > 1)) return {};
+  LogInfo(
+      "render: {} stores a preview of the frames ({} of {}, downsampled {}x): the velocity "
+      "snapshot and animation drawn from it are {} and {}; the run's {} and {} (every frame, "
+      "full size) are kept",
+      results_path, stored, analysed, std::isfinite(downsample) ? downsample : 1.0,
+      L::kPreviewSnapshotPng, L::kPreviewAnimationName, L::kVelocitySnapshotPng, L::kAnimationName);
+  return {L::kPreviewSnapshotPng, L::kPreviewAnimationName, L::kPreviewAnimationAviName,
+          L::kPreviewPngFramesDir, true};
+}
+
 // A render's outputs are one generation of the folder; it keeps the other entries of the previous
-// generation (a run's results.h5 and summaries) and replaces every figure and animation.
-OutputGenerationOptions RenderGenerationOptions() {
+// generation (a run's results.h5 and summaries, and its frame-based outputs when `names` are the
+// preview's) and replaces every figure and animation of its names.
+OutputGenerationOptions RenderGenerationOptions(const FrameOutputNames& names, bool force) {
   OutputGenerationOptions o;
   o.command = "impactdic render";
-  for (const char* name : L::kRenderOutputNames) o.own_names.emplace_back(name);
+  for (const char* name : {L::kMomentumPng, L::kDecelerationPng, L::kAddedMassPng, names.snapshot,
+                           names.animation, names.animation_avi, names.png_frames})
+    o.own_names.emplace_back(name);
   for (const char* name : L::kRunOnlyOutputNames) o.known_names.emplace_back(name);
+  if (names.preview) {
+    for (const char* name :
+         {L::kVelocitySnapshotPng, L::kAnimationName, L::kAnimationAviName, L::kPngFramesDir})
+      o.known_names.emplace_back(name);
+  }
   o.keep_other_entries = true;
+  o.replaces_kinds = {"run"};  // Its figures, beside the run's results.h5 (RefuseOtherResults).
+  o.force = force;
   return o;
 }
 
 void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
-                const RenderResultsOptions& options, RenderResultsSummary& summary);
+                const RenderResultsOptions& options, const FrameOutputNames& names,
+                RenderResultsSummary& summary);
 
 }  // namespace
 
@@ -275,8 +317,9 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
   }
   if (options.new_generation) {
     RefuseOtherResults(out_dir, results_path);
-    OutputGeneration generation(out_dir, RenderGenerationOptions());
-    RenderInto(reader, results_path, generation.staging_folder(), options, summary);
+    const FrameOutputNames names = FrameOutputsOf(reader, results_path, out_dir, options);
+    OutputGeneration generation(out_dir, RenderGenerationOptions(names, options.force));
+    RenderInto(reader, results_path, generation.staging_folder(), options, names, summary);
     generation.Commit();
     for (auto& w : summary.written) w = generation.FinalPath(w);
     summary.animation.path = generation.FinalPath(summary.animation.path);
@@ -291,7 +334,7 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
       throw Error(ErrorKind::kIo, "output folder",
                   OutputPathForMessages(out_dir) + " is not writable", "a writable folder");
     }
-    RenderInto(reader, results_path, out_dir, options, summary);
+    RenderInto(reader, results_path, out_dir, options, FrameOutputNames{}, summary);
   }
   summary.wall_s = wall.ElapsedSeconds();
   LogInfo("{}", summary.BriefReport());
@@ -329,7 +372,7 @@ std::size_t SnapshotFrame(const VelocityFieldSequence& seq, double t_e_s, std::s
 // The velocity snapshot and the animation (or why they are skipped).
 void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
                        const RenderResultsOptions& options, const std::string& out_dir,
-                       RenderResultsSummary& summary) {
+                       const FrameOutputNames& names, RenderResultsSummary& summary) {
   auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
   auto skip = [&](const std::string& output, const std::string& reason) {
     LogInfo("render: skipping {}: {}", output, reason);
@@ -338,8 +381,8 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
   if (!has_field) {
     const std::string reason = std::string("no velocity field (") + L::kTimeMs + ", " + L::kDicX +
                                ", " + L::kDicY + ", " + L::kVx + ", " + L::kVy + ")";
-    if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-    if (options.animation) skip(L::kAnimationName, reason);
+    if (options.snapshot) skip(names.snapshot, reason);
+    if (options.animation) skip(names.animation, reason);
   } else {
     const bool loaded = static_cast<bool>(options.frame_loader);
     VelocityFieldSequence seq =
@@ -350,20 +393,19 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
     }
     if (seq.num_frames() == 0) {
       const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
-      if (options.snapshot) skip(L::kVelocitySnapshotPng, reason);
-      if (options.animation) skip(L::kAnimationName, reason);
+      if (options.snapshot) skip(names.snapshot, reason);
+      if (options.animation) skip(names.animation, reason);
     } else {
       if (options.snapshot) {
         std::string title;
         const std::size_t frame = SnapshotFrame(seq, t_e_s, &title);
-        RenderVelocitySnapshot(seq, frame, out(L::kVelocitySnapshotPng), options.snapshot_overlay,
-                               title);
-        summary.written.push_back(out(L::kVelocitySnapshotPng));
+        RenderVelocitySnapshot(seq, frame, out(names.snapshot), options.snapshot_overlay, title);
+        summary.written.push_back(out(names.snapshot));
       }
       if (options.animation) {
         AnimationOptions a = options.animation_options;
-        if (options.png_frames) a.png_frames_dir = out(L::kPngFramesDir);
-        summary.animation = WriteVelocityAnimation(seq, out(L::kAnimationName), a);
+        if (options.png_frames) a.png_frames_dir = out(names.png_frames);
+        summary.animation = WriteVelocityAnimation(seq, out(names.animation), a);
         summary.has_animation = true;
         summary.written.push_back(summary.animation.path);
       }
@@ -372,7 +414,8 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
 }
 
 void RenderInto(const H5Reader& reader, const std::string& results_path, const std::string& out_dir,
-                const RenderResultsOptions& options, RenderResultsSummary& summary) {
+                const RenderResultsOptions& options, const FrameOutputNames& names,
+                RenderResultsSummary& summary) {
   auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
   auto skip = [&](const std::string& output, const std::string& reason) {
     LogInfo("render: skipping {}: {}", output, reason);
@@ -464,7 +507,7 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
     }
 
     if (options.snapshot || options.animation)
-      DrawVelocityField(reader, has_field, t_e_s, options, out_dir, summary);
+      DrawVelocityField(reader, has_field, t_e_s, options, out_dir, names, summary);
   } catch (Error& e) {
     if (e.file().empty() && e.kind() == ErrorKind::kFileFormat)
       e.WithFile(OutputPathForMessages(results_path));

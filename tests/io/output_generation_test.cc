@@ -135,10 +135,12 @@ TEST(OutputGeneration, AcceptsEmptyOlderAndNestedOutputFolders) {
   dir.Write("older/b.txt", "old");
   WriteGeneration(dir.File("older"), {{"a.txt", "new"}});
   EXPECT_EQ(Entries(dir.path() / "older"), (std::set<std::string>{".impactdic-output", "a.txt"}));
-  // A folder holding a generation of its own (e.g. a run's results inside a synth folder).
+  // A folder holding a generation of a kind it nests (e.g. a campaign's test folders).
   WriteGeneration(dir.File("outer"), {{"a.txt", "outer"}});
   WriteGeneration(dir.File("outer/inner"), {{"a.txt", "inner"}});
-  WriteGeneration(dir.File("outer"), {{"b.txt", "outer 2"}});
+  OutputGenerationOptions nesting = RunLike();
+  nesting.nested_kinds = {"test"};
+  WriteGeneration(dir.File("outer"), {{"b.txt", "outer 2"}}, nesting);
   EXPECT_EQ(Entries(dir.path() / "outer"), (std::set<std::string>{".impactdic-output", "b.txt"}));
 }
 
@@ -160,6 +162,7 @@ TEST(OutputGeneration, KeepOtherEntriesCarriesThemOverAsHardLinks) {
   render.command = "render";
   render.own_names = {"a.txt", "b.txt"};
   render.keep_other_entries = true;
+  render.replaces_kinds = {"test"};  // Into the folder of a "test" command.
   WriteGeneration(out, {{"b.txt", "new figure"}}, render);
   // a.txt is render's own: not carried over (it was not drawn this time).
   EXPECT_EQ(Entries(out), (std::set<std::string>{".impactdic-output", "b.txt", "results.h5"}));
@@ -169,6 +172,7 @@ TEST(OutputGeneration, KeepOtherEntriesCarriesThemOverAsHardLinks) {
   EXPECT_EQ(Read(fs::path(out) / "results.h5"), "data");
   const std::string marker = Read(fs::path(out) / ".impactdic-output");
   EXPECT_NE(marker.find("\nresults.h5\n"), std::string::npos) << marker;
+  EXPECT_NE(marker.find("\n# kind: test\n"), std::string::npos) << marker;  // Still its kind.
 }
 
 TEST(OutputGeneration, SwapByTwoRenamesWhereTheFileSystemCannotExchange) {

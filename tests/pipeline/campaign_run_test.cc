@@ -27,7 +27,7 @@ namespace impactdic {
 namespace {
 namespace fs = std::filesystem;
 
-// A campaign of tiny synthesised tests (8 frames, no per-test figures or video: quick).
+// A campaign of tiny synthesised tests (10 frames, no per-test figures or video: quick).
 std::string QuickCampaign(const TestDir& dir, const std::string& name, const std::string& widths) {
   return dir.Write(name,
                    "synthesise:\n  mass_kg: [10]\n  drop_height_m: [0.7]\n  width_m: " + widths +

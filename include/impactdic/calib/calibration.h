@@ -186,6 +186,8 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
 // YAML (keys in docs/calibration.md). Save is atomic; Load checks every key and reports the file
 // and key of a problem.
 void SaveCalibration(const CameraCalibration& calibration, const std::string& path);
+// How SaveCalibration's file begins (an existing calibrate -o file is replaced, any other kept).
+inline constexpr const char* kCalibrationFirstLine = "# impactdic camera calibration";
 CameraCalibration LoadCalibration(const std::string& path);
 
 // Throws Error(kInvalidValue) naming both sizes unless frame_size equals the calibration's image

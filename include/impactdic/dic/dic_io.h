@@ -78,6 +78,8 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
 //       reference first; /dic/frame_number as the CSV's frame column; other groups of an existing
 //       file are kept.
 void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
+// The columns of WriteDicResult's CSV.
+std::vector<std::string> DicCsvColumns();
 
 }  // namespace impactdic
 

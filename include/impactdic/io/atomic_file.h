@@ -52,6 +52,10 @@ struct OutputRules {
   std::string option;                   // the option naming the output ("-o"), for the messages
   std::vector<std::string> extensions;  // allowed endings, lower case with the dot; empty = any
   std::vector<std::string> inputs;      // files the command reads: the output is none of them
+  // How the text files this command writes begin (a CSV header "t_s,z_m,...", the calibration's
+  // "# impactdic camera calibration"): an existing .csv/.json/.yaml/.yml output whose first line
+  // begins with none of them was not written by it (an accelerometer record, a scene) and is kept.
+  std::vector<std::string> own_first_lines;
 };
 
 // Error kInvalidValue naming `option` and `output` if `output` is one of `inputs` (the same
@@ -62,7 +66,8 @@ void CheckNotAnInput(const std::string& output, const std::string& option,
 // CheckOutputLocation(path), then the rules, each an Error kInvalidValue naming the option and
 // the path: the extension (case-insensitive) is one of rules.extensions; the output is not one
 // of rules.inputs (the same file under any name: std::filesystem::equivalent); an existing
-// .h5/.hdf5 output is an HDF5 file (its other groups will be kept, see H5Writer), never a file
+// .h5/.hdf5 output is an HDF5 file (its other groups will be kept, see H5Writer), and an existing
+// text output (.csv, .json, .yaml, .yml) begins with one of rules.own_first_lines: never a file
 // of another kind that writing would destroy.
 void CheckOutputLocation(const std::string& path, const OutputRules& rules);
 

@@ -57,6 +57,10 @@ CsvTable ReadCsv(const std::string& path, const CsvReadOptions& options = {});
 void WriteCsv(const std::string& path, const std::vector<std::string>& names,
               const std::vector<std::vector<double>>& columns, int precision = 10);
 
+// The header row WriteCsv and WriteCsvRows write for `names` ("a,b,c"), without the newline: an
+// existing output whose first line is this was written by the same writer (OutputRules).
+std::string CsvHeaderLine(const std::vector<std::string>& names);
+
 // For tables with text cells (e.g. a status column): rows of already-formatted cells.
 void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
                   const std::vector<std::vector<std::string>>& rows);

@@ -25,6 +25,18 @@
 // no marker), folders holding a marker (nested outputs, e.g. a run's results inside a synth
 // folder, or a campaign's scene folders) and impactdic temporaries. Anything else (a user's file)
 // makes the command fail before any work, naming the entries; nothing is deleted.
+//
+// Kinds: the marker records which command wrote the folder and its kind ("run", "synth",
+// "campaign", "campaign test", "render"). A folder of another kind (a campaign under `run -o`, a
+// synth scene under `run -o` or `campaign -o`, a run under `synth -o`), or one holding nested
+// outputs of a kind the command does not nest (`run -o results` over results/t10/, a run of its
+// own), is refused before any work, naming the command that wrote it and some of its entries,
+// unless `force` (the CLI's --force). A user's files are never replaced, even with `force`.
+//
+// One writer at a time: the generation holds an flock on ".<name>.lock" beside the folder from
+// its construction to its destruction (the file holds the writer's pid and command, and is
+// removed again); a second writer of the same folder, in this process or another, is refused
+// naming the first one's pid.
 #ifndef IMPACTDIC_IO_OUTPUT_GENERATION_H_
 #define IMPACTDIC_IO_OUTPUT_GENERATION_H_
 
@@ -53,6 +65,56 @@ struct OutputGenerationOptions {
   // false: swap by two renames and a backup even where the file system can exchange atomically
   // (what file systems without RENAME_EXCHANGE get; tests use it to cover that path).
   bool atomic_exchange = true;
+  // The kind of folder this command makes, recorded in the marker; empty: derived from `command`
+  // (KindOfCommand: "impactdic campaign (test t1)" -> "campaign test").
+  std::string kind;
+  // Other kinds of folder it replaces without `force` (render: "run", run: "render"). A command
+  // that keeps other entries and replaces such a folder keeps its kind (render into a run's
+  // folder: still a run).
+  std::vector<std::string> replaces_kinds;
+  // Kinds of generation that may sit in the folder as entries of their own without being listed
+  // by its marker (campaign: "campaign test", its tests' folders).
+  std::vector<std::string> nested_kinds;
+  // Replace a folder of another kind, or holding nested outputs of other kinds, too (--force).
+  bool force = false;
+};
+
+// The kind of folder a command writes: "impactdic run" -> "run", "impactdic synth --realistic" ->
+// "synth", "impactdic campaign (merge)" -> "campaign", "impactdic campaign (test t1)" ->
+// "campaign test"; a command without the "impactdic " prefix is its own kind.
+std::string KindOfCommand(const std::string& command);
+
+// What `.impactdic-output` in `folder` says: whether there is one, the kind and command that
+// wrote the folder, when (UTC) and the entries it lists.
+struct OutputMarker {
+  bool present = false;
+  std::string kind, command, written_utc;
+  std::vector<std::string> entries;
+};
+OutputMarker ReadOutputMarker(const std::string& folder);
+
+// Error kInvalidValue naming `option` unless `path` can name an output folder: not empty, and
+// each part of it short enough for the file system (NAME_MAX, 255 bytes on Linux), its last
+// part short enough to stage it as ".NAME.tmp-<pid>-<hex>" beside it (NAME_MAX - 30 bytes).
+void CheckOutputFolderName(const std::string& path, const std::string& option);
+
+// The lock file of an output folder "<parent>/.<name>.lock" (the generation's flock).
+std::string OutputLockPath(const std::string& folder);
+
+// An flock on the lock file of an output folder (OutputLockPath), held while this exists: the
+// file holds "process <pid> (`<command>`, since <UTC>)" and is removed again at the end. Error
+// kIo naming `folder` and the holder if another writer (process or object) holds it.
+class OutputFolderLock {
+ public:
+  OutputFolderLock(const std::string& folder, const std::string& command);
+  ~OutputFolderLock();
+  OutputFolderLock(const OutputFolderLock&) = delete;
+  OutputFolderLock& operator=(const OutputFolderLock&) = delete;
+
+ private:
+  std::string path_;
+  int fd_ = -1;  // Holds the flock while >= 0.
+  std::optional<RemoveOnInterrupt> guard_;
 };
 
 class OutputGeneration {
@@ -81,6 +143,11 @@ class OutputGeneration {
 
  private:
   std::vector<std::string> ForeignEntries() const;
+  std::string OwnKind() const;
+  void CheckReplaceable();
+  void CheckKinds(const OutputMarker& marker) const;
+  void CheckRemovable() const;
+  void WarnOfUnmarkedEntries() const;
   void CarryOverPrevious() const;
   void WriteMarker() const;
   void SwapIn(bool had_previous);
@@ -90,6 +157,10 @@ class OutputGeneration {
   std::string staging_;      // Absolute: <parent>/.<name>.tmp-<pid>-<hex>
   OutputGenerationOptions options_;
   std::optional<RemoveOnInterrupt> staging_guard_;
+  std::string kind_;  // Written into the marker.
+  // --force over a folder of another kind: its entries, which keep_other_entries does not keep.
+  std::vector<std::string> dropped_entries_;
+  std::optional<OutputFolderLock> lock_;  // From the checks to the end: one writer at a time.
   bool committed_ = false;
 };
 
@@ -116,7 +187,7 @@ std::vector<std::string> RemoveStaleSystemTemporaries();
 std::string TemporaryName(const std::string& base, const char* kind = ".tmp-");
 
 // True for the name of an impactdic temporary (".<name>.tmp-<pid>-<hex>...",
-// ".<name>.bak-<pid>-<hex>"), whoever made it.
+// ".<name>.bak-<pid>-<hex>") or an output folder's lock file (".<name>.lock"), whoever made it.
 bool IsTemporaryName(const std::string& name);
 
 }  // namespace impactdic

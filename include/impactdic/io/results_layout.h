@@ -112,10 +112,17 @@ inline constexpr const char* kVelocitySnapshotPng = "velocity_field_te.png";
 inline constexpr const char* kAnimationName = "velocity.mp4";
 inline constexpr const char* kAnimationAviName = "velocity.avi";  // The MJPG fallback.
 inline constexpr const char* kPngFramesDir = "velocity_frames";
+// The same drawn by `render` into a run's folder from a preview of its frames (outputs.frames:
+// preview): they keep the run's own, drawn from every analysed frame at full size.
+inline constexpr const char* kPreviewSnapshotPng = "velocity_field_te_preview.png";
+inline constexpr const char* kPreviewAnimationName = "velocity_preview.mp4";
+inline constexpr const char* kPreviewAnimationAviName = "velocity_preview.avi";
+inline constexpr const char* kPreviewPngFramesDir = "velocity_preview_frames";
 // Everything RenderResults may write into its output folder (one generation, replaced together).
-inline constexpr std::array<const char*, 7> kRenderOutputNames = {
-    kMomentumPng,   kDecelerationPng,  kAddedMassPng, kVelocitySnapshotPng,
-    kAnimationName, kAnimationAviName, kPngFramesDir};
+inline constexpr std::array<const char*, 11> kRenderOutputNames = {
+    kMomentumPng,          kDecelerationPng,         kAddedMassPng,       kVelocitySnapshotPng,
+    kAnimationName,        kAnimationAviName,        kPngFramesDir,       kPreviewSnapshotPng,
+    kPreviewAnimationName, kPreviewAnimationAviName, kPreviewPngFramesDir};
 
 // The other files of a run's output folder (`impactdic run`, pipeline/pipeline.h).
 inline constexpr const char* kResultsFile = "results.h5";

@@ -240,6 +240,8 @@ ImpactSeries MakeImpactSeries(const ImpactModelParameters& params, const ImpactR
 // summary as attributes of /model), chosen by the extension (.csv, .h5/.hdf5).
 void WriteImpactSeries(const std::string& path, const ImpactModelParameters& params,
                        const ImpactRun& run);
+// The columns of WriteImpactSeries' CSV, in order.
+std::vector<std::string> ImpactSeriesColumns();
 
 // The exact solutions of docs/model.md (used by the tests and the work-precision study).
 // (a) K = 0, g = 0: (m_p + m_add(t)) v(t) = (m_p + m_add(0)) v0; z(t) in closed form.

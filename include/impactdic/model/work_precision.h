@@ -38,6 +38,7 @@ std::vector<Table1Row> RunTable1(const ImpactSolverOptions& options,
 // Text table (one line per combination) and CSV.
 std::string FormatTable1(const std::vector<Table1Row>& rows);
 void WriteTable1Csv(const std::string& path, const std::vector<Table1Row>& rows);
+std::vector<std::string> Table1CsvColumns();  // WriteTable1Csv's header.
 
 // A solver setting of the study: "dopri5", "stiff", "auto" or "ode45" (ode45's rules).
 ImpactSolverOptions SolverSetting(const std::string& name, double rtol);
@@ -73,6 +74,7 @@ struct WorkPrecisionRow {
 std::vector<WorkPrecisionRow> RunWorkPrecision(const WorkPrecisionOptions& options);
 std::string FormatWorkPrecision(const std::vector<WorkPrecisionRow>& rows);
 void WriteWorkPrecisionCsv(const std::string& path, const std::vector<WorkPrecisionRow>& rows);
+std::vector<std::string> WorkPrecisionCsvColumns();  // WriteWorkPrecisionCsv's header.
 // The figure: PlotWorkPrecision in render/work_precision_figure.h.
 
 }  // namespace impactdic

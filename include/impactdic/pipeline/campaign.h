@@ -70,9 +70,11 @@ struct CampaignOptions {
   // docs/campaign.md), N >= 1. Each test's correlation gets max(1, threads / jobs) threads.
   int jobs = 0;
   double confidence = 0.95;  // Of the regression intervals, in (0, 1).
-  bool force = false;        // Reprocess tests whose complete results exist.
-  bool figures = true;       // The comparison figures (Figs. 5, 7-10).
-  CampaignShard shard;       // Only the tests of this shard.
+  // Reprocess tests whose complete results exist; replace an output folder another kind of
+  // command wrote (a run, a synth scene: io/output_generation.h).
+  bool force = false;
+  bool figures = true;  // The comparison figures (Figs. 5, 7-10).
+  CampaignShard shard;  // Only the tests of this shard.
   void Check() const;
 };
 

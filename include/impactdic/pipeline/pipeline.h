@@ -50,6 +50,10 @@ struct PipelineOptions {
   // Write the outputs and return even when a stage produced nothing usable (file comment);
   // false: such a run throws PartialResultsError before writing anything.
   bool allow_partial = false;
+  // Also replace an output folder another kind of command wrote (a synth scene, a campaign) or
+  // holding other commands' outputs (io/output_generation.h); files impactdic did not write are
+  // never replaced.
+  bool force = false;
   // Writers run after the built-in ones (results.h5, figures, summary.json, summary.csv) when the
   // scene has the outputs stage (pipeline/output_writer.h).
   OutputWriters extra_output_writers;

@@ -34,6 +34,14 @@ struct RenderResultsOptions {
   // written by impactdic, and hold no results.h5 other than the one rendered. false: straight into
   // output_dir (for a caller that stages the folder itself, as `impactdic run` does).
   bool new_generation = true;
+  // Also replace an output folder another kind of command wrote (a campaign, a synth scene:
+  // io/output_generation.h); files impactdic did not write are never replaced.
+  bool force = false;
+  // Into the folder of its results file, when that stores only a preview of the frames (fewer
+  // rows than /time, or downsampled: outputs.frames: preview) and no frame_loader is given, the
+  // velocity snapshot and the animation are drawn under their preview names
+  // (results_layout.h kPreviewSnapshotPng, kPreviewAnimationName ...): the run's own, drawn from
+  // every analysed frame at full size, are kept.
   // The camera frame of each row of /time (e.g. `impactdic run` re-reading its frames from their
   // source, one at a time) instead of /frames/images, which may be a preview or absent.
   std::function<cv::Mat(std::size_t)> frame_loader;
