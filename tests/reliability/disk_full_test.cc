@@ -76,9 +76,10 @@ std::vector<Written> FilesInWriteOrder(const fs::path& folder) {
   return files;
 }
 
-// Room for the files before `index`, one page short of room for file `index`.
+// Room for the files before `index`, one page short of room for file `index`, plus the page of
+// the output folder's lock file (`.NAME.lock` beside the folder, held while the command writes).
 std::size_t RoomUpTo(const std::vector<Written>& files, std::size_t index) {
-  std::size_t room = 0;
+  std::size_t room = SmallDisk::kPage;
   for (std::size_t i = 0; i < index; ++i) room += SmallDisk::Pages(files[i].size);
   return room + SmallDisk::Pages(files[index].size) - SmallDisk::kPage;
 }
