@@ -1,6 +1,5 @@
 // impactdic correlate: subset DIC of an image sequence (library: impactdic/dic/dic_io.h).
 #include <fmt/format.h>
-#include <sys/stat.h>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
@@ -8,7 +7,6 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
-#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <sstream>
@@ -143,21 +141,17 @@ ImageFilter MakeImageFilter(const GaussianDecision& decision, const GaussianBlur
 // hard link) would be correlated twice and numbered alike. Error naming the option and both
 // spellings. Files that cannot be examined are left to the image reader's message.
 void CheckEachImageOnce(const std::vector<std::string>& paths) {
-  std::map<std::pair<dev_t, ino_t>, std::size_t> seen;
-  for (std::size_t i = 0; i < paths.size(); ++i) {
-    struct stat st {};
-    if (stat(paths[i].c_str(), &st) != 0) continue;
-    const auto [it, added] = seen.emplace(std::make_pair(st.st_dev, st.st_ino), i);
-    if (added) continue;
-    const std::string& first = paths[it->second];
-    const std::string found =
-        "'" + paths[i] + "', " +
-        (it->second == 0 ? "the --reference image" + (first == paths[i] ? "" : " '" + first + "'")
-         : first == paths[i] ? std::string("given twice")
-                             : "the same file as '" + first + "'");
-    throw Error(ErrorKind::kInvalidValue, "--deformed", found,
-                "each deformed image once, and none of them the reference");
-  }
+  const auto repeated = FirstRepeatedFile(paths);
+  if (!repeated) return;
+  const auto [earlier, i] = *repeated;
+  const std::string& first = paths[earlier];
+  const std::string found =
+      "'" + paths[i] + "', " +
+      (earlier == 0        ? "the --reference image" + (first == paths[i] ? "" : " '" + first + "'")
+       : first == paths[i] ? std::string("given twice")
+                           : "the same file as '" + first + "'");
+  throw Error(ErrorKind::kInvalidValue, "--deformed", found,
+              "each deformed image once, and none of them the reference");
 }
 
 // A correlation with no valid subset fails as `run`'s correlate stage does (DicSummary's one

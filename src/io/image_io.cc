@@ -18,6 +18,7 @@
 #include <opencv2/imgcodecs.hpp>  // flags only: the codecs are in the plugin (io/opencv_codecs.h)
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>  // property ids only
+#include <optional>
 #include <system_error>
 #include <utility>
 
@@ -369,21 +370,16 @@ std::string CheckedFrame(const fs::directory_entry& entry) {
 
 // Error when two names of a frame sequence are the same file (a symbolic or hard link, e.g.
 // one made to fill a gap in the numbering): the repeated image would read as no motion over that
-// frame interval. Files that cannot be stat()ed are left to the reader's message.
+// frame interval.
 void CheckDistinctFiles(const std::vector<std::string>& files) {
-  std::map<std::pair<dev_t, ino_t>, std::size_t> seen;
-  for (std::size_t k = 0; k < files.size(); ++k) {
-    struct stat info {};
-    if (stat(files[k].c_str(), &info) != 0) continue;
-    const auto [it, added] = seen.emplace(std::make_pair(info.st_dev, info.st_ino), k);
-    if (added) continue;
-    throw Error(
-        ErrorKind::kInvalidValue, "frames",
-        fmt::format("the same file as {} (a symbolic or hard link to it)", files[it->second]),
-        "each frame of a sequence its own image: a repeated image reads as no motion "
-        "over one frame interval")
-        .WithFile(files[k]);
-  }
+  const auto repeated = FirstRepeatedFile(files);
+  if (!repeated) return;
+  throw Error(
+      ErrorKind::kInvalidValue, "frames",
+      fmt::format("the same file as {} (a symbolic or hard link to it)", files[repeated->first]),
+      "each frame of a sequence its own image: a repeated image reads as no motion "
+      "over one frame interval")
+      .WithFile(files[repeated->second]);
 }
 
 // The reason in what OpenCV's imgcodecs printed about a file it could not decode, e.g.
@@ -624,6 +620,18 @@ std::vector<std::string> ListFrames(const std::string& source) {
   }
   std::sort(files.begin(), files.end(), NaturalLess);
   return files;
+}
+
+std::optional<std::pair<std::size_t, std::size_t>> FirstRepeatedFile(
+    const std::vector<std::string>& paths) {
+  std::map<std::pair<dev_t, ino_t>, std::size_t> seen;
+  for (std::size_t k = 0; k < paths.size(); ++k) {
+    struct stat info {};
+    if (stat(paths[k].c_str(), &info) != 0) continue;
+    const auto [it, added] = seen.emplace(std::make_pair(info.st_dev, info.st_ino), k);
+    if (!added) return std::make_pair(it->second, k);
+  }
+  return std::nullopt;
 }
 
 std::vector<std::string> ListFrameSequence(const std::string& source) {

@@ -3,9 +3,12 @@
 #ifndef IMPACTDIC_IO_IMAGE_IO_H_
 #define IMPACTDIC_IO_IMAGE_IO_H_
 
+#include <cstddef>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace impactdic {
@@ -79,6 +82,13 @@ std::vector<long long> FrameNumbers(const std::vector<std::string>& files);
 // the numbers advance by a constant step. Names that are not one numbered series are not
 // checked.
 void CheckFrameNumbering(const std::vector<std::string>& files);
+
+// The first name of `paths` that is the same file as an earlier one (same device and inode:
+// another spelling of the path, a symbolic or a hard link): {the earlier index, its index};
+// nullopt when all are distinct. Names that cannot be stat()ed are skipped (left to the image
+// reader's message). The one same-file check of `run`'s frames and `correlate`'s images.
+std::optional<std::pair<std::size_t, std::size_t>> FirstRepeatedFile(
+    const std::vector<std::string>& paths);
 
 // The frames of one sequence: ListFrames, then CheckFrameNumbering (a gap is an error), then an
 // Error when two of its names are the same file (a symbolic or hard link: the repeated image
