@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -113,6 +114,30 @@ TEST(MrawFile, FindsAPartnerWithAnUpperCaseExtension) {
   EXPECT_TRUE(SameFrame(reader->ReadFrame(1), frames[1]));
 }
 
+// Offsets past 4 GiB: a sparse 4.3 GB file of 257 frames of 4096 x 4096 8-bit pixels, the last
+// one written (it starts at 4 GiB).
+TEST(MrawFile, ReadsFramesBeyondFourGibibytes) {
+  TestDir dir;
+  constexpr long long kFrameBytes = 4096LL * 4096;
+  constexpr long long kFrames = 257;
+  dir.Write("big.cih",
+            "Record Rate(fps) : 1000\nTotal Frame : 257\nStart Frame : -100\n"
+            "Image Width : 4096\nImage Height : 4096\nColor Type : Mono\nColor Bit : 8\n");
+  cv::Mat last(4096, 4096, CV_8UC1);
+  cv::RNG(/*state=*/7).fill(last, cv::RNG::UNIFORM, 0, 256);
+  {
+    std::ofstream out(dir.File("big.mraw"), std::ios::binary);
+    out.seekp(static_cast<std::streamoff>((kFrames - 1) * kFrameBytes));
+    out.write(reinterpret_cast<const char*>(last.data), static_cast<std::streamsize>(kFrameBytes));
+  }
+  ASSERT_EQ(std::filesystem::file_size(dir.File("big.mraw")),
+            static_cast<std::uintmax_t>(kFrames * kFrameBytes));
+  auto reader = OpenMrawFile(dir.File("big.mraw"));
+  EXPECT_TRUE(SameFrame(reader->ReadFrame(kFrames - 1), last));
+  EXPECT_EQ(cv::countNonZero(reader->ReadFrame(128)), 0);
+  EXPECT_DOUBLE_EQ(reader->info().time_s.back(), 0.156);
+}
+
 TEST(MrawFile, NegativeStartFrameGivesTimesBeforeTheTrigger) {
   TestDir dir;
   test::MrawWriteOptions options;
@@ -169,10 +194,15 @@ TEST(MrawFile, RefusesColourRecordings) {
   test::MrawWriteOptions options;
   options.color_bit = 8;
   options.color_type = "Color";
-  const std::string message = ErrorOf(test::WriteMraw(dir.File("c"), MakeFrames(8, 2), options));
+  std::string message = ErrorOf(test::WriteMraw(dir.File("c"), MakeFrames(8, 2), options));
   EXPECT_NE(message.find("c.cih"), std::string::npos) << message;
   EXPECT_NE(message.find("Color Type"), std::string::npos) << message;
   EXPECT_NE(message.find("monochrome"), std::string::npos) << message;
+
+  options.cihx = true;
+  message = ErrorOf(test::WriteMraw(dir.File("x"), MakeFrames(8, 2), options));
+  EXPECT_NE(message.find("x.cihx"), std::string::npos) << message;
+  EXPECT_NE(message.find("imageDataInfo/colorInfo/type"), std::string::npos) << message;
 }
 
 TEST(MrawFile, RefusesASizeMismatchNamingBothSizes) {
