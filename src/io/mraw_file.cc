@@ -403,14 +403,16 @@ std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
   const std::uintmax_t size = fs::file_size(mraw_path, ec);
   if (ec) throw Error(ErrorKind::kIo, mraw_path, ec.message(), "a readable file");
   const long long max_frames = std::numeric_limits<long long>::max() / layout.frame_bytes;
-  if (layout.frame_count > max_frames ||
-      static_cast<std::uintmax_t>(layout.frame_count * layout.frame_bytes) != size) {
-    throw Error(
-        ErrorKind::kFileFormat, mraw_path, fmt::format("{} bytes", size),
-        fmt::format("{} bytes ({} frames of {} x {} pixels at {} bits, as {} says); a "
-                    "truncated copy or a description of another recording",
-                    layout.frame_count * layout.frame_bytes, layout.frame_count, layout.width_px,
-                    layout.height_px, layout.container_bits, description_path));
+  const bool too_many = layout.frame_count > max_frames;
+  if (too_many || static_cast<std::uintmax_t>(layout.frame_count * layout.frame_bytes) != size) {
+    // Beyond max_frames the product does not fit in 64 bits: say so instead of computing it.
+    const std::string expected = too_many ? std::string("more than 2^63")
+                                          : std::to_string(layout.frame_count * layout.frame_bytes);
+    throw Error(ErrorKind::kFileFormat, mraw_path, fmt::format("{} bytes", size),
+                fmt::format("{} bytes ({} frames of {} x {} pixels at {} bits, as {} says); a "
+                            "truncated copy or a description of another recording",
+                            expected, layout.frame_count, layout.width_px, layout.height_px,
+                            layout.container_bits, description_path));
   }
   CameraFileInfo info;
   info.path = mraw_path;
