@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -258,6 +259,13 @@ void BsplineImage::ValueGradient(double x, double y, double* value, double* gx, 
 }
 
 void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
+  gx->create(region_.height, region_.width, CV_32F);
+  gy->create(region_.height, region_.width, CV_32F);
+  NodeGradients(region_, gx, gy);
+}
+
+void BsplineImage::NodeGradients(const cv::Rect& rect, cv::Mat* gx, cv::Mat* gy) const {
+  assert((rect & region_) == rect && "NodeGradients: rect outside the coefficient region");
   const int w = region_.width, h = region_.height;
   const bool cubic = kind_ == Interpolation::kBicubic;
   // Value and derivative weights of the spline at a node, offsets -2..2.
@@ -267,46 +275,70 @@ void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
   const float deriv_w[5] = {cubic ? 0.0f : -1.0f / 24, cubic ? -0.5f : -10.0f / 24, 0,
                             cubic ? 0.5f : 10.0f / 24, cubic ? 0.0f : 1.0f / 24};
   const int reach = cubic ? 1 : 2;  // Taps -reach..reach are non-zero.
-  gx->create(h, w, CV_32F);
-  gy->create(h, w, CV_32F);
+  gx->create(rect.height, rect.width, CV_32F);
+  gy->create(rect.height, rect.width, CV_32F);
+  // Columns x0..x1 of the region (local coordinates), with 2 columns either side (mirrored at
+  // the region border).
+  const int x0 = rect.x - region_.x, x1 = x0 + rect.width;
   // Separable: gx = value filter along y of the derivative filter along x, gy the transpose.
   // Per output row, the rows r - reach..r + reach (mirrored at the region border) are first
-  // combined along y (value and derivative weights), then filtered along x.
-  tbb::parallel_for(0, h, [&](int r) {
-    std::vector<float> vy(static_cast<std::size_t>(w) + 4), dy(static_cast<std::size_t>(w) + 4);
-    float* v = vy.data() + 2;
-    float* d = dy.data() + 2;
-    for (int x = 0; x < w; ++x) v[x] = d[x] = 0;
+  // combined along y (value and derivative weights), then filtered along x. A column outside
+  // the region takes the values of its mirror image, so every node's gradient is the same
+  // whatever rectangle it is computed in.
+  const auto row = [&](int r) {
+    const int cols = rect.width + 4;
+    std::vector<float> vy(static_cast<std::size_t>(cols)), dy(static_cast<std::size_t>(cols));
+    float* v = vy.data() + 2 - x0;  // v[x] for x in x0 - 2 .. x1 + 1.
+    float* d = dy.data() + 2 - x0;
+    const int in0 = std::max(x0 - 2, 0), in1 = std::min(x1 + 2, w);
+    for (int x = in0; x < in1; ++x) v[x] = d[x] = 0;
     for (int k = -reach; k <= reach; ++k) {
       const float* c = coefficients_.ptr<float>(Mirror(r + k, h));
       const float a = value_w[k + 2], b = deriv_w[k + 2];
-      for (int x = 0; x < w; ++x) {
+      for (int x = in0; x < in1; ++x) {
         v[x] += a * c[x];
         d[x] += b * c[x];
       }
     }
     // Mirrored padding for the filter along x.
-    for (int k = 1; k <= 2; ++k) {
-      v[-k] = v[Mirror(-k, w)];
-      d[-k] = d[Mirror(-k, w)];
-      v[w - 1 + k] = v[Mirror(w - 1 + k, w)];
-      d[w - 1 + k] = d[Mirror(w - 1 + k, w)];
+    for (int x = x0 - 2; x < x1 + 2; ++x) {
+      if (x >= in0 && x < in1) continue;
+      const int m = Mirror(x, w);
+      if (m >= in0 && m < in1) {
+        v[x] = v[m];
+        d[x] = d[m];
+        continue;
+      }
+      float vm = 0, dm = 0;  // The mirror column is outside the computed range: compute it.
+      for (int k = -reach; k <= reach; ++k) {
+        const float c = coefficients_.ptr<float>(Mirror(r + k, h))[m];
+        vm += value_w[k + 2] * c;
+        dm += deriv_w[k + 2] * c;
+      }
+      v[x] = vm;
+      d[x] = dm;
     }
-    float* ox = gx->ptr<float>(r);
-    float* oy = gy->ptr<float>(r);
+    float* ox = gx->ptr<float>(r - (rect.y - region_.y)) - x0;
+    float* oy = gy->ptr<float>(r - (rect.y - region_.y)) - x0;
     if (cubic) {
-      for (int x = 0; x < w; ++x) {
+      for (int x = x0; x < x1; ++x) {
         ox[x] = deriv_w[3] * (v[x + 1] - v[x - 1]);
         oy[x] = value_w[1] * (d[x - 1] + d[x + 1]) + value_w[2] * d[x];
       }
     } else {
-      for (int x = 0; x < w; ++x) {
+      for (int x = x0; x < x1; ++x) {
         ox[x] = deriv_w[3] * (v[x + 1] - v[x - 1]) + deriv_w[4] * (v[x + 2] - v[x - 2]);
         oy[x] = value_w[0] * (d[x - 2] + d[x + 2]) + value_w[1] * (d[x - 1] + d[x + 1]) +
                 value_w[2] * d[x];
       }
     }
-  });
+  };
+  const int r0 = rect.y - region_.y, r1 = r0 + rect.height;
+  if (rect.area() >= 64 * 1024) {
+    tbb::parallel_for(r0, r1, row);
+  } else {
+    for (int r = r0; r < r1; ++r) row(r);
+  }
 }
 
 }  // namespace impactdic

@@ -37,6 +37,8 @@ using internal::SubsetRef;
 namespace {
 
 constexpr int kBorderPx = 4;
+// Patches per row of the reference images' patch layout (RefImages).
+constexpr int kPatchColumns = 64;
 
 bool Usable(SubsetStatus s) { return s == SubsetStatus::kConverged; }
 
@@ -283,11 +285,17 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   }
   const double coef_seconds = coef_timer.ElapsedSeconds();
   if (timing) timing->seconds_coefficients += coef_seconds;
+  // The reference images in the patch layout (RefImages): subset i's intensities and node
+  // gradients in patch i, so an update costs the subsets' pixels, not the image's.
   RefImages& im = ref.images;
   im.region = spline->region();
-  spline->NodeGradients(&im.gx, &im.gy);
-  raw(im.region).convertTo(im.f, CV_32F);
   im.full_scale = full_scale;
+  im.patch_size = size;
+  im.patch_cols = std::clamp(n, 1, kPatchColumns);
+  const cv::Size atlas((im.patch_cols * size), ((n + im.patch_cols - 1) / im.patch_cols) * size);
+  im.f.create(atlas, CV_32F);
+  im.gx.create(atlas, CV_32F);
+  im.gy.create(atlas, CV_32F);
   ref.subsets.assign(n, SubsetRef{});
   ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
@@ -297,6 +305,14 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
       return;
     }
     s = CentredSubset(ref_pos[i]);
+    s.patch = i;
+    const cv::Rect box(s.cx - half, s.cy - half, size, size);
+    if ((box & im.region) == box) {  // Else PrepareSubset finds it out of the image.
+      const cv::Rect patch = im.Patch(i);
+      cv::Mat f = im.f(patch), gx = im.gx(patch), gy = im.gy(patch);
+      raw(box).convertTo(f, CV_32F);
+      spline->NodeGradients(box, &gx, &gy);
+    }
     internal::PrepareSubset(shape, im, options.icgn, &s,
                             &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n]);
   });

@@ -87,7 +87,8 @@ void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, co
   const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
   const double u = p[0] - iu, v = p[nm] - iv;
   const int ccx = dcx + iu, ccy = dcy + iv;
-  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const cv::Point rc = RefCentre(ref, s);
+  const int rcx = rc.x, rcy = rc.y;
   const std::size_t rstride = ref.f.step1();
   for (int j = 0; j < size; ++j) {
     const double eta = j - h;
@@ -313,7 +314,8 @@ void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s
   const float* centre =
       coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
       (dcx + iu);
-  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const cv::Point rc = RefCentre(ref, s);
+  const int rcx = rc.x, rcy = rc.y;
   const std::size_t rstride = ref.f.step1();
   const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
@@ -632,7 +634,8 @@ void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef&
   const float* centre =
       coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
       (dcx + iu);
-  const int rcx = s.cx - ref.region.x, rcy = s.cy - ref.region.y;
+  const cv::Point rc = RefCentre(ref, s);
+  const int rcx = rc.x, rcy = rc.y;
   const std::size_t rstride = ref.f.step1();
   const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
@@ -907,7 +910,8 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
     s->status = SubsetStatus::kOutOfImage;
     return;
   }
-  const int rx = s->cx - ref.region.x - h, ry = s->cy - ref.region.y - h;
+  const cv::Point rc = RefCentre(ref, *s);
+  const int rx = rc.x - h, ry = rc.y - h;
   const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
   const bool vector = size >= 8 && size <= 8 * kMaxBlocks;
   const double count = double(size) * size;
@@ -1108,7 +1112,8 @@ void SubsetResiduals(const Shape& shape, const RefImages& ref, const SubsetRef& 
                      const BsplineImage& spline, const Params& p, std::vector<double>* r) {
   const int h = shape.half, size = 2 * h + 1, count = size * size;
   r->resize(count);
-  const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
+  const cv::Point rc = RefCentre(ref, s);
+  const int rx = rc.x - h, ry = rc.y - h;
   // The warped subset g, sampled from the spline's coefficients in coordinates local to the
   // subset centre (as IC-GN's pass does).
   const double gsum = spline.kind() == Interpolation::kBicubic
@@ -1202,7 +1207,8 @@ void InfluenceOfEachPixel(const Shape& shape, const RefImages& ref, const Subset
   const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
   au->resize(static_cast<std::size_t>(size) * size);
   av->resize(au->size());
-  const int rx = s.cx - ref.region.x - h, ry = s.cy - ref.region.y - h;
+  const cv::Point rc = RefCentre(ref, s);
+  const int rx = rc.x - h, ry = rc.y - h;
   const double* rows[4] = {hi, hi + nm, hi + static_cast<std::ptrdiff_t>(nm) * n,
                            hi + static_cast<std::ptrdiff_t>(nm) * n + nm};
   for (int j = 0; j < size; ++j) {

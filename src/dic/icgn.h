@@ -51,16 +51,34 @@ struct SubsetRef {
   double ox = 0, oy = 0;         // Tracked material point = centre + (ox, oy).
   float f_mean = 0, f_norm = 0;  // Mean and sqrt(sum (f - mean)^2) of the reference subset.
   SubsetStatus status = SubsetStatus::kConverged;  // kConverged = usable.
-  double sum_j[12] = {};                           // sum of the steepest-descent images J.
-  double sum_jf[12] = {};                          // sum J (f - f_mean).
+  int patch = -1;          // Its patch in RefImages' patch layout; -1: RefImages cover a region.
+  double sum_j[12] = {};   // sum of the steepest-descent images J.
+  double sum_jf[12] = {};  // sum J (f - f_mean).
 };
 
-// Reference images over a region (CV_32F): intensities and gradients at integer pixels.
+// Reference images (CV_32F): intensities and gradients at integer pixels. Two layouts:
+//  * region (patch_size == 0): the images cover `region` of the reference image;
+//  * patches (patch_size > 0): only the subsets' own pixels are stored, subset s (SubsetRef::patch
+//    = k >= 0) in the patch_size x patch_size square k of a grid of patch_cols squares per row
+//    (row-major); `region` is then the part of the reference image the subsets may lie in.
+// The patch layout costs the subsets' area, not the image's, at every reference update.
 struct RefImages {
   cv::Rect region;
   cv::Mat f, gx, gy;
   double full_scale = 255;
+  int patch_size = 0, patch_cols = 0;
+  // The square of patch k in f, gx and gy.
+  cv::Rect Patch(int k) const {
+    return {(k % patch_cols) * patch_size, (k / patch_cols) * patch_size, patch_size, patch_size};
+  }
 };
+
+// Where the centre pixel of subset s is in ref's images (column, row).
+inline cv::Point RefCentre(const RefImages& ref, const SubsetRef& s) {
+  if (s.patch < 0) return {s.cx - ref.region.x, s.cy - ref.region.y};
+  const cv::Rect p = ref.Patch(s.patch);
+  return {p.x + p.width / 2, p.y + p.height / 2};
+}
 
 // Computes the subset's reference data and its inverse Hessian (n x n, row-major, into hinv),
 // setting the status to kOutOfImage / kSaturated / kSingularHessian / kLowContrast if unusable.

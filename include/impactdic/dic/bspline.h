@@ -61,6 +61,10 @@ class BsplineImage {
   // Gradient images of the interpolant at the integer pixels of region() (exact derivatives of
   // the spline at the nodes, computed separably), CV_32F, region().size().
   void NodeGradients(cv::Mat* gx, cv::Mat* gy) const;
+  // The same gradients over `rect` only (image coordinates, inside region()), into gx and gy
+  // (created CV_32F, rect.size(), unless they already are, e.g. views into larger images): equal
+  // to NodeGradients' values there, bit for bit. Costs rect.area(), not region().area().
+  void NodeGradients(const cv::Rect& rect, cv::Mat* gx, cv::Mat* gy) const;
 
   // Raw coefficients (CV_32F, region().size()); coefficient (c, r) of the image is at
   // (c - region().x, r - region().y).
