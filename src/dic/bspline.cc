@@ -160,7 +160,11 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   region_ = region;
   const Prefilter prefilter = PrefilterFor(kind);
   const int w = region.width, h = region.height;
-  coefficients_.create(h, w, CV_32F);
+  // The buffer is kept from the last Build when it is large enough (no new pages to fault in
+  // for every frame of a sequence).
+  if (storage_.rows < h || storage_.cols < w)
+    storage_.create(std::max(h, storage_.rows), std::max(w, storage_.cols), CV_32F);
+  coefficients_ = storage_(cv::Rect(0, 0, w, h));
   cv::Mat source = image(region);
 
   // Rows (in double), kLanes rows at a time (interleaved), groups in parallel.

@@ -192,6 +192,10 @@ struct Correlator::Impl {
   int last_index = 0;
   std::unique_ptr<ReferenceUpdatePolicy> policy;  // From options.update (kSequence).
   std::unique_ptr<Frame> last_frame;  // For policies that KeepsLastFrame(): the last good frame.
+  // A frame done with: the next frame reuses its coefficient buffer (Recycle).
+  std::unique_ptr<Frame> spare_frame;
+  void Recycle(std::unique_ptr<Frame> frame);
+  std::unique_ptr<Frame> NewFrame();
   DicSummary summary;
   long long iteration_sum = 0, converged_sum = 0;
   tbb::enumerable_thread_specific<cv::Mat> scratch;
@@ -1094,10 +1098,25 @@ void Correlator::Impl::AdvanceReference(const cv::Mat& image, std::unique_ptr<Fr
     MoveReferencePoints(pos);
     BuildReference(out->frame, image, &frame->spline, frame->Float(), out);
     ++summary.reference_updates;
-    last_frame.reset();
+    Recycle(std::move(last_frame));
+    Recycle(std::move(frame));
   } else if (policy->KeepsLastFrame()) {
+    Recycle(std::move(last_frame));
     last_frame = std::move(frame);
+  } else {
+    Recycle(std::move(frame));
   }
+}
+
+void Correlator::Impl::Recycle(std::unique_ptr<Frame> frame) {
+  if (!frame) return;
+  frame->raw.release();  // The images belong to the caller (or the reference).
+  frame->image32.release();
+  spare_frame = std::move(frame);
+}
+
+std::unique_ptr<Frame> Correlator::Impl::NewFrame() {
+  return spare_frame ? std::move(spare_frame) : std::make_unique<Frame>();
 }
 
 void Correlator::Impl::AddToSummary(const FrameResult& out) {
@@ -1133,7 +1152,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   // First frame after the reference: positions at frame 0 are the prediction base only through
   // the seeds; afterwards constant-velocity prediction.
   WallTimer timer;
-  auto frame = std::make_unique<Frame>();
+  std::unique_ptr<Frame> frame = m.NewFrame();
   m.MakeFrame(image, out.frame, frame.get());
   out.seconds_coefficients += timer.ElapsedSeconds();
   std::vector<Attempt> at = m.Solve(*frame, &out);

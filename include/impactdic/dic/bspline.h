@@ -35,6 +35,7 @@ class BsplineImage {
  public:
   // Computes the coefficients of `image` (CV_8U, CV_16U, CV_32F or CV_64F, one channel) over
   // `region` (empty = whole image) grown by `guard_px` on every side and clipped to the image.
+  // Reuses the memory of the last Build when it is large enough (a sequence's frames).
   void Build(const cv::Mat& image, Interpolation kind, cv::Rect region = cv::Rect(),
              int guard_px = 16);
 
@@ -66,14 +67,15 @@ class BsplineImage {
   // to NodeGradients' values there, bit for bit. Costs rect.area(), not region().area().
   void NodeGradients(const cv::Rect& rect, cv::Mat* gx, cv::Mat* gy) const;
 
-  // Raw coefficients (CV_32F, region().size()); coefficient (c, r) of the image is at
-  // (c - region().x, r - region().y).
+  // Raw coefficients (CV_32F, region().size(), rows not necessarily continuous); coefficient
+  // (c, r) of the image is at (c - region().x, r - region().y).
   const cv::Mat& coefficients() const { return coefficients_; }
 
  private:
   Interpolation kind_ = Interpolation::kBicubic;
   cv::Rect region_;
-  cv::Mat coefficients_;
+  cv::Mat coefficients_;  // A view of storage_.
+  cv::Mat storage_;
   double x_min_ = 0, x_max_ = 0, y_min_ = 0, y_max_ = 0;
 };
 
