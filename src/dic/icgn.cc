@@ -621,12 +621,61 @@ inline void WeightsAvx512(__m512 t, __m512 w[kTaps]) {
   }
 }
 
+// The B-spline (times kWeightScale^2) at the local positions (x, y) of the lanes in m, relative to
+// `centre`; lanes outside m are 0 and read nothing. When the lanes' integer positions advance by
+// one column along one row (the usual case), each tap is one unaligned load; otherwise the taps
+// are gathered (the same expression in the same order).
+template <int kTaps>
+inline __m512 SampleBlock16(const float* centre, int istride, __m512 x, __m512 y, __mmask16 m) {
+  constexpr int kLow = kTaps == 4 ? 1 : 2;
+  const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  const __m512 fx =
+      _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512 fy =
+      _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512 tx = _mm512_sub_ps(x, fx), ty = _mm512_sub_ps(y, fy);
+  const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx),
+                iy = _mm512_maskz_cvttps_epi32(kAll, fy);
+  const int ix0 = _mm512_cvtsi512_si32(ix), iy0 = _mm512_cvtsi512_si32(iy);
+  const __mmask16 off =
+      _mm512_mask_cmpneq_epi32_mask(m, ix, _mm512_add_epi32(_mm512_set1_epi32(ix0), lane_i)) |
+      _mm512_mask_cmpneq_epi32_mask(m, iy, _mm512_set1_epi32(iy0));
+  __m512 wx[kTaps], wy[kTaps], rs[kTaps];
+  WeightsAvx512<kTaps>(tx, wx);
+  WeightsAvx512<kTaps>(ty, wy);
+  if (off == 0) {
+    const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
+    for (int r = 0; r < kTaps; ++r) {
+      const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
+      rs[r] = _mm512_mul_ps(wx[0], _mm512_maskz_loadu_ps(m, cr));
+      for (int k = 1; k < kTaps; ++k)
+        rs[r] = _mm512_fmadd_ps(wx[k], _mm512_maskz_loadu_ps(m, cr + k), rs[r]);
+    }
+  } else {
+    const __m512i off0 =
+        _mm512_add_epi32(_mm512_mullo_epi32(_mm512_sub_epi32(iy, _mm512_set1_epi32(kLow)),
+                                            _mm512_set1_epi32(istride)),
+                         _mm512_sub_epi32(ix, _mm512_set1_epi32(kLow)));
+    for (int r = 0; r < kTaps; ++r) {
+      const __m512i offr = _mm512_add_epi32(off0, _mm512_set1_epi32(r * istride));
+      auto tap = [&](int k) {
+        return _mm512_mask_i32gather_ps(
+            _mm512_setzero_ps(), m, _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
+      };
+      rs[r] = _mm512_mul_ps(wx[0], tap(0));
+      for (int k = 1; k < kTaps; ++k) rs[r] = _mm512_fmadd_ps(wx[k], tap(k), rs[r]);
+    }
+  }
+  __m512 g = _mm512_mul_ps(wy[0], rs[0]);
+  for (int r = 1; r < kTaps; ++r) g = _mm512_fmadd_ps(wy[r], rs[r], g);
+  return g;
+}
+
 template <int kTaps, bool kQuad>
 // NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
 void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef& s,
                       const float* coef, std::size_t stride, int dcx, int dcy, const Params& p,
                       Sums* out) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
   const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
   const __m512 fm = Splat16(s.f_mean);
   const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
@@ -638,7 +687,6 @@ void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef&
   const int rcx = rc.x, rcy = rc.y;
   const std::size_t rstride = ref.f.step1();
   const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const int blocks = (size + 15) / 16;
   const int istride = static_cast<int>(stride);
   constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
@@ -679,45 +727,7 @@ void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef&
         x = _mm512_fmadd_ps(xi, Splat16(ax1), Splat16(ax0));
         y = _mm512_fmadd_ps(xi, Splat16(ay1), Splat16(ay0));
       }
-      const __m512 fx =
-          _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-      const __m512 fy =
-          _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-      const __m512 tx = _mm512_sub_ps(x, fx), ty = _mm512_sub_ps(y, fy);
-      const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx),
-                    iy = _mm512_maskz_cvttps_epi32(kAll, fy);
-      const int ix0 = _mm512_cvtsi512_si32(ix), iy0 = _mm512_cvtsi512_si32(iy);
-      const __mmask16 off =
-          _mm512_mask_cmpneq_epi32_mask(m, ix, _mm512_add_epi32(_mm512_set1_epi32(ix0), lane_i)) |
-          _mm512_mask_cmpneq_epi32_mask(m, iy, _mm512_set1_epi32(iy0));
-      __m512 wx[kTaps], wy[kTaps], rs[kTaps];
-      WeightsAvx512<kTaps>(tx, wx);
-      WeightsAvx512<kTaps>(ty, wy);
-      if (off == 0) {
-        const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
-        for (int r = 0; r < kTaps; ++r) {
-          const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
-          rs[r] = _mm512_mul_ps(wx[0], _mm512_maskz_loadu_ps(m, cr));
-          for (int k = 1; k < kTaps; ++k)
-            rs[r] = _mm512_fmadd_ps(wx[k], _mm512_maskz_loadu_ps(m, cr + k), rs[r]);
-        }
-      } else {
-        const __m512i off0 =
-            _mm512_add_epi32(_mm512_mullo_epi32(_mm512_sub_epi32(iy, _mm512_set1_epi32(kLow)),
-                                                _mm512_set1_epi32(istride)),
-                             _mm512_sub_epi32(ix, _mm512_set1_epi32(kLow)));
-        for (int r = 0; r < kTaps; ++r) {
-          const __m512i offr = _mm512_add_epi32(off0, _mm512_set1_epi32(r * istride));
-          auto tap = [&](int k) {
-            return _mm512_mask_i32gather_ps(
-                _mm512_setzero_ps(), m, _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
-          };
-          rs[r] = _mm512_mul_ps(wx[0], tap(0));
-          for (int k = 1; k < kTaps; ++k) rs[r] = _mm512_fmadd_ps(wx[k], tap(k), rs[r]);
-        }
-      }
-      __m512 g = _mm512_mul_ps(wy[0], rs[0]);
-      for (int r = 1; r < kTaps; ++r) g = _mm512_fmadd_ps(wy[r], rs[r], g);
+      const __m512 g = SampleBlock16<kTaps>(centre, istride, x, y, m);
       const __m512 gp = _mm512_maskz_fmsub_ps(m, g, Splat16(1 / kScale2), fm);
       sg = _mm512_add_ps(sg, gp);
       sgg = _mm512_fmadd_ps(gp, gp, sgg);
@@ -1081,6 +1091,57 @@ double SampleWarpedSubset(const Shape& shape, const BsplineImage& spline, const 
   return sum;
 }
 
+#if IMPACTDIC_DIC_AVX512
+// SampleWarpedSubset 16 pixels at a time (AVX-512, SampleBlock16): positions in float relative to
+// the subset centre moved by the warp's integer translation, as in the IC-GN pass.
+template <int kTaps>
+double SampleWarpedSubset16(const Shape& shape, const BsplineImage& spline, const SubsetRef& s,
+                            const Params& p, double* g) {
+  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
+  const int istride = static_cast<int>(spline.coefficients().step1());
+  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
+  const float* centre = spline.coefficients().ptr<float>() +
+                        static_cast<std::ptrdiff_t>(s.cy - spline.region().y + iv) * istride +
+                        (s.cx - spline.region().x + iu);
+  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
+  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
+  __m512d sum = _mm512_setzero_pd();
+  for (int j = 0; j < size; ++j) {
+    double du0, dv0, dup, dvp, dum, dvm;
+    Displacement(shape, p, 0, j - h, &du0, &dv0);
+    Displacement(shape, p, 1, j - h, &dup, &dvp);
+    Displacement(shape, p, -1, j - h, &dum, &dvm);
+    const __m512 x0 = Splat16(static_cast<float>(du0 - iu)),
+                 x1 = Splat16(static_cast<float>(1 + 0.5 * (dup - dum))),
+                 x2 = Splat16(static_cast<float>(0.5 * (dup + dum) - du0));
+    const __m512 y0 = Splat16(static_cast<float>((j - h) + dv0 - iv)),
+                 y1 = Splat16(static_cast<float>(0.5 * (dvp - dvm))),
+                 y2 = Splat16(static_cast<float>(0.5 * (dvp + dvm) - dv0));
+    double* gj = g + static_cast<std::ptrdiff_t>(j) * size;
+    for (int i0 = 0; i0 < size; i0 += 16) {
+      const int valid = std::min(16, size - i0);
+      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
+      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
+      const __m512 x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, x2, x1), xi, x0);
+      const __m512 y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, y2, y1), xi, y0);
+      const __m512 v = _mm512_mul_ps(SampleBlock16<kTaps>(centre, istride, x, y, m),
+                                     Splat16(1 / kScale2));
+      const __m512d lo = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 0));
+      const __m512d hi = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 1));
+      const __mmask8 mlo = static_cast<__mmask8>(m & 0xFF), mhi = static_cast<__mmask8>(m >> 8);
+      _mm512_mask_storeu_pd(gj + i0, mlo, lo);
+      _mm512_mask_storeu_pd(gj + i0 + 8, mhi, hi);
+      sum = _mm512_add_pd(sum, _mm512_maskz_add_pd(mlo, lo, _mm512_maskz_mov_pd(mhi, hi)));
+    }
+  }
+  alignas(64) double lanes[8];
+  _mm512_store_pd(lanes, sum);
+  double total = 0;
+  for (double l : lanes) total += l;
+  return total;
+}
+#endif
+
 // Standard deviations of the warp's translation (u, v) at the solution p, from the residuals
 // r = (f - f_m) - (f_n / g_n) (g - g_m). The least-squares figure sigma_r sqrt(H^-1) assumes
 // independent residuals and exact reference gradients; both fail on real images (2.4x too small
@@ -1116,9 +1177,15 @@ void SubsetResiduals(const Shape& shape, const RefImages& ref, const SubsetRef& 
   const int rx = rc.x - h, ry = rc.y - h;
   // The warped subset g, sampled from the spline's coefficients in coordinates local to the
   // subset centre (as IC-GN's pass does).
+#if IMPACTDIC_DIC_AVX512
+  const double gsum = spline.kind() == Interpolation::kBicubic
+                          ? SampleWarpedSubset16<4>(shape, spline, s, p, r->data())
+                          : SampleWarpedSubset16<6>(shape, spline, s, p, r->data());
+#else
   const double gsum = spline.kind() == Interpolation::kBicubic
                           ? SampleWarpedSubset<4>(shape, spline, s, p, r->data())
                           : SampleWarpedSubset<6>(shape, spline, s, p, r->data());
+#endif
   const double gm = gsum / count;
   double gn2 = 0;
   for (const double g : *r) gn2 += (g - gm) * (g - gm);
@@ -1243,18 +1310,52 @@ void InfluenceOfEachPixel(const Shape& shape, const RefImages& ref, const Subset
   }
 }
 
+// Three dot products sum_i a_t[i] b_t[i] (t = 0, 1, 2) accumulated over several runs of
+// pixels: 4 lanes at a time where AVX2 is compiled in, the runs' remainders apart; the lanes are
+// added up in a fixed order.
+class Dot3 {
+ public:
+  void Add(const double* const a[3], const double* const b[3], int len) {
+    int i = 0;
+#if IMPACTDIC_DIC_AVX2
+    for (; i + 4 <= len; i += 4) {
+      for (int t = 0; t < 3; ++t)
+        lanes_[t] = _mm256_fmadd_pd(_mm256_loadu_pd(a[t] + i), _mm256_loadu_pd(b[t] + i), lanes_[t]);
+    }
+#endif
+    for (; i < len; ++i) {
+      for (int t = 0; t < 3; ++t) rest_[t] += a[t][i] * b[t][i];
+    }
+  }
+  std::array<double, 3> Sum() const {
+    std::array<double, 3> s{rest_[0], rest_[1], rest_[2]};
+#if IMPACTDIC_DIC_AVX2
+    for (int t = 0; t < 3; ++t) {
+      alignas(32) double l[4];
+      _mm256_store_pd(l, lanes_[t]);
+      s[t] += (l[0] + l[1]) + (l[2] + l[3]);
+    }
+#endif
+    return s;
+  }
+
+ private:
+#if IMPACTDIC_DIC_AVX2
+  __m256d lanes_[3] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd()};
+#endif
+  double rest_[3] = {};
+};
+
 // sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx (d = 0 included), for the
 // influences au and av: the variance of u and v per unit residual variance.
 std::array<double, 2> CorrelatedSums(const std::vector<double>& r, const std::vector<double>& au,
                                      const std::vector<double>& av, int size) {
-  double c0 = 0, a0u = 0, a0v = 0;
-  for (std::size_t k = 0; k < r.size(); ++k) {
-    c0 += r[k] * r[k];
-    a0u += au[k] * au[k];
-    a0v += av[k] * av[k];
-  }
-  c0 /= static_cast<double>(r.size());
-  std::array<double, 2> sums{a0u, a0v};
+  const double* data[3] = {r.data(), au.data(), av.data()};
+  Dot3 zero_lag;
+  zero_lag.Add(data, data, static_cast<int>(r.size()));
+  const std::array<double, 3> s0 = zero_lag.Sum();
+  const double c0 = s0[0] / static_cast<double>(r.size());
+  std::array<double, 2> sums{s0[1], s0[2]};
   if (!(c0 > 0)) return sums;
   // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
   for (int dy = 0; dy <= kResidualLagPx; ++dy) {
@@ -1262,19 +1363,17 @@ std::array<double, 2> CorrelatedSums(const std::vector<double>& r, const std::ve
       if (dy == 0 && dx <= 0) continue;
       const int i0 = std::max(0, -dx), i1 = size - std::max(0, dx);
       const std::size_t off = static_cast<std::size_t>(dy) * size + dx;
-      double c = 0, pu = 0, pv = 0;
+      Dot3 lag;
       for (int j = 0; j + dy < size; ++j) {
-        const std::size_t row = static_cast<std::size_t>(j) * size;
-        for (int i = i0; i < i1; ++i) {
-          const std::size_t k = row + i;
-          c += r[k] * r[k + off];
-          pu += au[k] * au[k + off];
-          pv += av[k] * av[k + off];
-        }
+        const std::size_t k0 = static_cast<std::size_t>(j) * size + i0;
+        const double* a[3] = {data[0] + k0, data[1] + k0, data[2] + k0};
+        const double* b[3] = {a[0] + off, a[1] + off, a[2] + off};
+        lag.Add(a, b, i1 - i0);
       }
-      const double rho = c / (double(i1 - i0) * (size - dy)) / c0;
-      sums[0] += 2 * rho * pu;
-      sums[1] += 2 * rho * pv;
+      const std::array<double, 3> c = lag.Sum();
+      const double rho = c[0] / (double(i1 - i0) * (size - dy)) / c0;
+      sums[0] += 2 * rho * c[1];
+      sums[1] += 2 * rho * c[2];
     }
   }
   return sums;
