@@ -38,10 +38,14 @@ Prefilter PrefilterFor(Interpolation kind) {
 
 // The prefilter (gain, then per pole a causal and an anti-causal first-order recursion with the
 // mirror-boundary initial values) on kLanes interleaved lines at once: c[k * kLanes + l] is
-// sample k of line l; the recursions run along k and are vectorised across the lines.
-constexpr int kLanes = 8;
+// sample k of line l; the recursions run along k and are vectorised across the lines. Every line
+// sees the same operations in the same order whatever kLanes is.
+constexpr int kRowLanes = 8;
+// Columns are filtered 32 at a time: two full cache lines of each row per pass.
+constexpr int kColumnLanes = 32;
 
 // Causal initial values for mirror boundary conditions (Unser et al. 1993).
+template <int kLanes>
 void InitialCausalLanes(const double* c, int n, double z, double* out) {
   const double tolerance = 1e-12;
   const int horizon = static_cast<int>(std::ceil(std::log(tolerance) / std::log(std::abs(z))));
@@ -70,13 +74,14 @@ void InitialCausalLanes(const double* c, int n, double z, double* out) {
   for (int l = 0; l < kLanes; ++l) out[l] = sum[l] / (1 - zn * zn);
 }
 
+template <int kLanes>
 void FilterLines(double* c, int n, const Prefilter& p) {
   if (n < 2) return;
   for (int k = 0; k < n * kLanes; ++k) c[k] *= p.gain;
   for (int j = 0; j < p.n_poles; ++j) {
     const double z = p.poles[j];
     double first[kLanes];
-    InitialCausalLanes(c, n, z, first);
+    InitialCausalLanes<kLanes>(c, n, z, first);
     for (int l = 0; l < kLanes; ++l) c[l] = first[l];
     for (int k = 1; k < n; ++k) {
       double* ck = c + static_cast<std::ptrdiff_t>(k) * kLanes;
@@ -93,7 +98,15 @@ void FilterLines(double* c, int n, const Prefilter& p) {
   }
 }
 
+// Per-thread scratch of the prefilter (kept between calls: no allocation per line group).
+double* Scratch(std::size_t count) {
+  thread_local std::vector<double> buffer;
+  if (buffer.size() < count) buffer.resize(count);
+  return buffer.data();
+}
+
 int Mirror(int i, int n) {
+  if (i >= 0 && i < n) return i;
   if (n == 1) return 0;
   const int period = 2 * (n - 1);
   i = std::abs(i) % period;
@@ -167,53 +180,60 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   coefficients_ = storage_(cv::Rect(0, 0, w, h));
   cv::Mat source = image(region);
 
-  // Rows (in double), kLanes rows at a time (interleaved), groups in parallel.
+  // Rows (in double), kRowLanes rows at a time (interleaved), groups in parallel.
   auto read_row = [&](int r, double* out, int lane) {
     switch (source.depth()) {
       case CV_8U: {
         const std::uint8_t* in = source.ptr<std::uint8_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
         break;
       }
       case CV_16U: {
         const std::uint16_t* in = source.ptr<std::uint16_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
         break;
       }
       case CV_32F: {
         const float* in = source.ptr<float>(r);
-        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
         break;
       }
       default: {
         const double* in = source.ptr<double>(r);
-        for (int c = 0; c < w; ++c) out[c * kLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
       }
     }
   };
-  tbb::parallel_for(0, (h + kLanes - 1) / kLanes, [&](int group) {
+  tbb::parallel_for(0, (h + kRowLanes - 1) / kRowLanes, [&](int group) {
+    constexpr int kLanes = kRowLanes;
     const int r0 = group * kLanes, lanes = std::min(kLanes, h - r0);
-    std::vector<double> buffer(static_cast<std::size_t>(w) * kLanes, 0.0);
-    for (int l = 0; l < lanes; ++l) read_row(r0 + l, buffer.data(), l);
-    FilterLines(buffer.data(), w, prefilter);
+    double* buffer = Scratch(static_cast<std::size_t>(w) * kLanes);
+    for (int l = 0; l < lanes; ++l) read_row(r0 + l, buffer, l);
+    for (int l = lanes; l < kLanes; ++l) {  // Unused lanes: zeros (no denormals or NaN).
+      for (int c = 0; c < w; ++c) buffer[c * kLanes + l] = 0;
+    }
+    FilterLines<kLanes>(buffer, w, prefilter);
     for (int l = 0; l < lanes; ++l) {
       float* out = coefficients_.ptr<float>(r0 + l);
       for (int c = 0; c < w; ++c) out[c] = static_cast<float>(buffer[c * kLanes + l]);
     }
   });
-  // Columns, kLanes adjacent columns at a time (contiguous in each row), groups in parallel.
-  tbb::parallel_for(0, (w + kLanes - 1) / kLanes, [&](int group) {
+  // Columns, kColumnLanes adjacent columns at a time (contiguous in each row), groups in parallel.
+  tbb::parallel_for(0, (w + kColumnLanes - 1) / kColumnLanes, [&](int group) {
+    constexpr int kLanes = kColumnLanes;
     const int c0 = group * kLanes, lanes = std::min(kLanes, w - c0);
-    std::vector<double> buffer(static_cast<std::size_t>(h) * kLanes, 0.0);
+    double* buffer = Scratch(static_cast<std::size_t>(h) * kLanes);
     for (int r = 0; r < h; ++r) {
       const float* in = coefficients_.ptr<float>(r) + c0;
-      for (int l = 0; l < lanes; ++l) buffer[static_cast<std::size_t>(r) * kLanes + l] = in[l];
+      double* b = buffer + static_cast<std::size_t>(r) * kLanes;
+      for (int l = 0; l < lanes; ++l) b[l] = in[l];
+      for (int l = lanes; l < kLanes; ++l) b[l] = 0;
     }
-    FilterLines(buffer.data(), h, prefilter);
+    FilterLines<kLanes>(buffer, h, prefilter);
     for (int r = 0; r < h; ++r) {
       float* out = coefficients_.ptr<float>(r) + c0;
-      for (int l = 0; l < lanes; ++l)
-        out[l] = static_cast<float>(buffer[static_cast<std::size_t>(r) * kLanes + l]);
+      const double* b = buffer + static_cast<std::size_t>(r) * kLanes;
+      for (int l = 0; l < lanes; ++l) out[l] = static_cast<float>(b[l]);
     }
   });
   // Evaluable domain: floor(x) - half_low >= 0 and floor(x) + half_high <= w - 1.
@@ -290,10 +310,11 @@ void BsplineImage::NodeGradients(const cv::Rect& rect, cv::Mat* gx, cv::Mat* gy)
   // the region takes the values of its mirror image, so every node's gradient is the same
   // whatever rectangle it is computed in.
   const auto row = [&](int r) {
-    const int cols = rect.width + 4;
-    std::vector<float> vy(static_cast<std::size_t>(cols)), dy(static_cast<std::size_t>(cols));
-    float* v = vy.data() + 2 - x0;  // v[x] for x in x0 - 2 .. x1 + 1.
-    float* d = dy.data() + 2 - x0;
+    thread_local std::vector<float> buffer;  // v and d: no allocation per row.
+    const std::size_t cols = static_cast<std::size_t>(rect.width) + 4;
+    if (buffer.size() < 2 * cols) buffer.resize(2 * cols);
+    float* v = buffer.data() + 2 - x0;  // v[x] for x in x0 - 2 .. x1 + 1.
+    float* d = buffer.data() + cols + 2 - x0;
     const int in0 = std::max(x0 - 2, 0), in1 = std::min(x1 + 2, w);
     for (int x = in0; x < in1; ++x) v[x] = d[x] = 0;
     for (int k = -reach; k <= reach; ++k) {

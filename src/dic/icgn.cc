@@ -629,13 +629,10 @@ template <int kTaps>
 inline __m512 SampleBlock16(const float* centre, int istride, __m512 x, __m512 y, __mmask16 m) {
   constexpr int kLow = kTaps == 4 ? 1 : 2;
   const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __m512 fx =
-      _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-  const __m512 fy =
-      _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512 fx = _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+  const __m512 fy = _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
   const __m512 tx = _mm512_sub_ps(x, fx), ty = _mm512_sub_ps(y, fy);
-  const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx),
-                iy = _mm512_maskz_cvttps_epi32(kAll, fy);
+  const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx), iy = _mm512_maskz_cvttps_epi32(kAll, fy);
   const int ix0 = _mm512_cvtsi512_si32(ix), iy0 = _mm512_cvtsi512_si32(iy);
   const __mmask16 off =
       _mm512_mask_cmpneq_epi32_mask(m, ix, _mm512_add_epi32(_mm512_set1_epi32(ix0), lane_i)) |
@@ -659,8 +656,8 @@ inline __m512 SampleBlock16(const float* centre, int istride, __m512 x, __m512 y
     for (int r = 0; r < kTaps; ++r) {
       const __m512i offr = _mm512_add_epi32(off0, _mm512_set1_epi32(r * istride));
       auto tap = [&](int k) {
-        return _mm512_mask_i32gather_ps(
-            _mm512_setzero_ps(), m, _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
+        return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m,
+                                        _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
       };
       rs[r] = _mm512_mul_ps(wx[0], tap(0));
       for (int k = 1; k < kTaps; ++k) rs[r] = _mm512_fmadd_ps(wx[k], tap(k), rs[r]);
@@ -1124,8 +1121,8 @@ double SampleWarpedSubset16(const Shape& shape, const BsplineImage& spline, cons
       const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
       const __m512 x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, x2, x1), xi, x0);
       const __m512 y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, y2, y1), xi, y0);
-      const __m512 v = _mm512_mul_ps(SampleBlock16<kTaps>(centre, istride, x, y, m),
-                                     Splat16(1 / kScale2));
+      const __m512 v =
+          _mm512_mul_ps(SampleBlock16<kTaps>(centre, istride, x, y, m), Splat16(1 / kScale2));
       const __m512d lo = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 0));
       const __m512d hi = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 1));
       const __mmask8 mlo = static_cast<__mmask8>(m & 0xFF), mhi = static_cast<__mmask8>(m >> 8);
@@ -1320,7 +1317,8 @@ class Dot3 {
 #if IMPACTDIC_DIC_AVX2
     for (; i + 4 <= len; i += 4) {
       for (int t = 0; t < 3; ++t)
-        lanes_[t] = _mm256_fmadd_pd(_mm256_loadu_pd(a[t] + i), _mm256_loadu_pd(b[t] + i), lanes_[t]);
+        lanes_[t] =
+            _mm256_fmadd_pd(_mm256_loadu_pd(a[t] + i), _mm256_loadu_pd(b[t] + i), lanes_[t]);
     }
 #endif
     for (; i < len; ++i) {
