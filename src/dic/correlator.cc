@@ -289,17 +289,26 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   }
   const double coef_seconds = coef_timer.ElapsedSeconds();
   if (timing) timing->seconds_coefficients += coef_seconds;
-  // The reference images in the patch layout (RefImages): subset i's intensities and node
-  // gradients in patch i, so an update costs the subsets' pixels, not the image's.
+  // The reference images (RefImages): in the patch layout (subset i's intensities and node
+  // gradients in patch i) when the tracked subsets cover less than the region, so that an update
+  // of a sparse grid costs the subsets' pixels, not the image's; over the region for dense grids
+  // (overlapping subsets). Both give the same values.
   RefImages& im = ref.images;
   im.region = spline->region();
   im.full_scale = full_scale;
-  im.patch_size = size;
-  im.patch_cols = std::clamp(n, 1, kPatchColumns);
-  const cv::Size atlas((im.patch_cols * size), ((n + im.patch_cols - 1) / im.patch_cols) * size);
-  im.f.create(atlas, CV_32F);
-  im.gx.create(atlas, CV_32F);
-  im.gy.create(atlas, CV_32F);
+  const long long tracked = std::count(active.begin(), active.end(), 1);
+  const bool patches = tracked * size * size < static_cast<long long>(im.region.area());
+  im.patch_size = patches ? size : 0;
+  im.patch_cols = patches ? std::clamp(n, 1, kPatchColumns) : 0;
+  if (patches) {
+    const cv::Size atlas(im.patch_cols * size, ((n + im.patch_cols - 1) / im.patch_cols) * size);
+    im.f.create(atlas, CV_32F);
+    im.gx.create(atlas, CV_32F);
+    im.gy.create(atlas, CV_32F);
+  } else {
+    spline->NodeGradients(&im.gx, &im.gy);
+    raw(im.region).convertTo(im.f, CV_32F);
+  }
   ref.subsets.assign(n, SubsetRef{});
   ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
@@ -309,9 +318,9 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
       return;
     }
     s = CentredSubset(ref_pos[i]);
-    s.patch = i;
     const cv::Rect box(s.cx - half, s.cy - half, size, size);
-    if ((box & im.region) == box) {  // Else PrepareSubset finds it out of the image.
+    if (patches && (box & im.region) == box) {  // Else PrepareSubset finds it out of the image.
+      s.patch = i;
       const cv::Rect patch = im.Patch(i);
       cv::Mat f = im.f(patch), gx = im.gx(patch), gy = im.gy(patch);
       raw(box).convertTo(f, CV_32F);
