@@ -74,10 +74,10 @@ void InitialCausalLanes(const double* c, int n, double z, double* out) {
   for (int l = 0; l < kLanes; ++l) out[l] = sum[l] / (1 - zn * zn);
 }
 
+// The lines c must already be multiplied by p.gain (done as they are read: one pass less).
 template <int kLanes>
 void FilterLines(double* c, int n, const Prefilter& p) {
   if (n < 2) return;
-  for (int k = 0; k < n * kLanes; ++k) c[k] *= p.gain;
   for (int j = 0; j < p.n_poles; ++j) {
     const double z = p.poles[j];
     double first[kLanes];
@@ -181,26 +181,28 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   cv::Mat source = image(region);
 
   // Rows (in double), kRowLanes rows at a time (interleaved), groups in parallel.
+  // Lines are read times the prefilter's gain (FilterLines).
+  const double gain = prefilter.gain;
   auto read_row = [&](int r, double* out, int lane) {
     switch (source.depth()) {
       case CV_8U: {
         const std::uint8_t* in = source.ptr<std::uint8_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
         break;
       }
       case CV_16U: {
         const std::uint16_t* in = source.ptr<std::uint16_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
         break;
       }
       case CV_32F: {
         const float* in = source.ptr<float>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
         break;
       }
       default: {
         const double* in = source.ptr<double>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = in[c];
+        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
       }
     }
   };
@@ -226,7 +228,7 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
     for (int r = 0; r < h; ++r) {
       const float* in = coefficients_.ptr<float>(r) + c0;
       double* b = buffer + static_cast<std::size_t>(r) * kLanes;
-      for (int l = 0; l < lanes; ++l) b[l] = in[l];
+      for (int l = 0; l < lanes; ++l) b[l] = gain * in[l];
       for (int l = lanes; l < kLanes; ++l) b[l] = 0;
     }
     FilterLines<kLanes>(buffer, h, prefilter);
