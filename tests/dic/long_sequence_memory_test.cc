@@ -80,10 +80,12 @@ TEST(LongSequenceMemory, ReferenceDataKeptForLostSubsetsIsBoundedBySubsetsNotFra
   // The sequence does lose subsets at updates, more of them over the longer run.
   ASSERT_GT(short_run.orphan_reference_bytes, 0);
   EXPECT_GT(long_run.orphan_reference_bytes, short_run.orphan_reference_bytes);
-  const long long per_orphan = 4LL * kSubset * kSubset * 4 + 36 * 8 + 1024;
-  EXPECT_LE(long_run.orphan_reference_bytes, long_run.subsets * per_orphan);
+  const long long per_orphan = 4LL * kSubset * kSubset * 4 + 36LL * 8 + 1024;
+  EXPECT_LE(long_run.orphan_reference_bytes, static_cast<long long>(long_run.subsets) * per_orphan);
   // Far below one reference of the image (intensities and two gradients over it).
   EXPECT_LT(long_run.orphan_reference_bytes, 3LL * kWidth * kHeight * 4);
+  EXPECT_NE(long_run.FullReport().find("lost subsets: at most"), std::string::npos)
+      << long_run.FullReport();
   RecordProperty("orphan_reference_bytes_short", std::to_string(short_run.orphan_reference_bytes));
   RecordProperty("orphan_reference_bytes_long", std::to_string(long_run.orphan_reference_bytes));
 }
