@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <opencv2/imgproc.hpp>
 #include <span>
 #include <utility>
@@ -96,13 +97,32 @@ struct Reference {
   std::vector<double> hinv;
 };
 
+// What an orphan keeps of the reference it was last found in: what IC-GN (RunIcgn reads the
+// reference intensities and node gradients over the subset's footprint alone) and the integer
+// search (its template is the footprint) read of it, copied out of the reference. An orphan so
+// holds a few kB (3 x 25^2 floats, the 25^2 template, its subset data and its n x n inverse
+// Hessian for subset 25), never the reference itself (images and data of every subset: 150 MB
+// and more at 4096 x 3000, once per update that lost a subset), so the memory of a long
+// recording does not grow with its reference updates.
+struct OrphanRef {
+  SubsetRef subset;
+  std::vector<double> hinv;  // n x n, row-major; empty unless the subset is usable.
+  RefImages images;          // f, gx, gy over the footprint; empty unless usable.
+  cv::Mat search_template;   // The search image over the footprint; empty if it leaves the image.
+  std::size_t Bytes() const {
+    const auto bytes = [](const cv::Mat& m) { return m.total() * m.elemSize(); };
+    return sizeof(OrphanRef) + hinv.size() * sizeof(double) + bytes(images.f) + bytes(images.gx) +
+           bytes(images.gy) + bytes(search_template);
+  }
+};
+
 // A subset that was not found in the frame that became the reference: it stays tracked against
-// the reference it was last found in (kept alive by the shared pointer), is tried against it in
+// the reference it was last found in (the part of it kept in OrphanRef), is tried against it in
 // every frame (status `lost` while it fails) and rejoins the tracked subsets at the next reference
 // update after it is found again.
 struct Orphan {
-  std::shared_ptr<const Reference> ref;
-  cv::Point2d ref_pos;  // Its tracked point in that reference.
+  std::shared_ptr<const OrphanRef> ref;  // Null unless orphaned.
+  cv::Point2d ref_pos;                   // Its tracked point in that reference.
 };
 
 struct Attempt {
@@ -161,6 +181,9 @@ std::string DicSummary::FullReport() const {
   if (data_bits > 0)
     s += fmt::format("  data: {}-bit (saturation at grey level {})\n", data_bits,
                      (1 << data_bits) - 1);
+  if (orphan_reference_bytes > 0)
+    s += fmt::format("  lost subsets: at most {:.1f} kB of earlier references kept for them\n",
+                     orphan_reference_bytes / 1024.0);
   s += "  status:";
   for (int i = 0; i < kSubsetStatusCount; ++i) {
     if (status_counts[i] > 0)
@@ -211,8 +234,14 @@ struct Correlator::Impl {
                                        FrameResult* out);
   void SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out);
   void MoveReferencePoints(const std::vector<cv::Point2d>& pos);
-  bool Search(const SubsetRef& s, const cv::Mat& ref_image32, Frame& frame, double gu, double gv,
+  // The search template of subset s: `image32` (the reference's search image) over its
+  // footprint, a view; empty if the footprint leaves the image.
+  cv::Mat SearchTemplate(const SubsetRef& s, const cv::Mat& image32) const;
+  // Integer-pixel ZNCC search of `templ` (SearchTemplate; empty: not found) around the guess.
+  bool Search(const SubsetRef& s, const cv::Mat& templ, Frame& frame, double gu, double gv,
               cv::Mat* scratch_mat, Params* p0) const;
+  // What orphan i keeps of the current reference (OrphanRef).
+  std::shared_ptr<const OrphanRef> KeepForOrphan(int i) const;
   void CheckImage(const cv::Mat& image, const char* what) const;
 
   // The steps of Correlate after the frame is solved against the current reference.
@@ -373,17 +402,23 @@ void Correlator::Impl::MakeFrame(const cv::Mat& raw, int index, Frame* out) {
   f.view.y_max = std::min<double>(reach.y + reach.height - 1, f.spline.y_max());
 }
 
-bool Correlator::Impl::Search(const SubsetRef& s, const cv::Mat& ref_image32, Frame& frame,
-                              double gu, double gv, cv::Mat* result, Params* p0) const {
-  const int R = options.init.search_radius_px;
+cv::Mat Correlator::Impl::SearchTemplate(const SubsetRef& s, const cv::Mat& image32) const {
   const cv::Rect full(0, 0, image_size.width, image_size.height);
   const cv::Rect templ_rect(s.cx - half, s.cy - half, size, size);
-  if ((templ_rect & full) != templ_rect) return false;
+  if ((templ_rect & full) != templ_rect) return {};
+  return image32(templ_rect);
+}
+
+bool Correlator::Impl::Search(const SubsetRef& s, const cv::Mat& templ, Frame& frame, double gu,
+                              double gv, cv::Mat* result, Params* p0) const {
+  if (templ.empty()) return false;
+  const int R = options.init.search_radius_px;
+  const cv::Rect full(0, 0, image_size.width, image_size.height);
   const int wx = s.cx + static_cast<int>(std::lround(gu)),
             wy = s.cy + static_cast<int>(std::lround(gv));
   const cv::Rect window = cv::Rect(wx - half - R, wy - half - R, size + 2 * R, size + 2 * R) & full;
   if (window.width < size || window.height < size) return false;
-  cv::matchTemplate(frame.image32(window), ref_image32(templ_rect), *result, cv::TM_CCOEFF_NORMED);
+  cv::matchTemplate(frame.image32(window), templ, *result, cv::TM_CCOEFF_NORMED);
   double best = -2;
   cv::Point loc(-1, -1);
   // Deterministic arg-max (first maximum in row-major order), ignoring non-finite scores.
@@ -534,7 +569,8 @@ class Correlator::Impl::FrameSolver {
       gv = p0[m_.shape.nm];
     }
     at_[i].searched = true;
-    if (!m_.Search(m_.ref.subsets[i], m_.ref.image32, frame_, gu, gv, &result, &p0)) {
+    const SubsetRef& s = m_.ref.subsets[i];
+    if (!m_.Search(s, m_.SearchTemplate(s, m_.ref.image32), frame_, gu, gv, &result, &p0)) {
       if (!at_[i].propagated) at_[i].r.status = SubsetStatus::kNotFound;
       return;
     }
@@ -752,18 +788,16 @@ void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, Fram
   const int n = static_cast<int>(initial.size());
   std::vector<int> list;
   for (int i = 0; i < n; ++i)
-    if (!active[i] && orphans[i].ref && Usable(orphans[i].ref->subsets[i].status))
-      list.push_back(i);
+    if (!active[i] && orphans[i].ref && Usable(orphans[i].ref->subset.status)) list.push_back(i);
   if (list.empty()) return;
   WallTimer timer;
   frame.Float();
-  const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
   std::vector<char> searched(list.size(), 0);
   tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
     const int i = list[k];
     const Orphan& o = orphans[i];
-    const Reference& old = *o.ref;
-    const SubsetRef& s = old.subsets[i];
+    const OrphanRef& old = *o.ref;
+    const SubsetRef& s = old.subset;
     cv::Point2d expected = pos_last[i];
     if (std::isnan(expected.x)) {
       const int r = i / nx, c = i % nx;
@@ -785,12 +819,12 @@ void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, Fram
     p0[0] = expected.x - o.ref_pos.x;
     p0[shape.nm] = expected.y - o.ref_pos.y;
     IcgnResult r =
-        internal::RunIcgn(shape, old.images, s, &old.hinv[i * nn], frame.view, options.icgn, p0);
+        internal::RunIcgn(shape, old.images, s, old.hinv.data(), frame.view, options.icgn, p0);
     Params p1;
     if (r.status != SubsetStatus::kConverged &&
-        Search(s, old.image32, frame, p0[0], p0[shape.nm], &scratch.local(), &p1)) {
+        Search(s, old.search_template, frame, p0[0], p0[shape.nm], &scratch.local(), &p1)) {
       searched[k] = 1;
-      r = internal::RunIcgn(shape, old.images, s, &old.hinv[i * nn], frame.view, options.icgn, p1);
+      r = internal::RunIcgn(shape, old.images, s, old.hinv.data(), frame.view, options.icgn, p1);
     }
     // Reported with the retry's outcome when IC-GN ran (e.g. `uncertain`), else still `lost`.
     if (r.iterations > 0) at[i].r = r;
@@ -821,15 +855,40 @@ void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos) 
     else
       ref_pos[i] = pos[i];
   }
-  if (lost.empty()) return;
-  // The current reference is kept (moved, not copied: BuildReference reuses the buffers).
-  auto old = std::make_shared<Reference>(std::move(ref));
-  ref = Reference{};
+  // What each lost subset needs of the current reference is copied out of it (KeepForOrphan);
+  // the reference itself is rebuilt for the new frame.
   for (int i : lost) {
     active[i] = 0;
     permanent[i] = SubsetStatus::kLost;
-    orphans[i] = Orphan{old, ref_pos[i]};
+    orphans[i] = Orphan{KeepForOrphan(i), ref_pos[i]};
   }
+  std::size_t bytes = 0;
+  for (const Orphan& o : orphans)
+    if (o.ref) bytes += o.ref->Bytes();
+  summary.orphan_reference_bytes =
+      std::max<long long>(summary.orphan_reference_bytes, static_cast<long long>(bytes));
+}
+
+std::shared_ptr<const OrphanRef> Correlator::Impl::KeepForOrphan(int i) const {
+  auto kept = std::make_shared<OrphanRef>();
+  kept->subset = ref.subsets[i];
+  if (!Usable(kept->subset.status)) return kept;  // Never tried again: its status is all it needs.
+  const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
+  kept->hinv.assign(ref.hinv.begin() + static_cast<std::ptrdiff_t>(i * nn),
+                    ref.hinv.begin() + static_cast<std::ptrdiff_t>((i + 1) * nn));
+  // A usable subset's footprint lies inside the reference region (PrepareSubset).
+  const SubsetRef& s = kept->subset;
+  const cv::Rect footprint(s.cx - half, s.cy - half, size, size);
+  const RefImages& im = ref.images;
+  const cv::Rect local = footprint - im.region.tl();
+  kept->images.region = footprint;
+  kept->images.f = im.f(local).clone();
+  kept->images.gx = im.gx(local).clone();
+  kept->images.gy = im.gy(local).clone();
+  kept->images.full_scale = im.full_scale;
+  const cv::Mat templ = SearchTemplate(s, ref.image32);
+  if (!templ.empty()) kept->search_template = templ.clone();
+  return kept;
 }
 
 // For policies that redo frames (`auto`): whether the subsets `which` (failed or below
@@ -1050,7 +1109,7 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attemp
       continue;
     }
     const Orphan& orphan = orphans[i];
-    const SubsetRef& s = orphan.ref ? orphan.ref->subsets[i] : ref.subsets[i];
+    const SubsetRef& s = orphan.ref ? orphan.ref->subset : ref.subsets[i];
     double du, dv;
     internal::Displacement(shape, r.p, s.ox, s.oy, &du, &dv);
     pos[i] = (orphan.ref ? orphan.ref_pos : ref_pos[i]) + cv::Point2d(du, dv);

@@ -5,6 +5,7 @@
 #include <tbb/task_group.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -229,19 +230,28 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
   const std::string ext = ToLower(std::filesystem::path(path).extension().string());
   const std::size_t n = result.positions.size(), frames = result.frames.size();
   if (ext == ".csv") {
-    std::vector<std::vector<std::string>> rows;
-    rows.reserve(n * frames);
+    // Row by row as they are formatted: the rows (about 10 strings per subset and frame) are
+    // many times the results' own size and never all held at once.
+    CsvRowWriter out(path, DicCsvColumns());
+    std::array<std::string, 10> row;
     for (std::size_t k = 0; k < frames; ++k) {
       const FrameResult& f = result.frames[k];
       const std::string frame = std::to_string(FrameLabel(result, f.frame));
       for (std::size_t i = 0; i < n; ++i) {
-        rows.push_back({frame, Number(result.positions[i].x), Number(result.positions[i].y),
-                        Number(f.u_px[i]), Number(f.v_px[i]), Number(f.zncc[i]),
-                        std::to_string(f.iterations[i]), ToString(f.status[i]),
-                        Number(f.sigma_u_px[i]), Number(f.sigma_v_px[i])});
+        row = {frame,
+               Number(result.positions[i].x),
+               Number(result.positions[i].y),
+               Number(f.u_px[i]),
+               Number(f.v_px[i]),
+               Number(f.zncc[i]),
+               std::to_string(f.iterations[i]),
+               ToString(f.status[i]),
+               Number(f.sigma_u_px[i]),
+               Number(f.sigma_v_px[i])};
+        out.Row(row);
       }
     }
-    WriteCsvRows(path, DicCsvColumns(), rows);
+    out.Commit();
     return;
   }
   if (ext != ".h5" && ext != ".hdf5") {

@@ -182,16 +182,51 @@ int WriteAll(int fd, const char* data, std::size_t size) {
 
 }  // namespace
 
-void WriteFileAtomic(const std::string& path, const void* data, std::size_t size) {
-  AtomicFile file(path);
-  const int fd = open(file.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw WriteError(path, errno);
-  int error = WriteAll(fd, static_cast<const char*>(data), size);
+AtomicStreamWriter::AtomicStreamWriter(const std::string& path) : file_(path) {
+  fd_ = open(file_.temp_path().c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd_ < 0) throw WriteError(path, errno);
+}
+
+AtomicStreamWriter::~AtomicStreamWriter() {
+  if (fd_ >= 0) close(fd_);  // Uncommitted: ~AtomicFile removes the temporary file.
+}
+
+void AtomicStreamWriter::Write(const void* data, std::size_t size) {
+  const char* bytes = static_cast<const char*>(data);
+  if (buffer_.size() + size < kBlockBytes) {
+    buffer_.append(bytes, size);
+    return;
+  }
+  Flush();
+  if (size >= kBlockBytes) {
+    if (const int error = WriteAll(fd_, bytes, size); error != 0)
+      throw WriteError(file_.final_path(), error);
+  } else {
+    buffer_.append(bytes, size);
+  }
+}
+
+void AtomicStreamWriter::Flush() {
+  if (const int error = WriteAll(fd_, buffer_.data(), buffer_.size()); error != 0)
+    throw WriteError(file_.final_path(), error);
+  buffer_.clear();
+}
+
+void AtomicStreamWriter::Commit() {
+  Flush();
+  int error = 0;
   // A file system may only report a full disk when the data reaches it (fsync) or at close.
-  if (error == 0 && fsync(fd) != 0 && errno != EINVAL && errno != EROFS) error = errno;
-  if (close(fd) != 0 && error == 0 && errno != EINTR) error = errno;
-  if (error != 0) throw WriteError(path, error);  // ~AtomicFile removes the temporary file.
-  file.Commit();
+  if (fsync(fd_) != 0 && errno != EINVAL && errno != EROFS) error = errno;
+  if (close(fd_) != 0 && error == 0 && errno != EINTR) error = errno;
+  fd_ = -1;
+  if (error != 0) throw WriteError(file_.final_path(), error);
+  file_.Commit();
+}
+
+void WriteFileAtomic(const std::string& path, const void* data, std::size_t size) {
+  AtomicStreamWriter out(path);
+  out.Write(data, size);
+  out.Commit();
 }
 
 void WriteTextFileAtomic(const std::string& path, const std::string& text) {

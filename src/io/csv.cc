@@ -284,12 +284,24 @@ void WriteCsv(const std::string& path, const std::vector<std::string>& names,
 
 void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
                   const std::vector<std::vector<std::string>>& rows) {
-  std::string text = CsvHeaderLine(names) + "\n";
-  for (const auto& row : rows) {
-    for (std::size_t c = 0; c < row.size(); ++c) text += (c ? "," : "") + row[c];
-    text += "\n";
+  CsvRowWriter out(path, names);
+  for (const auto& row : rows) out.Row(row);
+  out.Commit();
+}
+
+CsvRowWriter::CsvRowWriter(const std::string& path, const std::vector<std::string>& names)
+    : out_(path) {
+  out_.Write(CsvHeaderLine(names) + "\n");
+}
+
+void CsvRowWriter::Row(std::span<const std::string> cells) {
+  line_.clear();
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    if (c) line_ += ',';
+    line_ += cells[c];
   }
-  WriteTextFileAtomic(path, text);
+  line_ += '\n';
+  out_.Write(line_);
 }
 
 }  // namespace impactdic

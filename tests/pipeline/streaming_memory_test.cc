@@ -15,9 +15,6 @@
 // the same with or without streaming), a bound of the encoder, not of the recording
 // (docs/architecture.md, "Memory"); the snapshot still re-reads its frame.
 #include <gtest/gtest.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
@@ -33,6 +30,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../cli/measured_child.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
@@ -55,52 +53,6 @@ sensor: {tail_s: 0.05}
 calibration: {render: false}
 dic: {subset_size: 21, step: 40}
 )";
-
-struct Child {
-  int exit_code = -1;
-  long peak_rss_kb = 0;  // ru_maxrss of the child alone.
-};
-
-// Runs the impactdic binary with `args` (output discarded) and returns its exit code and peak
-// resident set size.
-Child RunMeasured(const std::vector<std::string>& args) {
-  std::vector<std::string> all = {IMPACTDIC_CLI_PATH};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (auto& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  // Under AddressSanitizer (the asan preset) freed blocks stay in its quarantine (256 MB), so the
-  // resident set would grow with everything ever allocated: the child runs without it.
-  std::vector<std::string> env;
-  bool asan_set = false;
-  for (char** e = environ; *e; ++e) {
-    std::string entry = *e;
-    if (entry.rfind("ASAN_OPTIONS=", 0) == 0) {
-      entry += ":quarantine_size_mb=0";
-      asan_set = true;
-    }
-    env.push_back(entry);
-  }
-  if (!asan_set) env.push_back("ASAN_OPTIONS=quarantine_size_mb=0");
-  std::vector<char*> envp;
-  for (auto& e : env) envp.push_back(e.data());
-  envp.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    std::freopen("/dev/null", "w", stdout);
-    std::freopen("/dev/null", "w", stderr);
-    execve(argv[0], argv.data(), envp.data());
-    _exit(127);
-  }
-  Child child;
-  int status = 0;
-  rusage usage{};
-  if (pid > 0 && wait4(pid, &status, 0, &usage) == pid) {
-    child.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    child.peak_rss_kb = usage.ru_maxrss;
-  }
-  return child;
-}
 
 // The scene written by synth with lines replaced (each `from` must occur).
 std::string SceneVariant(const TestDir& dir, const std::string& name,
@@ -140,9 +92,9 @@ TEST_F(StreamingRun, PeakMemoryDoesNotGrowWithTheNumberOfFrames) {
   const std::pair<std::string, std::string> no_animation = {"animation: true", "animation: false"};
   const std::string short_scene = SceneVariant(*dir_, "short", {kShort, no_animation});
   const std::string long_scene = SceneVariant(*dir_, "long", {no_animation});
-  const Child a = RunMeasured(
+  const MeasuredChild a = RunMeasured(
       {"-q", "run", short_scene, "-o", dir_->File("short"), "--threads", "2", "--allow-partial"});
-  const Child b = RunMeasured(
+  const MeasuredChild b = RunMeasured(
       {"-q", "run", long_scene, "-o", dir_->File("long"), "--threads", "2", "--allow-partial"});
   ASSERT_EQ(a.exit_code, 0);
   ASSERT_EQ(b.exit_code, 0);
@@ -182,9 +134,9 @@ TEST_F(StreamingRun, PeakMemoryHoldsTheResultsFileOnce) {
   with_short.push_back(kShort);
   const std::string short_scene = SceneVariant(*dir_, "short_all", with_short);
   const std::string long_scene = SceneVariant(*dir_, "long_all", all_frames);
-  const Child a = RunMeasured({"-q", "run", short_scene, "-o", dir_->File("short_all"), "--threads",
-                               "2", "--allow-partial"});
-  const Child b = RunMeasured(
+  const MeasuredChild a = RunMeasured({"-q", "run", short_scene, "-o", dir_->File("short_all"),
+                                       "--threads", "2", "--allow-partial"});
+  const MeasuredChild b = RunMeasured(
       {"-q", "run", long_scene, "-o", dir_->File("long_all"), "--threads", "2", "--allow-partial"});
   ASSERT_EQ(a.exit_code, 0);
   ASSERT_EQ(b.exit_code, 0);

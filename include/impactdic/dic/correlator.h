@@ -101,6 +101,11 @@ struct DicSummary {
   // images, 16; 0 for float images): the contrast and saturation limits are relative to it.
   int data_bits = 0;
   std::array<long long, kSubsetStatusCount> status_counts{};
+  // The most bytes of reference data kept, at any time, for subsets lost at a reference update
+  // (tracked against the reference they were last found in): for each, its footprint's
+  // intensities, gradients and search template and its subset data. At most the subsets times a
+  // few kB, whatever the number of frames and updates (the current reference is not counted).
+  long long orphan_reference_bytes = 0;
   // Time per phase [s], summed over frames: B-spline coefficients, reference precomputation
   // (gradients, per-subset Hessians), initial guesses (searches), IC-GN (including propagation).
   double seconds_coefficients = 0, seconds_reference = 0, seconds_initial_guess = 0,

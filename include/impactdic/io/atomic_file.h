@@ -71,9 +71,39 @@ void CheckNotAnInput(const std::string& output, const std::string& option,
 // of another kind that writing would destroy.
 void CheckOutputLocation(const std::string& path, const OutputRules& rules);
 
-// Writes `size` bytes to `path` atomically: a temporary sibling is written with checked POSIX
-// writes, synced to the disk and renamed. Any failure (a full disk, a quota, an I/O error) throws
-// WriteError(path, errno) and removes the temporary file; an existing file of that name is kept.
+// Writes a file atomically in pieces, for outputs built while they are written (a CSV of every
+// subset of every frame) rather than held whole in memory first: Write() collects the bytes and
+// passes them on in blocks of kBlockBytes with checked POSIX writes to a temporary sibling;
+// Commit() writes the rest, syncs it to the disk and renames it to `path`. Any failure (a full
+// disk, a quota, an I/O error) throws WriteError(path, errno); the temporary is removed when the
+// writer is destroyed uncommitted, and an existing file of that name is kept.
+//
+//   AtomicStreamWriter out("rows.csv");
+//   for (...) out.Write(line);
+//   out.Commit();
+class AtomicStreamWriter {
+ public:
+  static constexpr std::size_t kBlockBytes = std::size_t{1} << 20;
+  explicit AtomicStreamWriter(const std::string& path);
+  ~AtomicStreamWriter();
+  AtomicStreamWriter(const AtomicStreamWriter&) = delete;
+  AtomicStreamWriter& operator=(const AtomicStreamWriter&) = delete;
+
+  void Write(const void* data, std::size_t size);
+  void Write(const std::string& text) { Write(text.data(), text.size()); }
+  void Commit();
+
+ private:
+  void Flush();
+  AtomicFile file_;
+  int fd_ = -1;
+  std::string buffer_;
+};
+
+// Writes `size` bytes to `path` atomically (AtomicStreamWriter, in one piece): a temporary
+// sibling is written with checked POSIX writes, synced to the disk and renamed. Any failure (a
+// full disk, a quota, an I/O error) throws WriteError(path, errno) and removes the temporary
+// file; an existing file of that name is kept.
 void WriteFileAtomic(const std::string& path, const void* data, std::size_t size);
 
 // Writes `text` to `path` atomically (WriteFileAtomic).

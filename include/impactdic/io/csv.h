@@ -17,8 +17,11 @@
 #define IMPACTDIC_IO_CSV_H_
 
 #include <cstddef>
+#include <span>
 #include <string>
 #include <vector>
+
+#include "impactdic/io/atomic_file.h"
 
 namespace impactdic {
 
@@ -64,6 +67,25 @@ std::string CsvHeaderLine(const std::vector<std::string>& names);
 // For tables with text cells (e.g. a status column): rows of already-formatted cells.
 void WriteCsvRows(const std::string& path, const std::vector<std::string>& names,
                   const std::vector<std::vector<std::string>>& rows);
+
+// WriteCsvRows one row at a time, for tables too long to hold as cells (a row per subset and
+// frame): the same bytes, written atomically as they come (io/atomic_file.h AtomicStreamWriter;
+// the file appears under `path` only at Commit(), a full disk throws naming `path`).
+//
+//   CsvRowWriter out("dic.csv", {"frame", "u_px", "status"});
+//   const std::array<std::string, 3> row = {"1", "0.25", "converged"};
+//   out.Row(row);
+//   out.Commit();
+class CsvRowWriter {
+ public:
+  CsvRowWriter(const std::string& path, const std::vector<std::string>& names);
+  void Row(std::span<const std::string> cells);
+  void Commit() { out_.Commit(); }
+
+ private:
+  AtomicStreamWriter out_;
+  std::string line_;
+};
 
 }  // namespace impactdic
 
