@@ -3,6 +3,7 @@
 // published layout (.cih, .cihx, or the .mraw named), with --first/--last in the camera's frame
 // numbers, the camera's frame numbers and time stamps in the .h5; and each refusal (colour,
 // compressed, a frame number outside the recording, --first > --last, one frame).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -39,6 +40,7 @@ std::vector<cv::Mat> ShiftedFrames(int count, int bits) {
   render.supersampling = 2;
   render.bits = bits == 8 ? 8 : 16;
   std::vector<cv::Mat> frames;
+  frames.reserve(static_cast<std::size_t>(count));
   for (int k = 0; k < count; ++k) {
     cv::Mat f = RenderImage(pattern, 96, 72, Translation(0.5 * k, -0.25 * k), render);
     if (bits != 8 && bits != 16) f.convertTo(f, CV_16U, ((1 << bits) - 1) / 65535.0);
@@ -62,9 +64,9 @@ TEST(CorrelateCameraCli, EveryPhantomSampleCorrelatesWithItsFrameNumbersAndTimes
     const std::string out = dir.File(entry.path().stem().string() + ".h5");
     // The camera's frames 1..3 of the file, by their numbers.
     const long long first = info.first_frame_number + 1, last = info.first_frame_number + 3;
-    const CliResult r = RunCli(Quiet("--frames " + path + " --subset 21 --step 32 --first " +
-                                     std::to_string(first) + " --last " + std::to_string(last) +
-                                     " --allow-partial -o " + out));
+    const CliResult r = RunCli(Quiet(
+        fmt::format("--frames {} --subset 21 --step 32 --first {} --last {} --allow-partial -o {}",
+                    path, first, last, out)));
     ASSERT_EQ(r.exit_code, 0) << path << "\n" << r.output;
     H5Reader h5(out);
     EXPECT_EQ(h5.ReadDouble("/dic/frame_number"),

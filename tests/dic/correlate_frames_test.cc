@@ -33,6 +33,7 @@ std::vector<cv::Mat> ShiftedFrames(int count) {
   RenderOptions render;
   render.supersampling = 2;
   std::vector<cv::Mat> frames;
+  frames.reserve(static_cast<std::size_t>(count));
   for (int k = 0; k < count; ++k)
     frames.push_back(RenderImage(pattern, 96, 80, Translation(0.4 * k, -0.3 * k), render));
   return frames;

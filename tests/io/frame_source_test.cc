@@ -77,6 +77,7 @@ TEST(FrameSource, ListedImagesAreNumberedByIndexAndAColourImageIsWarnedOnce) {
 TEST(FrameSource, CameraFileHasFrameNumbersTimeStampsAndBits) {
   const TestDir dir;
   std::vector<cv::Mat> frames;
+  frames.reserve(4);
   for (int k = 0; k < 4; ++k) frames.push_back(Frame(100 * k, CV_16U));
   test::MrawWriteOptions o;
   o.color_bit = 12;
