@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <utility>
 
 #include "impactdic/core/error.h"
 
@@ -18,75 +19,30 @@ FramePreviewPlan PlanFramePreview(int count, cv::Size frame_size) {
   return plan;
 }
 
-FrameStream::FrameStream(const std::string& source, const PreprocessOptions& preprocess,
+FrameStream::FrameStream(std::unique_ptr<FrameSource> source, const PreprocessOptions& preprocess,
                          const CameraCalibration* calibration)
-    : source_(source), options_(preprocess), calibration_(calibration) {
-  if (!IsVideoFile(source)) {
-    files_ = ListFrameSequence(source);  // A gap in the numbering is an error.
-    source_frames_ = static_cast<int>(files_.size());
-  } else {
-    // The container's frame count is not to be trusted (a truncated recording): count the frames
-    // that decode, one at a time.
-    VideoReader video(source);
-    cv::Mat frame;
-    while (video.Read(&frame)) {
-    }
-    source_frames_ = static_cast<int>(video.frames_read());
-    const std::string truncated = video.Finish();
-    if (!truncated.empty()) warnings_.push_back(truncated);
-  }
-  last_ = source_frames_ - 1;
+    : source_(std::move(source)), options_(preprocess), calibration_(calibration) {
+  last_ = source_->frame_count() - 1;
 }
+
+FrameStream::FrameStream(const std::string& frames, const PreprocessOptions& preprocess,
+                         const CameraCalibration* calibration)
+    : FrameStream(OpenFrameSource(frames), preprocess, calibration) {}
 
 FrameStream::~FrameStream() = default;
 
 void FrameStream::SetRange(int first, int last) {
-  CheckValue(first >= 0 && first <= last && last < source_frames_, "analysed frames",
+  CheckValue(first >= 0 && first <= last && last < source_frames(), "analysed frames",
              fmt::format("{}..{}", first, last),
-             fmt::format("a range inside 0..{}", source_frames_ - 1));
+             fmt::format("a range inside 0..{}", source_frames() - 1));
   first_ = first;
   last_ = last;
-}
-
-std::string FrameStream::Name(int k) const {
-  const int index = first_ + k;
-  return files_.empty() ? fmt::format("{} frame {}", source_, index)
-                        : files_[static_cast<std::size_t>(index)];
-}
-
-cv::Mat FrameStream::ReadSource(int index) {
-  if (!files_.empty()) {
-    const std::string& path = files_[static_cast<std::size_t>(index)];
-    int channels = 1;
-    cv::Mat image = ReadGreyImage(path, &channels);
-    if (index > colour_checked_) {  // Each file's warning once, in the order of the files.
-      const std::string warning = colour_.Check(path, channels);
-      if (!warning.empty()) warnings_.push_back(warning);
-      colour_checked_ = index;
-    }
-    return image;
-  }
-  if (!video_ || index < video_next_) {  // Going back: decode from the start again.
-    video_ = std::make_unique<VideoReader>(source_);
-    video_next_ = 0;
-  }
-  cv::Mat frame;
-  while (video_next_ <= index) {
-    if (!video_->Read(&frame)) {
-      throw Error(
-          ErrorKind::kFileFormat, "video frame", std::to_string(index),
-          fmt::format("a frame that decodes ({} decoded when the run started)", source_frames_))
-          .WithFile(source_);
-    }
-    ++video_next_;
-  }
-  return frame;
 }
 
 cv::Mat FrameStream::ReadRaw(int k) {
   CheckValue(k >= 0 && k < count(), "analysed frame", std::to_string(k),
              fmt::format("0..{}", count() - 1));
-  cv::Mat image = ReadSource(first_ + k);
+  cv::Mat image = source_->Read(first_ + k);
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
     first_name_ = Name(k);
