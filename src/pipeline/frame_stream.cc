@@ -3,10 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <memory>
+#include <string>
 #include <utility>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/camera_file.h"
 
 namespace impactdic {
 
@@ -69,6 +73,38 @@ const PreprocessSummary* FrameStream::preprocess_summary() const {
 
 std::string FrameStream::PreprocessNote() const {
   return pre_ ? pre_->summary().BriefReport() : "";
+}
+
+CameraClock SceneFrameClock(const Scene& scene) {
+  CameraClock clock;
+  clock.fps = scene.inputs.fps;
+  clock.offset_s = scene.sensor.frame_time_offset_s;
+  if (!IsCameraFile(scene.inputs.frames)) return clock;
+  const CameraFileInfo info = OpenCameraFile(scene.inputs.frames)->info();
+  const double fps = info.fps;
+  if (scene.inputs.fps_given && std::abs(scene.inputs.fps / fps - 1) > kFrameRateTolerance) {
+    throw Error(ErrorKind::kInvalidValue, "inputs.fps", fmt::format("{:.6g} 1/s", scene.inputs.fps),
+                fmt::format("the frame rate {} states, {:.6g} 1/s, within {:.2g} %; or no "
+                            "inputs.fps (the file's rate is used)",
+                            info.path, fps, 100 * kFrameRateTolerance))
+        .WithFile(scene.path);
+  }
+  clock.fps = fps;
+  clock.fps_name = "the frame rate of " + info.path;
+  for (std::size_t k = 1; k < info.time_s.size(); ++k) {
+    const double dt = info.time_s[k] - info.time_s[k - 1];
+    if (std::abs(dt * fps - 1) <= kFrameRateTolerance) continue;
+    const long long number = info.first_frame_number + static_cast<long long>(k);
+    throw Error(ErrorKind::kFileFormat, "time stamps",
+                fmt::format("frames {} and {} {:.6g} s apart", number - 1, number, dt),
+                fmt::format("frames 1 / {:.6g} = {:.6g} s apart within {:.2g} % (a dropped or "
+                            "repeated frame would make the velocities wrong): analyse the frames "
+                            "on either side as separate recordings",
+                            fps, 1 / fps, 100 * kFrameRateTolerance))
+        .WithFile(info.path);
+  }
+  clock.time_s = info.time_s;
+  return clock;
 }
 
 }  // namespace impactdic

@@ -24,7 +24,9 @@
 #include "impactdic/calib/calibration.h"
 #include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/preprocess/preprocess.h"
+#include "impactdic/sensor/sensor.h"
 
 namespace impactdic {
 
@@ -45,6 +47,17 @@ struct FramePreviewPlan {
   }
 };
 FramePreviewPlan PlanFramePreview(int count, cv::Size frame_size);
+
+// How a scene's frames are timed (sensor CameraClock: the frame rate, the DAQ time of frame 0
+// without an exposure channel, the camera's time stamps). A camera file (.cine, .mraw) states
+// its rate and time stamps: its rate is used (the scene needs no inputs.fps; one given must agree
+// with it within sensor kFrameRateTolerance, else Error naming inputs.fps, both rates and the
+// file), and its time stamps must be uniform at that rate (every interval within
+// kFrameRateTolerance of 1 / fps, else Error naming the two frames: the kinematics difference
+// frames 1 / fps apart, so a dropped or repeated frame would make velocities wrong). Any other
+// source: inputs.fps and no time stamps. Reads only the camera file's header (and its time
+// stamps), so `analyze` times the frames exactly as `run` did.
+CameraClock SceneFrameClock(const Scene& scene);
 
 class FrameStream : public FrameSource {
  public:
