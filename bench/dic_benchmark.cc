@@ -28,9 +28,11 @@
 
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/bspline.h"
+#include "impactdic/dic/correlate_frames.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/synth/fields.h"
 #include "impactdic/synth/speckle.h"
@@ -114,7 +116,7 @@ void SetCounters(benchmark::State& state, const DicSummary& s, const FrameResult
 }
 
 // The whole job for a pair, including image loading, as `impactdic correlate` runs it
-// (CorrelateFiles: the deformed image is decoded while the reference is decoded and
+// (CorrelateFrames on the image files: the deformed image is decoded while the reference is
 // precomputed).
 void BM_FramePair(benchmark::State& state) {
   tbb::global_control threads(tbb::global_control::max_allowed_parallelism, g_threads);
@@ -122,7 +124,8 @@ void BM_FramePair(benchmark::State& state) {
   double best = 1e300;
   for (auto _ : state) {
     WallTimer timer;
-    const DicResult result = CorrelateFiles({FramePath(0), FramePath(1)}, options);
+    const std::unique_ptr<FrameSource> pair = MakeImageFileSource({FramePath(0), FramePath(1)});
+    const DicResult result = CorrelateFrames(*pair, options);
     const double seconds = timer.ElapsedSeconds();
     best = std::min(best, seconds);
     state.SetIterationTime(seconds);

@@ -1,4 +1,5 @@
-// impactdic correlate: subset DIC of an image sequence (library: impactdic/dic/dic_io.h).
+// impactdic correlate: subset DIC of an image sequence, a video or a camera file (library:
+// impactdic/dic/correlate_frames.h on a pipeline FrameStream; results: impactdic/dic/dic_io.h).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -23,13 +24,17 @@
 #include "impactdic/core/threads.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/bspline.h"
+#include "impactdic/dic/correlate_frames.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/atomic_file.h"
+#include "impactdic/io/camera_file.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/preprocess/preprocess.h"
 
@@ -70,6 +75,10 @@ struct CorrelateArgs {
   double outlier_noise = DicOptions{}.outliers.noise_px;
   double outlier_sigma_factor = DicOptions{}.outliers.sigma_factor;
   std::string continuity_local = ContinuityLimitText(DicOptions{}.continuity.local_ratio);
+  // The analysed frames, in the source's own numbering (FrameSource::FrameNumber); given when
+  // first_given / last_given.
+  long long first = 0, last = 0;
+  bool first_given = false, last_given = false;
   std::string output;
   bool allow_partial = false;  // Write the results even when no subset is valid (as `run`).
 };
@@ -110,31 +119,45 @@ cv::Rect ParseRoi(const std::string& text) {
   return cv::Rect(cv::Point(v[0], v[1]), cv::Point(v[2], v[3]));
 }
 
-// The pre-filter of --gaussian (auto | none | on | SIGMA[,KERNEL], preprocess
-// GaussianFromString): decided from the reference image (the first frame of a video) over the
-// ROI, as `run` decides from the first frame (docs/dic.md, "Sub-pixel bias"); logged.
-GaussianDecision DecidePrefilter(const GaussianBlurOptions& gaussian, bool video,
-                                 const std::vector<std::string>& paths, cv::Rect roi) {
-  cv::Mat reference;
-  if (video) {
-    VideoReader reader(paths[0]);
-    reader.Read(&reference);  // CorrelateVideo reports a video without frames.
-  } else {
-    CheckImageFileExists(paths[0]);
-    reference = ReadGreyImage(paths[0]);
+// The frames' source: the images listed (`paths`), a camera file or a video. A video needs two
+// decodable frames (Error naming it); camera files say what they hold.
+std::unique_ptr<FrameSource> OpenSource(const CorrelateArgs& a, bool pair, bool camera, bool video,
+                                        const std::vector<std::string>& paths) {
+  if (camera) return MakeCameraFileSource(a.frames);
+  if (!video) return MakeImageFileSource(paths, pair ? "" : a.frames);
+  std::unique_ptr<FrameSource> source = MakeVideoSource(a.frames);
+  if (source->frame_count() < 2) {
+    throw Error(ErrorKind::kInvalidValue, "frames video",
+                fmt::format("{} decodable frame(s)", source->frame_count()),
+                "a video of at least two frames (the first is the reference)")
+        .WithFile(a.frames);
   }
-  const GaussianDecision decision = DecideGaussian(gaussian, reference, roi);
-  LogInfo("pre-filter: {}", decision.Text());
-  return decision;
+  return source;
 }
 
-// The images' filter of a decision (none if not applied): the preprocess module's Gaussian blur
-// of every image, the reference included; callable from two threads at once.
-ImageFilter MakeImageFilter(const GaussianDecision& decision, const GaussianBlurOptions& options) {
-  if (!decision.applied) return {};
-  return {[options](const cv::Mat& image) { return GaussianBlurFrame(options, image); },
-          fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
-                      options.sigma_px, options.kernel_size, options.kernel_size)};
+// The one preprocessing route of `run` (preprocess Preprocessor) with --gaussian alone: decided
+// from the reference (the first analysed frame) over the ROI, as `run` decides from its first
+// frame (docs/dic.md, "Sub-pixel bias"); logged.
+PreprocessOptions CorrelatePreprocess(const GaussianBlurOptions& gaussian, cv::Rect roi) {
+  PreprocessOptions o;
+  o.gaussian = gaussian;
+  o.roi = roi;
+  return o;
+}
+
+// --first/--last: the analysed frames, by the source's frame numbers (Error naming the flag and
+// the source's span when no frame has the number); at least two of them.
+void SelectFrames(const CorrelateArgs& a, FrameStream* frames) {
+  const FrameSource& source = frames->source();
+  const int first = a.first_given ? FrameIndexOf(source, a.first, "--first") : 0;
+  const int last = a.last_given ? FrameIndexOf(source, a.last, "--last") : source.frame_count() - 1;
+  if (last - first < 1) {
+    throw Error(ErrorKind::kInvalidValue, "--first/--last",
+                fmt::format("frames {}..{} of {} (one frame)", source.FrameNumber(first),
+                            source.FrameNumber(last), source.description()),
+                "at least two frames (the first is the reference)");
+  }
+  frames->SetRange(first, last);
 }
 
 // Each image once: the same file given twice (under any spelling of its path, a symbolic or a
@@ -286,19 +309,25 @@ void Run(const CorrelateArgs& a) {
   options.outliers = OutliersFromArgs(a);
   WithFlagNames(kCorrelateFlags, [&] { options.Check(); });
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
+  // The inputs, listed (not decoded) before the output is checked.
   std::vector<std::string> paths;
-  const bool video = !pair && IsVideoFile(a.frames);  // Its frames, as `run`'s inputs.frames.
+  const bool camera = !pair && IsCameraFile(a.frames);
+  const bool video = !pair && !camera && IsVideoFile(a.frames);  // As `run`'s inputs.frames.
   if (pair) {
     paths.push_back(a.reference);
     paths.insert(paths.end(), a.deformed.begin(), a.deformed.end());
     CheckEachImageOnce(paths);
-  } else if (video) {
-    paths.push_back(a.frames);  // Checked and decoded by CorrelateVideo.
+  } else if (camera || video) {
+    paths.push_back(a.frames);  // Opened and checked below.
   } else {
     paths = ListFrameSequence(a.frames);  // A gap in the numbering is an error, as in `run`.
     CheckValue(paths.size() >= 2, "--frames",
                a.frames + " (" + std::to_string(paths.size()) + " image)",
                "at least two images (the first is the reference)");
+  }
+  if (a.first_given && a.last_given && a.first > a.last) {
+    throw Error(ErrorKind::kInvalidValue, "--first/--last", fmt::format("{} > {}", a.first, a.last),
+                "--first <= --last");
   }
   std::vector<std::string> inputs = paths;
   inputs.push_back(a.mask);
@@ -309,11 +338,17 @@ void Run(const CorrelateArgs& a) {
   WallTimer wall;
   DicResult result;
   try {
-    const GaussianDecision prefilter = DecidePrefilter(gaussian, video, paths, options.grid.roi);
-    const ImageFilter filter = MakeImageFilter(prefilter, gaussian);
-    result =
-        video ? CorrelateVideo(a.frames, options, filter) : CorrelateFiles(paths, options, filter);
+    FrameStream frames(OpenSource(a, pair, camera, video, paths),
+                       CorrelatePreprocess(gaussian, options.grid.roi), /*calibration=*/nullptr);
+    SelectFrames(a, &frames);
+    result = CorrelateFrames(frames, options);
+    const GaussianDecision& prefilter = frames.preprocess_summary()->gaussian;
     PrefilterAttributes(prefilter, &result.text_attributes, &result.number_attributes);
+    if (prefilter.applied) {
+      result.preprocess =
+          fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
+                      gaussian.sigma_px, gaussian.kernel_size, gaussian.kernel_size);
+    }
   } catch (Error& e) {
     if (e.where() == "mask" && e.file().empty()) e.WithFile(a.mask);  // Its size is wrong.
     RethrowWithFlagNames(e, kCorrelateFlags);
@@ -349,8 +384,17 @@ void RegisterCorrelateCommand(CLI::App& app) {
                   "against the reference alone (--reference-update does not apply)")
       ->capture_default_str();
   cmd->add_option("--frames", args->frames,
-                  "Folder or glob of frames (sorted; the first is the reference), or a video "
-                  "file (.mp4, .avi, .mov, .mkv: its frames, numbered from 0)");
+                  "Folder or glob of frames (sorted; the first is the reference), a video "
+                  "file (.mp4, .avi, .mov, .mkv: its frames, numbered from 0), or a camera file "
+                  "(Phantom .cine; Photron .mraw with its .cih/.cihx, or the .cih/.cihx: the "
+                  "camera's frame numbers, negative before the trigger, and time stamps)");
+  cmd->add_option("--first", args->first,
+                  "First analysed frame (the reference), by the frames' own numbers: the number "
+                  "in the file names of a numbered image sequence (else the 0-based position), "
+                  "the 0-based frame index of a video, the camera's frame number of a camera "
+                  "file (may be negative). Default: the first frame");
+  cmd->add_option("--last", args->last,
+                  "Last analysed frame, numbered as --first. Default: the last frame");
   cmd->add_option("--subset", args->subset, "Subset size [px], odd, in " + kSubsetSizeRange.Text())
       ->capture_default_str();
   cmd->add_option("--step", args->step, "Grid step [px]")->capture_default_str();
@@ -396,6 +440,8 @@ void RegisterCorrelateCommand(CLI::App& app) {
                 "without it such a correlation fails (exit 1) and writes nothing, as `run` does");
   cmd->callback([args, cmd] {
     args->update_given = cmd->count("--reference-update") > 0;
+    args->first_given = cmd->count("--first") > 0;
+    args->last_given = cmd->count("--last") > 0;
     Run(*args);
   });
 }

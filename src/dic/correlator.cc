@@ -1250,17 +1250,4 @@ int Correlator::cols() const { return impl_->nx; }
 const DicSummary& Correlator::summary() const { return impl_->summary; }
 const DicOptions& Correlator::options() const { return impl_->options; }
 
-DicResult CorrelateSequence(const std::vector<cv::Mat>& images, const DicOptions& options) {
-  CheckValue(images.size() >= 2, "images", std::to_string(images.size()),
-             "a reference and at least one deformed image");
-  Correlator correlator(options);
-  correlator.SetReference(images[0]);
-  DicResult result;
-  result.positions = correlator.positions();
-  for (std::size_t k = 1; k < images.size(); ++k)
-    result.frames.push_back(correlator.Correlate(images[k]));
-  result.summary = correlator.summary();
-  return result;
-}
-
 }  // namespace impactdic

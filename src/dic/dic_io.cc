@@ -1,24 +1,19 @@
 #include "impactdic/dic/dic_io.h"
 
 #include <fmt/format.h>
-#include <tbb/parallel_invoke.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <exception>
 #include <filesystem>
 #include <map>
 #include <opencv2/core.hpp>
 #include <type_traits>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/progress.h"
 #include "impactdic/core/strings.h"
-#include "impactdic/dic/bspline.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
@@ -83,6 +78,9 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
   t.frame.push_back(first_frame);
   t.reference_frame.push_back(first_frame);
   t.frame_number.push_back(number(0));
+  // The time stamps from the source (camera files), row by row.
+  const auto time = [&](int index) { return result.time_s.at(static_cast<std::size_t>(index)); };
+  if (!result.time_s.empty()) t.time_s.push_back(time(0));
   if (!result.frames.empty()) {
     for (std::size_t i = 0; i < n; ++i) {
       const SubsetStatus s = result.frames[0].status[i];
@@ -96,6 +94,7 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
     t.frame.push_back(first_frame + f.frame);
     t.reference_frame.push_back(first_frame + f.reference_frame);
     t.frame_number.push_back(number(f.frame));
+    if (!result.time_s.empty()) t.time_s.push_back(time(f.frame));
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t k = r * n + i;
       t.u_px[k] = f.u_px[i];
@@ -141,84 +140,6 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
 DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& options,
                                     int first_frame) {
   return MakeTable(result, options, first_frame);
-}
-
-DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options,
-                         const ImageFilter& filter) {
-  options.Check();
-  CheckValue(paths.size() >= 2, "images", std::to_string(paths.size()) + " image(s)",
-             "a reference and at least one deformed image");
-  // A missing file is reported before any work; a corrupt one when it is decoded.
-  for (const auto& p : paths) CheckImageFileExists(p);
-  // The reference is decoded and precomputed while the first deformed image is decoded; every
-  // later image is decoded while the one before it is correlated. Besides what the correlator
-  // keeps (its reference and, with `auto`, the last frame), at most two images are held,
-  // whatever the length of the sequence.
-  Correlator correlator(options);
-  DicResult result;
-  result.frame_numbers = FrameNumbers(paths);
-  result.preprocess = filter.apply ? filter.description : "";
-  // Colour layout of each file as decoded: read in parallel, compared in file order.
-  SequenceColourCheck colour;
-  std::vector<int> channels(paths.size(), 1);
-  auto check_colour = [&](std::size_t k) {
-    const std::string warning = colour.Check(paths[k], channels[k]);
-    if (!warning.empty()) result.warnings.push_back(warning);
-  };
-  auto read = [&paths, &channels, &filter](std::size_t k) {
-    cv::Mat image = ReadGreyImage(paths[k], &channels[k]);
-    return filter.apply ? filter.apply(image) : image;
-  };
-  cv::Mat reference, current;
-  std::exception_ptr reference_error, deformed_error;  // Reported in this order (deterministic).
-  tbb::parallel_invoke(
-      [&] {
-        try {
-          current = read(1);
-        } catch (...) {
-          deformed_error = std::current_exception();
-        }
-      },
-      [&] {
-        try {
-          reference = read(0);
-          correlator.SetReference(reference);
-        } catch (...) {
-          reference_error = std::current_exception();
-        }
-      });
-  if (reference_error) std::rethrow_exception(reference_error);
-  if (deformed_error) std::rethrow_exception(deformed_error);
-  CheckSameSize({reference, current}, {paths[0], paths[1]});
-  check_colour(0);
-  check_colour(1);
-  result.positions = correlator.positions();
-  ProgressBar bar("correlate", paths.size() - 1);
-  for (std::size_t k = 1; k < paths.size(); ++k) {
-    cv::Mat next;
-    tbb::task_group prefetch;
-    if (k + 1 < paths.size()) prefetch.run([&next, &read, k] { next = read(k + 1); });
-    try {
-      result.frames.push_back(correlator.Correlate(current));
-    } catch (...) {
-      prefetch.cancel();
-      try {
-        prefetch.wait();
-      } catch (...) {  // The correlation error is the one to report.
-      }
-      throw;
-    }
-    prefetch.wait();  // Rethrows a decoding error naming the file.
-    if (k + 1 < paths.size()) {
-      CheckSameSize({reference, next}, {paths[0], paths[k + 1]});
-      check_colour(k + 1);
-    }
-    current = next;
-    bar.Advance();
-  }
-  bar.Finish();
-  result.summary = correlator.summary();
-  return result;
 }
 
 std::vector<std::string> DicCsvColumns() {

@@ -140,6 +140,7 @@ void DicResultsTable::Check() const {
   CheckSize(frame, rows, "frame");
   CheckSize(reference_frame, rows, "reference_frame");
   CheckSize(frame_number, rows, "frame_number");
+  CheckSize(time_s, rows, "time_s");
 }
 
 void WriteDicResults(H5Writer& out, const DicResultsTable& t) {
@@ -183,6 +184,11 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& t) {
     out.Write(L::kDicFrameNumber, t.frame_number, "1",
               "frame number of the row's image from its file name (its index when the names are "
               "not one numbered series)");
+  }
+  if (!t.time_s.empty()) {
+    out.Write(L::kDicTimeS, t.time_s, "s",
+              "time stamp of the row's image from its source (a camera file's, relative to the "
+              "trigger)");
   }
   if (!t.reference_frame.empty()) {
     out.Write(L::kDicReferenceFrame, t.reference_frame, rows, "1",
@@ -228,6 +234,7 @@ DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file, DicF
   ReadOptional(in, file, L::kDicFrame, t.rows, ints, &t.frame);
   ReadOptional(in, file, L::kDicReferenceFrame, t.rows, ints, &t.reference_frame);
   ReadOptional(in, file, L::kDicFrameNumber, t.rows, doubles, &t.frame_number);
+  ReadOptional(in, file, L::kDicTimeS, t.rows, doubles, &t.time_s);
   if (in.HasAttribute(L::kDicStatus, L::kStatusCodesAttr))
     t.status_codes = in.ReadStringAttribute(L::kDicStatus, L::kStatusCodesAttr);
   else if (in.HasAttribute(L::kDicStatus, "status_names"))  // Version 1 of `run`.

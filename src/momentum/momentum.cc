@@ -543,14 +543,14 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
 }
 
 SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
-                                 double fps, double frame_time_offset_s, const SensorResult& sensor,
+                                 const CameraClock& clock, const SensorResult& sensor,
                                  const MomentumOptions& options, std::size_t first_frame) {
   SceneAnalysis a;
   KinematicsOptions kopt;
-  kopt.fps = fps;
+  kopt.fps = clock.fps;
   a.kinematics = ComputeKinematics(dic, mapping, kopt);
   const std::vector<double> all =
-      FrameTimes(sensor, static_cast<int>(first_frame + dic.frames), fps, frame_time_offset_s);
+      FrameTimes(sensor, static_cast<int>(first_frame + dic.frames), clock);
   a.frame_time_s.assign(all.begin() + static_cast<std::ptrdiff_t>(first_frame), all.end());
   a.momentum = AnalyzeMomentum(a.kinematics, a.frame_time_s, sensor, options);
   return a;

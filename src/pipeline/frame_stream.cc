@@ -3,9 +3,14 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <memory>
+#include <string>
+#include <utility>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/camera_file.h"
 
 namespace impactdic {
 
@@ -18,75 +23,30 @@ FramePreviewPlan PlanFramePreview(int count, cv::Size frame_size) {
   return plan;
 }
 
-FrameStream::FrameStream(const std::string& source, const PreprocessOptions& preprocess,
+FrameStream::FrameStream(std::unique_ptr<FrameSource> source, const PreprocessOptions& preprocess,
                          const CameraCalibration* calibration)
-    : source_(source), options_(preprocess), calibration_(calibration) {
-  if (!IsVideoFile(source)) {
-    files_ = ListFrameSequence(source);  // A gap in the numbering is an error.
-    source_frames_ = static_cast<int>(files_.size());
-  } else {
-    // The container's frame count is not to be trusted (a truncated recording): count the frames
-    // that decode, one at a time.
-    VideoReader video(source);
-    cv::Mat frame;
-    while (video.Read(&frame)) {
-    }
-    source_frames_ = static_cast<int>(video.frames_read());
-    const std::string truncated = video.Finish();
-    if (!truncated.empty()) warnings_.push_back(truncated);
-  }
-  last_ = source_frames_ - 1;
+    : source_(std::move(source)), options_(preprocess), calibration_(calibration) {
+  last_ = source_->frame_count() - 1;
 }
+
+FrameStream::FrameStream(const std::string& frames, const PreprocessOptions& preprocess,
+                         const CameraCalibration* calibration)
+    : FrameStream(OpenFrameSource(frames), preprocess, calibration) {}
 
 FrameStream::~FrameStream() = default;
 
 void FrameStream::SetRange(int first, int last) {
-  CheckValue(first >= 0 && first <= last && last < source_frames_, "analysed frames",
+  CheckValue(first >= 0 && first <= last && last < source_frames(), "analysed frames",
              fmt::format("{}..{}", first, last),
-             fmt::format("a range inside 0..{}", source_frames_ - 1));
+             fmt::format("a range inside 0..{}", source_frames() - 1));
   first_ = first;
   last_ = last;
-}
-
-std::string FrameStream::Name(int k) const {
-  const int index = first_ + k;
-  return files_.empty() ? fmt::format("{} frame {}", source_, index)
-                        : files_[static_cast<std::size_t>(index)];
-}
-
-cv::Mat FrameStream::ReadSource(int index) {
-  if (!files_.empty()) {
-    const std::string& path = files_[static_cast<std::size_t>(index)];
-    int channels = 1;
-    cv::Mat image = ReadGreyImage(path, &channels);
-    if (index > colour_checked_) {  // Each file's warning once, in the order of the files.
-      const std::string warning = colour_.Check(path, channels);
-      if (!warning.empty()) warnings_.push_back(warning);
-      colour_checked_ = index;
-    }
-    return image;
-  }
-  if (!video_ || index < video_next_) {  // Going back: decode from the start again.
-    video_ = std::make_unique<VideoReader>(source_);
-    video_next_ = 0;
-  }
-  cv::Mat frame;
-  while (video_next_ <= index) {
-    if (!video_->Read(&frame)) {
-      throw Error(
-          ErrorKind::kFileFormat, "video frame", std::to_string(index),
-          fmt::format("a frame that decodes ({} decoded when the run started)", source_frames_))
-          .WithFile(source_);
-    }
-    ++video_next_;
-  }
-  return frame;
 }
 
 cv::Mat FrameStream::ReadRaw(int k) {
   CheckValue(k >= 0 && k < count(), "analysed frame", std::to_string(k),
              fmt::format("0..{}", count() - 1));
-  cv::Mat image = ReadSource(first_ + k);
+  cv::Mat image = source_->Read(first_ + k);
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
     first_name_ = Name(k);
@@ -113,6 +73,38 @@ const PreprocessSummary* FrameStream::preprocess_summary() const {
 
 std::string FrameStream::PreprocessNote() const {
   return pre_ ? pre_->summary().BriefReport() : "";
+}
+
+CameraClock SceneFrameClock(const Scene& scene) {
+  CameraClock clock;
+  clock.fps = scene.inputs.fps;
+  clock.offset_s = scene.sensor.frame_time_offset_s;
+  if (!IsCameraFile(scene.inputs.frames)) return clock;
+  const CameraFileInfo info = OpenCameraFile(scene.inputs.frames)->info();
+  const double fps = info.fps;
+  if (scene.inputs.fps_given && std::abs(scene.inputs.fps / fps - 1) > kFrameRateTolerance) {
+    throw Error(ErrorKind::kInvalidValue, "inputs.fps", fmt::format("{:.6g} 1/s", scene.inputs.fps),
+                fmt::format("the frame rate {} states, {:.6g} 1/s, within {:.2g} %; or no "
+                            "inputs.fps (the file's rate is used)",
+                            info.path, fps, 100 * kFrameRateTolerance))
+        .WithFile(scene.path);
+  }
+  clock.fps = fps;
+  clock.fps_name = "the frame rate of " + info.path;
+  for (std::size_t k = 1; k < info.time_s.size(); ++k) {
+    const double dt = info.time_s[k] - info.time_s[k - 1];
+    if (std::abs(dt * fps - 1) <= kFrameRateTolerance) continue;
+    const long long number = info.first_frame_number + static_cast<long long>(k);
+    throw Error(ErrorKind::kFileFormat, "time stamps",
+                fmt::format("frames {} and {} {:.6g} s apart", number - 1, number, dt),
+                fmt::format("frames 1 / {:.6g} = {:.6g} s apart within {:.2g} % (a dropped or "
+                            "repeated frame would make the velocities wrong): analyse the frames "
+                            "on either side as separate recordings",
+                            fps, 1 / fps, 100 * kFrameRateTolerance))
+        .WithFile(info.path);
+  }
+  clock.time_s = info.time_s;
+  return clock;
 }
 
 }  // namespace impactdic

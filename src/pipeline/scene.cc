@@ -92,8 +92,16 @@ YamlOptionTable InputsTable(Scene* s) {
   YamlOptionTable t("inputs");
   SceneInputs& in = s->inputs;
   AddPath(t, "frames", &in.frames, s->folder,
-          "Folder, glob or video file of the frames (required)");
-  t.Add("fps", &in.fps, kCameraFpsRange, "a camera frame rate", "Camera frame rate");
+          "Folder, glob, video or camera file (.cine, .mraw, .cih, .cihx) of the frames "
+          "(required)");
+  t.AddNumber(
+      "fps", ExpectedText("a camera frame rate", kCameraFpsRange), Num(in.fps),
+      [&in](const YAML::Node& n) {
+        if (!DecodeNumber(n, kCameraFpsRange, &in.fps)) return false;
+        in.fps_given = true;
+        return true;
+      },
+      "Camera frame rate; a camera file's own rate when not given");
   AddPath(t, "calibration", &in.calibration, s->folder, "Calibration YAML (impactdic calibrate)");
   t.Add("mm_per_px", &in.mm_per_px, kMmPerPxRange, "an image scale",
         "Scale without a calibration; 0 = the calibration's plane scale");

@@ -69,9 +69,8 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   PanelMapping mapping;
   mapping.mm_per_px = mm_per_px;
   try {
-    run.analysis =
-        AnalyzeCorrelation(dic, mapping, scene.inputs.fps, scene.sensor.frame_time_offset_s,
-                           run.sensor, mopt, static_cast<std::size_t>(first));
+    run.analysis = AnalyzeCorrelation(dic, mapping, SceneFrameClock(scene), run.sensor, mopt,
+                                      static_cast<std::size_t>(first));
   } catch (Error& e) {
     // Name the file to fix: the DAQ record when its exposure channel times the frames, else the
     // scene's settings (fps, frame_time_offset_s, the grid).

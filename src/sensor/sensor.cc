@@ -674,13 +674,14 @@ namespace {
 // given fps (not checked when fps is 0 or NaN, or with fewer than 2 frames): Error naming
 // inputs.fps with both rates beyond kFrameRateTolerance + one DAQ sample over the edges' span.
 void CheckFrameRateAgainstExposure(const std::vector<double>& edges_s, double fps,
-                                   double daq_rate_hz, const std::string& path) {
+                                   const std::string& fps_name, double daq_rate_hz,
+                                   const std::string& path) {
   if (!(fps > 0) || !std::isfinite(fps) || edges_s.size() < 2) return;
   const double span = edges_s.back() - edges_s.front();
   const double rate = static_cast<double>(edges_s.size() - 1) / span;
   const double tolerance = kFrameRateTolerance + (daq_rate_hz > 0 ? 1 / (daq_rate_hz * span) : 0);
   if (std::abs(fps / rate - 1) <= tolerance) return;
-  throw Error(ErrorKind::kInvalidValue, "inputs.fps", fmt::format("{:.6g} 1/s", fps),
+  throw Error(ErrorKind::kInvalidValue, fps_name, fmt::format("{:.6g} 1/s", fps),
               fmt::format("the frame rate of the exposure channel{}, {:.6g} 1/s ({} rising "
                           "edges from {:.6g} s to {:.6g} s), within {:.2g} %: velocities scale "
                           "with the frame rate",
@@ -690,8 +691,8 @@ void CheckFrameRateAgainstExposure(const std::vector<double>& edges_s, double fp
 
 }  // namespace
 
-std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
-                               double offset_s, std::size_t* edges_found) {
+std::vector<double> FrameTimes(const SensorResult& result, int n_frames, const CameraClock& clock,
+                               std::size_t* edges_found) {
   CheckValue(n_frames >= 1, "n_frames", fmt::format("{}", n_frames), ">= 1");
   std::vector<double> times;
   if (edges_found) *edges_found = 0;
@@ -706,12 +707,23 @@ std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double 
                               n_frames));
     }
     times.resize(static_cast<std::size_t>(n_frames));
-    CheckFrameRateAgainstExposure(times, fps, result.summary.sample_rate_hz, result.path);
+    CheckFrameRateAgainstExposure(times, clock.fps, clock.fps_name, result.summary.sample_rate_hz,
+                                  result.path);
+  } else if (!clock.time_s.empty()) {  // The camera's own time stamps.
+    CheckValue(clock.time_s.size() >= static_cast<std::size_t>(n_frames), "camera time stamps",
+               std::to_string(clock.time_s.size()), fmt::format("one per frame ({})", n_frames));
+    CheckValue(std::isfinite(clock.offset_s), "frame_time_offset_s",
+               fmt::format("{}", clock.offset_s), "a finite time");
+    for (int k = 0; k < n_frames; ++k) {
+      times.push_back(clock.offset_s + clock.time_s[static_cast<std::size_t>(k)] -
+                      clock.time_s.front());
+    }
   } else {
-    CheckValue(std::isfinite(fps) && fps > 0, "fps", fmt::format("{}", fps), "> 0");
-    CheckValue(std::isfinite(offset_s), "frame_time_offset_s", fmt::format("{}", offset_s),
-               "a finite time");
-    for (int k = 0; k < n_frames; ++k) times.push_back(offset_s + k / fps);
+    CheckValue(std::isfinite(clock.fps) && clock.fps > 0, "fps", fmt::format("{}", clock.fps),
+               "> 0");
+    CheckValue(std::isfinite(clock.offset_s), "frame_time_offset_s",
+               fmt::format("{}", clock.offset_s), "a finite time");
+    for (int k = 0; k < n_frames; ++k) times.push_back(clock.offset_s + k / clock.fps);
   }
   const double t0 = result.time_s.front(), t1 = result.time_s.back();
   if (times.front() < t0 || times.back() > t1) {

@@ -38,8 +38,8 @@ TEST(Momentum, SyntheticChainConservesMomentum) {
   const SensorResult sensor = MakeSensor(c);
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const SceneAnalysis a =
-      AnalyzeCorrelation(MakeCorrelation(c), map, c.fps, c.offset, sensor, Options(c));
+  const SceneAnalysis a = AnalyzeCorrelation(
+      MakeCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset}, sensor, Options(c));
   const MomentumResult& m = a.momentum;
   const MomentumSummary& s = m.summary;
   ASSERT_EQ(s.grid.subset_ids.size(), 12u);
@@ -98,8 +98,8 @@ TEST(Momentum, SoilOvertakingThePounderEndsThePeakStageAtTheCrossing) {
   AddChainPenetration(c, &sensor);  // The sub-frame t_e uses the pounder penetration.
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const SceneAnalysis a =
-      AnalyzeCorrelation(MakeChainCorrelation(c), map, c.fps, c.offset, sensor, Options(c));
+  const SceneAnalysis a = AnalyzeCorrelation(
+      MakeChainCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset}, sensor, Options(c));
   const MomentumSummary& s = a.momentum.summary;
   std::printf("t_e %.4f ms (truth %.4f-%.4f), m_add,max %.4f kg (truth %.4f-%.4f), error %.2f %%\n",
               1e3 * s.t_end_peak_s, 1e3 * c.tau_c, 1e3 * c.tau_e, s.added_mass_max_kg,
@@ -135,8 +135,8 @@ TEST(Momentum, LateSoilReaccelerationDoesNotMoveTheEndOfThePeakStage) {
   const SensorResult sensor = MakeSensor(c);
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const SceneAnalysis a =
-      AnalyzeCorrelation(MakeChainCorrelation(c), map, c.fps, c.offset, sensor, Options(c));
+  const SceneAnalysis a = AnalyzeCorrelation(
+      MakeChainCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset}, sensor, Options(c));
   const MomentumResult& m = a.momentum;
   const MomentumSummary& s = m.summary;
   // The bump is seen: some frame after t_e has a soil acceleration above 5 % of the maximum.
@@ -164,8 +164,8 @@ TEST(Momentum, WritesHdf5Groups) {
   const SensorResult sensor = MakeSensor(c);
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const SceneAnalysis a =
-      AnalyzeCorrelation(MakeCorrelation(c), map, c.fps, c.offset, sensor, Options(c));
+  const SceneAnalysis a = AnalyzeCorrelation(
+      MakeCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset}, sensor, Options(c));
   TestDir dir;
   const std::string path = dir.File("out.h5");
   {
@@ -236,8 +236,10 @@ TEST(Momentum, SensorNotCoveringTheFramesIsAnError) {
   sensor.velocity_m_s.resize(400);
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const std::string msg = ErrorText(
-      [&] { AnalyzeCorrelation(MakeCorrelation(c), map, c.fps, c.offset, sensor, Options(c)); });
+  const std::string msg = ErrorText([&] {
+    AnalyzeCorrelation(MakeCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset}, sensor,
+                       Options(c));
+  });
   EXPECT_NE(msg.find("does not cover the frames"), std::string::npos) << msg;
 }
 

@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "../io/mraw_test_writer.h"
 #include "../io/test_dir.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/preprocess/nyquist_bias.h"
 #include "impactdic/preprocess/preprocess.h"
@@ -69,6 +71,39 @@ TEST(FrameStream, AutoPrefilterIsDecidedByTheFirstAnalysedFrame) {
   const GaussianDecision& d = frames.preprocess_summary()->gaussian;
   EXPECT_TRUE(d.applied);
   EXPECT_EQ(d.figure.bias_px, MeasureNyquistBias(raw[0]).bias_px);
+}
+
+// A camera file read through the stream (what `run` and `correlate` read): the analysed range in
+// source indices, each frame named, numbered and timed as the camera's frame, preprocessed.
+TEST(FrameStream, ReadsACameraFileWithItsFrameNumbersAndTimes) {
+  TestDir dir;
+  std::vector<cv::Mat> raw;
+  for (int k = 0; k < 5; ++k) {
+    cv::Mat image(24, 32, CV_16U);
+    cv::randu(image, 0, 1023);
+    raw.push_back(image);
+  }
+  test::MrawWriteOptions o;
+  o.color_bit = 10;
+  o.start_frame = -3;
+  o.fps = 2000;
+  const std::string cih = test::WriteMraw(dir.File("rec"), raw, o);
+  PreprocessOptions options;
+  options.gaussian.mode = GaussianMode::kOn;
+  FrameStream frames(OpenFrameSource(cih), options, /*calibration=*/nullptr);
+  EXPECT_EQ(frames.source_frames(), 5);
+  frames.SetRange(1, 3);
+  ASSERT_EQ(frames.frame_count(), 3);
+  EXPECT_EQ(frames.FrameNumber(0), -2);
+  EXPECT_DOUBLE_EQ(frames.TimeS(2), 0 / 2000.0);
+  EXPECT_DOUBLE_EQ(frames.fps(), 2000);
+  EXPECT_EQ(frames.data_bits(), 10);
+  EXPECT_NE(frames.Name(0).find("frame -2"), std::string::npos) << frames.Name(0);
+  cv::Mat expected;
+  cv::GaussianBlur(raw[2], expected, cv::Size(5, 5), GaussianBlurOptions{}.sigma_px,
+                   GaussianBlurOptions{}.sigma_px, cv::BORDER_REFLECT_101);
+  EXPECT_EQ(cv::norm(frames.Read(1), expected, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(frames.ReadRaw(0), raw[1], cv::NORM_INF), 0);
 }
 
 }  // namespace

@@ -72,7 +72,8 @@ SceneAnalysis AnalyzeChain(const Chain& c, const CorrelationSeries& dic,
                            const MomentumOptions& options) {
   PanelMapping map;
   map.mm_per_px = c.scale;
-  return AnalyzeCorrelation(dic, map, c.fps, c.offset, MakeChainSensor(c), options);
+  return AnalyzeCorrelation(dic, map, {.fps = c.fps, .offset_s = c.offset}, MakeChainSensor(c),
+                            options);
 }
 
 // 8 of the 12 grid subsets: 4 valid = 33 %, below the default 50 %.

@@ -154,9 +154,9 @@ TEST(PhysicsFaults, FrameRateMustAgreeWithTheExposureChannel) {
   // The tolerance: 1 % plus one DAQ sample (40 us) over the edges' span (30.6 ms): 1.13 %. The
   // sample's edges give 1599.22 1/s; 1610 (+0.68 %) passes, 1625 (+1.6 %) does not.
   const SensorResult sensor = AnalyzeSensorCsv(kSample + "/sensor.csv", SensorOptions{});
-  EXPECT_EQ(FrameTimes(sensor, 50, 1600, 0).size(), 50u);
-  EXPECT_EQ(FrameTimes(sensor, 50, 1610, 0).size(), 50u);
-  ExpectErrorContaining([&] { FrameTimes(sensor, 50, 1625, 0); }, "within 1.1 %");
+  EXPECT_EQ(FrameTimes(sensor, 50, {.fps = 1600}).size(), 50u);
+  EXPECT_EQ(FrameTimes(sensor, 50, {.fps = 1610}).size(), 50u);
+  ExpectErrorContaining([&] { FrameTimes(sensor, 50, {.fps = 1625}); }, "within 1.1 %");
 }
 
 // A missing exposure column was reported as "frames: got 1 frames from 49 to 49" (the frames
@@ -216,7 +216,8 @@ TEST(PhysicsFaults, PeakStageNotAnalysedFromItsStartMakesTeNull) {
   map.mm_per_px = c.scale;
   const SensorResult sensor = MakeChainSensor(c);
   const SceneAnalysis late =
-      AnalyzeCorrelation(ChainFromFrame(c, 55), map, c.fps, c.offset, sensor, ChainOptions(c), 55);
+      AnalyzeCorrelation(ChainFromFrame(c, 55), map, {.fps = c.fps, .offset_s = c.offset}, sensor,
+                         ChainOptions(c), 55);
   const MomentumSummary& s = late.momentum.summary;
   EXPECT_FALSE(s.IsUsable());
   EXPECT_TRUE(std::isnan(s.t_end_peak_s));
@@ -230,7 +231,8 @@ TEST(PhysicsFaults, PeakStageNotAnalysedFromItsStartMakesTeNull) {
   EXPECT_TRUE(Contains(s.t_end_problem, "dic.first_frame")) << s.t_end_problem;
   EXPECT_NEAR(s.p_max_kg_m_s, c.PMax(), 1e-9);  // The sensor's figure stays.
   const SceneAnalysis at_impact =
-      AnalyzeCorrelation(ChainFromFrame(c, 50), map, c.fps, c.offset, sensor, ChainOptions(c), 50);
+      AnalyzeCorrelation(ChainFromFrame(c, 50), map, {.fps = c.fps, .offset_s = c.offset}, sensor,
+                         ChainOptions(c), 50);
   const MomentumSummary& ok = at_impact.momentum.summary;
   EXPECT_TRUE(ok.IsUsable()) << ok.t_end_problem;
   EXPECT_NEAR(ok.t_end_peak_s, c.tau_e, 1 / c.fps + 1e-12);
@@ -246,8 +248,9 @@ TEST(PhysicsFaults, FramesEndingInsideThePeakStageMakeTeNull) {
   c.frames = 70;
   PanelMapping map;
   map.mm_per_px = c.scale;
-  const SceneAnalysis a = AnalyzeCorrelation(MakeChainCorrelation(c), map, c.fps, c.offset,
-                                             MakeChainSensor(c), ChainOptions(c));
+  const SceneAnalysis a =
+      AnalyzeCorrelation(MakeChainCorrelation(c), map, {.fps = c.fps, .offset_s = c.offset},
+                         MakeChainSensor(c), ChainOptions(c));
   const MomentumSummary& s = a.momentum.summary;
   EXPECT_FALSE(s.IsUsable());
   EXPECT_TRUE(std::isnan(s.t_end_peak_s));

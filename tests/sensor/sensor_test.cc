@@ -167,11 +167,11 @@ TEST(Sensor, FrameTimesFromExposureWithinOneSample) {
   const SensorResult r = AnalyzeSensorCsv(csv, SensorOptions{});
   const int frames = static_cast<int>(rec.frame_times.size()) - 1;
   ASSERT_GT(frames, 50);
-  const std::vector<double> t = FrameTimes(r, frames, /*fps=*/0, /*offset_s=*/0);
+  const std::vector<double> t = FrameTimes(r, frames, CameraClock{});
   ASSERT_EQ(t.size(), static_cast<std::size_t>(frames));
   for (int k = 0; k < frames; ++k) EXPECT_NEAR(t[k], rec.frame_times[k], 1 / kFs) << k;
   // More frames than exposure pulses: the record does not cover the frames.
-  const std::string msg = ErrorText([&] { FrameTimes(r, frames + 10, 1600, 0); });
+  const std::string msg = ErrorText([&] { FrameTimes(r, frames + 10, {.fps = 1600}); });
   EXPECT_NE(msg.find("does not cover the frames"), std::string::npos) << msg;
 }
 
@@ -183,10 +183,10 @@ TEST(Sensor, FrameTimesFromOffsetAndCoverage) {
   raw.accel_g = rec.accel_g;
   raw.sample_rate_hz = kFs;
   const SensorResult r = ProcessSensor(raw, SensorOptions{});
-  const std::vector<double> t = FrameTimes(r, 10, 1600, 0.3);
+  const std::vector<double> t = FrameTimes(r, 10, {.fps = 1600, .offset_s = 0.3});
   EXPECT_DOUBLE_EQ(t[0], 0.3);
   EXPECT_DOUBLE_EQ(t[9], 0.3 + 9 / 1600.0);
-  const std::string msg = ErrorText([&] { FrameTimes(r, 2000, 1600, 0.3); });
+  const std::string msg = ErrorText([&] { FrameTimes(r, 2000, {.fps = 1600, .offset_s = 0.3}); });
   EXPECT_NE(msg.find("does not cover the frames"), std::string::npos) << msg;
   const std::string msg2 = ErrorText([&] {
     SampleSeries(r.time_s, r.velocity_m_s, {0.1, 9.0}, "pounder velocity");

@@ -155,12 +155,16 @@ struct DicResult {
   std::vector<cv::Point2d> positions;
   std::vector<FrameResult> frames;
   DicSummary summary;
-  // Image files only (CorrelateFiles): the frame number of every image, the first reference
-  // included, from the file names when they are one numbered series (io FrameNumbers, e.g. 12
-  // for frame_0012.png); empty otherwise. frames[k] is image frames[k].frame.
+  // The frame number of every image, the first reference included (dic CorrelateFrames: the
+  // source's FrameSource::FrameNumber, e.g. 12 for frame_0012.png, -12 for a camera's frame
+  // recorded before the trigger); empty from CorrelateSequence (then the indices).
+  // frames[k] is image frames[k].frame.
   std::vector<long long> frame_numbers;
-  // What was done to the images before correlation (dic_io ImageFilter::description; the
-  // results' /dic attribute `preprocess`), "" if nothing.
+  // The time stamp [s] of every image, the first reference included, when the source has them
+  // (camera files: FrameSource::TimeS); empty otherwise.
+  std::vector<double> time_s;
+  // What was done to the images before correlation (the results' /dic attribute `preprocess`),
+  // "" if nothing.
   std::string preprocess;
   // Further /dic attributes set by the caller (e.g. the pre-filter's decision: preprocess
   // PrefilterAttributes).
@@ -170,7 +174,8 @@ struct DicResult {
   std::vector<std::string> warnings;
 };
 
-// Correlates images[1..] with images[0] as the first reference.
+// Correlates images[1..] with images[0] as the first reference (dic CorrelateFrames on the
+// frames in memory).
 DicResult CorrelateSequence(const std::vector<cv::Mat>& images, const DicOptions& options);
 
 }  // namespace impactdic

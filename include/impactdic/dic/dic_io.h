@@ -1,12 +1,10 @@
-// Running the correlator on image files and writing its results (the `correlate` stage).
+// The correlator's results as the rows of the results files, and writing them (`correlate`).
 //
-//   DicResult r = CorrelateFiles({"f0.tif", "f1.tif", "f2.tif"}, options);
+//   DicResult r = CorrelateFrames(*OpenFrameSource("frames/"), options);  // dic/correlate_frames.h
 //   WriteDicResult("out.h5", r, options);   // or .csv
 #ifndef IMPACTDIC_DIC_DIC_IO_H_
 #define IMPACTDIC_DIC_DIC_IO_H_
 
-#include <functional>
-#include <opencv2/core.hpp>
 #include <string>
 #include <vector>
 
@@ -15,36 +13,6 @@
 #include "impactdic/io/dic_results.h"
 
 namespace impactdic {
-
-// What is done to every image after it is decoded and before it is correlated, the same for the
-// reference and the deformed images (`correlate --gaussian` passes the preprocess module's
-// Gaussian blur), with a one-line description stored in DicResult::preprocess. `apply` returns an
-// image of the same size and is called from up to two threads at once; empty: the images as
-// decoded.
-struct ImageFilter {
-  std::function<cv::Mat(const cv::Mat&)> apply;
-  std::string description;
-};
-
-// Correlates paths[1..] against paths[0] frame by frame, with a progress bar. Missing files are
-// reported (Error naming the file) before any work; each image is decoded while the previous
-// one is correlated (Error naming the file if it is corrupt or its size or depth differs from
-// the first image's), so besides the correlator's reference (and last frame, with `auto`) at
-// most two images are in memory. If both the reference and the first deformed image are bad,
-// the reference is named. An image whose colour layout differs from the reference's (an RGB
-// frame in a grey sequence) is converted to grey with a warning naming it (DicResult::warnings).
-// The caller checks the numbering of a listed sequence (io ListFrameSequence).
-DicResult CorrelateFiles(const std::vector<std::string>& paths, const DicOptions& options,
-                         const ImageFilter& filter = {});
-
-// Correlates the frames of a video (io VideoReader: decoded to grey) as a sequence, frame 0 the
-// first reference; one frame is decoded at a time, so memory does not grow with the video's
-// length. DicResult::frame_numbers are the 0-based video frame indices. A video that decodes
-// fewer frames than its container declares is correlated up to its last decodable frame, with the
-// warning (naming both counts) in DicResult::warnings. Error naming the file when it cannot be
-// opened or has fewer than two frames.
-DicResult CorrelateVideo(const std::string& path, const DicOptions& options,
-                         const ImageFilter& filter = {});
 
 // Whether a subset's displacement is used downstream (kinematics, momentum, figures): only a
 // converged subset (the status code results_layout::kValidStatusCode in files).

@@ -53,6 +53,9 @@ inline constexpr const char* kDicSigma = "/dic/sigma_px";
 inline constexpr const char* kDicFrame = "/dic/frame";
 inline constexpr const char* kDicFrameNumber = "/dic/frame_number";
 inline constexpr const char* kDicReferenceFrame = "/dic/reference_frame";
+// Per row [F], double, only when the source stores them (camera files): the image's time stamp
+// [s] from the file (relative to the camera's trigger).
+inline constexpr const char* kDicTimeS = "/dic/time_s";
 // Number attribute of /dic: index in the input sequence of the first reference (row 0).
 inline constexpr const char* kFirstFrameAttr = "first_frame";
 

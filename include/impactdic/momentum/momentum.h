@@ -156,7 +156,8 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
                                const SensorResult& sensor, const MomentumOptions& options);
 
 // The whole analysis of one scene from the correlation arrays: frame times from the sensor
-// (exposure edges, or frame_time_offset_s + k / fps), kinematics, momentum. `first_frame` is the
+// (sensor FrameTimes: exposure edges, or the camera clock), kinematics (dt = 1 / clock.fps),
+// momentum. `first_frame` is the
 // index in the camera sequence of the first correlated frame (the frame times are those of frames
 // first_frame .. first_frame + dic.frames - 1).
 struct SceneAnalysis {
@@ -165,7 +166,7 @@ struct SceneAnalysis {
   MomentumResult momentum;
 };
 SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
-                                 double fps, double frame_time_offset_s, const SensorResult& sensor,
+                                 const CameraClock& clock, const SensorResult& sensor,
                                  const MomentumOptions& options, std::size_t first_frame = 0);
 
 // Write the /sensor group, and the /kinematics, /sensor and /momentum groups, with units and

@@ -32,10 +32,11 @@ struct SceneRunData {
 
   // frames: the analysed frames first_frame..last_frame of the source's source_frames, read on
   // demand and preprocessed (pipeline/frame_stream.h: one frame in memory at a time; null = the
-  // stage did not run); the DAQ time of every frame of the source (empty without a sensor
-  // record).
+  // stage did not run); the frame rate and the camera's time stamps; the DAQ time of every frame
+  // of the source (empty without a sensor record).
   int source_frames = 0;
   int first_frame = 0, last_frame = -1;
+  CameraClock clock;  // How the frames are timed (pipeline SceneFrameClock).
   std::vector<double> frame_times_s;
   std::shared_ptr<FrameStream> frames;
   std::string preprocess_note;  // What the preprocessing did (one line).

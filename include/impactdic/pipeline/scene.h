@@ -36,8 +36,12 @@
 namespace impactdic {
 
 struct SceneInputs {
-  std::string frames;       // Folder, glob ("frames/*.png") or video file; resolved path.
-  double fps = 1600;        // Camera frame rate [1/s], kCameraFpsRange (core/range.h).
+  // Folder, glob ("frames/*.png"), video or camera file (.cine, .mraw, .cih, .cihx); resolved path.
+  std::string frames;
+  // Camera frame rate [1/s], kCameraFpsRange (core/range.h). A camera file states its own rate
+  // (pipeline SceneFrameClock): then inputs.fps is not needed, and one given must agree with it.
+  double fps = 1600;
+  bool fps_given = false;   // inputs.fps is in the scene file.
   std::string calibration;  // Calibration YAML (calib module); empty = none (scale from mm_per_px).
   // Scale when there is no calibration file [mm/px], kMmPerPxRange; 0 = from the calibration.
   double mm_per_px = 0;

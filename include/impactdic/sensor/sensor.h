@@ -12,7 +12,7 @@
 //   opt.integrate_from = IntegrationStart::kRelease;
 //   SensorResult r = AnalyzeSensorCsv("daq.csv", opt);
 //   std::cout << r.summary.BriefReport();
-//   std::vector<double> t_frames = FrameTimes(r, /*n_frames=*/200, /*fps=*/1600, /*offset_s=*/0);
+//   std::vector<double> t_frames = FrameTimes(r, /*n_frames=*/200, CameraClock{.fps = 1600});
 #ifndef IMPACTDIC_SENSOR_SENSOR_H_
 #define IMPACTDIC_SENSOR_SENSOR_H_
 
@@ -229,14 +229,25 @@ std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
 // (16000 for 1600 gave 10x velocities).
 inline constexpr double kFrameRateTolerance = 0.01;
 
+// How the camera times its frames, besides the DAQ's exposure channel.
+struct CameraClock {
+  double fps = 0;       // Frame rate [1/s]; 0 or NaN: unknown (only with an exposure channel).
+  double offset_s = 0;  // DAQ time of frame 0 without an exposure channel [s].
+  // The camera's own time stamps of frames 0.. (a camera file's; any origin); empty: k / fps.
+  std::vector<double> time_s;
+  // Where the rate comes from, in messages: the scene key or the camera file.
+  std::string fps_name = "inputs.fps";
+};
+
 // Times of frames 0..n_frames-1 on the DAQ clock: the exposure rising edges when the record has
-// an exposure channel, else offset_s + k / fps. Error (kInvalidValue) if there are fewer edges
+// an exposure channel, else offset_s + k / fps, or offset_s + time_s[k] - time_s[0] when the
+// camera's time stamps are given. Error (kInvalidValue) if there are fewer edges (or time stamps)
 // than frames or a frame lies outside the sensor record. With an exposure channel, fps (0 or NaN:
 // unknown) must agree with the rate of the frames' edges within kFrameRateTolerance (Error
-// naming inputs.fps and both rates). `edges_found` (optional) receives the
-// number of exposure edges in the record (0 without an exposure channel).
-std::vector<double> FrameTimes(const SensorResult& result, int n_frames, double fps,
-                               double offset_s, std::size_t* edges_found = nullptr);
+// naming clock.fps_name and both rates). `edges_found` (optional) receives the number of exposure
+// edges in the record (0 without an exposure channel).
+std::vector<double> FrameTimes(const SensorResult& result, int n_frames, const CameraClock& clock,
+                               std::size_t* edges_found = nullptr);
 
 // Frames timed by a record need its exposure channel when one is named: Error (kFileFormat)
 // naming the file, the missing column (`column`, the scene's sensor.exposure_column), the columns

@@ -28,8 +28,9 @@ namespace L = results_layout;
 namespace {
 
 // /time: every analysed frame's time since the impact [ms] and its index in the input sequence.
-// Without a sensor record the frames are timed k / fps from the first analysed frame.
-void WriteFrameTimes(H5Writer& out, const Scene& scene, const SceneRunData& d) {
+// Without a sensor record the frames are timed from the first analysed frame by the camera's time
+// stamps (a camera file), else k / fps.
+void WriteFrameTimes(H5Writer& out, const SceneRunData& d) {
   const std::size_t F = d.dic->rows;
   const std::vector<double>& all = d.frame_times_s;
   const auto first = static_cast<std::size_t>(d.first_frame);
@@ -37,7 +38,10 @@ void WriteFrameTimes(H5Writer& out, const Scene& scene, const SceneRunData& d) {
   const double t_impact = d.sensor ? d.sensor->summary.impact_time_s : t_ref;
   std::vector<double> t_ms(F), frame_index(F);
   for (std::size_t f = 0; f < F; ++f) {
-    const double tf = all.empty() ? f / scene.inputs.fps : all[first + f];
+    const std::vector<double>& stamps = d.clock.time_s;
+    const double tf = !all.empty()     ? all[first + f]
+                      : stamps.empty() ? static_cast<double>(f) / d.clock.fps
+                                       : stamps[first + f] - stamps[first];
     t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
     frame_index[f] = static_cast<double>(first + f);
   }
@@ -141,7 +145,7 @@ class ResultsFileWriter : public OutputWriter {
     H5Writer out(c.results_path);
     WriteRunAttributes(out, c.scene, c.summary);
     if (d.dic) {
-      WriteFrameTimes(out, c.scene, d);
+      WriteFrameTimes(out, d);
       WriteDicResults(out, *d.dic);
     }
     if (d.frames && c.scene.outputs.frames != FrameStorage::kNone)

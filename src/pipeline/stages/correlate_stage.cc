@@ -1,4 +1,4 @@
-// correlate: subset DIC of the analysed frames (dic CorrelateSequence), as the rows of the
+// correlate: subset DIC of the analysed frames (dic CorrelateFrames), as the rows of the
 // results layout (dic MakeDicResultsTable). No valid subset in any frame is a failure.
 #include <fmt/format.h>
 
@@ -12,8 +12,8 @@
 #include <utility>
 #include <vector>
 
-#include "impactdic/core/progress.h"
 #include "impactdic/core/threads.h"
+#include "impactdic/dic/correlate_frames.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
@@ -28,25 +28,6 @@
 
 namespace impactdic::stages {
 namespace {
-
-// Correlates the analysed frames as a sequence, as dic CorrelateSequence does, reading each frame
-// when it is correlated: one frame in memory besides what the correlator keeps.
-DicResult CorrelateStream(FrameStream& frames, const Scene& scene, DicOptions& options) {
-  const cv::Mat reference = frames.Read(0);
-  options.grid.mask = SceneMask(scene, reference.size());
-  Correlator correlator(options);
-  correlator.SetReference(reference);
-  DicResult result;
-  result.positions = correlator.positions();
-  ProgressBar bar("correlate", static_cast<std::size_t>(frames.count() - 1));
-  for (int k = 1; k < frames.count(); ++k) {
-    result.frames.push_back(correlator.Correlate(frames.Read(k)));
-    bar.Advance();
-  }
-  bar.Finish();
-  result.summary = correlator.summary();
-  return result;
-}
 
 class CorrelateStage : public Stage {
  public:
@@ -65,7 +46,8 @@ class CorrelateStage : public Stage {
     const bool given = c.options.threads >= 0;  // Else the scene's dic.threads.
     const ThreadLimit limit(given ? c.options.threads : scene.dic.threads,
                             given ? "threads" : "dic.threads");
-    DicResult dic = CorrelateStream(*d.frames, scene, options);
+    options.grid.mask = SceneMask(scene, d.frames->frame_size());
+    DicResult dic = CorrelateFrames(*d.frames, options);
     for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
     d.preprocess_note = d.frames->PreprocessNote();
     d.dic_summary = dic.summary;

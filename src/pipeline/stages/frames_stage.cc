@@ -77,8 +77,7 @@ std::string TimeFrames(StageContext& c) {
   std::size_t edges = 0;  // Exposure edges in the record.
   RequireExposureChannel(*d.sensor, scene.sensor.options.columns.exposure);
   try {
-    d.frame_times_s =
-        FrameTimes(*d.sensor, n, scene.inputs.fps, scene.sensor.frame_time_offset_s, &edges);
+    d.frame_times_s = FrameTimes(*d.sensor, n, d.clock, &edges);
   } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
     if (e.file().empty()) e.WithFile(e.where() == "inputs.fps" ? scene.path : scene.inputs.sensor);
     throw;
@@ -96,16 +95,19 @@ std::string TimeFrames(StageContext& c) {
   const double impact_s = d.sensor->summary.impact_time_s;
   d.first_frame = ReferenceFrameForImpact(d.frame_times_s, impact_s);
   if (d.last_frame - d.first_frame < 2) {  // Was "frames: got 1 frames from 49 to 49".
-    throw Error(ErrorKind::kInvalidValue, "frame times",
-                fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
-                            "fewer than 3 of them from the last one before the impact at "
-                            "{:.6g} s on",
-                            0, n - 1, d.frame_times_s.front(), d.frame_times_s.back(),
-                            edges > 0 ? "the exposure edges of " + scene.inputs.sensor
-                                      : std::string("sensor.frame_time_offset_s + k / inputs.fps"),
-                            impact_s),
-                "frames that film the impact: check sensor.frame_time_offset_s, the exposure "
-                "channel and dic.last_frame")
+    throw Error(
+        ErrorKind::kInvalidValue, "frame times",
+        fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
+                    "fewer than 3 of them from the last one before the impact at "
+                    "{:.6g} s on",
+                    0, n - 1, d.frame_times_s.front(), d.frame_times_s.back(),
+                    edges > 0 ? "the exposure edges of " + scene.inputs.sensor
+                    : d.clock.time_s.empty()
+                        ? std::string("sensor.frame_time_offset_s + k / inputs.fps")
+                        : "sensor.frame_time_offset_s + the time stamps of " + scene.inputs.frames,
+                    impact_s),
+        "frames that film the impact: check sensor.frame_time_offset_s, the exposure "
+        "channel and dic.last_frame")
         .WithFile(scene.path);
   }
   if (d.first_frame == 0) return "";
@@ -152,6 +154,7 @@ class FramesStage : public Stage {
     d.frames = std::make_shared<FrameStream>(scene.inputs.frames, ScenePreprocessOptions(scene),
                                              d.calibration ? &*d.calibration : nullptr);
     d.source_frames = d.frames->source_frames();
+    d.clock = SceneFrameClock(scene);
     CheckFrameRange(scene, d.source_frames);
     d.first_frame = scene.dic.first_frame;
     d.last_frame = scene.dic.last_frame < 0 ? d.source_frames - 1 : scene.dic.last_frame;
@@ -170,9 +173,13 @@ class FramesStage : public Stage {
     if (!scene.HasStage("correlate")) {
       for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
     }
-    return fmt::format("{} of {} frames ({}x{}, {}-bit){}; {}", d.frames->count(), d.source_frames,
-                       f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, skipped_note,
-                       d.preprocess_note);
+    const std::string rate =
+        d.clock.time_s.empty()
+            ? ""
+            : fmt::format(", {:.6g} fps and time stamps from the file", d.clock.fps);
+    return fmt::format("{} of {} frames ({}x{}, {}-bit{}){}; {}", d.frames->count(),
+                       d.source_frames, f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, rate,
+                       skipped_note, d.preprocess_note);
   }
 };
 

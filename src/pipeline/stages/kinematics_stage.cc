@@ -49,7 +49,7 @@ class KinematicsStage : public Stage {
     PanelMapping mapping;
     mapping.mm_per_px = d.mm_per_px;
     KinematicsOptions k;
-    k.fps = c.scene.inputs.fps;
+    k.fps = d.clock.fps;  // A camera file's own rate, else inputs.fps.
     d.kinematics =
         ComputeKinematics(AnalysedSeries(*d.dic, c.scene, &c.summary.warnings), mapping, k);
     // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when
