@@ -876,16 +876,26 @@ std::shared_ptr<const OrphanRef> Correlator::Impl::KeepForOrphan(int i) const {
   const std::size_t nn = static_cast<std::size_t>(shape.n) * shape.n;
   kept->hinv.assign(ref.hinv.begin() + static_cast<std::ptrdiff_t>(i * nn),
                     ref.hinv.begin() + static_cast<std::ptrdiff_t>((i + 1) * nn));
-  // A usable subset's footprint lies inside the reference region (PrepareSubset).
   const SubsetRef& s = kept->subset;
-  const cv::Rect footprint(s.cx - half, s.cy - half, size, size);
   const RefImages& im = ref.images;
-  const cv::Rect local = footprint - im.region.tl();
-  kept->images.region = footprint;
-  kept->images.f = im.f(local).clone();
-  kept->images.gx = im.gx(local).clone();
-  kept->images.gy = im.gy(local).clone();
   kept->images.full_scale = im.full_scale;
+  if (s.patch >= 0) {  // Patch layout: its own square, kept as a layout of one patch.
+    const cv::Rect square = im.Patch(s.patch);
+    kept->images.region = im.region;
+    kept->images.patch_size = im.patch_size;
+    kept->images.patch_cols = 1;
+    kept->images.f = im.f(square).clone();
+    kept->images.gx = im.gx(square).clone();
+    kept->images.gy = im.gy(square).clone();
+    kept->subset.patch = 0;
+  } else {  // A usable subset's footprint lies inside the reference region (PrepareSubset).
+    const cv::Rect footprint(s.cx - half, s.cy - half, size, size);
+    const cv::Rect local = footprint - im.region.tl();
+    kept->images.region = footprint;
+    kept->images.f = im.f(local).clone();
+    kept->images.gx = im.gx(local).clone();
+    kept->images.gy = im.gy(local).clone();
+  }
   const cv::Mat templ = SearchTemplate(s, ref.image32);
   if (!templ.empty()) kept->search_template = templ.clone();
   return kept;
