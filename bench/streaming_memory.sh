@@ -17,23 +17,25 @@
 # A benchmark, not a test: the times depend on the machine and its load; the memory does not.
 #
 #   bench/streaming_memory.sh [-b BINARY] [-w WIDTH] [-h HEIGHT] [-d DIR] [-t THREADS]
-#                             [-g RUN_STEP] [-c SUBSET,STEP] [-n] N1 N2 ...
+#                             [-g RUN_STEP] [-a] [-c SUBSET,STEP] [-n] N1 N2 ...
 #   bench/streaming_memory.sh 50 500        # 1920x1440: ~2.8 MB of PNG per frame in DIR
 #   bench/streaming_memory.sh -w 4096 -h 3000 -d /tmp/bench4k -g 50 -c 25,50 20 80 500
 #     (4096x3000: ~9 MB of PNG per frame; -g 50: run with dic.step 50 instead of the scene's 20,
-#     -c 25,50: the issue's real-sand grid; -n: correlate only, no run)
+#     -c 25,50: the issue's real-sand grid; -n: correlate only, no run; -a: the run without the
+#     animation, whose H.264 encoder holds a lookahead of canvas frames, docs/architecture.md)
 set -euo pipefail
 binary="$(dirname "$0")/../build/release/src/cli/impactdic"
-width=1920 height=1440 dir=/tmp/impactdic_streaming_bench threads=2 run_step="" grid="" run=1
-while getopts "b:w:h:d:t:g:c:n" opt; do
+width=1920 height=1440 dir=/tmp/impactdic_streaming_bench threads=2 run_step="" grid="" run=1 animation=true
+while getopts "b:w:h:d:t:g:c:na" opt; do
   case $opt in
     b) binary=$OPTARG ;; w) width=$OPTARG ;; h) height=$OPTARG ;; d) dir=$OPTARG ;;
-    t) threads=$OPTARG ;; g) run_step=$OPTARG ;; c) grid=$OPTARG ;; n) run=0 ;; *) exit 2 ;;
+    t) threads=$OPTARG ;; g) run_step=$OPTARG ;; c) grid=$OPTARG ;; n) run=0 ;;
+    a) animation=false ;; *) exit 2 ;;
   esac
 done
 shift $((OPTIND - 1))
 [ $# -ge 1 ] || {
-  echo "usage: $0 [-b BINARY] [-w W] [-h H] [-d DIR] [-t THREADS] [-g RUN_STEP] [-c SUBSET,STEP] [-n] N..." >&2
+  echo "usage: $0 [-b BINARY] [-w W] [-h H] [-d DIR] [-t THREADS] [-g RUN_STEP] [-a] [-c SUBSET,STEP] [-n] N..." >&2
   exit 2
 }
 max=0
@@ -69,8 +71,8 @@ if [ "$run" = 1 ]; then
   for n in "$@"; do
     step_edit=""  # The scene's dic.step is its only `step:` line.
     [ -z "$run_step" ] || step_edit="s/^  step: [0-9]*$/  step: $run_step/"
-    sed -e "s/^dic:$/dic:\n  last_frame: $((n + 1))/" -e "$step_edit" "$dir/scene/scene.yaml" \
-      > "$dir/scene/n$n.yaml"
+    sed -e "s/^dic:$/dic:\n  last_frame: $((n + 1))/" -e "$step_edit" \
+      -e "s/^  animation: true$/  animation: $animation/" "$dir/scene/scene.yaml" > "$dir/scene/n$n.yaml"
     rm -rf "$dir/out$n"
     /usr/bin/time -f "%M %e" -o "$dir/time$n.txt" "$binary" run "$dir/scene/n$n.yaml" \
       -o "$dir/out$n" --threads "$threads" --allow-partial > "$dir/run$n.txt" 2>&1
