@@ -67,7 +67,10 @@ DicResult CorrelateFrames(FrameSource& frames, const DicOptions& options,
   const int count = frames.frame_count();
   CheckValue(count >= 2, "images", std::to_string(count),
              "a reference and at least one deformed image");
-  Correlator correlator(options);
+  DicOptions own = options;
+  // A camera file's bit depth, which the pixels cannot tell (10-bit data fits 0..4095 too).
+  if (own.data_bits == 0 && frames.StatesDataBits()) own.data_bits = frames.data_bits();
+  Correlator correlator(own);
   const cv::Mat reference = frames.Read(0);
   // The reference's precomputation while frame 1 is read; an error of the reference is reported
   // first (deterministic).

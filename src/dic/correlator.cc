@@ -54,14 +54,15 @@ SubsetRef CentredSubset(cv::Point2d pos) {
   return s;
 }
 
-// The saturation level of the first reference's data (io DataBits: 255, 4095 for 12-bit data in
-// 16-bit containers, 65535). The contrast and featureless limits are relative to it, so the same
+// The saturation level of the sequence's data: of `data_bits` (DicOptions::data_bits) when
+// given, else of the first reference's (io DataBits: 255, 4095 for 12-bit data in 16-bit
+// containers, 65535). The contrast and featureless limits are relative to it, so the same
 // speckle as 12-bit or 16-bit data passes the same subsets. Float data has no saturation level:
 // its largest magnitude in the first reference stands for it (just above it, so that no pixel
 // counts as saturated at the top), so float images scaled to 0..1 or to 0..255 pass the same
 // subsets as their 8-bit original.
-double FullScale(const cv::Mat& raw) {
-  const int bits = DataBits(raw);
+double FullScale(const cv::Mat& raw, int data_bits) {
+  const int bits = data_bits > 0 ? data_bits : DataBits(raw);
   if (bits > 0) return static_cast<double>((1 << bits) - 1);
   double lo = 0, hi = 0;
   cv::minMaxLoc(raw.reshape(1), &lo, &hi);
@@ -141,7 +142,9 @@ std::string DicSummary::BriefReport() const {
       "{} subsets x {} frames: {:.2f}% valid, {:.2f} iterations/subset, {} reference updates, "
       "{:.3f} s ({:.0f} subsets/s){}{}{}",
       subsets, frames, 100 * valid_fraction, mean_iterations, reference_updates, seconds_total,
-      SubsetsPerSecond(), data_bits == 12 ? "; 12-bit data in 16-bit images" : "",
+      SubsetsPerSecond(),
+      data_bits == 10 || data_bits == 12 ? fmt::format("; {}-bit data in 16-bit images", data_bits)
+                                         : "",
       Discontinuous() > 0 ? fmt::format("; {} subset results flagged as straddling a "
                                         "discontinuity",
                                         Discontinuous())
@@ -998,7 +1001,7 @@ void Correlator::SetReference(const cv::Mat& image) {
              fmt::format("{}x{}", g.mask.cols, g.mask.rows), "the image size");
   m.image_size = image.size();
   m.depth = image.depth();
-  m.full_scale = FullScale(image);
+  m.full_scale = FullScale(image, m.options.data_bits);
   // Subsets keep kBorderPx from the image border: the interpolation support of a subset that
   // moves by a pixel must stay inside the image.
   const cv::Rect inner(kBorderPx, kBorderPx, image.cols - 2 * kBorderPx,
@@ -1034,7 +1037,7 @@ void Correlator::SetReference(const cv::Mat& image) {
   m.last_index = 0;
   m.summary = DicSummary{};
   m.summary.subsets = n;
-  m.summary.data_bits = DataBits(image);
+  m.summary.data_bits = m.options.data_bits > 0 ? m.options.data_bits : DataBits(image);
   m.iteration_sum = m.converged_sum = 0;
   FrameResult timing;
   WallTimer timer;

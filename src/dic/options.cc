@@ -198,6 +198,9 @@ void DicOptions::Check() const {
   update.Check();
   continuity.Check();
   outliers.Check();
+  CheckValue(
+      data_bits == 0 || data_bits == 8 || data_bits == 10 || data_bits == 12 || data_bits == 16,
+      "data_bits", std::to_string(data_bits), "0 (measured), 8, 10, 12 or 16");
 }
 
 }  // namespace impactdic

@@ -136,6 +136,7 @@ class CameraFileSource : public FrameSource {
   double fps() const override { return file_->info().fps; }
   cv::Size frame_size() override { return {file_->info().width_px, file_->info().height_px}; }
   int data_bits() override { return file_->info().data_bits; }
+  bool StatesDataBits() const override { return true; }
   std::string description() const override { return path_; }
 
  private:

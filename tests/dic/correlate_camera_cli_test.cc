@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include "../core/shared_data.h"
 #include "../io/mraw_test_writer.h"
 #include "../io/test_dir.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/camera_file.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
@@ -117,6 +119,25 @@ TEST(CorrelateCameraCli, PhotronRecordingsOfEveryBitDepthCorrelate) {
     EXPECT_EQ(in.ReadDouble("/dic/frame_number"), (std::vector<double>{-1, 0, 1, 2}));
     EXPECT_EQ(in.ReadDouble("/dic/time_s"), (std::vector<double>{-1e-3, 0, 1e-3, 2e-3}));
   }
+}
+
+// 10-bit data fits 0..4095 like 12-bit data, so the pixels alone would put its saturation at 4095;
+// the recording states 10 bits, and glare clipped at 1023 is flagged `saturated`.
+TEST(CorrelateCameraCli, TenBitRecordingsSaturateAtTheirOwnLimit) {
+  const TestDir dir;
+  std::vector<cv::Mat> frames = ShiftedFrames(3, 10);
+  for (cv::Mat& f : frames) f(cv::Rect(0, 0, f.cols / 2, f.rows)).setTo(1023);  // Clipped glare.
+  test::MrawWriteOptions o;
+  o.color_bit = 10;
+  const std::string cih = test::WriteMraw(dir.File("glare"), frames, o);
+  const CliResult r =
+      RunCli(Quiet("--frames " + cih + " --subset 21 --step 16 -o " + dir.File("glare.h5")));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("10-bit data in 16-bit images"), std::string::npos) << r.output;
+  const std::vector<double> status = H5Reader(dir.File("glare.h5")).ReadDouble("/dic/status");
+  const auto saturated =
+      std::count(status.begin(), status.end(), static_cast<double>(SubsetStatus::kSaturated));
+  EXPECT_GT(saturated, 0) << r.output;
 }
 
 TEST(CorrelateCameraCli, FrameRangeOutsideTheRecordingIsRefusedNamingItsSpan) {

@@ -97,8 +97,9 @@ struct DicSummary {
   double mean_iterations = 0;  // Mean IC-GN iterations of the converged results.
   int reference_updates = 0;
   long long searches = 0;
-  // Dynamic range of the first reference's data (io DataBits: 8, 12 for 12-bit data in 16-bit
-  // images, 16; 0 for float images): the contrast and saturation limits are relative to it.
+  // Dynamic range of the data: DicOptions::data_bits when given (a camera file's 10 bits), else
+  // the first reference's (io DataBits: 8, 12 for 12-bit data in 16-bit images, 16; 0 for float
+  // images): the contrast and saturation limits are relative to it.
   int data_bits = 0;
   std::array<long long, kSubsetStatusCount> status_counts{};
   // The most bytes of reference data kept, at any time, for subsets lost at a reference update

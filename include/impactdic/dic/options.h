@@ -244,6 +244,12 @@ struct DicOptions {
   UpdateOptions update;
   ContinuityCheckOptions continuity;
   OutlierCheckOptions outliers;
+  // Significant bits of the frames' data: 8, or 10, 12, 16 in 16-bit images; 0 = measured from the
+  // first reference (io DataBits, which takes any 16-bit image whose maximum is at most 4095 for
+  // 12-bit data, so it cannot tell 10-bit data from 12-bit). The saturation level and the contrast
+  // limits follow it. The correlation driver (dic/correlate_frames.h) sets it from a source that
+  // states its bit depth (a camera file).
+  int data_bits = 0;
   void Check() const;
 };
 

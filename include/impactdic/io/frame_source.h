@@ -49,6 +49,9 @@ class FrameSource {
   // camera's for a camera file) of the frames; image files and video read frame 0 for them once.
   virtual cv::Size frame_size();
   virtual int data_bits();
+  // Whether data_bits() is the bit depth the recording states (a camera file: 10-bit data is
+  // then known as such), not measured from frame 0's pixels.
+  virtual bool StatesDataBits() const { return false; }
   // What reading found (a colour image in a grey sequence, a truncated video), each once, in
   // the order found.
   virtual const std::vector<std::string>& warnings() const { return warnings_; }

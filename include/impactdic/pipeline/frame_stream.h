@@ -99,6 +99,7 @@ class FrameStream : public FrameSource {
     return first_raw_.empty() ? source_->frame_size() : first_raw_.size();
   }
   int data_bits() override { return source_->data_bits(); }
+  bool StatesDataBits() const override { return source_->StatesDataBits(); }
   std::string description() const override { return source_->description(); }
   // The source's warnings (a colour image in a grey sequence, a truncated video), each reported
   // once however often a frame is re-read.
