@@ -13,6 +13,7 @@
 
 #include "../core/expect_error.h"
 #include "../core/shared_data.h"
+#include "cine_test_writer.h"
 #include "impactdic/io/camera_file.h"
 #include "test_dir.h"
 
@@ -200,63 +201,11 @@ TEST(CineFile, MissingFileIsNamed) {
   ExpectErrorContaining([] { OpenCineFile("/nonexistent/x.cine"); }, "/nonexistent/x.cine");
 }
 
-// A minimal cine written from the published layout: `pixels` already in the file's encoding.
-struct SyntheticCine {
-  int width = 4, height = 3;
-  int bi_height = 3;  // Negative: rows stored top-down.
-  std::uint16_t bit_count = 16;
-  std::uint32_t bi_compression = 0;
-  std::int32_t first_image_no = -2;
-  std::uint32_t frame_rate = 1000;
-  std::uint32_t real_bpp = 12;
-  std::vector<std::vector<std::uint8_t>> images;
-};
-
-void Put(std::vector<char>& b, std::size_t at, std::uint64_t value, int bytes) {
-  for (int i = 0; i < bytes; ++i) b[at + i] = static_cast<char>((value >> (8 * i)) & 0xFF);
-}
-
-std::vector<char> WriteCine(const SyntheticCine& c) {
-  const std::size_t setup_at = 84, setup_length = 1000;
-  const std::size_t offsets_at = setup_at + setup_length;  // No tagged blocks.
-  std::size_t image_at = offsets_at + 8 * c.images.size();
-  std::vector<char> b(image_at);
-  b[0] = 'C';
-  b[1] = 'I';
-  Put(b, 2, 44, 2);
-  Put(b, 16, static_cast<std::uint32_t>(c.first_image_no), 4);
-  Put(b, 20, c.images.size(), 4);
-  Put(b, 24, 44, 4);
-  Put(b, 28, setup_at, 4);
-  Put(b, 32, offsets_at, 4);
-  Put(b, 44, 40, 4);
-  Put(b, 48, static_cast<std::uint32_t>(c.width), 4);
-  Put(b, 52, static_cast<std::uint32_t>(c.bi_height), 4);
-  Put(b, 58, c.bit_count, 2);
-  Put(b, 60, c.bi_compression, 4);
-  Put(b, setup_at + 0, c.frame_rate, 2);
-  b[setup_at + 140] = 'S';
-  b[setup_at + 141] = 'T';
-  Put(b, setup_at + 142, setup_length, 2);
-  Put(b, setup_at + 768, c.frame_rate, 4);
-  Put(b, setup_at + 896, c.real_bpp, 4);
-  for (std::size_t i = 0; i < c.images.size(); ++i) {
-    Put(b, offsets_at + 8 * i, image_at, 8);
-    std::vector<char> block(8 + c.images[i].size());
-    Put(block, 0, 8, 4);
-    Put(block, 4, c.images[i].size(), 4);
-    std::copy(c.images[i].begin(), c.images[i].end(), block.begin() + 8);
-    b.insert(b.end(), block.begin(), block.end());
-    image_at += block.size();
-  }
-  return b;
-}
-
 TEST(CineFile, ReadsTwelveBitPackedAndTopDownRows) {
   const TestDir dir;
   // 12-bit packed, 4 x 3: values v = 100 * k + 7 for pixel k, two pixels in three bytes, most
   // significant bits first.
-  SyntheticCine c;
+  test::SyntheticCine c;
   c.bit_count = 16;
   c.bi_compression = 1024;
   std::vector<std::uint8_t> packed;
@@ -268,7 +217,7 @@ TEST(CineFile, ReadsTwelveBitPackedAndTopDownRows) {
   }
   c.images = {packed, packed};
   const std::string path = dir.File("p12.cine");
-  WriteAll(path, WriteCine(c));
+  WriteAll(path, test::WriteCine(c));
   auto reader = OpenCineFile(path);
   EXPECT_EQ(reader->info().data_bits, 12);
   EXPECT_EQ(reader->info().first_frame_number, -2);
@@ -280,7 +229,7 @@ TEST(CineFile, ReadsTwelveBitPackedAndTopDownRows) {
   for (int k = 0; k < 12; ++k) EXPECT_EQ(frame.at<std::uint16_t>(k / 4, k % 4), 100 * k + 7) << k;
 
   // 16-bit plain with negative biHeight: rows stored top-down, read as they are.
-  SyntheticCine t;
+  test::SyntheticCine t;
   t.bi_height = -3;
   std::vector<std::uint8_t> plain;
   for (int k = 0; k < 12; ++k) {
@@ -288,12 +237,12 @@ TEST(CineFile, ReadsTwelveBitPackedAndTopDownRows) {
     plain.push_back(static_cast<std::uint8_t>((1000 + k) >> 8));
   }
   t.images = {plain};
-  WriteAll(path, WriteCine(t));
+  WriteAll(path, test::WriteCine(t));
   const cv::Mat top_down = OpenCineFile(path)->ReadFrame(0);
   for (int k = 0; k < 12; ++k) EXPECT_EQ(top_down.at<std::uint16_t>(k / 4, k % 4), 1000 + k) << k;
   // The same data with positive biHeight: bottom-up, so the first stored row is the last.
   t.bi_height = 3;
-  WriteAll(path, WriteCine(t));
+  WriteAll(path, test::WriteCine(t));
   const cv::Mat bottom_up = OpenCineFile(path)->ReadFrame(0);
   EXPECT_EQ(bottom_up.at<std::uint16_t>(2, 0), 1000);
   EXPECT_EQ(bottom_up.at<std::uint16_t>(0, 0), 1008);
@@ -301,15 +250,15 @@ TEST(CineFile, ReadsTwelveBitPackedAndTopDownRows) {
 
 TEST(CineFile, RefusesCompressedImages) {
   const TestDir dir;
-  SyntheticCine c;
+  test::SyntheticCine c;
   c.images = {std::vector<std::uint8_t>(24, 0)};
-  std::vector<char> bytes = WriteCine(c);
-  Put(bytes, 4, 1, 2);  // Compression = CC_JPEG.
+  std::vector<char> bytes = test::WriteCine(c);
+  test::Put(bytes, 4, 1, 2);  // Compression = CC_JPEG.
   const std::string path = dir.File("jpeg.cine");
   WriteAll(path, bytes);
   ExpectErrorContaining([&] { OpenCineFile(path); }, "JPEG-compressed");
   c.bi_compression = 3;  // Not a known pixel format.
-  WriteAll(path, WriteCine(c));
+  WriteAll(path, test::WriteCine(c));
   ExpectErrorContaining([&] { OpenCineFile(path); }, "biCompression 3");
 }
 

@@ -5,16 +5,21 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
+#include "../core/expect_error.h"
+#include "../io/cine_test_writer.h"
 #include "../io/mraw_test_writer.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/preprocess/nyquist_bias.h"
 #include "impactdic/preprocess/preprocess.h"
 
@@ -104,6 +109,54 @@ TEST(FrameStream, ReadsACameraFileWithItsFrameNumbersAndTimes) {
                    GaussianBlurOptions{}.sigma_px, cv::BORDER_REFLECT_101);
   EXPECT_EQ(cv::norm(frames.Read(1), expected, cv::NORM_INF), 0);
   EXPECT_EQ(cv::norm(frames.ReadRaw(0), raw[1], cv::NORM_INF), 0);
+}
+
+// A scene whose frames are a 5-image .cine (camera frames -2..2) at 1000 fps, time-stamped.
+Scene CineScene(const TestDir& dir, const std::vector<double>& time_s) {
+  test::SyntheticCine c;
+  c.images.assign(5, std::vector<std::uint8_t>(24, 0));  // 4 x 3 px, 16-bit.
+  c.time_s = time_s;
+  Scene scene;
+  scene.inputs.frames = dir.File("rec.cine");
+  test::WriteCineFile(scene.inputs.frames, c);
+  scene.path = dir.File("scene.yaml");
+  scene.sensor.frame_time_offset_s = 0.25;
+  return scene;
+}
+
+TEST(SceneFrameClock, ACameraFileGivesItsRateAndTimeStamps) {
+  const TestDir dir;
+  const std::vector<double> stamps = {-0.002, -0.001, 0, 0.001, 0.002};
+  const CameraClock clock = SceneFrameClock(CineScene(dir, stamps));
+  EXPECT_EQ(clock.fps, 1000);  // Not inputs.fps's default 1600.
+  EXPECT_EQ(clock.offset_s, 0.25);
+  ASSERT_EQ(clock.time_s.size(), stamps.size());
+  for (std::size_t k = 0; k < stamps.size(); ++k) EXPECT_NEAR(clock.time_s[k], stamps[k], 1e-9);
+  EXPECT_NE(clock.fps_name.find("rec.cine"), std::string::npos) << clock.fps_name;
+  // Image files: inputs.fps and no time stamps.
+  Scene images;
+  images.inputs.frames = dir.File("frames/*.png");
+  images.inputs.fps = 2000;
+  EXPECT_EQ(SceneFrameClock(images).fps, 2000);
+  EXPECT_TRUE(SceneFrameClock(images).time_s.empty());
+}
+
+TEST(SceneFrameClock, ADroppedFrameInTheTimeStampsIsRefusedNamingBothFrames) {
+  const TestDir dir;
+  // Camera frames 0 and 1 are 2 ms apart at 1000 fps: one frame is missing between them.
+  const Scene scene = CineScene(dir, {-0.002, -0.001, 0, 0.002, 0.003});
+  ExpectErrorContaining([&] { SceneFrameClock(scene); }, "frames 0 and 1 0.002 s apart");
+  ExpectErrorContaining([&] { SceneFrameClock(scene); }, "rec.cine");
+}
+
+TEST(SceneFrameClock, AnInputsFpsThatDisagreesWithTheFileIsRefused) {
+  const TestDir dir;
+  Scene scene = CineScene(dir, {-0.002, -0.001, 0, 0.001, 0.002});
+  scene.inputs.fps = 1100;
+  scene.inputs.fps_given = true;
+  ExpectErrorContaining([&] { SceneFrameClock(scene); }, "inputs.fps");
+  scene.inputs.fps = 1005;  // Within 1 %: the file's rate is used.
+  EXPECT_EQ(SceneFrameClock(scene).fps, 1000);
 }
 
 }  // namespace
