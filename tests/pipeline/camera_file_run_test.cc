@@ -2,19 +2,23 @@
 // as a Photron .mraw recording give exactly the results of the same frames as PNG files, with the
 // frame rate taken from the file (the scene needs no inputs.fps), whether the frames are timed by
 // the DAQ's exposure channel or by the camera's own time stamps; an inputs.fps that disagrees with
-// the file is refused naming both.
+// the file is refused naming both. The same frames as a time-stamped Phantom .cine give the same
+// results, timed by the file's stamps.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <fstream>
+#include <opencv2/core.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../io/cine_test_writer.h"
 #include "../io/mraw_test_writer.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/csv.h"
@@ -60,6 +64,23 @@ class CameraFileRun : public ::testing::Test {
     o.fps = Fps();
     o.start_frame = -3;  // Frames before the trigger: negative camera numbers.
     cih_ = new std::string(test::WriteMraw(dir_->File("scene/rec"), frames, o));
+    // The same frames as an 8-bit Phantom .cine (rows bottom-up, as cameras save them) with
+    // TIME64 time stamps 1 / fps apart, frame 0 of the file at camera frame -3.
+    test::SyntheticCine cine;
+    cine.width = frames[0].cols;
+    cine.height = frames[0].rows;
+    cine.bi_height = frames[0].rows;
+    cine.bit_count = 8;
+    cine.real_bpp = 8;
+    cine.first_image_no = -3;
+    cine.frame_rate = static_cast<std::uint32_t>(Fps());
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      cv::Mat flipped;
+      cv::flip(frames[k], flipped, 0);
+      cine.images.emplace_back(flipped.datastart, flipped.dataend);
+      cine.time_s.push_back((static_cast<double>(k) - 3) / Fps());
+    }
+    test::WriteCineFile(dir_->File("scene/rec.cine"), cine);
   }
   static void TearDownTestSuite() {
     delete cih_;
@@ -159,6 +180,37 @@ TEST_F(CameraFileRun, CameraTimeStampsTimeTheFramesWithoutAnExposureChannel) {
       EXPECT_NEAR(v_png[k], v_mraw[k], 1e-9 * std::abs(v_png[k]) + 1e-12) << k;
     }
   }
+}
+
+TEST_F(CameraFileRun, ATimeStampedCineGivesThePngResults) {
+  const CsvTable csv = ReadCsv(dir_->File("scene/sensor.csv"));
+  const std::vector<double> edges =
+      ExposureRisingEdges(csv.Column("time_s"), csv.Column("exposure"));
+  ASSERT_FALSE(edges.empty());
+  const std::string no_exposure =
+      fmt::format("  exposure_column: \"\"\n  frame_time_offset_s: {:.17g}\n", edges.front());
+  const CliResult png = Run(
+      Scene("png_c", "frames/frame_*.png", "  fps: " + std::to_string(Fps()) + "\n", no_exposure),
+      "png_c");
+  ASSERT_EQ(png.exit_code, 0) << png.output;
+  const CliResult cine = Run(Scene("cine", "rec.cine", "", no_exposure), "cine");
+  ASSERT_EQ(cine.exit_code, 0) << cine.output;
+  for (const char* name : {L::kDicU, L::kDicV}) {
+    const std::vector<double> a = Dataset("png_c", name), b = Dataset("cine", name);
+    ASSERT_EQ(a.size(), b.size()) << name;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      if (std::isnan(a[k]) != std::isnan(b[k]) || (!std::isnan(a[k]) && a[k] != b[k]))
+        ADD_FAILURE() << name << "[" << k << "]: " << a[k] << " vs " << b[k];
+    }
+  }
+  const std::vector<double> t_png = Dataset("png_c", L::kTimeMs);
+  const std::vector<double> t_cine = Dataset("cine", L::kTimeMs);
+  ASSERT_EQ(t_png.size(), t_cine.size());
+  for (std::size_t k = 0; k < t_png.size(); ++k) EXPECT_NEAR(t_png[k], t_cine[k], 1e-6) << k;
+  // The camera's numbers of the analysed frames.
+  const std::vector<double> numbers = Dataset("cine", L::kDicFrameNumber);
+  ASSERT_FALSE(numbers.empty());
+  EXPECT_EQ(numbers.front(), Dataset("cine", L::kTimeFrameIndex).front() - 3);
 }
 
 TEST_F(CameraFileRun, AnFpsThatDisagreesWithTheFileIsRefusedNamingBoth) {
