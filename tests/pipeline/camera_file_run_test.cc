@@ -126,6 +126,29 @@ class CameraFileRun : public ::testing::Test {
     return H5Reader(dir_->File(run + "/results.h5")).ReadDouble(name);
   }
 
+  // The sensor lines that time the frames without the exposure channel, from
+  // sensor.frame_time_offset_s set to the first exposure edge: a PNG run (offset + k / fps) is
+  // then the same experiment as one timed by the camera's stamps.
+  static std::string NoExposureLines() {
+    const CsvTable csv = ReadCsv(dir_->File("scene/sensor.csv"));
+    const std::vector<double> edges =
+        ExposureRisingEdges(csv.Column("time_s"), csv.Column("exposure"));
+    EXPECT_FALSE(edges.empty());
+    return fmt::format("  exposure_column: \"\"\n  frame_time_offset_s: {:.17g}\n",
+                       edges.empty() ? 0.0 : edges.front());
+  }
+
+  // Dataset `name` of two runs' results.h5: equal element by element, NaN where NaN.
+  static void ExpectSameDataset(const std::string& run_a, const std::string& run_b,
+                                const std::string& name) {
+    const std::vector<double> a = Dataset(run_a, name), b = Dataset(run_b, name);
+    ASSERT_EQ(a.size(), b.size()) << name;
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      if (std::isnan(a[k]) != std::isnan(b[k]) || (!std::isnan(a[k]) && a[k] != b[k]))
+        ADD_FAILURE() << name << "[" << k << "]: " << a[k] << " vs " << b[k];
+    }
+  }
+
   static TestDir* dir_;
   static std::string* cih_;
 };
@@ -140,26 +163,14 @@ TEST_F(CameraFileRun, AMrawGivesThePngResultsWithTheFilesFrameRate) {
   const CliResult mraw = Run(Scene("mraw", "rec.cih", ""), "mraw");
   ASSERT_EQ(mraw.exit_code, 0) << mraw.output;
   for (const char* name : {L::kDicU, L::kDicV, L::kVy, L::kTimeMs}) {
-    const std::vector<double> a = Dataset("png", name), b = Dataset("mraw", name);
-    ASSERT_EQ(a.size(), b.size()) << name;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      if (std::isnan(a[k]) != std::isnan(b[k]) || (!std::isnan(a[k]) && a[k] != b[k]))
-        ADD_FAILURE() << name << "[" << k << "]: " << a[k] << " vs " << b[k];
-    }
+    ExpectSameDataset("png", "mraw", name);
   }
   EXPECT_EQ(ReadText(dir_->File("png/summary.json")).size(),
             ReadText(dir_->File("mraw/summary.json")).size());
 }
 
 TEST_F(CameraFileRun, CameraTimeStampsTimeTheFramesWithoutAnExposureChannel) {
-  // Without the exposure channel the frames are timed from sensor.frame_time_offset_s: set it to
-  // the first exposure edge, so that the PNG run (offset + k / fps) is the same experiment.
-  const CsvTable csv = ReadCsv(dir_->File("scene/sensor.csv"));
-  const std::vector<double> edges =
-      ExposureRisingEdges(csv.Column("time_s"), csv.Column("exposure"));
-  ASSERT_FALSE(edges.empty());
-  const std::string no_exposure =
-      fmt::format("  exposure_column: \"\"\n  frame_time_offset_s: {:.17g}\n", edges.front());
+  const std::string no_exposure = NoExposureLines();
   const CliResult png = Run(
       Scene("png_t", "frames/frame_*.png", "  fps: " + std::to_string(Fps()) + "\n", no_exposure),
       "png_t");
@@ -183,12 +194,7 @@ TEST_F(CameraFileRun, CameraTimeStampsTimeTheFramesWithoutAnExposureChannel) {
 }
 
 TEST_F(CameraFileRun, ATimeStampedCineGivesThePngResults) {
-  const CsvTable csv = ReadCsv(dir_->File("scene/sensor.csv"));
-  const std::vector<double> edges =
-      ExposureRisingEdges(csv.Column("time_s"), csv.Column("exposure"));
-  ASSERT_FALSE(edges.empty());
-  const std::string no_exposure =
-      fmt::format("  exposure_column: \"\"\n  frame_time_offset_s: {:.17g}\n", edges.front());
+  const std::string no_exposure = NoExposureLines();
   const CliResult png = Run(
       Scene("png_c", "frames/frame_*.png", "  fps: " + std::to_string(Fps()) + "\n", no_exposure),
       "png_c");
@@ -196,12 +202,7 @@ TEST_F(CameraFileRun, ATimeStampedCineGivesThePngResults) {
   const CliResult cine = Run(Scene("cine", "rec.cine", "", no_exposure), "cine");
   ASSERT_EQ(cine.exit_code, 0) << cine.output;
   for (const char* name : {L::kDicU, L::kDicV}) {
-    const std::vector<double> a = Dataset("png_c", name), b = Dataset("cine", name);
-    ASSERT_EQ(a.size(), b.size()) << name;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      if (std::isnan(a[k]) != std::isnan(b[k]) || (!std::isnan(a[k]) && a[k] != b[k]))
-        ADD_FAILURE() << name << "[" << k << "]: " << a[k] << " vs " << b[k];
-    }
+    ExpectSameDataset("png_c", "cine", name);
   }
   const std::vector<double> t_png = Dataset("png_c", L::kTimeMs);
   const std::vector<double> t_cine = Dataset("cine", L::kTimeMs);

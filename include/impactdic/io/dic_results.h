@@ -35,8 +35,8 @@ struct DicResultsTable {
   std::vector<std::int32_t> frame, reference_frame;
   std::vector<double> frame_number;
   std::vector<double> time_s;  // [rows]: time stamp from the source [s]; empty = none.
-  long first_frame = -1;     // Index of row 0 in the input sequence; -1 = not in the file.
-  std::string status_codes;  // "0=converged, 1=..." (attribute of /dic/status); "" = none.
+  long first_frame = -1;       // Index of row 0 in the input sequence; -1 = not in the file.
+  std::string status_codes;    // "0=converged, 1=..." (attribute of /dic/status); "" = none.
   // Further attributes of /dic (the options, the correlation's summary).
   std::map<std::string, double> number_attributes;
   std::map<std::string, std::string> text_attributes;
