@@ -1,6 +1,7 @@
 #include "impactdic/io/hdf5_store.h"
 
 #include <H5Cpp.h>
+#include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -13,7 +14,9 @@
 #include <filesystem>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <system_error>
+#include <type_traits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
@@ -64,6 +67,28 @@ void WriteStringAttribute(H5::H5Object& object, const std::string& name, const s
   attr.write(type, value);
 }
 
+// Objects are created without HDF5's modification times (H5Pset_obj_track_times), so the same
+// results give the same bytes whenever they are written; the file's own time is the root
+// attribute `created_utc`.
+H5::DSetCreatPropList UntimedDatasetProperties() {
+  H5::DSetCreatPropList props;
+  if (H5Pset_obj_track_times(props.getId(), false) < 0)
+    throw H5::PropListIException("H5Pset_obj_track_times", "cannot stop tracking times");
+  return props;
+}
+
+void CreateUntimedGroup(const H5::H5File& file, const std::string& path) {
+  const hid_t properties = H5Pcreate(H5P_GROUP_CREATE);
+  if (properties < 0) throw H5::PropListIException("H5Pcreate", "cannot make group properties");
+  const herr_t untimed = H5Pset_obj_track_times(properties, false);
+  const hid_t group =
+      untimed < 0 ? -1
+                  : H5Gcreate2(file.getId(), path.c_str(), H5P_DEFAULT, properties, H5P_DEFAULT);
+  H5Pclose(properties);
+  if (group < 0) throw H5::GroupIException("H5Gcreate2", "cannot create the group " + path);
+  H5Gclose(group);
+}
+
 std::string UtcNow() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm tm{};
@@ -73,11 +98,25 @@ std::string UtcNow() {
   return buffer;
 }
 
+// The error number of the last failed reservation of disk space for a writer's file
+// (ImageMalloc, ImageRealloc: a full disk), in the thread that called HDF5 (HDF5 runs the
+// callbacks in the caller's thread); 0 = none. Guard reports it as the disk's error.
+thread_local int disk_error = 0;
+
 template <typename Fn>
 auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltype(fn()) {
+  disk_error = 0;
   try {
-    return fn();
+    if constexpr (std::is_void_v<decltype(fn())>) {
+      fn();
+      if (disk_error != 0) throw WriteError(file, disk_error);
+    } else {
+      auto result = fn();
+      if (disk_error != 0) throw WriteError(file, disk_error);
+      return result;
+    }
   } catch (const H5::Exception& e) {
+    if (disk_error != 0) throw WriteError(file, disk_error);
     throw Error(ErrorKind::kIo, what, e.getDetailMsg(), "a valid HDF5 operation")
         .WithFile(OutputPathForMessages(file));
   }
@@ -85,13 +124,17 @@ auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltyp
 
 }  // namespace
 
-// The file is built in memory by HDF5's core driver (no backing store) and written to the disk
-// by WriteFileAtomic on Commit(). So HDF5 never writes to the disk itself: in HDF5 1.10 a close
-// whose final flush fails (a full disk) frees the file but leaves its id registered, and the next
-// close of that id, or the library's own clean-up at exit, reads freed memory (the segfault of
-// issue 11); the C++ objects' destructors also printed "H5Dclose failed" lines. Disk errors now
-// come only from our own checked writes, as one Error naming the file.
+// The file is built by HDF5's core driver (no backing store) and written to the disk by us, not
+// by HDF5: in HDF5 1.10 a close whose final flush fails (a full disk) frees the file but leaves
+// its id registered, and the next close of that id, or the library's own clean-up at exit, reads
+// freed memory (the segfault of issue 11); the C++ objects' destructors also printed "H5Dclose
+// failed" lines. Disk errors now come only from our own checked calls, as one Error naming the
+// file.
 constexpr std::size_t kCoreIncrement = std::size_t{4} << 20;  // growth step of the image [bytes]
+// Backing::kFile: the file grows a page at a time (the disk holds what the file uses, so a file
+// that fits on the disk can be written), and the pages written are returned to the page cache
+// every kCoreIncrement of growth.
+constexpr std::size_t kFileIncrement = 4096;
 
 // A name no file has, for a file image held in memory.
 std::string ImageName(const std::string& path) {
@@ -99,16 +142,30 @@ std::string ImageName(const std::string& path) {
   return path + " (in memory " + std::to_string(getpid()) + "-" + std::to_string(counter++) + ")";
 }
 
-// The core driver's memory, allocated through file image callbacks (H5Pset_file_image_callbacks)
+// The core driver's buffer, allocated through file image callbacks (H5Pset_file_image_callbacks)
 // so that Commit() writes the file from where the driver keeps it: H5Fget_file_image would copy
 // it out first, holding the whole file in memory twice. The driver's own buffer (ops FILE_OPEN,
-// FILE_RESIZE, FILE_CLOSE) is an anonymous mapping: it grows by mremap without a copy, whatever
-// the allocator's thresholds, and its pages go back to the system when the file is closed. The
-// property lists' copies of an initial image (kUpdate) are plain allocations.
+// FILE_RESIZE, FILE_CLOSE) is a mapping that grows by mremap without a copy, whatever the
+// allocator's thresholds; the property lists' copies of an initial image (kUpdate) are plain
+// allocations.
+//  - Backing::kFile (fd >= 0): a shared mapping of the writer's temporary file in the output's
+//    folder. Each growth first reserves the disk blocks (posix_fallocate: a full disk is known
+//    there and then, never a SIGBUS or a failed write-back later) and then returns the pages
+//    written so far to the page cache (MADV_DONTNEED keeps their data in the file), so the process
+//    holds about one growth step of the file however large it gets; Commit() renames the file.
+//    When the disk has no room the growth still succeeds, in an anonymous copy of the buffer
+//    (`error` set): HDF5 must never see a failed allocation (a failed flush inside HDF5 1.10 ends
+//    in the segfault above), so the operation completes in memory and Guard then throws the
+//    disk's error; the file is never committed.
+//  - Backing::kMemory (fd < 0): an anonymous mapping, freed when the file is closed.
 struct CoreImage {
-  void* data = nullptr;    // The file's bytes; null before the first write.
-  std::size_t size = 0;    // Bytes the driver asked for (>= what the file uses).
-  std::size_t mapped = 0;  // Bytes mapped (size rounded up to pages).
+  void* data = nullptr;     // The file's bytes; null before the first write.
+  std::size_t size = 0;     // Bytes the driver asked for (>= what the file uses).
+  std::size_t mapped = 0;   // Bytes mapped (size rounded up to pages).
+  int fd = -1;              // The temporary file under the mapping (Backing::kFile).
+  std::size_t dropped = 0;  // `mapped` when the pages were last returned (Backing::kFile).
+  int error = 0;            // The disk's error once it had no room (then anonymous, as kMemory).
+  bool OnDisk() const { return fd >= 0 && error == 0; }
 };
 
 std::size_t PageRounded(std::size_t size) {
@@ -121,14 +178,31 @@ bool IsDriverBuffer(H5FD_file_image_op_t op) {
          op == H5FD_FILE_IMAGE_OP_FILE_CLOSE;
 }
 
+// Reserves the first `bytes` of the temporary file on the disk; false (image.error and
+// disk_error set) if the disk has no room.
+bool Reserve(CoreImage& image, std::size_t bytes) {
+  const int error = posix_fallocate(image.fd, 0, static_cast<off_t>(bytes));
+  if (error == 0) return true;
+  image.error = disk_error = error;
+  return false;
+}
+
+void* MapAnonymous(std::size_t mapped) {
+  return mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+}
+
 void* ImageMalloc(std::size_t size, H5FD_file_image_op_t op, void* udata) {
   if (!IsDriverBuffer(op)) return std::malloc(size);
   auto* image = static_cast<CoreImage*>(udata);
   if (image->data) return nullptr;  // One driver buffer per writer.
   const std::size_t mapped = PageRounded(size);
-  void* p = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  const bool on_disk = image->OnDisk() && Reserve(*image, mapped);
+  void* p = on_disk ? mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_SHARED, image->fd, 0)
+                    : MapAnonymous(mapped);
   if (p == MAP_FAILED) return nullptr;
-  *image = {p, size, mapped};
+  image->data = p;
+  image->size = size;
+  image->mapped = mapped;
   return p;
 }
 
@@ -142,9 +216,27 @@ void* ImageRealloc(void* ptr, std::size_t size, H5FD_file_image_op_t op, void* u
   if (!ptr) return ImageMalloc(size, op, udata);
   if (ptr != image->data) return nullptr;
   const std::size_t mapped = PageRounded(size);
+  if (image->OnDisk() && !Reserve(*image, mapped)) {
+    // No room: the rest in memory (the buffer copied out of the file).
+    void* copy = MapAnonymous(mapped);
+    if (copy == MAP_FAILED) return nullptr;
+    std::memcpy(copy, ptr, std::min(image->size, size));
+    munmap(ptr, image->mapped);
+    image->data = copy;
+    image->size = size;
+    image->mapped = mapped;
+    return copy;
+  }
   void* p = mremap(ptr, image->mapped, mapped, MREMAP_MAYMOVE);
   if (p == MAP_FAILED) return nullptr;
-  *image = {p, size, mapped};
+  // The pages written so far stay in the file (the page cache), not in the process.
+  if (image->OnDisk() && mapped >= image->dropped + kCoreIncrement) {
+    madvise(p, image->mapped, MADV_DONTNEED);
+    image->dropped = mapped;
+  }
+  image->data = p;
+  image->size = size;
+  image->mapped = mapped;
   return p;
 }
 
@@ -152,7 +244,8 @@ herr_t ImageFree(void* ptr, H5FD_file_image_op_t, void* udata) {
   auto* image = static_cast<CoreImage*>(udata);
   if (ptr && ptr == image->data) {
     munmap(ptr, image->mapped);
-    *image = {};
+    image->data = nullptr;
+    image->size = image->mapped = image->dropped = 0;
   } else {
     std::free(ptr);
   }
@@ -187,14 +280,25 @@ void SetImageCallbacks(H5::FileAccPropList& access, CoreImage* image) {
 
 struct H5Writer::Impl {
   std::string final_path;
+  std::optional<AtomicFile>
+      spill;        // Backing::kFile: the temporary file (image.fd) renamed on Commit.
   CoreImage image;  // Before `file`: the file is closed (and its image freed) first.
   H5::H5File file;
   bool open = false;
+
+  // Closes the temporary file; its error number (0 = none). The file itself is kept.
+  int CloseSpill() {
+    if (image.fd < 0) return 0;
+    const int error = close(image.fd) != 0 && errno != EINTR ? errno : 0;
+    image.fd = -1;
+    return error;
+  }
 };
 
 H5Writer::H5Writer(const std::string& final_path) : H5Writer(final_path, Mode::kCreate) {}
 
-H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& source_path)
+H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& source_path,
+                   Backing backing)
     : impl_(std::make_unique<Impl>()) {
   H5::Exception::dontPrint();
   impl_->final_path = final_path;
@@ -203,6 +307,12 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& 
     H5Reader check(source);  // Error if missing or not HDF5.
   }
   CheckOutputLocation(final_path);
+  if (backing == Backing::kFile) {
+    impl_->spill.emplace(final_path);
+    impl_->image.fd =
+        open(impl_->spill->temp_path().c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (impl_->image.fd < 0) throw WriteError(final_path, errno);
+  }
   // kUpdate starts from the existing file's bytes: HDF5 never opens the original, so readers of
   // it (another process rendering it) are not locked out and it stays as it is until Commit().
   // No size limit: the file is one impactdic wrote (results.h5 with /frames may be gigabytes).
@@ -211,7 +321,8 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& 
     existing = ReadInputFile(source, "an HDF5 file", std::numeric_limits<std::uintmax_t>::max());
   Guard(final_path, "open", [&] {
     H5::FileAccPropList access;
-    access.setCore(kCoreIncrement, /*backing_store=*/false);
+    access.setCore(backing == Backing::kFile ? kFileIncrement : kCoreIncrement,
+                   /*backing_store=*/false);
     SetImageCallbacks(access, &impl_->image);  // Before the initial image (HDF5's rule).
     if (mode == Mode::kUpdate &&
         H5Pset_file_image(access.getId(), existing.data(), existing.size()) < 0)
@@ -251,7 +362,8 @@ void H5Writer::Remove(const std::string& path) {
   });
 }
 
-// Closing an in-memory file cannot fail on the disk; nothing was written unless Commit() ran.
+// Closing the file cannot fail on the disk (HDF5 writes only to the driver's buffer); nothing is
+// under the final name unless Commit() ran (the temporary file is removed).
 H5Writer::~H5Writer() {
   if (impl_->open) {
     try {
@@ -259,6 +371,7 @@ H5Writer::~H5Writer() {
     } catch (const H5::Exception&) {
     }
   }
+  impl_->CloseSpill();
 }
 
 const std::string& H5Writer::final_path() const { return impl_->final_path; }
@@ -268,7 +381,7 @@ void H5Writer::CreateGroup(const std::string& path) {
     std::string current;
     for (const auto& part : SplitPath(path)) {
       current += "/" + part;
-      if (!impl_->file.nameExists(current)) impl_->file.createGroup(current);
+      if (!impl_->file.nameExists(current)) CreateUntimedGroup(impl_->file, current);
     }
   });
 }
@@ -293,7 +406,7 @@ void WriteDataset(H5::H5File& file, const std::string& file_name, const std::str
   }
   std::vector<hsize_t> h_dims(dims.begin(), dims.end());
   H5::DataSpace space(static_cast<int>(h_dims.size()), h_dims.data());
-  H5::DSetCreatPropList props;
+  H5::DSetCreatPropList props = UntimedDatasetProperties();
   if (count >= kCompressThreshold) {
     // Chunks of whole trailing dimensions, about 64k elements each.
     std::vector<hsize_t> chunk = h_dims;
@@ -364,7 +477,7 @@ void H5Writer::WriteStack(const std::string& path, const Dims& dims, int bits,
   const H5::PredType& file_type = bits == 8 ? H5::PredType::STD_U8LE : H5::PredType::STD_U16LE;
   const std::vector<hsize_t> h_dims(dims.begin(), dims.end());
   H5::DataSpace space(3, h_dims.data());
-  H5::DSetCreatPropList props;
+  H5::DSetCreatPropList props = UntimedDatasetProperties();
   const hsize_t chunk[3] = {1, std::max<hsize_t>(1, h_dims[1]), std::max<hsize_t>(1, h_dims[2])};
   const std::size_t per_image = dims[1] * dims[2];
   if (dims[0] > 0 && per_image > 0) {
@@ -464,6 +577,9 @@ std::vector<char> H5Writer::CloseToImage() {
 // cleared) are written from the driver's buffer, then the file is closed. Only when HDF5 has
 // allocated more than it has written (eoa beyond the buffer; the driver reads zeros there) or the
 // superblock is not one ClearStatusFlags knows is the image copied out first, as before.
+// Backing::kFile: the buffer is the temporary file; what HDF5 writes while it closes goes to a
+// private copy of the mapping (MAP_FIXED over it), so the file keeps exactly those bytes; it is
+// then cut to `eoa`, synced and renamed.
 void H5Writer::Commit() {
   const char* data = nullptr;
   std::size_t size = 0;
@@ -476,16 +592,35 @@ void H5Writer::Commit() {
         ClearStatusFlags(static_cast<unsigned char*>(impl_->image.data), size))
       data = static_cast<const char*>(impl_->image.data);
   });
-  if (!data) {
-    const std::vector<char> image = CloseToImage();
-    WriteFileAtomic(final_path(), image.data(), image.size());
-    return;
+  if (impl_->image.error != 0) throw WriteError(final_path(), impl_->image.error);
+  if (!data || impl_->image.fd < 0) {
+    if (!data) {
+      const std::vector<char> image = CloseToImage();
+      WriteFileAtomic(final_path(), image.data(), image.size());
+    } else {
+      WriteFileAtomic(final_path(), data, size);
+    }
+    Guard(final_path(), "close", [&] {
+      if (impl_->open) impl_->file.close();
+      impl_->open = false;
+    });
+    return;  // The temporary file (if any) is removed with the writer.
   }
-  WriteFileAtomic(final_path(), data, size);
+  CoreImage& image = impl_->image;
+  if (mmap(image.data, image.mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_FIXED, image.fd,
+           0) == MAP_FAILED)
+    throw WriteError(final_path(), errno);
   Guard(final_path(), "close", [&] {
     impl_->file.close();
     impl_->open = false;
   });
+  int error = ftruncate(image.fd, static_cast<off_t>(size)) != 0 ? errno : 0;
+  // A file system may only report a full disk when the data reaches it (fsync) or at close.
+  if (error == 0 && fsync(image.fd) != 0 && errno != EINVAL && errno != EROFS) error = errno;
+  const int close_error = impl_->CloseSpill();
+  if (error == 0) error = close_error;
+  if (error != 0) throw WriteError(final_path(), error);
+  impl_->spill->Commit();
 }
 
 std::vector<char> H5Writer::CommitToMemory() { return CloseToImage(); }

@@ -88,7 +88,6 @@ std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& wher
     if (!s.valid[j] || !(s.sigma_u_px[j] > max_sigma_px || s.sigma_v_px[j] > max_sigma_px))
       continue;
     s.valid[j] = 0;
-    s.u_px[j] = s.v_px[j] = kNaN;
     ++excluded;
   }
   return excluded;
@@ -125,7 +124,6 @@ std::size_t ExcludeSamplesAboveMedianSigma(double ratio, const std::string& wher
     for (std::size_t i = row; i < row + s.subsets; ++i) {
       if (!s.valid[i] || !(s.sigma_u_px[i] > limit || s.sigma_v_px[i] > limit)) continue;
       s.valid[i] = 0;
-      s.u_px[i] = s.v_px[i] = kNaN;
       ++excluded;
     }
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -15,22 +16,58 @@
 
 namespace impactdic {
 
+namespace {
+
+// The series' columns from the table's, copied (a const table) or moved.
+template <typename Table>
+void TakeColumns(Table&& t, CorrelationSeries* s) {
+  s->frames = t.rows;
+  s->subsets = t.subsets;
+  s->x_px = std::forward<Table>(t).x_px;
+  s->y_px = std::forward<Table>(t).y_px;
+  s->u_px = std::forward<Table>(t).u_px;
+  s->v_px = std::forward<Table>(t).v_px;
+  s->sigma_u_px = std::forward<Table>(t).sigma_u_px;
+  s->sigma_v_px = std::forward<Table>(t).sigma_v_px;
+}
+
+// valid = status converged (empty without a status: valid where finite).
+void SetValid(const DicResultsTable& t, CorrelationSeries* s) {
+  if (t.status.empty()) return;
+  s->valid.resize(t.status.size());
+  for (std::size_t k = 0; k < t.status.size(); ++k) s->valid[k] = t.IsValid(k) ? 1 : 0;
+}
+
+}  // namespace
+
 CorrelationSeries CorrelationSeriesFromTable(const DicResultsTable& t) {
   CorrelationSeries s;
-  s.frames = t.rows;
-  s.subsets = t.subsets;
-  s.x_px = t.x_px;
-  s.y_px = t.y_px;
-  s.u_px = t.u_px;
-  s.v_px = t.v_px;
-  if (!t.status.empty()) {
-    s.valid.resize(t.status.size());
-    for (std::size_t k = 0; k < t.status.size(); ++k) s.valid[k] = t.IsValid(k) ? 1 : 0;
-  }
-  s.sigma_u_px = t.sigma_u_px;
-  s.sigma_v_px = t.sigma_v_px;
+  SetValid(t, &s);
+  TakeColumns(t, &s);
   s.Check();
   return s;
+}
+
+BorrowedCorrelationSeries::BorrowedCorrelationSeries(DicResultsTable* table) : table_(table) {
+  SetValid(*table_, &series_);
+  TakeColumns(std::move(*table_), &series_);
+  try {
+    series_.Check();
+  } catch (...) {
+    GiveBack();
+    throw;
+  }
+}
+
+BorrowedCorrelationSeries::~BorrowedCorrelationSeries() { GiveBack(); }
+
+void BorrowedCorrelationSeries::GiveBack() {
+  table_->x_px = std::move(series_.x_px);
+  table_->y_px = std::move(series_.y_px);
+  table_->u_px = std::move(series_.u_px);
+  table_->v_px = std::move(series_.v_px);
+  table_->sigma_u_px = std::move(series_.sigma_u_px);
+  table_->sigma_v_px = std::move(series_.sigma_v_px);
 }
 
 CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_frame) {

@@ -109,8 +109,9 @@ TEST(Kinematics, NanAwareDerivativesAndAverages) {
   }
 }
 
-// Samples above the sigma limit are left out (NaN, invalid) before the derivatives; the mean over
-// the grid then skips them; samples within the limit, and those already invalid, are untouched.
+// Samples above the sigma limit are left out (invalid; their u and v kept, as the run's kinematics
+// borrow the /dic rows) before the derivatives, which are NaN there; the mean over the grid then
+// skips them; samples within the limit, and those already invalid, are untouched.
 TEST(Kinematics, UncertainSamplesAreLeftOutAboveTheSigmaLimit) {
   CorrelationSeries dic;
   dic.frames = 4;
@@ -124,8 +125,8 @@ TEST(Kinematics, UncertainSamplesAreLeftOutAboveTheSigmaLimit) {
   dic.sigma_v_px = {0, 0, 0.01f, 0.04f, 0.01f, NAN, 0.02f, 0.02f};
   EXPECT_EQ(ExcludeUncertainSamples(0.03, "momentum.max_sigma_px", &dic), 1u);
   EXPECT_EQ(dic.valid, (std::vector<std::uint8_t>{1, 1, 1, 0, 1, 0, 1, 1}));
-  EXPECT_TRUE(std::isnan(dic.u_px[3]) && std::isnan(dic.v_px[3]));
-  EXPECT_EQ(dic.u_px[2], 1);
+  EXPECT_EQ(dic.u_px, (std::vector<double>{0, 0, 1, 1, 2, 2, 3, 3}));
+  EXPECT_EQ(dic.v_px, std::vector<double>(8, 0.0));
   PanelMapping map;
   map.mm_per_px = 1;
   KinematicsOptions opt;
@@ -134,6 +135,9 @@ TEST(Kinematics, UncertainSamplesAreLeftOutAboveTheSigmaLimit) {
   std::size_t count = 0;
   EXPECT_NEAR(MeanOverSubsets(r.disp_x_mm, 2, 1, {0, 1}, &count), 1, 1e-12);
   EXPECT_EQ(count, 1u);
+  EXPECT_TRUE(std::isnan(r.disp_x_mm[3]) && std::isnan(r.vel_x_mm_s[1]) &&
+              std::isnan(r.acc_x_mm_s2[3]));
+  EXPECT_TRUE(std::isfinite(r.disp_x_mm[2]));
   ExpectErrorContaining([&] { ExcludeUncertainSamples(0, "momentum.max_sigma_px", &dic); },
                         "momentum.max_sigma_px");
   dic.sigma_u_px.clear();
@@ -167,7 +171,8 @@ TEST(Kinematics, ExcludesSamplesFarAboveTheFramesMedianSigma) {
   EXPECT_EQ(ExcludeSamplesAboveMedianSigma(4, "momentum.max_sigma_ratio", &dic), 2u);
   EXPECT_EQ(dic.valid, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 1, 0, 1, 0,
                                                   1, 1, 1, 1, 0, 1, 1, 0, 0, 0}));
-  EXPECT_TRUE(std::isnan(dic.u_px[7]) && std::isnan(dic.v_px[9]));
+  EXPECT_EQ(dic.u_px[7], 1.0);  // Left out by `valid`; the displacements are kept.
+  EXPECT_EQ(dic.v_px[9], 2.0);
   ExpectErrorContaining(
       [&] { ExcludeSamplesAboveMedianSigma(1, "momentum.max_sigma_ratio", &dic); },
       "momentum.max_sigma_ratio");

@@ -4,11 +4,12 @@
 // attributes), so h5py, MATLAB's h5read/h5readatt and HDFView open them without conversion.
 // (MATLAB shows the dimensions reversed, as for every row-major file.)
 //
-// A writer builds the file in memory (HDF5's core driver) and Commit() writes it in one go with
-// WriteFileAtomic (atomic_file.h): a temporary sibling, renamed over the final name only when
-// complete. A writer destroyed without Commit() writes nothing; a full disk is one Error kIo
-// naming the file ("no space left on device") with no temporary file left. The price: the whole
-// file is held in memory until Commit(), once (Commit() writes it from the driver's buffer).
+// A writer builds the file with HDF5's core driver (HDF5 itself never writes to the disk) in a
+// temporary sibling mapped into memory a few MB at a time (Backing::kFile), and Commit() syncs it
+// and renames it over the final name, only when complete. A writer destroyed without Commit()
+// leaves nothing (the temporary file is removed); a full disk is one Error kIo naming the file
+// ("no space left on device"), at the write that needs the room, with no temporary file left.
+// The memory a writer holds does not grow with the file (Backing::kMemory: the whole file, once).
 //
 //   H5Writer out("run/results.h5");
 //   out.WriteProvenance(scene_yaml_text);
@@ -45,7 +46,14 @@ class H5Writer {
   // With `source_path`, kUpdate starts from that file instead (it is never changed) and Commit()
   // writes final_path: a changed copy (`analyze SCENE --output`).
   enum class Mode { kCreate, kUpdate };
-  H5Writer(const std::string& final_path, Mode mode, const std::string& source_path = "");
+  // Where the file is built until Commit(): kFile (the default) in a temporary file beside
+  // final_path, mapped into memory a few MB at a time, so a file of any size holds about 4 MB of
+  // the process's memory, and a full disk is an Error kIo naming final_path at the write that
+  // needs the room (the space is reserved as the file grows); kMemory in memory only (nothing on
+  // the disk before Commit(), e.g. for CommitToMemory), the whole file held once.
+  enum class Backing { kFile, kMemory };
+  H5Writer(const std::string& final_path, Mode mode, const std::string& source_path = "",
+           Backing backing = Backing::kFile);
   // For a command that owns only `owned_groups` of a file it may share with others (correlate -o
   // owns /dic): a new file when final_path does not exist, else kUpdate with those groups removed,
   // so everything else in the file is kept. An existing file that is not HDF5 is an Error
@@ -95,7 +103,8 @@ class H5Writer {
   // Writes the file under its final name (atomically); Error kIo naming it if that fails.
   void Commit();
   // Closes the file and returns its bytes instead of writing them, for a reader in the same
-  // process (H5Reader(name, image)): nothing is written to the disk.
+  // process (H5Reader(name, image)): nothing is written under the final name (Backing::kMemory:
+  // nothing at all is written to the disk).
   std::vector<char> CommitToMemory();
   const std::string& final_path() const;
 

@@ -55,11 +55,11 @@ struct CorrelationSeries {
 };
 
 // The downstream use of the correlation's uncertainty (scene key `momentum.max_sigma_px`): marks
-// the samples whose sigma_u_px or sigma_v_px exceeds max_sigma_px [px] invalid (NaN
-// displacement), so the kinematics (derivatives touching them are NaN) and the momentum grid
-// mean (NaN subsets skipped) leave them out; returns their count. Samples without a sigma (NaN:
-// failed subsets) are already invalid. Error naming `where` if max_sigma_px is not > 0 or the
-// series has no sigmas (results written before they existed).
+// the samples whose sigma_u_px or sigma_v_px exceeds max_sigma_px [px] invalid (valid = 0; u and
+// v are kept), so the kinematics (which take an invalid sample as NaN: derivatives touching them
+// are NaN) and the momentum grid mean (NaN subsets skipped) leave them out; returns their count.
+// Samples without a sigma (NaN: failed subsets) are already invalid. Error naming `where` if
+// max_sigma_px is not > 0 or the series has no sigmas (results written before they existed).
 std::size_t ExcludeUncertainSamples(double max_sigma_px, const std::string& where,
                                     CorrelationSeries* series);
 // ExcludeUncertainSamples, returning the warning the pipeline reports (`run` in summary.json,

@@ -23,6 +23,25 @@ namespace impactdic {
 // The correlation arrays of a results table (io/dic_results.h): valid = status converged.
 CorrelationSeries CorrelationSeriesFromTable(const DicResultsTable& table);
 
+// The same without a copy of the table's rows: the series borrows the table's columns (x, y, u, v
+// and the sigmas are moved into it; only `valid` is new) and gives them back, unchanged, when it
+// is destroyed (ExcludeUncertainSamples and ComputeKinematics change `valid` only). The table
+// must outlive it and is not used meanwhile. For the run's kinematics stage, so that the analysis
+// of a long recording holds the correlation results once.
+class BorrowedCorrelationSeries {
+ public:
+  explicit BorrowedCorrelationSeries(DicResultsTable* table);
+  ~BorrowedCorrelationSeries();
+  BorrowedCorrelationSeries(const BorrowedCorrelationSeries&) = delete;
+  BorrowedCorrelationSeries& operator=(const BorrowedCorrelationSeries&) = delete;
+  CorrelationSeries& series() { return series_; }
+
+ private:
+  void GiveBack();
+  DicResultsTable* table_;
+  CorrelationSeries series_;
+};
+
 // Reads the correlation results (io ReadDicResults). *first_frame (optional) receives the /dic
 // attribute first_frame, or -1 when absent.
 CorrelationSeries ReadCorrelationSeries(const std::string& h5_path, long* first_frame = nullptr);

@@ -142,7 +142,10 @@ class ResultsFileWriter : public OutputWriter {
   void Write(OutputContext& c) const override {
     const SceneRunData& d = c.data;
     c.results_path = c.Path(L::kResultsFile);
-    H5Writer out(c.results_path);
+    // Without outputs.hdf5 the file is only read by the other writers: in memory, so that it
+    // needs no room on the disk.
+    H5Writer out(c.results_path, H5Writer::Mode::kCreate, "",
+                 c.scene.outputs.hdf5 ? H5Writer::Backing::kFile : H5Writer::Backing::kMemory);
     WriteRunAttributes(out, c.scene, c.summary);
     if (d.dic) {
       WriteFrameTimes(out, d);

@@ -20,16 +20,6 @@
 namespace impactdic::stages {
 namespace {
 
-// The correlation series the kinematics and momentum use: without the uncertain samples
-// (ExcludeUncertainSamplesOfScene; counted in a warning). /dic keeps them.
-CorrelationSeries AnalysedSeries(const DicResultsTable& dic, const Scene& scene,
-                                 std::vector<std::string>* warnings) {
-  CorrelationSeries s = CorrelationSeriesFromTable(dic);
-  const std::string warning = ExcludeUncertainSamplesOfScene(scene, &s);
-  if (!warning.empty()) warnings->push_back(warning);
-  return s;
-}
-
 class KinematicsStage : public Stage {
  public:
   const char* name() const override { return "kinematics"; }
@@ -50,8 +40,15 @@ class KinematicsStage : public Stage {
     mapping.mm_per_px = d.mm_per_px;
     KinematicsOptions k;
     k.fps = d.clock.fps;  // A camera file's own rate, else inputs.fps.
-    d.kinematics =
-        ComputeKinematics(AnalysedSeries(*d.dic, c.scene, &c.summary.warnings), mapping, k);
+    {
+      // The series the kinematics use, borrowing the rows of /dic (no copy): without the
+      // uncertain samples (ExcludeUncertainSamplesOfScene marks them invalid and says how many;
+      // /dic keeps them).
+      BorrowedCorrelationSeries series(&*d.dic);
+      const std::string warning = ExcludeUncertainSamplesOfScene(c.scene, &series.series());
+      if (!warning.empty()) c.summary.warnings.push_back(warning);
+      d.kinematics = ComputeKinematics(series.series(), mapping, k);
+    }
     // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when
     // the record has no exposure channel); none without a sensor record.
     if (!d.frame_times_s.empty()) {

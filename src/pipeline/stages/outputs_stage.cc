@@ -8,12 +8,23 @@
 
 #include "impactdic/core/log.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
 #include "stage.h"
 
 namespace impactdic::stages {
 namespace {
+
+// The built-in writers after results.h5 read the results from it (render, summaries): the rows of
+// /dic and the kinematics (O(subsets x frames), the run's largest data) are released once it is
+// written, so that rendering a long recording does not hold them as well. Kept when the caller
+// added writers of its own (PipelineOptions::extra_output_writers), which may read them.
+void ReleaseRunResults(SceneRunData& d) {
+  d.dic.reset();
+  d.kinematics.reset();
+}
 
 class OutputsStage : public Stage {
  public:
@@ -35,6 +46,9 @@ class OutputsStage : public Stage {
       } else {
         LogInfo("[outputs] {} skipped: {}", writer->name(), why);
       }
+      if (writer->name() == std::string(results_layout::kResultsFile) &&
+          c.options.extra_output_writers.empty())
+        ReleaseRunResults(c.data);
     }
     // All complete: swap the new generation in (the previous one stays until this succeeds).
     generation_->Commit();
