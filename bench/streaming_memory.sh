@@ -11,9 +11,10 @@
 #    `correlate --subset SUBSET --step STEP -o DIR/correlateN.h5`, one row of
 #      deformed frames | subsets | peak RSS [MB] | growth [MB] | results [MB] | bound [MB] |
 #      wall [s] | wall per frame [s]
-# growth: the peak above the first N's; results: the results' own size in memory (40 bytes per
-# subset and correlated frame: u, v, ZNCC, three sigmas, iterations, status); bound: what issue 23
-# allows the growth, the results plus 10 % of the first N's peak.
+# growth: the peak above the first N's; results: the results' own size in memory, per subset and
+# frame 40 bytes of correlation (u, v, ZNCC, three sigmas, iterations, status) and, for `run`,
+# 48 bytes of kinematics (displacement, velocity, acceleration: 6 doubles), 88 in all; bound: what
+# issue 23 allows the growth, the results' own size plus 10 %.
 # A benchmark, not a test: the times depend on the machine and its load; the memory does not.
 #
 #   bench/streaming_memory.sh [-b BINARY] [-w WIDTH] [-h HEIGHT] [-d DIR] [-t THREADS]
@@ -56,14 +57,15 @@ EOF
   "$binary" -q synth "$dir/spec.yaml" -o "$dir/scene" > /dev/null
 fi
 # One table row: the peak, its growth above the first row's, the results and the bound.
-# Arguments: first columns, peak kB, subsets x frames of the results, then the last columns.
+# Arguments: first columns, peak kB, subsets x frames of the results, bytes per subset and frame,
+# then the last columns.
 first_rss_kb=""
 row() {
-  local head=$1 rss_kb=$2 results=$3 tail=$4
+  local head=$1 rss_kb=$2 results=$3 bytes=$4 tail=$5
   [ -n "$first_rss_kb" ] || first_rss_kb=$rss_kb
-  awk -v h="$head" -v r="$rss_kb" -v f="$first_rss_kb" -v n="$results" -v t="$tail" 'BEGIN {
-    printf "| %s | %.0f | %.0f | %.1f | %.1f | %s |\n", h, r / 1024, (r - f) / 1024, n * 40 / 1e6,
-      n * 40 / 1e6 + 0.1 * f / 1024, t }'
+  awk -v h="$head" -v r="$rss_kb" -v f="$first_rss_kb" -v n="$results" -v b="$bytes" -v t="$tail" \
+    'BEGIN { printf "| %s | %.0f | %.0f | %.1f | %.1f | %s |\n", h, r / 1024, (r - f) / 1024,
+      n * b / 1e6, 1.1 * n * b / 1e6, t }'
 }
 if [ "$run" = 1 ]; then
   echo "| analysed frames | peak RSS [MB] | growth [MB] | results [MB] | bound [MB] | wall [s] | wall per frame [s] | correlate per frame [s] |"
@@ -80,7 +82,7 @@ if [ "$run" = 1 ]; then
     correlate=$(awk '$1 == "correlate" && $3 == "s" {print $2}' "$dir/run$n.txt")
     analysed=$(awk '$1 == "frames" && $3 == "s" {print $4}' "$dir/run$n.txt")  # "frames 0.09 s 46 of 502 ..."
     results=$(awk '$1 == "correlate" && $3 == "s" {print $4 * $7}' "$dir/run$n.txt")  # "correlate 3.6 s 180 subsets x 48 frames"
-    row "$analysed" "$rss_kb" "$results" "$(awk -v n="$analysed" -v w="$wall" -v c="$correlate" \
+    row "$analysed" "$rss_kb" "$results" 88 "$(awk -v n="$analysed" -v w="$wall" -v c="$correlate" \
       'BEGIN { printf "%.1f | %.3f | %.3f", w, w / n, c / (n - 1) }')"
   done
 fi
@@ -97,7 +99,7 @@ if [ -n "$grid" ]; then
       --threads "$threads" -o "$dir/correlate$n.h5" > "$dir/correlate$n.txt" 2>&1
     read -r rss_kb wall < "$dir/ctime$n.txt"
     subsets=$(grep -o '[0-9]* subsets x' "$dir/correlate$n.txt" | head -1 | awk '{print $1}')
-    row "$n | $subsets" "$rss_kb" "$((subsets * n))" \
+    row "$n | $subsets" "$rss_kb" "$((subsets * n))" 40 \
       "$(awk -v n="$n" -v w="$wall" 'BEGIN { printf "%.1f | %.3f", w, w / n }')"
   done
 fi

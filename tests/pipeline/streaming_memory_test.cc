@@ -120,12 +120,14 @@ TEST_F(StreamingRun, PeakMemoryDoesNotGrowWithTheNumberOfFrames) {
   EXPECT_TRUE(std::filesystem::exists(dir_->File("long/velocity_field_te.png")));
 }
 
-// results.h5 is built in memory (HDF5's core driver, io/hdf5_store.h) and written from there on
-// commit, not copied out first: with `outputs.frames: all` (the file grows by a compressed frame
-// per frame) the peak grows by about the file's growth, not twice it. Without figures and
-// animation the commit is the run's peak. Measured (1024 x 768, 8 -> 31 analysed frames): file
-// +14.2 MB, peak +13.0 MB; main at 9f1eed4 (the image copied on commit): +32.6 MB, and fails.
-TEST_F(StreamingRun, PeakMemoryHoldsTheResultsFileOnce) {
+// results.h5 is built in a temporary file beside it (io/hdf5_store.h, Backing::kFile), a few MB
+// of it in memory at a time: with `outputs.frames: all` (the file grows by a compressed frame per
+// frame) the peak does not grow with the file. Without figures and animation the commit is the
+// run's peak. The bound: the 4 MB the writer may hold before it returns the pages it wrote, and
+// 1 MB. Measured (1024 x 768, 8 -> 31 analysed frames): file +14.2 MB, peak +1.6 to +2.4 MB; with
+// the file in memory (main at f14896c) +13.0 MB, and with its image copied on commit (main at
+// 9f1eed4) +32.6 MB; both fail.
+TEST_F(StreamingRun, PeakMemoryDoesNotHoldTheResultsFile) {
   const std::vector<std::pair<std::string, std::string>> all_frames = {
       {"figures: true", "figures: false"},
       {"animation: true", "animation: false"},
@@ -148,10 +150,14 @@ TEST_F(StreamingRun, PeakMemoryHoldsTheResultsFileOnce) {
   RecordProperty("results_file_growth_mb", std::to_string(file_growth_mb));
   RecordProperty("peak_rss_growth_mb", std::to_string(growth_mb));
   ASSERT_GT(file_growth_mb, 5.0);  // The frames are in it: 23 more of about 0.6 MB each.
-  EXPECT_LT(growth_mb, 1.5 * file_growth_mb)
-      << "peak RSS " << a.peak_rss_kb << " kB with dic.last_frame " << kShortLast << ", "
-      << b.peak_rss_kb << " kB for all " << kFrames << "; results.h5 grew by " << file_growth_mb
-      << " MB";
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "peak RSS is not asserted under AddressSanitizer (its allocator keeps freed "
+                  "memory resident); the release build asserts it";
+#else
+  EXPECT_LT(growth_mb, 5.0) << "peak RSS " << a.peak_rss_kb << " kB with dic.last_frame "
+                            << kShortLast << ", " << b.peak_rss_kb << " kB for all " << kFrames
+                            << "; results.h5 grew by " << file_growth_mb << " MB";
+#endif
 }
 
 TEST_F(StreamingRun, ResultsFileHoldsABoundedPreviewByDefault) {
@@ -242,6 +248,60 @@ TEST_F(StreamingRun, RunStreamsTheFramesOfAVideo) {
   if (!std::filesystem::exists(animation)) animation = dir_->File("video/velocity.avi");
   EXPECT_EQ(CountVideoFrames(animation), time_dims[0]);
   EXPECT_TRUE(std::filesystem::exists(dir_->File("video/velocity_field_te.png")));
+}
+
+// A long recording (issue 23, item 2): 200 frames of 320 x 240 against 20 of the same sequence,
+// 2736 subsets (dic.step 4), the animation off (its encoder's lookahead is bounded by the encoder,
+// docs/architecture.md "Memory"). What grows with the frames is the results, held once: the
+// correlation rows (40 bytes per subset and frame) and the kinematics (48), 88 bytes; results.h5
+// is built on the disk, the kinematics borrow the rows instead of copying them, and the rows and
+// kinematics are released once results.h5 is written, before rendering. The peak may grow by the
+// results' own size: 43 MB here. Measured: +17.2 MB (81.9 -> 99.0 MB); main at f14896c (the file
+// in memory, the kinematics' copy of the rows, the renderer's field beside them) +54.3 MB, and
+// fails.
+TEST(LongRun, PeakMemoryGrowsByNoMoreThanTheResults) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "peak RSS is not asserted under AddressSanitizer (its allocator keeps freed "
+                  "memory resident); the release build asserts it";
+#else
+  TestDir dir("LongRun");
+  const std::string spec = dir.Write("spec.yaml", R"(
+preset: small
+name: long_run
+camera: {lens: ideal, width: 320, height: 240, mm_per_px: 1.5}
+frames: {count: 202, before_impact: 2, supersampling: 1}
+sensor: {tail_s: 0.12}
+calibration: {render: false}
+dic: {subset_size: 15, step: 4}
+)");
+  const CliResult synth = RunCli("-q synth " + spec + " -o " + dir.File("scene"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const std::pair<std::string, std::string> no_animation = {"animation: true", "animation: false"};
+  const std::string short_scene =
+      SceneVariant(dir, "short", {{"\ndic:\n", "\ndic:\n  last_frame: 21\n"}, no_animation});
+  const std::string long_scene = SceneVariant(dir, "long", {no_animation});
+  const MeasuredChild a = RunMeasured(
+      {"-q", "run", short_scene, "-o", dir.File("short"), "--threads", "2", "--allow-partial"});
+  const MeasuredChild b = RunMeasured(
+      {"-q", "run", long_scene, "-o", dir.File("long"), "--threads", "2", "--allow-partial"});
+  ASSERT_EQ(a.exit_code, 0);
+  ASSERT_EQ(b.exit_code, 0);
+  // The results' own size [MB] from the rows x subsets of /dic.
+  auto results_mb = [&](const std::string& run) {
+    std::vector<std::size_t> dims;
+    H5Reader(dir.File(run + "/results.h5")).ReadDouble("/dic/u_px", &dims);
+    EXPECT_EQ(dims.size(), 2u);
+    return dims.size() == 2 ? double(dims[0]) * double(dims[1]) * 88 / 1e6 : 0.0;
+  };
+  const double short_mb = results_mb("short"), long_mb = results_mb("long");
+  ASSERT_GT(long_mb, 40.0) << "200 frames of 2736 subsets";
+  const double growth_mb = (b.peak_rss_kb - a.peak_rss_kb) * 1024.0 / 1e6;
+  RecordProperty("peak_rss_short_kb", std::to_string(a.peak_rss_kb));
+  RecordProperty("peak_rss_long_kb", std::to_string(b.peak_rss_kb));
+  EXPECT_LT(growth_mb, long_mb - short_mb)
+      << "peak RSS " << a.peak_rss_kb << " kB over 20 frames, " << b.peak_rss_kb
+      << " kB over 200; the results grew by " << long_mb - short_mb << " MB";
+#endif
 }
 
 }  // namespace

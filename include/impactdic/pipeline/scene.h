@@ -108,8 +108,8 @@ struct SceneMomentum {
 //            "Memory"): at most kPreviewFrames frames, evenly spaced, each downsampled by an
 //            integer factor to at most kPreviewLongSidePx on its longer side.
 //  kAll:     every analysed frame at full size, appended one chunk (frame) at a time; the file is
-//            built in memory until it is committed, so a run's memory grows with the compressed
-//            size of the frames.
+//            built on the disk (io/hdf5_store.h), so it costs disk (the compressed frames), not
+//            memory.
 enum class FrameStorage { kNone, kPreview, kAll };
 inline constexpr EnumNames<FrameStorage, 3> kFrameStorageNames{
     {{{FrameStorage::kNone, "none"},
