@@ -354,7 +354,7 @@ void Run(const CorrelateArgs& a) {
     RethrowWithFlagNames(e, kCorrelateFlags);
   }
   CheckSomethingUsable(a, result, options);
-  WriteDicResult(a.output, result, options);
+  WriteDicResult(a.output, &result, options);
   if (!result.preprocess.empty()) LogInfo("correlate: pre-filter {}", result.preprocess);
   const double seconds = wall.ElapsedSeconds();
   LogInfo("correlate: {}", result.summary.FullReport());

@@ -1,6 +1,7 @@
 #include "impactdic/dic/dic_io.h"
 
 #include <fmt/format.h>
+#include <malloc.h>
 
 #include <algorithm>
 #include <array>
@@ -46,6 +47,8 @@ bool FailsInReference(SubsetStatus status) {
 
 namespace {
 
+constexpr std::size_t kTrimRows = 16;  // Rows released between two malloc_trim calls.
+
 // MakeDicResultsTable; a DicResult passed as non-const has each frame's arrays released once
 // they are in the table, so that the results are in memory once (plus a frame), not twice.
 template <typename Result>
@@ -61,15 +64,12 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
     t.x_px.push_back(p.x);
     t.y_px.push_back(p.y);
   }
-  // Row 0: the first reference itself.
-  t.u_px.assign(rows * n, 0.0);
-  t.v_px.assign(rows * n, 0.0);
-  t.zncc.assign(rows * n, 1.0f);
-  t.sigma_u_px.assign(rows * n, 0.0f);
-  t.sigma_v_px.assign(rows * n, 0.0f);
-  t.sigma_px.assign(rows * n, 0.0f);
-  t.iterations.assign(rows * n, 0);
-  t.status.assign(rows * n, static_cast<std::int32_t>(SubsetStatus::kConverged));
+  // Row by row, each appended to reserved (not yet touched) memory: the table's pages become
+  // resident as the rows are released, so the results are held once while it fills.
+  for (auto* column : {&t.u_px, &t.v_px}) column->reserve(rows * n);
+  for (auto* column : {&t.zncc, &t.sigma_u_px, &t.sigma_v_px, &t.sigma_px})
+    column->reserve(rows * n);
+  for (auto* column : {&t.iterations, &t.status}) column->reserve(rows * n);
   // The number from the file names, else the index in the input sequence.
   const auto number = [&](int index) {
     return static_cast<double>(result.frame_numbers.empty() ? first_frame + index
@@ -81,32 +81,40 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
   // The time stamps from the source (camera files), row by row.
   const auto time = [&](int index) { return result.time_s.at(static_cast<std::size_t>(index)); };
   if (!result.time_s.empty()) t.time_s.push_back(time(0));
-  if (!result.frames.empty()) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const SubsetStatus s = result.frames[0].status[i];
-      if (!FailsInReference(s)) continue;
-      t.status[i] = static_cast<std::int32_t>(s);
-      t.u_px[i] = t.v_px[i] = std::nan("");
-    }
+  // Row 0: the first reference itself (NaN where the subset fails in it).
+  for (std::size_t i = 0; i < n; ++i) {
+    const SubsetStatus s =
+        result.frames.empty() ? SubsetStatus::kConverged : result.frames[0].status[i];
+    const bool fails = FailsInReference(s);
+    t.u_px.push_back(fails ? std::nan("") : 0.0);
+    t.v_px.push_back(fails ? std::nan("") : 0.0);
+    t.status.push_back(static_cast<std::int32_t>(fails ? s : SubsetStatus::kConverged));
   }
+  t.zncc.assign(n, 1.0f);
+  t.sigma_u_px.assign(n, 0.0f);
+  t.sigma_v_px.assign(n, 0.0f);
+  t.sigma_px.assign(n, 0.0f);
+  t.iterations.assign(n, 0);
   for (std::size_t r = 1; r < rows; ++r) {
     const FrameResult& f = result.frames[r - 1];
     t.frame.push_back(first_frame + f.frame);
     t.reference_frame.push_back(first_frame + f.reference_frame);
     t.frame_number.push_back(number(f.frame));
     if (!result.time_s.empty()) t.time_s.push_back(time(f.frame));
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t k = r * n + i;
-      t.u_px[k] = f.u_px[i];
-      t.v_px[k] = f.v_px[i];
-      t.zncc[k] = f.zncc[i];
-      t.sigma_u_px[k] = f.sigma_u_px[i];
-      t.sigma_v_px[k] = f.sigma_v_px[i];
-      t.sigma_px[k] = f.sigma_px[i];
-      t.iterations[k] = f.iterations[i];
-      t.status[k] = static_cast<std::int32_t>(f.status[i]);
+    t.u_px.insert(t.u_px.end(), f.u_px.begin(), f.u_px.end());
+    t.v_px.insert(t.v_px.end(), f.v_px.begin(), f.v_px.end());
+    t.zncc.insert(t.zncc.end(), f.zncc.begin(), f.zncc.end());
+    t.sigma_u_px.insert(t.sigma_u_px.end(), f.sigma_u_px.begin(), f.sigma_u_px.end());
+    t.sigma_v_px.insert(t.sigma_v_px.end(), f.sigma_v_px.begin(), f.sigma_v_px.end());
+    t.sigma_px.insert(t.sigma_px.end(), f.sigma_px.begin(), f.sigma_px.end());
+    t.iterations.insert(t.iterations.end(), f.iterations.begin(), f.iterations.end());
+    for (const SubsetStatus s : f.status) t.status.push_back(static_cast<std::int32_t>(s));
+    if constexpr (!std::is_const_v<Result>) {
+      result.frames[r - 1] = FrameResult{};
+      // The rows are small blocks of the heap, the table a few large mappings: the pages the
+      // released rows leave free go back to the system as they free up, not at the end.
+      if (r % kTrimRows == 0 || r + 1 == rows) malloc_trim(0);
     }
-    if constexpr (!std::is_const_v<Result>) result.frames[r - 1] = FrameResult{};
   }
   t.status_codes = SubsetStatusCodes();
   t.text_attributes = {{"interpolation", ToString(options.icgn.interpolation)},
@@ -147,7 +155,8 @@ std::vector<std::string> DicCsvColumns() {
           "zncc",  "iterations", "status", "sigma_u_px", "sigma_v_px"};
 }
 
-void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options) {
+void WriteDicResult(const std::string& path, DicResult* released, const DicOptions& options) {
+  DicResult& result = *released;
   const std::string ext = ToLower(std::filesystem::path(path).extension().string());
   const std::size_t n = result.positions.size(), frames = result.frames.size();
   if (ext == ".csv") {
@@ -171,6 +180,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
                Number(f.sigma_v_px[i])};
         out.Row(row);
       }
+      result.frames[k] = FrameResult{};
     }
     out.Commit();
     return;
@@ -179,7 +189,7 @@ void WriteDicResult(const std::string& path, const DicResult& result, const DicO
     throw Error(ErrorKind::kInvalidValue, "output", path, "a file ending in .csv or .h5");
   }
   H5Writer out(path, /*owned_groups=*/{"/dic"});  // Other groups of an existing file stay.
-  WriteDicResults(out, MakeDicResultsTable(result, options, /*first_frame=*/-1));
+  WriteDicResults(out, MakeTable(result, options, /*first_frame=*/-1));
   out.Commit();
 }
 

@@ -1,7 +1,7 @@
 // The correlator's results as the rows of the results files, and writing them (`correlate`).
 //
 //   DicResult r = CorrelateFrames(*OpenFrameSource("frames/"), options);  // dic/correlate_frames.h
-//   WriteDicResult("out.h5", r, options);   // or .csv
+//   WriteDicResult("out.h5", &r, options);  // or .csv; r.frames released
 #ifndef IMPACTDIC_DIC_DIC_IO_H_
 #define IMPACTDIC_DIC_DIC_IO_H_
 
@@ -45,7 +45,9 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
 //       from MakeDicResultsTable(result, options, /*first_frame=*/-1)): one row per image, the
 //       reference first; /dic/frame_number as the CSV's frame column; other groups of an existing
 //       file are kept.
-void WriteDicResult(const std::string& path, const DicResult& result, const DicOptions& options);
+// Each frame's arrays are released once written (.h5: once in the table), so the results are
+// held once; the positions, summary and attributes stay in *result.
+void WriteDicResult(const std::string& path, DicResult* result, const DicOptions& options);
 // The columns of WriteDicResult's CSV.
 std::vector<std::string> DicCsvColumns();
 
