@@ -36,6 +36,7 @@
 #include "impactdic/io/results_layout.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/render/animation.h"
+#include "small_scene_spec.h"
 
 namespace impactdic {
 namespace {
@@ -265,15 +266,13 @@ TEST(LongRun, PeakMemoryGrowsByNoMoreThanTheResults) {
                   "memory resident); the release build asserts it";
 #else
   TestDir dir("LongRun");
-  const std::string spec = dir.Write("spec.yaml", R"(
-preset: small
-name: long_run
-camera: {lens: ideal, width: 320, height: 240, mm_per_px: 1.5}
-frames: {count: 202, before_impact: 2, supersampling: 1}
-sensor: {tail_s: 0.12}
-calibration: {render: false}
-dic: {subset_size: 15, step: 4}
-)");
+  SmallScene long_recording;
+  long_recording.frames = 202;
+  long_recording.supersampling = 1;
+  long_recording.tail_s = 0.12;  // Past the 200 frames at the preset's rate.
+  long_recording.subset_size = 15;
+  long_recording.step = 4;
+  const std::string spec = dir.Write("spec.yaml", SmallSceneSpec(long_recording));
   const CliResult synth = RunCli("-q synth " + spec + " -o " + dir.File("scene"));
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   const std::pair<std::string, std::string> no_animation = {"animation: true", "animation: false"};
