@@ -11,15 +11,15 @@ bash scripts/install_deps.sh
 export IMPACTDIC_REQUIRE_SHARED_DATA="${IMPACTDIC_REQUIRE_SHARED_DATA:-1}"
 
 jobs=$(nproc)
-echo "== Release build (warnings are errors) =="
+echo "== Release build (warnings are errors), $(date -u +%T) UTC =="
 cmake --preset release -DIMPACTDIC_WERROR=ON -DIMPACTDIC_BUILD_TESTS=ON
 cmake --build --preset release -j "$jobs"
 ctest --preset release -j "$jobs"
 
-echo "== clang-tidy (.clang-tidy) over src/ =="
+echo "== clang-tidy (.clang-tidy) over src/, $(date -u +%T) UTC =="
 bash scripts/clang_tidy.sh build/release
 
-echo "== AddressSanitizer + UBSan build =="
+echo "== AddressSanitizer + UBSan build, $(date -u +%T) UTC =="
 cmake --preset asan -DIMPACTDIC_WERROR=ON -DIMPACTDIC_BUILD_TESTS=ON
 cmake --build --preset asan -j "$jobs"
 if ! ctest --preset asan -j "$jobs"; then
@@ -34,3 +34,4 @@ if ! ctest --preset asan -j "$jobs"; then
     exit 1
   fi
 fi
+echo "== Done, $(date -u +%T) UTC ==" 
