@@ -34,4 +34,4 @@ if ! ctest --preset asan -j "$jobs"; then
     exit 1
   fi
 fi
-echo "== Done, $(date -u +%T) UTC ==" 
+echo "== Done, $(date -u +%T) UTC =="

@@ -115,17 +115,19 @@ TEST(Hdf5Store, LargeDatasetsAreChunkedAndCompressed) {
   EXPECT_LT(ds.getStorageSize(), field.size() * sizeof(float) / 10);  // constant data compresses
 }
 
-// Commit() writes the file from the core driver's memory instead of a copy of it
-// (H5Fget_file_image): the bytes on the disk are still exactly those HDF5's copy holds (its
-// superblock's consistency flags cleared as H5Fget_file_image clears them).
+// Commit() writes the file from the core driver's buffer (the temporary file itself, or memory)
+// instead of a copy of it (H5Fget_file_image): the bytes on the disk are still exactly those
+// HDF5's copy holds (its superblock's consistency flags cleared as H5Fget_file_image clears them).
 TEST(Hdf5Store, CommitWritesTheBytesOfHdf5sFileImage) {
   TestDir dir;
   std::mt19937 random(7);
   std::uniform_real_distribution<double> value(-1, 1);
-  std::vector<double> field(300 * 200);
+  // 12 MB of random doubles (deflate keeps them as they are): the file on the disk passes through
+  // several 4 MB steps at which its pages are handed back to the page cache.
+  std::vector<double> field(std::size_t{1500} * 1000);
   for (double& v : field) v = value(random);
   auto fill = [&](H5Writer& out) {
-    out.Write("/dic/u_px", field, {300, 200}, "px", "random");
+    out.Write("/dic/u_px", field, {1500, 1000}, "px", "random");
     out.Write("/time_ms", std::vector<double>{0, 1, 2}, "ms", "time");
     out.SetAttribute("/dic", "interpolation", "bicubic");
   };
