@@ -63,7 +63,8 @@ endfunction()
 # impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow]
 #                    [WHOLE])
 # Each test case is its own CTest test (run in parallel processes), unless WHOLE: then the program
-# is one CTest test, for suites whose expensive shared fixture must run once.
+# is one CTest test, for suites whose expensive shared fixture must run once. A label listed in
+# IMPACTDIC_SKIP_TEST_LABELS leaves the program out of the default build and of CTest.
 function(impactdic_add_test)
   cmake_parse_arguments(ARG "WHOLE" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${ARG_NAME} ${ARG_SOURCES})
@@ -75,6 +76,12 @@ function(impactdic_add_test)
       IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
       IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
   impactdic_target_defaults(${ARG_NAME})
+  foreach(label IN LISTS ARG_LABELS)
+    if(label IN_LIST IMPACTDIC_SKIP_TEST_LABELS)
+      set_target_properties(${ARG_NAME} PROPERTIES EXCLUDE_FROM_ALL TRUE)
+      return()
+    endif()
+  endforeach()
   if(ARG_WHOLE)
     add_test(NAME ${ARG_NAME} COMMAND ${ARG_NAME})
     set_tests_properties(${ARG_NAME} PROPERTIES LABELS "${ARG_LABELS}")
