@@ -9,6 +9,7 @@
 
 #include "commands.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/pipeline/scene_template.h"
 
@@ -24,15 +25,12 @@ struct InitArgs {
 
 void RunInit(const InitArgs& args) {
   std::error_code ec;
-  fs::create_directories(args.folder, ec);
-  if (ec) {
-    throw Error(ErrorKind::kIo, args.folder, "cannot create the folder: " + ec.message(),
-                "a folder impactdic init can write to");
-  }
+  MakeFolders(args.folder, ec);
+  if (ec) throw Error(ErrorKind::kIo, args.folder + ": cannot create the folder: " + ec.message());
   const std::string path = (fs::path(args.folder) / "scene.yaml").string();
   if (!args.force && fs::exists(path)) {
-    throw Error(ErrorKind::kInvalidValue, path, "exists",
-                "a folder without scene.yaml (`impactdic init --force` overwrites it)");
+    throw Error(ErrorKind::kInvalidValue,
+                path + " exists; `impactdic init --force` overwrites it, or give another folder");
   }
   WriteTextFileAtomic(path, SceneTemplate());
   std::cout << "wrote " << path << ": fill in the lines marked REQUIRED, then run\n"
