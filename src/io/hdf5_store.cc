@@ -16,7 +16,6 @@
 #include <numeric>
 #include <optional>
 #include <system_error>
-#include <type_traits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
@@ -98,25 +97,11 @@ std::string UtcNow() {
   return buffer;
 }
 
-// The error number of the last failed reservation of disk space for a writer's file
-// (ImageMalloc, ImageRealloc: a full disk), in the thread that called HDF5 (HDF5 runs the
-// callbacks in the caller's thread); 0 = none. Guard reports it as the disk's error.
-thread_local int disk_error = 0;
-
 template <typename Fn>
 auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltype(fn()) {
-  disk_error = 0;
   try {
-    if constexpr (std::is_void_v<decltype(fn())>) {
-      fn();
-      if (disk_error != 0) throw WriteError(file, disk_error);
-    } else {
-      auto result = fn();
-      if (disk_error != 0) throw WriteError(file, disk_error);
-      return result;
-    }
+    return fn();
   } catch (const H5::Exception& e) {
-    if (disk_error != 0) throw WriteError(file, disk_error);
     throw Error(ErrorKind::kIo, what, e.getDetailMsg(), "a valid HDF5 operation")
         .WithFile(OutputPathForMessages(file));
   }
@@ -155,8 +140,8 @@ std::string ImageName(const std::string& path) {
 //    holds about one growth step of the file however large it gets; Commit() renames the file.
 //    When the disk has no room the growth still succeeds, in an anonymous copy of the buffer
 //    (`error` set): HDF5 must never see a failed allocation (a failed flush inside HDF5 1.10 ends
-//    in the segfault above), so the operation completes in memory and Guard then throws the
-//    disk's error; the file is never committed.
+//    in the segfault above), so the operation completes in memory and ThrowIfNoRoom then throws
+//    the disk's error; the file is never committed.
 //  - Backing::kMemory (fd < 0): an anonymous mapping, freed when the file is closed.
 struct CoreImage {
   void* data = nullptr;     // The file's bytes; null before the first write.
@@ -178,13 +163,19 @@ bool IsDriverBuffer(H5FD_file_image_op_t op) {
          op == H5FD_FILE_IMAGE_OP_FILE_CLOSE;
 }
 
-// Reserves the first `bytes` of the temporary file on the disk; false (image.error and
-// disk_error set) if the disk has no room.
+// Reserves the first `bytes` of the temporary file on the disk; false (image.error set) if the
+// disk has no room.
 bool Reserve(CoreImage& image, std::size_t bytes) {
   const int error = posix_fallocate(image.fd, 0, static_cast<off_t>(bytes));
   if (error == 0) return true;
-  image.error = disk_error = error;
+  image.error = error;
   return false;
+}
+
+// After each operation of a writer: the disk's error once its file found no room (the operation
+// itself completed in memory).
+void ThrowIfNoRoom(const CoreImage& image, const std::string& file) {
+  if (image.error != 0) throw WriteError(file, image.error);
 }
 
 void* MapAnonymous(std::size_t mapped) {
@@ -334,6 +325,7 @@ H5Writer::H5Writer(const std::string& final_path, Mode mode, const std::string& 
                              H5::FileCreatPropList::DEFAULT, access);
     impl_->open = true;
   });
+  ThrowIfNoRoom(impl_->image, final_path);
 }
 
 namespace {
@@ -360,6 +352,7 @@ void H5Writer::Remove(const std::string& path) {
     if (current.empty()) return;
     impl_->file.unlink(current);
   });
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 // Closing the file cannot fail on the disk (HDF5 writes only to the driver's buffer); nothing is
@@ -384,6 +377,7 @@ void H5Writer::CreateGroup(const std::string& path) {
       if (!impl_->file.nameExists(current)) CreateUntimedGroup(impl_->file, current);
     }
   });
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 namespace {
@@ -437,30 +431,35 @@ void H5Writer::Write(const std::string& path, const std::vector<double>& data, c
   CreateGroup(ParentOf(path));
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_DOUBLE,
                H5::PredType::IEEE_F64LE, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<float>& data, const Dims& dims,
                      const std::string& units, const std::string& description) {
   CreateGroup(ParentOf(path));
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_FLOAT,
                H5::PredType::IEEE_F32LE, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::int32_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
   CreateGroup(ParentOf(path));
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_INT32,
                H5::PredType::STD_I32LE, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::uint8_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
   CreateGroup(ParentOf(path));
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT8,
                H5::PredType::STD_U8LE, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::uint16_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
   CreateGroup(ParentOf(path));
   WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT16,
                H5::PredType::STD_U16LE, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::WriteStack(const std::string& path, const Dims& dims, int bits,
                           const std::function<void(std::size_t, void*)>& fill,
@@ -500,11 +499,13 @@ void H5Writer::WriteStack(const std::string& path, const Dims& dims, int bits,
     WriteStringAttribute(ds, "units", units);
     WriteStringAttribute(ds, "description", description);
   });
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 void H5Writer::Write(const std::string& path, const std::vector<double>& data,
                      const std::string& units, const std::string& description) {
   Write(path, data, Dims{data.size()}, units, description);
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 void H5Writer::SetAttribute(const std::string& object_path, const std::string& name,
@@ -525,6 +526,7 @@ void H5Writer::SetAttribute(const std::string& object_path, const std::string& n
       WriteStringAttribute(g, name, value);
     }
   });
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 void H5Writer::SetAttribute(const std::string& object_path, const std::string& name, double value) {
@@ -545,6 +547,7 @@ void H5Writer::SetAttribute(const std::string& object_path, const std::string& n
       write(g);
     }
   });
+  ThrowIfNoRoom(impl_->image, final_path());
 }
 
 void H5Writer::WriteProvenance(const std::string& scene_yaml_text) {
