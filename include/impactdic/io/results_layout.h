@@ -69,6 +69,53 @@ inline constexpr const char* kMmPerPxAttr = "mm_per_px";
 // direction in which vy_mm_s is positive.
 inline constexpr const char* kVyDirectionAttr = "vy_positive";
 
+// Optional, [F x N] double, only when the correlation kept them (dic keep_warp_gradient, scene
+// key strain.gradient: warp): the displacement gradient of the subset warp since the first
+// reference, composed across reference updates (du/dX, du/dY, dv/dX, dv/dY), NaN = failed.
+inline constexpr const char* kDicDudxWarp = "/dic/dudx_warp";
+inline constexpr const char* kDicDudyWarp = "/dic/dudy_warp";
+inline constexpr const char* kDicDvdxWarp = "/dic/dvdx_warp";
+inline constexpr const char* kDicDvdyWarp = "/dic/dvdy_warp";
+
+// --- Strain (/strain, scene key strain.enabled; strain/strain.h for the definitions) ---------
+// [F x N] double, dimensionless, NaN = unknown. Image axes (x right, y DOWN), reference
+// coordinates. The displacement gradient used, small strain (tension positive), Green-Lagrange
+// strain (tension positive), volumetric strain eps_v = -(exx + eyy) (COMPRESSION positive, plane
+// strain), principal strains eps_1 >= eps_2 and the direction of eps_1 [rad], maximum
+// (engineering) shear strain gamma_max = eps_1 - eps_2.
+inline constexpr const char* kStrainGroup = "/strain";
+inline constexpr const char* kStrainDudx = "/strain/dudx";
+inline constexpr const char* kStrainDudy = "/strain/dudy";
+inline constexpr const char* kStrainDvdx = "/strain/dvdx";
+inline constexpr const char* kStrainDvdy = "/strain/dvdy";
+inline constexpr const char* kStrainExx = "/strain/exx";
+inline constexpr const char* kStrainEyy = "/strain/eyy";
+inline constexpr const char* kStrainExy = "/strain/exy";
+inline constexpr const char* kStrainGxx = "/strain/green_lagrange_xx";
+inline constexpr const char* kStrainGyy = "/strain/green_lagrange_yy";
+inline constexpr const char* kStrainGxy = "/strain/green_lagrange_xy";
+inline constexpr const char* kStrainEpsV = "/strain/eps_v";
+inline constexpr const char* kStrainEps1 = "/strain/eps_1";
+inline constexpr const char* kStrainEps2 = "/strain/eps_2";
+inline constexpr const char* kStrainTheta1 = "/strain/theta_1_rad";
+inline constexpr const char* kStrainGammaMax = "/strain/gamma_max";
+// Rates [1/s], [F x N]: by the velocity's time differences.
+inline constexpr const char* kStrainExxRate = "/strain/exx_rate_1_s";
+inline constexpr const char* kStrainEyyRate = "/strain/eyy_rate_1_s";
+inline constexpr const char* kStrainExyRate = "/strain/exy_rate_1_s";
+inline constexpr const char* kStrainEpsVRate = "/strain/eps_v_rate_1_s";
+inline constexpr const char* kStrainGammaMaxRate = "/strain/gamma_max_rate_1_s";
+// Density rho = rho_d / (1 - eps_v) [kg/m^3], [F x N]; shear-band ridge mask (uint8), [F x N].
+inline constexpr const char* kStrainDensity = "/strain/density_kg_m3";
+inline constexpr const char* kStrainShearBand = "/strain/shear_band";
+// String attributes of kStrainGroup: "gradient" ("warp" | "fit"), "convention" (the sign
+// conventions above in words); number attributes: "window" (fit), "compaction_threshold",
+// "shear_band_threshold"; the compacted zone at t_e and at the last frame: "compacted_area_te_mm2",
+// "compacted_depth_te_mm", "compacted_area_end_mm2", "compacted_depth_end_mm" (NaN when t_e is not
+// known, with the reason in the string attribute "compacted_te_note").
+inline constexpr const char* kStrainGradientAttr = "gradient";
+inline constexpr const char* kStrainConventionAttr = "convention";
+
 // Camera frames as analysed, [F x R x C], int32 grey values (0..255 or 0..65535; any numeric type
 // is accepted). Optional number attribute kBitDepthAttr (8 or 16) on kFramesGroup.
 inline constexpr const char* kFramesGroup = "/frames";
