@@ -28,6 +28,7 @@ void RegisterRenderCommand(CLI::App& app);
 void RegisterCampaignCommand(CLI::App& app);
 void RegisterValidateDemCommand(CLI::App& app);
 void RegisterVersionCommand(CLI::App& app);
+void RegisterInitCommand(CLI::App& app);
 
 // Library errors name option struct fields and YAML keys ("sensor.cutoff_hz"); a command maps the
 // ones it exposes as flags ({"sensor.cutoff_hz", "--cutoff"}). Throws `e` again, naming the flag

@@ -68,6 +68,7 @@ int Main(int argc, char** argv) {
   cli::RegisterCampaignCommand(app);
   cli::RegisterValidateDemCommand(app);
   cli::RegisterVersionCommand(app);
+  cli::RegisterInitCommand(app);
 
   // An unknown first word is reported as such (CLI11 would only say a subcommand is required).
   for (int i = 1; i < argc; ++i) {

@@ -26,7 +26,7 @@ TEST(Cli, VersionPrintsVersionAndRevision) {
 
 TEST(Cli, EverySubcommandHasHelp) {
   for (const char* sub : {"run", "synth", "calibrate", "correlate", "analyze", "model", "render",
-                          "campaign", "version"}) {
+                          "campaign", "version", "init"}) {
     const CliResult r = RunCli(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub << ": " << r.output;
     EXPECT_NE(r.output.find(sub), std::string::npos) << r.output;

@@ -231,7 +231,9 @@ TEST(OptionDefaults, SceneKeyReferenceIsGeneratedFromTheBindings) {
       "src/pipeline/scene.cc) by\n`IMPACTDIC_UPDATE_DOCS=1 build/release/tests/pipeline/"
       "pipeline_test --gtest_filter='OptionDefaults.*'`;\nthe defaults are the library structs' "
       "(docs/architecture.md, \"Options\"). Besides these keys: `name`,\n`stages`, "
-      "`dic.roi`, `dic.roi_polygon`, `momentum.rect_mm` (README.md, \"Scene file\").\n\n"
+      "`dic.roi`, `dic.roi_polygon`, `momentum.rect_mm` (README.md, \"Scene file\").\n"
+      "`impactdic init [DIR]` writes all of them, with these defaults and meanings as comments, "
+      "into\nDIR/scene.yaml (pipeline/scene_template.h).\n\n"
       "| key | default | expected | meaning |\n|---|---|---|---|\n";
   for (const YamlOptionTable& table : SceneOptionTables(&scene)) expected += table.Reference();
   const std::string path = std::string(IMPACTDIC_SOURCE_DIR) + "/docs/scene_keys.md";
