@@ -93,13 +93,15 @@ namespace {
 // Error kFileFormat naming the first of `paths` the file lacks, as part of `what`.
 void RequireDatasets(const H5Reader& r, const std::vector<const char*>& paths,
                      const std::string& what) {
-  std::string all;
-  for (const char* path : paths) all += (all.empty() ? "" : ", ") + std::string(path);
+  std::string expected = what + " (";
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    expected += i ? ", " : "";
+    expected += paths[i];
+  }
+  expected += ")";
   for (const char* path : paths) {
-    if (!r.Exists(path)) {
-      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(path), "missing",
-                  what + " (" + all + ")");
-    }
+    if (!r.Exists(path))
+      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(path), "missing", expected);
   }
 }
 
