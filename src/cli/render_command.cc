@@ -21,7 +21,8 @@ void RegisterRenderCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "render",
       "Re-render the figures (PNG, gnuplot) and the velocity animation (MP4 H.264, else MJPG AVI) "
-      "from a results file");
+      "from a results file; when it has /strain, also the strain maps at t_e and at the last "
+      "frame (strain_te.png, strain_end.png) and the strain animation (strain.mp4)");
   struct Args {
     std::string results;
     std::string output_dir;
@@ -42,8 +43,8 @@ void RegisterRenderCommand(CLI::App& app) {
       "frames (outputs.frames: preview) into the run's folder, the snapshot and "
       "animation are named *_preview and the run's own stay");
   cmd->add_flag("--png-frames", args->png_frames,
-                "also write every animation frame as PNG (OUTDIR/velocity_frames)");
-  cmd->add_flag("--no-animation", args->no_animation, "skip the animation");
+                "also write every animation frame as PNG (OUTDIR/velocity_frames, strain_frames)");
+  cmd->add_flag("--no-animation", args->no_animation, "skip the animations");
   cmd->add_flag("--no-figures", args->no_figures, "skip the gnuplot figures");
   cmd->add_flag("--force", args->force,
                 "replace an output folder another command wrote (a campaign, a synth scene); "

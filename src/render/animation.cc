@@ -132,7 +132,7 @@ bool ContainerComplete(const std::string& path, const std::string& container) {
 // as PNG frames the first time, when asked), then the video read back. The result says what
 // failed; a full disk throws WriteError naming `final_path`. Adds the frame and timing counts
 // to `summary`.
-AttemptResult EncodeAttempt(const VelocityFieldRenderer& renderer, const Attempt& attempt,
+AttemptResult EncodeAttempt(const VideoFrameSource& source, const Attempt& attempt,
                             const std::string& temp, const std::string& final_path,
                             const AnimationOptions& options, bool* png_done,
                             AnimationSummary* summary) {
@@ -141,7 +141,7 @@ AttemptResult EncodeAttempt(const VelocityFieldRenderer& renderer, const Attempt
   opencv_codecs::VideoWriter writer;
   try {
     result.opened = writer.Open(temp, cv::CAP_FFMPEG, Fourcc(attempt.fourcc), options.fps,
-                                renderer.canvas_size(), /*is_color=*/true);
+                                source.size, /*is_color=*/true);
   } catch (const cv::Exception& e) {
     result.failure = e.what();
   }
@@ -152,7 +152,11 @@ AttemptResult EncodeAttempt(const VelocityFieldRenderer& renderer, const Attempt
   ProgressBar bar("animation", frames);
   for (std::size_t i = 0; i < frames; ++i) {
     WallTimer t;
-    const cv::Mat image = renderer.RenderFrame(i);
+    const cv::Mat image = source.render(i);
+    CheckValue(image.size() == source.size && image.type() == CV_8UC3,
+               "animation frame " + std::to_string(i),
+               std::to_string(image.cols) + "x" + std::to_string(image.rows),
+               "a BGR image of the first frame's size");
     summary->render_s += t.ElapsedSeconds();
     if (!*png_done) {
       char name[32];
@@ -184,22 +188,25 @@ AttemptResult EncodeAttempt(const VelocityFieldRenderer& renderer, const Attempt
 
 }  // namespace
 
-AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
-                                        const std::string& output_path,
-                                        const AnimationOptions& options) {
+AnimationSummary WriteAnimation(const VideoFrameSource& source, const std::string& output_path,
+                                const AnimationOptions& options) {
   WallTimer wall;
   options.Check();
-  sequence.Check();
+  CheckValue(source.count > 0 && static_cast<bool>(source.render), "animation frames", "none",
+             "at least one frame");
+  CheckValue(source.size.width > 0 && source.size.height > 0 && source.size.width % 2 == 0 &&
+                 source.size.height % 2 == 0,
+             "animation frame size",
+             std::to_string(source.size.width) + "x" + std::to_string(source.size.height),
+             "even width and height");
   CheckValue(!output_path.empty(), "animation output path", "empty", "a file name");
   CheckOutputLocation(output_path);
-  const VelocityFieldRenderer renderer(sequence, options.overlay);
-  const std::size_t frames = sequence.num_frames();
+  const std::size_t frames = source.count;
 
   AnimationSummary summary;
   summary.frames = frames;
-  summary.size = renderer.canvas_size();
+  summary.size = source.size;
   summary.fps = options.fps;
-  summary.color_max_mm_s = renderer.color_max_mm_s();
 
   if (!options.png_frames_dir.empty()) {
     std::error_code ec;
@@ -234,7 +241,7 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
     const RemoveOnInterrupt video_on_interrupt(temp);
 
     const AttemptResult result =
-        EncodeAttempt(renderer, attempt, temp, final_path, options, &png_done, &summary);
+        EncodeAttempt(source, attempt, temp, final_path, options, &png_done, &summary);
     if (result.failure.empty()) {
       std::error_code ec;
       fs::rename(temp, final_path, ec);
@@ -272,6 +279,21 @@ AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
   }
   summary.wall_s = wall.ElapsedSeconds();
   LogInfo("animation: {}", summary.BriefReport());
+  return summary;
+}
+
+AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
+                                        const std::string& output_path,
+                                        const AnimationOptions& options) {
+  options.Check();
+  sequence.Check();
+  const VelocityFieldRenderer renderer(sequence, options.overlay);
+  VideoFrameSource source;
+  source.count = sequence.num_frames();
+  source.size = renderer.canvas_size();
+  source.render = [&renderer](std::size_t i) { return renderer.RenderFrame(i); };
+  AnimationSummary summary = WriteAnimation(source, output_path, options);
+  summary.color_max_mm_s = renderer.color_max_mm_s();
   return summary;
 }
 

@@ -17,6 +17,7 @@
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/dic_results.h"
+#include "impactdic/io/image_io.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/render/figures.h"
@@ -38,6 +39,11 @@ std::string RenderResultsSummary::BriefReport() const {
     text += "; animation " + animation.codec + " " + std::to_string(animation.frames) + " frames";
     if (animation.fell_back) text += " (MJPG fallback)";
   }
+  if (has_strain_animation) {
+    text += "; strain animation " + strain_animation.codec + " " +
+            std::to_string(strain_animation.frames) + " frames";
+    if (strain_animation.fell_back) text += " (MJPG fallback)";
+  }
   char buf[32];
   std::snprintf(buf, sizeof buf, " in %.2f s", wall_s);
   return text + buf;
@@ -48,6 +54,7 @@ std::string RenderResultsSummary::FullReport() const {
   for (const auto& w : written) text += "  wrote   " + w + "\n";
   for (const auto& s : skipped) text += "  skipped " + s + "\n";
   if (has_animation) text += "  " + animation.BriefReport() + "\n";
+  if (has_strain_animation) text += "  " + strain_animation.BriefReport() + "\n";
   return text;
 }
 
@@ -83,62 +90,48 @@ std::string FormatMs(double t_s) {
 
 namespace {
 
-// The sequence's data at the given rows only (the frames are set by the caller).
-void KeepRows(VelocityFieldSequence& seq, const std::vector<std::size_t>& rows) {
-  const std::size_t n = seq.num_subsets;
-  auto keep = [&](std::vector<double>& per_row, std::size_t width) {
-    std::vector<double> kept;
-    for (std::size_t row : rows)
-      kept.insert(kept.end(), per_row.begin() + row * width, per_row.begin() + (row + 1) * width);
-    per_row = std::move(kept);
-  };
-  keep(seq.time_ms, 1);
-  keep(seq.vx_mm_s, n);
-  keep(seq.vy_mm_s, n);
-  if (seq.x_px.size() != n) {
-    keep(seq.x_px, n);
-    keep(seq.y_px, n);
+// Error kFileFormat naming the first of `paths` the file lacks, as part of `what`.
+void RequireDatasets(const H5Reader& r, const std::vector<const char*>& paths,
+                     const std::string& what) {
+  std::string expected = what + " (";
+  for (std::size_t i = 0; i < paths.size(); ++i) {
+    expected += i ? ", " : "";
+    expected += paths[i];
+  }
+  expected += ")";
+  for (const char* path : paths) {
+    if (!r.Exists(path))
+      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(path), "missing", expected);
   }
 }
 
-}  // namespace
-
-VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_frames,
-                                                bool read_frames) {
-  // The file name for messages is not exposed by H5Reader; the callers add it.
-  const std::string file;
-  VelocityFieldSequence seq;
-  for (const char* path : {L::kTimeMs, L::kDicX, L::kDicY, L::kVx, L::kVy}) {
-    if (!r.Exists(path)) {
-      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(path), "missing",
-                  "the velocity field data (" + std::string(L::kTimeMs) + ", " + L::kDicX + ", " +
-                      L::kDicY + ", " + L::kVx + ", " + L::kVy + ")");
-    }
-  }
-  Dims dt, dx, dy, dvx, dvy;
-  seq.time_ms = r.ReadDouble(L::kTimeMs, &dt);
+// The times, subset positions (moving with /dic/u_px, v_px when stored) and scale of a field whose
+// [frames x subsets] dataset `field` has shape `field_dims`.
+void ReadFieldGeometry(const H5Reader& r, const char* field, const Dims& field_dims,
+                       FieldSequence* seq) {
+  const std::string
+      file;  // The file name for messages is not exposed by H5Reader; the callers add it.
+  Dims dt, dx, dy;
+  seq->time_ms = r.ReadDouble(L::kTimeMs, &dt);
   const std::vector<double> x = r.ReadDouble(L::kDicX, &dx);
   const std::vector<double> y = r.ReadDouble(L::kDicY, &dy);
-  seq.vx_mm_s = r.ReadDouble(L::kVx, &dvx);
-  seq.vy_mm_s = r.ReadDouble(L::kVy, &dvy);
   if (dt.size() != 1) ShapeError(r, L::kTimeMs, file, dt, "[frames]");
   const std::size_t f = dt[0];
-  if (dvx.size() != 2 || dvx[0] != f) {
-    ShapeError(r, L::kVx, file, dvx, "[frames x subsets] with frames = " + std::to_string(f));
+  if (field_dims.size() != 2 || field_dims[0] != f) {
+    ShapeError(r, field, file, field_dims, "[frames x subsets] with frames = " + std::to_string(f));
   }
-  const std::size_t n = dvx[1];
-  if (dvy != dvx) ShapeError(r, L::kVy, file, dvy, "the shape of " + std::string(L::kVx));
+  const std::size_t n = field_dims[1];
   const bool fixed = dx.size() == 1 && dx[0] == n;
   const bool moving = dx.size() == 2 && dx[0] == f && dx[1] == n;
   if (!fixed && !moving) {
-    ShapeError(
-        r, L::kDicX, file, dx,
-        "[subsets] or [frames x subsets] matching " + std::string(L::kVx) + " " + Dims2Text(dvx));
+    ShapeError(r, L::kDicX, file, dx,
+               "[subsets] or [frames x subsets] matching " + std::string(field) + " " +
+                   Dims2Text(field_dims));
   }
   if (dy != dx) ShapeError(r, L::kDicY, file, dy, "the shape of " + std::string(L::kDicX));
-  seq.num_subsets = n;
-  seq.x_px = x;
-  seq.y_px = y;
+  seq->num_subsets = n;
+  seq->x_px = x;
+  seq->y_px = y;
   // Lagrangian positions from the accumulated displacement, when stored (read by io
   // ReadDicResults, whatever the layout version).
   if (fixed && r.Exists(L::kDicU) && r.Exists(L::kDicV)) {
@@ -146,35 +139,26 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
     DicResultsTable dic = ReadDicResults(r, file, DicFields::kDisplacements);
     if (dic.rows != f || dic.subsets != n) {
       ShapeError(r, L::kDicU, file, Dims{dic.rows, dic.subsets},
-                 "[frames x subsets] = " + Dims2Text(dvx));
+                 "[frames x subsets] = " + Dims2Text(field_dims));
     }
-    seq.x_px = std::move(dic.u_px);
-    seq.y_px = std::move(dic.v_px);
+    seq->x_px = std::move(dic.u_px);
+    seq->y_px = std::move(dic.v_px);
     for (std::size_t i = 0; i < f; ++i) {
       for (std::size_t s = 0; s < n; ++s) {
-        seq.x_px[i * n + s] = x[s] + seq.x_px[i * n + s];
-        seq.y_px[i * n + s] = y[s] + seq.y_px[i * n + s];
+        seq->x_px[i * n + s] = x[s] + seq->x_px[i * n + s];
+        seq->y_px[i * n + s] = y[s] + seq->y_px[i * n + s];
       }
     }
   }
-  seq.mm_per_px = NumberAttribute(r, L::kKinematicsGroup, L::kMmPerPxAttr);
-  if (r.HasAttribute(L::kKinematicsGroup, L::kVyDirectionAttr)) {
-    const std::string dir = r.ReadStringAttribute(L::kKinematicsGroup, L::kVyDirectionAttr);
-    if (dir != "up" && dir != "down") {
-      throw Error(ErrorKind::kFileFormat,
-                  "attribute " + std::string(L::kVyDirectionAttr) + " of " + L::kKinematicsGroup,
-                  dir, "up or down");
-    }
-    seq.vy_positive_down = dir == "down";
-  }
-  if (!read_frames) return seq;
-  if (!r.Exists(L::kFrameImages)) {
-    if (require_frames) {
-      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(L::kFrameImages), "missing",
-                  "the camera frames [frames x rows x cols]");
-    }
-    return seq;
-  }
+  if (r.Exists(L::kKinematicsGroup))
+    seq->mm_per_px = NumberAttribute(r, L::kKinematicsGroup, L::kMmPerPxAttr);
+}
+
+// The camera frames of /frames/images into seq->frames, scaled to the full frame size; returns
+// the rows of /time they belong to (every row, or a preview's).
+std::vector<std::size_t> ReadFieldFrames(const H5Reader& r, FieldSequence* seq) {
+  const std::string file;
+  const std::size_t f = seq->time_ms.size();
   Dims di;
   const std::vector<float> pixels = r.ReadFloat(L::kFrameImages, &di);
   // A preview (`run` outputs.frames: preview) stores some rows, downsampled.
@@ -219,9 +203,76 @@ VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_
       frame = as_float.clone();
     }
     if (frame.size() != full) cv::resize(frame, frame, full, 0, 0, cv::INTER_LINEAR);
-    seq.frames.push_back(frame);
+    seq->frames.push_back(frame);
   }
-  if (rows.size() != f) KeepRows(seq, rows);
+  return rows;
+}
+
+}  // namespace
+
+VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& r, bool require_frames,
+                                                bool read_frames) {
+  // The file name for messages is not exposed by H5Reader; the callers add it.
+  const std::string file;
+  VelocityFieldSequence seq;
+  RequireDatasets(r, {L::kTimeMs, L::kDicX, L::kDicY, L::kVx, L::kVy}, "the velocity field data");
+  Dims dvx, dvy;
+  seq.vx_mm_s = r.ReadDouble(L::kVx, &dvx);
+  seq.vy_mm_s = r.ReadDouble(L::kVy, &dvy);
+  ReadFieldGeometry(r, L::kVx, dvx, &seq);
+  if (dvy != dvx) ShapeError(r, L::kVy, file, dvy, "the shape of " + std::string(L::kVx));
+  if (r.HasAttribute(L::kKinematicsGroup, L::kVyDirectionAttr)) {
+    const std::string dir = r.ReadStringAttribute(L::kKinematicsGroup, L::kVyDirectionAttr);
+    if (dir != "up" && dir != "down") {
+      throw Error(ErrorKind::kFileFormat,
+                  "attribute " + std::string(L::kVyDirectionAttr) + " of " + L::kKinematicsGroup,
+                  dir, "up or down");
+    }
+    seq.vy_positive_down = dir == "down";
+  }
+  if (!read_frames) return seq;
+  if (!r.Exists(L::kFrameImages)) {
+    if (require_frames) {
+      throw Error(ErrorKind::kFileFormat, "dataset " + std::string(L::kFrameImages), "missing",
+                  "the camera frames [frames x rows x cols]");
+    }
+    return seq;
+  }
+  const std::vector<std::size_t> rows = ReadFieldFrames(r, &seq);
+  if (rows.size() != seq.time_ms.size()) seq.KeepRows(rows, {&seq.vx_mm_s, &seq.vy_mm_s});
+  return seq;
+}
+
+StrainFieldSequence ReadStrainFieldSequence(const H5Reader& r, bool read_frames) {
+  const std::string file;
+  StrainFieldSequence seq;
+  RequireDatasets(r, {L::kTimeMs, L::kDicX, L::kDicY, L::kStrainEpsV, L::kStrainGammaMax},
+                  "the strain field data");
+  Dims de, dg;
+  seq.eps_v = r.ReadDouble(L::kStrainEpsV, &de);
+  seq.gamma_max = r.ReadDouble(L::kStrainGammaMax, &dg);
+  ReadFieldGeometry(r, L::kStrainEpsV, de, &seq);
+  if (dg != de) {
+    ShapeError(r, L::kStrainGammaMax, file, dg, "the shape of " + std::string(L::kStrainEpsV));
+  }
+  if (r.Exists(L::kStrainShearBand)) {
+    Dims db;
+    seq.shear_band = r.ReadDouble(L::kStrainShearBand, &db);
+    if (db != de) {
+      ShapeError(r, L::kStrainShearBand, file, db, "the shape of " + std::string(L::kStrainEpsV));
+    }
+  }
+  const double full_w = NumberAttribute(r, L::kFramesGroup, L::kFrameWidthAttr);
+  const double full_h = NumberAttribute(r, L::kFramesGroup, L::kFrameHeightAttr);
+  if (full_w >= 1 && full_h >= 1)
+    seq.plain_size = cv::Size(static_cast<int>(full_w), static_cast<int>(full_h));
+  if (!read_frames || !r.Exists(L::kFrameImages)) return seq;
+  const std::vector<std::size_t> rows = ReadFieldFrames(r, &seq);
+  if (rows.size() != seq.time_ms.size()) {
+    std::vector<std::vector<double>*> fields = {&seq.eps_v, &seq.gamma_max};
+    if (!seq.shear_band.empty()) fields.push_back(&seq.shear_band);
+    seq.KeepRows(rows, fields);
+  }
   return seq;
 }
 
@@ -246,6 +297,11 @@ struct FrameOutputNames {
   const char* animation = L::kAnimationName;
   const char* animation_avi = L::kAnimationAviName;
   const char* png_frames = L::kPngFramesDir;
+  const char* strain_te = L::kStrainTePng;
+  const char* strain_end = L::kStrainEndPng;
+  const char* strain_animation = L::kStrainAnimationName;
+  const char* strain_animation_avi = L::kStrainAnimationAviName;
+  const char* strain_png_frames = L::kStrainPngFramesDir;
   bool preview = false;
 };
 
@@ -267,8 +323,11 @@ FrameOutputNames FrameOutputsOf(const H5Reader& r, const std::string& results_pa
       "full size) are kept",
       results_path, stored, analysed, std::isfinite(downsample) ? downsample : 1.0,
       L::kPreviewSnapshotPng, L::kPreviewAnimationName, L::kVelocitySnapshotPng, L::kAnimationName);
-  return {L::kPreviewSnapshotPng, L::kPreviewAnimationName, L::kPreviewAnimationAviName,
-          L::kPreviewPngFramesDir, true};
+  return {L::kPreviewSnapshotPng,         L::kPreviewAnimationName,
+          L::kPreviewAnimationAviName,    L::kPreviewPngFramesDir,
+          L::kStrainTePreviewPng,         L::kStrainEndPreviewPng,
+          L::kStrainPreviewAnimationName, L::kStrainPreviewAnimationAviName,
+          L::kStrainPreviewPngFramesDir,  true};
 }
 
 // A render's outputs are one generation of the folder; it keeps the other entries of the previous
@@ -277,13 +336,17 @@ FrameOutputNames FrameOutputsOf(const H5Reader& r, const std::string& results_pa
 OutputGenerationOptions RenderGenerationOptions(const FrameOutputNames& names, bool force) {
   OutputGenerationOptions o;
   o.command = "impactdic render";
-  for (const char* name : {L::kMomentumPng, L::kDecelerationPng, L::kAddedMassPng, names.snapshot,
-                           names.animation, names.animation_avi, names.png_frames})
+  for (const char* name :
+       {L::kMomentumPng, L::kDecelerationPng, L::kAddedMassPng, names.snapshot, names.animation,
+        names.animation_avi, names.png_frames, names.strain_te, names.strain_end,
+        names.strain_animation, names.strain_animation_avi, names.strain_png_frames})
     o.own_names.emplace_back(name);
   for (const char* name : L::kRunOnlyOutputNames) o.known_names.emplace_back(name);
   if (names.preview) {
     for (const char* name :
-         {L::kVelocitySnapshotPng, L::kAnimationName, L::kAnimationAviName, L::kPngFramesDir})
+         {L::kVelocitySnapshotPng, L::kAnimationName, L::kAnimationAviName, L::kPngFramesDir,
+          L::kStrainTePng, L::kStrainEndPng, L::kStrainAnimationName, L::kStrainAnimationAviName,
+          L::kStrainPngFramesDir})
       o.known_names.emplace_back(name);
   }
   o.keep_other_entries = true;
@@ -323,6 +386,7 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
     generation.Commit();
     for (auto& w : summary.written) w = generation.FinalPath(w);
     summary.animation.path = generation.FinalPath(summary.animation.path);
+    summary.strain_animation.path = generation.FinalPath(summary.strain_animation.path);
   } else {
     std::error_code ec;
     MakeFolders(out_dir, ec);
@@ -391,7 +455,7 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
       seq.frame_count = seq.time_ms.size();
       seq.load_frame = options.frame_loader;
     }
-    if (seq.num_frames() == 0) {
+    if (!seq.has_images()) {
       const std::string reason = std::string("no camera frames (") + L::kFrameImages + ")";
       if (options.snapshot) skip(names.snapshot, reason);
       if (options.animation) skip(names.animation, reason);
@@ -410,6 +474,55 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
         summary.written.push_back(summary.animation.path);
       }
     }
+  }
+}
+
+// The strain maps at t_e and at the last frame and the strain animation, when the file has
+// /strain (else nothing, and no entry in the summary: a run without strain asks for none).
+void DrawStrainField(const H5Reader& reader, double t_e_s, const RenderResultsOptions& options,
+                     const std::string& out_dir, const FrameOutputNames& names,
+                     RenderResultsSummary& summary) {
+  if (!reader.Exists(L::kStrainGroup)) return;
+  auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  const bool loaded = static_cast<bool>(options.frame_loader);
+  StrainFieldSequence seq = ReadStrainFieldSequence(reader, /*read_frames=*/!loaded);
+  if (loaded) {
+    seq.frame_count = seq.time_ms.size();
+    seq.load_frame = options.frame_loader;
+  }
+  if (!seq.has_images()) {
+    LogInfo("render: no camera frames ({}); the strain is drawn on a plain background",
+            L::kFrameImages);
+  }
+  const StrainFieldRenderer renderer(seq, options.strain_overlay);
+  if (options.snapshot) {
+    auto write = [&](std::size_t frame, const char* name, const std::string& title) {
+      WriteImage(out(name), renderer.RenderFrame(frame, title));
+      summary.written.push_back(out(name));
+    };
+    if (std::isfinite(t_e_s)) {
+      write(FrameNearestTime(seq, 1e3 * t_e_s), names.strain_te,
+            "Strain at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")");
+    } else {
+      const std::string reason = std::string("no ") + L::kTeAttr + " attribute on " +
+                                 L::kMomentumGroup + " (only the last frame is drawn)";
+      LogInfo("render: skipping {}: {}", names.strain_te, reason);
+      summary.skipped.push_back(std::string(names.strain_te) + ": " + reason);
+    }
+    const std::size_t last = seq.num_frames() - 1;
+    write(last, names.strain_end,
+          "Strain at the last analysed frame (t = " + FormatMs(1e-3 * seq.time_ms[last]) + ")");
+  }
+  if (options.animation) {
+    VideoFrameSource source;
+    source.count = seq.num_frames();
+    source.size = renderer.canvas_size();
+    source.render = [&renderer](std::size_t i) { return renderer.RenderFrame(i); };
+    AnimationOptions a = options.animation_options;
+    a.png_frames_dir = options.png_frames ? out(names.strain_png_frames) : "";
+    summary.strain_animation = WriteAnimation(source, out(names.strain_animation), a);
+    summary.has_strain_animation = true;
+    summary.written.push_back(summary.strain_animation.path);
   }
 }
 
@@ -432,7 +545,8 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
   const bool has_madd = has_momentum_t && reader.Exists(L::kMAdd);
   const bool has_field = reader.Exists(L::kTimeMs) && reader.Exists(L::kDicX) &&
                          reader.Exists(L::kDicY) && reader.Exists(L::kVx) && reader.Exists(L::kVy);
-  if (!has_momentum && !has_sensor && !has_model && !has_madd && !has_field) {
+  const bool has_strain = reader.Exists(L::kStrainGroup);
+  if (!has_momentum && !has_sensor && !has_model && !has_madd && !has_field && !has_strain) {
     throw Error(ErrorKind::kFileFormat, "results file", "none of the datasets render draws from",
                 std::string("at least one of: ") + L::kMomentumT + " with " + L::kPPounder + "/" +
                     L::kPGran + "/" + L::kPTotal + "; " + L::kSensorT + " + " + L::kSensorDecel +
@@ -506,8 +620,10 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
       }
     }
 
-    if (options.snapshot || options.animation)
+    if (options.snapshot || options.animation) {
       DrawVelocityField(reader, has_field, t_e_s, options, out_dir, names, summary);
+      DrawStrainField(reader, t_e_s, options, out_dir, names, summary);
+    }
   } catch (Error& e) {
     if (e.file().empty() && e.kind() == ErrorKind::kFileFormat)
       e.WithFile(OutputPathForMessages(results_path));

@@ -49,18 +49,7 @@ void WriteResults(const std::string& path, const Parts& parts) {
     out.Write(L::kVx, seq.vx_mm_s, {std::size_t(kFrames), n}, "mm/s", "velocity x");
     out.Write(L::kVy, seq.vy_mm_s, {std::size_t(kFrames), n}, "mm/s", "velocity y");
     out.SetAttribute(L::kKinematicsGroup, L::kMmPerPxAttr, 0.25);
-    if (parts.frames) {
-      std::vector<std::int32_t> pixels;
-      for (const auto& f : seq.frames) {
-        for (int y = 0; y < kRows; ++y) {
-          for (int x = 0; x < kCols; ++x) pixels.push_back(f.at<unsigned char>(y, x));
-        }
-      }
-      out.Write(L::kFrameImages, pixels,
-                {std::size_t(kFrames), std::size_t(kRows), std::size_t(kCols)}, "grey value",
-                "frames");
-      out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, 8.0);
-    }
+    if (parts.frames) test::WriteFrames(seq, out);
   }
   std::vector<double> t, pp, pg, pt, madd;
   for (int i = 0; i < 30; ++i) {

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -16,6 +17,8 @@
 #include <system_error>
 #include <vector>
 
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/render/velocity_field.h"
 
 namespace impactdic::test {
@@ -105,6 +108,22 @@ inline VelocityFieldSequence MakeSequence(int frames, int width, int height, int
   }
   seq.mm_per_px = 0.25;
   return seq;
+}
+
+// Writes the 8-bit frames of `seq` into a results file as `impactdic run` stores them
+// (/frames/images, int32 grey values, bit_depth 8).
+inline void WriteFrames(const VelocityFieldSequence& seq, H5Writer& out) {
+  namespace L = results_layout;
+  const int rows = seq.frames.at(0).rows, cols = seq.frames.at(0).cols;
+  std::vector<std::int32_t> pixels;
+  for (const auto& f : seq.frames) {
+    for (int y = 0; y < rows; ++y) {
+      for (int x = 0; x < cols; ++x) pixels.push_back(f.at<unsigned char>(y, x));
+    }
+  }
+  out.Write(L::kFrameImages, pixels, {seq.frames.size(), std::size_t(rows), std::size_t(cols)},
+            "grey value", "frames");
+  out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, 8.0);
 }
 
 }  // namespace impactdic::test

@@ -168,11 +168,40 @@ inline constexpr const char* kPreviewSnapshotPng = "velocity_field_te_preview.pn
 inline constexpr const char* kPreviewAnimationName = "velocity_preview.mp4";
 inline constexpr const char* kPreviewAnimationAviName = "velocity_preview.avi";
 inline constexpr const char* kPreviewPngFramesDir = "velocity_preview_frames";
+// The strain maps (eps_v and gamma_max side by side) at t_e and at the last analysed frame, and
+// their animation, drawn when the file has kStrainGroup; the preview names as above.
+inline constexpr const char* kStrainTePng = "strain_te.png";
+inline constexpr const char* kStrainEndPng = "strain_end.png";
+inline constexpr const char* kStrainAnimationName = "strain.mp4";
+inline constexpr const char* kStrainAnimationAviName = "strain.avi";  // The MJPG fallback.
+inline constexpr const char* kStrainPngFramesDir = "strain_frames";
+inline constexpr const char* kStrainTePreviewPng = "strain_te_preview.png";
+inline constexpr const char* kStrainEndPreviewPng = "strain_end_preview.png";
+inline constexpr const char* kStrainPreviewAnimationName = "strain_preview.mp4";
+inline constexpr const char* kStrainPreviewAnimationAviName = "strain_preview.avi";
+inline constexpr const char* kStrainPreviewPngFramesDir = "strain_preview_frames";
 // Everything RenderResults may write into its output folder (one generation, replaced together).
-inline constexpr std::array<const char*, 11> kRenderOutputNames = {
-    kMomentumPng,          kDecelerationPng,         kAddedMassPng,       kVelocitySnapshotPng,
-    kAnimationName,        kAnimationAviName,        kPngFramesDir,       kPreviewSnapshotPng,
-    kPreviewAnimationName, kPreviewAnimationAviName, kPreviewPngFramesDir};
+inline constexpr std::array<const char*, 21> kRenderOutputNames = {kMomentumPng,
+                                                                   kDecelerationPng,
+                                                                   kAddedMassPng,
+                                                                   kVelocitySnapshotPng,
+                                                                   kAnimationName,
+                                                                   kAnimationAviName,
+                                                                   kPngFramesDir,
+                                                                   kPreviewSnapshotPng,
+                                                                   kPreviewAnimationName,
+                                                                   kPreviewAnimationAviName,
+                                                                   kPreviewPngFramesDir,
+                                                                   kStrainTePng,
+                                                                   kStrainEndPng,
+                                                                   kStrainAnimationName,
+                                                                   kStrainAnimationAviName,
+                                                                   kStrainPngFramesDir,
+                                                                   kStrainTePreviewPng,
+                                                                   kStrainEndPreviewPng,
+                                                                   kStrainPreviewAnimationName,
+                                                                   kStrainPreviewAnimationAviName,
+                                                                   kStrainPreviewPngFramesDir};
 
 // The other files of a run's output folder (`impactdic run`, pipeline/pipeline.h).
 inline constexpr const char* kResultsFile = "results.h5";

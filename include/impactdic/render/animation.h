@@ -1,5 +1,6 @@
-// The velocity-field animation: one video frame per analysed camera frame, rendered off-screen by
-// VelocityFieldRenderer and written with cv::VideoWriter. H.264 in MP4 is tried first (fourccs
+// The field animations: one video frame per analysed camera frame, rendered off-screen (the
+// velocity field by VelocityFieldRenderer, the strain fields by StrainFieldRenderer,
+// strain_field.h) and written with cv::VideoWriter. H.264 in MP4 is tried first (fourccs
 // avc1, H264, X264); the writer must open AND the written file must read back with exactly one
 // video frame per camera frame. Otherwise the animation falls back to Motion-JPEG in AVI, and the
 // log and the summary say so. The video is written under a temporary name and renamed when
@@ -14,6 +15,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <functional>
 #include <opencv2/core.hpp>
 #include <string>
 #include <vector>
@@ -44,7 +46,7 @@ struct AnimationOptions {
   std::vector<std::string> h264_fourccs = {"avc1", "H264", "X264"};
   // When not empty, every frame is also written as <dir>/frame_00000.png ... (folder created).
   std::string png_frames_dir;
-  VelocityOverlayOptions overlay;
+  VelocityOverlayOptions overlay;  // the velocity animation's drawing (WriteVelocityAnimation)
 
   void Check() const;  // Error kInvalidValue naming the field
 };
@@ -61,7 +63,7 @@ struct AnimationSummary {
   std::string png_frames_dir;
   cv::Size size;
   double fps = 0.0;
-  double color_max_mm_s = 0.0;  // top of the colour scale
+  double color_max_mm_s = 0.0;  // top of the colour scale (velocity animation)
   double render_s = 0.0;        // drawing the frames (all attempts)
   double encode_s = 0.0;        // encoding and verifying
   double wall_s = 0.0;
@@ -69,10 +71,24 @@ struct AnimationSummary {
   std::string BriefReport() const;  // one line: file, codec, frames, size, fallback
 };
 
-// Writes the animation of `sequence`. `output_path` names the video; its extension is replaced by
-// .mp4 for H.264 and .avi for MJPG (the summary has the real path). Errors: kInvalidValue for
-// inconsistent data or options, kIo for an unwritable folder or when no codec produces a file that
-// reads back with the right frame count (then no video file is left behind).
+// Video frames drawn on demand: `count` BGR 8-bit images of `size` (even width and height),
+// frame i drawn by render(i).
+struct VideoFrameSource {
+  std::size_t count = 0;
+  cv::Size size;
+  std::function<cv::Mat(std::size_t)> render;
+};
+
+// Writes the frames of `source` as a video, with the codec fallbacks and checks above (every
+// animation goes through here). `output_path` names the video; its extension is replaced by .mp4
+// for H.264 and .avi for MJPG (the summary has the real path). Errors: kInvalidValue for
+// inconsistent frames or options, kIo for an unwritable folder or when no codec produces a file
+// that reads back with the right frame count (then no video file is left behind).
+AnimationSummary WriteAnimation(const VideoFrameSource& source, const std::string& output_path,
+                                const AnimationOptions& options);
+
+// Writes the velocity animation of `sequence`: WriteAnimation of its VelocityFieldRenderer frames
+// (options.overlay), with the same path rules and errors.
 AnimationSummary WriteVelocityAnimation(const VelocityFieldSequence& sequence,
                                         const std::string& output_path,
                                         const AnimationOptions& options = {});

@@ -18,6 +18,7 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/render/animation.h"
 #include "impactdic/render/gnuplot.h"
+#include "impactdic/render/strain_field.h"
 #include "impactdic/render/velocity_field.h"
 
 namespace impactdic {
@@ -25,9 +26,12 @@ namespace impactdic {
 struct RenderResultsOptions {
   std::string output_dir;  // folder for the outputs (created if missing); empty = the file's folder
   bool figures = true;     // the gnuplot figures
-  bool snapshot = true;    // the velocity field at the end of the peak stage
-  bool animation = true;   // the velocity animation
-  bool png_frames = false;  // also every animation frame as PNG (output_dir/velocity_frames)
+  // The field snapshots: the velocity field at the end of the peak stage and, when the file has
+  // /strain, the strain maps at t_e and at the last analysed frame.
+  bool snapshot = true;
+  bool animation = true;  // the velocity animation, and the strain animation when /strain exists
+  // Also every animation frame as PNG (output_dir/velocity_frames, strain_frames).
+  bool png_frames = false;
   // true: the outputs are one new generation of output_dir (io/output_generation.h): drawn into a
   // staging folder and swapped in together, keeping the folder's other entries (results.h5,
   // summaries) and replacing every earlier figure and animation; output_dir must be new, empty or
@@ -48,6 +52,7 @@ struct RenderResultsOptions {
   PlotOptions plot;
   AnimationOptions animation_options;       // png_frames_dir is set from png_frames
   VelocityOverlayOptions snapshot_overlay;  // the velocity-field figure at t_e
+  StrainOverlayOptions strain_overlay;      // the strain maps and animation
 
   void Check() const;
 };
@@ -57,6 +62,8 @@ struct RenderResultsSummary {
   std::vector<std::string> skipped;  // "<output>: <reason>"
   bool has_animation = false;
   AnimationSummary animation;
+  bool has_strain_animation = false;
+  AnimationSummary strain_animation;
   double wall_s = 0.0;
 
   std::string BriefReport() const;  // one line
@@ -70,6 +77,13 @@ struct RenderResultsSummary {
 // scaled back to the full frame size (attributes of /frames).
 VelocityFieldSequence ReadVelocityFieldSequence(const H5Reader& reader, bool require_frames = true,
                                                 bool read_frames = true);
+
+// The strain field data of a results file (/strain/eps_v, gamma_max, shear_band if present, with
+// /time and the /dic grid), or an Error kFileFormat naming the missing or inconsistent dataset.
+// The camera frames as in ReadVelocityFieldSequence when stored and `read_frames` (a preview
+// keeps the stored rows only); without them the sequence has none (a plain background of the
+// size in the attributes of /frames, else of the grid).
+StrainFieldSequence ReadStrainFieldSequence(const H5Reader& reader, bool read_frames = true);
 
 // Renders everything the file has data for. Errors: kFileNotFound / kFileFormat for a missing or
 // unreadable file, kFileFormat when the file has none of the data any output needs (naming what

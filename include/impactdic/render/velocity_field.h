@@ -29,45 +29,20 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/render/field_sequence.h"
 
 namespace impactdic {
 
-struct VelocityFieldSequence {
-  // One grey camera frame per analysed time step (CV_8UC1, CV_16UC1 or CV_32FC1; all the same
-  // size and type). 16-bit and float frames are contrast-stretched for display.
-  std::vector<cv::Mat> frames;
-  // Instead of `frames` (left empty): frame_count frames handed over one at a time by
-  // load_frame(i) (e.g. re-read from their source), so a long sequence is never held in memory;
-  // each must have the size and type of frame 0.
-  std::size_t frame_count = 0;
-  std::function<cv::Mat(std::size_t)> load_frame;
-  std::vector<double> time_ms;  // time since impact of each frame [ms]; NaN = unknown
-  std::size_t num_subsets = 0;
-  // Subset centres in image pixels (x right, y down): num_subsets values (the same positions in
-  // every frame) or frames * num_subsets values, row-major [frame][subset] (Lagrangian positions).
-  std::vector<double> x_px;
-  std::vector<double> y_px;
+// The frames, times, subset positions and scale (FieldSequence) with the velocity of every subset.
+struct VelocityFieldSequence : FieldSequence {
   // Velocity per frame and subset [mm/s], row-major [frame][subset]; NaN = invalid subset.
   std::vector<double> vx_mm_s;
   std::vector<double> vy_mm_s;
   // Direction of vy: true = along image rows (down, the image convention), false = up.
   bool vy_positive_down = true;
-  // Scale of the panel plane [mm/px], for the scale bar; NaN or <= 0 = no scale bar.
-  double mm_per_px = kNaN;
 
-  std::size_t num_frames() const {
-    return frames.empty() && load_frame ? frame_count : frames.size();
-  }
-  // Frame i (stored or loaded); Error kInvalidValue if a loaded frame differs from frame 0.
-  cv::Mat Frame(std::size_t i) const;
-  bool lagrangian() const { return x_px.size() != num_subsets; }
-  double x(std::size_t frame, std::size_t subset) const {
-    return lagrangian() ? x_px[frame * num_subsets + subset] : x_px[subset];
-  }
-  double y(std::size_t frame, std::size_t subset) const {
-    return lagrangian() ? y_px[frame * num_subsets + subset] : y_px[subset];
-  }
-  // Consistency of all sizes and types; Error kInvalidValue naming the field.
+  // Consistency of all sizes and types (camera frames required); Error kInvalidValue naming the
+  // field.
   void Check() const;
 };
 
@@ -119,11 +94,9 @@ class VelocityFieldRenderer {
 
  private:
   // The constructor's steps, in order.
-  void EstimateGridSpacing();  // spacing_px_: median nearest-neighbour distance in frame 0
-  void SetColourScale();       // colour_max, unit, reference arrow speed (whole sequence)
-  void SetLayout();            // display scale and size, text scale, colour-bar panel, canvas
-  void ChooseArrowSubsets();   // one arrow per cell of k x k grid spacings
-  void SetGreyContrast();      // grey_low_/grey_high_ for 16-bit and float frames
+  void SetColourScale();      // colour_max, unit, reference arrow speed (whole sequence)
+  void SetLayout();           // display scale and size, text scale, colour-bar panel, canvas
+  void ChooseArrowSubsets();  // one arrow per cell of k x k grid spacings
   cv::Mat DisplayGrey(std::size_t frame) const;
   void DrawField(std::size_t frame, cv::Mat* canvas) const;
   void DrawArrows(std::size_t frame, cv::Mat* canvas) const;
@@ -153,10 +126,6 @@ cv::Mat ViridisLut();
 
 // 1-2-5 "nice" tick step for a span divided into about `target_ticks` intervals.
 double NiceStep(double span, int target_ticks);
-
-// Index of the frame whose time is nearest to `t_ms` (frames with NaN time are ignored; 0 if none
-// has a time).
-std::size_t FrameNearestTime(const VelocityFieldSequence& sequence, double t_ms);
 
 // Writes the titled velocity-field image of `frame` as a PNG (atomically); returns its size.
 cv::Size RenderVelocitySnapshot(const VelocityFieldSequence& sequence, std::size_t frame,

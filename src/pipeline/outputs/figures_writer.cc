@@ -1,6 +1,9 @@
 // The figures (momentum, deceleration, added mass), the velocity snapshot at t_e and the
 // animation, drawn by render RenderResults from results.h5 (on disk, or held in memory when
-// outputs.hdf5 is false), over the frames re-read from their source one at a time.
+// outputs.hdf5 is false), over the frames re-read from their source one at a time. When the run
+// computed strain (results.h5 has /strain), also the strain maps at t_e and at the last frame
+// (with outputs.figures) and the strain animation (with outputs.animation); a run without it
+// writes none of them.
 #include <array>
 #include <cstddef>
 #include <functional>
