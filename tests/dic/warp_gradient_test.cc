@@ -2,6 +2,7 @@
 // affine parameters since the first reference, composed across reference updates, in
 // FrameResult, the /dic table (*_warp), the CSV and `correlate --warp-gradient`.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core.hpp>
@@ -264,6 +266,30 @@ TEST(WarpGradient, ComposesThroughTheAutoRescue) {
     EXPECT_GT(e.converged, 0.9 * composed.positions.size()) << f.frame;
     EXPECT_LT(e.rms, 1.15 * e_direct.rms + 2e-4) << f.frame;
     EXPECT_LT(MaxAbs(Minus(e.mean, e_direct.mean)), 5e-4) << f.frame;
+  }
+}
+
+// The same gradients, bit for bit, with 1 and 2 threads (reference updates and orphans included).
+TEST(WarpGradient, DoNotDependOnTheThreadCount) {
+  testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/18, /*supersampling=*/2);
+  const FieldSequence seq =
+      LinearSequence(Sum({Sinusoidal(2.0, 1.5, /*wavelength_px=*/160), Translation(1.5, -2)}), 4);
+  std::vector<cv::Mat> images = Render(scene, seq);
+  images[2](cv::Rect(60, 40, 40, 40)).setTo(0);
+  DicResult runs[2];
+  for (int t = 0; t < 2; ++t) {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, t + 1);
+    runs[t] = CorrelateSequence(images, GradientOptions("incremental"));
+  }
+  for (std::size_t k = 0; k < runs[0].frames.size(); ++k) {
+    const FrameResult& a = runs[0].frames[k];
+    const FrameResult& b = runs[1].frames[k];
+    const std::size_t bytes = a.dudx.size() * sizeof(double);
+    ASSERT_EQ(a.dudx.size(), b.dudx.size());
+    EXPECT_EQ(std::memcmp(a.dudx.data(), b.dudx.data(), bytes), 0) << k;
+    EXPECT_EQ(std::memcmp(a.dudy.data(), b.dudy.data(), bytes), 0) << k;
+    EXPECT_EQ(std::memcmp(a.dvdx.data(), b.dvdx.data(), bytes), 0) << k;
+    EXPECT_EQ(std::memcmp(a.dvdy.data(), b.dvdy.data(), bytes), 0) << k;
   }
 }
 
