@@ -98,7 +98,7 @@ std::string FrameGrid(const H5Reader& in, std::size_t f, double t_ms, std::size_
   xml += fmt::format("        <Geometry GeometryType=\"XY\">\n          {}\n        </Geometry>\n",
                      DataItem(in, L::kXdmfPoints));
   for (const std::string& name : in.List(group)) {
-    const std::string path = group + "/" + name;
+    const std::string path = fmt::format("{}/{}", group, name);
     const bool vector = in.Dimensions(path).size() == 2;
     xml += fmt::format(
         "        <Attribute Name=\"{}\" AttributeType=\"{}\" Center=\"Node\">\n          {}\n"
