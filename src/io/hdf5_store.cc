@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdlib>
@@ -508,6 +509,117 @@ void H5Writer::Write(const std::string& path, const std::vector<double>& data,
   ThrowIfNoRoom(impl_->image, final_path());
 }
 
+bool H5Writer::Exists(const std::string& path) const {
+  const std::string p = Normalise(path);
+  std::string current;
+  for (const auto& part : SplitPath(p)) {
+    current += "/" + part;
+    if (!impl_->file.nameExists(current)) return false;
+  }
+  return true;
+}
+
+Dims H5Writer::Dimensions(const std::string& path) const {
+  if (!Exists(path)) {
+    throw Error(ErrorKind::kInvalidValue, "dataset " + path, "missing", "the dataset to exist");
+  }
+  return Guard(final_path(), "dataset " + path, [&] {
+    H5::DataSpace space = impl_->file.openDataSet(Normalise(path)).getSpace();
+    std::vector<hsize_t> h(space.getSimpleExtentNdims());
+    space.getSimpleExtentDims(h.data());
+    return Dims(h.begin(), h.end());
+  });
+}
+
+namespace {
+
+std::vector<std::string> GroupMembers(const H5::H5File& file, const std::string& file_name,
+                                      const std::string& group_path) {
+  return Guard(file_name, "group " + group_path, [&] {
+    H5::Group g = file.openGroup(Normalise(group_path));
+    std::vector<std::string> names;
+    for (hsize_t i = 0; i < g.getNumObjs(); ++i) names.push_back(g.getObjnameByIdx(i));
+    return names;
+  });
+}
+
+}  // namespace
+
+std::vector<std::string> H5Writer::List(const std::string& group_path) const {
+  return GroupMembers(impl_->file, final_path(), group_path);
+}
+
+namespace {
+
+// The selection of one view part in its source ([N], or row `row` of [F x N]), checked against
+// the view's N; the error names the view and the source.
+H5::DataSpace ViewSourceSelection(const H5::DataSet& source, const std::string& view,
+                                  const H5Writer::ViewPart& part, std::size_t n) {
+  H5::DataSpace space = source.getSpace();
+  std::vector<hsize_t> dims(space.getSimpleExtentNdims());
+  space.getSimpleExtentDims(dims.data());
+  const bool by_row = part.row.has_value();
+  const bool fits = by_row ? dims.size() == 2 && dims[1] == n && *part.row < dims[0]
+                           : dims.size() == 1 && dims[0] == n;
+  if (!fits) {
+    throw Error(ErrorKind::kInvalidValue, "source " + part.source + " of view " + view,
+                std::to_string(dims.size()) + "-D",
+                by_row ? "[F x " + std::to_string(n) + "] with the row inside"
+                       : "[" + std::to_string(n) + "]");
+  }
+  if (by_row) {
+    const std::array<hsize_t, 2> start = {*part.row, 0};
+    const std::array<hsize_t, 2> count = {1, n};
+    space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
+  }
+  return space;
+}
+
+}  // namespace
+
+void H5Writer::WriteView(const std::string& path, const Dims& dims,
+                         const std::vector<ViewPart>& parts, const std::string& units,
+                         const std::string& description) {
+  if (dims.empty() || dims.size() > 2 || parts.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "view " + path,
+                std::to_string(dims.size()) + " dims, " + std::to_string(parts.size()) + " parts",
+                "[N] or [N x C] with at least one part");
+  }
+  Guard(final_path(), "view " + path, [&] {
+    const std::string p = Normalise(path);
+    const std::vector<hsize_t> h_dims(dims.begin(), dims.end());
+    H5::DataSpace view_space(static_cast<int>(h_dims.size()), h_dims.data());
+    H5::DSetCreatPropList props = UntimedDatasetProperties();
+    H5::DataType type;
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      const H5::DataSet source = impl_->file.openDataSet(Normalise(parts[i].source));
+      if (i == 0) type = source.getDataType();
+      const H5::DataSpace source_space = ViewSourceSelection(source, path, parts[i], dims[0]);
+      if (dims.size() == 2 && parts[i].column >= dims[1]) {
+        throw Error(ErrorKind::kInvalidValue, "column of " + parts[i].source + " in view " + path,
+                    std::to_string(parts[i].column), "< " + std::to_string(dims[1]));
+      }
+      if (dims.size() == 2) {  // Column `column`; a 1-D view is all selected.
+        const std::array<hsize_t, 2> start = {0, parts[i].column};
+        const std::array<hsize_t, 2> count = {dims[0], 1};
+        view_space.selectHyperslab(H5S_SELECT_SET, count.data(), start.data());
+      }
+      if (H5Pset_virtual(props.getId(), view_space.getId(), ".", Normalise(parts[i].source).c_str(),
+                         source_space.getId()) < 0) {
+        throw H5::PropListIException("H5Pset_virtual", "cannot map " + parts[i].source);
+      }
+    }
+    view_space.selectAll();
+    const std::string parent = ParentOf(p);
+    if (!parent.empty() && parent != "/") CreateGroup(parent);
+    if (impl_->file.nameExists(p)) impl_->file.unlink(p);
+    H5::DataSet ds = impl_->file.createDataSet(p, type, view_space, props);
+    WriteStringAttribute(ds, "units", units);
+    WriteStringAttribute(ds, "description", description);
+  });
+  ThrowIfNoRoom(impl_->image, final_path());
+}
+
 void H5Writer::SetAttribute(const std::string& object_path, const std::string& name,
                             const std::string& value) {
   Guard(final_path(), "attribute " + name + " of " + object_path, [&] {
@@ -785,11 +897,22 @@ double H5Reader::ReadNumberAttribute(const std::string& object_path,
 }
 
 std::vector<std::string> H5Reader::List(const std::string& group_path) const {
-  return Guard(impl_->path, "group " + group_path, [&] {
-    H5::Group g = impl_->file.openGroup(Normalise(group_path));
-    std::vector<std::string> names;
-    for (hsize_t i = 0; i < g.getNumObjs(); ++i) names.push_back(g.getObjnameByIdx(i));
-    return names;
+  return GroupMembers(impl_->file, impl_->path, group_path);
+}
+
+H5Reader::NumberType H5Reader::Type(const std::string& path) const {
+  Dimensions(path);  // Error kFileFormat if it is missing.
+  return Guard(impl_->path, "dataset " + path, [&] {
+    H5::DataSet ds = impl_->file.openDataSet(Normalise(path));
+    NumberType type;
+    type.bytes = ds.getDataType().getSize();
+    if (ds.getTypeClass() == H5T_INTEGER) {
+      type.kind = ds.getIntType().getSign() == H5T_SGN_NONE ? NumberKind::kUInt : NumberKind::kInt;
+    } else if (ds.getTypeClass() != H5T_FLOAT) {
+      throw Error(ErrorKind::kFileFormat, "dataset " + path, "not numeric", "a numeric dataset")
+          .WithFile(impl_->path);
+    }
+    return type;
   });
 }
 

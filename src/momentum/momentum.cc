@@ -13,6 +13,7 @@
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 namespace {
@@ -652,17 +653,17 @@ void WriteKinematics(H5Writer& out, const KinematicsResult& k,
     out.Write("kinematics/frame_time_daq_s", frame_time_s, "s",
               "frame time on the DAQ clock (exposure edges or offset + k / fps)");
   }
-  out.Write("kinematics/x_mm", k.x_mm, "mm", "reference subset centre x (panel, right)");
-  out.Write("kinematics/y_mm", k.y_mm, "mm", "reference subset centre y (panel, down)");
-  out.Write("kinematics/ux_mm", k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
-  out.Write("kinematics/uy_mm", k.disp_y_mm, fs, "mm",
+  out.Write(results_layout::kKinematicsX, k.x_mm, "mm", "reference subset centre x (panel, right)");
+  out.Write(results_layout::kKinematicsY, k.y_mm, "mm", "reference subset centre y (panel, down)");
+  out.Write(results_layout::kUxMm, k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
+  out.Write(results_layout::kUyMm, k.disp_y_mm, fs, "mm",
             "displacement y, downward positive [frames x subsets]");
-  out.Write("kinematics/vx_mm_s", k.vel_x_mm_s, fs, "mm/s",
+  out.Write(results_layout::kVx, k.vel_x_mm_s, fs, "mm/s",
             "subset velocity x (right), central differences");
-  out.Write("kinematics/vy_mm_s", k.vel_y_mm_s, fs, "mm/s",
+  out.Write(results_layout::kVy, k.vel_y_mm_s, fs, "mm/s",
             "subset velocity y (down), central differences");
-  out.Write("kinematics/ax_mm_s2", k.acc_x_mm_s2, fs, "mm/s^2", "subset acceleration x (right)");
-  out.Write("kinematics/ay_mm_s2", k.acc_y_mm_s2, fs, "mm/s^2", "subset acceleration y (down)");
+  out.Write(results_layout::kAx, k.acc_x_mm_s2, fs, "mm/s^2", "subset acceleration x (right)");
+  out.Write(results_layout::kAy, k.acc_y_mm_s2, fs, "mm/s^2", "subset acceleration y (down)");
   out.SetAttribute("kinematics", "vy_positive", "down");
 }
 

@@ -395,6 +395,8 @@ YamlOptionTable OutputsTable(Scene* s) {
   SceneOutputs& o = s->outputs;
   AddPath(t, "folder", &o.folder, s->folder, "Output folder (`impactdic run -o` overrides)");
   t.Add("hdf5", &o.hdf5, "results.h5");
+  t.Add("xdmf", &o.xdmf,
+        "results.xdmf for ParaView/VisIt: views of results.h5's fields, no copy (needs hdf5)");
   t.Add("csv", &o.csv, "summary.csv and the series CSVs");
   t.Add("figures", &o.figures, "Figures (gnuplot)");
   t.Add("animation", &o.animation, "Animation");

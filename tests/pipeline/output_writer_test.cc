@@ -72,11 +72,11 @@ TEST(OutputWriter, ARegisteredWriterIsInvokedWithTheRunsData) {
   EXPECT_TRUE(fs::exists(fs::path(dir.File("out")) / "summary.json"));
 }
 
-TEST(OutputWriter, BuiltInWritersAreTheFiveFormats) {
+TEST(OutputWriter, BuiltInWritersAreTheSixFormats) {
   std::vector<std::string> names;
   for (const auto& w : BuiltInOutputWriters()) names.push_back(w->name());
-  EXPECT_EQ(names, (std::vector<std::string>{"results.h5", "figures", "summary.json", "summary.csv",
-                                             "timing.json"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"results.h5", "results.xdmf", "figures",
+                                             "summary.json", "summary.csv", "timing.json"}));
 }
 
 }  // namespace

@@ -14,6 +14,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
@@ -69,6 +71,29 @@ inline void WriteBytes(const std::string& path, const std::string& bytes) {
 
 // Single-quoted for the shell (paths with globs).
 inline std::string Quoted(const std::string& text) { return "'" + text + "'"; }
+
+// The sample scene (sample_frames/scene.yaml) with absolute input paths, figures and animation off,
+// each (from, to) of `edits` applied to its text and `extra` appended; written to DIR/scene.yaml.
+inline std::string SampleScene(const TestDir& dir,
+                               const std::vector<std::pair<std::string, std::string>>& edits,
+                               const std::string& extra = "") {
+  const std::string kSample = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames";
+  std::string text = ReadBytes(kSample + "/scene.yaml");
+  std::vector<std::pair<std::string, std::string>> all = {
+      {"\"frames/frame_", "\"" + kSample + "/frames/frame_"},
+      {"\"../calibration/", "\"" + kSample + "/../calibration/"},
+      {"sensor: sensor.csv", "sensor: " + kSample + "/sensor.csv"},
+      {"truth: truth.h5", "truth: " + kSample + "/truth.h5"},
+      {"figures: true", "figures: false"},
+      {"animation: true", "animation: false"}};
+  all.insert(all.end(), edits.begin(), edits.end());
+  for (const auto& [from, to] : all) {
+    const std::size_t at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  return dir.Write("scene.yaml", text + extra);
+}
 
 }  // namespace impactdic
 

@@ -40,28 +40,6 @@ bool Contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-// The sample scene with absolute input paths, figures and animation off, each (from, to) of
-// `edits` applied to its text and `extra` appended; written to DIR/scene.yaml.
-std::string SampleScene(const TestDir& dir,
-                        const std::vector<std::pair<std::string, std::string>>& edits,
-                        const std::string& extra = "") {
-  std::string text = ReadBytes(kSample + "/scene.yaml");
-  std::vector<std::pair<std::string, std::string>> all = {
-      {"\"frames/frame_", "\"" + kSample + "/frames/frame_"},
-      {"\"../calibration/", "\"" + kSample + "/../calibration/"},
-      {"sensor: sensor.csv", "sensor: " + kSample + "/sensor.csv"},
-      {"truth: truth.h5", "truth: " + kSample + "/truth.h5"},
-      {"figures: true", "figures: false"},
-      {"animation: true", "animation: false"}};
-  all.insert(all.end(), edits.begin(), edits.end());
-  for (const auto& [from, to] : all) {
-    const std::size_t at = text.find(from);
-    EXPECT_NE(at, std::string::npos) << from;
-    if (at != std::string::npos) text.replace(at, from.size(), to);
-  }
-  return dir.Write("scene.yaml", text + extra);
-}
-
 // The stages that time the frames without correlating them (quick).
 const std::string kNoCorrelation = "stages: [calibrate, sensor, frames, outputs]\n";
 

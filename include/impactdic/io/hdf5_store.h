@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,25 @@ class H5Writer {
   void Write(const std::string& path, const std::vector<double>& data, const std::string& units,
              const std::string& description);
 
+  // A view: an HDF5 virtual dataset at `path` of `dims` ([N] or [N x C]) that holds no data of its
+  // own. Each part maps N values of a dataset already in this file -- row `row` of an [F x N]
+  // one, or the whole of an [N] one (row unset) -- onto column `column` of the view (onto the
+  // whole view when it is 1-D); what no part maps reads as 0. The view has the type of its first
+  // part's source. Readers see an ordinary dataset (HDF5 >= 1.10; the source file is ".", this
+  // file, so the file can be moved or renamed). For results.xdmf (pipeline outputs).
+  struct ViewPart {
+    std::string source;
+    std::optional<std::size_t> row;
+    std::size_t column = 0;
+  };
+  void WriteView(const std::string& path, const Dims& dims, const std::vector<ViewPart>& parts,
+                 const std::string& units, const std::string& description);
+  // Whether a group or dataset exists in the file being written; a dataset's dimensions; the
+  // names of the members of a group.
+  bool Exists(const std::string& path) const;
+  Dims Dimensions(const std::string& path) const;
+  std::vector<std::string> List(const std::string& group_path) const;
+
   // String / numeric attribute on an existing group or dataset ("/" is the root).
   void SetAttribute(const std::string& object_path, const std::string& name,
                     const std::string& value);
@@ -137,6 +157,14 @@ class H5Reader {
   bool HasAttribute(const std::string& object_path, const std::string& name) const;
   // Names of the members of a group.
   std::vector<std::string> List(const std::string& group_path) const;
+  // The stored element type of a numeric dataset: float, signed or unsigned integer, and its
+  // size [bytes].
+  enum class NumberKind { kFloat, kInt, kUInt };
+  struct NumberType {
+    NumberKind kind = NumberKind::kFloat;
+    std::size_t bytes = 8;
+  };
+  NumberType Type(const std::string& path) const;
 
  private:
   struct Impl;

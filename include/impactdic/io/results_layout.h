@@ -63,6 +63,14 @@ inline constexpr const char* kFirstFrameAttr = "first_frame";
 inline constexpr const char* kKinematicsGroup = "/kinematics";
 inline constexpr const char* kVx = "/kinematics/vx_mm_s";
 inline constexpr const char* kVy = "/kinematics/vy_mm_s";
+// Subset acceleration [mm/s^2] and displacement since the first reference [mm] on the panel,
+// [F x N] (x right, y down), NaN = invalid subset; reference subset centres on the panel [mm], [N].
+inline constexpr const char* kAx = "/kinematics/ax_mm_s2";
+inline constexpr const char* kAy = "/kinematics/ay_mm_s2";
+inline constexpr const char* kUxMm = "/kinematics/ux_mm";
+inline constexpr const char* kUyMm = "/kinematics/uy_mm";
+inline constexpr const char* kKinematicsX = "/kinematics/x_mm";
+inline constexpr const char* kKinematicsY = "/kinematics/y_mm";
 // Attribute of kKinematicsGroup: panel scale [mm/px] (number).
 inline constexpr const char* kMmPerPxAttr = "mm_per_px";
 // Optional string attribute of kKinematicsGroup: "down" (default, image rows) or "up": the
@@ -210,8 +218,20 @@ inline constexpr const char* kSummaryCsv = "summary.csv";
 // The run's wall times and rates (PipelineSummary::TimingJson), kept out of summary.json so that
 // two runs of one scene give byte-identical summaries.
 inline constexpr const char* kTimingJson = "timing.json";
-inline constexpr std::array<const char*, 4> kRunOnlyOutputNames = {kResultsFile, kSummaryJson,
-                                                                   kSummaryCsv, kTimingJson};
+// results.xdmf (outputs.xdmf, with outputs.hdf5): the XDMF 3 description of results.h5's subset
+// fields for ParaView and VisIt. It references views in results.h5 (kXdmfGroup): HDF5 virtual
+// datasets that hold no data of their own, so readers that take whole datasets (meshio) read it
+// as well as those that take hyperslabs. kXdmfPoints [N x 2] = (kDicX, kDicY) [px];
+// kXdmfVertices [N x 1] int32 = 0..N-1 (the Polyvertex topology, the only stored data); per
+// analysed frame f a group kXdmfFramePrefix + f (6 digits) of [N] views of row f of the [F x N]
+// datasets of /dic, /kinematics and /strain, and [N x 3] vectors (x, y, 0).
+inline constexpr const char* kXdmfFile = "results.xdmf";
+inline constexpr const char* kXdmfGroup = "/xdmf";
+inline constexpr const char* kXdmfPoints = "/xdmf/points_px";
+inline constexpr const char* kXdmfVertices = "/xdmf/vertices";
+inline constexpr const char* kXdmfFramePrefix = "/xdmf/frame_";
+inline constexpr std::array<const char*, 5> kRunOnlyOutputNames = {
+    kResultsFile, kSummaryJson, kSummaryCsv, kTimingJson, kXdmfFile};
 
 }  // namespace impactdic::results_layout
 

@@ -122,6 +122,9 @@ struct SceneOutputs {
   std::string folder = "results";  // Output folder; resolved path.
   FrameStorage frames = FrameStorage::kPreview;
   bool hdf5 = true;
+  // results.xdmf beside results.h5 (only with hdf5): the subset grid and its fields per frame for
+  // ParaView and VisIt, as views of results.h5's datasets (/xdmf), no copied data.
+  bool xdmf = true;
   bool csv = true;
   bool figures = true;
   bool animation = true;

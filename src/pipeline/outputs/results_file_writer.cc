@@ -155,6 +155,7 @@ class ResultsFileWriter : public OutputWriter {
       WriteFrames(out, *d.frames, c.scene.outputs.frames);
     WriteMotion(out, d);
     if (d.model) WriteModel(out, d);
+    if (c.scene.outputs.hdf5 && c.scene.outputs.xdmf) WriteXdmfViews(out);
     WriteSummaryGroup(out, c.summary);
     if (c.scene.outputs.hdf5) {
       out.Commit();

@@ -5,9 +5,15 @@
 
 #include <memory>
 
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/pipeline/output_writer.h"
 
 namespace impactdic::outputs {
+
+// The views of results.xdmf (xdmf_writer.cc) in the results.h5 being written: /xdmf
+// (io/results_layout.h, kXdmfGroup), from the /dic, /kinematics and /strain datasets it holds.
+// Writes nothing without /dic/x_px, /dic/y_px of shape [N] and /time/t_ms.
+void WriteXdmfViews(H5Writer& out);
 
 #define IMPACTDIC_OUTPUT_WRITER(factory, file) std::shared_ptr<const OutputWriter> factory();
 #include "output_writers.def"
