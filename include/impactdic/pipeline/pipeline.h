@@ -1,6 +1,7 @@
 // The whole pipeline on one scene (README.md, "The pipeline"; the stage graph and the data between
 // the stages in docs/architecture.md): calibrate -> sensor -> frames -> correlate -> kinematics
-// -> momentum -> model -> outputs, skipping what the scene does not need and saying so. Each
+// -> momentum -> model -> strain -> outputs, skipping what the scene does not need and saying so
+// (strain only with strain.enabled). Each
 // stage is a unit in src/pipeline/stages/, the data between them is SceneRunData
 // (pipeline/run_data.h), the outputs are OutputWriters (pipeline/output_writer.h).
 // `impactdic run SCENE.yaml` is a thin layer over RunScene().
@@ -26,6 +27,7 @@
 //   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
 //   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
 //   timing.json     wall times of the run and its stages, the correlation's subsets per second
+//   strain.csv      the strain series (strain.enabled and outputs.csv; docs/strain.md)
 //   momentum.png, deceleration.png, added_mass.png, velocity_field_te.png, velocity.mp4 (or .avi)
 #ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
 #define IMPACTDIC_PIPELINE_PIPELINE_H_
