@@ -19,7 +19,8 @@ StrainResult SmallResult() {
   g.frames = 4;
   g.subsets = 3;
   for (std::size_t j = 0; j < 12; ++j) {
-    const double k = static_cast<double>(j / 3);
+    const std::size_t frame = j / 3;
+    const auto k = static_cast<double>(frame);
     g.dudx.push_back(0.001 * k);
     g.dudy.push_back(0.002 * k);
     g.dvdx.push_back(0.0);

@@ -46,6 +46,7 @@ class SummaryCsvWriter : public OutputWriter {
       for (double v : c.summary.strain->CsvValues()) values.push_back(v);
     }
     std::vector<std::vector<double>> columns;
+    columns.reserve(values.size());
     for (double v : values) columns.push_back({v});
     WriteCsv(path, names, columns);
     c.summary.outputs.push_back(path);
