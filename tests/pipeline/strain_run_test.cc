@@ -86,8 +86,8 @@ TEST_F(StrainRun, EnabledWritesStrainWithItsAttributesTheCsvAndTheSummaryFigures
   const PipelineSummary s = Run("on.yaml", scene_text_ + kStrainOn, "on");
   ASSERT_TRUE(s.strain.has_value());
   const std::string out = dir_->File("on");
-  EXPECT_EQ(FilesIn(out), (std::set<std::string>{".impactdic-output", "results.h5", "strain.csv", "summary.csv",
-                                                 "summary.json", "timing.json"}));
+  EXPECT_EQ(FilesIn(out), (std::set<std::string>{".impactdic-output", "results.h5", "strain.csv",
+                                                 "summary.csv", "summary.json", "timing.json"}));
   const H5Reader h5(out + "/results.h5");
   ASSERT_TRUE(h5.Exists(L::kStrainGroup));
   Dims dic_dims;
@@ -142,8 +142,8 @@ TEST_F(StrainRun, DisabledWritesNoStrainAndNoExtraFile) {
   const PipelineSummary s = Run("off.yaml", scene_text_, "off");
   EXPECT_FALSE(s.strain.has_value());
   const std::string out = dir_->File("off");
-  EXPECT_EQ(FilesIn(out),
-            (std::set<std::string>{".impactdic-output", "results.h5", "summary.csv", "summary.json", "timing.json"}));
+  EXPECT_EQ(FilesIn(out), (std::set<std::string>{".impactdic-output", "results.h5", "summary.csv",
+                                                 "summary.json", "timing.json"}));
   const H5Reader h5(out + "/results.h5");
   EXPECT_FALSE(h5.Exists(L::kStrainGroup));
   EXPECT_EQ(ReadText(out + "/summary.json").find("strain"), std::string::npos);
@@ -173,7 +173,8 @@ TEST_F(StrainRun, WithoutTheMomentumStageTheTeFiguresAreNullWithTheReason) {
       << s.strain->te_note;
   EXPECT_EQ(s.strain->depth_from, "grid top row");
   const std::string out = dir_->File("no_te");
-  EXPECT_EQ(FilesIn(out), (std::set<std::string>{".impactdic-output", "results.h5", "summary.json", "timing.json"}));
+  EXPECT_EQ(FilesIn(out), (std::set<std::string>{".impactdic-output", "results.h5", "summary.json",
+                                                 "timing.json"}));
   const std::string json = ReadText(out + "/summary.json");
   EXPECT_NE(json.find("\"compacted_depth_te_mm\": null"), std::string::npos) << json;
   EXPECT_NE(json.find("\"te_note\""), std::string::npos) << json;
@@ -183,6 +184,34 @@ TEST_F(StrainRun, WithoutTheMomentumStageTheTeFiguresAreNullWithTheReason) {
   EXPECT_EQ(r.depth_from, "grid top row");
   const std::vector<double> y = h5.ReadDouble(L::kDicY);
   EXPECT_EQ(r.surface_y_px, *std::min_element(y.begin(), y.end()));
+}
+
+TEST_F(StrainRun, WarpGradientIsTheCorrelationsSubsetWarpGradient) {
+  // strain.gradient: warp makes the correlation keep the warp's gradient (/dic/*_warp) and the
+  // strain stage use it as it is where the sample is valid.
+  const PipelineSummary s =
+      Run("warp.yaml", scene_text_ + "strain:\n  enabled: true\n  gradient: warp\n", "warp");
+  ASSERT_TRUE(s.strain.has_value());
+  EXPECT_EQ(s.strain->gradient, "warp");
+  const H5Reader h5(dir_->File("warp/results.h5"));
+  ASSERT_TRUE(h5.Exists(L::kDicDudxWarp));
+  EXPECT_EQ(h5.ReadStringAttribute(L::kStrainGroup, L::kStrainGradientAttr), "warp");
+  const std::vector<double> warp = h5.ReadDouble(L::kDicDvdyWarp);
+  const std::vector<double> used = h5.ReadDouble(L::kStrainDvdy);
+  const std::vector<double> u = h5.ReadDouble(L::kDicU);
+  ASSERT_EQ(warp.size(), used.size());
+  std::size_t finite = 0;
+  for (std::size_t j = 0; j < used.size(); ++j) {
+    if (std::isnan(used[j])) continue;
+    ++finite;
+    EXPECT_EQ(used[j], warp[j]) << j;
+    EXPECT_TRUE(std::isfinite(u[j])) << j;
+  }
+  EXPECT_GT(finite, used.size() / 2);
+  // The fit run (strain.gradient default) keeps no warp gradient in /dic.
+  const PipelineSummary fit = Run("fit.yaml", scene_text_ + kStrainOn, "fit");
+  EXPECT_EQ(fit.strain->gradient, "fit");
+  EXPECT_FALSE(H5Reader(dir_->File("fit/results.h5")).Exists(L::kDicDudxWarp));
 }
 
 }  // namespace

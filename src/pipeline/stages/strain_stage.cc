@@ -12,8 +12,11 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
@@ -26,13 +29,45 @@
 namespace impactdic::stages {
 namespace {
 
+// The subset warp's gradient of the correlation (/dic/*_warp, DicOptions::keep_warp_gradient,
+// which the correlate stage sets for strain.gradient: warp), NaN where the series' sample is not
+// valid (the kinematics' rule). The table's *_warp columns are not among those `series` borrows.
+DisplacementGradient WarpGradient(const Scene& scene, const DicResultsTable& table,
+                                  const CorrelationSeries& series) {
+  const std::size_t n = series.frames * series.subsets;
+  for (const std::vector<double>* c :
+       {&table.dudx_warp, &table.dudy_warp, &table.dvdx_warp, &table.dvdy_warp}) {
+    if (c->size() != n) {
+      throw Error(ErrorKind::kInvalidValue, "strain.gradient", "warp",
+                  "correlation results with the subset warp's gradient (/dic/dudx_warp ...: "
+                  "DicOptions::keep_warp_gradient), or strain.gradient: fit")
+          .WithFile(scene.path);
+    }
+  }
+  DisplacementGradient g;
+  g.frames = series.frames;
+  g.subsets = series.subsets;
+  g.dudx.assign(n, kNaN);
+  g.dudy.assign(n, kNaN);
+  g.dvdx.assign(n, kNaN);
+  g.dvdy.assign(n, kNaN);
+  for (std::size_t j = 0; j < n; ++j) {
+    const bool valid = (series.valid.empty() || series.valid[j] != 0) &&
+                       std::isfinite(series.u_px[j]) && std::isfinite(series.v_px[j]);
+    if (!valid) continue;
+    g.dudx[j] = table.dudx_warp[j];
+    g.dudy[j] = table.dudy_warp[j];
+    g.dvdx[j] = table.dvdx_warp[j];
+    g.dvdy[j] = table.dvdy_warp[j];
+  }
+  return g;
+}
+
 // The displacement gradient the scene asks for (strain.gradient).
-DisplacementGradient GradientOfScene(const Scene& scene, const CorrelationSeries& series) {
-  if (scene.strain.gradient == StrainGradient::kFit)
-    return FitDisplacementGradient(series, scene.strain.window);
-  throw Error(ErrorKind::kInvalidValue, "strain.gradient", "warp",
-              "fit (this build's correlation does not keep the subset warp's gradient)")
-      .WithFile(scene.path);
+DisplacementGradient GradientOfScene(const Scene& scene, const DicResultsTable& table,
+                                     const CorrelationSeries& series) {
+  if (scene.strain.gradient == StrainGradient::kWarp) return WarpGradient(scene, table, series);
+  return FitDisplacementGradient(series, scene.strain.window);
 }
 
 // The frame of t_e (the momentum stage's end of the peak stage), or why there is none.
@@ -56,7 +91,7 @@ StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries&
   const SceneRunData& d = c.data;
   StrainResult r;
   r.options = scene.strain;
-  r.gradient = GradientOfScene(scene, series);
+  r.gradient = GradientOfScene(scene, *d.dic, series);
   r.field = ComputeStrain(r.gradient, d.clock.fps);
   r.dry_density_kg_m3 = scene.model.density_kg_m3;
   r.density_kg_m3 = DensityField(r.field, r.dry_density_kg_m3);
