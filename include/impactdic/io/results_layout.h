@@ -120,7 +120,11 @@ inline constexpr const char* kStrainShearBand = "/strain/shear_band";
 // conventions above in words); number attributes: "window" (fit), "compaction_threshold",
 // "shear_band_threshold"; the compacted zone at t_e and at the last frame: "compacted_area_te_mm2",
 // "compacted_depth_te_mm", "compacted_area_end_mm2", "compacted_depth_end_mm" (NaN when t_e is not
-// known, with the reason in the string attribute "compacted_te_note").
+// known, with the reason in the string attribute "compacted_te_note"), their frames (rows)
+// "compacted_te_frame" (NaN when t_e is not known) and "compacted_end_frame", where the depth is
+// measured from: the string "depth_from" ("momentum.surface_y_px" or "grid top row") and the
+// number "surface_y_px" [px]; "dry_density_kg_m3" (rho_d, test.density_kg_m3). Reader and writer:
+// strain/strain_results.h.
 inline constexpr const char* kStrainGradientAttr = "gradient";
 inline constexpr const char* kStrainConventionAttr = "convention";
 
@@ -230,8 +234,11 @@ inline constexpr const char* kXdmfGroup = "/xdmf";
 inline constexpr const char* kXdmfPoints = "/xdmf/points_px";
 inline constexpr const char* kXdmfVertices = "/xdmf/vertices";
 inline constexpr const char* kXdmfFramePrefix = "/xdmf/frame_";
-inline constexpr std::array<const char*, 5> kRunOnlyOutputNames = {
-    kResultsFile, kSummaryJson, kSummaryCsv, kTimingJson, kXdmfFile};
+// The strain series (scene keys strain.enabled and outputs.csv): one row per analysed frame and
+// subset, the /strain measures (docs/strain.md).
+inline constexpr const char* kStrainCsv = "strain.csv";
+inline constexpr std::array<const char*, 6> kRunOnlyOutputNames = {
+    kResultsFile, kSummaryJson, kSummaryCsv, kTimingJson, kXdmfFile, kStrainCsv};
 
 }  // namespace impactdic::results_layout
 

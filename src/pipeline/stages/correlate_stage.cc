@@ -22,6 +22,7 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/strain/strain.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "scene_inputs.h"
 #include "stage.h"
@@ -43,6 +44,9 @@ class CorrelateStage : public Stage {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     DicOptions options = MakeDicOptions(scene.dic);
+    // strain.gradient: warp reads the subset warp's gradient (/dic/*_warp).
+    options.keep_warp_gradient =
+        scene.strain.enabled && scene.strain.gradient == StrainGradient::kWarp;
     const bool given = c.options.threads >= 0;  // Else the scene's dic.threads.
     const ThreadLimit limit(given ? c.options.threads : scene.dic.threads,
                             given ? "threads" : "dic.threads");
