@@ -15,25 +15,6 @@
 #include "impactdic/io/hdf5_store.h"
 
 namespace impactdic {
-namespace {
-
-std::vector<double> UniqueSorted(std::vector<double> v, double tol) {
-  std::sort(v.begin(), v.end());
-  std::vector<double> out;
-  for (double x : v)
-    if (out.empty() || x - out.back() > tol) out.push_back(x);
-  return out;
-}
-
-double MedianStep(const std::vector<double>& sorted) {
-  if (sorted.size() < 2) return kNaN;
-  std::vector<double> d;
-  for (std::size_t i = 1; i < sorted.size(); ++i) d.push_back(sorted[i] - sorted[i - 1]);
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return d[d.size() / 2];
-}
-
-}  // namespace
 
 void MomentumOptions::Check() const {
   CheckValue(std::isfinite(pounder_mass_kg) && pounder_mass_kg > 0, "momentum.pounder_mass_kg",

@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <limits>
+#include <vector>
 
 namespace impactdic {
 
@@ -56,6 +58,26 @@ double GoldenSectionMaximize(F&& f, double lo, double hi,
     }
   }
   return 0.5 * (a + b);
+}
+
+// The distinct values of v, sorted; values closer than tol to the previous kept one are the same
+// (grid coordinates of subset centres).
+inline std::vector<double> UniqueSorted(std::vector<double> v, double tol) {
+  std::sort(v.begin(), v.end());
+  std::vector<double> out;
+  for (double x : v)
+    if (out.empty() || x - out.back() > tol) out.push_back(x);
+  return out;
+}
+
+// The median difference of consecutive entries of a sorted vector (a grid step); NaN for fewer
+// than two entries.
+inline double MedianStep(const std::vector<double>& sorted) {
+  if (sorted.size() < 2) return kNaN;
+  std::vector<double> d;
+  for (std::size_t i = 1; i < sorted.size(); ++i) d.push_back(sorted[i] - sorted[i - 1]);
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
 }
 
 }  // namespace impactdic

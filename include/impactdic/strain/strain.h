@@ -27,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/enum_names.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/kinematics/kinematics.h"
 
 namespace impactdic {
@@ -37,6 +39,8 @@ namespace impactdic {
 //   kFit:  a least-squares plane u = a + b X + c Y (and v) through the valid displacements of the
 //          window x window grid neighbourhood centred on each subset (at least 3 non-collinear).
 enum class StrainGradient { kWarp, kFit };
+inline constexpr EnumNames<StrainGradient, 2> kStrainGradientNames{
+    {{{StrainGradient::kWarp, "warp"}, {StrainGradient::kFit, "fit"}}}};
 
 struct StrainOptions {
   bool enabled = false;  // Scene key strain.enabled: compute /strain at all.
@@ -84,14 +88,17 @@ std::vector<double> DensityField(const StrainField& strain, double dry_density_k
 
 // The compacted zone in one frame: the valid samples with eps_v > compaction_threshold. Area =
 // their count times the grid cell area on the panel [mm^2]; depth = the deepest such subset's
-// reference y minus the grid's top row y, on the panel [mm] (0 and 0 when none).
+// reference y minus the soil surface's y, on the panel [mm] (0 and 0 when none; never < 0). The
+// soil surface is surface_y_px (image y of the undisturbed surface, e.g. the scene's
+// momentum.surface_y_px) when finite, else the grid's top row y.
 struct CompactedZone {
   std::size_t frame = 0;
   std::size_t samples = 0;
   double area_mm2 = 0, depth_mm = 0;
 };
 CompactedZone FindCompactedZone(const StrainField& strain, const CorrelationSeries& dic,
-                                std::size_t frame, const StrainOptions& options, double mm_per_px);
+                                std::size_t frame, const StrainOptions& options, double mm_per_px,
+                                double surface_y_px = kNaN);
 
 // Shear bands: 1 where gamma_max is a ridge (a local maximum across the band: larger than both
 // grid neighbours along at least one of the four grid directions) and exceeds
