@@ -20,7 +20,7 @@
 namespace impactdic::strain_validation {
 
 // The run's /dic as the strain module's input (valid = converged status), and /time/frame_index
-// (the truth frame of each row).
+// (the truth frame of each row; the row itself without it, as `correlate` writes).
 struct RunDic {
   CorrelationSeries series;
   std::vector<std::size_t> truth_frame;
@@ -38,8 +38,12 @@ inline RunDic ReadRunDic(const std::string& results_h5) {
   const std::vector<std::int32_t> status = in.ReadInt("/dic/status");
   s.valid.resize(status.size());
   for (std::size_t i = 0; i < status.size(); ++i) s.valid[i] = status[i] == 0 ? 1 : 0;
-  for (double k : in.ReadDouble("/time/frame_index"))
-    r.truth_frame.push_back(static_cast<std::size_t>(k));
+  if (in.Exists("/time/frame_index")) {
+    for (double k : in.ReadDouble("/time/frame_index"))
+      r.truth_frame.push_back(static_cast<std::size_t>(k));
+  } else {  // `impactdic correlate`: row f is image f
+    for (std::size_t f = 0; f < s.frames; ++f) r.truth_frame.push_back(f);
+  }
   return r;
 }
 
