@@ -81,6 +81,7 @@ struct CorrelateArgs {
   bool first_given = false, last_given = false;
   std::string output;
   bool allow_partial = false;  // Write the results even when no subset is valid (as `run`).
+  bool warp_gradient = DicOptions{}.keep_warp_gradient;  // DicOptions::keep_warp_gradient.
 };
 
 // The command-line flags of the library fields named in errors.
@@ -307,6 +308,7 @@ void Run(const CorrelateArgs& a) {
   const GaussianBlurOptions gaussian = GaussianFromString(a.gaussian, "--gaussian");
   options.continuity = ContinuityFromArgs(a);
   options.outliers = OutliersFromArgs(a);
+  options.keep_warp_gradient = a.warp_gradient;
   WithFlagNames(kCorrelateFlags, [&] { options.Check(); });
   CheckValue(!a.output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   // The inputs, listed (not decoded) before the output is checked.
@@ -434,6 +436,10 @@ void RegisterCorrelateCommand(CLI::App& app) {
       ->capture_default_str();
   AddContinuityFlags(cmd, args.get());
   AddOutlierFlags(cmd, args.get());
+  cmd->add_flag("--warp-gradient", args->warp_gradient,
+                "Keep the displacement gradient of each subset's warp since the reference "
+                "(composed across reference updates): /dic/dudx_warp, dudy_warp, dvdx_warp, "
+                "dvdy_warp in .h5, the last four columns of .csv (docs/dic.md, \"Warp gradient\")");
   cmd->add_option("-o,--output", args->output, "Output file (.csv or .h5)");
   cmd->add_flag(kAllowPartialFlag, args->allow_partial,
                 "Write the output (exit 0) even when no subset is valid in any deformed image; "

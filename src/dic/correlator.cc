@@ -126,6 +126,20 @@ struct Orphan {
   cv::Point2d ref_pos;                   // Its tracked point in that reference.
 };
 
+// A displacement gradient H = F - I (du/dX, du/dY, dv/dX, dv/dY).
+using Gradient = std::array<double, 4>;
+constexpr Gradient kNoGradient{kNaN, kNaN, kNaN, kNaN};
+
+// The gradient of two warps applied one after the other: first `first` (X -> x_r), then
+// `second` (x_r -> x), evaluated at the matching points: F = F_second F_first, so
+// H = H_second + H_first + H_second H_first (2 x 2 matrices, row-major).
+Gradient ComposeGradients(const Gradient& second, const Gradient& first) {
+  const auto& [a, b, c, d] = second;
+  const auto& [e, f, g, h] = first;
+  return {a + e + a * e + b * g, b + f + a * f + b * h, c + g + c * e + d * g,
+          d + h + c * f + d * h};
+}
+
 struct Attempt {
   IcgnResult r;
   bool solved = false, searched = false, propagated = false;
@@ -215,6 +229,12 @@ struct Correlator::Impl {
   std::vector<cv::Point2d> pos_last, pos_prev;
   std::vector<Params> params_last;
   std::vector<char> params_valid;
+  // options.keep_warp_gradient (empty otherwise), per subset: the displacement gradient since
+  // the first reference at the tracked point when its current reference (ref_pos, or its
+  // orphan's) was made (F_prev - I; 0 for the first reference), and the gradient in the last
+  // solved frame (NaN where not converged), which becomes the former if that frame becomes the
+  // reference.
+  std::vector<Gradient> gradient_at_ref, gradient_last;
   int last_index = 0;
   std::unique_ptr<ReferenceUpdatePolicy> policy;  // From options.update (kSequence).
   std::unique_ptr<Frame> last_frame;  // For policies that KeepsLastFrame(): the last good frame.
@@ -236,7 +256,10 @@ struct Correlator::Impl {
                                        const std::vector<Attempt>& at, const Frame& frame,
                                        FrameResult* out);
   void SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out);
-  void MoveReferencePoints(const std::vector<cv::Point2d>& pos);
+  // Makes `pos` (the tracked points in the last solved frame, NaN = not found) the reference
+  // points, `gradient` (gradient_last of that frame) their gradients since the first reference.
+  void MoveReferencePoints(const std::vector<cv::Point2d>& pos,
+                           const std::vector<Gradient>& gradient);
   // The search template of subset s: `image32` (the reference's search image) over its
   // footprint, a view; empty if the footprint leaves the image.
   cv::Mat SearchTemplate(const SubsetRef& s, const cv::Mat& image32) const;
@@ -267,6 +290,9 @@ struct Correlator::Impl {
   // Makes the subsets that a post-check set to `flagged` in out failures in `at` too.
   void Untrack(SubsetStatus flagged, std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
                const FrameResult& out);
+  // options.keep_warp_gradient: NaN gradients where a post-check failed the subset, and the
+  // frame's gradients kept as gradient_last.
+  void KeepGradients(FrameResult* out);
   // Makes the frame the reference if the policy says so, else keeps it if the policy needs it.
   void AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
                         const std::vector<Attempt>& at, const std::vector<cv::Point2d>& pos,
@@ -840,15 +866,22 @@ void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, Fram
 // Before a reference update to the frame whose tracked positions are `pos`: tracked subsets move
 // their reference point there; those not found in it become orphans of the current reference
 // (status `lost` while they fail); orphans found in it rejoin the tracked subsets.
-void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos) {
+void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos,
+                                           const std::vector<Gradient>& gradient) {
   const int n = static_cast<int>(initial.size());
+  // A subset found in the new reference composes its later warps with its gradient there; a lost
+  // one keeps the gradient of the reference it stays tracked against.
+  const auto move = [&](int i) {
+    ref_pos[i] = pos[i];
+    if (!gradient_at_ref.empty()) gradient_at_ref[i] = gradient[i];
+  };
   std::vector<int> lost;
   for (int i = 0; i < n; ++i) {
     if (!active[i]) {
       if (orphans[i].ref && !std::isnan(pos[i].x)) {
         active[i] = 1;
         permanent[i] = SubsetStatus::kConverged;
-        ref_pos[i] = pos[i];
+        move(i);
         orphans[i] = Orphan{};
       }
       continue;
@@ -856,7 +889,7 @@ void Correlator::Impl::MoveReferencePoints(const std::vector<cv::Point2d>& pos) 
     if (std::isnan(pos[i].x))
       lost.push_back(i);
     else
-      ref_pos[i] = pos[i];
+      move(i);
   }
   // What each lost subset needs of the current reference is copied out of it (KeepForOrphan);
   // the reference itself is rebuilt for the new frame.
@@ -1034,6 +1067,13 @@ void Correlator::SetReference(const cv::Mat& image) {
   m.pos_prev = m.pos_last;
   m.params_last.assign(n, Params{});
   m.params_valid.assign(n, 0);
+  if (m.options.keep_warp_gradient) {
+    m.gradient_at_ref.assign(n, Gradient{});  // The first reference: no deformation.
+    m.gradient_last.assign(n, kNoGradient);
+  } else {
+    m.gradient_at_ref.clear();
+    m.gradient_last.clear();
+  }
   m.last_index = 0;
   m.summary = DicSummary{};
   m.summary.subsets = n;
@@ -1087,7 +1127,7 @@ void Correlator::Impl::RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* a
   const std::vector<char> rescued = RescuedByLastFrame(candidates, *at, frame, out);
   if (std::find(rescued.begin(), rescued.end(), 1) != rescued.end()) {
     // Switch to the last good frame: its tracked positions become the new reference points.
-    MoveReferencePoints(pos_last);
+    MoveReferencePoints(pos_last, gradient_last);
     Frame& last = *last_frame;
     BuildReference(last.index, last.raw, &last.spline, last.Float(), out);
     ++summary.reference_updates;
@@ -1111,6 +1151,9 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attemp
   out->sigma_u_px = out->sigma_px;
   out->sigma_v_px = out->sigma_px;
   out->status.resize(n);
+  const bool gradients = !gradient_at_ref.empty();
+  if (gradients)
+    for (auto* g : {&out->dudx, &out->dudy, &out->dvdx, &out->dvdy}) g->assign(n, kNaN);
   std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
   for (int i = 0; i < n; ++i) {
     const IcgnResult& r = at[i].r;
@@ -1131,6 +1174,18 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attemp
     out->sigma_u_px[i] = r.sigma_u_px;
     out->sigma_v_px[i] = r.sigma_v_px;
     out->sigma_px[i] = r.sigma_px;
+    if (gradients) {
+      // The warp's gradient at the tracked point (the subset centre moved by (ox, oy)), against
+      // the reference the subset was solved in, composed with the gradient it had there.
+      const Params at_point = internal::Transfer(shape, r.p, s.ox, s.oy);
+      const Gradient h = ComposeGradients(
+          {at_point[1], at_point[2], at_point[shape.nm + 1], at_point[shape.nm + 2]},
+          gradient_at_ref[i]);
+      out->dudx[i] = h[0];
+      out->dudy[i] = h[1];
+      out->dvdx[i] = h[2];
+      out->dvdy[i] = h[3];
+    }
     params_last[i] = r.p;
     params_valid[i] = orphan.ref ? 0 : 1;
     iteration_sum += r.iterations;
@@ -1170,13 +1225,23 @@ void Correlator::Impl::Untrack(SubsetStatus flagged, std::vector<Attempt>* at,
   }
 }
 
+void Correlator::Impl::KeepGradients(FrameResult* out) {
+  if (gradient_at_ref.empty()) return;
+  for (std::size_t i = 0; i < out->status.size(); ++i) {
+    if (out->status[i] != SubsetStatus::kConverged) {
+      for (auto* g : {&out->dudx, &out->dudy, &out->dvdx, &out->dvdy}) (*g)[i] = kNaN;
+    }
+    gradient_last[i] = {out->dudx[i], out->dudy[i], out->dvdx[i], out->dvdy[i]};
+  }
+}
+
 void Correlator::Impl::AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
                                         const std::vector<Attempt>& at,
                                         const std::vector<cv::Point2d>& pos, FrameResult* out) {
   FrameView storage;
   if (policy->MakesFrameTheReference(View(out->frame, at, &storage))) {
     // The frame just solved becomes the reference.
-    MoveReferencePoints(pos);
+    MoveReferencePoints(pos, gradient_last);
     BuildReference(out->frame, image, &frame->spline, frame->Float(), out);
     ++summary.reference_updates;
     Recycle(std::move(last_frame));
@@ -1243,6 +1308,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   // Results: tracked positions and accumulated displacements.
   std::vector<cv::Point2d> pos = m.StoreResults(at, &out);
   m.PostCheck(&at, &pos, &out);
+  m.KeepGradients(&out);
   m.pos_prev = m.pos_last;
   m.pos_last = pos;
   if (out.frame == 1) {

@@ -28,6 +28,12 @@ std::string Number(double v) {
   return fmt::format("{:.6f}", v);
 }
 
+// A dimensionless gradient: 9 significant digits (strains of 1e-5 and below keep theirs).
+std::string Ratio(double v) {
+  if (std::isnan(v)) return "nan";
+  return fmt::format("{:.9g}", v);
+}
+
 // The frame number of image `index` (0 = the first reference): from its file name when the
 // names are one numbered series, else the index itself.
 long long FrameLabel(const DicResult& result, int index) {
@@ -70,6 +76,12 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
   for (auto* column : {&t.zncc, &t.sigma_u_px, &t.sigma_v_px, &t.sigma_px})
     column->reserve(rows * n);
   for (auto* column : {&t.iterations, &t.status}) column->reserve(rows * n);
+  // The warp gradients, when the correlation kept them (DicOptions::keep_warp_gradient).
+  const bool gradients = !result.frames.empty() && !result.frames[0].dudx.empty();
+  const std::array<std::vector<double>*, 4> warp = {&t.dudx_warp, &t.dudy_warp, &t.dvdx_warp,
+                                                    &t.dvdy_warp};
+  if (gradients)
+    for (auto* column : warp) column->reserve(rows * n);
   // The number from the file names, else the index in the input sequence.
   const auto number = [&](int index) {
     return static_cast<double>(result.frame_numbers.empty() ? first_frame + index
@@ -89,6 +101,8 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
     t.u_px.push_back(fails ? std::nan("") : 0.0);
     t.v_px.push_back(fails ? std::nan("") : 0.0);
     t.status.push_back(static_cast<std::int32_t>(fails ? s : SubsetStatus::kConverged));
+    if (gradients)
+      for (auto* column : warp) column->push_back(fails ? std::nan("") : 0.0);
   }
   t.zncc.assign(n, 1.0f);
   t.sigma_u_px.assign(n, 0.0f);
@@ -108,6 +122,12 @@ DicResultsTable MakeTable(Result& result, const DicOptions& options, int first_f
     t.sigma_v_px.insert(t.sigma_v_px.end(), f.sigma_v_px.begin(), f.sigma_v_px.end());
     t.sigma_px.insert(t.sigma_px.end(), f.sigma_px.begin(), f.sigma_px.end());
     t.iterations.insert(t.iterations.end(), f.iterations.begin(), f.iterations.end());
+    if (gradients) {
+      const std::array<const std::vector<double>*, 4> frame_warp = {&f.dudx, &f.dudy, &f.dvdx,
+                                                                    &f.dvdy};
+      for (std::size_t g = 0; g < warp.size(); ++g)
+        warp[g]->insert(warp[g]->end(), frame_warp[g]->begin(), frame_warp[g]->end());
+    }
     for (const SubsetStatus s : f.status) t.status.push_back(static_cast<std::int32_t>(s));
     if constexpr (!std::is_const_v<Result>) {
       result.frames[r - 1] = FrameResult{};
@@ -150,9 +170,12 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
   return MakeTable(result, options, first_frame);
 }
 
-std::vector<std::string> DicCsvColumns() {
-  return {"frame", "x_px",       "y_px",   "u_px",       "v_px",
-          "zncc",  "iterations", "status", "sigma_u_px", "sigma_v_px"};
+std::vector<std::string> DicCsvColumns(bool warp_gradient) {
+  std::vector<std::string> columns = {"frame", "x_px",       "y_px",   "u_px",       "v_px",
+                                      "zncc",  "iterations", "status", "sigma_u_px", "sigma_v_px"};
+  if (warp_gradient)
+    columns.insert(columns.end(), {"dudx_warp", "dudy_warp", "dvdx_warp", "dvdy_warp"});
+  return columns;
 }
 
 void WriteDicResult(const std::string& path, DicResult* released, const DicOptions& options) {
@@ -162,22 +185,20 @@ void WriteDicResult(const std::string& path, DicResult* released, const DicOptio
   if (ext == ".csv") {
     // Row by row as they are formatted: the rows (about 10 strings per subset and frame) are
     // many times the results' own size and never all held at once.
-    CsvRowWriter out(path, DicCsvColumns());
-    std::array<std::string, 10> row;
+    const bool gradients = frames > 0 && !result.frames[0].dudx.empty();
+    CsvRowWriter out(path, DicCsvColumns(gradients));
+    std::vector<std::string> row(DicCsvColumns(gradients).size());
     for (std::size_t k = 0; k < frames; ++k) {
       const FrameResult& f = result.frames[k];
       const std::string frame = std::to_string(FrameLabel(result, f.frame));
       for (std::size_t i = 0; i < n; ++i) {
-        row = {frame,
-               Number(result.positions[i].x),
-               Number(result.positions[i].y),
-               Number(f.u_px[i]),
-               Number(f.v_px[i]),
-               Number(f.zncc[i]),
-               std::to_string(f.iterations[i]),
-               ToString(f.status[i]),
-               Number(f.sigma_u_px[i]),
-               Number(f.sigma_v_px[i])};
+        row.assign({frame, Number(result.positions[i].x), Number(result.positions[i].y),
+                    Number(f.u_px[i]), Number(f.v_px[i]), Number(f.zncc[i]),
+                    std::to_string(f.iterations[i]), ToString(f.status[i]), Number(f.sigma_u_px[i]),
+                    Number(f.sigma_v_px[i])});
+        if (gradients) {
+          for (double g : {f.dudx[i], f.dudy[i], f.dvdx[i], f.dvdy[i]}) row.push_back(Ratio(g));
+        }
         out.Row(row);
       }
       result.frames[k] = FrameResult{};

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "impactdic/core/error.h"
@@ -43,6 +44,8 @@ void PrependReferenceRow(DicResultsTable* t) {
   PrependRow(&t->sigma_u_px, n, 0.0f);
   PrependRow(&t->sigma_v_px, n, 0.0f);
   PrependRow(&t->sigma_px, n, 0.0f);
+  for (auto* g : {&t->dudx_warp, &t->dudy_warp, &t->dvdx_warp, &t->dvdy_warp})
+    PrependRow(g, n, 0.0);
   PrependRow(&t->frame, 1, std::int32_t{0});
   PrependRow(&t->reference_frame, 1, std::int32_t{0});
   PrependRow(&t->frame_number, 1, std::nan(""));
@@ -116,6 +119,26 @@ void ReadGrid(const H5Reader& in, const std::string& file, DicResultsTable* t) {
   t->y_px.resize(t->subsets);
 }
 
+// The four warp-gradient datasets, each only when the table has it.
+void WriteWarpGradient(H5Writer& out, const DicResultsTable& t) {
+  const Dims dims{t.rows, t.subsets};
+  const struct {
+    const char* path;
+    const std::vector<double>& values;
+    const char* what;
+  } gradients[] = {{L::kDicDudxWarp, t.dudx_warp, "du/dX"},
+                   {L::kDicDudyWarp, t.dudy_warp, "du/dY"},
+                   {L::kDicDvdxWarp, t.dvdx_warp, "dv/dX"},
+                   {L::kDicDvdyWarp, t.dvdy_warp, "dv/dY"}};
+  for (const auto& g : gradients) {
+    if (g.values.empty()) continue;
+    out.Write(g.path, g.values, dims, "1",
+              std::string(g.what) +
+                  " of the subset warp since the first reference (row 0), in first-reference "
+                  "coordinates (x right, y down), composed across reference updates; NaN = failed");
+  }
+}
+
 }  // namespace
 
 bool DicResultsTable::IsValid(std::size_t k) const {
@@ -137,6 +160,10 @@ void DicResultsTable::Check() const {
   CheckSize(sigma_u_px, n, "sigma_u_px");
   CheckSize(sigma_v_px, n, "sigma_v_px");
   CheckSize(sigma_px, n, "sigma_px");
+  CheckSize(dudx_warp, n, "dudx_warp");
+  CheckSize(dudy_warp, n, "dudy_warp");
+  CheckSize(dvdx_warp, n, "dvdx_warp");
+  CheckSize(dvdy_warp, n, "dvdy_warp");
   CheckSize(frame, rows, "frame");
   CheckSize(reference_frame, rows, "reference_frame");
   CheckSize(frame_number, rows, "frame_number");
@@ -176,6 +203,7 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& t) {
   }
   if (!t.sigma_px.empty())
     out.Write(L::kDicSigma, t.sigma_px, dims, "px", "the larger of sigma_u_px and sigma_v_px");
+  WriteWarpGradient(out, t);
   if (!t.frame.empty()) {
     out.Write(L::kDicFrame, t.frame, rows, "1",
               "index of the row's image in the input sequence (0 = its first image)");
@@ -226,11 +254,19 @@ DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file, DicF
     ReadOptional(in, file, L::kDicSigmaU, n, floats, &t.sigma_u_px);
     ReadOptional(in, file, L::kDicSigmaV, n, floats, &t.sigma_v_px);
     ReadOptional(in, file, L::kDicSigma, n, floats, &t.sigma_px);
+    ReadOptional(in, file, L::kDicDudxWarp, n, doubles, &t.dudx_warp);
+    ReadOptional(in, file, L::kDicDudyWarp, n, doubles, &t.dudy_warp);
+    ReadOptional(in, file, L::kDicDvdxWarp, n, doubles, &t.dvdx_warp);
+    ReadOptional(in, file, L::kDicDvdyWarp, n, doubles, &t.dvdy_warp);
   }
   if (t.sigma_u_px.empty() != t.sigma_v_px.empty()) {
     t.sigma_u_px.clear();  // Only both together are of use.
     t.sigma_v_px.clear();
   }
+  const std::array<std::vector<double>*, 4> warp = {&t.dudx_warp, &t.dudy_warp, &t.dvdx_warp,
+                                                    &t.dvdy_warp};
+  if (std::any_of(warp.begin(), warp.end(), [](const auto* g) { return g->empty(); }))
+    for (auto* g : warp) g->clear();  // Only the four together are a gradient.
   ReadOptional(in, file, L::kDicFrame, t.rows, ints, &t.frame);
   ReadOptional(in, file, L::kDicReferenceFrame, t.rows, ints, &t.reference_frame);
   ReadOptional(in, file, L::kDicFrameNumber, t.rows, doubles, &t.frame_number);

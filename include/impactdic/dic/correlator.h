@@ -82,6 +82,14 @@ struct FrameResult {
   // both), NaN unless status == kConverged. They do not include the error carried over from an
   // earlier reference (after a reference update).
   std::vector<float> sigma_u_px, sigma_v_px, sigma_px;
+  // Per subset, only with DicOptions::keep_warp_gradient (empty otherwise): the displacement
+  // gradient of the subset warp since the first reference, H = F - I with F = dx/dX, in
+  // first-reference (material) coordinates X, image axes (x right, y down), at the tracked point;
+  // NaN unless status == kConverged. Against the first reference it is IC-GN's affine parameters
+  // (du/dx, du/dy, dv/dx, dv/dy); after reference updates the warps compose,
+  // F = F_r(x_r) F_prev(X): F_r the warp's against the current reference at the subset's point
+  // x_r in it, F_prev the total when that reference was made (docs/dic.md, "Warp gradient").
+  std::vector<double> dudx, dudy, dvdx, dvdy;
   std::vector<int> iterations;  // IC-GN iterations of the final attempt.
   std::vector<SubsetStatus> status;
   // Costs of this frame [s].

@@ -40,7 +40,10 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
 //       the names are one numbered series, else its 1-based index; x,y = subset centre in the
 //       first reference,
 //       u,v = accumulated displacement [px], x right, y down; status by name; sigma_u,v = their
-//       estimated standard deviations against the frame's reference [px]; NaN as "nan").
+//       estimated standard deviations against the frame's reference [px]; NaN as "nan"),
+//       then, only when the correlation kept them (DicOptions::keep_warp_gradient), the columns
+//       dudx_warp,dudy_warp,dvdx_warp,dvdy_warp: the displacement gradient of the subset warp
+//       since the first reference (FrameResult::dudx ...; 9 significant digits).
 // .h5:  the /dic group of the results layout (io/results_layout.h, written by WriteDicResults
 //       from MakeDicResultsTable(result, options, /*first_frame=*/-1)): one row per image, the
 //       reference first; /dic/frame_number as the CSV's frame column; other groups of an existing
@@ -48,8 +51,9 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
 // Each frame's arrays are released once written (.h5: once in the table), so the results are
 // held once; the positions, summary and attributes stay in *result.
 void WriteDicResult(const std::string& path, DicResult* result, const DicOptions& options);
-// The columns of WriteDicResult's CSV.
-std::vector<std::string> DicCsvColumns();
+// The columns of WriteDicResult's CSV; `warp_gradient`: with the warp-gradient columns (they
+// come last, so every CSV begins with DicCsvColumns()).
+std::vector<std::string> DicCsvColumns(bool warp_gradient = false);
 
 }  // namespace impactdic
 

@@ -250,6 +250,13 @@ struct DicOptions {
   // limits follow it. The correlation driver (dic/correlate_frames.h) sets it from a source that
   // states its bit depth (a camera file).
   int data_bits = 0;
+  // Keep, per subset and frame, the displacement gradient of the subset warp since the first
+  // reference (FrameResult::dudx ... dvdy; the /dic datasets *_warp, `correlate --warp-gradient`):
+  // IC-GN's affine parameters at the tracked point, composed across reference updates
+  // (docs/dic.md, "Warp gradient"). Off by default: the frames' results then hold no gradient
+  // (4 doubles per subset and frame more when on). Both shape functions (affine, quadratic)
+  // carry a gradient.
+  bool keep_warp_gradient = false;
   void Check() const;
 };
 

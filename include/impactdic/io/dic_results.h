@@ -30,6 +30,10 @@ struct DicResultsTable {
   // [rows x subsets]; empty = not in the file (read: then every finite displacement is valid).
   std::vector<std::int32_t> status, iterations;
   std::vector<float> zncc, sigma_u_px, sigma_v_px, sigma_px;
+  // [rows x subsets], only when the correlation kept them (DicOptions::keep_warp_gradient);
+  // empty = not in the file: the displacement gradient of the subset warp since the first
+  // reference (du/dX, du/dY, dv/dX, dv/dY; 0 in row 0 where valid, NaN = failed).
+  std::vector<double> dudx_warp, dudy_warp, dvdx_warp, dvdy_warp;
   // [rows]: image index in the input sequence, frame number (file name), reference image index.
   // Empty = not in the file.
   std::vector<std::int32_t> frame, reference_frame;
@@ -55,7 +59,8 @@ void WriteDicResults(H5Writer& out, const DicResultsTable& table);
 // (a correlate file of version 1 gets its reference row prepended). Error kFileFormat naming
 // `file` and the dataset when it is missing or its shape or frame indices are inconsistent.
 // kDisplacements reads the grid, u_px, v_px and the per-row indices only, not the per-sample
-// status and quality (status, iterations, zncc, sigmas stay empty): what a reader of the motion
+// status, quality and warp gradients (status, iterations, zncc, sigmas, *_warp stay empty): what
+// a reader of the motion
 // needs, without four more arrays of rows x subsets in memory (render's velocity field).
 enum class DicFields { kAll, kDisplacements };
 DicResultsTable ReadDicResults(const H5Reader& in, const std::string& file,
