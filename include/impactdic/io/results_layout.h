@@ -112,7 +112,11 @@ inline constexpr const char* kStrainShearBand = "/strain/shear_band";
 // conventions above in words); number attributes: "window" (fit), "compaction_threshold",
 // "shear_band_threshold"; the compacted zone at t_e and at the last frame: "compacted_area_te_mm2",
 // "compacted_depth_te_mm", "compacted_area_end_mm2", "compacted_depth_end_mm" (NaN when t_e is not
-// known, with the reason in the string attribute "compacted_te_note").
+// known, with the reason in the string attribute "compacted_te_note"), their frames (rows)
+// "compacted_te_frame" (NaN when t_e is not known) and "compacted_end_frame", where the depth is
+// measured from: the string "depth_from" ("momentum.surface_y_px" or "grid top row") and the
+// number "surface_y_px" [px]; "dry_density_kg_m3" (rho_d, test.density_kg_m3). Reader and writer:
+// strain/strain_results.h.
 inline constexpr const char* kStrainGradientAttr = "gradient";
 inline constexpr const char* kStrainConventionAttr = "convention";
 
