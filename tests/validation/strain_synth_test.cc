@@ -16,6 +16,7 @@
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
+#include "impactdic/io/hdf5_store.h"
 #include "impactdic/strain/strain.h"
 #include "strain_compare.h"
 
@@ -180,6 +181,36 @@ TEST(StrainSynthTruth, FitGradientMatchesTheAnalyticStrain) {
                                "fit, window " + w + ", against the same fit of the truth");
     ExpectWithin(p, perfect_bounds[k], /*sensitive=*/true);
   }
+}
+
+// The subset warp's gradient (`correlate --warp-gradient` on the same frames and grid, /dic/*_warp)
+// against the analytic strain. Its bounds are 1.5 x what this scene gives.
+TEST(StrainSynthTruth, WarpGradientMatchesTheAnalyticStrain) {
+  TestDir dir;
+  SynthAndRun(dir);
+  const std::string scene = dir.File("scene");
+  const H5Reader attrs(scene + "/truth.h5");
+  std::ostringstream roi;
+  for (const char* key : {"roi_x0_px", "roi_y0_px", "roi_x1_px", "roi_y1_px"})
+    roi << (roi.tellp() > 0 ? "," : "") << std::lround(attrs.ReadNumberAttribute("soil", key));
+  const std::string out = dir.File("warp.h5");
+  const CliResult r = RunCli(
+      "-q correlate --frames '" + scene + "/frames/frame_*.png' --subset " +
+      std::to_string(std::lround(attrs.ReadNumberAttribute("soil", "subset_size_px"))) +
+      " --step " + std::to_string(std::lround(attrs.ReadNumberAttribute("soil", "step_px"))) +
+      " --roi " + roi.str() + " --warp-gradient -o '" + out + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const RunDic run = strain_validation::ReadRunDic(out);
+  const StrainTruth truth(scene + "/truth.h5", run);
+  const H5Reader in(out);
+  DisplacementGradient g;
+  g.frames = run.series.frames, g.subsets = run.series.subsets;
+  g.dudx = in.ReadDouble("/dic/dudx_warp");
+  g.dudy = in.ReadDouble("/dic/dudy_warp");
+  g.dvdx = in.ReadDouble("/dic/dvdx_warp");
+  g.dvdy = in.ReadDouble("/dic/dvdy_warp");
+  const Measured m = Measure(truth, g, Named(truth), "warp, against the analytic strain");
+  ExpectWithin(m, Bounds{7.3e-3, 9.2e-3, 9.6e-3, 6.3e-3, 7.0e-4}, /*sensitive=*/true);
 }
 
 }  // namespace
