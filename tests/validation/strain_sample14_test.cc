@@ -1,11 +1,12 @@
 // The strain validation on DIC Challenge 1.0 Sample 14 (docs/validation.md, "Strain"): reference
 // -> L3 and L5 (pairs, subset 25, step 5), exx by the strain module's fit (windows 3, 5, 7) and
-// the subset warp's gradient (correlate --warp-gradient) against the
-// commanded exx of `Sample 14 Commanded Displacement.csv`. The sinusoid's amplitude is 0.1 px and
-// its period shrinks along x, so exx grows along x; one subset's gradient is mostly noise at this
-// amplitude, so the comparison is of each grid column's mean exx (the challenge's own way), in
-// the long-period part x in [400, 1200) px (periods of about 1400 down to 380 px). Skipped when the
-// data is absent, failed then under IMPACTDIC_REQUIRE_SHARED_DATA=1.
+// the subset warp's gradient (correlate --warp-gradient) against the commanded exx of
+// `Sample 14 Commanded Displacement.csv`. The sinusoid's amplitude is 0.1 px and its period
+// shrinks along x, so exx grows along x; one subset's gradient is mostly noise at this amplitude,
+// so the comparison is of each grid column's mean exx (the challenge's own way), in the
+// long-period part x in [400, 1200) px (local periods 2 pi 0.1 px / (sqrt(2) RMS exx): L3 660 down
+// to 360 px, L5 380 down to 200 px). Skipped when the data is absent, failed then under
+// IMPACTDIC_REQUIRE_SHARED_DATA=1.
 #include <gtest/gtest.h>
 
 #include <cmath>
