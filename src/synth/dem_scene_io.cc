@@ -70,7 +70,11 @@ std::vector<std::vector<std::size_t>> GrainsPerWindow(const std::vector<cv::Poin
     const int j1 =
         std::min(dic.rows - 1, static_cast<int>(std::floor((q[g].y - c0.y + half) / step)));
     for (int j = j0; j <= j1; ++j)
-      for (int i = i0; i <= i1; ++i) in[static_cast<std::size_t>(j * dic.cols + i)].push_back(g);
+      for (int i = i0; i <= i1; ++i) {
+        const auto cell = static_cast<std::size_t>(j) * static_cast<std::size_t>(dic.cols) +
+                          static_cast<std::size_t>(i);
+        in[cell].push_back(g);
+      }
   }
   return in;
 }

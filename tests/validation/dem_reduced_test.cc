@@ -122,7 +122,7 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   // validate-dem drew its figures from the run's default outputs (a 16-frame preview).
   for (const char* png :
        {"velocity_field_compare.png", "momentum_compare.png", "deceleration_compare.png"})
-    EXPECT_TRUE(fs::is_regular_file(work + "/run_" + name + "/compare/" + png)) << png;
+    EXPECT_TRUE(fs::is_regular_file(fs::path(work) / ("run_" + name) / "compare" / png)) << png;
 
   const DemValidation v = ValidateDemRun(truth_h5, results_h5);
 

@@ -108,7 +108,10 @@ TEST(StrainSample14, FitExxFollowsTheCommandedStrainWhereThePeriodIsLong) {
         std::printf("  [%.0f, %.0f) %.0f (%.0f)", b[0], b[1], 1e6 * e.rms, 1e6 * e.commanded_rms);
       }
       std::printf("\n");
-      const auto it = bound.find(level + " " + name);
+      std::string key = level;
+      key += " ";
+      key += name;
+      const auto it = bound.find(key);
       if (it == bound.end()) continue;
       const ColumnError e = ColumnMeanError(run.series, exx, frame, commanded.at(level), 400, 1200);
       EXPECT_LE(e.rms, it->second) << it->first;
