@@ -32,8 +32,9 @@ void RegisterRunCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "run",
       "Run the stages a scene needs (calibration -> sensor -> frames -> correlate -> "
-      "kinematics -> momentum -> model -> outputs; the sensor comes first because its impact "
-      "time decides the first frame to correlate)");
+      "kinematics -> momentum -> model -> strain (only with the scene's strain.enabled: "
+      "docs/strain.md) -> outputs; the sensor comes first because its impact time decides the "
+      "first frame to correlate)");
   cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
   auto* output = cmd->add_option("-o,--output", args->output,
                                  "Output folder (default: the scene's outputs.folder)");

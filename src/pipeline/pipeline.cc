@@ -90,6 +90,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
     stages::RunStage(*make(), context);
   stages::AddMeasuredPeakDeceleration(context);
   stages::RunStage(*stages::MakeModelStage(), context);
+  stages::RunStage(*stages::MakeStrainStage(), context);
   ThrowIfFailed(summary, options);
   summary.seconds = total.ElapsedSeconds();  // timing.json: up to the outputs.
   stages::RunStage(*stages::MakeOutputsStage(writers, generation ? &*generation : nullptr),

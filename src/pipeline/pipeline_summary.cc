@@ -66,6 +66,31 @@ std::vector<double> SceneFigures::CsvValues() const {
           dic_subsets_per_s};
 }
 
+std::vector<std::string> StrainFigures::CsvNames() const {
+  return {"strain_compacted_area_te_mm2",  "strain_compacted_depth_te_mm",
+          "strain_compacted_area_end_mm2", "strain_compacted_depth_end_mm",
+          "strain_crater_depth_model_mm",  "strain_crater_depth_measured_mm"};
+}
+
+std::vector<double> StrainFigures::CsvValues() const {
+  return {compacted_area_te_mm2,  compacted_depth_te_mm, compacted_area_end_mm2,
+          compacted_depth_end_mm, crater_depth_model_mm, crater_depth_measured_mm};
+}
+
+JsonObject StrainFigures::ToJson() const {
+  JsonObject j;
+  j.Add("gradient", gradient)
+      .Add("compacted_area_te_mm2", compacted_area_te_mm2)
+      .Add("compacted_depth_te_mm", compacted_depth_te_mm)
+      .Add("compacted_area_end_mm2", compacted_area_end_mm2)
+      .Add("compacted_depth_end_mm", compacted_depth_end_mm)
+      .Add("crater_depth_model_mm", crater_depth_model_mm)
+      .Add("crater_depth_measured_mm", crater_depth_measured_mm)
+      .Add("depth_from", depth_from);
+  if (!te_note.empty()) j.Add("te_note", te_note);
+  return j;
+}
+
 std::string PipelineSummary::FailureText() const {
   std::string text;
   for (const StageFailure& f : failures)
@@ -85,6 +110,7 @@ std::string PipelineSummary::BriefReport() const {
 
 JsonObject PipelineSummary::ToJson() const {
   JsonObject j = figures.ToJson();
+  if (strain) j.Add("strain", strain->ToJson());
   JsonObject failed;
   for (const StageFailure& f : failures) failed.Add(f.stage, f.reason);
   j.Add("usable", IsUsable()).Add("failures", failed).Add("warnings", warnings);
@@ -115,6 +141,14 @@ std::string PipelineSummary::FullReport() const {
   const auto values = figures.CsvValues();
   for (std::size_t i = 0; i < names.size(); ++i)
     text += fmt::format("  {:<32} {:.6g}\n", names[i], values[i]);
+  if (strain) {
+    const auto strain_names = strain->CsvNames();
+    const auto strain_values = strain->CsvValues();
+    for (std::size_t i = 0; i < strain_names.size(); ++i)
+      text += fmt::format("  {:<32} {:.6g}\n", strain_names[i], strain_values[i]);
+    text += "  strain compacted depth from the " + strain->depth_from +
+            (strain->te_note.empty() ? "" : "; " + strain->te_note) + "\n";
+  }
   for (const auto& w : warnings) text += "  warning: " + w + "\n";
   text += "Outputs:\n";
   for (const auto& o : outputs) text += "  " + o + "\n";

@@ -38,6 +38,9 @@ constexpr ValueRange kNonNegativePx{0, 1e300, "px"};
 constexpr ValueRange kAnyTime{-1e300, 1e300, "s"};
 constexpr ValueRange kCount{1, 1e300, ""};
 constexpr ValueRange kFraction{0, 1, "", /*min_open=*/true};
+constexpr ValueRange kStrainWindowRange{3, 99, "grid points"};
+constexpr ValueRange kStrainCompactionRange{0, 1, "", /*min_open=*/false, /*max_open=*/true};
+constexpr ValueRange kStrainShearRange{0, 1e300, ""};
 // Gravity must push the pounder down in a scene (0 is only for the model's exact solutions).
 constexpr ValueRange kSceneGravityRange{kGravityRange.min, kGravityRange.max, kGravityRange.unit,
                                         /*min_open=*/true};
@@ -390,6 +393,27 @@ FrameStorage FrameStorageFromString(const std::string& text) {
 
 namespace {
 
+// `strain.*`: StrainOptions (docs/strain.md).
+YamlOptionTable StrainTable(Scene* s) {
+  YamlOptionTable t("strain");
+  StrainOptions& o = s->strain;
+  t.Add("enabled", &o.enabled,
+        "Strain, density, compacted zone and shear bands (/strain, strain.csv; docs/strain.md)");
+  t.AddChoice(
+      "gradient", kStrainGradientNames.Names(), kStrainGradientNames.Name(o.gradient),
+      [&o](const std::string& v) { o.gradient = kStrainGradientNames.Parse(v, "strain.gradient"); },
+      "Displacement gradient: fit = least-squares plane through the neighbours' displacements, "
+      "warp = the subset warp's own");
+  AddOdd(t, "window", &o.window, kStrainWindowRange,
+         "gradient fit: neighbourhood side in grid points");
+  t.Add("compaction_threshold", &o.compaction_threshold, kStrainCompactionRange,
+        "a volumetric strain (compression positive)",
+        "Compacted zone: samples whose eps_v exceeds it");
+  t.Add("shear_band_threshold", &o.shear_band_threshold, kStrainShearRange, "a shear strain",
+        "Shear bands: ridges of gamma_max above it");
+  return t;
+}
+
 YamlOptionTable OutputsTable(Scene* s) {
   YamlOptionTable t("outputs");
   SceneOutputs& o = s->outputs;
@@ -572,6 +596,7 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
     MakeSensorOptions(scene);
     MakeModelParameters(scene, scene.ImpactVelocity());
     scene.solver.Check();
+    scene.strain.Check();
   } catch (const Error& e) {
     problems->Add(root, "(options)", e.what());
   }
@@ -589,15 +614,16 @@ bool Scene::HasStage(const std::string& stage) const {
 }
 
 const std::vector<std::string>& AllSceneStages() {
-  static const std::vector<std::string> kStages = {
-      "calibrate", "frames", "correlate", "kinematics", "sensor", "momentum", "model", "outputs"};
+  static const std::vector<std::string> kStages = {"calibrate",  "frames", "correlate",
+                                                   "kinematics", "sensor", "momentum",
+                                                   "model",      "strain", "outputs"};
   return kStages;
 }
 
 std::vector<YamlOptionTable> SceneOptionTables(Scene* scene) {
   std::vector<YamlOptionTable> tables = {InputsTable(scene), TestTable(scene)};
   for (YamlOptionTable& t : PreprocessTables(scene)) tables.push_back(std::move(t));
-  for (auto make : {DicTable, SensorTable, MomentumTable, ModelTable, OutputsTable})
+  for (auto make : {DicTable, SensorTable, MomentumTable, ModelTable, StrainTable, OutputsTable})
     tables.push_back(make(scene));
   return tables;
 }

@@ -187,7 +187,7 @@ StrainAtPoint StrainFromGradient(double dudx, double dudy, double dvdx, double d
   s.gxx = dudx + 0.5 * (dudx * dudx + dvdx * dvdx);
   s.gyy = dvdy + 0.5 * (dudy * dudy + dvdy * dvdy);
   s.gxy = 0.5 * (dudy + dvdx) + 0.5 * (dudx * dudy + dvdx * dvdy);
-  s.eps_v = -(s.exx + s.eyy);
+  s.eps_v = 0.0 - (s.exx + s.eyy);  // +0 (not -0) without strain.
   const double centre = 0.5 * (s.exx + s.eyy);
   const double radius = std::hypot(0.5 * (s.exx - s.eyy), s.exy);
   s.eps_1 = centre + radius;

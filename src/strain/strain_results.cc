@@ -79,6 +79,17 @@ auto NumberAttributes(R& r) {
 
 }  // namespace
 
+std::string StrainMeasure::Name() const {
+  const std::string p = path;
+  return p.substr(p.rfind('/') + 1);
+}
+
+std::vector<StrainMeasure> StrainMeasures(const StrainResult& result) {
+  std::vector<StrainMeasure> m;
+  for (const auto& d : Datasets(result)) m.push_back({d.path, d.units, d.description, d.values});
+  return m;
+}
+
 const char* StrainConventionText() {
   return "image axes x right, y DOWN, reference (first frame) coordinates; H = [[du/dX, du/dY], "
          "[dv/dX, dv/dY]]; small strain (H + H^T) / 2 and Green-Lagrange (H + H^T + H^T H) / 2, "

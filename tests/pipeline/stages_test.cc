@@ -72,10 +72,12 @@ TEST(Stages, EveryStageReportsOnceInPipelineOrder) {
       RunScene(FramesScene(dir, "[frames, correlate, kinematics, outputs]"), PipelineOptions{});
   std::vector<std::string> names;
   for (const StageReport& r : s.stages) names.push_back(r.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"calibrate", "sensor", "frames", "correlate",
-                                             "kinematics", "momentum", "model", "outputs"}));
+  EXPECT_EQ(names,
+            (std::vector<std::string>{"calibrate", "sensor", "frames", "correlate", "kinematics",
+                                      "momentum", "model", "strain", "outputs"}));
   EXPECT_EQ(Find(s, "momentum")->note, "needs the sensor record (pounder velocity)");
   EXPECT_TRUE(Find(s, "kinematics")->ran);
+  EXPECT_EQ(Find(s, "strain")->note, "strain.enabled is false");
 }
 
 }  // namespace

@@ -185,8 +185,11 @@ inline constexpr const char* kSummaryCsv = "summary.csv";
 // The run's wall times and rates (PipelineSummary::TimingJson), kept out of summary.json so that
 // two runs of one scene give byte-identical summaries.
 inline constexpr const char* kTimingJson = "timing.json";
-inline constexpr std::array<const char*, 4> kRunOnlyOutputNames = {kResultsFile, kSummaryJson,
-                                                                   kSummaryCsv, kTimingJson};
+// The strain series (scene keys strain.enabled and outputs.csv): one row per analysed frame and
+// subset, the /strain measures (docs/strain.md).
+inline constexpr const char* kStrainCsv = "strain.csv";
+inline constexpr std::array<const char*, 5> kRunOnlyOutputNames = {
+    kResultsFile, kSummaryJson, kSummaryCsv, kTimingJson, kStrainCsv};
 
 }  // namespace impactdic::results_layout
 

@@ -1,6 +1,7 @@
 // The whole pipeline on one scene (README.md, "The pipeline"; the stage graph and the data between
 // the stages in docs/architecture.md): calibrate -> sensor -> frames -> correlate -> kinematics
-// -> momentum -> model -> outputs, skipping what the scene does not need and saying so. Each
+// -> momentum -> model -> strain -> outputs, skipping what the scene does not need and saying so
+// (strain only with strain.enabled). Each
 // stage is a unit in src/pipeline/stages/, the data between them is SceneRunData
 // (pipeline/run_data.h), the outputs are OutputWriters (pipeline/output_writer.h).
 // `impactdic run SCENE.yaml` is a thin layer over RunScene().
@@ -26,11 +27,13 @@
 //   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
 //   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
 //   timing.json     wall times of the run and its stages, the correlation's subsets per second
+//   strain.csv      the strain series (strain.enabled and outputs.csv; docs/strain.md)
 //   momentum.png, deceleration.png, added_mass.png, velocity_field_te.png, velocity.mp4 (or .avi)
 #ifndef IMPACTDIC_PIPELINE_PIPELINE_H_
 #define IMPACTDIC_PIPELINE_PIPELINE_H_
 
 #include <algorithm>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -98,6 +101,23 @@ struct SceneFigures {
   std::vector<double> CsvValues() const;
 };
 
+// The strain stage's key figures (summary.json "strain", summary.csv's strain_* columns; only
+// when the stage ran): the compacted zone (eps_v > strain.compaction_threshold) at t_e and at the
+// last analysed frame, its depth measured from `depth_from`, next to the crater depths. NaN: not
+// available (te_note says why for the t_e figures).
+struct StrainFigures {
+  double compacted_area_te_mm2 = kNaN, compacted_depth_te_mm = kNaN;
+  double compacted_area_end_mm2 = kNaN, compacted_depth_end_mm = kNaN;
+  double crater_depth_model_mm = kNaN, crater_depth_measured_mm = kNaN;
+  std::string te_note;     // Why the t_e figures are NaN ("" when t_e is known).
+  std::string depth_from;  // "momentum.surface_y_px" or "grid top row".
+  std::string gradient;    // "fit" or "warp".
+  JsonObject ToJson() const;
+  // summary.csv's extra columns (strain_compacted_area_te_mm2, ...) and values, in one order.
+  std::vector<std::string> CsvNames() const;
+  std::vector<double> CsvValues() const;
+};
+
 // A run (RunScene) or an analysis (AnalyzeSceneResults) in which a stage produced nothing usable,
 // with partial output not allowed: Error(kNumerical) reading "PROBLEM; the option `allow_partial`
 // REMEDY". problem() says what failed and what was kept, remedy() what the option would write. The
@@ -126,8 +146,9 @@ struct PipelineSummary {
   std::string output_folder;
   std::vector<StageReport> stages;
   SceneFigures figures;
-  std::vector<StageFailure> failures;  // Empty: every stage that ran produced what it is for.
-  std::vector<std::string> outputs;    // Files written.
+  std::optional<StrainFigures> strain;  // When the strain stage ran.
+  std::vector<StageFailure> failures;   // Empty: every stage that ran produced what it is for.
+  std::vector<std::string> outputs;     // Files written.
   std::vector<std::string> warnings;
   double seconds = 0;
   bool IsUsable() const { return failures.empty(); }
@@ -135,7 +156,8 @@ struct PipelineSummary {
   std::string FailureText() const;
   std::string BriefReport() const;
   std::string FullReport() const;
-  // summary.json: the figures' keys (SceneFigures::ToJson), then "usable", "failures" (stage ->
+  // summary.json: the figures' keys (SceneFigures::ToJson), "strain" (StrainFigures::ToJson, when
+  // the strain stage ran), then "usable", "failures" (stage ->
   // reason) and "warnings". Nothing that varies between runs of one scene (no time, rate, path
   // or version).
   JsonObject ToJson() const;

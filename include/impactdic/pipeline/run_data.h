@@ -18,6 +18,7 @@
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/strain/strain_results.h"
 
 namespace impactdic {
 
@@ -56,6 +57,10 @@ struct SceneRunData {
   // model: the impact model's solve and its parameters.
   std::optional<ImpactRun> model;
   ImpactModelParameters model_parameters;
+
+  // strain: the strain fields, density, compacted zone and shear bands (strain.enabled and the
+  // correlation results; strain/strain_results.h); released with dic after results.h5.
+  std::optional<StrainResult> strain;
 };
 
 }  // namespace impactdic

@@ -32,6 +32,7 @@
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/preprocess/preprocess.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/strain/strain.h"
 
 namespace impactdic {
 
@@ -137,7 +138,8 @@ struct Scene {
   SceneInputs inputs;
   SceneTest test;
   // Stages to run, in pipeline order; default all whose inputs exist:
-  // calibrate, frames, correlate, kinematics, sensor, momentum, model, outputs.
+  // calibrate, frames, correlate, kinematics, sensor, momentum, model, strain, outputs (strain
+  // runs only with strain.enabled).
   std::vector<std::string> stages;
   PreprocessOptions preprocess;  // `preprocess.gaussian.*`, `preprocess.clahe.*`.
   SceneDic dic;
@@ -147,6 +149,8 @@ struct Scene {
   // impact_velocity_m_s is ImpactVelocity().
   ImpactModelParameters model;
   ImpactSolverOptions solver;  // `model.solver`, `model.rtol`, `model.atol`.
+  // `strain.*` (docs/strain.md): off unless strain.enabled; rho_d is test.density_kg_m3.
+  StrainOptions strain;
   SceneOutputs outputs;
 
   bool HasStage(const std::string& stage) const;

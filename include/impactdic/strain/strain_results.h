@@ -37,6 +37,19 @@ struct StrainResult {
   double surface_y_px = kNaN;
 };
 
+// One [frames x subsets] double dataset of /strain (its path in io/results_layout.h, units,
+// description) bound to a result's values.
+struct StrainMeasure {
+  const char* path;
+  const char* units;
+  const char* description;
+  const std::vector<double>* values;
+  std::string Name() const;  // The path's last part ("eps_v"): the strain.csv column.
+};
+// Every double dataset of /strain, in the order written (the gradient, the strains, the rates,
+// the density); the uint8 shear_band is apart.
+std::vector<StrainMeasure> StrainMeasures(const StrainResult& result);
+
 // The "convention" attribute of /strain: the sign conventions in words.
 const char* StrainConventionText();
 

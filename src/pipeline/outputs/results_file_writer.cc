@@ -21,31 +21,22 @@
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/strain/strain_results.h"
 #include "writers.h"
 
 namespace impactdic::outputs {
 namespace L = results_layout;
 namespace {
 
-// /time: every analysed frame's time since the impact [ms] and its index in the input sequence.
-// Without a sensor record the frames are timed from the first analysed frame by the camera's time
-// stamps (a camera file), else k / fps.
+// /time: every analysed frame's time since the impact [ms] (AnalysedFrameTimesMs) and its index
+// in the input sequence.
 void WriteFrameTimes(H5Writer& out, const SceneRunData& d) {
   const std::size_t F = d.dic->rows;
-  const std::vector<double>& all = d.frame_times_s;
   const auto first = static_cast<std::size_t>(d.first_frame);
-  const double t_ref = all.empty() ? 0.0 : all[first];
-  const double t_impact = d.sensor ? d.sensor->summary.impact_time_s : t_ref;
-  std::vector<double> t_ms(F), frame_index(F);
-  for (std::size_t f = 0; f < F; ++f) {
-    const std::vector<double>& stamps = d.clock.time_s;
-    const double tf = !all.empty()     ? all[first + f]
-                      : stamps.empty() ? static_cast<double>(f) / d.clock.fps
-                                       : stamps[first + f] - stamps[first];
-    t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
-    frame_index[f] = static_cast<double>(first + f);
-  }
-  out.Write(L::kTimeMs, t_ms, "ms", "time of each analysed frame since the impact");
+  std::vector<double> frame_index(F);
+  for (std::size_t f = 0; f < F; ++f) frame_index[f] = static_cast<double>(first + f);
+  out.Write(L::kTimeMs, AnalysedFrameTimesMs(d), "ms",
+            "time of each analysed frame since the impact");
   out.Write(L::kTimeFrameIndex, frame_index, "1",
             "index of the analysed frame in the input sequence");
 }
@@ -155,6 +146,7 @@ class ResultsFileWriter : public OutputWriter {
       WriteFrames(out, *d.frames, c.scene.outputs.frames);
     WriteMotion(out, d);
     if (d.model) WriteModel(out, d);
+    if (d.strain) WriteStrainResults(out, *d.strain);  // Nothing without the strain stage.
     WriteSummaryGroup(out, c.summary);
     if (c.scene.outputs.hdf5) {
       out.Commit();
@@ -166,6 +158,23 @@ class ResultsFileWriter : public OutputWriter {
 };
 
 }  // namespace
+
+std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d) {
+  const std::size_t F = d.dic->rows;
+  const std::vector<double>& all = d.frame_times_s;
+  const auto first = static_cast<std::size_t>(d.first_frame);
+  const double t_ref = all.empty() ? 0.0 : all[first];
+  const double t_impact = d.sensor ? d.sensor->summary.impact_time_s : t_ref;
+  std::vector<double> t_ms(F);
+  for (std::size_t f = 0; f < F; ++f) {
+    const std::vector<double>& stamps = d.clock.time_s;
+    const double tf = !all.empty()     ? all[first + f]
+                      : stamps.empty() ? static_cast<double>(f) / d.clock.fps
+                                       : stamps[first + f] - stamps[first];
+    t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
+  }
+  return t_ms;
+}
 
 std::shared_ptr<const OutputWriter> MakeResultsFileWriter() {
   return std::make_shared<ResultsFileWriter>();

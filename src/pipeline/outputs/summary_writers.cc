@@ -39,9 +39,15 @@ class SummaryCsvWriter : public OutputWriter {
   }
   void Write(OutputContext& c) const override {
     const std::string path = c.Path(L::kSummaryCsv);
+    std::vector<std::string> names = c.summary.figures.CsvNames();
+    std::vector<double> values = c.summary.figures.CsvValues();
+    if (c.summary.strain) {  // The strain stage's columns, only when it ran.
+      for (const std::string& n : c.summary.strain->CsvNames()) names.push_back(n);
+      for (double v : c.summary.strain->CsvValues()) values.push_back(v);
+    }
     std::vector<std::vector<double>> columns;
-    for (double v : c.summary.figures.CsvValues()) columns.push_back({v});
-    WriteCsv(path, c.summary.figures.CsvNames(), columns);
+    for (double v : values) columns.push_back({v});
+    WriteCsv(path, names, columns);
     c.summary.outputs.push_back(path);
   }
 };

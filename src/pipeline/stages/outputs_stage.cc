@@ -18,12 +18,14 @@ namespace impactdic::stages {
 namespace {
 
 // The built-in writers after results.h5 read the results from it (render, summaries): the rows of
-// /dic and the kinematics (O(subsets x frames), the run's largest data) are released once it is
-// written, so that rendering a long recording does not hold them as well. Kept when the caller
+// /dic, the kinematics and the strain fields (O(subsets x frames), the run's largest data) are
+// released once it is written, so that rendering a long recording does not hold them as well
+// (strain.csv is written before results.h5 for this reason). Kept when the caller
 // added writers of its own (PipelineOptions::extra_output_writers), which may read them.
 void ReleaseRunResults(SceneRunData& d) {
   d.dic.reset();
   d.kinematics.reset();
+  d.strain.reset();
 }
 
 class OutputsStage : public Stage {

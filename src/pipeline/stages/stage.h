@@ -46,6 +46,8 @@ std::unique_ptr<Stage> MakeCorrelateStage();
 std::unique_ptr<Stage> MakeKinematicsStage();
 std::unique_ptr<Stage> MakeMomentumStage();
 std::unique_ptr<Stage> MakeModelStage();
+// After the model (t_e from momentum, the crater depths from the model and the sensor).
+std::unique_ptr<Stage> MakeStrainStage();
 // The outputs: every writer into the staging folder of the run's output generation, committed
 // when all are complete.
 std::unique_ptr<Stage> MakeOutputsStage(const OutputWriters& writers, OutputGeneration* generation);

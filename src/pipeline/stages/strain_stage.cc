@@ -1,0 +1,143 @@
+// strain: the strain fields of the correlated soil (strain/strain.h, docs/strain.md), the density,
+// the compacted zone at t_e (from the momentum stage) and at the last frame next to the crater
+// depths (from the model stage and the sensor record), and the shear bands. Only with
+// strain.enabled; the samples the kinematics leave out (momentum.max_sigma_px / max_sigma_ratio)
+// are left out here too.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include "impactdic/core/error.h"
+#include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/pipeline/scene_analysis.h"
+#include "impactdic/strain/strain.h"
+#include "impactdic/strain/strain_results.h"
+#include "stage.h"
+
+namespace impactdic::stages {
+namespace {
+
+// The displacement gradient the scene asks for (strain.gradient).
+DisplacementGradient GradientOfScene(const Scene& scene, const CorrelationSeries& series) {
+  if (scene.strain.gradient == StrainGradient::kFit)
+    return FitDisplacementGradient(series, scene.strain.window);
+  throw Error(ErrorKind::kInvalidValue, "strain.gradient", "warp",
+              "fit (this build's correlation does not keep the subset warp's gradient)")
+      .WithFile(scene.path);
+}
+
+// The frame of t_e (the momentum stage's end of the peak stage), or why there is none.
+std::optional<std::size_t> TeFrame(const SceneRunData& d, std::size_t frames, std::string* note) {
+  if (!d.momentum) {
+    *note = "t_e is not known: the momentum stage did not run (it needs the sensor record)";
+    return std::nullopt;
+  }
+  const MomentumSummary& m = d.momentum->summary;
+  if (!std::isfinite(m.t_end_peak_s) || m.end_frame >= frames) {
+    *note = "t_e was not measured: " +
+            (m.t_end_problem.empty() ? std::string("no frame of t_e") : m.t_end_problem);
+    return std::nullopt;
+  }
+  return m.end_frame;
+}
+
+// The strain result of the series (the gradient, every measure, density, bands, zones).
+StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries& series) {
+  const Scene& scene = c.scene;
+  const SceneRunData& d = c.data;
+  StrainResult r;
+  r.options = scene.strain;
+  r.gradient = GradientOfScene(scene, series);
+  r.field = ComputeStrain(r.gradient, d.clock.fps);
+  r.dry_density_kg_m3 = scene.model.density_kg_m3;
+  r.density_kg_m3 = DensityField(r.field, r.dry_density_kg_m3);
+  r.shear_band = ShearBands(r.field, series, r.options);
+  if (scene.momentum.surface_y_px) {
+    r.depth_from = "momentum.surface_y_px";
+    r.surface_y_px = *scene.momentum.surface_y_px;
+  } else {
+    r.depth_from = "grid top row";
+    r.surface_y_px = kNaN;
+  }
+  const std::size_t frames = r.field.frames;
+  r.zone_end =
+      FindCompactedZone(r.field, series, frames - 1, r.options, d.mm_per_px, r.surface_y_px);
+  if (const std::optional<std::size_t> te = TeFrame(d, frames, &r.te_note)) {
+    r.te_known = true;
+    r.zone_te = FindCompactedZone(r.field, series, *te, r.options, d.mm_per_px, r.surface_y_px);
+  }
+  if (!std::isfinite(r.surface_y_px)) {
+    double top = series.y_px.front();
+    for (double y : series.y_px) top = std::min(top, y);
+    r.surface_y_px = top;  // As FindCompactedZone took it.
+  }
+  return r;
+}
+
+StrainFigures FiguresOf(const StrainResult& r, const SceneFigures& fig) {
+  StrainFigures s;
+  s.gradient = kStrainGradientNames.Name(r.options.gradient);
+  s.depth_from = r.depth_from;
+  s.te_note = r.te_known ? "" : r.te_note;
+  s.compacted_area_te_mm2 = r.zone_te.area_mm2;
+  s.compacted_depth_te_mm = r.zone_te.depth_mm;
+  s.compacted_area_end_mm2 = r.zone_end.area_mm2;
+  s.compacted_depth_end_mm = r.zone_end.depth_mm;
+  s.crater_depth_model_mm = 1e3 * fig.crater_depth_model_m;
+  s.crater_depth_measured_mm = 1e3 * fig.crater_depth_measured_m;
+  return s;
+}
+
+class StrainStage : public Stage {
+ public:
+  const char* name() const override { return "strain"; }
+
+  std::string SkipReason(const StageContext& c) const override {
+    if (!c.scene.strain.enabled) return "strain.enabled is false";
+    if (!c.data.dic) return "no correlation results";
+    return NotListed(c.scene, name());
+  }
+
+  std::string Run(StageContext& c) const override {
+    SceneRunData& d = c.data;
+    if (!(d.mm_per_px > 0)) {
+      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px", "no scale",
+                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
+          .WithFile(c.scene.path);
+    }
+    {
+      // The rows of /dic borrowed (no copy), without the samples the kinematics leave out (their
+      // warning is the kinematics stage's).
+      BorrowedCorrelationSeries series(&*d.dic);
+      ExcludeUncertainSamplesOfScene(c.scene, &series.series());
+      d.strain = ComputeStrainResult(c, series.series());
+    }
+    const StrainResult& r = *d.strain;
+    c.summary.strain = FiguresOf(r, c.summary.figures);
+    return fmt::format(
+        "{} gradient{}; compacted zone (eps_v > {}) at the end {:.4g} mm^2, {:.4g} mm deep (from "
+        "the {}); at t_e {}",
+        kStrainGradientNames.Name(r.options.gradient),
+        r.options.gradient == StrainGradient::kFit ? fmt::format(" ({0}x{0})", r.options.window)
+                                                   : std::string(),
+        r.options.compaction_threshold, r.zone_end.area_mm2, r.zone_end.depth_mm, r.depth_from,
+        r.te_known
+            ? fmt::format("{:.4g} mm^2, {:.4g} mm deep", r.zone_te.area_mm2, r.zone_te.depth_mm)
+            : std::string("unknown"));
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<Stage> MakeStrainStage() { return std::make_unique<StrainStage>(); }
+
+}  // namespace impactdic::stages
