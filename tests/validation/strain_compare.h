@@ -134,6 +134,16 @@ inline NamedFields Named(const StrainTruth& truth) {
   return f;
 }
 
+// A results file's /strain datasets (the pipeline's strain stage) under the same names.
+inline NamedFields ReadStrainGroup(const std::string& results_h5) {
+  const H5Reader in(results_h5);
+  NamedFields f;
+  for (const char* name : {"dudx", "dudy", "dvdx", "dvdy", "exx", "eyy", "exy", "green_lagrange_xx",
+                           "green_lagrange_yy", "green_lagrange_xy", "eps_v", "gamma_max"})
+    f[name] = in.ReadDouble(std::string("/strain/") + name);
+  return f;
+}
+
 // a - b elementwise (e.g. the Green-Lagrange quadratic term (H^T H) / 2 = GL - small strain).
 inline std::vector<double> Minus(const std::vector<double>& a, const std::vector<double>& b) {
   std::vector<double> d(a.size());

@@ -48,6 +48,8 @@ std::string SynthAndRun(const TestDir& dir) {
     const auto at = yaml.find(on);
     if (at != std::string::npos) yaml.replace(at, on.size(), key + ": false");
   }
+  // The pipeline's strain stage too: /strain in results.h5 (fit, window 3).
+  yaml += "strain:\n  enabled: true\n  gradient: fit\n  window: 3\n";
   std::ofstream(scene + "/scene.yaml") << yaml;
   const CliResult run = RunCli("-q run '" + scene + "/scene.yaml' -o '" + dir.File("run") + "'");
   EXPECT_EQ(run.exit_code, 0) << run.output;
@@ -69,12 +71,11 @@ struct Measured {
   double gradient_flipped = 0, green_lagrange_linear = 0, quadratic_truth = 0;
 };
 
-// The errors of the strain from gradient g against `ref` (Named fields), printed under `label`.
-Measured Measure(const StrainTruth& truth, const DisplacementGradient& g, const NamedFields& ref,
+// The errors of the strain `tool` against `ref` (Named fields), printed under `label`.
+Measured Measure(const StrainTruth& truth, const NamedFields& tool, const NamedFields& ref,
                  const std::string& label) {
   Measured m;
   std::printf("%s\n", label.c_str());
-  const NamedFields tool = Named(g, ComputeStrain(g, kFps));
   for (const char* name : {"dudx", "dudy", "dvdx", "dvdy"}) {
     const ErrorStats e = truth.Compare(tool.at(name), ref.at(name));
     Print(name, e);
@@ -169,15 +170,20 @@ TEST(StrainSynthTruth, FitGradientMatchesTheAnalyticStrain) {
   const Bounds perfect_bounds[] = {{4.8e-3, 4.0e-3, 5.7e-3, 3.5e-3, 5.3e-4},
                                    {2.8e-3, 2.1e-3, 3.4e-3, 2.0e-3, 2.8e-4},
                                    {1.7e-3, 1.3e-3, 2.1e-3, 1.2e-3, 1.4e-4}};
+  // The run's /strain (the pipeline's stage, fit, window 3) within the window-3 bounds.
+  const Measured stage = Measure(truth, strain_validation::ReadStrainGroup(results), analytic,
+                                 "the run's /strain (fit, window 3), against the analytic strain");
+  ExpectWithin(stage, analytic_bounds[0], /*sensitive=*/true);
   for (int k = 0; k < 3; ++k) {
     const int window = 3 + 2 * k;
     const DisplacementGradient g = FitDisplacementGradient(run.series, window);
     const std::string w = std::to_string(window);
+    const NamedFields tool = Named(g, ComputeStrain(g, kFps));
     const Measured a =
-        Measure(truth, g, analytic, "fit, window " + w + ", against the analytic strain");
+        Measure(truth, tool, analytic, "fit, window " + w + ", against the analytic strain");
     ExpectWithin(a, analytic_bounds[k], /*sensitive=*/window == 3);
     const DisplacementGradient perfect = FitDisplacementGradient(truth.PerfectSeries(), window);
-    const Measured p = Measure(truth, g, Named(perfect, ComputeStrain(perfect, kFps)),
+    const Measured p = Measure(truth, tool, Named(perfect, ComputeStrain(perfect, kFps)),
                                "fit, window " + w + ", against the same fit of the truth");
     ExpectWithin(p, perfect_bounds[k], /*sensitive=*/true);
   }
@@ -209,7 +215,8 @@ TEST(StrainSynthTruth, WarpGradientMatchesTheAnalyticStrain) {
   g.dudy = in.ReadDouble("/dic/dudy_warp");
   g.dvdx = in.ReadDouble("/dic/dvdx_warp");
   g.dvdy = in.ReadDouble("/dic/dvdy_warp");
-  const Measured m = Measure(truth, g, Named(truth), "warp, against the analytic strain");
+  const Measured m = Measure(truth, Named(g, ComputeStrain(g, kFps)), Named(truth),
+                             "warp, against the analytic strain");
   ExpectWithin(m, Bounds{7.3e-3, 9.2e-3, 9.6e-3, 6.3e-3, 7.0e-4}, /*sensitive=*/true);
 }
 
