@@ -19,6 +19,7 @@
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 #include "scene_files.h"
+#include "strain_truth.h"
 
 namespace impactdic {
 namespace {
@@ -53,6 +54,70 @@ std::size_t FindPeakEnd(const std::vector<double>& t, const std::vector<double>&
   return std::string::npos;
 }
 
+// The grains (indices into the reference snapshot) whose reference centre q[i] lies in each
+// subset's window |q - centre| <= half (x and y); centres row-major cols x rows, spacing `step`.
+std::vector<std::vector<std::size_t>> GrainsPerWindow(const std::vector<cv::Point2d>& q,
+                                                      const SceneDicGrid& dic, double step,
+                                                      double half) {
+  std::vector<std::vector<std::size_t>> in(dic.centres_px.size());
+  if (dic.centres_px.empty()) return in;
+  const cv::Point2d c0 = dic.centres_px[0];
+  for (std::size_t g = 0; g < q.size(); ++g) {
+    const int i0 = std::max(0, static_cast<int>(std::ceil((q[g].x - c0.x - half) / step)));
+    const int i1 =
+        std::min(dic.cols - 1, static_cast<int>(std::floor((q[g].x - c0.x + half) / step)));
+    const int j0 = std::max(0, static_cast<int>(std::ceil((q[g].y - c0.y - half) / step)));
+    const int j1 =
+        std::min(dic.rows - 1, static_cast<int>(std::floor((q[g].y - c0.y + half) / step)));
+    for (int j = j0; j <= j1; ++j)
+      for (int i = i0; i <= i1; ++i) {
+        const auto cell = static_cast<std::size_t>(j) * static_cast<std::size_t>(dic.cols) +
+                          static_cast<std::size_t>(i);
+        in[cell].push_back(g);
+      }
+  }
+  return in;
+}
+
+// The gradient of the least-squares affine fit of the window grains' displacements (DemTruth::
+// dudx): with the reference positions centred on their mean, H = S_ud S_dd^-1 (S the sums of
+// outer products). NaN when fewer than 3 grains or det S_dd <= 1e-6 trace(S_dd)^2 (collinear).
+void FitGrainGradients(const std::vector<std::vector<std::size_t>>& window,
+                       const std::vector<cv::Point2d>& ref_px,
+                       const std::vector<std::vector<cv::Point2d>>& px_of_frame, DemTruth& T) {
+  const std::size_t N = window.size(), F = px_of_frame.size();
+  for (auto* f : {&T.dudx, &T.dudy, &T.dvdx, &T.dvdy}) f->assign(F * N, kNaN);
+  T.grains_per_subset.assign(N, 0);
+  for (std::size_t c = 0; c < N; ++c) {
+    const std::vector<std::size_t>& w = window[c];
+    T.grains_per_subset[c] = static_cast<int>(w.size());
+    if (w.size() < 3) continue;
+    double mx = 0, my = 0;
+    for (std::size_t g : w) mx += ref_px[g].x, my += ref_px[g].y;
+    mx /= static_cast<double>(w.size()), my /= static_cast<double>(w.size());
+    double sxx = 0, sxy = 0, syy = 0;
+    for (std::size_t g : w) {
+      const double dx = ref_px[g].x - mx, dy = ref_px[g].y - my;
+      sxx += dx * dx, sxy += dx * dy, syy += dy * dy;
+    }
+    const double det = sxx * syy - sxy * sxy;
+    if (!(det > 1e-6 * (sxx + syy) * (sxx + syy))) continue;
+    for (std::size_t k = 0; k < F; ++k) {
+      double sux = 0, suy = 0, svx = 0, svy = 0;  // displacement minus its mean: sums drop it
+      for (std::size_t g : w) {
+        const double dx = ref_px[g].x - mx, dy = ref_px[g].y - my;
+        const double u = px_of_frame[k][g].x - ref_px[g].x, v = px_of_frame[k][g].y - ref_px[g].y;
+        sux += u * dx, suy += u * dy, svx += v * dx, svy += v * dy;
+      }
+      const std::size_t o = k * N + c;
+      T.dudx[o] = (sux * syy - suy * sxy) / det;
+      T.dudy[o] = (suy * sxx - sux * sxy) / det;
+      T.dvdx[o] = (svx * syy - svy * sxy) / det;
+      T.dvdy[o] = (svy * sxx - svx * sxy) / det;
+    }
+  }
+}
+
 }  // namespace
 
 void DemScene::ComputeTruth() {
@@ -73,13 +138,14 @@ void DemScene::ComputeTruth() {
   const SceneDicGrid& dic = b.dic_grid();
   const SceneMomentumTruth& mt = b.momentum();
   std::vector<int> dic_cell(G), grid_cell(G);
-  std::vector<cv::Point2d> ref_mm(G);
+  std::vector<cv::Point2d> ref_mm(G), ref_px(G);
   for (std::size_t i = 0; i < G; ++i) {
     ref_mm[i] = PanelFromDem(ref.grains[i].x_m, ref.grains[i].y_m);
-    const cv::Point2d q = b.IdealFromPanel(ref_mm[i]);
-    dic_cell[i] = CellOf(q, dic.centres_px, dic.cols, dic.rows, step);
-    grid_cell[i] = CellOf(q, mt.centres_px, mt.cols, mt.rows, step);
+    ref_px[i] = b.IdealFromPanel(ref_mm[i]);
+    dic_cell[i] = CellOf(ref_px[i], dic.centres_px, dic.cols, dic.rows, step);
+    grid_cell[i] = CellOf(ref_px[i], mt.centres_px, mt.cols, mt.rows, step);
   }
+  std::vector<std::vector<cv::Point2d>> px_of_frame(static_cast<std::size_t>(F));
   const std::size_t N = dic.centres_px.size();
   T.grains_per_cell.assign(N, 0);
   std::vector<double> cell_mass(N, 0);
@@ -98,8 +164,11 @@ void DemScene::ComputeTruth() {
   for (int k = 0; k < F; ++k) {
     const DemSnapshot& s = record_.frames[static_cast<std::size_t>(k)];
     const std::size_t o = static_cast<std::size_t>(k) * N;
+    std::vector<cv::Point2d>& px = px_of_frame[static_cast<std::size_t>(k)];
+    px.resize(G);
     for (std::size_t i = 0; i < G; ++i) {
       const DemGrain& g = s.grains[i];
+      px[i] = b.IdealFromPanel(PanelFromDem(g.x_m, g.y_m));
       if (g.id != ref.grains[i].id)
         throw Error(ErrorKind::kFileFormat, "grains.dump", fmt::format("grain id {}", g.id),
                     fmt::format("the same ids in every snapshot (step {})", s.step));
@@ -119,6 +188,8 @@ void DemScene::ComputeTruth() {
       for (auto* field : {&T.u_px, &T.v_px, &T.velocity_x_mm_s, &T.velocity_y_mm_s})
         (*field)[o + c] = cell_mass[c] > 0 ? (*field)[o + c] / cell_mass[c] : kNaN;
   }
+  FitGrainGradients(GrainsPerWindow(ref_px, dic, step, spec_.subset_size / 2.0), ref_px,
+                    px_of_frame, T);
   T.bulk_density_kg_m3 = spec_.density_kg_m3;
   T.grid_mass_bulk_kg = spec_.density_kg_m3 * mt.grid_area_mm2 * 1e-6 * m.depth_m;
   T.p_gran_fd_Ns.assign(static_cast<std::size_t>(F), 0);
@@ -260,6 +331,11 @@ void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
   out.Write("soil/velocity_y_mm_s", T.velocity_y_mm_s, fdims, "mm/s", "the same, y down");
   out.Write("soil/grains_per_cell", T.grains_per_cell, gdims, "1",
             "grains whose centre lies in the step x step cell at the reference frame");
+  out.Write("soil/grains_per_subset", T.grains_per_subset, gdims, "1",
+            "grains whose centre lies in the subset at the reference frame (the strain fit's)");
+  synth_internal::WriteStrainTruth(
+      synth_internal::GradientTruth{T.dudx, T.dudy, T.dvdx, T.dvdy}, fdims,
+      "least-squares affine fit of the displacements of the subset's grains", out);
   out.SetAttribute("soil", "reference_frame", T.reference_frame);
   out.SetAttribute("soil", "step_px", scene.base().spec().step);
   out.SetAttribute("soil", "subset_size_px", scene.base().spec().subset_size);

@@ -34,6 +34,7 @@
 #include "impactdic/synth/speckle.h"
 #include "scene_files.h"
 #include "spec_keys.h"
+#include "strain_truth.h"
 
 namespace impactdic {
 namespace {
@@ -355,12 +356,15 @@ void WriteSoilTruth(const ImpactScene& scene, const std::vector<double>& t, H5Wr
   const Dims fdims{F, gdims[0], gdims[1]};
   std::vector<double> gx(n), gy(n), u_px(F * n), v_px(F * n), vel_x(F * n), vel_y(F * n);
   std::vector<std::int32_t> occluded(F * n);
+  synth_internal::GradientTruth grad;
+  for (auto* c : {&grad.dudx, &grad.dudy, &grad.dvdx, &grad.dvdy}) c->resize(F * n);
   const int half = s.subset_size / 2;
   for (std::size_t i = 0; i < n; ++i) {
     gx[i] = grid.centres_px[i].x;
     gy[i] = grid.centres_px[i].y;
   }
   for (std::size_t k = 0; k < F; ++k) {
+    const DisplacementField field = scene.SoilFieldPx(t[k]);
     for (std::size_t i = 0; i < n; ++i) {
       const cv::Point2d m = scene.PanelFromIdeal(grid.centres_px[i]);
       const cv::Vec2d d = scene.SoilDisplacementMm(m.x, m.y, t[k]);
@@ -371,6 +375,8 @@ void WriteSoilTruth(const ImpactScene& scene, const std::vector<double>& t, H5Wr
       vel_x[j] = vel[0];
       vel_y[j] = vel[1];
       occluded[j] = scene.PounderCovers(gx[i] + u_px[j], gy[i] + v_px[j], half, t[k]) ? 1 : 0;
+      const cv::Vec4d h = field.gradient(gx[i], gy[i]);  // exact: the field's own Jacobian
+      grad.dudx[j] = h[0], grad.dudy[j] = h[1], grad.dvdx[j] = h[2], grad.dvdy[j] = h[3];
     }
   }
   out.Write("soil/grid_x_px", gx, gdims, "px", "DIC subset centres in the first frame, x");
@@ -381,6 +387,7 @@ void WriteSoilTruth(const ImpactScene& scene, const std::vector<double>& t, H5Wr
   out.Write("soil/velocity_y_mm_s", vel_y, fdims, "mm/s", "velocity of the subset centres, down");
   out.Write("soil/occluded", occluded, fdims, "1",
             "1 where the pounder covers part of the deformed subset");
+  synth_internal::WriteStrainTruth(grad, fdims, "analytic Jacobian of the soil field", out);
   out.SetAttribute("soil", "subset_size_px", s.subset_size);
   out.SetAttribute("soil", "step_px", s.step);
   out.SetAttribute("soil", "roi_x0_px", grid.roi[0]);

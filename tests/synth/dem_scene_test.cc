@@ -69,6 +69,43 @@ TEST(DemScene, UniformGrainMotionGivesKnownCellVelocityAndMomentum) {
   fs::remove_all(dir);
 }
 
+// The strain truth (DemTruth::dudx ...): the least-squares affine fit of each subset's grains
+// recovers the gradient of an affine grain motion (dem_test_record.h), in pixels (Y down).
+TEST(DemScene, GrainFitGivesTheGradientOfAnAffineGrainMotion) {
+  constexpr double kStretch = 2, kShear = 3;  // [1/s]
+  const std::string dir = MakeDemDir("affine", kStretch, kShear);
+  DemScene scene(ReadDemRecord(dir), TinySpec());
+  const DemTruth& t = scene.truth();
+  const std::size_t n = scene.base().dic_grid().centres_px.size();
+  const double sx = scene.base().sx_mm_per_px(), sy = scene.base().sy_mm_per_px();
+  const double t_r = scene.FrameTime(t.reference_frame);
+  std::size_t checked = 0;
+  for (int k = 0; k < scene.frame_count(); ++k) {
+    // DEM time minus the reference's: the frame times differ from it by the contact time only.
+    const double dt = scene.FrameTime(k) - t_r, tr = t_r + scene.contact_time_s();
+    const double dudx = kStretch * dt / (1 + kStretch * tr);
+    const double dudy = -kShear * dt / (1 + kStretch * tr) * sy / sx;
+    for (std::size_t c = 0; c < n; ++c) {
+      const std::size_t j = static_cast<std::size_t>(k) * n + c;
+      if (t.grains_per_subset[c] < 3) {
+        EXPECT_TRUE(std::isnan(t.dudx[j])) << "subset " << c << " with " << t.grains_per_subset[c];
+        continue;
+      }
+      // Positions in the dump have 1 um steps (2e-4 px): over the 11 rows of grains of a full
+      // subset that is below 1e-4 in the gradient; the edge subsets, with a row or two, are
+      // looser (not checked).
+      if (t.grains_per_subset[c] < 60) continue;
+      ++checked;
+      EXPECT_NEAR(t.dudx[j], dudx, 1e-4) << "frame " << k << " subset " << c;
+      EXPECT_NEAR(t.dudy[j], dudy, 1e-4) << "frame " << k << " subset " << c;
+      EXPECT_NEAR(t.dvdx[j], 0, 1e-4) << "frame " << k << " subset " << c;
+      EXPECT_NEAR(t.dvdy[j], 0, 1e-4) << "frame " << k << " subset " << c;
+    }
+  }
+  EXPECT_GT(checked, 100u);
+  fs::remove_all(dir);
+}
+
 TEST(DemScene, SensorReadsHeldFreeFallAndContactForce) {
   const std::string dir = MakeDemDir("sensor");
   DemScene scene(ReadDemRecord(dir), TinySpec());

@@ -48,7 +48,12 @@ inline double PounderZ(double t) {
   return zc + PounderV(kContact) * s - 0.5 * a * s * s;
 }
 
-inline std::string MakeDemDir(const std::string& name) {
+// The record in a temporary folder. With stretch_x_per_s = c or shear_per_s = a, the grains
+// also move sideways by t (c (x0 - kAxisX) + a (y0 - kSurfaceY)) (x0, y0 their lattice place): an
+// affine field whose gradient since a reference time t_r is du/dX = c (t - t_r) / (1 + c t_r),
+// du/dY = -a (t - t_r) / (1 + c t_r) (Y down), dv = 0.
+inline std::string MakeDemDir(const std::string& name, double stretch_x_per_s = 0,
+                              double shear_per_s = 0) {
   const fs::path dir =
       fs::temp_directory_path() / ("impactdic_dem_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(dir);
@@ -76,10 +81,13 @@ inline std::string MakeDemDir(const std::string& name) {
     for (int j = 0; j < 40; ++j)
       for (int i = 0; i < 120; ++i) {
         ++id;
-        const double x = kAxisX - 0.3 + (i + 0.5) * kSpacing;
-        const double y = kSurfaceY - 0.0025 - j * kSpacing - kVGrain * t;
+        const double x0 = kAxisX - 0.3 + (i + 0.5) * kSpacing;
+        const double y0 = kSurfaceY - 0.0025 - j * kSpacing;
+        const double vx = stretch_x_per_s * (x0 - kAxisX) + shear_per_s * (y0 - kSurfaceY);
+        const double x = x0 + vx * t, y = y0 - kVGrain * t;
         lines.push_back(std::to_string(id) + " " + std::to_string(x) + " " + std::to_string(y) +
-                        " 0 " + std::to_string(-kVGrain) + " 0.0024 " + std::to_string(kGrainMass));
+                        " " + std::to_string(vx) + " " + std::to_string(-kVGrain) + " 0.0024 " +
+                        std::to_string(kGrainMass));
       }
     dump << "ITEM: TIMESTEP\n"
          << step << "\nITEM: NUMBER OF ATOMS\n"

@@ -86,6 +86,12 @@ struct DemTruth {
   std::vector<double> u_px, v_px;                        // Mean displacement since the reference.
   std::vector<double> velocity_x_mm_s, velocity_y_mm_s;  // Mean velocity, y down.
   std::vector<int> grains_per_cell;
+  // Per frame x DIC subset: the gradient (du/dX, du/dY, dv/dX, dv/dY) [px/px] of the
+  // least-squares affine fit u = a + H (X - centre) of the displacements of the grains whose
+  // reference centre lies in the subset (|X - cx|, |Y - cy| <= subset_size / 2); NaN for fewer
+  // than 3 such grains or nearly collinear ones (docs/validation.md "Strain").
+  std::vector<double> dudx, dudy, dvdx, dvdy;
+  std::vector<int> grains_per_subset;
   // Default momentum grid (cols x rows cells).
   double grid_mass_kg = 0;         // Sum of the grid grains' masses.
   double grid_mass_bulk_kg = 0;    // rho_d * grid area * t_z with the bed's bulk density.
