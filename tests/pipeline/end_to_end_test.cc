@@ -22,6 +22,7 @@
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/results_layout.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/render/animation.h"
 #include "small_scene_spec.h"
@@ -192,6 +193,27 @@ TEST_P(EndToEnd, FiguresAndAnimationAreComplete) {
   }
   EXPECT_TRUE(fs::exists(p_->Out("summary.json")));
   EXPECT_TRUE(fs::exists(p_->Out("summary.csv")));
+  // The strain maps and animation (issue 25): the committed sample asks for the strain
+  // (strain.enabled), the generated scene does not, and gets neither them nor /strain.
+  const bool strain = GetParam() == Source::kCommittedSample;
+  EXPECT_EQ(results.Exists(results_layout::kStrainGroup), strain);
+  EXPECT_EQ(fs::exists(p_->Out("strain.csv")), strain);
+  for (const char* name : {results_layout::kStrainTePng, results_layout::kStrainEndPng}) {
+    EXPECT_EQ(fs::exists(p_->Out(name)), strain) << name;
+    if (!strain) continue;
+    const cv::Mat png = cv::imread(p_->Out(name), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(png.empty()) << name << " is not a readable PNG";
+    EXPECT_GE(png.cols, 640) << name;
+  }
+  std::string strain_video = p_->Out(results_layout::kStrainAnimationName);
+  if (!fs::exists(strain_video)) strain_video = p_->Out(results_layout::kStrainAnimationAviName);
+  EXPECT_EQ(fs::exists(strain_video), strain);
+  if (strain) {
+    EXPECT_EQ(CountVideoFrames(strain_video), analysed);
+    EXPECT_EQ(results.ReadStringAttribute(results_layout::kStrainGroup,
+                                          results_layout::kStrainGradientAttr),
+              "warp");
+  }
   // Nothing temporary is left behind.
   for (const auto& entry : fs::directory_iterator(p_->dir->File("out")))
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();

@@ -45,7 +45,8 @@ inline constexpr EnumNames<StrainGradient, 2> kStrainGradientNames{
 struct StrainOptions {
   bool enabled = false;  // Scene key strain.enabled: compute /strain at all.
   StrainGradient gradient = StrainGradient::kFit;
-  int window = 5;  // kFit: neighbourhood side in grid points, odd, >= 3.
+  // kFit: neighbourhood side in grid points, odd, >= 3. Default 3: docs/validation.md "Strain".
+  int window = 3;
   // The compacted zone: samples whose eps_v exceeds this (compression positive, dimensionless).
   double compaction_threshold = 0.01;
   // Shear bands: ridge samples of gamma_max whose value exceeds this (dimensionless).
