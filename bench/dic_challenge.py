@@ -34,6 +34,12 @@ separated: s3,s14,s12,sand,synth):
         reference. Per frame: valid % of DICe's points, RMS and max |difference| of u and v at the
         points valid in both. DICe's settings differ (params.xml: Keys 4th-order interpolation,
         shape function translation + normal strain); the difference is not our error.
+        Strain (correlate --warp-gradient): per frame, at DICe's points, the RMS and max
+        |difference| of exx, eyy against DICe's VSG_STRAIN_XX, _YY (Green-Lagrange, a plane fitted
+        to its displacements within the circle of diameter strain_window_size_in_pixels of
+        params.xml, 360 px): ours is the Green-Lagrange strain of the mean of our warp gradients
+        over our valid subsets at DICe's points in the same circle, and, raw, of the point's own
+        subset; DICe's RMS strain for scale.
   sand  Real sand test48 (real-sand/test48, IMG_30..40, 4096x3000 JPEG): --mode sequence against
         IMG_30, subset 25, step 50 (--sand-step; 50 keeps the run short and the subsets apart, so
         that neighbouring results have independent noise), --roi 0,1400,4096,3000: the sand below
@@ -121,6 +127,10 @@ def fmt(x, digits=4):
     return f"{x:.{digits}f}"
 
 
+def sci(x):
+    return "n/a" if x is None or math.isnan(x) else f"{x:.2e}"
+
+
 def pct(x):
     return "n/a" if x is None or math.isnan(x) else f"{x:.1f} %"
 
@@ -191,6 +201,9 @@ class Frame:
         self.status = np.array([r["status"] for r in rows])
         # Valid: status converged (the library's IsValidStatus) with finite values.
         self.valid = (self.status == "converged") & np.isfinite(self.u) & np.isfinite(self.v)
+        # The subset warp's gradient (correlate --warp-gradient); NaN without it.
+        self.grad = {c: np.array([float(r.get(c + "_warp") or "nan") for r in rows])
+                     for c in ("dudx", "dudy", "dvdx", "dvdy")}
 
     @property
     def valid_percent(self):
@@ -521,7 +534,8 @@ def sample12(ctx):
     try:
         frames, seconds = ctx.run.correlate(
             "s12", ["--reference", images[ref_index], "--deformed", *deformed],
-            ["--mode", "sequence", "--subset", str(subset), "--step", str(step), "--roi", roi],
+            ["--mode", "sequence", "--subset", str(subset), "--step", str(step), "--roi", roi,
+             "--warp-gradient"],
             len(deformed))
     except Unmeasurable as e:
         print("| n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a |\n")
@@ -557,8 +571,105 @@ def sample12(ctx):
               f"{fmt(r['rms_sigma_u'])}, {fmt(r['rms_sigma_v'])} |")
     print(f"\n{seconds:.1f} s\n")
     notes_block(notes)
+    window = xml_int(os.path.join(folder, "params.xml"), "strain_window_size_in_pixels")
+    strain_rows, strain_ok = s12_strain_table(frames_idx, frames, gold, window)
     return {"subset": subset, "step": step, "roi": roi, "rows": rows_out, "notes": notes,
-            "seconds": seconds}, ok
+            "seconds": seconds, "strain_window_px": window, "strain_rows": strain_rows}, ok and strain_ok
+
+
+def green_lagrange(dudx, dudy, dvdx, dvdy):
+    """E_xx, E_yy of H = [[dudx, dudy], [dvdx, dvdy]]: E = (H + H^T + H^T H) / 2."""
+    return dudx + (dudx * dudx + dvdx * dvdx) / 2, dvdy + (dudy * dudy + dvdy * dvdy) / 2
+
+
+def dice_gauge(gx, gy, u, v, valid, window):
+    """DICe's VSG strain of displacements u, v at the points gx, gy: per point, the least-squares
+    plane u = a + b dx + c dy of the valid points within window / 2 of it, E_xx, E_yy
+    (Green-Lagrange) of the planes' slopes; NaN below 3 valid points."""
+    exx, eyy = np.full(gx.size, NA), np.full(gx.size, NA)
+    for i in range(gx.size):
+        near = valid & ((gx - gx[i]) ** 2 + (gy - gy[i]) ** 2 <= (window / 2) ** 2 + 1e-5)
+        if near.sum() < 3:
+            continue
+        x = np.column_stack([np.ones(near.sum()), gx[near] - gx[i], gy[near] - gy[i]])
+        (_, dudx, dudy), (_, dvdx, dvdy) = (np.linalg.lstsq(x, w[near], rcond=None)[0] for w in (u, v))
+        exx[i], eyy[i] = green_lagrange(dudx, dudy, dvdx, dvdy)
+    return exx, eyy
+
+
+def s12_strain(fr, g, window):
+    """At DICe's points (MATCH == 0) where our subset is valid with a warp gradient: DICe's
+    VSG_STRAIN_XX, _YY, ours from the window mean of our warp gradients (our valid subsets at
+    DICe's points within the circle of diameter `window` about the point, DICe's neighbourhood)
+    and ours from the point's own subset; all Green-Lagrange."""
+    ours = {(int(round(x)), int(round(y))): i for i, (x, y) in enumerate(zip(fr.x, fr.y))}
+    gx, gy = g["COORDINATE_X"], g["COORDINATE_Y"]
+    at = np.array([ours.get((int(round(x)), int(round(y))), -1) for x, y in zip(gx, gy)], int)
+    grad = {c: np.where(at >= 0, a[np.maximum(at, 0)], NA) for c, a in fr.grad.items()}
+    member = (at >= 0) & fr.valid[np.maximum(at, 0)]
+    member &= np.all([np.isfinite(a) for a in grad.values()], axis=0)
+    points = member & (g.get("MATCH", np.zeros_like(gx)) == 0)
+    win = {c: np.full(gx.size, NA) for c in grad}
+    for i in np.flatnonzero(points):
+        near = member & ((gx - gx[i]) ** 2 + (gy - gy[i]) ** 2 <= (window / 2) ** 2 + 1e-5)
+        for c, a in grad.items():
+            win[c][i] = np.mean(a[near])
+    wxx, wyy = green_lagrange(*(win[c][points] for c in ("dudx", "dudy", "dvdx", "dvdy")))
+    rxx, ryy = green_lagrange(*(grad[c][points] for c in ("dudx", "dudy", "dvdx", "dvdy")))
+    dxx, dyy = g["VSG_STRAIN_XX"][points], g["VSG_STRAIN_YY"][points]
+    u = np.where(member, fr.u[np.maximum(at, 0)], NA)
+    v = np.where(member, fr.v[np.maximum(at, 0)], NA)
+    oxx, oyy = (e[points] for e in dice_gauge(gx, gy, u, v, member, window))
+    match = g.get("MATCH", np.zeros_like(gx)) == 0
+    cxx, cyy = (e[points] for e in dice_gauge(gx, gy, g["DISPLACEMENT_X"], g["DISPLACEMENT_Y"], match,
+                                              window))
+    return {"points": int(points.sum()),
+            "rms_diff_exx": rms(wxx - dxx), "rms_diff_eyy": rms(wyy - dyy),
+            "max_diff_exx": float(np.max(np.abs(wxx - dxx))) if dxx.size else NA,
+            "max_diff_eyy": float(np.max(np.abs(wyy - dyy))) if dyy.size else NA,
+            "raw_rms_diff_exx": rms(rxx - dxx), "raw_rms_diff_eyy": rms(ryy - dyy),
+            "gauge_rms_diff_exx": rms(oxx - dxx), "gauge_rms_diff_eyy": rms(oyy - dyy),
+            "check_max_diff": float(np.max(np.abs(np.r_[cxx - dxx, cyy - dyy]))) if dxx.size else NA,
+            "dice_rms_exx": rms(dxx), "dice_rms_eyy": rms(dyy),
+            "max_quadratic_xx": float(np.max(np.abs(wxx - win["dudx"][points]))) if dxx.size else NA,
+            "max_quadratic_yy": float(np.max(np.abs(wyy - win["dvdy"][points]))) if dyy.size else NA}
+
+
+def s12_strain_table(frames_idx, frames, gold, window):
+    print(f"### Sample 12 strain against DICe's VSG strain ({window} px window)\n")
+    print(f"DICe's VSG_STRAIN_XX, _YY are Green-Lagrange (its VSG post-processor: least-squares "
+          f"plane of its valid displacements within {window / 2:g} px of the point, E = (H + H^T + "
+          f"H^T H) / 2 of the plane's slopes; its GAMMA column is the match criterion, not a "
+          f"shear). Ours, Green-Lagrange too: window = the mean of our warp gradients "
+          f"(--warp-gradient) over our valid subsets at DICe's points within the same circle; raw "
+          f"= the point's own subset. DICe's gauge on our u, v: DICe's plane fit applied to our "
+          f"displacements at its points (the correlations' difference alone); check: the same fit "
+          f"on DICe's own displacements against its VSG strain (the gauge reproduced). Points: "
+          f"DICe's MATCH = 0 and ours valid. H^T H / 2 = the largest Green-Lagrange minus "
+          f"small-strain term of our window strain.\n")
+    print("| frame | points | RMS diff exx | RMS diff eyy | max diff exx | max diff eyy | raw: RMS "
+          "diff exx, eyy | DICe's gauge on our u, v: RMS diff exx, eyy | check: max diff | DICe "
+          "RMS exx, eyy | max H^T H / 2 xx, yy |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    rows, notes = [], []
+    for k, fr in zip(frames_idx, frames):
+        g = gold[k]
+        if "VSG_STRAIN_XX" not in g or "VSG_STRAIN_YY" not in g:
+            notes.append(f"frame {k}: DICe's solution has no VSG_STRAIN_XX/_YY columns")
+            continue
+        if not np.isfinite(fr.grad["dudx"]).any():
+            notes.append(f"frame {k}: no dudx_warp in our CSV (correlate --warp-gradient?)")
+            continue
+        r = {"frame": k, **s12_strain(fr, g, window)}
+        rows.append(r)
+        print(f"| {k} | {r['points']} | {sci(r['rms_diff_exx'])} | {sci(r['rms_diff_eyy'])} | "
+              f"{sci(r['max_diff_exx'])} | {sci(r['max_diff_eyy'])} | {sci(r['raw_rms_diff_exx'])}, "
+              f"{sci(r['raw_rms_diff_eyy'])} | {sci(r['gauge_rms_diff_exx'])}, "
+              f"{sci(r['gauge_rms_diff_eyy'])} | {sci(r['check_max_diff'])} | {sci(r['dice_rms_exx'])}, {sci(r['dice_rms_eyy'])} | "
+              f"{sci(r['max_quadratic_xx'])}, {sci(r['max_quadratic_yy'])} |")
+    print()
+    notes_block(notes)
+    return rows, not notes
 
 
 # ---------------------------------------------------------------- real sand
