@@ -18,8 +18,8 @@ void WriteStrainTruth(const GradientTruth& g, const Dims& fdims, const std::stri
   out.Write("soil/dvdy", g.dvdy, fdims, "1", "displacement gradient dv/dY");
   out.SetAttribute("soil", "strain_source", how);
   const std::size_t n = g.dudx.size();
-  std::vector<double> exx(n), eyy(n), exy(n), gxx(n), gyy(n), gxy(n), eps_v(n), eps_1(n),
-      eps_2(n), theta(n), gamma(n);
+  std::vector<double> exx(n), eyy(n), exy(n), gxx(n), gyy(n), gxy(n), eps_v(n), eps_1(n), eps_2(n),
+      theta(n), gamma(n);
   for (std::size_t i = 0; i < n; ++i) {
     const StrainAtPoint s = StrainFromGradient(g.dudx[i], g.dudy[i], g.dvdx[i], g.dvdy[i]);
     exx[i] = s.exx, eyy[i] = s.eyy, exy[i] = s.exy, gxx[i] = s.gxx, gyy[i] = s.gyy;

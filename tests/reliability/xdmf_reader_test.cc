@@ -81,7 +81,7 @@ TEST_F(XdmfReader, MeshioReadsTheSampleRunsFieldsAtEveryFrame) {
 // the same run's (its /dic is there).
 TEST(XdmfOutput, OutputsXdmfFalseWritesNeither) {
   TestDir dir;
-  const std::string scene = SampleScene(dir, {{"hdf5: true", "hdf5: true\n  xdmf: false"}});
+  const std::string scene = SampleScene(dir, {{"xdmf: true", "xdmf: false"}});
   const CliResult r = RunCli("-q run " + scene + " -o " + dir.File("out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_FALSE(fs::exists(dir.File("out/") + L::kXdmfFile));

@@ -125,7 +125,8 @@ struct SceneOutputs {
   bool hdf5 = true;
   // results.xdmf beside results.h5 (only with hdf5): the subset grid and its fields per frame for
   // ParaView and VisIt, as views of results.h5's datasets (/xdmf), no copied data.
-  bool xdmf = true;
+  // Off by default: the views cost memory while results.h5 is built (docs/python.md, "Cost").
+  bool xdmf = false;
   bool csv = true;
   bool figures = true;
   bool animation = true;

@@ -22,8 +22,8 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/strain/strain.h"
 #include "impactdic/preprocess/preprocess.h"
+#include "impactdic/strain/strain.h"
 #include "scene_inputs.h"
 #include "stage.h"
 
