@@ -15,6 +15,7 @@
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
+#include "scene_inputs.h"
 #include "stage.h"
 
 namespace impactdic::stages {
@@ -31,11 +32,7 @@ class KinematicsStage : public Stage {
 
   std::string Run(StageContext& c) const override {
     SceneRunData& d = c.data;
-    if (!(d.mm_per_px > 0)) {
-      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px", "no scale",
-                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
-          .WithFile(c.scene.path);
-    }
+    RequireScale(c.scene, d.mm_per_px);
     PanelMapping mapping;
     mapping.mm_per_px = d.mm_per_px;
     KinematicsOptions k;

@@ -23,6 +23,15 @@ std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& v
   return points;
 }
 
+double RequireScale(const Scene& scene, double mm_per_px) {
+  if (!(mm_per_px > 0)) {
+    throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px", "no scale",
+                "inputs.mm_per_px > 0 or a calibration with a plane scale")
+        .WithFile(scene.path);
+  }
+  return mm_per_px;
+}
+
 cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
   const SceneDic& d = scene.dic;
   cv::Mat mask;

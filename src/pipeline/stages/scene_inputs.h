@@ -18,6 +18,11 @@ std::vector<cv::Point> PolygonPoints(const std::vector<std::array<double, 2>>& v
 // non-zero where subsets may be centred. Error naming dic.mask / dic.roi_polygon.
 cv::Mat SceneMask(const Scene& scene, cv::Size frame_size);
 
+// The panel scale [mm/px] a stage that works in millimetres needs (the kinematics and strain
+// stages): mm_per_px itself, or Error naming inputs.mm_per_px and the scene file when it is not >
+// 0.
+double RequireScale(const Scene& scene, double mm_per_px);
+
 }  // namespace impactdic::stages
 
 #endif  // IMPACTDIC_SRC_PIPELINE_STAGES_SCENE_INPUTS_H_

@@ -24,6 +24,7 @@
 #include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/strain/strain.h"
 #include "impactdic/strain/strain_results.h"
+#include "scene_inputs.h"
 #include "stage.h"
 
 namespace impactdic::stages {
@@ -144,11 +145,7 @@ class StrainStage : public Stage {
 
   std::string Run(StageContext& c) const override {
     SceneRunData& d = c.data;
-    if (!(d.mm_per_px > 0)) {
-      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px", "no scale",
-                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
-          .WithFile(c.scene.path);
-    }
+    RequireScale(c.scene, d.mm_per_px);
     {
       // The rows of /dic borrowed (no copy), without the samples the kinematics leave out (their
       // warning is the kinematics stage's).
