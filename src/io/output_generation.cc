@@ -282,8 +282,14 @@ std::vector<std::string> RemoveStaleSystemTemporaries() {
 OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string& command)
     : path_(OutputLockPath(folder)) {
   for (int attempt = 0; attempt < 1000; ++attempt) {
+    // Registered, made and locked as one step for a signal's cleanup (which waits for the block):
+    // a signal between making the file and registering it left the lock file behind.
+    const DeferInterrupts making;
+    if (Interrupted()) break;
+    guard_.emplace(path_, making);
     const int fd = open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
     if (fd < 0) {
+      guard_.reset();
       throw Error(ErrorKind::kIo, "output folder",
                   "cannot make its lock file " + path_ + ": " + std::strerror(errno),
                   "a writable parent folder")
@@ -294,6 +300,7 @@ OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string&
       char text[256] = {};
       const ssize_t n = pread(fd, text, sizeof text - 1, 0);
       close(fd);
+      guard_.reset();  // Another writer's (or a file system without flock): never removed by us.
       if (error != EWOULDBLOCK) {  // A file system without flock (some network ones).
         LogWarning(
             "{}: cannot lock {} ({}); two commands writing this folder at once are not "
@@ -316,7 +323,6 @@ OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string&
     if (fstat(fd, &by_fd) == 0 && stat(path_.c_str(), &by_path) == 0 &&
         by_fd.st_ino == by_path.st_ino && by_fd.st_dev == by_path.st_dev) {
       fd_ = fd;
-      guard_.emplace(path_);
       const std::string text = fmt::format("process {} (`{}`, since {})\n",
                                            static_cast<long>(getpid()), command, UtcNow());
       if (ftruncate(fd, 0) == 0) {
@@ -325,7 +331,9 @@ OutputFolderLock::OutputFolderLock(const std::string& folder, const std::string&
       return;
     }
     close(fd);  // Its holder removed it meanwhile: lock the one that replaced it.
+    guard_.reset();
   }
+  WaitIfInterrupted();
   throw Error(ErrorKind::kIo, "output folder", "cannot lock " + path_,
               "a lock file that stays in place")
       .WithFile(folder);
