@@ -121,7 +121,8 @@ void IndexKeys(const std::vector<std::string>& lines, std::map<std::string, std:
 // Sets every key of the YAML block `edits` (nested maps of scalars, 2 spaces per level) in the
 // YAML text `yaml`: the key's line (or its commented-out line) is replaced; a key the file lacks
 // is added below its map (the map too when missing).
-std::string ApplyEdits(const std::string& yaml, const std::string& edits, const std::string& where) {
+std::string ApplyEdits(const std::string& yaml, const std::string& edits,
+                       const std::string& where) {
   std::vector<std::string> lines = Lines(yaml);
   std::vector<std::string> path;
   for (const std::string& line : Lines(edits)) {
@@ -183,22 +184,23 @@ TEST(GuideDocs, CommandsRunInOrderOnTheSample) {
   fs::create_directory_symlink(source / "calibration", work / "checkerboard");
   fs::create_directory_symlink(source / "sample_frames" / "frames", work / "recording");
   fs::create_symlink(source / "sample_frames" / "sensor.csv", work / "daq.csv");
-  const std::string path_with_cli =
-      "PATH=" + fs::path(IMPACTDIC_CLI_PATH).parent_path().string() + ":\"$PATH\"";
+  // Each block runs from the work folder with the built impactdic first on the PATH.
+  const std::string run_in_work =
+      "cd " + work.string() + " && PATH=" + fs::path(IMPACTDIC_CLI_PATH).parent_path().string() +
+      ":\"$PATH\" bash -e ";
 
   int commands = 0, edits = 0;
   for (const CodeBlock& b : blocks) {
     if (b.info == "bash") {
       const std::string script = dir.Write("block_" + std::to_string(b.line) + ".sh", b.text);
-      const CliResult r =
-          RunShell("cd " + work.string() + " && " + path_with_cli + " bash -e " + script);
+      const CliResult r = RunShell(run_in_work + script);
       ASSERT_EQ(r.exit_code, 0) << DescribeBlock(b) << ":\n" << b.text << "\n" << r.output;
       ++commands;
     } else if (!b.edit_file.empty()) {
       ASSERT_EQ(b.info, "yaml") << DescribeBlock(b) << ": an edit block must be ```yaml";
       const fs::path file = work / b.edit_file;
-      ASSERT_TRUE(fs::exists(file)) << DescribeBlock(b) << " edits " << file
-                                    << ", which no earlier command wrote";
+      ASSERT_TRUE(fs::exists(file))
+          << DescribeBlock(b) << " edits " << file << ", which no earlier command wrote";
       WriteBytes(file.string(), ApplyEdits(ReadBytes(file.string()), b.text, DescribeBlock(b)));
       ++edits;
     }
@@ -213,8 +215,8 @@ TEST(GuideDocs, CommandsRunInOrderOnTheSample) {
     named.insert((*it)[1]);
   EXPECT_GE(named.size(), 10u) << "the guide names fewer outputs than expected";
   for (const std::string& name : named)
-    EXPECT_TRUE(fs::exists(work / name)) << "docs/guide.md names " << name
-                                         << ", which the guide's commands did not write";
+    EXPECT_TRUE(fs::exists(work / name))
+        << "docs/guide.md names " << name << ", which the guide's commands did not write";
 }
 
 // Every --flag given to an impactdic command in a code block of the guide (run or shown) is an
@@ -238,7 +240,8 @@ TEST(GuideDocs, EveryFlagIsInItsCommandsHelp) {
       for (std::sregex_iterator it(rest.begin(), rest.end(), kFlag), end; it != end; ++it) {
         const std::string flag = (*it)[1];
         ++flags;
-        EXPECT_TRUE(std::regex_search(help[command], std::regex("(^|[ ,])" + flag + "(?=[\\s=,]|$)")))
+        EXPECT_TRUE(
+            std::regex_search(help[command], std::regex("(^|[ ,])" + flag + "(?=[\\s=,]|$)")))
             << DescribeBlock(b) << ": impactdic " << command << " has no option " << flag;
       }
     }
