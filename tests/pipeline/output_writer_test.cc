@@ -72,6 +72,23 @@ TEST(OutputWriter, ARegisteredWriterIsInvokedWithTheRunsData) {
   EXPECT_TRUE(fs::exists(fs::path(dir.File("out")) / "summary.json"));
 }
 
+// Reading and checking the frames alone (README: `frames` alone) with the default figures on: the
+// figures writer has nothing to draw and says so, instead of failing the finished run.
+TEST(OutputWriter, AFramesOnlyRunSkipsTheFiguresInsteadOfFailing) {
+  TestDir dir;
+  const std::string sample = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/";
+  const Scene scene =
+      ParseScene("inputs: {frames: " + sample + "frames}\nstages: [frames, outputs]\n" +
+                     "dic: {last_frame: 2}\noutputs: {folder: out, animation: false}\n",
+                 dir.File("scene.yaml"));
+  ASSERT_TRUE(scene.outputs.figures);  // The default.
+  const PipelineSummary s = RunScene(scene, PipelineOptions{});
+  const fs::path out = dir.File("out");
+  EXPECT_TRUE(fs::exists(out / "results.h5"));
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  for (const auto& o : s.outputs) EXPECT_NE(fs::path(o).extension(), ".png") << o;
+}
+
 TEST(OutputWriter, BuiltInWritersAreTheSevenFormats) {
   std::vector<std::string> names;
   for (const auto& w : BuiltInOutputWriters()) names.push_back(w->name());

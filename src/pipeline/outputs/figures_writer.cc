@@ -37,10 +37,15 @@ class FiguresWriter : public OutputWriter {
   void CheckBeforeRun(const Scene& scene) const override {
     if (scene.outputs.figures) DetectPngTerminal(ResolveGnuplotBinary(PlotOptions{}));
   }
-  std::string SkipReason(const Scene& scene, const SceneRunData&) const override {
-    return scene.outputs.figures || scene.outputs.animation
-               ? ""
-               : "outputs.figures and outputs.animation are false";
+  std::string SkipReason(const Scene& scene, const SceneRunData& d) const override {
+    if (!scene.outputs.figures && !scene.outputs.animation) {
+      return "outputs.figures and outputs.animation are false";
+    }
+    // A run of the first stages only (e.g. frames alone, to check them): nothing to draw.
+    if (!d.sensor && !d.kinematics && !d.momentum && !d.model) {
+      return "nothing to draw: none of the sensor, kinematics, momentum and model stages ran";
+    }
+    return "";
   }
   void Write(OutputContext& c) const override {
     const Scene& scene = c.scene;
