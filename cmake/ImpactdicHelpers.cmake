@@ -60,6 +60,27 @@ function(impactdic_registered_sources var list_file)
   set(${var} ${sources} PARENT_SCOPE)
 endfunction()
 
+# The headers nearly every test includes (GoogleTest, OpenCV's core, the standard library), compiled
+# once per build and reused by every test program: they were about half of each test file's compile
+# time. A test whose flags differ from the precompiling target's falls back to reading the headers.
+function(impactdic_test_precompiled_headers target)
+  if(NOT TARGET impactdic_test_pch)
+    file(WRITE ${CMAKE_BINARY_DIR}/impactdic_test_pch.cc "// Only compiles the tests' headers.\n")
+    add_library(impactdic_test_pch OBJECT ${CMAKE_BINARY_DIR}/impactdic_test_pch.cc)
+    target_link_libraries(impactdic_test_pch PRIVATE GTest::gtest impactdic_deps::opencv_codecs
+                                                     impactdic::core)
+    target_compile_definitions(impactdic_test_pch PRIVATE
+        IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+        IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
+    impactdic_target_defaults(impactdic_test_pch)
+    target_precompile_headers(impactdic_test_pch PRIVATE
+        <gtest/gtest.h> <opencv2/core.hpp> <opencv2/imgproc.hpp> <fmt/format.h>
+        <algorithm> <cmath> <cstdint> <filesystem> <fstream> <map> <memory> <sstream> <string>
+        <vector>)
+  endif()
+  target_precompile_headers(${target} REUSE_FROM impactdic_test_pch)
+endfunction()
+
 # impactdic_add_test(NAME dic_bspline_test SOURCES bspline_test.cc DEPS impactdic::dic [LABELS slow]
 #                    [WHOLE])
 # Each test case is its own CTest test (run in parallel processes), unless WHOLE: then the program
@@ -68,6 +89,7 @@ endfunction()
 function(impactdic_add_test)
   cmake_parse_arguments(ARG "WHOLE" "NAME" "SOURCES;DEPS;LABELS" ${ARGN})
   add_executable(${ARG_NAME} ${ARG_SOURCES})
+  impactdic_test_precompiled_headers(${ARG_NAME})
   # Tests may read and write images with OpenCV directly (the library itself does not link it).
   target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} impactdic_deps::opencv_codecs GTest::gtest
                                             GTest::gtest_main impactdic_test_worker_threads
