@@ -37,7 +37,7 @@ bool Equal(double a, double b) {
 // Every dataset below `group` (recursively), as paths.
 void Datasets(const H5Reader& in, const std::string& group, std::vector<std::string>* out) {
   for (const std::string& name : in.List(group)) {
-    const std::string path = group + "/" + name;
+    const std::string path = std::string(group).append("/").append(name);
     bool dataset = true;
     try {
       in.Dimensions(path);
@@ -60,10 +60,11 @@ void Compare(const YAML::Node& a, const YAML::Node& b, const std::string& path,
   } else if (a.IsMap()) {
     for (const auto& entry : b) {
       const std::string key = entry.first.as<std::string>();
+      const std::string at = std::string(path).append(".").append(key);
       if (!a[key]) {
-        differences->push_back(path + "." + key + ": missing");
+        differences->push_back(at + ": missing");
       } else {
-        Compare(a[key], entry.second, path + "." + key, differences);
+        Compare(a[key], entry.second, at, differences);
       }
     }
     if (a.size() != b.size()) differences->push_back(path + ": other keys");
