@@ -1,6 +1,7 @@
-// impactdic analyze: the accelerometer record alone (--sensor CSV), or a scene's sensor,
-// kinematics and momentum stages from its correlation results (SCENE.yaml; exit 1 when t_e is not
-// measurable, as `run`, unless --allow-partial).
+// impactdic analyze: the accelerometer record alone (--sensor CSV), or a scene's analysis from its
+// correlation results (SCENE.yaml: the stages of `run` after the correlation, through the one
+// stage graph, pipeline/scene_analysis.h; exit 1 when a stage produced nothing usable, as `run`,
+// unless --allow-partial).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
@@ -15,10 +16,10 @@
 #include <system_error>
 
 #include "commands.h"
-#include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/range.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
@@ -53,11 +54,6 @@ struct AnalyzeArgs {
   std::string results;
   bool allow_partial = false;
 };
-
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() &&
-         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 // A folder of outputs written as one generation (`run`'s, a campaign test's results/: its
 // summary.json, figures and results.h5 describe one analysis) is never changed file by file:
@@ -192,17 +188,6 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
     throw Error(ErrorKind::kInvalidValue, "--results", a.results, "an HDF5 file (.h5, .hdf5)");
   }
   const Scene scene = LoadScene(a.scene);
-  double mm_per_px = scene.inputs.mm_per_px;
-  if (!(mm_per_px > 0) && !scene.inputs.calibration.empty()) {
-    const CameraCalibration cal = LoadCalibration(scene.inputs.calibration);
-    if (!cal.plane) {
-      throw Error(ErrorKind::kInvalidValue, "inputs.mm_per_px",
-                  "0 and the calibration has no plane scale",
-                  "inputs.mm_per_px > 0 or a calibration with a plane scale")
-          .WithFile(scene.path);
-    }
-    mm_per_px = cal.plane->mm_per_px;
-  }
   const std::string results =
       a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
                         : a.results;
@@ -219,25 +204,29 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   }
   SceneAnalysisRun run;
   try {
-    run = AnalyzeSceneResults(scene, results, mm_per_px, a.allow_partial, a.output);
+    run = AnalyzeSceneResults(scene, results, a.allow_partial, a.output);
   } catch (const PartialResultsError& e) {
     RethrowWithPartialFlag(e, "analyze");
   }
-  const MomentumSummary& m = run.analysis.momentum.summary;
-  if (!m.IsUsable())
-    LogWarning("analyze: partial results (--allow-partial): t_e is not measurable: {}",
-               m.t_end_problem);
+  if (!run.summary.IsUsable())
+    LogWarning("analyze: partial results (--allow-partial): {}", run.summary.FailureText());
+  // The stages analyze requires ran (AnalyzeSceneResults checks that the scene lists them).
+  const SensorSummary& s = run.data.sensor->summary;
+  const MomentumSummary& m = run.data.momentum->summary;
   if (a.format == "json") {
     JsonObject j = m.ToJson();
-    j.Add("impact_time_s", run.sensor.summary.impact_time_s)
-        .Add("impact_velocity_m_s", run.sensor.summary.impact_velocity_m_s)
-        .Add("final_penetration_m", run.sensor.summary.final_penetration_m)
-        .Add("results", a.output.empty() ? results : a.output)
-        .Add("usable", m.IsUsable());
+    j.Add("impact_time_s", s.impact_time_s)
+        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
+        .Add("final_penetration_m", s.final_penetration_m)
+        .Add("results", run.results_path)
+        .Add("usable", run.summary.IsUsable())
+        // The analysis' key figures as `run`'s summary.json has them (measured and modelled).
+        .Add("summary", run.summary.ToJson());
     std::cout << j.Dump() << "\n";
   } else {
-    std::cout << "scene " << scene.path << " -> " << (a.output.empty() ? results : a.output) << "\n"
-              << run.sensor.summary.FullReport() << m.FullReport();
+    std::cout << "scene " << scene.path << " -> " << run.results_path << "\n"
+              << s.FullReport() << m.FullReport();
+    if (run.data.model) std::cout << "model: " << run.data.model->summary.BriefReport() << "\n";
   }
 }
 
@@ -251,7 +240,8 @@ void RegisterAnalyzeCommand(CLI::App& app) {
       "from its correlation results (SCENE.yaml)");
   cmd->add_option("SCENE", args->scene,
                   "scene YAML: reads the correlation results and the sensor CSV, writes "
-                  "/sensor, /kinematics, /momentum into the results HDF5");
+                  "/sensor, /kinematics, /momentum (and /model, /strain when the scene has "
+                  "them) into the results HDF5");
   cmd->add_option("--sensor", args->sensor, "DAQ CSV (time_s, accel_g [, exposure, force*])");
   cmd->add_flag("--from-release", args->from_release,
                 "integrate from the release (v = 0; the record starts at rest, or give "

@@ -31,14 +31,9 @@ namespace {
 // Throws when a stage produced nothing usable, unless the options allow a partial run.
 void ThrowIfFailed(const PipelineSummary& summary, const PipelineOptions& options) {
   if (summary.failures.empty() || options.allow_partial) return;
-  std::string stages;
-  for (const StageFailure& f : summary.failures)
-    stages += fmt::format("\n  {}: {}", f.stage, f.reason);
   throw PartialResultsError(
-      fmt::format("scene {}: {} stage(s) produced nothing usable:{}\nNo output was written "
-                  "(outputs of an earlier run in {} are kept)",
-                  summary.scene_name, summary.failures.size(), stages,
-                  OutputPathForMessages(summary.output_folder)),
+      fmt::format("{}\nNo output was written (outputs of an earlier run in {} are kept)",
+                  stages::FailedStagesText(summary), OutputPathForMessages(summary.output_folder)),
       "writes them, with the figures that could not be measured as null and the reasons in "
       "summary.json");
 }
@@ -84,13 +79,7 @@ PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
   SceneRunData data;
   data.mm_per_px = scene.inputs.mm_per_px;
   stages::StageContext context{scene, options, data, summary};
-  for (const auto& make :
-       {stages::MakeCalibrateStage, stages::MakeSensorStage, stages::MakeFramesStage,
-        stages::MakeCorrelateStage, stages::MakeKinematicsStage, stages::MakeMomentumStage})
-    stages::RunStage(*make(), context);
-  stages::AddMeasuredPeakDeceleration(context);
-  stages::RunStage(*stages::MakeModelStage(), context);
-  stages::RunStage(*stages::MakeStrainStage(), context);
+  stages::RunAnalysisStages(context, /*results_file=*/"");
   ThrowIfFailed(summary, options);
   summary.seconds = total.ElapsedSeconds();  // timing.json: up to the outputs.
   stages::RunStage(*stages::MakeOutputsStage(writers, generation ? &*generation : nullptr),

@@ -2,29 +2,43 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
-#include <cstddef>
-#include <optional>
-#include <vector>
+#include <string>
 
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
 #include "impactdic/io/hdf5_store.h"
-#include "impactdic/kinematics/kinematics.h"
-#include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/run_data.h"
+#include "outputs/writers.h"
+#include "stages/scene_inputs.h"
+#include "stages/stage.h"
 
 namespace impactdic {
+namespace {
 
-std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series) {
-  if (scene.momentum.max_sigma_px) {
-    return ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px, "momentum.max_sigma_px",
-                                              series);
+// What the analysis needs of the scene, checked before any work: the sensor record, the stages
+// it is about (sensor, kinematics, momentum) listed, and a scale (inputs.mm_per_px, else the
+// calibration's plane scale, which the calibrate stage reads).
+void CheckSceneForAnalysis(const Scene& scene) {
+  if (scene.inputs.sensor.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "inputs.sensor", "empty",
+                "the DAQ CSV (the momentum analysis needs the pounder velocity)")
+        .WithFile(scene.path);
   }
-  if (!std::isfinite(scene.momentum.max_sigma_ratio) || series->sigma_u_px.empty()) return "";
-  return ExcludeSamplesAboveMedianSigmaWithWarning(scene.momentum.max_sigma_ratio,
-                                                   "momentum.max_sigma_ratio", series);
+  for (const char* stage : {"sensor", "kinematics", "momentum"}) {
+    if (scene.HasStage(stage)) continue;
+    std::string listed;
+    for (const std::string& s : scene.stages) listed += (listed.empty() ? "" : ", ") + s;
+    throw Error(ErrorKind::kInvalidValue, "stages", "[" + listed + "]",
+                "sensor, kinematics and momentum listed (`analyze` runs them on the correlation "
+                "results)")
+        .WithFile(scene.path);
+  }
+  if (scene.inputs.calibration.empty() || !scene.HasStage("calibrate"))
+    stages::RequireScale(scene, scene.inputs.mm_per_px);
 }
+
+}  // namespace
 
 void CheckResultsAreOfScene(const Scene& scene, const std::string& results_path,
                             const std::string& option) {
@@ -40,61 +54,30 @@ void CheckResultsAreOfScene(const Scene& scene, const std::string& results_path,
 }
 
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
-                                     double mm_per_px, bool allow_partial,
-                                     const std::string& output_path) {
-  CheckValue(std::isfinite(mm_per_px) && mm_per_px > 0, "inputs.mm_per_px",
-             fmt::format("{}", mm_per_px), "> 0 mm/px (or a calibration with a plane scale)");
-  if (scene.inputs.sensor.empty()) {
-    throw Error(ErrorKind::kInvalidValue, "inputs.sensor", "empty",
-                "the DAQ CSV (the momentum analysis needs the pounder velocity)")
-        .WithFile(scene.path);
-  }
+                                     bool allow_partial, const std::string& output_path) {
+  CheckSceneForAnalysis(scene);
   CheckResultsAreOfScene(scene, results_path, "results file");
-  const SensorOptions sopt = MakeSensorOptions(scene);
-  const MomentumOptions mopt = MakeMomentumOptions(scene, mm_per_px);
-  long first = -1;
-  CorrelationSeries dic = ReadCorrelationSeries(results_path, &first);
-  try {
-    const std::string warning = ExcludeUncertainSamplesOfScene(scene, &dic);
-    if (!warning.empty()) LogWarning("{}", warning);
-  } catch (Error& e) {
-    e.WithFile(results_path);
-    throw;
-  }
-  if (first < 0) first = scene.dic.first_frame;
+  WallTimer total;
   SceneAnalysisRun run;
-  run.results_path = results_path;
-  run.sensor = AnalyzeSensorCsv(scene.inputs.sensor, sopt);
-  RequireExposureChannel(run.sensor, sopt.columns.exposure);
-  PanelMapping mapping;
-  mapping.mm_per_px = mm_per_px;
-  try {
-    run.analysis = AnalyzeCorrelation(dic, mapping, SceneFrameClock(scene), run.sensor, mopt,
-                                      static_cast<std::size_t>(first));
-  } catch (Error& e) {
-    // Name the file to fix: the DAQ record when its exposure channel times the frames, else the
-    // scene's settings (fps, frame_time_offset_s, the grid).
-    if (e.file().empty()) {
-      const bool timing = e.where() == "exposure channel" || e.where() == "frame times";
-      e.WithFile(timing && !run.sensor.exposure.empty() ? scene.inputs.sensor : scene.path);
-    }
-    throw;
+  run.summary.scene_name = scene.name;
+  run.data.mm_per_px = scene.inputs.mm_per_px;
+  PipelineOptions options;
+  options.allow_partial = allow_partial;
+  stages::StageContext context{scene, options, run.data, run.summary};
+  stages::RunAnalysisStages(context, results_path);
+  if (!run.summary.failures.empty() && !allow_partial) {
+    throw PartialResultsError(fmt::format("{}\nNothing was written ({} is as it was)",
+                                          stages::FailedStagesText(run.summary), results_path),
+                              "writes it, with the figures that could not be measured as NaN");
   }
-  const MomentumSummary& m = run.analysis.momentum.summary;
-  if (!m.IsUsable() && !allow_partial) {
-    throw PartialResultsError(
-        fmt::format("scene {}: the momentum stage produced nothing usable: t_e is not "
-                    "measurable: {}\nNothing was written ({} is as it was)",
-                    scene.name, m.t_end_problem, results_path),
-        "writes it, with the figures that could not be measured as NaN");
-  }
-  H5Writer out(output_path.empty() ? results_path : output_path, H5Writer::Mode::kUpdate,
-               results_path);
+  run.results_path = output_path.empty() ? results_path : output_path;
+  H5Writer out(run.results_path, H5Writer::Mode::kUpdate, results_path);
   out.Remove("/summary");
   out.SetAttribute("/", "scene_name", scene.name);
-  WriteAnalysis(out, run.analysis, run.sensor);
-  out.SetAttribute("kinematics", "mm_per_px", mm_per_px);
+  outputs::WriteAnalysisResults(out, run.data);
   out.Commit();
+  run.summary.outputs.push_back(run.results_path);
+  run.summary.seconds = total.ElapsedSeconds();
   return run;
 }
 

@@ -1,7 +1,9 @@
-// The data that flows between the stages of a scene's run (pipeline/pipeline.h, the stage graph
-// in docs/architecture.md). Each stage reads what the stages before it left here and adds its
-// own outputs; an empty optional means the stage did not run (its reason is in
-// PipelineSummary::stages). The output writers (pipeline/output_writer.h) read it all.
+// The data that flows between the stages of a scene's run or analysis (pipeline/pipeline.h,
+// pipeline/scene_analysis.h; the stage graph in docs/architecture.md). Each stage reads what the
+// stages before it left here and adds its own outputs; an empty optional means the stage did not
+// run (its reason is in PipelineSummary::stages). The output writers (pipeline/output_writer.h)
+// read it all. The summary (PipelineSummary) is only written by the stages, never read: what a
+// stage needs from another is here.
 #ifndef IMPACTDIC_PIPELINE_RUN_DATA_H_
 #define IMPACTDIC_PIPELINE_RUN_DATA_H_
 
@@ -11,6 +13,7 @@
 #include <vector>
 
 #include "impactdic/calib/calibration.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/kinematics/kinematics.h"
@@ -30,6 +33,12 @@ struct SceneRunData {
 
   // sensor: the accelerometer record analysed (impact time and velocity, pounder motion).
   std::optional<SensorResult> sensor;
+  // sensor, then momentum: the measured peak deceleration of the peak stage [g] (momentum
+  // MeasuredPeakDeceleration) and that stage's length after the impact [s]: the sensor stage sets
+  // them over T + 4/b of the scene's model, the momentum stage over t_e when it measured t_e. NaN
+  // without a sensor record.
+  double peak_stage_s = kNaN;
+  double peak_deceleration_measured_g = kNaN;
 
   // frames: the analysed frames first_frame..last_frame of the source's source_frames, read on
   // demand and preprocessed (pipeline/frame_stream.h: one frame in memory at a time; null = the
@@ -43,8 +52,11 @@ struct SceneRunData {
   std::string preprocess_note;  // What the preprocessing did (one line).
 
   // correlate: the correlation's rows (io/dic_results.h; row 0 = frame first_frame) and summary.
+  // load_dic (`analyze SCENE`, instead of frames and correlate): the rows read from dic_file, the
+  // frame range and times as the frames stage sets them, no frames and an empty dic_summary.
   std::optional<DicResultsTable> dic;
   DicSummary dic_summary;
+  std::string dic_file;  // The results file /dic was read from ("" = correlated in this run).
 
   // kinematics: subset motion on the panel from the analysed series (momentum.max_sigma_px
   // applied); analysed_frame_times_s = frame_times_s[first_frame..last_frame] (may be empty).
@@ -54,7 +66,8 @@ struct SceneRunData {
   // momentum: the momentum balance (needs kinematics and the sensor record).
   std::optional<MomentumResult> momentum;
 
-  // model: the impact model's solve and its parameters.
+  // model: the impact model's solve and its parameters (impact velocity: the sensor's measured
+  // one, else the scene's v0).
   std::optional<ImpactRun> model;
   ImpactModelParameters model_parameters;
 

@@ -144,9 +144,7 @@ class ResultsFileWriter : public OutputWriter {
     }
     if (d.frames && c.scene.outputs.frames != FrameStorage::kNone)
       WriteFrames(out, *d.frames, c.scene.outputs.frames);
-    WriteMotion(out, d);
-    if (d.model) WriteModel(out, d);
-    if (d.strain) WriteStrainResults(out, *d.strain);  // Nothing without the strain stage.
+    WriteAnalysisResults(out, d);
     if (c.scene.outputs.hdf5 && c.scene.outputs.xdmf) WriteXdmfViews(out);
     WriteSummaryGroup(out, c.summary);
     if (c.scene.outputs.hdf5) {
@@ -175,6 +173,15 @@ std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d) {
     t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
   }
   return t_ms;
+}
+
+void WriteAnalysisResults(H5Writer& out, const SceneRunData& d) {
+  WriteMotion(out, d);
+  if (d.model) {
+    out.Remove("/model");  // An earlier analysis' (analyze SCENE).
+    WriteModel(out, d);
+  }
+  if (d.strain) WriteStrainResults(out, *d.strain);  // Nothing without the strain stage.
 }
 
 std::shared_ptr<const OutputWriter> MakeResultsFileWriter() {

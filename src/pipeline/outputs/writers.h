@@ -25,6 +25,11 @@ void WriteXdmfViews(H5Writer& out);
 // without a sensor record from the first analysed frame, by the camera's time stamps or k / fps.
 std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d);
 
+// The groups of the analysis stages that ran (results_file_writer.cc): /sensor, /kinematics (with
+// the attribute mm_per_px), /momentum, /model, /strain; each replaces its group. The one writer
+// of results.h5 and of `impactdic analyze SCENE` (pipeline/scene_analysis.h).
+void WriteAnalysisResults(H5Writer& out, const SceneRunData& d);
+
 }  // namespace impactdic::outputs
 
 #endif  // IMPACTDIC_SRC_PIPELINE_OUTPUTS_WRITERS_H_

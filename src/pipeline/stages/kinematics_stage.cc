@@ -8,13 +8,13 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/pipeline/scene_analysis.h"
 #include "scene_inputs.h"
 #include "stage.h"
 
@@ -42,8 +42,16 @@ class KinematicsStage : public Stage {
       // uncertain samples (ExcludeUncertainSamplesOfScene marks them invalid and says how many;
       // /dic keeps them).
       BorrowedCorrelationSeries series(&*d.dic);
-      const std::string warning = ExcludeUncertainSamplesOfScene(c.scene, &series.series());
-      if (!warning.empty()) c.summary.warnings.push_back(warning);
+      try {
+        const std::string warning = ExcludeUncertainSamplesOfScene(c.scene, &series.series());
+        if (!warning.empty()) {
+          LogWarning("{}", warning);
+          c.summary.warnings.push_back(warning);
+        }
+      } catch (Error& e) {  // e.g. no sigmas in a results file: name it.
+        if (e.file().empty() && !d.dic_file.empty()) e.WithFile(d.dic_file);
+        throw;
+      }
       d.kinematics = ComputeKinematics(series.series(), mapping, k);
     }
     // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when

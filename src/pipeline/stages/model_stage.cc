@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/numeric.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
@@ -29,8 +30,8 @@ class ModelStage : public Stage {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     SceneFigures& fig = c.summary.figures;
-    const double v0 =
-        std::isfinite(fig.impact_velocity_m_s) ? fig.impact_velocity_m_s : scene.ImpactVelocity();
+    const double measured_v0 = d.sensor ? d.sensor->summary.impact_velocity_m_s : kNaN;
+    const double v0 = std::isfinite(measured_v0) ? measured_v0 : scene.ImpactVelocity();
     d.model_parameters = MakeModelParameters(scene, v0);
     d.model = SimulateImpact(d.model_parameters, scene.solver);
     const ImpactSummary& s = d.model->summary;

@@ -1,5 +1,6 @@
 // momentum: the momentum balance of pounder and soil (needs the kinematics and the sensor record);
-// t_e not measurable is a failure. Also the measured peak deceleration of the peak stage.
+// t_e not measurable is a failure. Also the measured peak deceleration of the peak stage
+// (impact .. t_e), in place of the sensor stage's over the scene model's T + 4/b.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/fit.h"
 #include "impactdic/momentum/momentum.h"
@@ -34,7 +36,12 @@ class MomentumStage : public Stage {
   std::string Run(StageContext& c) const override {
     SceneRunData& d = c.data;
     const MomentumOptions options = MakeMomentumOptions(c.scene, d.mm_per_px);
-    d.momentum = AnalyzeMomentum(*d.kinematics, d.analysed_frame_times_s, *d.sensor, options);
+    try {
+      d.momentum = AnalyzeMomentum(*d.kinematics, d.analysed_frame_times_s, *d.sensor, options);
+    } catch (Error& e) {
+      NameFileToFix(c, e);
+      throw;
+    }
     const MomentumSummary& ms = d.momentum->summary;
     for (const auto& w : ms.warnings) c.summary.warnings.push_back("momentum: " + w);
     SceneFigures& fig = c.summary.figures;
@@ -51,30 +58,31 @@ class MomentumStage : public Stage {
     }
     if (!ms.IsUsable())
       c.summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
+    MeasurePeakDeceleration(c);
     return ms.BriefReport();
+  }
+
+ private:
+  // The peak stage ends at t_e; without it the sensor stage's T + 4/b of the scene's model stays
+  // (said in a warning).
+  static void MeasurePeakDeceleration(StageContext& c) {
+    SceneRunData& d = c.data;
+    const double t_e = d.momentum->summary.t_end_peak_s;
+    if (std::isfinite(t_e)) {
+      d.peak_stage_s = t_e;
+      d.peak_deceleration_measured_g = MeasuredPeakDeceleration(*d.sensor, t_e);
+      c.summary.figures.peak_deceleration_measured_g = d.peak_deceleration_measured_g;
+      return;
+    }
+    c.summary.warnings.push_back(fmt::format(
+        "peak deceleration (measured): t_e was not measured, so the peak stage is taken as the "
+        "first T + 4/b = {:.3f} ms after the impact (the scene's model)",
+        1e3 * d.peak_stage_s));
   }
 };
 
 }  // namespace
 
 std::unique_ptr<Stage> MakeMomentumStage() { return std::make_unique<MomentumStage>(); }
-
-void AddMeasuredPeakDeceleration(StageContext& c) {
-  if (!c.data.sensor) return;
-  // The peak stage ends at t_e; without it, T + 4/b of the scene's model (with a warning when the
-  // momentum stage ran but could not measure t_e).
-  double window_s = c.summary.figures.t_end_peak_s;
-  if (!std::isfinite(window_s)) {
-    window_s = c.scene.model.sigmoid_delay_T_s + 4 / c.scene.model.sigmoid_rate_b_per_s;
-    if (c.data.momentum) {
-      c.summary.warnings.push_back(fmt::format(
-          "peak deceleration (measured): t_e was not measured, so the peak stage is taken as the "
-          "first T + 4/b = {:.3f} ms after the impact (the scene's model)",
-          1e3 * window_s));
-    }
-  }
-  c.summary.figures.peak_deceleration_measured_g =
-      MeasuredPeakDeceleration(*c.data.sensor, window_s);
-}
 
 }  // namespace impactdic::stages

@@ -32,6 +32,16 @@ double RequireScale(const Scene& scene, double mm_per_px) {
   return mm_per_px;
 }
 
+std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series) {
+  if (scene.momentum.max_sigma_px) {
+    return ExcludeUncertainSamplesWithWarning(*scene.momentum.max_sigma_px, "momentum.max_sigma_px",
+                                              series);
+  }
+  if (!std::isfinite(scene.momentum.max_sigma_ratio) || series->sigma_u_px.empty()) return "";
+  return ExcludeSamplesAboveMedianSigmaWithWarning(scene.momentum.max_sigma_ratio,
+                                                   "momentum.max_sigma_ratio", series);
+}
+
 cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
   const SceneDic& d = scene.dic;
   cv::Mat mask;

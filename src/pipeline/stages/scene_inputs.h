@@ -5,8 +5,10 @@
 
 #include <array>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
+#include "impactdic/kinematics/kinematics.h"
 #include "impactdic/pipeline/scene.h"
 
 namespace impactdic::stages {
@@ -22,6 +24,12 @@ cv::Mat SceneMask(const Scene& scene, cv::Size frame_size);
 // stages): mm_per_px itself, or Error naming inputs.mm_per_px and the scene file when it is not >
 // 0.
 double RequireScale(const Scene& scene, double mm_per_px);
+
+// Leaves the uncertain samples of the scene's correlation series out of its kinematics and
+// momentum (momentum.max_sigma_px if set, else momentum.max_sigma_ratio) and returns the warning
+// saying how many (empty when neither applies, or the ratio rule left nothing out). The one rule
+// of the kinematics and strain stages.
+std::string ExcludeUncertainSamplesOfScene(const Scene& scene, CorrelationSeries* series);
 
 }  // namespace impactdic::stages
 

@@ -1,9 +1,12 @@
-// sensor: the accelerometer record (impact time and velocity, pounder motion, crater depth).
+// sensor: the accelerometer record (impact time and velocity, pounder motion, crater depth), and
+// the measured peak deceleration over the peak stage as the scene's model has it (T + 4/b; the
+// momentum stage measures it over t_e).
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
@@ -28,6 +31,9 @@ class SensorStage : public Stage {
     for (const auto& w : sensor.summary.warnings) c.summary.warnings.push_back("sensor: " + w);
     c.summary.figures.impact_velocity_m_s = sensor.summary.impact_velocity_m_s;
     c.summary.figures.crater_depth_measured_m = sensor.summary.final_penetration_m;
+    c.data.peak_stage_s = c.scene.model.sigmoid_delay_T_s + 4 / c.scene.model.sigmoid_rate_b_per_s;
+    c.data.peak_deceleration_measured_g = MeasuredPeakDeceleration(sensor, c.data.peak_stage_s);
+    c.summary.figures.peak_deceleration_measured_g = c.data.peak_deceleration_measured_g;
     return sensor.summary.BriefReport();
   }
 };

@@ -1,7 +1,12 @@
 #include "stage.h"
 
+#include <fmt/format.h>
+
+#include <memory>
+#include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
 
@@ -19,6 +24,35 @@ void RunStage(const Stage& stage, StageContext& context) {
   const std::string note = stage.Run(context);
   reports.push_back({stage.name(), true, note, timer.ElapsedSeconds()});
   LogInfo("[{}] {} ({:.2f} s)", stage.name(), note, timer.ElapsedSeconds());
+}
+
+void RunAnalysisStages(StageContext& context, const std::string& results_file) {
+  RunStage(*MakeCalibrateStage(), context);
+  RunStage(*MakeSensorStage(), context);
+  if (results_file.empty()) {
+    RunStage(*MakeFramesStage(), context);
+    RunStage(*MakeCorrelateStage(), context);
+  } else {
+    RunStage(*MakeLoadDicStage(results_file), context);
+  }
+  for (const auto& make : {MakeKinematicsStage, MakeMomentumStage, MakeModelStage, MakeStrainStage})
+    RunStage(*make(), context);
+}
+
+std::string FailedStagesText(const PipelineSummary& summary) {
+  std::string text =
+      fmt::format("scene {}: {} stage(s) produced nothing usable:", summary.scene_name,
+                  summary.failures.size());
+  for (const StageFailure& f : summary.failures)
+    text += fmt::format("\n  {}: {}", f.stage, f.reason);
+  return text;
+}
+
+void NameFileToFix(const StageContext& context, Error& error) {
+  if (!error.file().empty()) return;
+  const bool timing = error.where() == "exposure channel" || error.where() == "frame times";
+  const bool exposure = context.data.sensor && !context.data.sensor->exposure.empty();
+  error.WithFile(timing && exposure ? context.scene.inputs.sensor : context.scene.path);
 }
 
 std::string NotListed(const Scene& scene, const char* name) {

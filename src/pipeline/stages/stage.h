@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
@@ -43,7 +44,12 @@ std::unique_ptr<Stage> MakeCalibrateStage();
 std::unique_ptr<Stage> MakeSensorStage();
 std::unique_ptr<Stage> MakeFramesStage();
 std::unique_ptr<Stage> MakeCorrelateStage();
+// Instead of frames and correlate (`impactdic analyze SCENE`): the /dic group of results_file,
+// the frame range it covers and the frames' DAQ times; the figure dic_valid_fraction from its
+// attribute. Always runs.
+std::unique_ptr<Stage> MakeLoadDicStage(const std::string& results_file);
 std::unique_ptr<Stage> MakeKinematicsStage();
+// Also the measured peak deceleration over the peak stage (impact .. t_e).
 std::unique_ptr<Stage> MakeMomentumStage();
 std::unique_ptr<Stage> MakeModelStage();
 // After the model (t_e from momentum, the crater depths from the model and the sensor).
@@ -52,9 +58,18 @@ std::unique_ptr<Stage> MakeStrainStage();
 // when all are complete.
 std::unique_ptr<Stage> MakeOutputsStage(const OutputWriters& writers, OutputGeneration* generation);
 
-// The measured peak deceleration of the peak stage (a figure of the sensor record, its window
-// t_e from the momentum stage, else the scene model's T + 4/b); run between momentum and model.
-void AddMeasuredPeakDeceleration(StageContext& context);
+// The one stage graph up to the outputs (docs/architecture.md), of `run` and `analyze`:
+// calibrate, sensor, the correlation results (frames and correlate when results_file is empty,
+// else load_dic of results_file), kinematics, momentum, model, strain.
+void RunAnalysisStages(StageContext& context, const std::string& results_file);
+
+// "scene NAME: N stage(s) produced nothing usable:" and a line "  stage: reason" per failure.
+std::string FailedStagesText(const PipelineSummary& summary);
+
+// Names the file to fix in an error of the frames' timing or the momentum analysis that names
+// none: the DAQ record when its exposure channel times the frames ("exposure channel", "frame
+// times"), else the scene file (fps, frame_time_offset_s, the momentum grid).
+void NameFileToFix(const StageContext& context, Error& error);
 
 // "not among the scene's stages" unless the scene lists `name` ("").
 std::string NotListed(const Scene& scene, const char* name);

@@ -21,7 +21,6 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/strain/strain.h"
 #include "impactdic/strain/strain_results.h"
 #include "scene_inputs.h"
@@ -119,7 +118,9 @@ StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries&
   return r;
 }
 
-StrainFigures FiguresOf(const StrainResult& r, const SceneFigures& fig) {
+// The strain figures, next to the crater depths of the model and the sensor record (NaN when
+// their stage did not run).
+StrainFigures FiguresOf(const StrainResult& r, const SceneRunData& d) {
   StrainFigures s;
   s.gradient = kStrainGradientNames.Name(r.options.gradient);
   s.depth_from = r.depth_from;
@@ -128,8 +129,8 @@ StrainFigures FiguresOf(const StrainResult& r, const SceneFigures& fig) {
   s.compacted_depth_te_mm = r.zone_te.depth_mm;
   s.compacted_area_end_mm2 = r.zone_end.area_mm2;
   s.compacted_depth_end_mm = r.zone_end.depth_mm;
-  s.crater_depth_model_mm = 1e3 * fig.crater_depth_model_m;
-  s.crater_depth_measured_mm = 1e3 * fig.crater_depth_measured_m;
+  s.crater_depth_model_mm = d.model ? 1e3 * d.model->summary.crater_depth_m : kNaN;
+  s.crater_depth_measured_mm = d.sensor ? 1e3 * d.sensor->summary.final_penetration_m : kNaN;
   return s;
 }
 
@@ -154,7 +155,7 @@ class StrainStage : public Stage {
       d.strain = ComputeStrainResult(c, series.series());
     }
     const StrainResult& r = *d.strain;
-    c.summary.strain = FiguresOf(r, c.summary.figures);
+    c.summary.strain = FiguresOf(r, d);
     return fmt::format(
         "{} gradient{}; compacted zone (eps_v > {}) at the end {:.4g} mm^2, {:.4g} mm deep (from "
         "the {}); at t_e {}",
