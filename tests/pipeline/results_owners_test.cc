@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <exception>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
 
 #include "../reliability/fault_util.h"
+#include "impactdic/core/error.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
@@ -115,6 +117,24 @@ TEST_F(ResultsOwners, ModelCommandWritesTheRunsModelLayout) {
   for (const char* name : {"units", "description"})
     EXPECT_EQ(alone.ReadStringAttribute(L::kModelDecel, name),
               run.ReadStringAttribute(L::kModelDecel, name));
+}
+
+// A file without the group: the owner's reader names the group and the file.
+TEST_F(ResultsOwners, AReaderNamesTheMissingGroupAndTheFile) {
+  const std::string model_h5 = dir_->File("model_only.h5");
+  ASSERT_EQ(RunCli("-q model --mass 10 --height 0.7 --width 0.15 -o " + model_h5).exit_code, 0);
+  const H5Reader in(model_h5);
+  for (const auto& read : std::vector<std::function<void()>>{
+           [&] { ReadSensorResults(in, model_h5); }, [&] { ReadKinematicsResults(in, model_h5); },
+           [&] { ReadMomentumResults(in, model_h5); }}) {
+    try {
+      read();
+      ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(model_h5), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("missing"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace
