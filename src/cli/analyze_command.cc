@@ -29,6 +29,7 @@
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/sensor_results.h"
 
 namespace impactdic::cli {
 namespace {
@@ -140,7 +141,7 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
   const SensorSummary& s = r.summary;
   if (!a.output.empty()) {
     // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.
-    H5Writer out(a.output, /*owned_groups=*/{"/sensor"});
+    H5Writer out(a.output, /*owned_groups=*/{results_layout::kSensorGroup});
     WriteSensor(out, r);
     out.Commit();
   }

@@ -209,7 +209,8 @@ void WriteDicResult(const std::string& path, DicResult* released, const DicOptio
   if (ext != ".h5" && ext != ".hdf5") {
     throw Error(ErrorKind::kInvalidValue, "output", path, "a file ending in .csv or .h5");
   }
-  H5Writer out(path, /*owned_groups=*/{"/dic"});  // Other groups of an existing file stay.
+  // Other groups of an existing file stay.
+  H5Writer out(path, /*owned_groups=*/{results_layout::kDicGroup});
   WriteDicResults(out, MakeTable(result, options, /*first_frame=*/-1));
   out.Commit();
 }

@@ -16,6 +16,7 @@
 #include <limits>
 #include <numeric>
 #include <optional>
+#include <set>
 #include <system_error>
 
 #include "impactdic/core/error.h"
@@ -743,6 +744,7 @@ std::vector<char> H5Writer::CommitToMemory() { return CloseToImage(); }
 struct H5Reader::Impl {
   std::string path;
   H5::H5File file;
+  std::set<std::string> datasets_read;  // Normalised paths, for DatasetsRead().
 };
 
 H5Reader::H5Reader(const std::string& path) : impl_(std::make_unique<Impl>()) {
@@ -827,16 +829,19 @@ std::vector<T> ReadAs(const H5::H5File& file, const std::string& file_name, cons
 
 std::vector<double> H5Reader::ReadDouble(const std::string& path, Dims* dims) const {
   const Dims shape = Dimensions(path);
+  impl_->datasets_read.insert(Normalise(path));
   return ReadAs<double>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_DOUBLE,
                         dims, shape);
 }
 std::vector<float> H5Reader::ReadFloat(const std::string& path, Dims* dims) const {
   const Dims shape = Dimensions(path);
+  impl_->datasets_read.insert(Normalise(path));
   return ReadAs<float>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_FLOAT, dims,
                        shape);
 }
 std::vector<std::int32_t> H5Reader::ReadInt(const std::string& path, Dims* dims) const {
   const Dims shape = Dimensions(path);
+  impl_->datasets_read.insert(Normalise(path));
   return ReadAs<std::int32_t>(impl_->file, impl_->path, Normalise(path), H5::PredType::NATIVE_INT32,
                               dims, shape);
 }
@@ -898,6 +903,10 @@ double H5Reader::ReadNumberAttribute(const std::string& object_path,
 
 std::vector<std::string> H5Reader::List(const std::string& group_path) const {
   return GroupMembers(impl_->file, impl_->path, group_path);
+}
+
+std::vector<std::string> H5Reader::DatasetsRead() const {
+  return {impl_->datasets_read.begin(), impl_->datasets_read.end()};
 }
 
 H5Reader::NumberType H5Reader::Type(const std::string& path) const {

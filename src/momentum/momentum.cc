@@ -12,8 +12,6 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
-#include "impactdic/io/hdf5_store.h"
-#include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 
@@ -524,20 +522,6 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
   return r;
 }
 
-SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMapping& mapping,
-                                 const CameraClock& clock, const SensorResult& sensor,
-                                 const MomentumOptions& options, std::size_t first_frame) {
-  SceneAnalysis a;
-  KinematicsOptions kopt;
-  kopt.fps = clock.fps;
-  a.kinematics = ComputeKinematics(dic, mapping, kopt);
-  const std::vector<double> all =
-      FrameTimes(sensor, static_cast<int>(first_frame + dic.frames), clock);
-  a.frame_time_s.assign(all.begin() + static_cast<std::ptrdiff_t>(first_frame), all.end());
-  a.momentum = AnalyzeMomentum(a.kinematics, a.frame_time_s, sensor, options);
-  return a;
-}
-
 std::string MomentumSummary::BriefReport() const {
   return fmt::format(
              "p_max = {:.4g} kg m/s, t_e = {:.3f} ms, conservation error = {:.2f} %, m_add,max = "
@@ -583,128 +567,6 @@ JsonObject MomentumSummary::ToJson() const {
       .Add("t_end_problem", t_end_problem)
       .Add("warnings", warnings);
   return j;
-}
-
-void WriteSensor(H5Writer& out, const SensorResult& sensor) {
-  const SensorSummary& s = sensor.summary;
-  out.Remove("sensor");  // Idempotent: WriteAnalysis writes it too.
-  std::vector<double> t_after(sensor.time_s.size()), decel(sensor.accel_g.size());
-  for (std::size_t i = 0; i < t_after.size(); ++i) t_after[i] = sensor.time_s[i] - s.impact_time_s;
-  for (std::size_t i = 0; i < decel.size(); ++i) decel[i] = sensor.accel_g[i] - 1;
-  out.Write("sensor/t_s", t_after, "s", "time since the detected impact");
-  out.Write("sensor/time_daq_s", sensor.time_s, "s", "DAQ clock time");
-  out.Write("sensor/decel_g", decel, "g",
-            "pounder deceleration accel_g - 1 (positive = slowing down)");
-  out.Write("sensor/accel_g", sensor.accel_g, "g",
-            "accelerometer reading (axis up; 0 in free fall, 1 at rest), offset-corrected and "
-            "zero-phase low-pass filtered");
-  out.Write("sensor/accel_down_m_s2", sensor.accel_down_m_s2, "m/s^2",
-            "pounder acceleration g (1 - accel_g), downward positive");
-  out.Write("sensor/velocity_m_s", sensor.velocity_m_s, "m/s",
-            "pounder velocity, downward positive");
-  out.Write("sensor/penetration_m", sensor.penetration_m, "m",
-            "pounder position relative to the impact position, downward positive");
-  for (std::size_t c = 0; c < sensor.force.size(); ++c)
-    out.Write("sensor/force/" + sensor.force_names[c], sensor.force[c], "as in the CSV",
-              "force channel, zero-phase low-pass filtered");
-  const std::vector<std::pair<const char*, double>> attrs = {
-      {"sample_rate_hz", s.sample_rate_hz},
-      {"cutoff_hz", s.cutoff_hz},
-      {"offset_g", s.offset_g},
-      {"noise_g", s.noise_g},
-      {"impact_time_s", s.impact_time_s},
-      {"impact_velocity_m_s", s.impact_velocity_m_s},
-      {"final_penetration_m", s.final_penetration_m},
-      {"peak_deceleration_g", s.peak_deceleration_g},
-      {"t_peak_s", s.t_peak_s},
-      {"stop_time_s", s.stop_time_s},
-      {"release_time_s", s.release_time_s}};
-  for (const auto& [name, value] : attrs) out.SetAttribute("sensor", name, value);
-  out.SetAttribute("sensor", "sign_convention",
-                   "accelerometer axis up (reads 0 g in free fall, 1 g at rest); velocity and "
-                   "penetration downward positive");
-}
-
-void WriteKinematics(H5Writer& out, const KinematicsResult& k,
-                     const std::vector<double>& frame_time_s) {
-  const Dims fs{k.frames, k.subsets};
-  out.Remove("kinematics");
-  out.Write("kinematics/time_s", k.time_s, "s", "frame time k / fps since frame 0");
-  if (!frame_time_s.empty()) {
-    out.Write("kinematics/frame_time_daq_s", frame_time_s, "s",
-              "frame time on the DAQ clock (exposure edges or offset + k / fps)");
-  }
-  out.Write(results_layout::kKinematicsX, k.x_mm, "mm", "reference subset centre x (panel, right)");
-  out.Write(results_layout::kKinematicsY, k.y_mm, "mm", "reference subset centre y (panel, down)");
-  out.Write(results_layout::kUxMm, k.disp_x_mm, fs, "mm", "displacement x [frames x subsets]");
-  out.Write(results_layout::kUyMm, k.disp_y_mm, fs, "mm",
-            "displacement y, downward positive [frames x subsets]");
-  out.Write(results_layout::kVx, k.vel_x_mm_s, fs, "mm/s",
-            "subset velocity x (right), central differences");
-  out.Write(results_layout::kVy, k.vel_y_mm_s, fs, "mm/s",
-            "subset velocity y (down), central differences");
-  out.Write(results_layout::kAx, k.acc_x_mm_s2, fs, "mm/s^2", "subset acceleration x (right)");
-  out.Write(results_layout::kAy, k.acc_y_mm_s2, fs, "mm/s^2", "subset acceleration y (down)");
-  out.SetAttribute("kinematics", "vy_positive", "down");
-}
-
-void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor) {
-  WriteKinematics(out, analysis.kinematics, analysis.frame_time_s);
-  WriteSensor(out, sensor);
-  WriteMomentum(out, analysis.momentum, sensor);
-}
-
-void WriteMomentum(H5Writer& out, const MomentumResult& m, const SensorResult& sensor) {
-  out.Remove("momentum");
-  const MomentumSummary& s = m.summary;
-  const double ti = sensor.summary.impact_time_s;
-  std::vector<double> t_after(m.frame_time_s.size());
-  for (std::size_t i = 0; i < t_after.size(); ++i) t_after[i] = m.frame_time_s[i] - ti;
-  out.Write("momentum/t_s", t_after, "s", "frame time since the detected impact");
-  out.Write("momentum/time_daq_s", m.frame_time_s, "s", "frame time on the DAQ clock");
-  out.Write("momentum/v_pounder_m_s", m.v_pounder_m_s, "m/s",
-            "pounder velocity at the frames (down +)");
-  out.Write("momentum/v_sand_m_s", m.v_sand_m_s, "m/s",
-            "mean soil velocity over the grid (down +)");
-  out.Write("momentum/a_sand_m_s2", m.a_sand_m_s2, "m/s^2",
-            "mean soil acceleration over the grid (down +)");
-  out.Write("momentum/p_pounder", m.p_pounder_kg_m_s, "N s", "pounder momentum m_p v_p");
-  out.Write("momentum/p_gran", m.p_gran_kg_m_s, "N s", "granular momentum rho_d area t_z v_sand");
-  out.Write("momentum/p_total", m.p_total_kg_m_s, "N s", "p_pounder + p_gran");
-  out.Write("momentum/m_add_kg", m.added_mass_kg, "kg",
-            "added mass p_max / v_p - m_p (Eq. 3), NaN outside [impact, t_e]");
-  out.Write("momentum/valid_subsets", m.valid_subsets, "1", "valid subsets in the grid per frame");
-  if (!m.added_mass_daq_kg.empty()) {
-    out.Write("momentum/added_mass_daq/t_s", m.added_mass_time_after_impact_s, "s",
-              "DAQ sample time since the impact");
-    out.Write("momentum/added_mass_daq/m_add_kg", m.added_mass_daq_kg, "kg",
-              "p_max / v_p - m_p at the DAQ rate (what the sigmoid is fitted to)");
-  }
-  std::vector<std::int32_t> ids(s.grid.subset_ids.begin(), s.grid.subset_ids.end());
-  out.Write("momentum/grid_subset_ids", ids, Dims{ids.size()}, "1", "subsets of the momentum grid");
-  const std::vector<std::pair<const char*, double>> attrs = {
-      {"p_max", s.p_max_kg_m_s},
-      {"t_e", s.t_end_peak_s},
-      {"M", s.sigmoid_fitted ? s.sigmoid.M_kg : kNaN},
-      {"b", s.sigmoid_fitted ? s.sigmoid.b_per_s : kNaN},
-      {"T", s.sigmoid_fitted ? s.sigmoid.T_s : kNaN},
-      {"p_max_kg_m_s", s.p_max_kg_m_s},
-      {"t_end_peak_s", s.t_end_peak_s},
-      {"momentum_conservation_error", s.momentum_conservation_error},
-      {"added_mass_max_kg", s.added_mass_max_kg},
-      {"momentum_ratio", s.momentum_ratio},
-      {"v_sand_max_m_s", s.v_sand_max_m_s},
-      {"v_p_max_m_s", s.v_p_max_m_s},
-      {"grid_area_m2", s.grid.area_m2},
-      {"grid_mass_kg", s.grid.mass_kg},
-      {"sigmoid_se_M_kg", s.sigmoid_fitted ? s.sigmoid.se_M_kg : kNaN},
-      {"sigmoid_se_b_per_s", s.sigmoid_fitted ? s.sigmoid.se_b_per_s : kNaN},
-      {"sigmoid_se_T_s", s.sigmoid_fitted ? s.sigmoid.se_T_s : kNaN}};
-  for (const auto& [name, value] : attrs) out.SetAttribute("momentum", name, value);
-  out.SetAttribute("momentum", "t_e_found",
-                   !s.t_end_problem.empty() ? "not measurable: " + s.t_end_problem
-                   : s.t_end_found          ? std::string("yes")
-                                            : std::string("no (max soil velocity)"));
 }
 
 }  // namespace impactdic

@@ -14,14 +14,19 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/numeric.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
 #include "impactdic/model/impact_model.h"
+#include "impactdic/model/model_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/render/figures.h"
 #include "impactdic/render/gnuplot.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/velocity_field.h"
+#include "impactdic/sensor/sensor_results.h"
 
 namespace impactdic {
 namespace {
@@ -58,8 +63,8 @@ std::string DescribeFileKind(const H5Reader& in) {
   if (in.Exists(results_layout::kTimeFrameIndex) || in.HasAttribute("/", "scene_name"))
     return "a run's results file (impactdic run)";
   if (in.Exists(results_layout::kDicGroup)) return "correlation results (impactdic correlate)";
-  if (in.Exists("/model")) return "a model series (impactdic model -o)";
-  if (in.Exists("/sensor")) return "sensor results (impactdic analyze --output)";
+  if (in.Exists(results_layout::kModelGroup)) return "a model series (impactdic model -o)";
+  if (in.Exists(results_layout::kSensorGroup)) return "sensor results (impactdic analyze --output)";
   return "an HDF5 file impactdic did not write";
 }
 
@@ -135,15 +140,13 @@ std::vector<long> MatchCells(const std::vector<double>& x, const std::vector<dou
   return cell;
 }
 
-void CompareDic(const H5Reader& res, const TruthFile& t, const std::vector<std::size_t>& frame,
-                DemValidation* out, VelocityFieldSequence* tool_seq,
-                VelocityFieldSequence* truth_seq) {
-  const std::vector<double> x = res.ReadDouble(results_layout::kDicX);
-  const std::vector<double> y = res.ReadDouble(results_layout::kDicY);
-  const std::vector<double> u = res.ReadDouble(results_layout::kDicU);
-  const std::vector<double> v = res.ReadDouble(results_layout::kDicV);
-  const std::vector<double> vx = res.ReadDouble(results_layout::kVx);
-  const std::vector<double> vy = res.ReadDouble(results_layout::kVy);
+void CompareDic(const H5Reader& res, const std::string& file, const TruthFile& t,
+                const std::vector<std::size_t>& frame, DemValidation* out,
+                VelocityFieldSequence* tool_seq, VelocityFieldSequence* truth_seq) {
+  const DicResultsTable dic = ReadDicResults(res, file);
+  const KinematicsResult kin = ReadKinematicsResults(res, file).kinematics;
+  const std::vector<double>&x = dic.x_px, &y = dic.y_px, &u = dic.u_px, &v = dic.v_px;
+  const std::vector<double>&vx = kin.vel_x_mm_s, &vy = kin.vel_y_mm_s;
   const std::size_t N = x.size(), F = frame.size();
   const std::vector<long> cell = MatchCells(x, y, t);
   const double fps = 1 / (t.frame_t[1] - t.frame_t[0]);
@@ -188,21 +191,22 @@ void CompareDic(const H5Reader& res, const TruthFile& t, const std::vector<std::
   tool_seq->vy_mm_s = vy;
 }
 
-void CompareMomentum(const H5Reader& res, const TruthFile& t, const std::vector<std::size_t>& frame,
-                     DemValidation* out) {
-  out->p_gran_tool_Ns = res.ReadDouble(results_layout::kPGran);
-  out->p_pounder_tool_Ns = res.ReadDouble(results_layout::kPPounder);
-  out->v_sand_tool_m_s = res.ReadDouble("/momentum/v_sand_m_s");
-  out->m_add_tool_kg = res.ReadDouble(results_layout::kMAdd);
-  const std::string g = results_layout::kMomentumGroup;
-  out->p_max_tool_Ns = Attr(res, g, "p_max_kg_m_s");
-  out->t_e_tool_s = Attr(res, g, "t_end_peak_s");
-  out->conservation_tool = Attr(res, g, "momentum_conservation_error");
-  out->m_add_max_tool_kg = Attr(res, g, "added_mass_max_kg");
-  out->grid_mass_tool_kg = Attr(res, g, "grid_mass_kg");
-  out->sigmoid_M_kg = Attr(res, g, "M");
-  out->sigmoid_b_per_s = Attr(res, g, "b");
-  out->sigmoid_T_s = Attr(res, g, "T");
+void CompareMomentum(const MomentumResultsGroup& tool, const TruthFile& t,
+                     const std::vector<std::size_t>& frame, DemValidation* out) {
+  const MomentumResult& m = tool.momentum;
+  const MomentumSummary& s = m.summary;
+  out->p_gran_tool_Ns = m.p_gran_kg_m_s;
+  out->p_pounder_tool_Ns = m.p_pounder_kg_m_s;
+  out->v_sand_tool_m_s = m.v_sand_m_s;
+  out->m_add_tool_kg = m.added_mass_kg;
+  out->p_max_tool_Ns = s.p_max_kg_m_s;
+  out->t_e_tool_s = s.t_end_peak_s;
+  out->conservation_tool = s.momentum_conservation_error;
+  out->m_add_max_tool_kg = s.added_mass_max_kg;
+  out->grid_mass_tool_kg = s.grid.mass_kg;
+  out->sigmoid_M_kg = s.sigmoid.M_kg;  // NaN when no sigmoid was fitted.
+  out->sigmoid_b_per_s = s.sigmoid.b_per_s;
+  out->sigmoid_T_s = s.sigmoid.T_s;
   out->p_max_truth_Ns = t.p_max;
   out->t_e_truth_s = t.t_e;
   out->conservation_truth = t.cons;
@@ -412,18 +416,18 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
   const TruthFile t = ReadTruth(truth_h5);
   H5Reader res(results_h5);
   DemValidation out;
-  std::vector<double> index = res.ReadDouble("/time/frame_index");
+  std::vector<double> index = res.ReadDouble(results_layout::kTimeFrameIndex);
   std::vector<std::size_t> frame;
   for (double k : index) {
     if (!(k >= 0) || static_cast<std::size_t>(k) >= t.frame_t.size())
-      throw Error(ErrorKind::kInvalidValue, results_h5 + ": /time/frame_index",
+      throw Error(ErrorKind::kInvalidValue, results_h5 + ": " + results_layout::kTimeFrameIndex,
                   fmt::format("{}", k),
                   fmt::format("frame indices of the {} truth frames", t.frame_t.size()));
     frame.push_back(static_cast<std::size_t>(k));
   }
   VelocityFieldSequence tool_seq, truth_seq;
-  CompareDic(res, t, frame, &out, &tool_seq, &truth_seq);
-  CompareMomentum(res, t, frame, &out);
+  CompareDic(res, results_h5, t, frame, &out, &tool_seq, &truth_seq);
+  CompareMomentum(ReadMomentumResults(res, results_h5), t, frame, &out);
   std::vector<double> model_t, model_g;
   CompareModel(t, &out, &model_t, &model_g);
   if (!figures_dir.empty()) {

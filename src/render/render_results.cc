@@ -20,7 +20,11 @@
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/model/model_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/render/figures.h"
+#include "impactdic/sensor/sensor_results.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;

@@ -17,6 +17,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/model/model_results.h"
 #include "impactdic/model/work_precision.h"
 
 namespace impactdic {
@@ -281,16 +282,22 @@ TEST(ImpactModel, SeriesHasEveryForceTermAndWritesCsv) {
   const CsvTable t = ReadCsv(path, ro);
   EXPECT_EQ(t.rows(), s.size());
   std::filesystem::remove(path);
-  // HDF5: the same columns with units, the summary as attributes of /model.
+  // HDF5: the run's /model layout (model_results.h): the same series with units, the summary and
+  // parameters as attributes of /model.
   const std::string h5 = (std::filesystem::temp_directory_path() /
                           ("impactdic_model_series_test_" + std::to_string(getpid()) + ".h5"))
                              .string();
   WriteImpactSeries(h5, p, run);
   {
     H5Reader in(h5);
-    EXPECT_EQ(in.ReadDouble("model/series/z_m"), s.z_m);
-    EXPECT_EQ(in.ReadStringAttribute("model/series/z_m", "units"), "m");
-    EXPECT_EQ(in.ReadNumberAttribute("model", "crater_depth_m"), run.summary.crater_depth_m);
+    const ModelResultsGroup back = ReadModelResults(in, h5);
+    EXPECT_EQ(back.series.z_m, s.z_m);
+    EXPECT_EQ(back.series.gravity_N, s.gravity_N);
+    EXPECT_EQ(in.ReadStringAttribute(results_layout::kModelZ, "units"), "m");
+    EXPECT_EQ(back.summary.crater_depth_m, run.summary.crater_depth_m);
+    EXPECT_EQ(back.parameters.friction_K, p.friction_K);
+    ASSERT_EQ(back.decel_g.size(), s.size());
+    EXPECT_DOUBLE_EQ(back.decel_g[1], -s.dv_dt_m_s2[1] / p.gravity_m_s2);
   }
   std::filesystem::remove(h5);
 }

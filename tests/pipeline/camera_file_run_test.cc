@@ -25,6 +25,7 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
 #include "impactdic/sensor/sensor.h"
 #include "small_scene_spec.h"
 

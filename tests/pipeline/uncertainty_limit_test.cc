@@ -18,6 +18,8 @@
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/kinematics/kinematics.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/momentum/scene_analysis.h"
 #include "impactdic/pipeline/scene.h"
 #include "small_scene_spec.h"

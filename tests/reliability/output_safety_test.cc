@@ -121,7 +121,7 @@ TEST(OutputSafety, ModelAndCorrelateIntoAnExistingFileReplaceOnlyTheirGroups) {
              "frame_0001.png --subset 21 --step 60 -o " + results);
   ASSERT_EQ(correlate.exit_code, 0) << correlate.output;
   const H5Reader in(results);
-  EXPECT_TRUE(in.Exists("model/series/t_s"));
+  EXPECT_TRUE(in.Exists("model/t_s"));  // The run's /model layout since 2026-11-28.
   EXPECT_EQ(in.ReadDouble("sensor/t_s"), (std::vector<double>{-1, -2}));
   EXPECT_EQ(in.ReadInt("frames/images"), std::vector<std::int32_t>(24, 7));
   // /dic is correlate's: its new grid, not the old three values.

@@ -14,8 +14,11 @@
 
 #include "../cli/cli_runner.h"
 #include "../synth/dem_test_record.h"
+#include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 
@@ -24,9 +27,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Writes a results.h5 as `impactdic run` lays it out, from the truth of `scene`: the analysed
-// frames from the reference on, every DIC subset; velocities = truth + (dvx, 0) mm/s, p_gran =
-// truth * gran_factor.
+// Writes a results.h5 as `impactdic run` lays it out (the groups' owners' writers), from the truth
+// of `scene`: the analysed frames from the reference on, every DIC subset; velocities = truth +
+// (dvx, 0) mm/s, p_gran = truth * gran_factor.
 void WriteFakeResults(const DemScene& scene, const std::string& path, double dvx,
                       double gran_factor) {
   const DemTruth& t = scene.truth();
@@ -50,22 +53,35 @@ void WriteFakeResults(const DemScene& scene, const std::string& path, double dvx
   }
   const std::size_t Fa = index.size();
   H5Writer out(path);
-  out.Write("time/frame_index", index, Dims{Fa}, "1", "frame index");
-  std::vector<double> t_ms;
-  for (double k : index) t_ms.push_back(1e3 * t.frame_time_s[static_cast<std::size_t>(k)]);
-  out.Write("time/t_ms", t_ms, Dims{Fa}, "ms", "time since the impact");
-  out.Write("dic/x_px", x, Dims{N}, "px", "x");
-  out.Write("dic/y_px", y, Dims{N}, "px", "y");
-  out.Write("dic/u_px", u, Dims{Fa, N}, "px", "u");
-  out.Write("dic/v_px", v, Dims{Fa, N}, "px", "v");
-  out.Write("kinematics/vx_mm_s", vx, Dims{Fa, N}, "mm/s", "vx");
-  out.Write("kinematics/vy_mm_s", vy, Dims{Fa, N}, "mm/s", "vy");
-  out.Write("momentum/p_gran", pg, Dims{Fa}, "N s", "p_gran");
-  out.Write("momentum/p_pounder", pp, Dims{Fa}, "N s", "p_pounder");
-  out.Write("momentum/v_sand_m_s", vs, Dims{Fa}, "m/s", "v_sand");
-  out.Write("momentum/m_add_kg", madd, Dims{Fa}, "kg", "m_add");
-  out.SetAttribute("momentum", "p_max_kg_m_s", t.p_max_Ns);
-  out.SetAttribute("momentum", "t_end_peak_s", t.t_e_s);
+  out.Write(results_layout::kTimeFrameIndex, index, Dims{Fa}, "1", "frame index");
+  std::vector<double> t_ms, t_s;
+  for (double k : index) t_s.push_back(t.frame_time_s[static_cast<std::size_t>(k)]);
+  for (double ts : t_s) t_ms.push_back(1e3 * ts);
+  out.Write(results_layout::kTimeMs, t_ms, Dims{Fa}, "ms", "time since the impact");
+  // Each group by its owner's writer.
+  DicResultsTable dic;
+  dic.rows = Fa;
+  dic.subsets = N;
+  dic.x_px = x, dic.y_px = y, dic.u_px = u, dic.v_px = v;
+  WriteDicResults(out, dic);
+  KinematicsResult kin;
+  kin.frames = Fa, kin.subsets = N;
+  kin.time_s = t_s, kin.x_mm = x, kin.y_mm = y;
+  kin.vel_x_mm_s = vx, kin.vel_y_mm_s = vy;
+  kin.disp_x_mm = kin.disp_y_mm = kin.acc_x_mm_s2 = kin.acc_y_mm_s2 =
+      std::vector<double>(Fa * N, 0.0);
+  WriteKinematicsResults(out, kin, /*frame_time_daq_s=*/{});
+  MomentumResult m;
+  m.frame_time_s = t_s;
+  m.p_gran_kg_m_s = pg, m.p_pounder_kg_m_s = pp, m.v_sand_m_s = vs, m.added_mass_kg = madd;
+  for (std::size_t f = 0; f < Fa; ++f) {
+    m.v_pounder_m_s.push_back(pp[f] / dem_test::kMass);
+    m.p_total_kg_m_s.push_back(pp[f] + pg[f]);
+  }
+  m.a_sand_m_s2 = m.valid_subsets = std::vector<double>(Fa, 0.0);
+  m.summary.p_max_kg_m_s = t.p_max_Ns;
+  m.summary.t_end_peak_s = t.t_e_s;
+  WriteMomentumResults(out, m, /*impact_time_s=*/0);
   out.Commit();
 }
 

@@ -14,6 +14,10 @@
 #include "impactdic/core/error.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/model/model_results.h"
+#include "impactdic/momentum/momentum_results.h"
+#include "impactdic/sensor/sensor_results.h"
 #include "test_util.h"
 
 namespace impactdic {

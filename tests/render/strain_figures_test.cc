@@ -13,6 +13,8 @@
 #include "../cli/cli_runner.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/strain_field.h"
 #include "test_util.h"

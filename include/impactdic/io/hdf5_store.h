@@ -157,6 +157,9 @@ class H5Reader {
   bool HasAttribute(const std::string& object_path, const std::string& name) const;
   // Names of the members of a group.
   std::vector<std::string> List(const std::string& group_path) const;
+  // The datasets read so far by ReadDouble / ReadFloat / ReadInt ("/dic/u_px", sorted, each
+  // once): a test checks that the readers of a file's groups read every dataset in it.
+  std::vector<std::string> DatasetsRead() const;
   // The stored element type of a numeric dataset: float, signed or unsigned integer, and its
   // size [bytes].
   enum class NumberKind { kFloat, kInt, kUInt };

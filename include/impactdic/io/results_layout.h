@@ -1,8 +1,15 @@
-// The layout of the results files, in one place: the names of the datasets and attributes of
-// results.h5 (`impactdic run`) and of `impactdic correlate -o X.h5`, which every writer and reader
-// uses (README.md "HDF5 layout", docs/render.md). The /dic group is written and read by one
-// writer and one reader (io/dic_results.h). If a name changes, change it here. Shapes: F =
-// analysed frames, N = subsets, R x C = frame rows x columns, K = samples.
+// The layout of the results files: the names of the datasets and attributes of results.h5
+// (`impactdic run`) and of `impactdic correlate -o X.h5` (README.md "HDF5 layout",
+// docs/render.md). Each group has one owner, which declares its names in this namespace beside its
+// writer and reader; every other file uses those names (a test, results_paths_test, keeps string
+// literals of results paths out of the rest of src/):
+//   /dic         io/dic_results.h (names here)       /strain   strain/strain_results.h (names here)
+//   /sensor      sensor/sensor_results.h             /kinematics  kinematics/kinematics_results.h
+//   /momentum    momentum/momentum_results.h         /model    model/model_results.h
+//   /time, /frames, /xdmf, the output folder's file names: here (the run's outputs,
+//   pipeline/outputs).
+// If a name changes, change it at its owner. Shapes: F = analysed frames, N = subsets,
+// R x C = frame rows x columns, K = samples.
 #ifndef IMPACTDIC_IO_RESULTS_LAYOUT_H_
 #define IMPACTDIC_IO_RESULTS_LAYOUT_H_
 
@@ -58,24 +65,6 @@ inline constexpr const char* kDicReferenceFrame = "/dic/reference_frame";
 inline constexpr const char* kDicTimeS = "/dic/time_s";
 // Number attribute of /dic: index in the input sequence of the first reference (row 0).
 inline constexpr const char* kFirstFrameAttr = "first_frame";
-
-// Subset velocity [mm/s], [F x N], NaN = invalid subset.
-inline constexpr const char* kKinematicsGroup = "/kinematics";
-inline constexpr const char* kVx = "/kinematics/vx_mm_s";
-inline constexpr const char* kVy = "/kinematics/vy_mm_s";
-// Subset acceleration [mm/s^2] and displacement since the first reference [mm] on the panel,
-// [F x N] (x right, y down), NaN = invalid subset; reference subset centres on the panel [mm], [N].
-inline constexpr const char* kAx = "/kinematics/ax_mm_s2";
-inline constexpr const char* kAy = "/kinematics/ay_mm_s2";
-inline constexpr const char* kUxMm = "/kinematics/ux_mm";
-inline constexpr const char* kUyMm = "/kinematics/uy_mm";
-inline constexpr const char* kKinematicsX = "/kinematics/x_mm";
-inline constexpr const char* kKinematicsY = "/kinematics/y_mm";
-// Attribute of kKinematicsGroup: panel scale [mm/px] (number).
-inline constexpr const char* kMmPerPxAttr = "mm_per_px";
-// Optional string attribute of kKinematicsGroup: "down" (default, image rows) or "up": the
-// direction in which vy_mm_s is positive.
-inline constexpr const char* kVyDirectionAttr = "vy_positive";
 
 // Optional, [F x N] double, only when the correlation kept them (dic keep_warp_gradient, scene
 // key strain.gradient: warp): the displacement gradient of the subset warp since the first
@@ -142,29 +131,6 @@ inline constexpr const char* kDownsampleAttr = "downsample";
 inline constexpr const char* kFrameWidthAttr = "width_px";
 inline constexpr const char* kFrameHeightAttr = "height_px";
 inline constexpr const char* kBitDepthAttr = "bit_depth";
-
-// Momentum series (Fig. 4), [K] each; time since impact [s], momentum [N s].
-inline constexpr const char* kMomentumGroup = "/momentum";
-inline constexpr const char* kMomentumT = "/momentum/t_s";
-inline constexpr const char* kPPounder = "/momentum/p_pounder";
-inline constexpr const char* kPGran = "/momentum/p_gran";
-inline constexpr const char* kPTotal = "/momentum/p_total";
-// Added mass (Eq. 3) [kg] on the kMomentumT time base.
-inline constexpr const char* kMAdd = "/momentum/m_add_kg";
-// Number attributes of kMomentumGroup: p_max [N s], t_e [s] (end of the peak stage), and the
-// sigmoid fit of m_add (Eq. 5): M [kg], b [1/s], T [s].
-inline constexpr const char* kPMaxAttr = "p_max";
-inline constexpr const char* kTeAttr = "t_e";
-inline constexpr const char* kSigmoidMAttr = "M";
-inline constexpr const char* kSigmoidBAttr = "b";
-inline constexpr const char* kSigmoidTAttr = "T";
-
-// Accelerometer: time since impact [s] and pounder deceleration [g] (positive = slowing), [K].
-inline constexpr const char* kSensorT = "/sensor/t_s";
-inline constexpr const char* kSensorDecel = "/sensor/decel_g";
-// Impact model (Eq. 9): the same quantities, [K'].
-inline constexpr const char* kModelT = "/model/t_s";
-inline constexpr const char* kModelDecel = "/model/decel_g";
 
 // Output file names written by RenderResults into the output folder.
 inline constexpr const char* kMomentumPng = "momentum.png";

@@ -236,8 +236,9 @@ ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolver
 ImpactSeries MakeImpactSeries(const ImpactModelParameters& params, const ImpactRun& run);
 
 // Writes the series as CSV (columns t_s, z_m, v_m_s, dv_dt_m_s2, m_add_kg, dm_add_dt_kg_s,
-// inertia_N, dynamic_N, friction_N, gravity_N) or HDF5 (group /model/series with units, the
-// summary as attributes of /model), chosen by the extension (.csv, .h5/.hdf5).
+// inertia_N, dynamic_N, friction_N, gravity_N) or HDF5 (the /model group of a run's results.h5,
+// model/model_results.h WriteModelResults; other groups of an existing file are kept), chosen by
+// the extension (.csv, .h5/.hdf5).
 void WriteImpactSeries(const std::string& path, const ImpactModelParameters& params,
                        const ImpactRun& run);
 // The columns of WriteImpactSeries' CSV, in order.

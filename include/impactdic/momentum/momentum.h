@@ -169,23 +169,15 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
                                  const CameraClock& clock, const SensorResult& sensor,
                                  const MomentumOptions& options, std::size_t first_frame = 0);
 
-// Write the /sensor group, and the /kinematics, /sensor and /momentum groups, with units and
-// descriptions on every dataset (names follow io/results_layout.h where it has them):
-//   /sensor: t_s (since impact), time_daq_s, decel_g (= accel_g - 1), accel_g, accel_down_m_s2,
-//            velocity_m_s, penetration_m, force/<name>; summary numbers as attributes.
-//   /kinematics: time_s, frame_time_daq_s, x_mm, y_mm [N]; ux_mm, uy_mm, vx_mm_s, vy_mm_s,
-//            ax_mm_s2, ay_mm_s2 [F x N] (y down; attribute vy_positive = "down").
-//   /momentum: t_s (since impact), time_daq_s, v_pounder_m_s, v_sand_m_s, a_sand_m_s2, p_pounder,
-//            p_gran, p_total [N s], m_add_kg, valid_subsets [F]; added_mass_daq/{t_s, m_add_kg};
-//            grid_subset_ids; attributes p_max, t_e, M, b, T and the summary numbers.
-// Each replaces the groups it writes if they exist, so calling both is harmless.
+// The groups of the scene analysis, each written by its owner (names, units and descriptions
+// there): /sensor by sensor/sensor_results.h, /kinematics by kinematics/kinematics_results.h,
+// /momentum by momentum/momentum_results.h (their readers are there too). WriteAnalysis writes
+// the three; each replaces its group if it exists, so calling several is harmless.
 void WriteSensor(H5Writer& out, const SensorResult& sensor);
 void WriteAnalysis(H5Writer& out, const SceneAnalysis& analysis, const SensorResult& sensor);
-// The /kinematics group alone (WriteAnalysis writes it too); frame_time_daq_s only when
-// frame_time_s is not empty.
+// frame_time_daq_s only when frame_time_s is not empty.
 void WriteKinematics(H5Writer& out, const KinematicsResult& kinematics,
                      const std::vector<double>& frame_time_s);
-// The /momentum group alone (WriteAnalysis writes it too).
 void WriteMomentum(H5Writer& out, const MomentumResult& momentum, const SensorResult& sensor);
 
 }  // namespace impactdic

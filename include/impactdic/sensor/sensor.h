@@ -217,6 +217,8 @@ double DetectImpactOnset(const std::vector<double>& time_s, const std::vector<do
                          const std::vector<double>& filtered_g, std::size_t search_from,
                          const OnsetOptions& options, std::size_t* index);
 
+// --- Camera timing (src/sensor/camera_timing.cc) ----------------------------------------------
+
 // Rising edges of the exposure channel (threshold halfway between its low and high levels),
 // located by linear interpolation between the samples either side. Times on the DAQ clock.
 std::vector<double> ExposureRisingEdges(const std::vector<double>& time_s,
@@ -258,6 +260,8 @@ void RequireExposureChannel(const SensorResult& result, const std::string& colum
 // The first frame to correlate for an impact at impact_time_s (DAQ clock): the last frame exposed
 // at or before it (nothing earlier moves), 0 if none is; frame_times_s from FrameTimes.
 int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s);
+
+// --- Series of the record (src/sensor/sensor.cc) -----------------------------------------------
 
 // THE definition of the measured peak deceleration: the sample of largest filtered deceleration
 // accel_g - 1 among those with from_s <= time_s - t_ref_s <= to_s (the first of equal ones);

@@ -1,6 +1,7 @@
-// results.h5: everything the run measured and modelled (layout: io/results_layout.h, README.md
-// "HDF5 layout"). Without outputs.hdf5 it is still built, in memory, when the figures or the
-// animation need it (OutputContext::results_in_memory), and not kept.
+// results.h5: everything the run measured and modelled (layout: io/results_layout.h and the
+// groups' owners it lists, README.md "HDF5 layout"): each group written by its owner. Without
+// outputs.hdf5 it is still built, in memory, when the figures or the animation need it
+// (OutputContext::results_in_memory), and not kept.
 #include <algorithm>
 #include <cstddef>
 #include <memory>
@@ -13,14 +14,15 @@
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
-#include "impactdic/model/impact_model.h"
-#include "impactdic/momentum/momentum.h"
+#include "impactdic/kinematics/kinematics_results.h"
+#include "impactdic/model/model_results.h"
+#include "impactdic/momentum/momentum_results.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
-#include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/sensor_results.h"
 #include "impactdic/strain/strain_results.h"
 #include "writers.h"
 
@@ -79,28 +81,12 @@ void WriteFrames(H5Writer& out, FrameStream& frames, FrameStorage storage) {
   out.SetAttribute(L::kFramesGroup, L::kFrameHeightAttr, static_cast<double>(first.rows));
 }
 
-// /kinematics, /sensor, /momentum.
+// /sensor, /kinematics, /momentum, each by its owner's writer.
 void WriteMotion(H5Writer& out, const SceneRunData& d) {
-  if (d.sensor) WriteSensor(out, *d.sensor);
-  if (d.kinematics) WriteKinematics(out, *d.kinematics, d.analysed_frame_times_s);
-  if (d.momentum) WriteMomentum(out, *d.momentum, *d.sensor);
-  if (d.kinematics) out.SetAttribute(L::kKinematicsGroup, L::kMmPerPxAttr, d.mm_per_px);
-}
-
-// /model: the impact model's series and summary.
-void WriteModel(H5Writer& out, const SceneRunData& d) {
-  const ImpactModelParameters& p = d.model_parameters;
-  const ImpactSeries s = MakeImpactSeries(p, *d.model);
-  std::vector<double> decel(s.size());
-  for (std::size_t i = 0; i < s.size(); ++i) decel[i] = -s.dv_dt_m_s2[i] / p.gravity_m_s2;
-  out.Write(L::kModelT, s.t_s, "s", "model time since impact");
-  out.Write(L::kModelDecel, decel, "g", "model pounder deceleration -dv/dt / g");
-  out.Write("/model/z_m", s.z_m, "m", "model penetration (down)");
-  out.Write("/model/v_m_s", s.v_m_s, "m/s", "model pounder velocity (down)");
-  out.Write("/model/m_add_kg", s.m_add_kg, "kg", "model added mass, Eq. 5");
-  out.SetAttribute("/model", "summary", d.model->summary.BriefReport());
-  out.SetAttribute("/model", "solver", d.model->summary.solver);
-  out.SetAttribute("/model", "error_estimate", d.model->summary.error_estimate);
+  if (d.sensor) WriteSensorResults(out, *d.sensor);
+  if (d.kinematics)
+    WriteKinematicsResults(out, *d.kinematics, d.analysed_frame_times_s, d.mm_per_px);
+  if (d.momentum) WriteMomentumResults(out, *d.momentum, d.sensor->summary.impact_time_s);
 }
 
 // /, /stages and /summary attributes: the scene, what each stage did, the key figures.
@@ -178,8 +164,8 @@ std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d) {
 void WriteAnalysisResults(H5Writer& out, const SceneRunData& d) {
   WriteMotion(out, d);
   if (d.model) {
-    out.Remove("/model");  // An earlier analysis' (analyze SCENE).
-    WriteModel(out, d);
+    out.Remove(L::kModelGroup);  // An earlier analysis' (analyze SCENE).
+    WriteModelResults(out, d.model_parameters, *d.model);
   }
   if (d.strain) WriteStrainResults(out, *d.strain);  // Nothing without the strain stage.
 }

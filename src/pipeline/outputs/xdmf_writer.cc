@@ -24,6 +24,7 @@
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
+#include "impactdic/kinematics/kinematics_results.h"
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "writers.h"
