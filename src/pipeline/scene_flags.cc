@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/io/yaml.h"
 
 namespace impactdic {
@@ -97,7 +98,9 @@ void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
   for (const YamlOptionTable& table : SceneOptionTables(scene)) {
     for (const YamlOptionTable::Entry& e : table.entries()) {
       if (table.section() + "." + e.key != key) continue;
-      CheckValue(e.parse(YAML::Node(value)), flag, value, e.expected);
+      // A number as written, text quoted (as the library's own messages show them).
+      CheckValue(e.parse(YAML::Node(value)), flag, ParseNumber(value) ? value : "'" + value + "'",
+                 e.expected);
       return;
     }
   }
