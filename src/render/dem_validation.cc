@@ -14,7 +14,6 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/numeric.h"
-#include "impactdic/io/csv.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/results_layout.h"
@@ -406,20 +405,6 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
 }
 
 }  // namespace
-
-std::vector<std::string> DemValidation::CsvColumns() {
-  return {"t_s",           "p_pounder_tool_Ns", "p_pounder_dem_Ns", "p_gran_tool_Ns",
-          "p_gran_dem_Ns", "p_gran_dem_fd_Ns",  "v_sand_tool_m_s",  "v_sand_dem_m_s",
-          "m_add_tool_kg", "m_add_dem_kg"};
-}
-
-void DemValidation::WriteCsv(const std::string& path) const {
-  impactdic::WriteCsv(
-      path, CsvColumns(),
-      {t_s, p_pounder_tool_Ns, p_pounder_truth_Ns, p_gran_tool_Ns, p_gran_truth_Ns,
-       p_gran_fd_truth_Ns, v_sand_tool_m_s, v_sand_truth_m_s, m_add_tool_kg, m_add_truth_kg},
-      8);
-}
 
 DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
                              const std::string& figures_dir) {

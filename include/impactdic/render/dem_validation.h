@@ -53,10 +53,6 @@ struct DemValidation {
   std::vector<std::string> notes;
 
   std::string Report() const;  // The table of docs/validation.md for this case, as text.
-  // The per-frame series (tool and grains) as CSV (`validate-dem --csv`): its header's columns,
-  // and the file, written atomically (io/csv.h).
-  static std::vector<std::string> CsvColumns();
-  void WriteCsv(const std::string& path) const;
 };
 
 // Reads both files and compares. Error kFileFormat naming the file and what it is when the first
