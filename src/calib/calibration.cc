@@ -260,6 +260,53 @@ std::string CalibrationSummary::FullReport(const CameraCalibration& c) const {
   return out;
 }
 
+std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
+                                              const std::string& output) const {
+  std::string out = fmt::format("images: {} used, {} rejected (of {})\n", images_used,
+                                images_rejected, images_total);
+  for (const RejectedView& r : c.rejected)
+    out += fmt::format("  rejected {}: {}\n", r.image, r.reason);
+  out += fmt::format("reprojection RMS: {:.4f} px (worst view {} {:.4f} px)\n", c.rms_px,
+                     worst_view, worst_view_rms_px);
+  out += fmt::format("intrinsics: fx {:.4f}  fy {:.4f}  cx {:.4f}  cy {:.4f} [px], image {}x{}\n",
+                     c.fx, c.fy, c.cx, c.cy, c.image_width, c.image_height);
+  out += fmt::format("distortion: k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}\n",
+                     c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
+  if (c.plane)
+    out += fmt::format("scale: {:.6f} +- {:.6f} mm/px (plane view {})\n", c.plane->mm_per_px,
+                       c.plane->mm_per_px_uncertainty, c.plane->image);
+  else
+    out += "scale: none (give --plane IMAGE, a view of the board lying on the panel)\n";
+  return out + "written: " + output + "\n";
+}
+
+JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::string& output) const {
+  JsonObject j;
+  j.Add("rms_px", c.rms_px)
+      .Add("fx", c.fx)
+      .Add("fy", c.fy)
+      .Add("cx", c.cx)
+      .Add("cy", c.cy)
+      .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()));
+  if (c.plane) {
+    j.Add("mm_per_px", c.plane->mm_per_px);
+    j.Add("mm_per_px_uncertainty", c.plane->mm_per_px_uncertainty);
+  } else {
+    j.AddNull("mm_per_px");
+    j.AddNull("mm_per_px_uncertainty");
+  }
+  std::vector<std::string> rejected;
+  for (const RejectedView& r : c.rejected) rejected.push_back(r.image);
+  j.Add("images_used", images_used)
+      .Add("images_rejected", images_rejected)
+      .Add("images_repeated", images_repeated)
+      .Add("rejected_images", rejected)
+      .Add("image_width", c.image_width)
+      .Add("image_height", c.image_height)
+      .Add("output", output);
+  return j;
+}
+
 std::optional<std::vector<cv::Point2f>> DetectBoard(const cv::Mat& image, const BoardSpec& board,
                                                     const DetectionOptions& options) {
   board.Check();

@@ -20,7 +20,6 @@
 #include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
-#include "impactdic/io/json.h"
 
 namespace impactdic::cli {
 namespace {
@@ -36,53 +35,6 @@ struct CalibrateArgs {
   int min_views = CalibrationOptions{}.min_views;
   bool fix_k3 = CalibrationOptions{}.fix_k3;
 };
-
-void PrintText(const CameraCalibration& c, const CalibrationSummary& s, const std::string& out) {
-  std::cout << fmt::format("images: {} used, {} rejected (of {})\n", s.images_used,
-                           s.images_rejected, s.images_total);
-  for (const RejectedView& r : c.rejected)
-    std::cout << fmt::format("  rejected {}: {}\n", r.image, r.reason);
-  std::cout << fmt::format("reprojection RMS: {:.4f} px (worst view {} {:.4f} px)\n", c.rms_px,
-                           s.worst_view, s.worst_view_rms_px);
-  std::cout << fmt::format(
-      "intrinsics: fx {:.4f}  fy {:.4f}  cx {:.4f}  cy {:.4f} [px], image {}x{}\n", c.fx, c.fy,
-      c.cx, c.cy, c.image_width, c.image_height);
-  std::cout << fmt::format("distortion: k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}\n",
-                           c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
-  if (c.plane)
-    std::cout << fmt::format("scale: {:.6f} +- {:.6f} mm/px (plane view {})\n", c.plane->mm_per_px,
-                             c.plane->mm_per_px_uncertainty, c.plane->image);
-  else
-    std::cout << "scale: none (give --plane IMAGE, a view of the board lying on the panel)\n";
-  std::cout << "written: " << out << "\n";
-}
-
-void PrintJson(const CameraCalibration& c, const CalibrationSummary& s, const std::string& out) {
-  JsonObject j;
-  j.Add("rms_px", c.rms_px)
-      .Add("fx", c.fx)
-      .Add("fy", c.fy)
-      .Add("cx", c.cx)
-      .Add("cy", c.cy)
-      .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()));
-  if (c.plane) {
-    j.Add("mm_per_px", c.plane->mm_per_px);
-    j.Add("mm_per_px_uncertainty", c.plane->mm_per_px_uncertainty);
-  } else {
-    j.AddNull("mm_per_px");
-    j.AddNull("mm_per_px_uncertainty");
-  }
-  std::vector<std::string> rejected;
-  for (const RejectedView& r : c.rejected) rejected.push_back(r.image);
-  j.Add("images_used", s.images_used)
-      .Add("images_rejected", s.images_rejected)
-      .Add("images_repeated", s.images_repeated)
-      .Add("rejected_images", rejected)
-      .Add("image_width", c.image_width)
-      .Add("image_height", c.image_height)
-      .Add("output", out);
-  std::cout << j.Dump() << "\n";
-}
 
 }  // namespace
 
@@ -117,8 +69,7 @@ void RegisterCalibrateCommand(CLI::App& app) {
     CalibrationOptions options;
     WithFlagNames({{"board", "--board"}, {"board.square_mm", "--square"}},
                   [&] { options.board = ParseBoard(args->board, args->square_mm); });
-    CheckValue(args->format == "text" || args->format == "json", "--format", args->format,
-               "text or json");
+    CheckFormat(args->format);
     options.max_rms_px = args->max_rms_px;
     options.min_views = args->min_views;
     options.fix_k3 = args->fix_k3;
@@ -156,10 +107,8 @@ void RegisterCalibrateCommand(CLI::App& app) {
       }
     }();
     SaveCalibration(calibration, args->output);
-    if (args->format == "json")
-      PrintJson(calibration, summary, args->output);
-    else
-      PrintText(calibration, summary, args->output);
+    std::cout << (args->format == "json" ? summary.ToJson(calibration, args->output).Dump() + "\n"
+                                         : summary.CommandReport(calibration, args->output));
   });
 }
 

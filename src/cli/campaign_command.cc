@@ -42,8 +42,7 @@ CampaignPlan PlanOf(const std::vector<std::string>& files) {
 }
 
 CampaignOptions OptionsOf(const CampaignArgs& a) {
-  if (a.format != "text" && a.format != "json")
-    throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
+  CheckFormat(a.format);
   if (a.threads) CheckThreadCount(*a.threads, "--threads");
   CampaignOptions o;
   o.output_folder = a.output;

@@ -6,14 +6,17 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/pipeline/scene_flags.h"
 
 namespace impactdic {
 class PartialResultsError;  // pipeline/pipeline.h
+struct Scene;               // pipeline/scene.h
 }  // namespace impactdic
 
 namespace impactdic::cli {
@@ -56,6 +59,35 @@ inline constexpr const char* kAllowPartialFlag = "--allow-partial";
 // `command` ("run", "analyze") exposes it as kAllowPartialFlag. Throws Error(kNumerical)
 // "PROBLEM; `impactdic COMMAND --allow-partial` REMEDY" (PartialResultsError's two texts).
 [[noreturn]] void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command);
+
+// Scene keys as flags (pipeline/scene_flags.h): each key of `sections` becomes a flag named as the
+// key ("--dic.max_iterations") and one per alias of the command ("--search-radius"), unless `cmd`
+// binds that name itself; their text is kept in `values` (flag -> key, text). ApplySceneKeyFlags
+// sets the ones given into `scene` (SetSceneKey, naming the flag used); a key given under two
+// names is an error.
+using SceneKeyValues = std::map<std::string, std::pair<std::string, std::string>>;
+void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
+                      SceneKeyValues* values);
+void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene);
+
+// A scene key the command binds itself (its own type and checks): the flag "--KEY" and the
+// command's aliases of it (SceneFlagAliases), all storing into `value`; an alias excludes the key
+// flag. `default_text` (if any) is shown as their default.
+template <typename T>
+void AddSceneKeyOption(CLI::App* cmd, const std::string& key, T* value, const std::string& help,
+                       const std::string& default_text = "") {
+  CLI::Option* key_flag = cmd->add_option("--" + key, *value, help);
+  std::vector<CLI::Option*> flags = {key_flag};
+  for (const SceneFlagAlias& a : SceneFlagAliases()) {
+    if (cmd->get_name() == a.command && key == a.key)
+      flags.push_back(cmd->add_option(a.alias, *value, "Short for --" + key)->excludes(key_flag));
+  }
+  if (!default_text.empty())
+    for (CLI::Option* flag : flags) flag->default_str(default_text);
+}
+
+// --format of a report on stdout: "text" or "json", else Error naming --format.
+void CheckFormat(const std::string& format);
 
 }  // namespace impactdic::cli
 

@@ -1,5 +1,5 @@
-// RethrowWithFlagNames, RethrowWithPartialFlag (commands.h): library field names -> command-line
-// flags.
+// RethrowWithFlagNames, RethrowWithPartialFlag, the scene key flags and CheckFormat (commands.h):
+// library field names and scene keys -> command-line flags.
 #include <fmt/format.h>
 
 #include <string>
@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene_flags.h"
 
 namespace impactdic::cli {
 
@@ -24,6 +25,38 @@ void RethrowWithFlagNames(const Error& e, const FlagNames& flags) {
 void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command) {
   throw Error(ErrorKind::kNumerical, fmt::format("{}; `impactdic {} {}` {}", e.problem(), command,
                                                  kAllowPartialFlag, e.remedy()));
+}
+
+void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
+                      SceneKeyValues* values) {
+  for (const SceneKeyFlag& f : SceneKeyFlags(sections)) {
+    std::vector<std::string> names = {"--" + f.key};
+    for (const SceneFlagAlias& a : SceneFlagAliases())
+      if (cmd->get_name() == a.command && f.key == a.key) names.emplace_back(a.alias);
+    for (const std::string& name : names) {
+      if (cmd->get_option_no_throw(name)) continue;  // The command binds it itself.
+      const bool on_off = f.default_text == "true" || f.default_text == "false";
+      auto& [key, text] = (*values)[name];
+      key = f.key;
+      cmd->add_option(name, text, name == names[0] ? f.help : "Short for " + names[0])
+          ->default_str(on_off ? (f.default_text == "true" ? "on" : "off") : f.default_text);
+    }
+  }
+}
+
+void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene) {
+  std::map<std::string, std::string> given;  // Key -> the flag that set it.
+  for (const auto& [flag, key_text] : values) {
+    const auto& [key, text] = key_text;
+    if (cmd.count(flag) == 0) continue;
+    const auto [first, inserted] = given.emplace(key, flag);
+    CheckValue(inserted, first->second + "/" + flag, "both given", "one name of " + key);
+    SetSceneKey(scene, key, text, flag);
+  }
+}
+
+void CheckFormat(const std::string& format) {
+  CheckValue(format == "text" || format == "json", "--format", format, "text or json");
 }
 
 }  // namespace impactdic::cli

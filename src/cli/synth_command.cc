@@ -2,190 +2,19 @@
 // Renders a synthetic impact scene (synth/impact_scene.h, docs/synth.md): frames, sensor CSV,
 // calibration images through the same lens (calibrated here with the calib module into
 // DIR/calibration/camera.yaml), the scene YAML that processes it and the ground truth HDF5.
-#include <fmt/format.h>
-
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <array>
-#include <filesystem>
 #include <iostream>
 #include <memory>
-#include <optional>
-#include <stdexcept>
 #include <string>
-#include <system_error>
-#include <utility>
-#include <vector>
 
 #include "commands.h"
-#include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
-#include "impactdic/core/log.h"
-#include "impactdic/io/atomic_file.h"
-#include "impactdic/io/output_generation.h"
-#include "impactdic/model/impact_model.h"
-#include "impactdic/synth/dem_scene.h"
-#include "impactdic/synth/impact_scene.h"
-#include "impactdic/synth/realistic.h"
+#include "impactdic/pipeline/synth_folder.h"
 
 namespace impactdic::cli {
-namespace {
-
-struct SynthArgs {
-  std::string spec_path;
-  std::string preset;
-  std::string output;
-  std::string dem_dir;
-  std::string realistic_spec;
-  std::optional<int> frames;  // Overrides the spec's frames.count.
-  bool calibrate = true;
-  bool force = false;  // Replace a folder another command wrote (io/output_generation.h).
-};
-
-// The scene points at calibration/camera.yaml: make it from the rendered images in `staging` (the
-// generation's folder; messages name `output`, where they will be).
-void CalibrateRendered(const ImpactSceneSpec& spec, const std::string& staging,
-                       const std::string& output, bool calibrate) {
-  namespace fs = std::filesystem;
-  if (!spec.render_calibration || !spec.calibration_yaml.empty()) return;
-  const fs::path dir = fs::path(staging) / "calibration";
-  const std::string yaml = (dir / "camera.yaml").string();
-  if (calibrate) {
-    CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
-    CalibrationSummary summary;
-    CameraCalibration calibration = CalibrateFromFiles(
-        {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
-    SaveCalibration(calibration, yaml);
-    LogInfo("calibration: {}", summary.BriefReport());
-  } else {
-    const fs::path final_dir = fs::path(output) / "calibration";
-    const std::string final_yaml = (final_dir / "camera.yaml").string();
-    LogWarning(
-        "--no-calibrate: the scene points at {} which does not exist yet; make it with "
-        "impactdic calibrate --board 9x6 --square 25 --plane {} {} -o {}",
-        final_yaml, (final_dir / "plane.png").string(), (final_dir / "view_*.png").string(),
-        final_yaml);
-  }
-}
-
-// impactdic synth --dem DIR: films a DEM run (synth/dem_scene.h, docs/validation.md).
-void RunSynthDem(const SynthArgs& args, const ImpactSceneSpec& spec, OutputGeneration& generation) {
-  if (args.frames)
-    throw Error(ErrorKind::kInvalidValue, "--frames", std::to_string(*args.frames),
-                "no --frames with --dem (the frames are the DEM's snapshots)");
-  DemRecord record = ReadDemRecord(args.dem_dir);
-  DemScene scene(std::move(record), spec);
-  const DemTruth& t = scene.truth();
-  LogInfo(
-      "DEM scene: {} frames, {} grains, bulk density {:.1f} kg/m^3, grid mass {:.4g} kg (bulk "
-      "estimate {:.4g} kg), p_max {:.4g} N s, t_e {:.4g} ms, m_add,max {:.4g} kg, conservation "
-      "error at t_e {:.2f} % (max {:.2f} % in the peak stage)",
-      scene.frame_count(), scene.record().frames[0].grains.size(), t.bulk_density_kg_m3,
-      t.grid_mass_kg, t.grid_mass_bulk_kg, t.p_max_Ns, t.t_e_s * 1e3, t.m_add_max_kg,
-      100 * t.conservation_error_te, 100 * t.conservation_error_peak);
-  for (const auto& note : t.notes) LogWarning("DEM truth: {}", note);
-  DemSceneReport report = WriteDemScene(scene, generation.staging_folder());
-  CalibrateRendered(scene.base().spec(), generation.staging_folder(), args.output, args.calibrate);
-  generation.Commit();
-  for (std::string* path : {&report.out_dir, &report.scene_yaml, &report.truth_h5,
-                            &report.sensor_csv, &report.calibration_yaml})
-    *path = generation.FinalPath(*path);
-  std::cout << report.BriefReport() << "\n";
-  std::cout << "scene: " << report.scene_yaml << "\n";
-}
-
-// impactdic synth --realistic SPEC -o DIR: realistic footage (synth/realistic.h, docs/synth.md).
-void RunSynthRealistic(const SynthArgs& args) {
-  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() || args.frames)
-    throw Error(ErrorKind::kInvalidValue, "--realistic", args.realistic_spec,
-                "no SCENE_SPEC, --preset, --dem or --frames with --realistic (the realistic "
-                "spec has its own `realistic.frames`)");
-  const RealisticSceneSpec spec = LoadRealisticSceneSpec(args.realistic_spec);
-  CheckNotAnInput((std::filesystem::path(args.output) / "spec.yaml").string(), "-o",
-                  {args.realistic_spec});
-  OutputGenerationOptions generation_options;
-  generation_options.command = "impactdic synth --realistic";
-  generation_options.own_names = {"frames", "spec.yaml", "truth.h5"};
-  generation_options.force = args.force;
-  generation_options.nested_kinds = {"run", "render"};  // Runs of the scene it replaces.
-  OutputGeneration generation(args.output, generation_options);
-  const RealisticScene scene(spec);
-  const RealisticSceneReport report = WriteRealisticScene(scene, generation.staging_folder());
-  generation.Commit();
-  std::cout << fmt::format("realistic scene: {} frames of {}x{} px in {:.1f} s; truth {}\n",
-                           report.frames, spec.width, spec.height, report.render_seconds,
-                           generation.FinalPath(report.truth_h5));
-}
-
-void RunSynth(const SynthArgs& args) {
-  if (!args.realistic_spec.empty()) {
-    if (args.output.empty())
-      throw Error(ErrorKind::kInvalidValue, "-o", "nothing", "an output folder");
-    RunSynthRealistic(args);
-    return;
-  }
-  // Validate everything before any work.
-  if (args.spec_path.empty() && args.preset.empty())
-    throw Error(ErrorKind::kInvalidValue, "SCENE_SPEC", "nothing",
-                "a scene spec YAML file or --preset small|full|tiny");
-  if (args.output.empty())
-    throw Error(ErrorKind::kInvalidValue, "-o", "nothing", "an output folder");
-  if (!args.preset.empty() && !args.spec_path.empty())
-    throw Error(ErrorKind::kInvalidValue, "--preset", args.preset,
-                "no --preset together with a spec file (write `preset:` in the spec)");
-  ImpactSceneSpec spec =
-      args.spec_path.empty() ? ImpactScenePreset(args.preset) : LoadImpactSceneSpec(args.spec_path);
-  if (args.frames) spec.frames = *args.frames;
-  // The spec's check (the allowed counts are defined there), naming --frames for the override.
-  try {
-    spec.Check();
-  } catch (const Error& e) {
-    if (!args.frames) throw;
-    RethrowWithFlagNames(e, {{"frames.count", "--frames"}});
-  }
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(args.output, ec) && !fs::is_directory(args.output, ec))
-    throw Error(ErrorKind::kInvalidValue, "-o", args.output, "a folder, not a file");
-  // The files synth replaces in DIR must not include the spec it reads.
-  for (const char* name : {"scene.yaml", "spec.yaml", "sensor.csv", "truth.h5"})
-    CheckNotAnInput((fs::path(args.output) / name).string(), "-o", {args.spec_path});
-  // The folder's files are one generation (io/output_generation.h): made in a staging folder and
-  // swapped in when complete, replacing an earlier scene (and the runs nested in it) whole.
-  OutputGenerationOptions generation_options;
-  generation_options.command = "impactdic synth";
-  for (const char* name : kImpactSceneOutputNames) generation_options.own_names.emplace_back(name);
-  generation_options.known_names = {"results"};  // The scene's outputs.folder, run by an older
-                                                 // impactdic (newer runs leave a marker in it).
-  generation_options.force = args.force;
-  generation_options.nested_kinds = {"run", "render"};  // Runs of the scene it replaces.
-  OutputGeneration generation(args.output, generation_options);
-
-  if (!args.dem_dir.empty()) {
-    RunSynthDem(args, spec, generation);
-    return;
-  }
-  ImpactScene scene(spec);
-  LogInfo("model: {}", scene.model_run().summary.BriefReport());
-  LogInfo("scene: {} frames of {}x{} px, t_e = {:.4g} ms, m_grid = {:.4g} kg, ROI [{}, {}, {}, {}]",
-          scene.frame_count(), spec.width, spec.height, scene.momentum().t_e_s * 1e3,
-          scene.momentum().m_grid_kg, scene.dic_grid().roi[0], scene.dic_grid().roi[1],
-          scene.dic_grid().roi[2], scene.dic_grid().roi[3]);
-  ImpactSceneReport report = WriteImpactScene(scene, generation.staging_folder());
-
-  CalibrateRendered(spec, generation.staging_folder(), args.output, args.calibrate);
-  generation.Commit();
-  for (std::string* path : {&report.out_dir, &report.scene_yaml, &report.truth_h5,
-                            &report.sensor_csv, &report.spec_yaml, &report.calibration_dir})
-    *path = generation.FinalPath(*path);
-  std::cout << report.BriefReport() << "\n";
-  std::cout << "scene: " << report.scene_yaml << "\n";
-}
-
-}  // namespace
 
 void RegisterSynthCommand(CLI::App& app) {
-  auto args = std::make_shared<SynthArgs>();
+  auto args = std::make_shared<SynthFolderOptions>();
   auto* cmd = app.add_subcommand(
       "synth",
       "Render a synthetic impact scene (frames, sensor CSV, calibration images, scene YAML, "
@@ -210,7 +39,18 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_flag("--force", args->force,
                 "Replace an output folder another command wrote (a run, a campaign); files "
                 "impactdic did not write are never replaced");
-  cmd->callback([args] { RunSynth(*args); });
+  cmd->callback([args] {
+    // Validate everything before any work (WriteSynthFolder checks the spec).
+    const SynthFolderOptions& a = *args;
+    if (a.realistic_spec.empty()) {
+      CheckValue(!a.spec_path.empty() || !a.preset.empty(), "SCENE_SPEC", "nothing",
+                 "a scene spec YAML file or --preset small|full|tiny");
+      CheckValue(a.preset.empty() || a.spec_path.empty(), "--preset", a.preset,
+                 "no --preset together with a spec file (write `preset:` in the spec)");
+    }
+    CheckValue(!a.output.empty(), "-o", "nothing", "an output folder");
+    std::cout << WriteSynthFolder(a);
+  });
 }
 
 }  // namespace impactdic::cli

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <numbers>
@@ -762,6 +763,37 @@ ImpactRun SimulateImpact(const ImpactModelParameters& params, const ImpactSolver
 }
 
 // ---------------------------------------------------------------------------------------------
+
+JsonObject ImpactSummary::ToJson(const ImpactModelParameters& params,
+                                 const ImpactSolverOptions& options) const {
+  JsonObject j;
+  j.Add("t_end_s", t_end_s)
+      .Add("crater_depth_m", crater_depth_m)
+      .Add("relative_penetration", relative_penetration)
+      .Add("added_mass_max_kg", added_mass_max_kg)
+      .Add("peak_deceleration_g", peak_deceleration_g)
+      .Add("t_peak_s", t_peak_s)
+      .Add("plateau_deceleration_g", plateau_deceleration_g)
+      .Add("momentum_ratio", momentum_ratio)
+      .Add("solver", solver)
+      .Add("steps", static_cast<std::int64_t>(steps))
+      .Add("rejected_steps", static_cast<std::int64_t>(rejected_steps))
+      .Add("rhs_evals", static_cast<std::int64_t>(rhs_evals))
+      .Add("jacobian_evals", static_cast<std::int64_t>(jacobian_evals))
+      .Add("error_estimate", error_estimate)
+      .Add("wall_time_s", wall_time_s)
+      .Add("warnings", warnings)
+      .Add("solver_reason", solver_reason)
+      .Add("error_estimator", error_estimator)
+      .Add("error_estimate_local", error_estimate_local)
+      .Add("impact_velocity_m_s", params.impact_velocity_m_s)
+      .Add("rtol", options.EffectiveRtol())
+      .Add("atol", options.EffectiveAtol())
+      .Add("stopped", stopped)
+      .Add("stop_reason", stop_reason)
+      .Add("t_reached_s", t_reached_s);
+  return j;
+}
 
 bool ImpactSummary::IsUsable() const {
   return stopped && std::isfinite(crater_depth_m) && std::isfinite(t_end_s);

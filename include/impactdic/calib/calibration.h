@@ -31,6 +31,7 @@
 
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
+#include "impactdic/io/json.h"
 
 namespace impactdic {
 
@@ -145,6 +146,10 @@ struct CalibrationSummary {
   double calibration_seconds = 0;
   std::string BriefReport() const;
   std::string FullReport(const CameraCalibration& calibration) const;
+  // What `impactdic calibrate` prints (text, or JSON for --format json): the images used and
+  // rejected, the RMS, intrinsics, distortion and scale, and `output`, the calibration written.
+  std::string CommandReport(const CameraCalibration& calibration, const std::string& output) const;
+  JsonObject ToJson(const CameraCalibration& calibration, const std::string& output) const;
   bool IsUsable(const CalibrationOptions& options) const {
     return images_used >= options.min_views && rms_px <= options.max_rms_px;
   }

@@ -26,6 +26,7 @@
 #include "impactdic/core/enum_names.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
+#include "impactdic/io/json.h"
 #include "impactdic/model/ode.h"
 
 namespace impactdic {
@@ -215,6 +216,9 @@ struct ImpactSummary {
   bool IsUsable() const;
   std::string BriefReport() const;  // One line.
   std::string FullReport() const;   // Several lines.
+  // The summary as JSON (`impactdic model --format json`), with the run's impact velocity and
+  // effective tolerances (`params`, `options`: the run's).
+  JsonObject ToJson(const ImpactModelParameters& params, const ImpactSolverOptions& options) const;
 };
 
 // Time series at the steps (t, z, v, dv/dt, m_add, dm_add/dt and each force term). At v = 0 the

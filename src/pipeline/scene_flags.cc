@@ -1,0 +1,110 @@
+#include "impactdic/pipeline/scene_flags.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
+#include "impactdic/io/yaml.h"
+
+namespace impactdic {
+
+const std::vector<SceneFlagAlias>& SceneFlagAliases() {
+  static const std::vector<SceneFlagAlias> kAliases = {
+      {"correlate", "inputs.frames", "--frames"},
+      {"correlate", "dic.subset_size", "--subset"},
+      {"correlate", "dic.step", "--step"},
+      {"correlate", "dic.roi", "--roi"},
+      {"correlate", "dic.mask", "--mask"},
+      {"correlate", "dic.interpolation", "--interp"},
+      {"correlate", "dic.shape", "--shape"},
+      {"correlate", "dic.reference_update", "--reference-update"},
+      {"correlate", "dic.threads", "--threads"},
+      {"correlate", "dic.search_radius_px", "--search-radius"},
+      {"correlate", "dic.min_zncc", "--min-zncc"},
+      {"correlate", "dic.max_uncertainty_px", "--max-uncertainty"},
+      {"correlate", "dic.continuity_check", "--continuity-check"},
+      {"correlate", "dic.continuity_misfit_ratio", "--continuity-misfit-ratio"},
+      {"correlate", "dic.continuity_min_misfit", "--continuity-min-misfit"},
+      {"correlate", "dic.continuity_max_second_difference_px",
+       "--continuity-max-second-difference"},
+      {"correlate", "dic.continuity_max_neighbour_difference_px",
+       "--continuity-max-neighbour-difference"},
+      {"correlate", "dic.continuity_local_ratio", "--continuity-local-ratio"},
+      {"correlate", "dic.outlier_check", "--outlier-check"},
+      {"correlate", "dic.outlier_threshold", "--outlier-threshold"},
+      {"correlate", "dic.outlier_noise_px", "--outlier-noise"},
+      {"correlate", "dic.outlier_sigma_factor", "--outlier-sigma-factor"},
+      {"model", "test.mass_kg", "--mass"},
+      {"model", "test.drop_height_m", "--height"},
+      {"model", "test.impact_velocity_m_s", "--velocity"},
+      {"model", "test.width_m", "--width"},
+      {"model", "test.depth_m", "--depth"},
+      {"model", "test.density_kg_m3", "--rho"},
+      {"model", "test.bed_height_m", "--bed-height"},
+      {"model", "test.g_m_s2", "--g"},
+      {"model", "model.added_mass_kg", "--added-mass"},
+      {"model", "model.K", "--K"},
+      {"model", "model.n", "--n"},
+      {"model", "model.u", "--u"},
+      {"model", "model.T_s", "--T"},
+      {"model", "model.b_per_s", "--b"},
+      {"model", "model.solver", "--solver"},
+      {"model", "model.rtol", "--rtol"},
+      {"model", "model.atol", "--atol"},
+  };
+  return kAliases;
+}
+
+std::string SceneFlagNames(const std::string& command, const std::string& key) {
+  std::string names = "--" + key;
+  for (const SceneFlagAlias& a : SceneFlagAliases())
+    if (command == a.command && key == a.key) names += std::string(",") + a.alias;
+  return names;
+}
+
+std::string SceneFlagShortName(const std::string& command, const std::string& key) {
+  for (const SceneFlagAlias& a : SceneFlagAliases())
+    if (command == a.command && key == a.key) return a.alias;
+  return "--" + key;
+}
+
+namespace {
+
+bool InSections(const std::string& section, const std::vector<std::string>& sections) {
+  for (const std::string& s : sections)
+    if (section == s || section.rfind(s + ".", 0) == 0) return true;
+  return false;
+}
+
+}  // namespace
+
+std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections) {
+  Scene defaults;
+  std::vector<SceneKeyFlag> flags;
+  for (const YamlOptionTable& table : SceneOptionTables(&defaults)) {
+    if (!InSections(table.section(), sections)) continue;
+    for (const YamlOptionTable::Entry& e : table.entries())
+      flags.push_back({table.section() + "." + e.key, e.doc + "; " + e.expected, e.default_text});
+  }
+  return flags;
+}
+
+void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
+                 const std::string& flag) {
+  for (const YamlOptionTable& table : SceneOptionTables(scene)) {
+    for (const YamlOptionTable::Entry& e : table.entries()) {
+      if (table.section() + "." + e.key != key) continue;
+      // A number as written, text quoted (as the library's own messages show them).
+      CheckValue(e.parse(YAML::Node(value)), flag, ParseNumber(value) ? value : "'" + value + "'",
+                 e.expected);
+      return;
+    }
+  }
+  throw std::logic_error("SetSceneKey: no scene key " + key);
+}
+
+}  // namespace impactdic
