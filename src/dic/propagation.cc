@@ -132,8 +132,8 @@ class Correlator::Impl::FrameSolver {
   // subsets.
   bool Predict(int i, Params* p0) const {
     const int grid_nx = m_.nx, grid_ny = m_.ny;
-    const std::vector<internal::SubsetTrack>& tracks = m_.tracks;
-    const internal::SubsetTrack& t = tracks[i];
+    const std::vector<internal::SubsetTrack>& all = m_.tracks;
+    const internal::SubsetTrack& t = all[i];
     if (std::isnan(t.pos_last.x)) return false;
     cv::Point2d pred = t.pos_last;
     if (!std::isnan(t.pos_prev.x)) {
@@ -143,7 +143,7 @@ class Correlator::Impl::FrameSolver {
       for (int rr = std::max(0, r - 1); rr <= std::min(grid_ny - 1, r + 1); ++rr) {
         for (int cc = std::max(0, c - 1); cc <= std::min(grid_nx - 1, c + 1); ++cc) {
           const int j = rr * grid_nx + cc;
-          const internal::SubsetTrack& tj = tracks[j];
+          const internal::SubsetTrack& tj = all[j];
           if (std::isnan(tj.pos_last.x) || std::isnan(tj.pos_prev.x)) continue;
           velocity += tj.pos_last - tj.pos_prev;
           ++count;
