@@ -1408,6 +1408,39 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
   *sigma_v = static_cast<float>(std::sqrt(var_r * std::max(sums[1], hinv[nm * n + nm])));
 }
 
+// True when the warped subset, with a 1 px margin, lies inside the deformed image's valid region
+// at every pixel it samples. An affine warp's extremes are at the corners; a quadratic warp along
+// a pixel row is a parabola in xi, whose extremes are at the row's ends or at its vertex (which may
+// lie inside the row, beyond the corners and edge midpoints).
+bool WarpedSubsetInside(const Shape& shape, const SubsetRef& s, const Params& p,
+                        const DeformedImage& def) {
+  const auto at = [&](double xi, double eta, double* x, double* y) {
+    double du, dv;
+    Displacement(shape, p, xi, eta, &du, &dv);
+    *x = s.cx + xi + du;
+    *y = s.cy + eta + dv;
+    return *x - 1 >= def.x_min && *x + 1 < def.x_max && *y - 1 >= def.y_min && *y + 1 < def.y_max;
+  };
+  const double h = shape.half;
+  double x[3], y[3];
+  if (shape.kind != ShapeFunction::kQuadratic) {
+    return at(-h, -h, x, y) && at(h, -h, x, y) && at(-h, h, x, y) && at(h, h, x, y);
+  }
+  for (int row = -shape.half; row <= shape.half; ++row) {
+    const double eta = row;
+    if (!at(-h, eta, &x[0], &y[0]) || !at(0, eta, &x[1], &y[1]) || !at(h, eta, &x[2], &y[2])) {
+      return false;
+    }
+    for (const double* f : {x, y}) {  // f(xi) = f1 + c1 xi + c2 xi^2 through the three samples.
+      const double c2 = (f[2] + f[0] - 2 * f[1]) / (2 * h * h), c1 = (f[2] - f[0]) / (2 * h);
+      const double vertex = c2 != 0 ? -c1 / (2 * c2) : 0;
+      double vx, vy;
+      if (std::abs(vertex) < h && !at(vertex, eta, &vx, &vy)) return false;
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s, const double* hinv,
@@ -1440,18 +1473,10 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
   }
   for (int it = 1; it <= options.max_iterations; ++it) {
     result.iterations = it;
-    // The warped subset (corners, edge midpoints, 1 px margin) must stay in the valid region.
-    for (int k = 0; k < 9; ++k) {
-      if (k == 4) continue;
-      const int column = k % 3, row = k / 3;  // Corners and edge midpoints.
-      const double xi = (column - 1) * h, eta = (row - 1) * h;
-      double du, dv;
-      Displacement(shape, p, xi, eta, &du, &dv);
-      const double x = s.cx + xi + du, y = s.cy + eta + dv;
-      if (!(x - 1 >= def.x_min && x + 1 < def.x_max && y - 1 >= def.y_min && y + 1 < def.y_max)) {
-        result.status = SubsetStatus::kOutOfImage;
-        return result;
-      }
+    // The warped subset (every sampled pixel, 1 px margin) must stay in the valid region.
+    if (!WarpedSubsetInside(shape, s, p, def)) {
+      result.status = SubsetStatus::kOutOfImage;
+      return result;
     }
     Sums sums;
     if (cubic) {
@@ -1507,6 +1532,12 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
     const double var_r = r2 / (count - n);
     if (move < std::max(options.convergence_px,
                         options.convergence_sigma_fraction * std::sqrt(var_r) * corner_sd)) {
+      // The converged warp is sampled once more (the residuals of the uncertainty): it must stay
+      // in the valid region too (a quadratic subset's last step read past the image).
+      if (!WarpedSubsetInside(shape, s, p, def)) {
+        result.status = SubsetStatus::kOutOfImage;
+        return result;
+      }
       CorrelatedResidualSigma(shape, ref, s, hinv, spline, p, var_r, &result.sigma_u_px,
                               &result.sigma_v_px);
       result.sigma_px = std::max(result.sigma_u_px, result.sigma_v_px);
