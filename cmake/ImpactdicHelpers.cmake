@@ -24,9 +24,14 @@ function(impactdic_add_module)
   set(target impactdic_${ARG_NAME})
   add_library(${target} STATIC ${ARG_SOURCES})
   add_library(impactdic::${ARG_NAME} ALIAS ${target})
-  target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>)
+  target_include_directories(${target} PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include>
+                                              $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   impactdic_target_defaults(${target})
+  # Installed as impactdic::<NAME> of the exported package (top CMakeLists.txt, "Install").
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${ARG_NAME})
+  install(TARGETS ${target} EXPORT impactdicTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endfunction()
 
 # impactdic_registered_sources(VAR reference_update_policies.def) sets VAR to the source files named

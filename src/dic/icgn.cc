@@ -13,33 +13,15 @@
 
 #include <algorithm>
 #include <array>
-#include <cstddef>
-#if defined(__AVX2__) && defined(__FMA__)
-#define IMPACTDIC_DIC_AVX2 1
-#include <immintrin.h>
-// The IC-GN pass uses 16-lane AVX-512 where available (unless IMPACTDIC_DIC_NO_AVX512 is defined,
-// to test the 8-lane path on such machines).
-#if defined(__AVX512F__) && !defined(IMPACTDIC_DIC_NO_AVX512)
-#define IMPACTDIC_DIC_AVX512 1
-#else
-#define IMPACTDIC_DIC_AVX512 0
-#endif
-#else
-#define IMPACTDIC_DIC_AVX512 0
-#define IMPACTDIC_DIC_AVX2 0
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-#endif
 #include <cassert>
 #include <cmath>
+#include <cstddef>
 #include <vector>
+
+#include "icgn_kernels.h"
 
 namespace impactdic::internal {
 namespace {
-
-// Longest subset row of the vectorised reference moments, in blocks of 8 pixels.
-constexpr int kMaxBlocks = 32;
 
 constexpr int kMonoPx[6] = {0, 1, 0, 2, 1, 0};
 constexpr int kMonoPy[6] = {0, 0, 1, 0, 1, 2};
@@ -52,747 +34,6 @@ void Monomials(double xi, double eta, double m[6]) {
   m[3] = 0.5 * xi * xi;
   m[4] = xi * eta;
   m[5] = 0.5 * eta * eta;
-}
-
-inline void QuinticWeightsF(float t, float w[6]) {
-  const float s = 1 - t;
-  const float t2 = t * t, t4 = t2 * t2, t5 = t4 * t;
-  const float s2 = s * s, s4 = s2 * s2;
-  constexpr float k = 1.0f / 120;
-  w[0] = s4 * s * k;
-  w[5] = t5 * k;
-  // Distance 1 + t (mid piece) and 1 - t, 2 - t.
-  const float d1 = 1 + t, d1_2 = d1 * d1, d1_4 = d1_2 * d1_2;
-  w[1] = (51 + 75 * d1 - 210 * d1_2 + 150 * d1_2 * d1 - 45 * d1_4 + 5 * d1_4 * d1) * k;
-  w[2] = (66 - 60 * t2 + 30 * t4 - 10 * t5) * k;
-  const float s5 = s4 * s;
-  w[3] = (66 - 60 * s2 + 30 * s4 - 10 * s5) * k;
-  w[4] = 1 - w[0] - w[1] - w[2] - w[3] - w[5];
-}
-
-// One pass over the subset: accumulates the sums of the expansion above.
-struct Sums {
-  double sg = 0, sgg = 0, sfg = 0;
-  double a[2][3][3] = {};  // sum g' grad_a xi^p eta^q, a = x/y, p + q <= 2.
-};
-
-template <int kTaps, bool kQuad>
-// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
-void Accumulate(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
-                std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
-  const float fm = s.f_mean;
-  // Integer part of the translation moved into the centre, so local coordinates stay small.
-  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
-  const double u = p[0] - iu, v = p[nm] - iv;
-  const int ccx = dcx + iu, ccy = dcy + iv;
-  const cv::Point rc = RefCentre(ref, s);
-  const int rcx = rc.x, rcy = rc.y;
-  const std::size_t rstride = ref.f.step1();
-  for (int j = 0; j < size; ++j) {
-    const double eta = j - h;
-    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
-    if constexpr (kQuad) {
-      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
-      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
-      ax2 = static_cast<float>(0.5 * p[3]);
-      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
-      ay1 = static_cast<float>(p[7] + p[10] * eta);
-      ay2 = static_cast<float>(0.5 * p[9]);
-    } else {
-      ax0 = static_cast<float>(u + p[2] * eta);
-      ax1 = static_cast<float>(1 + p[1]);
-      ay0 = static_cast<float>(eta + v + p[5] * eta);
-      ay1 = static_cast<float>(p[4]);
-    }
-    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
-    const float* fr = ref.f.ptr<float>() + roff;
-    const float* gxr = ref.gx.ptr<float>() + roff;
-    const float* gyr = ref.gy.ptr<float>() + roff;
-    float sg = 0, sgg = 0, sfg = 0, a0 = 0, a1 = 0, a2 = 0, b0 = 0, b1 = 0, b2 = 0;
-    for (int i = 0; i < size; ++i) {
-      const float xi = static_cast<float>(i - h);
-      float x, y;
-      if constexpr (kQuad) {
-        x = ax0 + xi * (ax1 + xi * ax2);
-        y = ay0 + xi * (ay1 + xi * ay2);
-      } else {
-        x = ax0 + xi * ax1;
-        y = ay0 + xi * ay1;
-      }
-      // floor() of small local coordinates without a library call.
-      const int ix = static_cast<int>(x + 1024.0f) - 1024;
-      const int iy = static_cast<int>(y + 1024.0f) - 1024;
-      const float tx = x - static_cast<float>(ix), ty = y - static_cast<float>(iy);
-      const float* c =
-          coef + static_cast<std::size_t>(ccy + iy - kLow) * stride + (ccx + ix - kLow);
-      float g = 0;
-      if constexpr (kTaps == 4) {
-#if defined(__SSE2__)
-        // Weights of the 4 taps as cubic polynomials of t, evaluated 4-wide (Horner), then the
-        // 4x4 block: rows weighted by wy and summed, dot product with wx.
-        const __m128 tx4 = _mm_set1_ps(tx), ty4 = _mm_set1_ps(ty);
-        const __m128 kA = _mm_setr_ps(-1.0f / 6, 0.5f, -0.5f, 1.0f / 6);
-        const __m128 kB = _mm_setr_ps(0.5f, -1.0f, 0.5f, 0.0f);
-        const __m128 kC = _mm_setr_ps(-0.5f, 0.0f, 0.5f, 0.0f);
-        const __m128 kD = _mm_setr_ps(1.0f / 6, 4.0f / 6, 1.0f / 6, 0.0f);
-        const __m128 wx4 = _mm_add_ps(
-            _mm_mul_ps(_mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(kA, tx4), kB), tx4), kC), tx4),
-            kD);
-        const __m128 wy4 = _mm_add_ps(
-            _mm_mul_ps(_mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(kA, ty4), kB), ty4), kC), ty4),
-            kD);
-        __m128 acc = _mm_mul_ps(_mm_loadu_ps(c), _mm_shuffle_ps(wy4, wy4, 0x00));
-        acc = _mm_add_ps(acc, _mm_mul_ps(_mm_loadu_ps(c + stride), _mm_shuffle_ps(wy4, wy4, 0x55)));
-        acc = _mm_add_ps(acc,
-                         _mm_mul_ps(_mm_loadu_ps(c + 2 * stride), _mm_shuffle_ps(wy4, wy4, 0xAA)));
-        acc = _mm_add_ps(acc,
-                         _mm_mul_ps(_mm_loadu_ps(c + 3 * stride), _mm_shuffle_ps(wy4, wy4, 0xFF)));
-        acc = _mm_mul_ps(acc, wx4);
-        __m128 sh = _mm_shuffle_ps(acc, acc, _MM_SHUFFLE(2, 3, 0, 1));
-        acc = _mm_add_ps(acc, sh);
-        sh = _mm_movehl_ps(sh, acc);
-        g = _mm_cvtss_f32(_mm_add_ss(acc, sh));
-#else
-        float wx[4], wy[4];
-        CubicWeights(tx, wx);
-        CubicWeights(ty, wy);
-        for (int r = 0; r < 4; ++r) {
-          const float* cr = c + r * stride;
-          g += wy[r] * (wx[0] * cr[0] + wx[1] * cr[1] + wx[2] * cr[2] + wx[3] * cr[3]);
-        }
-#endif
-      } else {
-        float wx[6], wy[6];
-        QuinticWeightsF(tx, wx);
-        QuinticWeightsF(ty, wy);
-        for (int r = 0; r < 6; ++r) {
-          const float* cr = c + r * stride;
-          g += wy[r] * (wx[0] * cr[0] + wx[1] * cr[1] + wx[2] * cr[2] + wx[3] * cr[3] +
-                        wx[4] * cr[4] + wx[5] * cr[5]);
-        }
-      }
-      const float gp = g - fm;
-      sg += gp;
-      sgg += gp * gp;
-      sfg += fr[i] * gp;
-      const float a = gp * gxr[i], b = gp * gyr[i];
-      a0 += a;
-      a1 += a * xi;
-      b0 += b;
-      b1 += b * xi;
-      if constexpr (kQuad) {
-        a2 += a * xi * xi;
-        b2 += b * xi * xi;
-      }
-    }
-    out->sg += sg;
-    out->sgg += sgg;
-    out->sfg += sfg;
-    const double e2 = eta * eta;
-    out->a[0][0][0] += a0;
-    out->a[0][1][0] += a1;
-    out->a[0][0][1] += a0 * eta;
-    out->a[1][0][0] += b0;
-    out->a[1][1][0] += b1;
-    out->a[1][0][1] += b0 * eta;
-    if constexpr (kQuad) {
-      out->a[0][2][0] += a2;
-      out->a[0][1][1] += a1 * eta;
-      out->a[0][0][2] += a0 * e2;
-      out->a[1][2][0] += b2;
-      out->a[1][1][1] += b1 * eta;
-      out->a[1][0][2] += b0 * e2;
-    }
-  }
-  (void)nm;
-}
-
-#if IMPACTDIC_DIC_AVX2
-// The same pass, 8 pixels of a subset row at a time (AVX2 + FMA, one pixel per lane). The B-spline
-// weights of the 8 pixels are evaluated lane-wise. Along a row the sample positions advance by
-// about one pixel per pixel, so in the usual ("regular") case the tap (r, k) of the 8 pixels is 8
-// consecutive coefficients: one unaligned load per tap. When a block straddles a change of the
-// integer row, or its integer columns do not advance by exactly one, the taps are gathered
-// instead; both paths evaluate the same expression in the same order. A row is covered by blocks
-// starting at 0, 8, ...; the last block is moved back to end at the row end, its lanes that the
-// previous block already covered are masked out (so nothing outside the subset is read); when it
-// adds only 1 or 2 pixels, those are interpolated one by one. The per-lane sums run over the whole
-// subset (float) and are reduced once at the end.
-inline __m256 Splat(float v) { return _mm256_set1_ps(v); }
-
-// Sum of the 8 lanes, in a fixed order.
-inline double HorizontalSum(__m256 v) {
-  const __m128 q = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps(v, 1));
-  const __m128 d = _mm_add_ps(q, _mm_movehl_ps(q, q));
-  return _mm_cvtss_f32(_mm_add_ss(d, _mm_shuffle_ps(d, d, 1)));
-}
-
-// 120 x the quintic B-spline weights b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2),
-// b5(t - 3) as polynomials of t: coefficients of 1, t, ..., t^5.
-constexpr float kQuinticC[6][6] = {
-    {1, -5, 10, -10, 5, -1},     // (1 - t)^5
-    {26, -50, 20, 20, -20, 5},   // b5(1 + t)
-    {66, 0, -60, 0, 30, -10},    // b5(t)
-    {26, 50, 20, -20, -20, 10},  // b5(1 - t)
-    {1, 5, 10, 10, 5, -5},       // b5(2 - t)
-    {0, 0, 0, 0, 0, 1},          // t^5
-};
-
-// Scale of the weights of WeightsAvx2 (per axis): the interpolated value is the weighted sum
-// divided by kWeightScale^2.
-template <int kTaps>
-constexpr float kWeightScale = kTaps == 4 ? 6.0f : 1.0f;
-
-template <int kTaps>
-inline void WeightsAvx2(__m256 t, __m256 w[kTaps]) {
-  if constexpr (kTaps == 4) {
-    // 6 x the cubic B-spline weights (the caller divides by 36 at the end): t^3, (1 - t)^3,
-    // 4 - 6 t^2 + 3 t^3 and the same of 1 - t.
-    const __m256 s = _mm256_sub_ps(Splat(1), t);
-    const __m256 t2 = _mm256_mul_ps(t, t), s2 = _mm256_mul_ps(s, s);
-    const __m256 t3 = _mm256_mul_ps(t2, t), s3 = _mm256_mul_ps(s2, s);
-    w[0] = s3;
-    w[1] = _mm256_fmadd_ps(t3, Splat(3), _mm256_fnmadd_ps(t2, Splat(6), Splat(4)));
-    w[2] = _mm256_fmadd_ps(s3, Splat(3), _mm256_fnmadd_ps(s2, Splat(6), Splat(4)));
-    w[3] = t3;
-  } else {
-    // Quintic B-spline weights as quintic polynomials of t (Horner), coefficients of
-    // b5(t + 2), b5(t + 1), b5(t), b5(t - 1), b5(t - 2), b5(t - 3) times 120.
-    for (int k = 0; k < 6; ++k) {
-      __m256 v = Splat(kQuinticC[k][5] / 120);
-      for (int d = 4; d >= 0; --d) v = _mm256_fmadd_ps(v, t, Splat(kQuinticC[k][d] / 120));
-      w[k] = v;
-    }
-  }
-}
-
-// Sum over the kTaps rows of the per-row tap sums weighted by wy.
-template <int kTaps>
-inline __m256 CombineRows(const __m256 wy[kTaps], const __m256 rs[kTaps]) {
-  __m256 g = _mm256_mul_ps(wy[0], rs[0]);
-  for (int r = 1; r < kTaps; ++r) g = _mm256_fmadd_ps(wy[r], rs[r], g);
-  return g;
-}
-
-// The B-spline at one local position (x, y) relative to `centre` (scalar).
-template <int kTaps>
-inline float SampleScalar(const float* centre, int stride, float x, float y) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const float fx = std::floor(x), fy = std::floor(y);
-  float wx[6], wy[6];
-  if constexpr (kTaps == 4) {
-    CubicWeights(x - fx, wx);
-    CubicWeights(y - fy, wy);
-  } else {
-    QuinticWeightsF(x - fx, wx);
-    QuinticWeightsF(y - fy, wy);
-  }
-  const float* c = centre + static_cast<std::ptrdiff_t>(static_cast<int>(fy) - kLow) * stride +
-                   (static_cast<int>(fx) - kLow);
-  float g = 0;
-  for (int r = 0; r < kTaps; ++r) {
-    const float* cr = c + static_cast<std::ptrdiff_t>(r) * stride;
-    float row = 0;
-    for (int k = 0; k < kTaps; ++k) row += wx[k] * cr[k];
-    g += wy[r] * row;
-  }
-  return g;
-}
-
-template <int kTaps, bool kQuad>
-// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
-void AccumulateAvx2(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
-                    std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
-  const __m256 fm = Splat(s.f_mean);
-  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
-  const double u = p[0] - iu, v = p[nm] - iv;
-  // Coefficients around the (shifted) subset centre; tap offsets are relative to it.
-  const float* centre =
-      coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
-      (dcx + iu);
-  const cv::Point rc = RefCentre(ref, s);
-  const int rcx = rc.x, rcy = rc.y;
-  const std::size_t rstride = ref.f.step1();
-  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-  const __m256i lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-  const int blocks = (size + 7) / 8;
-  const int istride = static_cast<int>(stride);
-  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
-  __m256 sg = _mm256_setzero_ps(), sgg = sg, sfg = sg;
-  // a[p][q]: sum g' gx xi^p eta^q; b: the same with gy.
-  __m256 a00 = sg, a10 = sg, a01 = sg, b00 = sg, b10 = sg, b01 = sg;
-  __m256 a20 = sg, a11 = sg, a02 = sg, b20 = sg, b11 = sg, b02 = sg;
-  for (int j = 0; j < size; ++j) {
-    const double eta = j - h;
-    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
-    if constexpr (kQuad) {
-      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
-      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
-      ax2 = static_cast<float>(0.5 * p[3]);
-      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
-      ay1 = static_cast<float>(p[7] + p[10] * eta);
-      ay2 = static_cast<float>(0.5 * p[9]);
-    } else {
-      ax0 = static_cast<float>(u + p[2] * eta);
-      ax1 = static_cast<float>(1 + p[1]);
-      ay0 = static_cast<float>(eta + v + p[5] * eta);
-      ay1 = static_cast<float>(p[4]);
-    }
-    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
-    const float* fr = ref.f.ptr<float>() + roff;
-    const float* gxr = ref.gx.ptr<float>() + roff;
-    const float* gyr = ref.gy.ptr<float>() + roff;
-    __m256 ra00 = _mm256_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
-           rb20 = ra00;
-    for (int b = 0; b < blocks; ++b) {
-      const int i0 = std::min(8 * b, size - 8), fresh = size - 8 * b;
-      const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
-      __m256 g;
-      if (fresh <= 2) {
-        // A row end of 1 or 2 pixels (e.g. subset 25 = 3 x 8 + 1): per pixel, not a block.
-        alignas(32) float gl[8] = {};
-        for (int l = 8 - fresh; l < 8; ++l) {
-          const float xs = static_cast<float>(i0 + l - h);
-          const float px = kQuad ? ax0 + xs * (ax1 + xs * ax2) : ax0 + xs * ax1;
-          const float py = kQuad ? ay0 + xs * (ay1 + xs * ay2) : ay0 + xs * ay1;
-          gl[l] = SampleScalar<kTaps>(centre, istride, px, py) * kScale2;
-        }
-        g = _mm256_load_ps(gl);
-      } else {
-        __m256 x, y;
-        if constexpr (kQuad) {
-          x = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ax2), Splat(ax1)), xi, Splat(ax0));
-          y = _mm256_fmadd_ps(_mm256_fmadd_ps(xi, Splat(ay2), Splat(ay1)), xi, Splat(ay0));
-        } else {
-          x = _mm256_fmadd_ps(xi, Splat(ax1), Splat(ax0));
-          y = _mm256_fmadd_ps(xi, Splat(ay1), Splat(ay0));
-        }
-        const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y);
-        const __m256 tx = _mm256_sub_ps(x, fx), ty = _mm256_sub_ps(y, fy);
-        const __m256i ix = _mm256_cvttps_epi32(fx), iy = _mm256_cvttps_epi32(fy);
-        const int ix0 = _mm256_cvtsi256_si32(ix), iy0 = _mm256_cvtsi256_si32(iy);
-        const __m256i expect_x = _mm256_add_epi32(_mm256_set1_epi32(ix0), lane_i);
-        const __m256i same = _mm256_and_si256(_mm256_cmpeq_epi32(ix, expect_x),
-                                              _mm256_cmpeq_epi32(iy, _mm256_set1_epi32(iy0)));
-        const bool regular = _mm256_movemask_epi8(same) == -1;
-        __m256 wx[kTaps], wy[kTaps];
-        WeightsAvx2<kTaps>(tx, wx);
-        WeightsAvx2<kTaps>(ty, wy);
-        if (regular) {
-          const float* c0 =
-              centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
-          __m256 rs[kTaps];
-          for (int r = 0; r < kTaps; ++r) {
-            const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
-            rs[r] = _mm256_mul_ps(wx[0], _mm256_loadu_ps(cr));
-            for (int k = 1; k < kTaps; ++k)
-              rs[r] = _mm256_fmadd_ps(wx[k], _mm256_loadu_ps(cr + k), rs[r]);
-          }
-          g = CombineRows<kTaps>(wy, rs);
-        } else {
-          const __m256i off0 =
-              _mm256_add_epi32(_mm256_mullo_epi32(_mm256_sub_epi32(iy, _mm256_set1_epi32(kLow)),
-                                                  _mm256_set1_epi32(istride)),
-                               _mm256_sub_epi32(ix, _mm256_set1_epi32(kLow)));
-          __m256 rs[kTaps];
-          for (int r = 0; r < kTaps; ++r) {
-            const __m256i offr = _mm256_add_epi32(off0, _mm256_set1_epi32(r * istride));
-            auto tap = [&](int k) {
-              return _mm256_i32gather_ps(centre, _mm256_add_epi32(offr, _mm256_set1_epi32(k)), 4);
-            };
-            rs[r] = _mm256_mul_ps(wx[0], tap(0));
-            for (int k = 1; k < kTaps; ++k) rs[r] = _mm256_fmadd_ps(wx[k], tap(k), rs[r]);
-          }
-          g = CombineRows<kTaps>(wy, rs);
-        }
-      }
-      __m256 gp = _mm256_fmsub_ps(g, Splat(1 / kScale2), fm);
-      if (i0 != 8 * b) {  // Mask the lanes of the previous block.
-        gp = _mm256_and_ps(gp,
-                           _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ));
-      }
-      sg = _mm256_add_ps(sg, gp);
-      sgg = _mm256_fmadd_ps(gp, gp, sgg);
-      sfg = _mm256_fmadd_ps(_mm256_loadu_ps(fr + i0), gp, sfg);
-      const __m256 a = _mm256_mul_ps(gp, _mm256_loadu_ps(gxr + i0));
-      const __m256 bb = _mm256_mul_ps(gp, _mm256_loadu_ps(gyr + i0));
-      ra00 = _mm256_add_ps(ra00, a);
-      ra10 = _mm256_fmadd_ps(a, xi, ra10);
-      rb00 = _mm256_add_ps(rb00, bb);
-      rb10 = _mm256_fmadd_ps(bb, xi, rb10);
-      if constexpr (kQuad) {
-        ra20 = _mm256_fmadd_ps(_mm256_mul_ps(a, xi), xi, ra20);
-        rb20 = _mm256_fmadd_ps(_mm256_mul_ps(bb, xi), xi, rb20);
-      }
-    }
-    const __m256 e = Splat(static_cast<float>(eta));
-    a00 = _mm256_add_ps(a00, ra00);
-    a10 = _mm256_add_ps(a10, ra10);
-    a01 = _mm256_fmadd_ps(ra00, e, a01);
-    b00 = _mm256_add_ps(b00, rb00);
-    b10 = _mm256_add_ps(b10, rb10);
-    b01 = _mm256_fmadd_ps(rb00, e, b01);
-    if constexpr (kQuad) {
-      const __m256 e2 = Splat(static_cast<float>(eta * eta));
-      a20 = _mm256_add_ps(a20, ra20);
-      a11 = _mm256_fmadd_ps(ra10, e, a11);
-      a02 = _mm256_fmadd_ps(ra00, e2, a02);
-      b20 = _mm256_add_ps(b20, rb20);
-      b11 = _mm256_fmadd_ps(rb10, e, b11);
-      b02 = _mm256_fmadd_ps(rb00, e2, b02);
-    }
-  }
-  out->sg = HorizontalSum(sg);
-  out->sgg = HorizontalSum(sgg);
-  out->sfg = HorizontalSum(sfg);
-  out->a[0][0][0] = HorizontalSum(a00);
-  out->a[0][1][0] = HorizontalSum(a10);
-  out->a[0][0][1] = HorizontalSum(a01);
-  out->a[1][0][0] = HorizontalSum(b00);
-  out->a[1][1][0] = HorizontalSum(b10);
-  out->a[1][0][1] = HorizontalSum(b01);
-  if constexpr (kQuad) {
-    out->a[0][2][0] = HorizontalSum(a20);
-    out->a[0][1][1] = HorizontalSum(a11);
-    out->a[0][0][2] = HorizontalSum(a02);
-    out->a[1][2][0] = HorizontalSum(b20);
-    out->a[1][1][1] = HorizontalSum(b11);
-    out->a[1][0][2] = HorizontalSum(b02);
-  }
-}
-#endif  // IMPACTDIC_DIC_AVX2
-
-#if IMPACTDIC_DIC_AVX2
-// The moments of PrepareSubset (gg[k][p][q] for p + q <= kPmax, gs and gf for p + q <= kPmax / 2,
-// ss), 8 pixels at a time: per-lane float sums of a row weighted by powers of xi, folded into the
-// per-lane subset sums with powers of eta at the end of each row, reduced once at the end.
-template <int kPmax>
-void MomentsAvx2(const RefImages& ref, int rx, int ry, int h, double* mean, int* saturated,
-                 double gg[3][5][5], double gs[2][3][3], double gf[2][3][3], double* ss) {
-  constexpr int kPs = kPmax / 2;
-  const int size = 2 * h + 1;
-  const __m256 lane = _mm256_setr_ps(0, 1, 2, 3, 4, 5, 6, 7);
-  // Intensities are taken relative to the centre pixel K (one pass: the mean is not known yet);
-  // the moments about the mean follow at the end.
-  const float shift = ref.f.ptr<float>(ry + h)[rx + h];
-  const __m256 zero = _mm256_setzero_ps(), m = Splat(shift);
-  const __m256 full = Splat(static_cast<float>(ref.full_scale)), one = Splat(1);
-  __m256 SF = zero, SAT = zero;
-  const int blocks = (size + 7) / 8;
-  __m256 GG[3][kPmax + 1][kPmax + 1], GS[2][kPs + 1][kPs + 1], GF[2][kPs + 1][kPs + 1];
-  __m256 SS = zero;
-  // Powers of xi of the lanes of each block (the same for every row), and the mask of the last
-  // block's lanes that the previous block did not cover.
-  __m256 xi_pow[kMaxBlocks][kPmax + 1];
-  for (int b = 0; b < blocks; ++b) {
-    const int i0 = std::min(8 * b, size - 8);
-    const __m256 xi = _mm256_add_ps(lane, Splat(static_cast<float>(i0 - h)));
-    xi_pow[b][0] = Splat(1);
-    for (int p = 1; p <= kPmax; ++p) xi_pow[b][p] = _mm256_mul_ps(xi_pow[b][p - 1], xi);
-  }
-  const __m256 keep_last =
-      _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * (blocks - 1) - (size - 8))), _CMP_GE_OQ);
-  for (auto& a : GG)
-    for (auto& b : a)
-      for (auto& c : b) c = zero;
-  for (int a = 0; a < 2; ++a)
-    for (int p = 0; p <= kPs; ++p)
-      for (int q = 0; q <= kPs; ++q) GS[a][p][q] = GF[a][p][q] = zero;
-  for (int j = 0; j < size; ++j) {
-    const float* f = ref.f.ptr<float>(ry + j) + rx;
-    const float* gxr = ref.gx.ptr<float>(ry + j) + rx;
-    const float* gyr = ref.gy.ptr<float>(ry + j) + rx;
-    __m256 rg[3][kPmax + 1], rs[2][kPs + 1], rf[2][kPs + 1];
-    for (auto& a : rg)
-      for (auto& b : a) b = zero;
-    for (int a = 0; a < 2; ++a)
-      for (int p = 0; p <= kPs; ++p) rs[a][p] = rf[a][p] = zero;
-    for (int b = 0; b < blocks; ++b) {
-      const int i0 = std::min(8 * b, size - 8);
-      __m256 fd = _mm256_sub_ps(_mm256_loadu_ps(f + i0), m);  // f - K.
-      __m256 g[2] = {_mm256_loadu_ps(gxr + i0), _mm256_loadu_ps(gyr + i0)};
-      const __m256 raw = _mm256_loadu_ps(f + i0);
-      __m256 sat = _mm256_and_ps(
-          _mm256_or_ps(_mm256_cmp_ps(raw, zero, _CMP_LE_OQ), _mm256_cmp_ps(raw, full, _CMP_GE_OQ)),
-          one);
-      if (i0 != 8 * b) {  // Mask the lanes of the previous block.
-        fd = _mm256_and_ps(fd, keep_last);
-        g[0] = _mm256_and_ps(g[0], keep_last);
-        g[1] = _mm256_and_ps(g[1], keep_last);
-        sat = _mm256_and_ps(sat, keep_last);
-      }
-      SF = _mm256_add_ps(SF, fd);
-      SAT = _mm256_add_ps(SAT, sat);
-      const __m256* xp = xi_pow[b];
-      SS = _mm256_fmadd_ps(fd, fd, SS);
-      const __m256 prod[3] = {_mm256_mul_ps(g[0], g[0]), _mm256_mul_ps(g[0], g[1]),
-                              _mm256_mul_ps(g[1], g[1])};
-      const __m256 lf[2] = {_mm256_mul_ps(g[0], fd), _mm256_mul_ps(g[1], fd)};
-      for (int k = 0; k < 3; ++k) {
-        rg[k][0] = _mm256_add_ps(rg[k][0], prod[k]);
-        for (int p = 1; p <= kPmax; ++p) rg[k][p] = _mm256_fmadd_ps(prod[k], xp[p], rg[k][p]);
-      }
-      for (int a = 0; a < 2; ++a) {
-        rs[a][0] = _mm256_add_ps(rs[a][0], g[a]);
-        rf[a][0] = _mm256_add_ps(rf[a][0], lf[a]);
-        for (int p = 1; p <= kPs; ++p) {
-          rs[a][p] = _mm256_fmadd_ps(g[a], xp[p], rs[a][p]);
-          rf[a][p] = _mm256_fmadd_ps(lf[a], xp[p], rf[a][p]);
-        }
-      }
-    }
-    const float eta = static_cast<float>(j - h);
-    float ep = 1;
-    for (int q = 0; q <= kPmax; ++q) {
-      const __m256 e = Splat(ep);
-      for (int p = 0; p + q <= kPmax; ++p) {
-        for (int k = 0; k < 3; ++k) GG[k][p][q] = _mm256_fmadd_ps(rg[k][p], e, GG[k][p][q]);
-        if (p + q <= kPs) {
-          for (int a = 0; a < 2; ++a) {
-            GS[a][p][q] = _mm256_fmadd_ps(rs[a][p], e, GS[a][p][q]);
-            GF[a][p][q] = _mm256_fmadd_ps(rf[a][p], e, GF[a][p][q]);
-          }
-        }
-      }
-      ep *= eta;
-    }
-  }
-  for (int q = 0; q <= kPmax; ++q) {
-    for (int p = 0; p + q <= kPmax; ++p) {
-      for (int k = 0; k < 3; ++k) gg[k][p][q] = HorizontalSum(GG[k][p][q]);
-      if (p + q <= kPs) {
-        for (int a = 0; a < 2; ++a) {
-          gs[a][p][q] = HorizontalSum(GS[a][p][q]);
-          gf[a][p][q] = HorizontalSum(GF[a][p][q]);
-        }
-      }
-    }
-  }
-  // About the mean: sum g (f - mean) = sum g (f - K) - (mean - K) sum g, and
-  // sum (f - mean)^2 = sum (f - K)^2 - N (mean - K)^2.
-  const double count = double(size) * size, offset = HorizontalSum(SF) / count;
-  *mean = shift + offset;
-  *saturated = static_cast<int>(HorizontalSum(SAT));
-  for (int a = 0; a < 2; ++a)
-    for (int p = 0; p <= kPs; ++p)
-      for (int q = 0; p + q <= kPs; ++q) gf[a][p][q] -= offset * gs[a][p][q];
-  *ss = std::max(0.0, HorizontalSum(SS) - count * offset * offset);
-}
-#endif  // IMPACTDIC_DIC_AVX2
-
-#if IMPACTDIC_DIC_AVX512
-// The IC-GN pass 16 pixels at a time (AVX-512): as AccumulateAvx2, with blocks of 16 lanes
-// starting at 0, 16, ... and the lanes past the row end masked (masked loads read nothing
-// there), so a row of 25 pixels takes two blocks.
-inline __m512 Splat16(float v) { return _mm512_set1_ps(v); }
-// All lanes (the zero-masking forms of some intrinsics avoid a GCC 12 false
-// -Wmaybe-uninitialized in the unmasked ones).
-constexpr __mmask16 kAll = 0xFFFF;
-
-// Sum of the 16 lanes, in a fixed order.
-inline double Sum16(__m512 v) {
-  alignas(64) float lanes[16];
-  _mm512_store_ps(lanes, v);
-  float s = 0;
-  for (float l : lanes) s += l;
-  return s;
-}
-
-template <int kTaps>
-inline void WeightsAvx512(__m512 t, __m512 w[kTaps]) {
-  if constexpr (kTaps == 4) {
-    const __m512 s = _mm512_sub_ps(Splat16(1), t);
-    const __m512 t2 = _mm512_mul_ps(t, t), s2 = _mm512_mul_ps(s, s);
-    const __m512 t3 = _mm512_mul_ps(t2, t), s3 = _mm512_mul_ps(s2, s);
-    w[0] = s3;
-    w[1] = _mm512_fmadd_ps(t3, Splat16(3), _mm512_fnmadd_ps(t2, Splat16(6), Splat16(4)));
-    w[2] = _mm512_fmadd_ps(s3, Splat16(3), _mm512_fnmadd_ps(s2, Splat16(6), Splat16(4)));
-    w[3] = t3;
-  } else {
-    for (int k = 0; k < 6; ++k) {
-      __m512 v = Splat16(kQuinticC[k][5] / 120);
-      for (int d = 4; d >= 0; --d) v = _mm512_fmadd_ps(v, t, Splat16(kQuinticC[k][d] / 120));
-      w[k] = v;
-    }
-  }
-}
-
-// The B-spline (times kWeightScale^2) at the local positions (x, y) of the lanes in m, relative to
-// `centre`; lanes outside m are 0 and read nothing. When the lanes' integer positions advance by
-// one column along one row (the usual case), each tap is one unaligned load; otherwise the taps
-// are gathered (the same expression in the same order).
-template <int kTaps>
-inline __m512 SampleBlock16(const float* centre, int istride, __m512 x, __m512 y, __mmask16 m) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const __m512i lane_i = _mm512_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const __m512 fx = _mm512_maskz_roundscale_ps(kAll, x, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-  const __m512 fy = _mm512_maskz_roundscale_ps(kAll, y, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
-  const __m512 tx = _mm512_sub_ps(x, fx), ty = _mm512_sub_ps(y, fy);
-  const __m512i ix = _mm512_maskz_cvttps_epi32(kAll, fx), iy = _mm512_maskz_cvttps_epi32(kAll, fy);
-  const int ix0 = _mm512_cvtsi512_si32(ix), iy0 = _mm512_cvtsi512_si32(iy);
-  const __mmask16 off =
-      _mm512_mask_cmpneq_epi32_mask(m, ix, _mm512_add_epi32(_mm512_set1_epi32(ix0), lane_i)) |
-      _mm512_mask_cmpneq_epi32_mask(m, iy, _mm512_set1_epi32(iy0));
-  __m512 wx[kTaps], wy[kTaps], rs[kTaps];
-  WeightsAvx512<kTaps>(tx, wx);
-  WeightsAvx512<kTaps>(ty, wy);
-  if (off == 0) {
-    const float* c0 = centre + static_cast<std::ptrdiff_t>(iy0 - kLow) * istride + (ix0 - kLow);
-    for (int r = 0; r < kTaps; ++r) {
-      const float* cr = c0 + static_cast<std::ptrdiff_t>(r) * istride;
-      rs[r] = _mm512_mul_ps(wx[0], _mm512_maskz_loadu_ps(m, cr));
-      for (int k = 1; k < kTaps; ++k)
-        rs[r] = _mm512_fmadd_ps(wx[k], _mm512_maskz_loadu_ps(m, cr + k), rs[r]);
-    }
-  } else {
-    const __m512i off0 =
-        _mm512_add_epi32(_mm512_mullo_epi32(_mm512_sub_epi32(iy, _mm512_set1_epi32(kLow)),
-                                            _mm512_set1_epi32(istride)),
-                         _mm512_sub_epi32(ix, _mm512_set1_epi32(kLow)));
-    for (int r = 0; r < kTaps; ++r) {
-      const __m512i offr = _mm512_add_epi32(off0, _mm512_set1_epi32(r * istride));
-      auto tap = [&](int k) {
-        return _mm512_mask_i32gather_ps(_mm512_setzero_ps(), m,
-                                        _mm512_add_epi32(offr, _mm512_set1_epi32(k)), centre, 4);
-      };
-      rs[r] = _mm512_mul_ps(wx[0], tap(0));
-      for (int k = 1; k < kTaps; ++k) rs[r] = _mm512_fmadd_ps(wx[k], tap(k), rs[r]);
-    }
-  }
-  __m512 g = _mm512_mul_ps(wy[0], rs[0]);
-  for (int r = 1; r < kTaps; ++r) g = _mm512_fmadd_ps(wy[r], rs[r], g);
-  return g;
-}
-
-template <int kTaps, bool kQuad>
-// NOLINTNEXTLINE(readability-function-size): a SIMD kernel, kept whole (docs/architecture.md)
-void AccumulateAvx512(const Shape& shape, const RefImages& ref, const SubsetRef& s,
-                      const float* coef, std::size_t stride, int dcx, int dcy, const Params& p,
-                      Sums* out) {
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
-  const __m512 fm = Splat16(s.f_mean);
-  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
-  const double u = p[0] - iu, v = p[nm] - iv;
-  const float* centre =
-      coef + static_cast<std::ptrdiff_t>(dcy + iv) * static_cast<std::ptrdiff_t>(stride) +
-      (dcx + iu);
-  const cv::Point rc = RefCentre(ref, s);
-  const int rcx = rc.x, rcy = rc.y;
-  const std::size_t rstride = ref.f.step1();
-  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  const int blocks = (size + 15) / 16;
-  const int istride = static_cast<int>(stride);
-  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
-  __m512 sg = _mm512_setzero_ps(), sgg = sg, sfg = sg;
-  __m512 a00 = sg, a10 = sg, a01 = sg, b00 = sg, b10 = sg, b01 = sg;
-  __m512 a20 = sg, a11 = sg, a02 = sg, b20 = sg, b11 = sg, b02 = sg;
-  for (int j = 0; j < size; ++j) {
-    const double eta = j - h;
-    float ax0, ax1, ax2 = 0, ay0, ay1, ay2 = 0;
-    if constexpr (kQuad) {
-      ax0 = static_cast<float>(u + p[2] * eta + 0.5 * p[5] * eta * eta);
-      ax1 = static_cast<float>(1 + p[1] + p[4] * eta);
-      ax2 = static_cast<float>(0.5 * p[3]);
-      ay0 = static_cast<float>(eta + v + p[8] * eta + 0.5 * p[11] * eta * eta);
-      ay1 = static_cast<float>(p[7] + p[10] * eta);
-      ay2 = static_cast<float>(0.5 * p[9]);
-    } else {
-      ax0 = static_cast<float>(u + p[2] * eta);
-      ax1 = static_cast<float>(1 + p[1]);
-      ay0 = static_cast<float>(eta + v + p[5] * eta);
-      ay1 = static_cast<float>(p[4]);
-    }
-    const std::size_t roff = static_cast<std::size_t>(rcy + j - h) * rstride + (rcx - h);
-    const float* fr = ref.f.ptr<float>() + roff;
-    const float* gxr = ref.gx.ptr<float>() + roff;
-    const float* gyr = ref.gy.ptr<float>() + roff;
-    __m512 ra00 = _mm512_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
-           rb20 = ra00;
-    for (int b = 0; b < blocks; ++b) {
-      const int i0 = 16 * b, valid = std::min(16, size - i0);
-      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
-      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
-      __m512 x, y;
-      if constexpr (kQuad) {
-        x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, Splat16(ax2), Splat16(ax1)), xi, Splat16(ax0));
-        y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, Splat16(ay2), Splat16(ay1)), xi, Splat16(ay0));
-      } else {
-        x = _mm512_fmadd_ps(xi, Splat16(ax1), Splat16(ax0));
-        y = _mm512_fmadd_ps(xi, Splat16(ay1), Splat16(ay0));
-      }
-      const __m512 g = SampleBlock16<kTaps>(centre, istride, x, y, m);
-      const __m512 gp = _mm512_maskz_fmsub_ps(m, g, Splat16(1 / kScale2), fm);
-      sg = _mm512_add_ps(sg, gp);
-      sgg = _mm512_fmadd_ps(gp, gp, sgg);
-      sfg = _mm512_fmadd_ps(_mm512_maskz_loadu_ps(m, fr + i0), gp, sfg);
-      const __m512 a = _mm512_mul_ps(gp, _mm512_maskz_loadu_ps(m, gxr + i0));
-      const __m512 bb = _mm512_mul_ps(gp, _mm512_maskz_loadu_ps(m, gyr + i0));
-      ra00 = _mm512_add_ps(ra00, a);
-      ra10 = _mm512_fmadd_ps(a, xi, ra10);
-      rb00 = _mm512_add_ps(rb00, bb);
-      rb10 = _mm512_fmadd_ps(bb, xi, rb10);
-      if constexpr (kQuad) {
-        ra20 = _mm512_fmadd_ps(_mm512_mul_ps(a, xi), xi, ra20);
-        rb20 = _mm512_fmadd_ps(_mm512_mul_ps(bb, xi), xi, rb20);
-      }
-    }
-    const __m512 e = Splat16(static_cast<float>(eta));
-    a00 = _mm512_add_ps(a00, ra00);
-    a10 = _mm512_add_ps(a10, ra10);
-    a01 = _mm512_fmadd_ps(ra00, e, a01);
-    b00 = _mm512_add_ps(b00, rb00);
-    b10 = _mm512_add_ps(b10, rb10);
-    b01 = _mm512_fmadd_ps(rb00, e, b01);
-    if constexpr (kQuad) {
-      const __m512 e2 = Splat16(static_cast<float>(eta * eta));
-      a20 = _mm512_add_ps(a20, ra20);
-      a11 = _mm512_fmadd_ps(ra10, e, a11);
-      a02 = _mm512_fmadd_ps(ra00, e2, a02);
-      b20 = _mm512_add_ps(b20, rb20);
-      b11 = _mm512_fmadd_ps(rb10, e, b11);
-      b02 = _mm512_fmadd_ps(rb00, e2, b02);
-    }
-  }
-  out->sg = Sum16(sg);
-  out->sgg = Sum16(sgg);
-  out->sfg = Sum16(sfg);
-  out->a[0][0][0] = Sum16(a00);
-  out->a[0][1][0] = Sum16(a10);
-  out->a[0][0][1] = Sum16(a01);
-  out->a[1][0][0] = Sum16(b00);
-  out->a[1][1][0] = Sum16(b10);
-  out->a[1][0][1] = Sum16(b01);
-  if constexpr (kQuad) {
-    out->a[0][2][0] = Sum16(a20);
-    out->a[0][1][1] = Sum16(a11);
-    out->a[0][0][2] = Sum16(a02);
-    out->a[1][2][0] = Sum16(b20);
-    out->a[1][1][1] = Sum16(b11);
-    out->a[1][0][2] = Sum16(b02);
-  }
-}
-#endif  // IMPACTDIC_DIC_AVX512
-
-// Dispatches to the vectorised pass where it is compiled in and the subset is at least 8 px wide.
-template <int kTaps, bool kQuad>
-void AccumulateBest(const Shape& shape, const RefImages& ref, const SubsetRef& s, const float* coef,
-                    std::size_t stride, int dcx, int dcy, const Params& p, Sums* out) {
-#if IMPACTDIC_DIC_AVX512
-  if (2 * shape.half + 1 >= 8) {
-    AccumulateAvx512<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
-    return;
-  }
-#elif IMPACTDIC_DIC_AVX2
-  if (2 * shape.half + 1 >= 8) {
-    AccumulateAvx2<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
-    return;
-  }
-#endif
-  Accumulate<kTaps, kQuad>(shape, ref, s, coef, stride, dcx, dcy, p, out);
 }
 
 }  // namespace
@@ -909,6 +150,27 @@ Params ComposeInverse(const Shape& s, const Params& p, const Params& dp) {
   return q;
 }
 
+namespace {
+
+// The pointers of subset s's reference pixels for the kernels (f, gx and gy share their layout).
+MomentInput RefMoments(const Shape& shape, const RefImages& ref, const SubsetRef& s) {
+  assert(ref.gx.step1() == ref.f.step1() && ref.gy.step1() == ref.f.step1());
+  const int h = shape.half;
+  const cv::Point rc = RefCentre(ref, s);
+  MomentInput in;
+  in.half = h;
+  in.stride = static_cast<std::ptrdiff_t>(ref.f.step1());
+  const std::ptrdiff_t corner = static_cast<std::ptrdiff_t>(rc.y - h) * in.stride + (rc.x - h);
+  in.f = ref.f.ptr<float>() + corner;
+  in.gx = ref.gx.ptr<float>() + corner;
+  in.gy = ref.gy.ptr<float>() + corner;
+  in.full_scale = ref.full_scale;
+  in.pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
+  return in;
+}
+
+}  // namespace
+
 void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& options,
                    SubsetRef* s, double* hinv) {
   const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
@@ -917,77 +179,18 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
     s->status = SubsetStatus::kOutOfImage;
     return;
   }
-  const cv::Point rc = RefCentre(ref, *s);
-  const int rx = rc.x - h, ry = rc.y - h;
-  const int pmax = shape.kind == ShapeFunction::kAffine ? 2 : 4;
-  const bool vector = size >= 8 && size <= 8 * kMaxBlocks;
-  const double count = double(size) * size;
-  double mean = 0;
-  int saturated = 0;
   // Moments: gg[k][p][q] = sum g_a g_b xi^p eta^q (k: xx, xy, yy), gs[a][p][q] = sum g_a ...,
-  // gf[a][p][q] = sum g_a (f - mean) ...
-  double gg[3][5][5] = {}, gs[2][3][3] = {}, gf[2][3][3] = {}, ss = 0;
-#if IMPACTDIC_DIC_AVX2
-  if (vector) {
-    if (pmax == 2)
-      MomentsAvx2<2>(ref, rx, ry, h, &mean, &saturated, gg, gs, gf, &ss);
-    else
-      MomentsAvx2<4>(ref, rx, ry, h, &mean, &saturated, gg, gs, gf, &ss);
-  }
-#endif
-  if (!IMPACTDIC_DIC_AVX2 || !vector) {
-    double sum = 0;
-    for (int j = 0; j < size; ++j) {
-      const float* f = ref.f.ptr<float>(ry + j) + rx;
-      for (int i = 0; i < size; ++i) {
-        sum += f[i];
-        saturated += (f[i] <= 0 || f[i] >= ref.full_scale) ? 1 : 0;
-      }
-    }
-    mean = sum / count;
-  }
-  if (!IMPACTDIC_DIC_AVX2 || !vector) {
-    for (int j = 0; j < size; ++j) {
-      const double eta = j - h;
-      const float* f = ref.f.ptr<float>(ry + j) + rx;
-      const float* gx = ref.gx.ptr<float>(ry + j) + rx;
-      const float* gy = ref.gy.ptr<float>(ry + j) + rx;
-      double rg[3][5] = {}, rs[2][3] = {}, rf[2][3] = {};
-      for (int i = 0; i < size; ++i) {
-        const double xi = i - h, fd = f[i] - mean;
-        ss += fd * fd;
-        const double g[2] = {gx[i], gy[i]};
-        const double prod[3] = {g[0] * g[0], g[0] * g[1], g[1] * g[1]};
-        double xp = 1;
-        for (int p = 0; p <= pmax; ++p) {
-          for (int k = 0; k < 3; ++k) rg[k][p] += prod[k] * xp;
-          if (p <= 2) {
-            for (int a = 0; a < 2; ++a) {
-              rs[a][p] += g[a] * xp;
-              rf[a][p] += g[a] * fd * xp;
-            }
-          }
-          xp *= xi;
-        }
-      }
-      double ep = 1;
-      for (int q = 0; q <= pmax; ++q) {
-        for (int p = 0; p + q <= pmax; ++p) {
-          for (int k = 0; k < 3; ++k) gg[k][p][q] += rg[k][p] * ep;
-          if (p + q <= 2) {
-            for (int a = 0; a < 2; ++a) {
-              gs[a][p][q] += rs[a][p] * ep;
-              gf[a][p][q] += rf[a][p] * ep;
-            }
-          }
-        }
-        ep *= eta;
-      }
-    }
-  }
+  // gf[a][p][q] = sum g_a (f - mean) ... (MomentSums).
+  MomentSums moments;
+  ActiveIcgnKernel().moments(RefMoments(shape, ref, *s), &moments);
+  const double count = double(size) * size;
+  const double mean = moments.mean, ss = moments.ss;
+  const auto& gg = moments.gg;
+  const auto& gs = moments.gs;
+  const auto& gf = moments.gf;
   s->f_mean = static_cast<float>(mean);
   s->f_norm = static_cast<float>(std::sqrt(ss));
-  if (saturated > options.max_saturated_fraction * count) {
+  if (moments.saturated > options.max_saturated_fraction * count) {
     s->status = SubsetStatus::kSaturated;
     return;
   }
@@ -1020,9 +223,6 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
 
 namespace {
 
-// Half-width [px] of the lag window over which the residuals' spatial covariance is estimated.
-constexpr int kResidualLagPx = 2;
-
 // The variance of the B-spline node gradient (BsplineImage::NodeGradients, the reference
 // gradients of IC-GN) of unit white noise, divided by that of the central difference (1/2):
 // measured once per interpolator on the spline of a unit impulse.
@@ -1040,104 +240,6 @@ double NodeGradientNoiseRatio(Interpolation kind) {
   static const double quintic = gain(Interpolation::kBiquintic);
   return kind == Interpolation::kBicubic ? cubic : quintic;
 }
-
-// The deformed image's spline at the warped subset's pixels (row-major into g), returning their
-// sum. Along a row the warped position is a polynomial of xi of degree <= 2.
-template <int kTaps>
-double SampleWarpedSubset(const Shape& shape, const BsplineImage& spline, const SubsetRef& s,
-                          const Params& p, double* g) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const int h = shape.half, size = 2 * h + 1;
-  const std::ptrdiff_t stride = static_cast<std::ptrdiff_t>(spline.coefficients().step1());
-  const float* centre = spline.coefficients().ptr<float>() +
-                        static_cast<std::ptrdiff_t>(s.cy - spline.region().y) * stride +
-                        (s.cx - spline.region().x);
-  double sum = 0;
-  for (int j = 0; j < size; ++j) {
-    double du0, dv0, dup, dvp, dum, dvm;
-    Displacement(shape, p, 0, j - h, &du0, &dv0);
-    Displacement(shape, p, 1, j - h, &dup, &dvp);
-    Displacement(shape, p, -1, j - h, &dum, &dvm);
-    const double x0 = du0, x1 = 1 + 0.5 * (dup - dum), x2 = 0.5 * (dup + dum) - du0;
-    const double y0 = (j - h) + dv0, y1 = 0.5 * (dvp - dvm), y2 = 0.5 * (dvp + dvm) - dv0;
-    for (int i = 0; i < size; ++i) {
-      const double xi = i - h;
-      const double x = x0 + xi * (x1 + xi * x2), y = y0 + xi * (y1 + xi * y2);
-      const double fx = std::floor(x), fy = std::floor(y);
-      float wx[kTaps], wy[kTaps];
-      if constexpr (kTaps == 4) {
-        CubicWeights(static_cast<float>(x - fx), wx);
-        CubicWeights(static_cast<float>(y - fy), wy);
-      } else {
-        QuinticWeightsF(static_cast<float>(x - fx), wx);
-        QuinticWeightsF(static_cast<float>(y - fy), wy);
-      }
-      const float* c =
-          centre + (static_cast<int>(fy) - kLow) * stride + (static_cast<int>(fx) - kLow);
-      float value = 0;
-      for (int row = 0; row < kTaps; ++row) {
-        const float* cr = c + row * stride;
-        float line = 0;
-        for (int k = 0; k < kTaps; ++k) line += wx[k] * cr[k];
-        value += wy[row] * line;
-      }
-      g[j * size + i] = value;
-      sum += value;
-    }
-  }
-  return sum;
-}
-
-#if IMPACTDIC_DIC_AVX512
-// SampleWarpedSubset 16 pixels at a time (AVX-512, SampleBlock16): positions in float relative to
-// the subset centre moved by the warp's integer translation, as in the IC-GN pass.
-template <int kTaps>
-double SampleWarpedSubset16(const Shape& shape, const BsplineImage& spline, const SubsetRef& s,
-                            const Params& p, double* g) {
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
-  const int istride = static_cast<int>(spline.coefficients().step1());
-  const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
-  const float* centre = spline.coefficients().ptr<float>() +
-                        static_cast<std::ptrdiff_t>(s.cy - spline.region().y + iv) * istride +
-                        (s.cx - spline.region().x + iu);
-  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
-  __m512d sum = _mm512_setzero_pd();
-  for (int j = 0; j < size; ++j) {
-    double du0, dv0, dup, dvp, dum, dvm;
-    Displacement(shape, p, 0, j - h, &du0, &dv0);
-    Displacement(shape, p, 1, j - h, &dup, &dvp);
-    Displacement(shape, p, -1, j - h, &dum, &dvm);
-    const __m512 x0 = Splat16(static_cast<float>(du0 - iu)),
-                 x1 = Splat16(static_cast<float>(1 + 0.5 * (dup - dum))),
-                 x2 = Splat16(static_cast<float>(0.5 * (dup + dum) - du0));
-    const __m512 y0 = Splat16(static_cast<float>((j - h) + dv0 - iv)),
-                 y1 = Splat16(static_cast<float>(0.5 * (dvp - dvm))),
-                 y2 = Splat16(static_cast<float>(0.5 * (dvp + dvm) - dv0));
-    double* gj = g + static_cast<std::ptrdiff_t>(j) * size;
-    for (int i0 = 0; i0 < size; i0 += 16) {
-      const int valid = std::min(16, size - i0);
-      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
-      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
-      const __m512 x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, x2, x1), xi, x0);
-      const __m512 y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, y2, y1), xi, y0);
-      const __m512 v =
-          _mm512_mul_ps(SampleBlock16<kTaps>(centre, istride, x, y, m), Splat16(1 / kScale2));
-      const __m512d lo = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 0));
-      const __m512d hi = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 1));
-      const __mmask8 mlo = static_cast<__mmask8>(m & 0xFF), mhi = static_cast<__mmask8>(m >> 8);
-      _mm512_mask_storeu_pd(gj + i0, mlo, lo);
-      _mm512_mask_storeu_pd(gj + i0 + 8, mhi, hi);
-      sum = _mm512_add_pd(sum, _mm512_maskz_add_pd(mlo, lo, _mm512_maskz_mov_pd(mhi, hi)));
-    }
-  }
-  alignas(64) double lanes[8];
-  _mm512_store_pd(lanes, sum);
-  double total = 0;
-  for (double l : lanes) total += l;
-  return total;
-}
-#endif
 
 // Standard deviations of the warp's translation (u, v) at the solution p, from the residuals
 // r = (f - f_m) - (f_n / g_n) (g - g_m). The least-squares figure sigma_r sqrt(H^-1) assumes
@@ -1173,16 +275,35 @@ void SubsetResiduals(const Shape& shape, const RefImages& ref, const SubsetRef& 
   const cv::Point rc = RefCentre(ref, s);
   const int rx = rc.x - h, ry = rc.y - h;
   // The warped subset g, sampled from the spline's coefficients in coordinates local to the
-  // subset centre (as IC-GN's pass does).
-#if IMPACTDIC_DIC_AVX512
-  const double gsum = spline.kind() == Interpolation::kBicubic
-                          ? SampleWarpedSubset16<4>(shape, spline, s, p, r->data())
-                          : SampleWarpedSubset16<6>(shape, spline, s, p, r->data());
-#else
-  const double gsum = spline.kind() == Interpolation::kBicubic
-                          ? SampleWarpedSubset<4>(shape, spline, s, p, r->data())
-                          : SampleWarpedSubset<6>(shape, spline, s, p, r->data());
-#endif
+  // subset centre (as IC-GN's pass does). Along row j the warped position is a polynomial of xi
+  // of degree <= 2: its coefficients from xi = 0, 1, -1.
+  thread_local std::vector<double> rows;
+  rows.resize(static_cast<std::size_t>(6) * size);
+  for (int j = 0; j < size; ++j) {
+    double du0, dv0, dup, dvp, dum, dvm;
+    Displacement(shape, p, 0, j - h, &du0, &dv0);
+    Displacement(shape, p, 1, j - h, &dup, &dvp);
+    Displacement(shape, p, -1, j - h, &dum, &dvm);
+    double* row = rows.data() + static_cast<std::size_t>(6) * j;
+    row[0] = du0;
+    row[1] = 1 + 0.5 * (dup - dum);
+    row[2] = 0.5 * (dup + dum) - du0;
+    row[3] = (j - h) + dv0;
+    row[4] = 0.5 * (dvp - dvm);
+    row[5] = 0.5 * (dvp + dvm) - dv0;
+  }
+  WarpedInput in;
+  in.half = h;
+  in.rows = rows.data();
+  in.stride = static_cast<std::ptrdiff_t>(spline.coefficients().step1());
+  in.centre = spline.coefficients().ptr<float>() +
+              static_cast<std::ptrdiff_t>(s.cy - spline.region().y) * in.stride +
+              (s.cx - spline.region().x);
+  in.iu = static_cast<int>(std::lround(p[0]));
+  in.iv = static_cast<int>(std::lround(p[shape.nm]));
+  const double gsum =
+      ActiveIcgnKernel().sample_warped[spline.kind() == Interpolation::kBicubic ? 0 : 1](in,
+                                                                                         r->data());
   const double gm = gsum / count;
   double gn2 = 0;
   for (const double g : *r) gn2 += (g - gm) * (g - gm);
@@ -1307,93 +428,6 @@ void InfluenceOfEachPixel(const Shape& shape, const RefImages& ref, const Subset
   }
 }
 
-// Three dot products sum_i a_t[i] b_t[i] (t = 0, 1, 2) accumulated over several runs of
-// pixels: 8 lanes at a time with AVX-512 (a run's last block masked), else 4 lanes at a time
-// where AVX2 is compiled in with the runs' remainders apart; the lanes are added up in a fixed
-// order.
-class Dot3 {
- public:
-  void Add(const double* const a[3], const double* const b[3], int len) {
-    int i = 0;
-#if IMPACTDIC_DIC_AVX512
-    for (; i < len; i += 8) {
-      const __mmask8 m = static_cast<__mmask8>(len - i >= 8 ? 0xFF : (1u << (len - i)) - 1);
-      for (int t = 0; t < 3; ++t) {
-        lanes_[t] = _mm512_mask3_fmadd_pd(_mm512_maskz_loadu_pd(m, a[t] + i),
-                                          _mm512_maskz_loadu_pd(m, b[t] + i), lanes_[t], m);
-      }
-    }
-#elif IMPACTDIC_DIC_AVX2
-    for (; i + 4 <= len; i += 4) {
-      for (int t = 0; t < 3; ++t)
-        lanes_[t] =
-            _mm256_fmadd_pd(_mm256_loadu_pd(a[t] + i), _mm256_loadu_pd(b[t] + i), lanes_[t]);
-    }
-#endif
-    for (; i < len; ++i) {
-      for (int t = 0; t < 3; ++t) rest_[t] += a[t][i] * b[t][i];
-    }
-  }
-  std::array<double, 3> Sum() const {
-    std::array<double, 3> s{rest_[0], rest_[1], rest_[2]};
-#if IMPACTDIC_DIC_AVX512
-    for (int t = 0; t < 3; ++t) {
-      alignas(64) double l[8];
-      _mm512_store_pd(l, lanes_[t]);
-      s[t] += ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
-    }
-#elif IMPACTDIC_DIC_AVX2
-    for (int t = 0; t < 3; ++t) {
-      alignas(32) double l[4];
-      _mm256_store_pd(l, lanes_[t]);
-      s[t] += (l[0] + l[1]) + (l[2] + l[3]);
-    }
-#endif
-    return s;
-  }
-
- private:
-#if IMPACTDIC_DIC_AVX512
-  __m512d lanes_[3] = {_mm512_setzero_pd(), _mm512_setzero_pd(), _mm512_setzero_pd()};
-#elif IMPACTDIC_DIC_AVX2
-  __m256d lanes_[3] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd()};
-#endif
-  double rest_[3] = {};
-};
-
-// sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx (d = 0 included), for the
-// influences au and av: the variance of u and v per unit residual variance.
-std::array<double, 2> CorrelatedSums(const std::vector<double>& r, const std::vector<double>& au,
-                                     const std::vector<double>& av, int size) {
-  const double* data[3] = {r.data(), au.data(), av.data()};
-  Dot3 zero_lag;
-  zero_lag.Add(data, data, static_cast<int>(r.size()));
-  const std::array<double, 3> s0 = zero_lag.Sum();
-  const double c0 = s0[0] / static_cast<double>(r.size());
-  std::array<double, 2> sums{s0[1], s0[2]};
-  if (!(c0 > 0)) return sums;
-  // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
-  for (int dy = 0; dy <= kResidualLagPx; ++dy) {
-    for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
-      if (dy == 0 && dx <= 0) continue;
-      const int i0 = std::max(0, -dx), i1 = size - std::max(0, dx);
-      const std::size_t off = static_cast<std::size_t>(dy) * size + dx;
-      Dot3 lag;
-      for (int j = 0; j + dy < size; ++j) {
-        const std::size_t k0 = static_cast<std::size_t>(j) * size + i0;
-        const double* a[3] = {data[0] + k0, data[1] + k0, data[2] + k0};
-        const double* b[3] = {a[0] + off, a[1] + off, a[2] + off};
-        lag.Add(a, b, i1 - i0);
-      }
-      const std::array<double, 3> c = lag.Sum();
-      const double rho = c[0] / (double(i1 - i0) * (size - dy)) / c0;
-      sums[0] += 2 * rho * c[1];
-      sums[1] += 2 * rho * c[2];
-    }
-  }
-  return sums;
-}
-
 void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const SubsetRef& s,
                              const double* hinv, const BsplineImage& spline, const Params& p,
                              double var_r, float* sigma_u, float* sigma_v) {
@@ -1403,7 +437,8 @@ void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const Sub
   double htinv[144];
   const double* hi = TrueHessianInverse(shape, hinv, GradientNoise(r, size, spline.kind()), htinv);
   InfluenceOfEachPixel(shape, ref, s, hi, &au, &av);
-  const std::array<double, 2> sums = CorrelatedSums(r, au, av, size);
+  double sums[2];
+  ActiveIcgnKernel().correlated_sums(r.data(), au.data(), av.data(), size, sums);
   *sigma_u = static_cast<float>(std::sqrt(var_r * std::max(sums[0], hinv[0])));
   *sigma_v = static_cast<float>(std::sqrt(var_r * std::max(sums[1], hinv[nm * n + nm])));
 }
@@ -1451,10 +486,20 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
   const double count = double(2 * h + 1) * (2 * h + 1);
   const BsplineImage& spline = *def.spline;
   const cv::Mat& coef = spline.coefficients();
-  const std::size_t stride = coef.step1();
   const int dcx = s.cx - spline.region().x, dcy = s.cy - spline.region().y;
-  const bool quad = shape.kind == ShapeFunction::kQuadratic;
-  const bool cubic = spline.kind() == Interpolation::kBicubic;
+  const auto pass = ActiveIcgnKernel().accumulate[spline.kind() == Interpolation::kBicubic ? 0 : 1]
+                                                 [shape.kind == ShapeFunction::kQuadratic ? 1 : 0];
+  // The pass's view of the subset (the warp's part is set per iteration).
+  const MomentInput ref_in = RefMoments(shape, ref, s);
+  PassInput in;
+  in.half = h;
+  in.f = ref_in.f;
+  in.gx = ref_in.gx;
+  in.gy = ref_in.gy;
+  in.ref_stride = ref_in.stride;
+  in.f_mean = s.f_mean;
+  in.stride = static_cast<std::ptrdiff_t>(coef.step1());
+  in.nm = nm;
   Params& p = result.p;
   // The standard deviation of a subset corner's displacement per unit residual standard deviation
   // (independent residuals), the largest over the four corners: sqrt(m^T H^-1_uu m + m^T H^-1_vv
@@ -1478,18 +523,14 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
       result.status = SubsetStatus::kOutOfImage;
       return result;
     }
-    Sums sums;
-    if (cubic) {
-      if (quad)
-        AccumulateBest<4, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
-      else
-        AccumulateBest<4, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
-    } else {
-      if (quad)
-        AccumulateBest<6, true>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
-      else
-        AccumulateBest<6, false>(shape, ref, s, coef.ptr<float>(), stride, dcx, dcy, p, &sums);
-    }
+    // The integer part of the translation moves the centre, so local coordinates stay small.
+    const int iu = static_cast<int>(std::lround(p[0])), iv = static_cast<int>(std::lround(p[nm]));
+    in.centre = coef.ptr<float>() + static_cast<std::ptrdiff_t>(dcy + iv) * in.stride + (dcx + iu);
+    in.p = p.data();
+    in.u = p[0] - iu;
+    in.v = p[nm] - iv;
+    PassSums sums;
+    pass(in, &sums);
     const double gm = sums.sg / count;
     const double gn2 = sums.sgg - count * gm * gm;
     if (!(gn2 > 1e-9 * count) || !(s.f_norm > 0)) {
