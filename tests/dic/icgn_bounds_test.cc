@@ -46,14 +46,14 @@ TEST(IcgnBounds, AQuadraticRowWhoseVertexLeavesTheRegionIsOutOfImage) {
   // corners and edge midpoints are inside, the vertex is not.
   internal::Params p{};
   p[3] = 0.2;  // The coefficient of xi^2 / 2 in u.
-  const internal::DeformedImage region{&s.def_spline, 78.5, 0, 160, 140};
+  const internal::DeformedImage region{&s.def_spline, 78.5, 160, 0, 140};
   const internal::IcgnResult r =
       internal::RunIcgn(s.shape, s.ref, s.subset, s.hinv.data(), region, s.options, p);
   EXPECT_EQ(r.status, SubsetStatus::kOutOfImage);
   EXPECT_EQ(r.iterations, 1);
   // With the region's edge 1.1 px further out the first iteration's check passes (the next ones
   // undo the bend, and the straight subset's left end is outside this region).
-  const internal::DeformedImage wider{&s.def_spline, 76.4, 0, 160, 140};
+  const internal::DeformedImage wider{&s.def_spline, 76.4, 160, 0, 140};
   EXPECT_GT(
       internal::RunIcgn(s.shape, s.ref, s.subset, s.hinv.data(), wider, s.options, p).iterations,
       1);
@@ -64,11 +64,11 @@ TEST(IcgnBounds, AnAffineSubsetIsCheckedAtItsCorners) {
   ASSERT_EQ(s.subset.status, SubsetStatus::kConverged);
   internal::Params p{};
   p[0] = 0.5;  // x from 68.5 to 92.5: its left corners need the region to start at 67.5 or less.
-  const internal::DeformedImage tight{&s.def_spline, 67.6, 0, 160, 140};
+  const internal::DeformedImage tight{&s.def_spline, 67.6, 160, 0, 140};
   EXPECT_EQ(internal::RunIcgn(s.shape, s.ref, s.subset, s.hinv.data(), tight, s.options, p).status,
             SubsetStatus::kOutOfImage);
   // Room for the shifted corners and for the unshifted ones the iterations return to (67).
-  const internal::DeformedImage loose{&s.def_spline, 66.9, 0, 160, 140};
+  const internal::DeformedImage loose{&s.def_spline, 66.9, 160, 0, 140};
   EXPECT_NE(internal::RunIcgn(s.shape, s.ref, s.subset, s.hinv.data(), loose, s.options, p).status,
             SubsetStatus::kOutOfImage);
 }
