@@ -67,7 +67,8 @@ class OutputWriter {
   // Called before any stage runs: Error when the writer cannot work (e.g. no gnuplot), so a run
   // does not fail after its correlation. Default: nothing to check.
   virtual void CheckBeforeRun(const Scene& /*scene*/) const {}
-  // Why it writes nothing for this scene and run ("" = it writes).
+  // Why it writes nothing for this scene and run ("" = it writes). Asked of every writer before any
+  // of them writes, on the whole run's data (results.h5's writer releases rows after it).
   virtual std::string SkipReason(const Scene& scene, const SceneRunData& data) const = 0;
   virtual void Write(OutputContext& context) const = 0;
 };

@@ -41,8 +41,13 @@ class OutputsStage : public Stage {
 
   std::string Run(StageContext& c) const override {
     OutputContext out{c.scene, c.options, c.data, c.summary, generation_->staging_folder(), {}, {}};
-    for (const auto& writer : writers_) {
-      const std::string why = writer->SkipReason(c.scene, c.data);
+    // Every writer decides on the whole run's data, before results.h5's writer releases the
+    // rows it wrote (ReleaseRunResults).
+    std::vector<std::string> skip_reasons;
+    for (const auto& writer : writers_) skip_reasons.push_back(writer->SkipReason(c.scene, c.data));
+    for (std::size_t i = 0; i < writers_.size(); ++i) {
+      const auto& writer = writers_[i];
+      const std::string& why = skip_reasons[i];
       if (why.empty()) {
         writer->Write(out);
       } else {
