@@ -5,13 +5,10 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <cmath>
-#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <system_error>
 
@@ -22,9 +19,7 @@
 #include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
-#include "impactdic/io/json.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
@@ -179,27 +174,7 @@ void RunSensorForm(const AnalyzeArgs& a, const CLI::App& cmd, const SensorOption
     out.Commit();
   }
   if (a.format == "json") {
-    JsonObject j;
-    // The contract's keys first, in this order; more keys after them.
-    j.Add("impact_time_s", s.impact_time_s)
-        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
-        .Add("final_penetration_m", s.final_penetration_m)
-        .Add("peak_deceleration_g", s.peak_deceleration_g)
-        .Add("t_peak_s", s.t_peak_s)
-        .Add("sample_rate_hz", s.sample_rate_hz)
-        .Add("warnings", s.warnings)
-        .Add("peak_time_daq_s", s.peak_time_s)
-        .Add("stop_time_s", s.stop_time_s)
-        .Add("stopped", s.stopped)
-        .Add("release_time_s", s.release_time_s)
-        .Add("offset_g", s.offset_g)
-        .Add("noise_g", s.noise_g)
-        .Add("cutoff_hz", s.cutoff_hz)
-        .Add("integrate_from", ToString(o.integrate_from))
-        .Add("offset_reference", ToString(o.offset_reference))
-        .Add("samples", static_cast<std::int64_t>(s.samples))
-        .Add("seconds", s.seconds);
-    std::cout << j.Dump() << "\n";
+    std::cout << SensorReportJson(s, o).Dump() << "\n";
   } else {
     std::cout << "sensor record " << a.sensor << "\n"
               << "integration from " << ToString(o.integrate_from) << ", offset from "
@@ -248,23 +223,7 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   if (!run.summary.IsUsable())
     LogWarning("analyze: partial results (--allow-partial): {}", run.summary.FailureText());
   // The stages analyze requires ran (AnalyzeSceneResults checks that the scene lists them).
-  const SensorSummary& s = run.data.sensor->summary;
-  const MomentumSummary& m = run.data.momentum->summary;
-  if (a.format == "json") {
-    JsonObject j = m.ToJson();
-    j.Add("impact_time_s", s.impact_time_s)
-        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
-        .Add("final_penetration_m", s.final_penetration_m)
-        .Add("results", run.results_path)
-        .Add("usable", run.summary.IsUsable())
-        // The analysis' key figures as `run`'s summary.json has them (measured and modelled).
-        .Add("summary", run.summary.ToJson());
-    std::cout << j.Dump() << "\n";
-  } else {
-    std::cout << "scene " << scene.path << " -> " << run.results_path << "\n"
-              << s.FullReport() << m.FullReport();
-    if (run.data.model) std::cout << "model: " << run.data.model->summary.BriefReport() << "\n";
-  }
+  std::cout << (a.format == "json" ? run.ToJson().Dump() + "\n" : run.FullReport(scene.path));
 }
 
 }  // namespace
@@ -315,9 +274,7 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   AddSceneKeyFlags(cmd, {"sensor", "momentum"}, &args->keys);
   cmd->callback([args, cmd] {
     const AnalyzeArgs& a = *args;
-    if (a.format != "text" && a.format != "json") {
-      throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
-    }
+    CheckFormat(a.format);
     if (a.scene.empty() == a.sensor.empty()) {
       throw Error(ErrorKind::kInvalidValue, "SCENE / --sensor",
                   a.scene.empty() ? "neither given" : "both given",

@@ -59,9 +59,7 @@ void RegisterRunCommand(CLI::App& app) {
   cmd->callback([args, cmd, output] {
     if (output->count() > 0) CheckOutputFolderName(args->output, "-o");
     if (args->threads) CheckThreadCount(*args->threads, "--threads");
-    if (args->format != "text" && args->format != "json") {
-      throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
-    }
+    CheckFormat(args->format);
     Scene scene = LoadScene(args->scene);
     ApplySceneKeyFlags(*cmd, args->keys, &scene);
     MakeSensorOptions(scene);  // The flags' values checked together, as the scene file's.
@@ -79,11 +77,7 @@ void RegisterRunCommand(CLI::App& app) {
     }
     if (!summary.IsUsable())
       LogWarning("run: partial results (--allow-partial): {}", summary.FailureText());
-    if (args->format == "json") {
-      std::cout << summary.ToJson().Dump() << "\n";
-    } else {
-      std::cout << summary.FullReport();
-    }
+    std::cout << (args->format == "json" ? summary.ToJson().Dump() + "\n" : summary.FullReport());
   });
 }
 
