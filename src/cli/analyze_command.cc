@@ -5,13 +5,10 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
-#include <cmath>
-#include <cstdint>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <system_error>
 
@@ -22,9 +19,7 @@
 #include "impactdic/core/strings.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
-#include "impactdic/io/json.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_analysis.h"
@@ -35,7 +30,9 @@ namespace impactdic::cli {
 namespace {
 
 // Defaults: the sensor library's SensorOptions, except --accel-column (empty: the first of
-// accel_g, accel_m_s2 in the file).
+// accel_g, accel_m_s2 in the file). The scene's sensor.* and momentum.* keys are flags (`keys`);
+// --cutoff and --accel-column are bound here (the library's check of the cut-off, the column's
+// automatic choice).
 struct AnalyzeArgs {
   std::string scene;
   std::string sensor;
@@ -43,18 +40,29 @@ struct AnalyzeArgs {
   std::optional<double> impact_velocity;
   double cutoff = SensorOptions{}.cutoff_hz;
   std::string format = "text";
-  std::string time_column = SensorOptions{}.columns.time;
   std::string accel_column;
-  std::string accel_unit = ToString(SensorOptions{}.columns.accel_unit);
-  std::string exposure_column = SensorOptions{}.columns.exposure;
   std::string offset_reference = ToString(SensorOptions{}.offset_reference);
   std::optional<double> release_time;
-  double quiet_window = SensorOptions{}.quiet_window_s;
   double impact_threshold = SensorOptions{}.impact_threshold_g;
   std::string output;
   std::string results;
   bool allow_partial = false;
+  SceneKeyValues keys;  // --sensor.*, --momentum.* and their aliases.
 };
+
+// The name `key` was given under in `cmd` ("--cutoff" or "--sensor.cutoff_hz"), empty if none.
+std::string GivenName(const CLI::App& cmd, const std::string& key) {
+  if (cmd.count("--" + key) > 0) return "--" + key;
+  const std::string alias = SceneFlagShortName(cmd.get_name(), key);
+  return cmd.count(alias) > 0 ? alias : "";
+}
+
+// The keys bound in AnalyzeArgs, set into `scene` when given.
+void ApplyBoundKeys(const AnalyzeArgs& a, const CLI::App& cmd, Scene* scene) {
+  if (!GivenName(cmd, "sensor.cutoff_hz").empty()) scene->sensor.options.cutoff_hz = a.cutoff;
+  if (!GivenName(cmd, "sensor.accel_column").empty())
+    scene->sensor.options.columns.accel = a.accel_column;
+}
 
 // A folder of outputs written as one generation (`run`'s, a campaign test's results/: its
 // summary.json, figures and results.h5 describe one analysis) is never changed file by file:
@@ -75,15 +83,29 @@ void CheckNotInAGeneration(const std::string& path, const std::string& option) {
               "`impactdic run` to redo the whole folder");
 }
 
-// The library's names of the options `analyze --sensor` exposes as flags.
-const FlagNames kSensorFlags = {{"sensor.cutoff_hz", "--cutoff"},
-                                {"sensor.quiet_window_s", "--quiet-window"},
-                                {"sensor.impact_threshold_g", "--impact-threshold"},
-                                {"sensor.impact_velocity_m_s", "--impact-velocity"},
-                                {"sensor.release_time_s", "--release-time"},
-                                {"sensor.columns.time", "--time-column"},
-                                {"accel_unit", "--accel-unit"},
-                                {"offset_reference", "--offset-reference"}};
+// The library's names of the sensor options -> the flags of `cmd` that set them (the name given
+// for a scene key, else its alias).
+FlagNames SensorFlagNames(const CLI::App& cmd) {
+  FlagNames names = {{"sensor.impact_threshold_g", "--impact-threshold"},
+                     {"sensor.impact_velocity_m_s", "--impact-velocity"},
+                     {"sensor.release_time_s", "--release-time"},
+                     {"offset_reference", "--offset-reference"}};
+  for (const auto& [field, key] : FlagNames{{"sensor.cutoff_hz", "sensor.cutoff_hz"},
+                                            {"sensor.quiet_window_s", "sensor.quiet_window_s"},
+                                            {"sensor.columns.time", "sensor.time_column"},
+                                            {"accel_unit", "sensor.accel_unit"}}) {
+    const std::string given = GivenName(cmd, key);
+    names.emplace_back(field, given.empty() ? SceneFlagShortName(cmd.get_name(), key) : given);
+  }
+  return names;
+}
+
+// The flags of the SCENE form only: the momentum.* keys and the sensor keys that need frames or
+// a scene's test (--from-release / --impact-velocity say where the --sensor form integrates from).
+bool IsSceneOnlyKey(const std::string& key) {
+  return key.rfind("momentum.", 0) == 0 || key == "sensor.integrate_from" ||
+         key == "sensor.frame_time_offset_s";
+}
 
 // The sensor-only form: every option checked before the file is read.
 SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) {
@@ -109,12 +131,18 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
                   std::string(scene_only) + " only with the SCENE.yaml form");
     }
   }
-  SensorOptions o;
-  o.columns.time = a.time_column;
-  o.columns.accel = a.accel_column;
-  o.columns.exposure = a.exposure_column;
-  o.cutoff_hz = a.cutoff;
-  o.quiet_window_s = a.quiet_window;
+  for (const auto& [flag, key_text] : a.keys) {
+    if (cmd.count(flag) > 0 && IsSceneOnlyKey(key_text.first)) {
+      throw Error(ErrorKind::kInvalidValue, flag, "with --sensor",
+                  flag + " only with the SCENE.yaml form");
+    }
+  }
+  // The library defaults, the accelerometer column chosen from the file unless given.
+  Scene defaults;
+  defaults.sensor.options.columns.accel.clear();
+  ApplySceneKeyFlags(cmd, a.keys, &defaults);
+  ApplyBoundKeys(a, cmd, &defaults);
+  SensorOptions o = defaults.sensor.options;
   o.impact_threshold_g = a.impact_threshold;
   if (a.from_release) {
     o.integrate_from = IntegrationStart::kRelease;
@@ -124,20 +152,20 @@ SensorOptions ValidatedSensorOptions(const AnalyzeArgs& a, const CLI::App& cmd) 
     o.impact_velocity_m_s = *a.impact_velocity;
   }
   // The library's parsers and checks (the allowed values are defined there), naming the flags.
-  WithFlagNames(kSensorFlags, [&] {
-    o.columns.accel_unit = AccelUnitFromString(a.accel_unit);
+  WithFlagNames(SensorFlagNames(cmd), [&] {
     o.offset_reference = OffsetReferenceFromString(a.offset_reference);
     o.Check();
   });
   return o;
 }
 
-void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
+void RunSensorForm(const AnalyzeArgs& a, const CLI::App& cmd, const SensorOptions& o) {
   if (!std::filesystem::exists(a.sensor)) {
     throw Error(ErrorKind::kFileNotFound, "--sensor", a.sensor, "an existing DAQ CSV file")
         .WithFile(a.sensor);
   }
-  const SensorResult r = WithFlagNames(kSensorFlags, [&] { return AnalyzeSensorCsv(a.sensor, o); });
+  const SensorResult r =
+      WithFlagNames(SensorFlagNames(cmd), [&] { return AnalyzeSensorCsv(a.sensor, o); });
   const SensorSummary& s = r.summary;
   if (!a.output.empty()) {
     // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.
@@ -146,27 +174,7 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
     out.Commit();
   }
   if (a.format == "json") {
-    JsonObject j;
-    // The contract's keys first, in this order; more keys after them.
-    j.Add("impact_time_s", s.impact_time_s)
-        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
-        .Add("final_penetration_m", s.final_penetration_m)
-        .Add("peak_deceleration_g", s.peak_deceleration_g)
-        .Add("t_peak_s", s.t_peak_s)
-        .Add("sample_rate_hz", s.sample_rate_hz)
-        .Add("warnings", s.warnings)
-        .Add("peak_time_daq_s", s.peak_time_s)
-        .Add("stop_time_s", s.stop_time_s)
-        .Add("stopped", s.stopped)
-        .Add("release_time_s", s.release_time_s)
-        .Add("offset_g", s.offset_g)
-        .Add("noise_g", s.noise_g)
-        .Add("cutoff_hz", s.cutoff_hz)
-        .Add("integrate_from", ToString(o.integrate_from))
-        .Add("offset_reference", ToString(o.offset_reference))
-        .Add("samples", static_cast<std::int64_t>(s.samples))
-        .Add("seconds", s.seconds);
-    std::cout << j.Dump() << "\n";
+    std::cout << SensorReportJson(s, o).Dump() << "\n";
   } else {
     std::cout << "sensor record " << a.sensor << "\n"
               << "integration from " << ToString(o.integrate_from) << ", offset from "
@@ -176,19 +184,22 @@ void RunSensorForm(const AnalyzeArgs& a, const SensorOptions& o) {
 }
 
 void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
-  for (const char* sensor_only :
-       {"--from-release", "--impact-velocity", "--cutoff", "--release-time", "--accel-column",
-        "--accel-unit", "--time-column", "--exposure-column", "--offset-reference",
-        "--quiet-window", "--impact-threshold"}) {
+  for (const char* sensor_only : {"--from-release", "--impact-velocity", "--release-time",
+                                  "--offset-reference", "--impact-threshold"}) {
     if (cmd.count(sensor_only) > 0) {
       throw Error(ErrorKind::kInvalidValue, sensor_only, "with SCENE.yaml",
-                  "this option only with --sensor (the scene file sets the sensor options)");
+                  "this option only with --sensor (the scene file and its sensor.* flags set "
+                  "the sensor options)");
     }
   }
   if (!a.results.empty() && !EndsWith(a.results, ".h5") && !EndsWith(a.results, ".hdf5")) {
     throw Error(ErrorKind::kInvalidValue, "--results", a.results, "an HDF5 file (.h5, .hdf5)");
   }
-  const Scene scene = LoadScene(a.scene);
+  Scene scene = LoadScene(a.scene);
+  // The sensor.* and momentum.* flags given override the scene file's values.
+  ApplySceneKeyFlags(cmd, a.keys, &scene);
+  ApplyBoundKeys(a, cmd, &scene);
+  WithFlagNames(SensorFlagNames(cmd), [&] { MakeSensorOptions(scene); });
   const std::string results =
       a.results.empty() ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
                         : a.results;
@@ -212,23 +223,7 @@ void RunSceneForm(const AnalyzeArgs& a, const CLI::App& cmd) {
   if (!run.summary.IsUsable())
     LogWarning("analyze: partial results (--allow-partial): {}", run.summary.FailureText());
   // The stages analyze requires ran (AnalyzeSceneResults checks that the scene lists them).
-  const SensorSummary& s = run.data.sensor->summary;
-  const MomentumSummary& m = run.data.momentum->summary;
-  if (a.format == "json") {
-    JsonObject j = m.ToJson();
-    j.Add("impact_time_s", s.impact_time_s)
-        .Add("impact_velocity_m_s", s.impact_velocity_m_s)
-        .Add("final_penetration_m", s.final_penetration_m)
-        .Add("results", run.results_path)
-        .Add("usable", run.summary.IsUsable())
-        // The analysis' key figures as `run`'s summary.json has them (measured and modelled).
-        .Add("summary", run.summary.ToJson());
-    std::cout << j.Dump() << "\n";
-  } else {
-    std::cout << "scene " << scene.path << " -> " << run.results_path << "\n"
-              << s.FullReport() << m.FullReport();
-    if (run.data.model) std::cout << "model: " << run.data.model->summary.BriefReport() << "\n";
-  }
+  std::cout << (a.format == "json" ? run.ToJson().Dump() + "\n" : run.FullReport(scene.path));
 }
 
 }  // namespace
@@ -249,16 +244,11 @@ void RegisterAnalyzeCommand(CLI::App& app) {
                 "--release-time)");
   cmd->add_option("--impact-velocity", args->impact_velocity,
                   "integrate from the detected impact with this velocity [m/s]");
-  cmd->add_option("--cutoff", args->cutoff, "low-pass cut-off [Hz]")->capture_default_str();
+  AddSceneKeyOption(cmd, "sensor.cutoff_hz", &args->cutoff, "low-pass cut-off [Hz]",
+                    fmt::format("{}", args->cutoff));
   cmd->add_option("--format", args->format, "output format: text or json (default text)");
-  cmd->add_option("--time-column", args->time_column, "time column [s]")->capture_default_str();
-  cmd->add_option("--accel-column", args->accel_column,
-                  "acceleration column (default: accel_g, else accel_m_s2)");
-  cmd->add_option("--accel-unit", args->accel_unit, "auto (from the column name), g or m/s^2")
-      ->capture_default_str();
-  cmd->add_option("--exposure-column", args->exposure_column,
-                  "camera exposure column (ignored when absent)")
-      ->capture_default_str();
+  AddSceneKeyOption(cmd, "sensor.accel_column", &args->accel_column,
+                    "acceleration column (default: accel_g, else accel_m_s2; SCENE: the scene's)");
   cmd->add_option("--offset-reference", args->offset_reference,
                   "what reads a known level: free-fall (the whole free fall reads 0 g), "
                   "free-fall-window (the quiet window before the impact reads 0 g), rest (the "
@@ -267,8 +257,6 @@ void RegisterAnalyzeCommand(CLI::App& app) {
   cmd->add_option("--release-time", args->release_time,
                   "release time on the DAQ clock [s] (with --from-release, instead of the "
                   "detected one; inside the record and before the impact)");
-  cmd->add_option("--quiet-window", args->quiet_window, "length of the offset/noise window [s]")
-      ->capture_default_str();
   cmd->add_option("--impact-threshold", args->impact_threshold,
                   "reading [g] that is certainly the impact; the onset is found before it")
       ->capture_default_str();
@@ -282,11 +270,11 @@ void RegisterAnalyzeCommand(CLI::App& app) {
                 "SCENE form: write the results (exit 0) even when t_e is not measurable, with the "
                 "figures that depend on it NaN; without it such an analysis fails (exit 1) and "
                 "the results file is left as it was, as with `impactdic run`");
+  // The other sensor.* and momentum.* keys; in the SCENE form they override the scene file.
+  AddSceneKeyFlags(cmd, {"sensor", "momentum"}, &args->keys);
   cmd->callback([args, cmd] {
     const AnalyzeArgs& a = *args;
-    if (a.format != "text" && a.format != "json") {
-      throw Error(ErrorKind::kInvalidValue, "--format", a.format, "text or json");
-    }
+    CheckFormat(a.format);
     if (a.scene.empty() == a.sensor.empty()) {
       throw Error(ErrorKind::kInvalidValue, "SCENE / --sensor",
                   a.scene.empty() ? "neither given" : "both given",
@@ -294,7 +282,7 @@ void RegisterAnalyzeCommand(CLI::App& app) {
     }
     if (!a.sensor.empty()) {
       const SensorOptions o = ValidatedSensorOptions(a, *cmd);
-      RunSensorForm(a, o);
+      RunSensorForm(a, *cmd, o);
     } else {
       RunSceneForm(a, *cmd);
     }

@@ -27,6 +27,7 @@ void RegisterRunCommand(CLI::App& app) {
     bool allow_partial = false;
     bool force = false;
     std::string format = "text";
+    SceneKeyValues keys;  // --sensor.*, --momentum.*, --outputs.*: override the scene file.
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -51,13 +52,17 @@ void RegisterRunCommand(CLI::App& app) {
                 "that holds other commands' outputs; files impactdic did not write are never "
                 "replaced");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
-  cmd->callback([args, output] {
+  AddSceneKeyFlags(cmd, {"sensor", "momentum", "outputs"}, &args->keys);
+  cmd->footer(
+      "A --sensor.*, --momentum.* or --outputs.* flag overrides that key of the scene file "
+      "(-o overrides --outputs.folder).");
+  cmd->callback([args, cmd, output] {
     if (output->count() > 0) CheckOutputFolderName(args->output, "-o");
     if (args->threads) CheckThreadCount(*args->threads, "--threads");
-    if (args->format != "text" && args->format != "json") {
-      throw Error(ErrorKind::kInvalidValue, "--format", args->format, "text or json");
-    }
-    const Scene scene = LoadScene(args->scene);
+    CheckFormat(args->format);
+    Scene scene = LoadScene(args->scene);
+    ApplySceneKeyFlags(*cmd, args->keys, &scene);
+    MakeSensorOptions(scene);  // The flags' values checked together, as the scene file's.
     PipelineOptions options;
     options.output_folder = args->output;
     options.png_frames = args->png_frames;
@@ -72,11 +77,7 @@ void RegisterRunCommand(CLI::App& app) {
     }
     if (!summary.IsUsable())
       LogWarning("run: partial results (--allow-partial): {}", summary.FailureText());
-    if (args->format == "json") {
-      std::cout << summary.ToJson().Dump() << "\n";
-    } else {
-      std::cout << summary.FullReport();
-    }
+    std::cout << (args->format == "json" ? summary.ToJson().Dump() + "\n" : summary.FullReport());
   });
 }
 

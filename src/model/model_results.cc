@@ -13,20 +13,12 @@ namespace impactdic {
 namespace L = results_layout;
 namespace {
 
-// A series of /model (path, units, description) bound to an ImpactSeries (const for the writer,
-// mutable for the reader), in the order written; decel_g is apart.
-template <typename Vector>
-struct Series {
-  const char* path;
-  const char* units;
-  const char* description;
-  Vector* values;
-};
-
+// The series of /model bound to an ImpactSeries (const for the writer, mutable for the reader),
+// in the order written; decel_g is apart.
 template <typename S>
 auto ModelSeries(S& s) {
   using Vector = std::remove_reference_t<decltype((s.t_s))>;
-  return std::vector<Series<Vector>>{
+  return std::vector<DatasetBinding<Vector>>{
       {L::kModelT, "s", "model time since impact", &s.t_s},
       {L::kModelZ, "m", "model penetration (down)", &s.z_m},
       {L::kModelV, "m/s", "model pounder velocity (down)", &s.v_m_s},

@@ -16,20 +16,12 @@ namespace impactdic {
 namespace L = results_layout;
 namespace {
 
-// The per-frame series of /momentum (path, units, description) bound to a result (const for the
-// writer, mutable for the reader), in the order written.
-template <typename Vector>
-struct Series {
-  const char* path;
-  const char* units;
-  const char* description;
-  Vector* values;
-};
-
+// The per-frame series of /momentum bound to a result (const for the writer, mutable for the
+// reader), in the order written.
 template <typename R>
 auto FrameSeries(R& m) {
   using Vector = std::remove_reference_t<decltype((m.frame_time_s))>;
-  return std::vector<Series<Vector>>{
+  return std::vector<DatasetBinding<Vector>>{
       {L::kMomentumTimeDaq, "s", "frame time on the DAQ clock", &m.frame_time_s},
       {L::kVPounder, "m/s", "pounder velocity at the frames (down +)", &m.v_pounder_m_s},
       {L::kVSand, "m/s", "mean soil velocity over the grid (down +)", &m.v_sand_m_s},

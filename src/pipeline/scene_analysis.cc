@@ -2,13 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <cstdint>
 #include <string>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/json.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
+#include "impactdic/sensor/sensor.h"
 #include "outputs/writers.h"
 #include "stages/scene_inputs.h"
 #include "stages/stage.h"
@@ -79,6 +82,49 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
   run.summary.outputs.push_back(run.results_path);
   run.summary.seconds = total.ElapsedSeconds();
   return run;
+}
+
+JsonObject SceneAnalysisRun::ToJson() const {
+  const SensorSummary& s = data.sensor->summary;
+  JsonObject j = data.momentum->summary.ToJson();
+  j.Add("impact_time_s", s.impact_time_s)
+      .Add("impact_velocity_m_s", s.impact_velocity_m_s)
+      .Add("final_penetration_m", s.final_penetration_m)
+      .Add("results", results_path)
+      .Add("usable", summary.IsUsable())
+      // The analysis' key figures as `run`'s summary.json has them (measured and modelled).
+      .Add("summary", summary.ToJson());
+  return j;
+}
+
+std::string SceneAnalysisRun::FullReport(const std::string& scene_path) const {
+  std::string text = "scene " + scene_path + " -> " + results_path + "\n" +
+                     data.sensor->summary.FullReport() + data.momentum->summary.FullReport();
+  if (data.model) text += "model: " + data.model->summary.BriefReport() + "\n";
+  return text;
+}
+
+JsonObject SensorReportJson(const SensorSummary& s, const SensorOptions& o) {
+  JsonObject j;
+  j.Add("impact_time_s", s.impact_time_s)
+      .Add("impact_velocity_m_s", s.impact_velocity_m_s)
+      .Add("final_penetration_m", s.final_penetration_m)
+      .Add("peak_deceleration_g", s.peak_deceleration_g)
+      .Add("t_peak_s", s.t_peak_s)
+      .Add("sample_rate_hz", s.sample_rate_hz)
+      .Add("warnings", s.warnings)
+      .Add("peak_time_daq_s", s.peak_time_s)
+      .Add("stop_time_s", s.stop_time_s)
+      .Add("stopped", s.stopped)
+      .Add("release_time_s", s.release_time_s)
+      .Add("offset_g", s.offset_g)
+      .Add("noise_g", s.noise_g)
+      .Add("cutoff_hz", s.cutoff_hz)
+      .Add("integrate_from", ToString(o.integrate_from))
+      .Add("offset_reference", ToString(o.offset_reference))
+      .Add("samples", static_cast<std::int64_t>(s.samples))
+      .Add("seconds", s.seconds);
+  return j;
 }
 
 }  // namespace impactdic

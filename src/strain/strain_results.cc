@@ -11,21 +11,12 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/results_io.h"
 #include "impactdic/io/results_layout.h"
 
 namespace impactdic {
 namespace L = results_layout;
 namespace {
-
-// One [frames x subsets] double dataset of /strain: its name, units, description and field
-// (Vector: const for the writer, mutable for the reader).
-template <typename Vector>
-struct StrainDataset {
-  const char* path;
-  const char* units;
-  const char* description;
-  Vector* values;
-};
 
 // Every double dataset of /strain, bound to `r` (StrainResult, const or not).
 template <typename R>
@@ -33,7 +24,7 @@ auto Datasets(R& r) {
   auto& g = r.gradient;
   auto& s = r.field;
   using Vector = std::remove_reference_t<decltype((g.dudx))>;
-  return std::vector<StrainDataset<Vector>>{
+  return std::vector<DatasetBinding<Vector>>{
       {L::kStrainDudx, "1", "displacement gradient du/dX (x right, y down, reference)", &g.dudx},
       {L::kStrainDudy, "1", "displacement gradient du/dY", &g.dudy},
       {L::kStrainDvdx, "1", "displacement gradient dv/dX", &g.dvdx},

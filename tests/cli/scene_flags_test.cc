@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../io/test_dir.h"
+#include "../reliability/fault_util.h"
 #include "cli_runner.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
@@ -42,13 +43,16 @@ TEST(SceneFlags, EveryKeyOfTheTablesIsAFlagOfItsCommand) {
   // The sections of the keys each command runs on (run and analyze take a scene file).
   ExpectEveryKeyInHelp("correlate", {"dic", "preprocess"});
   ExpectEveryKeyInHelp("model", {"test", "model"});
+  ExpectEveryKeyInHelp("analyze", {"sensor", "momentum"});
+  ExpectEveryKeyInHelp("run", {"sensor", "momentum", "outputs"});
   // Every section of the table: the lists above are checked against it.
   Scene scene;
   std::vector<std::string> keys;
   for (const YamlOptionTable& t : SceneOptionTables(&scene))
     for (const auto& e : t.entries()) keys.push_back(t.section() + "." + e.key);
   for (const char* key : {"dic.max_iterations", "dic.convergence_px", "model.K", "test.mass_kg",
-                          "preprocess.gaussian.sigma", "preprocess.clahe.enabled"})
+                          "preprocess.gaussian.sigma", "preprocess.clahe.enabled",
+                          "sensor.cutoff_hz", "momentum.grid_cols", "outputs.figures"})
     EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
 }
 
@@ -131,6 +135,40 @@ TEST_F(SceneFlagsCorrelate, AKeyFlagIsRefusedAsTheKeyAndTwoNamesOfOneKeyAreRefus
   r = RunCli(pair + " --min-zncc 0.5 --dic.min_zncc 0.6");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("both given"), std::string::npos) << r.output;
+}
+
+// `run SCENE --KEY VALUE` and `analyze SCENE --KEY VALUE`: the flag overrides the scene file's
+// key (sensor.*, momentum.*, outputs.*); a momentum key is refused with `analyze --sensor`.
+TEST(SceneFlags, RunAndAnalyzeFlagsOverrideTheSceneFile) {
+  TestDir dir("scene_flags_run");
+  const std::string scene = SampleScene(dir, {});  // outputs.folder: results; xdmf, csv: true.
+  const std::string out = dir.File("from_flag");
+  CliResult r = RunCli("-q run " + scene + " --outputs.folder " + out +
+                       " --outputs.xdmf off --outputs.csv false");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(out + "/results.h5"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/results.xdmf"));
+  EXPECT_FALSE(std::filesystem::exists(out + "/summary.csv"));
+  EXPECT_FALSE(std::filesystem::exists(dir.File("results")));
+  r = RunCli("run " + scene + " --outputs.frames some");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--outputs.frames: invalid value (got 'some')"), std::string::npos)
+      << r.output;
+
+  // analyze SCENE: --cutoff (alias of sensor.cutoff_hz) and the momentum keys reach the analysis.
+  const std::string analyze = "analyze " + scene + " --results " + out + "/results.h5";
+  r = RunCli(analyze + " --output " + dir.File("a.h5") + " --cutoff 1000");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1000.0 Hz"), std::string::npos) << r.output;
+  r = RunCli(analyze + " --output " + dir.File("b.h5") + " --momentum.grid_cols 0");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--momentum.grid_cols: invalid value (got 0)"), std::string::npos)
+      << r.output;
+  r = RunCli("analyze --sensor " + std::string(IMPACTDIC_SOURCE_DIR) +
+             "/sample_frames/sensor.csv --from-release --momentum.grid_cols 3");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--momentum.grid_cols only with the SCENE.yaml form"), std::string::npos)
+      << r.output;
 }
 
 }  // namespace

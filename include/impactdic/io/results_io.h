@@ -42,6 +42,18 @@ double ReadNumberAttributeOr(const H5Reader& in, const std::string& object, cons
 std::string ReadStringAttributeOr(const H5Reader& in, const std::string& object,
                                   const std::string& name, const std::string& absent);
 
+// One dataset of a results group bound to its field, so that one list of bindings is both the
+// writer's and the reader's (Vector: const std::vector<double> to write, std::vector<double> to
+// read):
+//   for (const auto& d : Datasets(result)) out.Write(d.path, *d.values, d.units, d.description);
+template <typename Vector>
+struct DatasetBinding {
+  const char* path;         // Its path in the file, a name of io/results_layout.h.
+  const char* units;        // "m"
+  const char* description;  // The dataset's description attribute.
+  Vector* values;
+};
+
 // Writes / reads number attributes of `object` given as (name, value) pairs; the reader sets
 // each value from the file, NaN where the attribute is absent.
 void WriteNumberAttributes(H5Writer& out, const std::string& object,

@@ -11,9 +11,11 @@
 
 #include <string>
 
+#include "impactdic/io/json.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/sensor.h"
 
 namespace impactdic {
 
@@ -21,7 +23,20 @@ struct SceneAnalysisRun {
   PipelineSummary summary;   // The stages, the key figures, warnings and failures.
   SceneRunData data;         // What the stages produced (sensor, dic, kinematics, momentum, ...).
   std::string results_path;  // The file written.
+
+  // `impactdic analyze SCENE`'s reports: MomentumSummary::ToJson's keys, then impact_time_s,
+  // impact_velocity_m_s, final_penetration_m, results, usable and summary (PipelineSummary's
+  // JSON, as run's summary.json); the text: "scene PATH -> RESULTS", the sensor's and the
+  // momentum's full reports and the model's brief one.
+  JsonObject ToJson() const;
+  std::string FullReport(const std::string& scene_path) const;
 };
+
+// `impactdic analyze --sensor`'s JSON report: impact_time_s, impact_velocity_m_s,
+// final_penetration_m, peak_deceleration_g, t_peak_s, sample_rate_hz, warnings first, in this
+// order (the contract's keys), then the record's other figures and the options' integrate_from
+// and offset_reference.
+JsonObject SensorReportJson(const SensorSummary& s, const SensorOptions& o);
 
 // Runs the analysis stages on the /dic group of results_path and writes the groups of the stages
 // that ran (/sensor, /kinematics, /momentum, /model, /strain: results_file_writer's, as results.h5)
