@@ -16,6 +16,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/image_io.h"
 
 namespace impactdic {
@@ -521,6 +522,28 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
   if (!plane_path.empty())
     calibration.plane =
         MeasurePlaneScale(ReadGreyImage(plane_path), plane_path, calibration, options.detection);
+  return calibration;
+}
+
+CameraCalibration CalibrateToFile(const std::vector<std::string>& image_sources,
+                                  const std::string& plane_path, const CalibrationOptions& options,
+                                  const std::string& output, CalibrationSummary* summary) {
+  options.Check();
+  CheckValue(
+      !image_sources.empty(), "calibration images", "none",
+      fmt::format("at least {} checkerboard images (files, folders or globs)", options.min_views));
+  CheckValue(!output.empty(), "output", "an empty name", "the calibration YAML to write");
+  if (!plane_path.empty()) CheckImageFileExists(plane_path);
+  // The calibration is YAML; an image name (-o calcopy/view_00.png) would overwrite an input.
+  std::vector<std::string> inputs = {plane_path};
+  for (const std::string& source : image_sources) {
+    const std::vector<std::string> listed = ListFrames(source);
+    inputs.insert(inputs.end(), listed.begin(), listed.end());
+  }
+  CheckOutputLocation(output, {"output", {".yaml", ".yml"}, inputs, {kCalibrationFirstLine}});
+  const CameraCalibration calibration =
+      CalibrateFromFiles(image_sources, plane_path, options, summary);
+  SaveCalibration(calibration, output);
   return calibration;
 }
 

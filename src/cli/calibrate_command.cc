@@ -1,25 +1,15 @@
 // impactdic calibrate --board COLSxROWS --square SIZE_MM [--plane IMAGE] IMAGES... -o OUT.yaml
 // Checkerboard calibration (calib module): prints the RMS, intrinsics, distortion and plane
 // scale, and writes the calibration YAML (keys in docs/calibration.md).
-#include <fmt/format.h>
-
 #include <CLI/CLI.hpp>
-#include <algorithm>
-#include <array>
-#include <cmath>
 #include <iostream>
 #include <memory>
-#include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
-#include "impactdic/core/range.h"
-#include "impactdic/io/atomic_file.h"
-#include "impactdic/io/image_io.h"
 
 namespace impactdic::cli {
 namespace {
@@ -65,48 +55,33 @@ void RegisterCalibrateCommand(CLI::App& app) {
   cmd->add_option("images", args->images,
                   "Checkerboard images (files, folders or glob patterns), all the same size");
   cmd->callback([args] {
-    // Validate every option before any work.
-    CalibrationOptions options;
-    WithFlagNames({{"board", "--board"}, {"board.square_mm", "--square"}},
-                  [&] { options.board = ParseBoard(args->board, args->square_mm); });
+    // Every option checked before any work, by the library (the one definition), naming the flags.
     CheckFormat(args->format);
+    const FlagNames flags = {{"calibration.max_rms_px", "--max-rms"},
+                             {"calibration.min_views", "--min-views"},
+                             {"board", "--board"},
+                             {"board.square_mm", "--square"},
+                             {"calibration images", "IMAGES"},
+                             {"output", "-o"}};
+    CalibrationOptions options;
     options.max_rms_px = args->max_rms_px;
     options.min_views = args->min_views;
     options.fix_k3 = args->fix_k3;
-    // The library's check (the allowed values are defined there), naming the flags.
-    WithFlagNames({{"calibration.max_rms_px", "--max-rms"},
-                   {"calibration.min_views", "--min-views"},
-                   {"board", "--board"},
-                   {"board.square_mm", "--square"}},
-                  [&] { options.Check(); });
-    CheckValue(
-        !args->images.empty(), "IMAGES", "no calibration images",
-        fmt::format("at least {} checkerboard images (files, folders or globs)", args->min_views));
-    CheckValue(!args->output.empty(), "-o", "an empty name", "the calibration YAML to write");
-    if (!args->plane.empty()) CheckImageFileExists(args->plane);
-    // The calibration is YAML; an image name (-o calcopy/view_00.png) would overwrite an input.
-    std::vector<std::string> inputs = {args->plane};
-    for (const std::string& source : args->images) {
-      const std::vector<std::string> listed = ListFrames(source);
-      inputs.insert(inputs.end(), listed.begin(), listed.end());
-    }
-    CheckOutputLocation(args->output, {"-o", {".yaml", ".yml"}, inputs, {kCalibrationFirstLine}});
     CalibrationSummary summary;
-    const CameraCalibration calibration = [&] {
+    const CameraCalibration calibration = WithFlagNames(flags, [&] {
+      options.board = ParseBoard(args->board, args->square_mm);
       try {
-        return CalibrateFromFiles(args->images, args->plane, options, &summary);
+        return CalibrateToFile(args->images, args->plane, options, args->output, &summary);
       } catch (const Error& e) {
-        // The library names CalibrationOptions fields; here they are flags.
-        const std::string what = e.what();
-        if (e.kind() == ErrorKind::kNumerical)
-          throw Error(e.kind(),
-                      what + " (--max-rms sets the limit; --board and --square the board)");
-        if (what.find("calibration.min_views") != std::string::npos)
-          throw Error(e.kind(), what + " (--min-views sets the minimum)");
-        throw;
+        // A view count or RMS beyond its limit: the limits are flags here.
+        const bool views = std::string(e.what()).find("calibration.min_views") != std::string::npos;
+        if (!e.where().empty() || (!views && e.kind() != ErrorKind::kNumerical)) throw;
+        throw Error(e.kind(), std::string(e.what()) +
+                                  (views ? " (--min-views sets the minimum)"
+                                         : " (--max-rms sets the limit; --board and --square the "
+                                           "board)"));
       }
-    }();
-    SaveCalibration(calibration, args->output);
+    });
     std::cout << (args->format == "json" ? summary.ToJson(calibration, args->output).Dump() + "\n"
                                          : summary.CommandReport(calibration, args->output));
   });

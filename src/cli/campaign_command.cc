@@ -20,68 +20,33 @@
 namespace impactdic::cli {
 namespace {
 
+// Defaults: the library's CampaignOptions (bound in `options`).
 struct CampaignArgs {
   std::vector<std::string> files, merge;
-  std::string table, output = "results/campaign", format = "text", shard;
+  std::string table, format = "text", shard;
   std::optional<int> threads;  // Unset: each scene's dic.threads.
-  int jobs = 0;
-  double confidence = 0.95;
-  bool force = false, no_figures = false;
+  bool no_figures = false;
+  CampaignOptions options;
 };
 
-// The plan of the positional files: one campaign file, or scene files.
-CampaignPlan PlanOf(const std::vector<std::string>& files) {
-  if (files.size() == 1 && IsCampaignFile(files[0])) return LoadCampaignFile(files[0]);
-  for (const auto& f : files) {
-    if (IsCampaignFile(f)) {
-      throw Error(ErrorKind::kInvalidValue, "files", f + " is a campaign file",
-                  "one campaign file alone, or scene files");
-    }
-  }
-  return PlanFromSceneFiles(files);
-}
-
-CampaignOptions OptionsOf(const CampaignArgs& a) {
-  CheckFormat(a.format);
-  if (a.threads) CheckThreadCount(*a.threads, "--threads");
-  CampaignOptions o;
-  o.output_folder = a.output;
-  o.threads = a.threads.value_or(-1);
-  o.jobs = a.jobs;
-  o.confidence = a.confidence;
-  o.force = a.force;
-  o.figures = !a.no_figures;
-  if (!a.shard.empty()) o.shard = ParseShard(a.shard, "--shard");
-  // The library's check (the allowed values are defined there), naming the flags.
-  WithFlagNames({{"output_folder", "-o"},
-                 {"threads", "--threads"},
-                 {"jobs", "--jobs"},
-                 {"confidence", "--confidence"},
-                 {"shard", "--shard"}},
-                [&] { o.Check(); });
-  return o;
-}
-
-// A campaign none of whose tests has results (every one failed) is a failed command: exit 1
-// after its report and files (campaign.csv lists each test's error), naming how many failed and
-// the first error. Some failed tests among good ones leave the exit status 0 (docs/campaign.md).
-void ThrowIfEveryTestFailed(const CampaignSummary& summary, const std::string& folder) {
-  if (summary.rows.empty() || summary.failed < static_cast<int>(summary.rows.size())) return;
-  const CampaignRow& first = summary.rows.front();
-  throw Error(ErrorKind::kNumerical,
-              fmt::format("campaign: all {} tests failed, none has results (each test's error is "
-                          "in {}/campaign.csv); the first, {}: {}",
-                          summary.failed, folder, first.name, first.error));
-}
-
-void Run(const CampaignArgs& a) {
+void Run(CampaignArgs a) {
   const int modes = !a.files.empty() + !a.table.empty() + !a.merge.empty();
   if (modes != 1) {
     throw Error(ErrorKind::kInvalidValue, "files / --from-table / --merge",
                 modes == 0 ? "none" : "more than one",
                 "a campaign file or scene files, --from-table CSV, or --merge DIR...: one of them");
   }
-  const CampaignOptions options = OptionsOf(a);
+  CheckFormat(a.format);
+  if (a.threads) CheckThreadCount(*a.threads, "--threads");
+  CampaignOptions& options = a.options;
+  options.threads = a.threads.value_or(-1);
+  options.figures = !a.no_figures;
+  if (!a.shard.empty()) options.shard = ParseShard(a.shard, "--shard");
+  // The library's check (the allowed values are defined there), naming the flags.
+  const FlagNames flags = {{"output_folder", "-o"}, {"threads", "--threads"},
+                           {"jobs", "--jobs"},      {"confidence", "--confidence"},
+                           {"shard", "--shard"},    {"merge folders", "--merge"}};
+  WithFlagNames(flags, [&] { options.Check(); });
   if ((!a.table.empty() || !a.merge.empty()) && !a.shard.empty()) {
     throw Error(ErrorKind::kInvalidValue, "--shard", "with --from-table or --merge",
                 "--shard only when running tests");
@@ -90,17 +55,16 @@ void Run(const CampaignArgs& a) {
   if (!a.table.empty()) {
     summary = RegressCampaignTable(a.table, options);
   } else if (!a.merge.empty()) {
-    summary = WithFlagNames({{"merge folders", "--merge"}},
-                            [&] { return MergeCampaigns(a.merge, options); });
+    summary = WithFlagNames(flags, [&] { return MergeCampaigns(a.merge, options); });
   } else {
-    summary = RunCampaignPlan(PlanOf(a.files), options);
+    summary = RunCampaign(a.files, options);
   }
   if (a.format == "json") {
     std::cout << summary.RegressionJson().Dump() << "\n";
   } else {
     std::cout << summary.FullReport();
   }
-  if (a.table.empty() && a.merge.empty()) ThrowIfEveryTestFailed(summary, a.output);
+  if (a.table.empty() && a.merge.empty()) summary.ThrowIfEveryTestFailed(options.output_folder);
 }
 
 }  // namespace
@@ -119,21 +83,23 @@ void RegisterCampaignCommand(CLI::App& app) {
   cmd->add_option("--merge", args->merge,
                   "Combine the output folders of shard runs (--shard I/N) into -o")
       ->expected(1, -1);
-  cmd->add_option("-o,--output", args->output, "Output folder (default results/campaign)");
+  cmd->add_option("-o,--output", args->options.output_folder, "Output folder")
+      ->capture_default_str();
   cmd->add_option("--shard", args->shard,
                   "Run only shard I of N: tests I, I+N, I+2N, ... in plan order (e.g. 2/3)");
-  cmd->add_option("--jobs", args->jobs,
-                  "Tests at the same time: 0 = auto (one per thread), N >= 1 (default 0)");
+  cmd->add_option("--jobs", args->options.jobs,
+                  "Tests at the same time: 0 = auto (one per thread), N >= 1")
+      ->capture_default_str();
   cmd->add_option("--threads", args->threads,
                   std::string("Threads of the whole campaign: ") + kThreadCountExpected +
                       " (default: each scene's dic.threads, one test at a time)");
-  cmd->add_flag("--force", args->force,
+  cmd->add_flag("--force", args->options.force,
                 "Reprocess tests whose complete results exist, and replace an output folder "
                 "another command wrote (a run, a synth scene); files impactdic did not write "
                 "are never replaced");
   cmd->add_flag("--no-figures", args->no_figures, "Skip the comparison figures");
-  cmd->add_option("--confidence", args->confidence,
-                  "Confidence level of the intervals (default 0.95)");
+  cmd->add_option("--confidence", args->options.confidence, "Confidence level of the intervals")
+      ->capture_default_str();
   cmd->add_option("--format", args->format, "Report on stdout: text or json (the regression)");
   cmd->callback([args] { Run(*args); });
 }

@@ -1,16 +1,12 @@
 // impactdic render RESULTS.h5 [-o OUTDIR] [--png-frames] [--codec auto|h264|mjpg] [--fps F]
 // [--force]
 #include <CLI/CLI.hpp>
-#include <filesystem>
 #include <iostream>
 #include <memory>
-#include <stdexcept>
 #include <string>
-#include <system_error>
 
 #include "commands.h"
 #include "impactdic/core/error.h"
-#include "impactdic/core/range.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/render/animation.h"
 #include "impactdic/render/render_results.h"
@@ -56,29 +52,26 @@ void RegisterRenderCommand(CLI::App& app) {
                   "playback frame rate of the animation, in " + AnimationOptions::kFpsRange.Text())
       ->capture_default_str();
   cmd->callback([args, output] {
-    // Validate every option before any work.
+    // Validate every option before any work (RenderResults checks the rest, named as flags).
     if (output->count() > 0) CheckOutputFolderName(args->output_dir, "-o");
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(args->results, ec)) {
-      throw Error(ErrorKind::kFileNotFound, "RESULTS", args->results,
-                  "an existing results .h5 file");
-    }
+    CheckValue(!args->no_animation || !args->png_frames, "--png-frames",
+               "given with --no-animation", "--png-frames only together with the animation");
     RenderResultsOptions options;
-    options.animation_options.codec = WithFlagNames(
-        {{"video codec", "--codec"}}, [&] { return VideoCodecFromString(args->codec); });
-    CheckRange(args->fps, AnimationOptions::kFpsRange, "--fps", "a playback frame rate");
-    if (args->no_animation && args->png_frames) {
-      throw Error(ErrorKind::kInvalidValue, "--png-frames", "given with --no-animation",
-                  "--png-frames only together with the animation");
-    }
     options.animation_options.fps = args->fps;
     options.output_dir = args->output_dir;
     options.png_frames = args->png_frames;
     options.animation = !args->no_animation;
     options.figures = !args->no_figures;
     options.force = args->force;
-    const RenderResultsSummary summary = RenderResults(args->results, options);
-    std::cout << summary.FullReport();
+    std::cout << WithFlagNames({{"video codec", "--codec"},
+                                {"AnimationOptions.fps", "--fps"},
+                                {"results file", "RESULTS"}},
+                               [&] {
+                                 options.animation_options.codec =
+                                     VideoCodecFromString(args->codec);
+                                 return RenderResults(args->results, options);
+                               })
+                     .FullReport();
   });
 }
 

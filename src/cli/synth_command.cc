@@ -39,18 +39,7 @@ void RegisterSynthCommand(CLI::App& app) {
   cmd->add_flag("--force", args->force,
                 "Replace an output folder another command wrote (a run, a campaign); files "
                 "impactdic did not write are never replaced");
-  cmd->callback([args] {
-    // Validate everything before any work (WriteSynthFolder checks the spec).
-    const SynthFolderOptions& a = *args;
-    if (a.realistic_spec.empty()) {
-      CheckValue(!a.spec_path.empty() || !a.preset.empty(), "SCENE_SPEC", "nothing",
-                 "a scene spec YAML file or --preset small|full|tiny");
-      CheckValue(a.preset.empty() || a.spec_path.empty(), "--preset", a.preset,
-                 "no --preset together with a spec file (write `preset:` in the spec)");
-    }
-    CheckValue(!a.output.empty(), "-o", "nothing", "an output folder");
-    std::cout << WriteSynthFolder(a);
-  });
+  cmd->callback([args] { std::cout << WriteSynthFolder(*args); });
 }
 
 }  // namespace impactdic::cli

@@ -268,7 +268,23 @@ CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions&
 CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                             const CampaignOptions& options) {
   options.Check();
+  if (scene_paths.size() == 1 && IsCampaignFile(scene_paths[0]))
+    return RunCampaignPlan(LoadCampaignFile(scene_paths[0]), options);
+  for (const std::string& f : scene_paths) {
+    if (IsCampaignFile(f)) {
+      throw Error(ErrorKind::kInvalidValue, "files", f + " is a campaign file",
+                  "one campaign file alone, or scene files");
+    }
+  }
   return RunCampaignPlan(PlanFromSceneFiles(scene_paths), options);
+}
+
+void CampaignSummary::ThrowIfEveryTestFailed(const std::string& folder) const {
+  if (rows.empty() || failed < static_cast<int>(rows.size())) return;
+  throw Error(ErrorKind::kNumerical,
+              fmt::format("campaign: all {} tests failed, none has results (each test's error is "
+                          "in {}/campaign.csv); the first, {}: {}",
+                          failed, folder, rows.front().name, rows.front().error));
 }
 
 }  // namespace impactdic

@@ -5,10 +5,14 @@
 
 #include <cstddef>
 #include <exception>
+#include <filesystem>
 #include <string>
 #include <vector>
 
+#include "impactdic/core/error.h"
+#include "impactdic/core/interrupt.h"
 #include "impactdic/core/strings.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/pipeline/scene.h"
 
@@ -162,6 +166,19 @@ std::string SceneTemplate() {
     text += ExtraKeyLines(tables[t].section(), indent);
   }
   return text;
+}
+
+std::string WriteSceneTemplate(const std::string& folder, bool force) {
+  std::error_code ec;
+  MakeFolders(folder, ec);
+  if (ec) throw Error(ErrorKind::kIo, folder + ": cannot create the folder: " + ec.message());
+  const std::string path = (std::filesystem::path(folder) / "scene.yaml").string();
+  if (!force && std::filesystem::exists(path)) {
+    throw Error(ErrorKind::kInvalidValue,
+                path + " exists; `impactdic init --force` overwrites it, or give another folder");
+  }
+  WriteTextFileAtomic(path, SceneTemplate());
+  return path;
 }
 
 }  // namespace impactdic

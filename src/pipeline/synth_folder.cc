@@ -98,6 +98,14 @@ std::string RunSynthRealistic(const SynthFolderOptions& args) {
 }  // namespace
 
 std::string WriteSynthFolder(const SynthFolderOptions& args) {
+  // Named as `impactdic synth` names them.
+  if (args.realistic_spec.empty()) {
+    CheckValue(!args.spec_path.empty() || !args.preset.empty(), "SCENE_SPEC", "nothing",
+               "a scene spec YAML file or --preset small|full|tiny");
+    CheckValue(args.preset.empty() || args.spec_path.empty(), "--preset", args.preset,
+               "no --preset together with a spec file (write `preset:` in the spec)");
+  }
+  CheckValue(!args.output.empty(), "-o", "nothing", "an output folder");
   if (!args.realistic_spec.empty()) return RunSynthRealistic(args);
   ImpactSceneSpec spec =
       args.spec_path.empty() ? ImpactScenePreset(args.preset) : LoadImpactSceneSpec(args.spec_path);

@@ -10,10 +10,13 @@
 #include <opencv2/imgcodecs.hpp>  // flag values only (WriteImage encodes)
 #include <opencv2/imgproc.hpp>
 #include <system_error>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/numeric.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/csv.h"
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/image_io.h"
@@ -447,6 +450,38 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
                 figures_dir);
   }
   return out;
+}
+
+const std::vector<std::string>& DemValidationCsvColumns() {
+  static const std::vector<std::string> kColumns = {
+      "t_s",           "p_pounder_tool_Ns", "p_pounder_dem_Ns", "p_gran_tool_Ns",
+      "p_gran_dem_Ns", "p_gran_dem_fd_Ns",  "v_sand_tool_m_s",  "v_sand_dem_m_s",
+      "m_add_tool_kg", "m_add_dem_kg"};
+  return kColumns;
+}
+
+DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& results_h5,
+                               const std::string& figures_dir, const std::string& csv_path) {
+  for (const auto& [name, path] : {std::pair{"TRUTH", truth_h5}, {"RESULTS", results_h5}}) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec))
+      throw Error(ErrorKind::kFileNotFound, name, path, "an existing HDF5 file");
+  }
+  // Before any work: the table is never written over an input (io/atomic_file.h).
+  const std::vector<std::string>& columns = DemValidationCsvColumns();
+  if (!csv_path.empty()) {
+    CheckOutputLocation(csv_path,
+                        {"--csv", {".csv"}, {truth_h5, results_h5}, {CsvHeaderLine(columns)}});
+  }
+  const DemValidation v = ValidateDemRun(truth_h5, results_h5, figures_dir);
+  if (!csv_path.empty()) {
+    WriteCsv(csv_path, columns,
+             {v.t_s, v.p_pounder_tool_Ns, v.p_pounder_truth_Ns, v.p_gran_tool_Ns, v.p_gran_truth_Ns,
+              v.p_gran_fd_truth_Ns, v.v_sand_tool_m_s, v.v_sand_truth_m_s, v.m_add_tool_kg,
+              v.m_add_truth_kg},
+             8);
+  }
+  return v;
 }
 
 std::string DemValidation::Report() const {

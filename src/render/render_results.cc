@@ -368,6 +368,10 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
 RenderResultsSummary RenderResults(const std::string& results_path,
                                    const RenderResultsOptions& options) {
   options.Check();
+  std::error_code ec;
+  if (!fs::is_regular_file(results_path, ec))
+    throw Error(ErrorKind::kFileNotFound, "results file", results_path,
+                "an existing results .h5 file");
   const H5Reader reader(results_path);
   return RenderResults(reader, results_path, options);
 }

@@ -188,6 +188,13 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
                                      const CalibrationOptions& options,
                                      CalibrationSummary* summary = nullptr);
 
+// `impactdic calibrate`: checks everything before any work (options.Check(); at least one image
+// source, "calibration images"; the plane view exists; `output` a .yaml / .yml that is none of
+// the images, "output"), then CalibrateFromFiles and SaveCalibration to `output`.
+CameraCalibration CalibrateToFile(const std::vector<std::string>& image_sources,
+                                  const std::string& plane_path, const CalibrationOptions& options,
+                                  const std::string& output, CalibrationSummary* summary);
+
 // YAML (keys in docs/calibration.md). Save is atomic; Load checks every key and reports the file
 // and key of a problem.
 void SaveCalibration(const CameraCalibration& calibration, const std::string& path);

@@ -148,13 +148,18 @@ struct CampaignSummary {
   double seconds = 0;
   JsonObject RegressionJson() const;
   std::string FullReport() const;
+  // A campaign none of whose tests has results (every one failed) is a failed command: Error
+  // kNumerical naming how many failed, the first error and `folder`/campaign.csv, which lists each
+  // test's error. Some failed tests among good ones are not an error (docs/campaign.md).
+  void ThrowIfEveryTestFailed(const std::string& folder) const;
 };
 
 // Runs the plan's tests (those of options.shard) in parallel, resuming complete ones, then writes
 // the campaign-level files. Error for bad options or an output folder that cannot be used; a
 // failing test is a row with status "failed", not an error.
 CampaignSummary RunCampaignPlan(const CampaignPlan& plan, const CampaignOptions& options);
-// The same for scene files (the command line's `impactdic campaign SCENE.yaml...`).
+// The same for the command line's files: one campaign file alone, or scene files (Error naming
+// "files" for a campaign file among others).
 CampaignSummary RunCampaign(const std::vector<std::string>& scene_paths,
                             const CampaignOptions& options);
 

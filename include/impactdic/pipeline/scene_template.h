@@ -21,6 +21,10 @@ inline constexpr const char* kSceneTemplateFramesPlaceholder = "frames/*.png";
 // The scene template's YAML text (see above).
 std::string SceneTemplate();
 
+// `impactdic init`: writes FOLDER/scene.yaml (the folder created if missing) and returns its path.
+// Error when the folder cannot be made, or when the file exists and not `force`.
+std::string WriteSceneTemplate(const std::string& folder, bool force);
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_PIPELINE_SCENE_TEMPLATE_H_

@@ -30,8 +30,9 @@ struct SynthFolderOptions {
 };
 
 // Writes the folder and returns the report to print (the scene's brief report and its YAML's
-// path). The spec's errors are Error(kInvalidValue) naming its keys; an override of frames.count
-// out of range names "frames.count".
+// path). Errors name the options of `impactdic synth`: no spec nor preset ("SCENE_SPEC"), both
+// ("--preset"), no output folder ("-o"). The spec's errors are Error(kInvalidValue) naming its
+// keys; an override of frames.count out of range names "frames.count".
 std::string WriteSynthFolder(const SynthFolderOptions& options);
 
 }  // namespace impactdic

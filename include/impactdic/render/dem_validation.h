@@ -65,6 +65,14 @@ struct DemValidation {
 DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
                              const std::string& figures_dir = "");
 
+// `impactdic validate-dem`: ValidateDemRun after checking, before any work, that both files exist
+// (Error kFileNotFound naming "TRUTH" / "RESULTS") and that `csv_path` (when not empty) is a .csv
+// that is not one of them ("--csv"); then writes the per-frame series there (t_s, then each
+// quantity of the tool and of the grains: DemValidationCsvColumns).
+DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& results_h5,
+                               const std::string& figures_dir, const std::string& csv_path);
+const std::vector<std::string>& DemValidationCsvColumns();
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_RENDER_DEM_VALIDATION_H_
