@@ -203,7 +203,7 @@ class FramesStage : public Stage {
           fmt::format("{} frames from {} to {}", std::max(0, d.last_frame - d.first_frame + 1),
                       d.first_frame, d.last_frame),
           min == 3 ? "at least 3 frames to correlate and differentiate"
-                   : "at least 2 frames (the first is the reference)")
+                   : "at least two frames (the first is the reference)")
           .WithFile(files.empty() ? scene.inputs.frames : files.front());
     }
     d.frames->SetRange(d.first_frame, d.last_frame);
