@@ -178,30 +178,29 @@ std::vector<std::string> DicCsvColumns(bool warp_gradient) {
   return columns;
 }
 
-void WriteDicResult(const std::string& path, DicResult* released, const DicOptions& options) {
-  DicResult& result = *released;
+void WriteDicResultsFile(const std::string& path, const DicResultsTable& t) {
   const std::string ext = ToLower(std::filesystem::path(path).extension().string());
-  const std::size_t n = result.positions.size(), frames = result.frames.size();
   if (ext == ".csv") {
     // Row by row as they are formatted: the rows (about 10 strings per subset and frame) are
-    // many times the results' own size and never all held at once.
-    const bool gradients = frames > 0 && !result.frames[0].dudx.empty();
+    // many times the results' own size and never all held at once. Row 0 (the reference) is left
+    // out.
+    const bool gradients = !t.dudx_warp.empty();
+    const std::array<const std::vector<double>*, 4> warp = {&t.dudx_warp, &t.dudy_warp,
+                                                            &t.dvdx_warp, &t.dvdy_warp};
     CsvRowWriter out(path, DicCsvColumns(gradients));
-    std::vector<std::string> row(DicCsvColumns(gradients).size());
-    for (std::size_t k = 0; k < frames; ++k) {
-      const FrameResult& f = result.frames[k];
-      const std::string frame = std::to_string(FrameLabel(result, f.frame));
-      for (std::size_t i = 0; i < n; ++i) {
-        row.assign({frame, Number(result.positions[i].x), Number(result.positions[i].y),
-                    Number(f.u_px[i]), Number(f.v_px[i]), Number(f.zncc[i]),
-                    std::to_string(f.iterations[i]), ToString(f.status[i]), Number(f.sigma_u_px[i]),
-                    Number(f.sigma_v_px[i])});
-        if (gradients) {
-          for (double g : {f.dudx[i], f.dudy[i], f.dvdx[i], f.dvdy[i]}) row.push_back(Ratio(g));
-        }
+    std::vector<std::string> row;
+    for (std::size_t r = 1; r < t.rows; ++r) {
+      const std::string frame = std::to_string(std::llround(t.frame_number[r]));
+      for (std::size_t i = 0; i < t.subsets; ++i) {
+        const std::size_t k = r * t.subsets + i;
+        row.assign({frame, Number(t.x_px[i]), Number(t.y_px[i]), Number(t.u_px[k]),
+                    Number(t.v_px[k]), Number(t.zncc[k]), std::to_string(t.iterations[k]),
+                    ToString(static_cast<SubsetStatus>(t.status[k])), Number(t.sigma_u_px[k]),
+                    Number(t.sigma_v_px[k])});
+        if (gradients)
+          for (const auto* g : warp) row.push_back(Ratio((*g)[k]));
         out.Row(row);
       }
-      result.frames[k] = FrameResult{};
     }
     out.Commit();
     return;
@@ -211,8 +210,12 @@ void WriteDicResult(const std::string& path, DicResult* released, const DicOptio
   }
   // Other groups of an existing file stay.
   H5Writer out(path, /*owned_groups=*/{results_layout::kDicGroup});
-  WriteDicResults(out, MakeTable(result, options, /*first_frame=*/-1));
+  WriteDicResults(out, t);
   out.Commit();
+}
+
+void WriteDicResult(const std::string& path, DicResult* released, const DicOptions& options) {
+  WriteDicResultsFile(path, MakeTable(*released, options, /*first_frame=*/-1));
 }
 
 }  // namespace impactdic

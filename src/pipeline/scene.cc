@@ -277,6 +277,15 @@ YamlOptionTable DicTable(Scene* s) {
         "...or less than this fraction of the subset's own sigma");
   t.Add("search_radius_px", &o.init.search_radius_px, kSearchRadiusRange, "search radius",
         "Integer-pixel initial-guess search radius");
+  t.AddChoice(
+      "mode", kSequenceModeNames.Names(), ToString(o.mode),
+      [&o](const std::string& v) { o.mode = SequenceModeFromString(v, "dic.mode"); },
+      "sequence | pairs: sequence = the frames of one recording, each predicted from the previous "
+      "ones, the reference updated by reference_update; pairs = independent images, each "
+      "correlated against the first alone (reference_update does not apply)");
+  t.Add("keep_warp_gradient", &o.keep_warp_gradient,
+        "Keep each subset's warp gradient since the first reference: /dic/dudx_warp, dudy_warp, "
+        "dvdx_warp, dvdy_warp (docs/dic.md, Warp gradient); on with strain.gradient warp");
   AddContinuityKeys(t, &o.continuity);
   AddOutlierKeys(t, &o.outliers);
   AddDicFrameKeys(t, s);

@@ -2,6 +2,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
+#include <cmath>
+#include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -22,6 +26,9 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"correlate", "dic.interpolation", "--interp"},
       {"correlate", "dic.shape", "--shape"},
       {"correlate", "dic.reference_update", "--reference-update"},
+      {"correlate", "dic.mode", "--mode"},
+      {"correlate", "dic.first_frame_number", "--first"},
+      {"correlate", "dic.last_frame_number", "--last"},
       {"correlate", "dic.threads", "--threads"},
       {"correlate", "dic.search_radius_px", "--search-radius"},
       {"correlate", "dic.min_zncc", "--min-zncc"},
@@ -99,8 +106,32 @@ std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections
   return flags;
 }
 
+namespace {
+
+// dic.roi as a flag's text "X0,Y0,X1,Y1" (four integers [px]). Error naming `flag` otherwise.
+std::array<int, 4> RoiFromText(const std::string& text, const std::string& flag) {
+  std::vector<int> v;
+  std::stringstream ss(text);
+  bool ok = true;
+  for (std::string item; std::getline(ss, item, ',');) {
+    const std::optional<double> number = ParseNumber(item);
+    ok = ok && number && *number == std::floor(*number) && std::abs(*number) < 1e9;
+    v.push_back(ok ? static_cast<int>(*number) : 0);
+  }
+  CheckValue(ok && v.size() == 4, flag, text, "X0,Y0,X1,Y1 (four integers, pixels)");
+  CheckValue(v[0] >= 0 && v[1] >= 0 && v[2] > v[0] && v[3] > v[1], flag, text,
+             "0 <= X0 < X1 and 0 <= Y0 < Y1");
+  return {v[0], v[1], v[2], v[3]};
+}
+
+}  // namespace
+
 void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
                  const std::string& flag) {
+  if (key == "dic.roi") {  // Not a field of the tables (ParseScene reads it as a list).
+    scene->dic.roi = RoiFromText(value, flag);
+    return;
+  }
   for (const YamlOptionTable& table : SceneOptionTables(scene)) {
     for (const YamlOptionTable::Entry& e : table.entries()) {
       if (table.section() + "." + e.key != key) continue;

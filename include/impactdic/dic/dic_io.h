@@ -2,6 +2,7 @@
 //
 //   DicResult r = CorrelateFrames(*OpenFrameSource("frames/"), options);  // dic/correlate_frames.h
 //   WriteDicResult("out.h5", &r, options);  // or .csv; r.frames released
+//   WriteDicResultsFile("out.csv", table);  // a DicResultsTable (`correlate`)
 #ifndef IMPACTDIC_DIC_DIC_IO_H_
 #define IMPACTDIC_DIC_DIC_IO_H_
 
@@ -33,7 +34,7 @@ DicResultsTable MakeDicResultsTable(const DicResult& result, const DicOptions& o
 // copied, so the subsets x frames results are in memory once (plus one frame), not twice.
 DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& options, int first_frame);
 
-// Writes the result by extension:
+// Writes the table (MakeDicResultsTable) by extension:
 // .csv: columns frame,x_px,y_px,u_px,v_px,zncc,iterations,status,sigma_u_px,sigma_v_px (one row
 //       per frame and subset;
 //       frame = the deformed image's frame number from its file name (frame_0012.png -> 12) when
@@ -44,12 +45,15 @@ DicResultsTable MakeDicResultsTable(DicResult&& result, const DicOptions& option
 //       then, only when the correlation kept them (DicOptions::keep_warp_gradient), the columns
 //       dudx_warp,dudy_warp,dvdx_warp,dvdy_warp: the displacement gradient of the subset warp
 //       since the first reference (FrameResult::dudx ...; 9 significant digits).
-// .h5:  the /dic group of the results layout (io/results_layout.h, written by WriteDicResults
-//       from MakeDicResultsTable(result, options, /*first_frame=*/-1)): one row per image, the
+// .h5:  the /dic group of the results layout (io/results_layout.h, written by
+//       WriteDicResults): one row per image, the
 //       reference first; /dic/frame_number as the CSV's frame column; other groups of an existing
 //       file are kept.
-// Each frame's arrays are released once written (.h5: once in the table), so the results are
-// held once; the positions, summary and attributes stay in *result.
+// The .csv is written row by row as formatted; the .h5 atomically (io/hdf5_store.h).
+void WriteDicResultsFile(const std::string& path, const DicResultsTable& table);
+// The same for MakeDicResultsTable(result, options, /*first_frame=*/-1): each frame's arrays are
+// released once in the table, so the results are held once; the positions, summary and
+// attributes stay in *result.
 void WriteDicResult(const std::string& path, DicResult* result, const DicOptions& options);
 // The columns of WriteDicResult's CSV; `warp_gradient`: with the warp-gradient columns (they
 // come last, so every CSV begins with DicCsvColumns()).

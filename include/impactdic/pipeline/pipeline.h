@@ -185,7 +185,8 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
 
 // The correlation options of a scene's `dic` section: SceneDic::options (keys not in the scene
 // keep the dic library's defaults) with the region of interest (roi, roi_polygon) applied. Error
-// naming the key if invalid.
+// naming the key if invalid (dic.reference_update other than the default or fixed with dic.mode
+// pairs).
 DicOptions MakeDicOptions(const SceneDic& dic);
 
 }  // namespace impactdic

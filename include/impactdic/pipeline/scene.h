@@ -39,6 +39,9 @@ namespace impactdic {
 struct SceneInputs {
   // Folder, glob ("frames/*.png"), video or camera file (.cine, .mraw, .cih, .cihx); resolved path.
   std::string frames;
+  // Instead of `frames`: image files in this order, the first the reference (`impactdic correlate
+  // --reference REF --deformed DEF ...`; not a scene-file key). Each file once.
+  std::vector<std::string> frame_files;
   // Camera frame rate [1/s], kCameraFpsRange (core/range.h). A camera file states its own rate
   // (pipeline SceneFrameClock): then inputs.fps is not needed, and one given must agree with it.
   double fps = 1600;
@@ -71,6 +74,10 @@ struct SceneDic {
   int threads = 0;      // 0 = all cores, N >= 1 = at most N (core/threads.h).
   int first_frame = 0;  // First frame to correlate (index in the sequence), >= 0.
   int last_frame = -1;  // Last frame (inclusive); -1 = the last frame.
+  // The analysed frames by the source's own numbers (FrameSource::FrameNumber: a numbered file
+  // name's number, a camera's frame number; `impactdic correlate --first/--last`; not scene-file
+  // keys): when set, they replace first_frame / last_frame.
+  std::optional<long long> first_frame_number, last_frame_number;
 };
 
 // `sensor.*`: SensorOptions (g and, with integrate_from: impact, v0 come from the test).

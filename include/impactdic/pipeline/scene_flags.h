@@ -42,7 +42,8 @@ struct SceneKeyFlag {
 std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections);
 
 // Sets `key` of `scene` from the text given to its flag `flag`, parsed as the key's value in a
-// scene file (relative paths against scene->folder). Error(kInvalidValue) "FLAG: invalid value
+// scene file (relative paths against scene->folder); dic.roi (a list in a scene file) as
+// "X0,Y0,X1,Y1" [px]. Error(kInvalidValue) "FLAG: invalid value
 // (got 'VALUE'); expected <the key's expected values>" otherwise; an unknown key is a programming
 // error (std::logic_error).
 void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,

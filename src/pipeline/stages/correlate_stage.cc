@@ -44,9 +44,10 @@ class CorrelateStage : public Stage {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
     DicOptions options = MakeDicOptions(scene.dic);
-    // strain.gradient: warp reads the subset warp's gradient (/dic/*_warp).
+    // dic.keep_warp_gradient, or strain.gradient warp (which reads /dic/*_warp).
     options.keep_warp_gradient =
-        scene.strain.enabled && scene.strain.gradient == StrainGradient::kWarp;
+        options.keep_warp_gradient ||
+        (scene.strain.enabled && scene.strain.gradient == StrainGradient::kWarp);
     const bool given = c.options.threads >= 0;  // Else the scene's dic.threads.
     const ThreadLimit limit(given ? c.options.threads : scene.dic.threads,
                             given ? "threads" : "dic.threads");

@@ -17,6 +17,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/dic/options.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
@@ -28,6 +29,10 @@
 namespace impactdic::stages {
 namespace {
 
+// The fewest analysed frames: a reference and one deformed frame, and a third for the kinematics'
+// derivatives when the scene lists them.
+int MinFrames(const Scene& scene) { return scene.HasStage("kinematics") ? 3 : 2; }
+
 // dic.first_frame and dic.last_frame against the n frames of the source: Error naming the key,
 // its value and the allowed range.
 void CheckFrameRange(const Scene& scene, int n) {
@@ -37,16 +42,46 @@ void CheckFrameRange(const Scene& scene, int n) {
                 fmt::format("< the number of frames ({}) in {}", n, scene.inputs.frames))
         .WithFile(scene.path);
   }
-  const int first = scene.dic.first_frame;
-  if (first > 0 && last - first < 2) {
+  const int first = scene.dic.first_frame, min = MinFrames(scene);
+  if (first > 0 && last - first < min - 1) {
     throw Error(ErrorKind::kInvalidValue, "dic.first_frame", std::to_string(first),
-                fmt::format("a frame index <= {}: {} holds {} frames (0..{}){}, and at least 3 "
+                fmt::format("a frame index <= {}: {} holds {} frames (0..{}){}, and at least {} "
                             "from dic.first_frame on are correlated",
-                            std::max(0, last - 2), scene.inputs.frames, n, n - 1,
+                            std::max(0, last - min + 1), scene.inputs.frames, n, n - 1,
                             scene.dic.last_frame < 0
                                 ? ""
-                                : fmt::format(", dic.last_frame is {}", scene.dic.last_frame)))
+                                : fmt::format(", dic.last_frame is {}", scene.dic.last_frame),
+                            min))
         .WithFile(scene.path);
+  }
+}
+
+// The analysed frames, as source indices into d.first_frame..d.last_frame: dic.first_frame and
+// dic.last_frame, or the frames numbered dic.first_frame_number / last_frame_number (Error naming
+// the field, the number and the source's span when no frame has it; at least two frames).
+void SelectFrameRange(const Scene& scene, SceneRunData& d) {
+  const SceneDic& dic = scene.dic;
+  CheckFrameRange(scene, d.source_frames);
+  d.first_frame = dic.first_frame;
+  d.last_frame = dic.last_frame < 0 ? d.source_frames - 1 : dic.last_frame;
+  if (!dic.first_frame_number && !dic.last_frame_number) return;
+  const FrameSource& source = d.frames->source();
+  const std::string both = "dic.first_frame_number..last_frame_number";
+  if (dic.first_frame_number && dic.last_frame_number &&
+      *dic.first_frame_number > *dic.last_frame_number) {
+    throw Error(ErrorKind::kInvalidValue, both,
+                fmt::format("{} > {}", *dic.first_frame_number, *dic.last_frame_number),
+                "first <= last");
+  }
+  if (dic.first_frame_number)
+    d.first_frame = FrameIndexOf(source, *dic.first_frame_number, "dic.first_frame_number");
+  if (dic.last_frame_number)
+    d.last_frame = FrameIndexOf(source, *dic.last_frame_number, "dic.last_frame_number");
+  if (d.last_frame - d.first_frame < 1) {
+    throw Error(ErrorKind::kInvalidValue, both,
+                fmt::format("frames {}..{} of {} (one frame)", source.FrameNumber(d.first_frame),
+                            source.FrameNumber(d.last_frame), source.description()),
+                "at least two frames (the first is the reference)");
   }
 }
 
@@ -61,7 +96,7 @@ void CheckSceneRoi(const Scene& scene, cv::Size frame) {
       fmt::format("[{}, {}, {}, {}]{}", r[0], r[1], r[2], r[3],
                   r[0] >= frame.width || r[1] >= frame.height ? ", entirely outside the frames"
                                                               : ", partly outside the frames"),
-      fmt::format("a rectangle [x0, y0, x1, y1] inside the {}x{} frames (x1 <= {}, "
+      fmt::format("a rectangle (ROI) [x0, y0, x1, y1] inside the {}x{} frames (x1 <= {}, "
                   "y1 <= {})",
                   frame.width, frame.height, frame.width, frame.height))
       .WithFile(scene.path);
@@ -151,21 +186,25 @@ class FramesStage : public Stage {
   std::string Run(StageContext& c) const override {
     const Scene& scene = c.scene;
     SceneRunData& d = c.data;
-    d.frames = std::make_shared<FrameStream>(scene.inputs.frames, ScenePreprocessOptions(scene),
-                                             d.calibration ? &*d.calibration : nullptr);
+    const CameraCalibration* calibration = d.calibration ? &*d.calibration : nullptr;
+    const std::vector<std::string>& files = scene.inputs.frame_files;
+    d.frames = files.empty()
+                   ? std::make_shared<FrameStream>(scene.inputs.frames,
+                                                   ScenePreprocessOptions(scene), calibration)
+                   : std::make_shared<FrameStream>(MakeImageFileSource(files),
+                                                   ScenePreprocessOptions(scene), calibration);
     d.source_frames = d.frames->source_frames();
     d.clock = SceneFrameClock(scene);
-    CheckFrameRange(scene, d.source_frames);
-    d.first_frame = scene.dic.first_frame;
-    d.last_frame = scene.dic.last_frame < 0 ? d.source_frames - 1 : scene.dic.last_frame;
+    SelectFrameRange(scene, d);
     const std::string skipped_note = d.sensor ? TimeFrames(c) : "";
-    if (d.last_frame - d.first_frame < 2) {
+    if (const int min = MinFrames(scene); d.last_frame - d.first_frame < min - 1) {
       throw Error(
           ErrorKind::kInvalidValue, "frames",
           fmt::format("{} frames from {} to {}", std::max(0, d.last_frame - d.first_frame + 1),
                       d.first_frame, d.last_frame),
-          "at least 3 frames to correlate and differentiate")
-          .WithFile(scene.inputs.frames);
+          min == 3 ? "at least 3 frames to correlate and differentiate"
+                   : "at least two frames (the first is the reference)")
+          .WithFile(files.empty() ? scene.inputs.frames : files.front());
     }
     d.frames->SetRange(d.first_frame, d.last_frame);
     const cv::Mat f0 = CheckFrames(c, *d.frames);

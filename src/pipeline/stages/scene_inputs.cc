@@ -75,6 +75,13 @@ cv::Mat SceneMask(const Scene& scene, cv::Size frame_size) {
 
 DicOptions MakeDicOptions(const SceneDic& d) {
   DicOptions o = d.options;
+  // Pairs never update the reference: a policy other than the default or fixed is a mistake.
+  if (o.mode == SequenceMode::kPairs && o.update.policy != "fixed" &&
+      o.update.policy != UpdateOptions{}.policy) {
+    throw Error(ErrorKind::kInvalidValue, "dic.reference_update",
+                o.update.policy + " with dic.mode pairs",
+                "no dic.reference_update (or fixed): pairs never update the reference");
+  }
   if (d.roi[2] > d.roi[0] && d.roi[3] > d.roi[1]) {
     o.grid.roi = cv::Rect(d.roi[0], d.roi[1], d.roi[2] - d.roi[0], d.roi[3] - d.roi[1]);
   }

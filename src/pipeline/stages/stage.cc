@@ -26,12 +26,16 @@ void RunStage(const Stage& stage, StageContext& context) {
   LogInfo("[{}] {} ({:.2f} s)", stage.name(), note, timer.ElapsedSeconds());
 }
 
+void RunCorrelationStages(StageContext& context) {
+  RunStage(*MakeFramesStage(), context);
+  RunStage(*MakeCorrelateStage(), context);
+}
+
 void RunAnalysisStages(StageContext& context, const std::string& results_file) {
   RunStage(*MakeCalibrateStage(), context);
   RunStage(*MakeSensorStage(), context);
   if (results_file.empty()) {
-    RunStage(*MakeFramesStage(), context);
-    RunStage(*MakeCorrelateStage(), context);
+    RunCorrelationStages(context);
   } else {
     RunStage(*MakeLoadDicStage(results_file), context);
   }

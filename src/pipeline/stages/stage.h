@@ -58,6 +58,10 @@ std::unique_ptr<Stage> MakeStrainStage();
 // when all are complete.
 std::unique_ptr<Stage> MakeOutputsStage(const OutputWriters& writers, OutputGeneration* generation);
 
+// The correlation of the stage graph: frames, then correlate (`run`, and `impactdic correlate`
+// alone: pipeline/correlate_scene.h).
+void RunCorrelationStages(StageContext& context);
+
 // The one stage graph up to the outputs (docs/architecture.md), of `run` and `analyze`:
 // calibrate, sensor, the correlation results (frames and correlate when results_file is empty,
 // else load_dic of results_file), kinematics, momentum, model, strain.

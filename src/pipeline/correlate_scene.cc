@@ -1,0 +1,125 @@
+#include "impactdic/pipeline/correlate_scene.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/log.h"
+#include "impactdic/core/timer.h"
+#include "impactdic/dic/dic_io.h"
+#include "impactdic/io/atomic_file.h"
+#include "impactdic/io/camera_file.h"
+#include "impactdic/io/csv.h"
+#include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene_flags.h"
+#include "stages/stage.h"
+
+namespace impactdic {
+namespace {
+
+// Each image of inputs.frame_files once: the same file given twice (under any spelling of its
+// path, a symbolic or a hard link) would be correlated twice and numbered alike. Error naming
+// `correlate --deformed` and both spellings. Files that cannot be examined are left to the image
+// reader's message.
+void CheckEachImageOnce(const std::vector<std::string>& paths) {
+  const auto repeated = FirstRepeatedFile(paths);
+  if (!repeated) return;
+  const auto [earlier, i] = *repeated;
+  const std::string& first = paths[earlier];
+  const std::string found =
+      "'" + paths[i] + "', " +
+      (earlier == 0        ? "the --reference image" + (first == paths[i] ? "" : " '" + first + "'")
+       : first == paths[i] ? std::string("given twice")
+                           : "the same file as '" + first + "'");
+  throw Error(ErrorKind::kInvalidValue, "--deformed", found,
+              "each deformed image once, and none of them the reference");
+}
+
+// The files the correlation reads, listed (not decoded): the images, or the video or camera
+// file, and the mask. The output must be none of them. Errors name `correlate`'s flags.
+std::vector<std::string> ListInputs(const Scene& scene) {
+  std::vector<std::string> inputs = scene.inputs.frame_files;
+  const std::string& frames = scene.inputs.frames;
+  if (inputs.empty() == frames.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "input",
+                frames.empty() ? "none" : "both --reference/--deformed and --frames",
+                "either --reference REF --deformed DEF [DEF ...] or --frames GLOB");
+  }
+  if (!inputs.empty()) {
+    CheckValue(!inputs[0].empty(), "--reference", "missing", "the reference image");
+    CheckValue(inputs.size() >= 2, "--deformed", "missing", "at least one deformed image");
+    CheckEachImageOnce(inputs);
+  } else if (IsCameraFile(frames) || IsVideoFile(frames)) {
+    inputs.push_back(frames);
+  } else {
+    inputs = ListFrameSequence(frames);  // A gap in the numbering is an error, as in `run`.
+  }
+  inputs.push_back(scene.dic.mask);
+  return inputs;
+}
+
+// The table as `correlate -o` has always written it: rows numbered from the reference (no
+// first_frame attribute) and, instead of the run's preprocessing note with its timings, the
+// Gaussian pre-filter applied (if any), so that the same results give the same bytes.
+void AsCorrelateFile(const Scene& scene, const FrameStream& frames, DicResultsTable* t) {
+  for (auto* column : {&t->frame, &t->reference_frame})
+    for (auto& f : *column) f -= static_cast<std::int32_t>(t->first_frame);
+  t->first_frame = -1;
+  t->text_attributes.erase("preprocess");
+  const GaussianBlurOptions& g = scene.preprocess.gaussian;
+  if (frames.preprocess_summary()->gaussian.applied) {
+    t->text_attributes["preprocess"] =
+        fmt::format("gaussian: sigma {} px, kernel {}x{} (reference and deformed images)",
+                    g.sigma_px, g.kernel_size, g.kernel_size);
+    LogInfo("correlate: pre-filter {}", t->text_attributes["preprocess"]);
+  }
+}
+
+}  // namespace
+
+PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bool allow_partial) {
+  Scene scene = given;
+  scene.stages = {"frames", "correlate"};
+  CheckValue(!output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
+  CheckOutputLocation(output, {"-o/--output",
+                               {".csv", ".h5", ".hdf5"},
+                               ListInputs(scene),
+                               {CsvHeaderLine(DicCsvColumns())}});
+  WallTimer wall;
+  PipelineSummary summary;
+  summary.scene_name = scene.name;
+  SceneRunData data;
+  const PipelineOptions options;  // threads -1: dic.threads.
+  stages::StageContext context{scene, options, data, summary};
+  stages::RunCorrelationStages(context);
+  const DicSummary& dic = data.dic_summary;
+  // As `run`'s correlate stage fails (DicSummary's one rule), naming the command's flag.
+  const std::string problem = dic.NothingUsable(SceneFlagShortName("correlate", "dic.min_zncc"),
+                                                scene.dic.options.icgn.min_zncc);
+  if (!problem.empty() && !allow_partial) {
+    throw PartialResultsError(
+        fmt::format("correlate: {}\nNothing was written ({} is as it was)", problem, output),
+        "writes it, every subset with its status");
+  }
+  if (!problem.empty()) LogWarning("correlate: partial results (--allow-partial): {}", problem);
+  AsCorrelateFile(scene, *data.frames, &*data.dic);
+  WriteDicResultsFile(output, *data.dic);
+  summary.outputs.push_back(output);
+  summary.seconds = wall.ElapsedSeconds();
+  LogInfo("correlate: {}", dic.FullReport());
+  LogInfo(
+      "correlate: wrote {}; wall time {:.3f} s with reading the images and writing the "
+      "results ({:.0f} POIs/s)",
+      output, summary.seconds, double(dic.subsets) * dic.frames / std::max(summary.seconds, 1e-9));
+  if (!dic.IsUsable()) {
+    LogWarning("correlate: only {:.1f}% of the subset results are valid", 100 * dic.valid_fraction);
+  }
+  return summary;
+}
+
+}  // namespace impactdic
