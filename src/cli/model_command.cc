@@ -20,22 +20,23 @@ void RegisterModelCommand(CLI::App& app) {
       "Simulate the added-mass impact model (Eq. 9): one test, the solvers' work-precision study "
       "(--work-precision) or the paper's 27 combinations (--table1)");
   // The test.* and model.* keys (the option table: name, help and default; the required inputs of
-  // a single run show none), read as numbers; model.solver as text.
+  // a single run show none): numbers, the solver's names as text, ode45_defaults as a switch.
   for (const SceneKeyFlag& f : SceneKeyFlags({"test", "model"})) {
     const bool required = f.key == "test.mass_kg" || f.key == "test.width_m" ||
                           f.key == "test.drop_height_m" || f.key == "test.impact_velocity_m_s";
-    if (f.key == "model.solver")
-      AddSceneKeyOption(cmd, f.key, &request->solver, f.help, f.default_text);
-    else
+    if (f.key == "model.solver" || f.key == "model.error_estimator") {
+      AddSceneKeyOption(cmd, f.key,
+                        f.key == "model.solver" ? &request->solver : &request->error_estimator,
+                        f.help, f.default_text);
+    } else if (f.key == "model.ode45_defaults") {
+      auto* key_flag = cmd->add_flag("--" + f.key, request->ode45_defaults, f.help);
+      cmd->add_flag(SceneFlagShortName("model", f.key), request->ode45_defaults,
+                    "Short for --" + f.key)
+          ->excludes(key_flag);
+    } else {
       AddSceneKeyOption(cmd, f.key, &request->keys[f.key], f.help, required ? "" : f.default_text);
+    }
   }
-  cmd->add_flag(
-      "--ode45-defaults", request->ode45_defaults,
-      "MATLAB ode45's rules and defaults (RelTol 1e-3, AbsTol 1e-6), the paper's setting");
-  cmd->add_option("--error-estimate", request->error_estimate,
-                  "companion (a run at rtol/10; default) | local (summed local estimates)");
-  cmd->add_option("--t-max", request->t_max_s,
-                  "give up if v has not reached 0 by then [s] (default 10)");
   cmd->add_option("--format", *format, "text | json (default text)");
   cmd->add_option("-o,--output", request->output,
                   "single run: time series SERIES.csv | SERIES.h5; --work-precision / --table1: "

@@ -126,6 +126,7 @@ std::vector<std::string> SplitList(const std::string& text) {
 constexpr const char* kHeight = "test.drop_height_m";
 constexpr const char* kVelocity = "test.impact_velocity_m_s";
 constexpr const char* kGravity = "test.g_m_s2";
+constexpr const char* kTMax = "model.t_max_s";
 
 // Which inputs the run takes: a single run needs the test's mass, width and exactly one of the
 // drop height and impact velocity; --table1 and --work-precision take none of them.
@@ -161,10 +162,11 @@ void CheckRunInputs(const ModelRequest& r) {
 ImpactModelParameters ModelRequestParameters(const ModelRequest& r) {
   CheckRunInputs(r);
   // Each value is read as its scene key (the key's one parser and range); g may be 0 here (the
-  // exact solutions), not in a scene, and the tolerances are the solver options'.
+  // exact solutions), not in a scene, and the tolerances and t_max are the solver options'
+  // (ModelRequestSolverOptions).
   Scene scene;
   for (const auto& [key, value] : r.keys)
-    if (value && key != kGravity && key != "model.rtol" && key != "model.atol")
+    if (value && key != kGravity && key != "model.rtol" && key != "model.atol" && key != kTMax)
       SetSceneKey(&scene, key, Num(*value), NameOf(r, key));
   const auto height = Given(r, kHeight), velocity = Given(r, kVelocity);
   const double g = Given(r, kGravity).value_or(ImpactModelParameters{}.gravity_m_s2);
@@ -194,25 +196,28 @@ ImpactModelParameters ModelRequestParameters(const ModelRequest& r) {
 
 ImpactSolverOptions ModelRequestSolverOptions(const ModelRequest& r) {
   ImpactSolverOptions o;
-  const std::string rtol = NameOf(r, "model.rtol"), atol = NameOf(r, "model.atol");
-  Naming({{"solver", NameOf(r, "model.solver")}, {"error_estimator", "--error-estimate"}}, [&] {
-    o.solver = ImpactSolverFromString(r.solver);
-    o.error_estimator = ErrorEstimatorFromString(r.error_estimate);
-  });
+  const std::string rtol = NameOf(r, "model.rtol"), atol = NameOf(r, "model.atol"),
+                    t_max = NameOf(r, "model.t_max_s");
+  Naming({{"solver", NameOf(r, "model.solver")},
+          {"error_estimator", NameOf(r, "model.error_estimator")}},
+         [&] {
+           o.solver = ImpactSolverFromString(r.solver);
+           o.error_estimator = ErrorEstimatorFromString(r.error_estimator);
+         });
   o.ode45_defaults = r.ode45_defaults;
   // A given tolerance or time must be a number: NaN means "unset" to the library.
-  for (const auto& [value, name] :
-       {std::pair{Given(r, "model.rtol"), rtol}, std::pair{Given(r, "model.atol"), atol},
-        std::pair{r.t_max_s, std::string("--t-max")}})
-    if (value) CheckValue(!std::isnan(*value), name, Num(*value), "a number");
+  for (const auto& [key, name] :
+       {std::pair{"model.rtol", rtol}, std::pair{"model.atol", atol}, std::pair{kTMax, t_max}})
+    if (const auto value = Given(r, key))
+      CheckValue(!std::isnan(*value), name, Num(*value), "a number");
   o.rtol = Given(r, "model.rtol").value_or(o.rtol);
   o.atol = Given(r, "model.atol").value_or(o.atol);
-  o.t_max_s = r.t_max_s.value_or(o.t_max_s);
+  o.t_max_s = Given(r, kTMax).value_or(o.t_max_s);
   // The library's check (the allowed ranges are defined there).
   Naming({{"rtol", rtol},
           {"atol", atol},
-          {"t_max_s", "--t-max"},
-          {"ode45_defaults", "--ode45-defaults"}},
+          {"t_max_s", t_max},
+          {"ode45_defaults", NameOf(r, "model.ode45_defaults")}},
          [&] { o.Check(); });
   return o;
 }

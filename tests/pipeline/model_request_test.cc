@@ -6,10 +6,12 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/pipeline/model_runs.h"
+#include "impactdic/pipeline/scene.h"
 
 namespace impactdic {
 namespace {
@@ -98,14 +100,14 @@ TEST(ModelRequest, SolverOptionsAndStudyListsAreChecked) {
   ModelRequest r = SingleRun();
   r.solver = "stiff";
   r.ode45_defaults = true;
-  EXPECT_EQ(Refusal([&] { ModelRequestSolverOptions(r); }).where(), "--ode45-defaults");
+  EXPECT_EQ(Refusal([&] { ModelRequestSolverOptions(r); }).where(), "model.ode45_defaults");
   r = SingleRun();
   r.keys["model.rtol"] = NAN;
   EXPECT_EQ(Refusal([&] { ModelRequestSolverOptions(r); }).expected(), "a number");
   r = SingleRun();
   r.keys["model.rtol"] = 1e-8;
-  r.t_max_s = 2;
-  r.error_estimate = "local";
+  r.keys["model.t_max_s"] = 2;
+  r.error_estimator = "local";
   const ImpactSolverOptions o = ModelRequestSolverOptions(r);
   EXPECT_EQ(o.rtol, 1e-8);
   EXPECT_EQ(o.t_max_s, 2);
@@ -122,6 +124,24 @@ TEST(ModelRequest, SolverOptionsAndStudyListsAreChecked) {
   EXPECT_FALSE(w.table1);
   r.wp_cases = ",";
   EXPECT_EQ(Refusal([&] { ModelRequestStudy(r); }).expected(), "at least one case");
+}
+
+// The solver options the command had only as flags are scene keys too (model.*), for `run`.
+TEST(ModelRequest, SolverFlagsAreSceneKeys) {
+  const Scene s = ParseScene(
+      "inputs: {frames: f/*.png}\n"
+      "model: {error_estimator: local, ode45_defaults: true, t_max_s: 0.5}\n",
+      "s.yaml");
+  EXPECT_EQ(s.solver.error_estimator, ErrorEstimator::kLocalSum);
+  EXPECT_TRUE(s.solver.ode45_defaults);
+  EXPECT_EQ(s.solver.t_max_s, 0.5);
+  for (const auto& [bad, key] :
+       {std::pair{"model: {t_max_s: 0}", "model.t_max_s"},
+        std::pair{"model: {error_estimator: x}", "model.error_estimator"}}) {
+    const Error e = Refusal(
+        [bad = bad] { ParseScene("inputs: {frames: f/*.png}\n" + std::string(bad), "s.yaml"); });
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

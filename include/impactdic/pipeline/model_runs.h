@@ -35,8 +35,9 @@ void RunModelWorkPrecision(const WorkPrecisionOptions& study, const std::string&
                            const std::string& output, const std::string& plot, std::ostream& out);
 
 // `impactdic model` as one request: the test.* and model.* scene keys given (their ranges are the
-// scene's, pipeline/scene.cc) and the options of the run that are not scene keys (named in errors
-// by the command's flags, as -o and --plot above). A key is named in errors by `key_names` (the
+// scene's, pipeline/scene.cc; the solver's are ImpactSolverOptions::Check()'s) and the choice of
+// run, whose options are not scene keys (named in errors by the command's flags, as -o and --plot
+// above). A key is named in errors by `key_names` (the
 // flag the user typed for it, "--mass"), else by the key itself.
 //
 //   ModelRequest r;
@@ -45,11 +46,9 @@ void RunModelWorkPrecision(const WorkPrecisionOptions& study, const std::string&
 struct ModelRequest {
   std::map<std::string, std::optional<double>> keys;  // Numbers by key ("model.K"); unset: default.
   std::string solver = ToString(ImpactSolverOptions{}.solver);  // model.solver
-  std::map<std::string, std::string> key_names;                 // Key -> the name errors give it.
-  // Not scene keys (--t-max, --error-estimate, --ode45-defaults): ImpactSolverOptions.
-  std::optional<double> t_max_s;
-  std::string error_estimate = ToString(ImpactSolverOptions{}.error_estimator);
-  bool ode45_defaults = false;
+  std::string error_estimator = ToString(ImpactSolverOptions{}.error_estimator);
+  bool ode45_defaults = false;                   // model.ode45_defaults
+  std::map<std::string, std::string> key_names;  // Key -> the name errors give it.
   // The run: one test (mass, width and exactly one of drop height / impact velocity required), the
   // paper's 27 combinations (--table1) or the work-precision study (--work-precision; comma lists
   // of WorkPrecisionOptions' solvers and of its cases exact, default, table1). Both of these
@@ -67,8 +66,8 @@ struct ModelRequest {
 // checked by the scene keys' parsers and ImpactModelParameters::Check(); Error(kInvalidValue)
 // naming the key (key_names) otherwise. Throws also when the keys do not fit the run (above).
 ImpactModelParameters ModelRequestParameters(const ModelRequest& request);
-// The solver options: model.solver, model.rtol, model.atol and the others, by
-// ImpactSolverOptions::Check() (naming --rtol, --atol, --t-max, --ode45-defaults, ...).
+// The solver options (model.solver, rtol, atol, error_estimator, ode45_defaults, t_max_s), checked
+// by ImpactSolverOptions::Check(), naming the key.
 ImpactSolverOptions ModelRequestSolverOptions(const ModelRequest& request);
 // The work-precision study of wp_solvers and wp_cases (Error naming --wp-solvers / --wp-cases).
 WorkPrecisionOptions ModelRequestStudy(const ModelRequest& request);
