@@ -389,6 +389,16 @@ YamlOptionTable ModelTable(Scene* s) {
                "Relative tolerance of the ODE solver");
   AddTolerance(t, "atol", &o.atol, kPositive, "an absolute tolerance", "1e-3 * rtol",
                "Absolute tolerance of the ODE solver");
+  t.AddChoice(
+      "error_estimator", kErrorEstimatorNames.Names(), ToString(o.error_estimator),
+      [&o](const std::string& v) { o.error_estimator = ErrorEstimatorFromString(v); },
+      "How a solve estimates its error: companion (a run at rtol/10) or local (summed local "
+      "estimates)");
+  t.Add("ode45_defaults", &o.ode45_defaults,
+        "MATLAB ode45's rules and defaults (RelTol 1e-3, AbsTol 1e-6), the paper's setting; "
+        "solver auto or dopri5");
+  t.Add("t_max_s", &o.t_max_s, ValueRange{0, 1e300, "s", /*min_open=*/true}, "a time",
+        "Give up (warning) if v has not reached 0 by then");
   return t;
 }
 

@@ -68,6 +68,9 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"model", "model.solver", "--solver"},
       {"model", "model.rtol", "--rtol"},
       {"model", "model.atol", "--atol"},
+      {"model", "model.error_estimator", "--error-estimate"},
+      {"model", "model.ode45_defaults", "--ode45-defaults"},
+      {"model", "model.t_max_s", "--t-max"},
   };
   return kAliases;
 }

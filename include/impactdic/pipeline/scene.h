@@ -159,7 +159,8 @@ struct Scene {
   // `test.*` (pounder, soil, g) and `model.*` (Table 2: K, n, u, T_s, b_per_s; added_mass_kg).
   // impact_velocity_m_s is ImpactVelocity().
   ImpactModelParameters model;
-  ImpactSolverOptions solver;  // `model.solver`, `model.rtol`, `model.atol`.
+  ImpactSolverOptions solver;  // `model.solver`, `rtol`, `atol`, `error_estimator`,
+                               // `ode45_defaults`, `t_max_s`.
   // `strain.*` (docs/strain.md): off unless strain.enabled; rho_d is test.density_kg_m3.
   StrainOptions strain;
   SceneOutputs outputs;
