@@ -67,8 +67,9 @@ void RegisterAnalyzeCommand(CLI::App& app) {
     if (a.from_release) SetSceneKey(&r.scene, "sensor.integrate_from", "release", "--from-release");
     r.given.command = cmd->get_name();
     for (const CLI::Option* o : cmd->get_options()) {
+      if (o->count() == 0) continue;
       const std::string key = SceneKeyOfFlag(r.given.command, o->get_name());
-      if (o->count() > 0 && !key.empty()) r.given.Add(key, o->get_name());
+      if (!key.empty()) r.given.Add(key, o->get_name());
     }
     if (r.given.Has("sensor.cutoff_hz")) r.scene.sensor.options.cutoff_hz = a.cutoff;
     if (r.given.Has("sensor.accel_column")) r.scene.sensor.options.columns.accel = a.accel_column;
