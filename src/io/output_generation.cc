@@ -218,6 +218,20 @@ void CheckOutputFolderName(const std::string& path, const std::string& option) {
   }
 }
 
+void CheckNotInAGeneration(const std::string& path, const std::string& option) {
+  const fs::path folder = fs::absolute(path).parent_path();
+  std::error_code ec;
+  const bool summary = fs::exists(folder / "summary.json", ec);
+  if (!summary && !fs::exists(folder / kOutputMarkerName, ec)) return;
+  throw Error(ErrorKind::kInvalidValue, option,
+              path + ", in a folder of outputs written together by impactdic (" +
+                  (summary ? "with its summary.json" : "one generation") +
+                  "): writing one file of it alone would leave the other files describing another "
+                  "analysis",
+              "a file of its own for this analysis (--output NEW.h5 outside that folder), or "
+              "`impactdic run` to redo the whole folder");
+}
+
 std::string OutputLockPath(const std::string& folder) {
   fs::path dest = fs::path(folder).lexically_normal();
   if (dest.filename().empty()) dest = dest.parent_path();

@@ -314,6 +314,18 @@ YamlOptionTable SensorTable(Scene* s) {
         "Time of frame 0 on the DAQ clock (no exposure channel)");
   t.Add("quiet_window_s", &o.quiet_window_s, kQuietWindowRange, "a window length",
         "Offset/noise window length");
+  t.AddChoice(
+      "offset_reference", kOffsetReferenceNames.Names(), ToString(o.offset_reference),
+      [&o](const std::string& v) { o.offset_reference = OffsetReferenceFromString(v); },
+      "What reads a known level: free-fall (the whole free fall reads 0 g), free-fall-window (the "
+      "quiet window before the impact reads 0 g), rest (the record start reads 1 g) or none");
+  t.AddNumber(
+      "release_time_s", ExpectedText("a release time", kAnyTime), "detected",
+      [&o](const YAML::Node& n) { return DecodeNumber(n, kAnyTime, &o.release_time_s); },
+      "Release time on the DAQ clock, with integrate_from release (inside the record, before the "
+      "impact); detected = the record starts at rest");
+  t.Add("impact_threshold_g", &o.impact_threshold_g, kImpactThresholdRange, "an impact threshold",
+        "Reading [g] that is certainly the impact; the onset is found before it");
   return t;
 }
 

@@ -3,15 +3,21 @@
 #include <fmt/format.h>
 
 #include <cstdint>
+#include <filesystem>
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/strings.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
+#include "impactdic/io/output_generation.h"
+#include "impactdic/pipeline/given_keys.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/sensor_results.h"
 #include "outputs/writers.h"
 #include "stages/scene_inputs.h"
 #include "stages/stage.h"
@@ -41,7 +47,120 @@ void CheckSceneForAnalysis(const Scene& scene) {
     stages::RequireScale(scene, scene.inputs.mm_per_px);
 }
 
+// The sensor library's error fields that are not themselves a scene key.
+const FieldKeys kSensorFieldKeys = {{"sensor.columns.time", "sensor.time_column"},
+                                    {"accel_unit", "sensor.accel_unit"},
+                                    {"offset_reference", "sensor.offset_reference"},
+                                    {"sensor.impact_velocity_m_s", "test.impact_velocity_m_s"}};
+
+// The keys of the accelerometer record alone: the others need frames or a scene's test.
+bool IsSensorRecordKey(const std::string& key) {
+  return key == "inputs.sensor" || key == "test.impact_velocity_m_s" ||
+         (key.rfind("sensor.", 0) == 0 && key != "sensor.frame_time_offset_s");
+}
+
+// The options of AnalyzeSensorRecord, checked (see there).
+SensorOptions SensorRecordOptions(const AnalyzeRequest& r) {
+  const GivenKeys& given = r.given;
+  const std::string sensor_flag = given.Name("inputs.sensor");
+  for (const auto& [key, flag] : given.flags)
+    CheckValue(IsSensorRecordKey(key), flag, "with " + sensor_flag,
+               flag + " only with the SCENE.yaml form");
+  CheckValue(r.results.empty(), "--results", "with " + sensor_flag,
+             "--results only with the SCENE.yaml form");
+  CheckValue(!r.allow_partial, "--allow-partial", "with " + sensor_flag,
+             "--allow-partial only with the SCENE.yaml form");
+  SensorOptions o = r.scene.sensor.options;
+  const bool from_release =
+      given.Has("sensor.integrate_from") && o.integrate_from == IntegrationStart::kRelease;
+  const bool from_impact = given.Has("test.impact_velocity_m_s");
+  CheckValue(from_release != from_impact,
+             given.Name("sensor.integrate_from") + " / " + given.Name("test.impact_velocity_m_s"),
+             from_release ? "both given" : "neither given",
+             "exactly one: integrate from the release (v = 0) or from the impact with the given "
+             "impact velocity [m/s]");
+  if (from_impact) {
+    o.integrate_from = IntegrationStart::kImpact;
+    o.impact_velocity_m_s = r.scene.test.impact_velocity_m_s.value();
+  }
+  WithGivenNames(given, kSensorFieldKeys, /*name_defaults=*/true, [&] { o.Check(); });
+  return o;
+}
+
 }  // namespace
+
+Scene AnalyzeCommandScene(const std::string& scene_path, const std::string& sensor_csv) {
+  if (scene_path.empty() == sensor_csv.empty()) {
+    throw Error(ErrorKind::kInvalidValue, "SCENE / --sensor",
+                scene_path.empty() ? "neither given" : "both given",
+                "either a scene file (momentum analysis) or --sensor CSV (accelerometer only)");
+  }
+  if (!scene_path.empty()) return LoadScene(scene_path);
+  Scene scene;
+  scene.inputs.sensor = sensor_csv;
+  scene.sensor.options.columns.accel.clear();  // Chosen from the file: accel_g, else accel_m_s2.
+  return scene;
+}
+
+SensorRecordAnalysis AnalyzeSensorRecord(const AnalyzeRequest& request) {
+  SensorRecordAnalysis a;
+  a.csv = request.scene.inputs.sensor;
+  a.options = SensorRecordOptions(request);
+  if (!request.output.empty()) {
+    CheckOutputLocation(request.output, {"--output", {".h5", ".hdf5"}, {a.csv}});
+    CheckNotInAGeneration(request.output, "--output");
+  }
+  if (!std::filesystem::exists(a.csv)) {
+    throw Error(ErrorKind::kFileNotFound, request.given.Name("inputs.sensor"), a.csv,
+                "an existing DAQ CSV file")
+        .WithFile(a.csv);
+  }
+  a.result = WithGivenNames(request.given, kSensorFieldKeys, /*name_defaults=*/true,
+                            [&] { return AnalyzeSensorCsv(a.csv, a.options); });
+  if (!request.output.empty()) {
+    // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.
+    H5Writer out(request.output, /*owned_groups=*/{results_layout::kSensorGroup});
+    WriteSensorResults(out, a.result);
+    out.Commit();
+  }
+  return a;
+}
+
+JsonObject SensorRecordAnalysis::ToJson() const {
+  return SensorReportJson(result.summary, options);
+}
+
+std::string SensorRecordAnalysis::FullReport() const {
+  return "sensor record " + csv + "\nintegration from " + ToString(options.integrate_from) +
+         ", offset from " + ToString(options.offset_reference) + "\n" + result.summary.FullReport();
+}
+
+SceneAnalysisRun AnalyzeSceneResults(const AnalyzeRequest& request) {
+  const Scene& scene = request.scene;
+  const std::string& output = request.output;
+  CheckValue(request.results.empty() || EndsWith(request.results, ".h5") ||
+                 EndsWith(request.results, ".hdf5"),
+             "--results", request.results, "an HDF5 file (.h5, .hdf5)");
+  // The flags' values checked together, as the scene file's.
+  WithGivenNames(request.given, kSensorFieldKeys, /*name_defaults=*/false,
+                 [&] { MakeSensorOptions(scene); });
+  const std::string results =
+      request.results.empty()
+          ? (std::filesystem::path(scene.outputs.folder) / "results.h5").string()
+          : request.results;
+  const std::string results_option = request.results.empty() ? "outputs.folder" : "--results";
+  CheckResultsAreOfScene(scene, results, results_option);
+  if (output.empty()) {
+    CheckNotInAGeneration(results, results_option);
+  } else {
+    CheckOutputLocation(output,
+                        {"--output", {".h5", ".hdf5"}, {scene.path, scene.inputs.sensor, results}});
+    CheckNotInAGeneration(output, "--output");
+    // Replaced whole by the analysis: never another scene's file (nor one that is not HDF5).
+    if (std::filesystem::exists(output)) CheckResultsAreOfScene(scene, output, "--output");
+  }
+  return AnalyzeSceneResults(scene, results, request.allow_partial, output);
+}
 
 void CheckResultsAreOfScene(const Scene& scene, const std::string& results_path,
                             const std::string& option) {

@@ -51,6 +51,12 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"analyze", "sensor.accel_unit", "--accel-unit"},
       {"analyze", "sensor.exposure_column", "--exposure-column"},
       {"analyze", "sensor.quiet_window_s", "--quiet-window"},
+      {"analyze", "sensor.offset_reference", "--offset-reference"},
+      {"analyze", "sensor.release_time_s", "--release-time"},
+      {"analyze", "sensor.impact_threshold_g", "--impact-threshold"},
+      {"analyze", "sensor.integrate_from", "--from-release"},  // A flag: integrate_from release.
+      {"analyze", "test.impact_velocity_m_s", "--impact-velocity"},
+      {"analyze", "inputs.sensor", "--sensor"},
       {"model", "test.mass_kg", "--mass"},
       {"model", "test.drop_height_m", "--height"},
       {"model", "test.impact_velocity_m_s", "--velocity"},

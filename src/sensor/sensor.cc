@@ -85,9 +85,14 @@ void SensorOptions::Check() const {
   }
   CheckValue(std::isnan(release_time_s) || std::isfinite(release_time_s), "sensor.release_time_s",
              fmt::format("{}", release_time_s), "a finite time or NaN (unknown)");
-  CheckValue(std::isfinite(impact_threshold_g) && impact_threshold_g > 1,
-             "sensor.impact_threshold_g", fmt::format("{}", impact_threshold_g),
-             "> 1 g (above the rest level)");
+  CheckValue(std::isnan(release_time_s) || integrate_from == IntegrationStart::kRelease,
+             "sensor.release_time_s",
+             fmt::format("{} s, integrating from the impact", release_time_s),
+             "a release time only when integrating from the release (integrate_from release)");
+  CheckValue(
+      std::isfinite(impact_threshold_g) && kImpactThresholdRange.Contains(impact_threshold_g),
+      "sensor.impact_threshold_g", fmt::format("{}", impact_threshold_g),
+      ExpectedText("an impact threshold", kImpactThresholdRange));
   CheckValue(std::isfinite(noise_band_sigma) && noise_band_sigma > 0, "sensor.noise_band_sigma",
              fmt::format("{}", noise_band_sigma), "> 0");
   CheckValue(std::isfinite(stop_velocity_m_s) && stop_velocity_m_s >= 0, "sensor.stop_velocity_m_s",

@@ -331,11 +331,12 @@ TEST(AnalyzeSceneCli, WritesMomentumIntoResults) {
   EXPECT_EQ(in.ReadDouble("momentum/p_gran").size(), c.frames);
   EXPECT_TRUE(in.Exists("sensor/velocity_m_s"));
   EXPECT_TRUE(in.Exists("kinematics/vy_mm_s"));
-  // Sensor-only options are refused with the scene form (sensor.* keys such as --cutoff are flags
-  // of both forms: they override the scene file).
-  const CliResult bad = RunCli("analyze " + scene + " --impact-threshold 5");
+  // The sensor form's options are sensor.* keys (--impact-threshold is sensor.impact_threshold_g):
+  // flags of both forms, overriding the scene file, refused by the key's own check.
+  const CliResult bad = RunCli("analyze " + scene + " --impact-threshold 1");
   EXPECT_EQ(bad.exit_code, 1);
-  EXPECT_NE(bad.output.find("only with --sensor"), std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("--impact-threshold: invalid value (got 1)"), std::string::npos)
+      << bad.output;
   // A grid outside the correlated region: the error names the scene file that places it.
   std::string text = ReadTextFile(scene);
   text.replace(text.find("pounder_center_x_px: 145"), 24, "pounder_center_x_px: 9000");

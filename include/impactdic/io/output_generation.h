@@ -186,6 +186,13 @@ std::vector<std::string> RemoveStaleSystemTemporaries();
 // process whether its maker still runs (RemoveStaleTemporaries).
 std::string TemporaryName(const std::string& base, const char* kind = ".tmp-");
 
+// A folder of outputs written as one generation (`run`'s, a campaign test's results/: its
+// summary.json, figures and results.h5 describe one analysis) is never changed file by file: a
+// command that writes one file (`analyze`) writes its own file instead. Error kInvalidValue naming
+// `option` if `path` (the file it would write) lies in such a folder (one with a summary.json or
+// a kOutputMarkerName).
+void CheckNotInAGeneration(const std::string& path, const std::string& option);
+
 // True for the name of an impactdic temporary (".<name>.tmp-<pid>-<hex>...",
 // ".<name>.bak-<pid>-<hex>") or an output folder's lock file (".<name>.lock"), whoever made it.
 bool IsTemporaryName(const std::string& name);

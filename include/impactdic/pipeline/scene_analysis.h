@@ -12,6 +12,7 @@
 #include <string>
 
 #include "impactdic/io/json.h"
+#include "impactdic/pipeline/given_keys.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
@@ -52,6 +53,48 @@ JsonObject SensorReportJson(const SensorSummary& s, const SensorOptions& o);
 SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& results_path,
                                      bool allow_partial = false,
                                      const std::string& output_path = "");
+
+// What `impactdic analyze` was asked. Its two forms are scenes: SCENE.yaml (AnalyzeCommandScene
+// loads it), or the accelerometer record alone (--sensor CSV: the library's defaults, the
+// acceleration column chosen from the file, inputs.sensor the CSV); the flags given set the
+// scene's keys (scene_flags.h) and are named in `given`.
+struct AnalyzeRequest {
+  Scene scene;
+  GivenKeys given;      // The keys the command line set: errors name the flag typed.
+  std::string results;  // --results (SCENE form; empty: <outputs.folder>/results.h5).
+  std::string output;   // --output: the HDF5 file to write (empty: SCENE form updates `results`).
+  bool allow_partial = false;  // --allow-partial (SCENE form).
+};
+
+// The scene of exactly one of `scene_path` (LoadScene) and `sensor_csv` (the record alone, see
+// AnalyzeRequest); Error naming "SCENE / --sensor" when both or neither are given.
+Scene AnalyzeCommandScene(const std::string& scene_path, const std::string& sensor_csv);
+
+// `impactdic analyze SCENE.yaml`: checks the paths before any work (--results an HDF5 file of this
+// scene, --output none of the inputs and of this scene if it exists, neither inside a folder of
+// outputs written together: CheckNotInAGeneration) and the sensor keys given, then
+// AnalyzeSceneResults(scene, results, allow_partial, output).
+SceneAnalysisRun AnalyzeSceneResults(const AnalyzeRequest& request);
+
+// The accelerometer record alone (`impactdic analyze --sensor CSV`).
+struct SensorRecordAnalysis {
+  std::string csv;
+  SensorOptions options;  // As used: integrate_from, offset_reference, ...
+  SensorResult result;
+
+  JsonObject ToJson() const;       // SensorReportJson.
+  std::string FullReport() const;  // "sensor record CSV", the integration start and the offset
+                                   // reference, then SensorSummary::FullReport.
+};
+
+// Runs the sensor stage's analysis on request.scene.inputs.sensor and writes /sensor into
+// request.output if given (its other groups kept). Before reading the record: only keys of the
+// record (sensor.*, test.impact_velocity_m_s; not sensor.frame_time_offset_s) given, nor
+// --results or --allow-partial; exactly one of sensor.integrate_from release and
+// test.impact_velocity_m_s (integrate from the release, or from the impact at that velocity);
+// SensorOptions::Check; the output's location (an HDF5 file, not the record, not inside a
+// generation). Errors name the flag given (request.given), else the key's flag of `analyze`.
+SensorRecordAnalysis AnalyzeSensorRecord(const AnalyzeRequest& request);
 
 // Error kInvalidValue naming `option` unless the results file holds no scene name (correlate -o)
 // or the scene's: "R holds the results of scene 'A'; expected results of scene 'B' (S)".

@@ -88,6 +88,8 @@ struct SensorColumns {
 // with the record).
 inline constexpr ValueRange kCutoffRange{0, 1e300, "Hz", /*min_open=*/true};
 inline constexpr ValueRange kQuietWindowRange{0, 1e3, "s", /*min_open=*/true};
+// A reading above the rest level (1 g).
+inline constexpr ValueRange kImpactThresholdRange{1, 1e300, "g", /*min_open=*/true};
 
 struct SensorOptions {
   SensorColumns columns;
@@ -100,10 +102,11 @@ struct SensorOptions {
   // kImpact: the impact velocity [m/s], > 0 (NaN otherwise).
   double impact_velocity_m_s = kNaN;
   // kRelease: release time on the DAQ clock [s], inside the record and before the impact (Error
-  // naming the record's span otherwise); NaN = detected (the record starts at rest).
+  // naming the record's span otherwise); NaN = detected (the record starts at rest). Only NaN
+  // with kImpact (no release to start from).
   double release_time_s = kNaN;
   // A filtered reading above this [g] is certainly the impact (coarse search only; the impact time
-  // is the onset found backwards from it), > 1 (the rest level).
+  // is the onset found backwards from it), kImpactThresholdRange (above the rest level).
   double impact_threshold_g = 5;
   // Half-width of the noise band around the free-fall level, in standard deviations, > 0.
   double noise_band_sigma = 4;
