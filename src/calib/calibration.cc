@@ -428,7 +428,7 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
     throw Error(
         ErrorKind::kNumerical,
         fmt::format("implausible calibration: reprojection RMS {:.3f} px exceeds the "
-                    "limit {:.3f} px (CalibrationOptions::max_rms_px); worst view {} "
+                    "limit {:.3f} px (calibration.max_rms_px); worst view {} "
                     "with {:.3f} px. Check the board size (inner corners, square size), blurred or "
                     "mis-detected views",
                     result.rms_px, options.max_rms_px, s.worst_view, s.worst_view_rms_px));

@@ -15,15 +15,10 @@ namespace impactdic::cli {
 namespace {
 
 struct CalibrateArgs {
-  std::string board;
+  std::string board, plane, output, format = "text";
   double square_mm = 0;
-  std::string plane;
   std::vector<std::string> images;
-  std::string output;
-  std::string format = "text";
-  double max_rms_px = CalibrationOptions{}.max_rms_px;  // Defaults: the calib library's.
-  int min_views = CalibrationOptions{}.min_views;
-  bool fix_k3 = CalibrationOptions{}.fix_k3;
+  CalibrationOptions options;  // Defaults: the calib library's.
 };
 
 }  // namespace
@@ -45,13 +40,13 @@ void RegisterCalibrateCommand(CLI::App& app) {
                   "Calibration YAML to write (.yaml or .yml; never one of the images)")
       ->required();
   cmd->add_option("--format", args->format, "Output format: text or json")->capture_default_str();
-  cmd->add_option("--max-rms", args->max_rms_px,
+  cmd->add_option("--max-rms", args->options.max_rms_px,
                   "Refuse a calibration whose reprojection RMS exceeds this [px], > 0")
       ->capture_default_str();
-  cmd->add_option("--min-views", args->min_views,
+  cmd->add_option("--min-views", args->options.min_views,
                   "Fewest images in which the board must be found, >= 3")
       ->capture_default_str();
-  cmd->add_flag("--fix-k3", args->fix_k3, "Hold k3 = 0 (fewer views or mild distortion)");
+  cmd->add_flag("--fix-k3", args->options.fix_k3, "Hold k3 = 0 (fewer views or mild distortion)");
   cmd->add_option("images", args->images,
                   "Checkerboard images (files, folders or glob patterns), all the same size");
   cmd->callback([args] {
@@ -63,24 +58,11 @@ void RegisterCalibrateCommand(CLI::App& app) {
                              {"board.square_mm", "--square"},
                              {"calibration images", "IMAGES"},
                              {"output", "-o"}};
-    CalibrationOptions options;
-    options.max_rms_px = args->max_rms_px;
-    options.min_views = args->min_views;
-    options.fix_k3 = args->fix_k3;
+    CalibrationOptions& options = args->options;
     CalibrationSummary summary;
     const CameraCalibration calibration = WithFlagNames(flags, [&] {
       options.board = ParseBoard(args->board, args->square_mm);
-      try {
-        return CalibrateToFile(args->images, args->plane, options, args->output, &summary);
-      } catch (const Error& e) {
-        // A view count or RMS beyond its limit: the limits are flags here.
-        const bool views = std::string(e.what()).find("calibration.min_views") != std::string::npos;
-        if (!e.where().empty() || (!views && e.kind() != ErrorKind::kNumerical)) throw;
-        throw Error(e.kind(), std::string(e.what()) +
-                                  (views ? " (--min-views sets the minimum)"
-                                         : " (--max-rms sets the limit; --board and --square the "
-                                           "board)"));
-      }
+      return CalibrateToFile(args->images, args->plane, options, args->output, &summary);
     });
     std::cout << (args->format == "json" ? summary.ToJson(calibration, args->output).Dump() + "\n"
                                          : summary.CommandReport(calibration, args->output));

@@ -35,7 +35,8 @@ void RegisterInitCommand(CLI::App& app);
 
 // Library errors name option struct fields and YAML keys ("sensor.cutoff_hz"); a command maps the
 // ones it exposes as flags ({"sensor.cutoff_hz", "--cutoff"}). Throws `e` again, naming the flag
-// (file and line kept) when its `where` is in `flags`, unchanged otherwise.
+// (file and line kept) when its `where` is in `flags`, or a free-form message with each "(FIELD)"
+// of `flags` as "(FLAG)"; unchanged otherwise.
 using FlagNames = std::vector<std::pair<std::string, std::string>>;
 [[noreturn]] void RethrowWithFlagNames(const Error& e, const FlagNames& flags);
 

@@ -2,6 +2,7 @@
 // library field names and scene keys -> command-line flags.
 #include <fmt/format.h>
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -13,12 +14,19 @@
 namespace impactdic::cli {
 
 void RethrowWithFlagNames(const Error& e, const FlagNames& flags) {
+  std::string text = e.what();  // A free-form message names a field in parentheses: "(FIELD)".
   for (const auto& [field, flag] : flags) {
+    if (e.where().empty()) {
+      for (std::size_t at = 0; (at = text.find("(" + field + ")", at)) != std::string::npos;)
+        text.replace(at + 1, field.size(), flag);
+      continue;
+    }
     if (e.where() != field) continue;
     Error renamed(e.kind(), flag, e.found(), e.expected());
     if (!e.file().empty()) renamed.WithFile(e.file(), e.line(), e.column());
     throw renamed;
   }
+  if (text != e.what()) throw Error(e.kind(), text);
   throw e;
 }
 

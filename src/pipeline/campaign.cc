@@ -287,4 +287,20 @@ void CampaignSummary::ThrowIfEveryTestFailed(const std::string& folder) const {
                           failed, folder, rows.front().name, rows.front().error));
 }
 
+CampaignSummary RunCampaignRequest(CampaignRequest request) {
+  const int modes = !request.files.empty() + !request.table.empty() + !request.merge.empty();
+  CheckValue(modes == 1, "files / table / merge", modes == 0 ? "none" : "more than one",
+             "a campaign file or scene files, a table, or merge folders: one of them");
+  CampaignOptions& options = request.options;
+  if (request.threads) CheckThreadCount(*request.threads, "threads");
+  options.threads = request.threads.value_or(-1);
+  if (!request.shard.empty()) options.shard = ParseShard(request.shard, "shard");
+  options.Check();
+  CheckValue(request.RunsTests() || request.shard.empty(), "shard", "with a table or merge folders",
+             "a shard only when running tests");
+  if (!request.table.empty()) return RegressCampaignTable(request.table, options);
+  if (!request.merge.empty()) return MergeCampaigns(request.merge, options);
+  return RunCampaign(request.files, options);
+}
+
 }  // namespace impactdic

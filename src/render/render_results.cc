@@ -31,6 +31,8 @@ namespace fs = std::filesystem;
 namespace L = results_layout;
 
 void RenderResultsOptions::Check() const {
+  CheckValue(animation || !png_frames, "png_frames", "without the animation",
+             "PNG frames only together with the animation");
   plot.Check();
   animation_options.Check();
   snapshot_overlay.Check();

@@ -176,6 +176,21 @@ CampaignSummary MergeCampaigns(const std::vector<std::string>& folders,
 // column says "excluded" are left out. Writes campaign.csv and regression.json.
 CampaignSummary RegressCampaignTable(const std::string& csv_path, const CampaignOptions& options);
 
+// What `impactdic campaign` asks for: exactly one of `files` (a campaign file or scene files:
+// RunCampaign), `table` (RegressCampaignTable) or `merge` (MergeCampaigns); `shard` ("I/N") and
+// `threads` (unset: each scene's dic.threads) only apply to running tests.
+struct CampaignRequest {
+  std::vector<std::string> files, merge;
+  std::string table, shard;
+  std::optional<int> threads;
+  CampaignOptions options;
+  bool RunsTests() const { return table.empty() && merge.empty(); }
+};
+// Checks the whole request before any work (Error naming "files / table / merge", "shard",
+// "threads" or an option's field) and runs it. ThrowIfEveryTestFailed is the caller's, after its
+// report.
+CampaignSummary RunCampaignRequest(CampaignRequest request);
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_PIPELINE_CAMPAIGN_H_

@@ -30,7 +30,8 @@ struct RenderResultsOptions {
   // /strain, the strain maps at t_e and at the last analysed frame.
   bool snapshot = true;
   bool animation = true;  // the velocity animation, and the strain animation when /strain exists
-  // Also every animation frame as PNG (output_dir/velocity_frames, strain_frames).
+  // Also every animation frame as PNG (output_dir/velocity_frames, strain_frames); only with
+  // `animation` (Check).
   bool png_frames = false;
   // true: the outputs are one new generation of output_dir (io/output_generation.h): drawn into a
   // staging folder and swapped in together, keeping the folder's other entries (results.h5,

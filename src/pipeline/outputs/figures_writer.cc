@@ -55,7 +55,7 @@ class FiguresWriter : public OutputWriter {
     r.figures = scene.outputs.figures;
     r.snapshot = scene.outputs.figures;
     r.animation = scene.outputs.animation;
-    r.png_frames = c.options.png_frames || scene.outputs.png_frames;
+    r.png_frames = r.animation && (c.options.png_frames || scene.outputs.png_frames);
     if (c.data.frames) {  // Re-read from the source, one at a time (results.h5 holds a preview).
       const std::shared_ptr<FrameStream> frames = c.data.frames;
       r.frame_loader = [frames](std::size_t row) { return frames->Read(static_cast<int>(row)); };
