@@ -1,5 +1,6 @@
 // impactdic render RESULTS.h5 [-o OUTDIR] [--png-frames] [--codec auto|h264|mjpg] [--fps F]
-// [--force]
+// [--force] [--outputs.plot.* ...]: the figures and animations again, drawn as the scene's
+// outputs.plot, .video, .velocity_map and .strain_map keys say (given as flags).
 #include <CLI/CLI.hpp>
 #include <iostream>
 #include <memory>
@@ -8,7 +9,7 @@
 #include "commands.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"
-#include "impactdic/render/animation.h"
+#include "impactdic/pipeline/scene.h"
 #include "impactdic/render/render_results.h"
 
 namespace impactdic::cli {
@@ -21,8 +22,8 @@ void RegisterRenderCommand(CLI::App& app) {
       "frame (strain_te.png, strain_end.png) and the strain animation (strain.mp4)");
   struct Args {
     std::string results;
-    std::string codec = ToString(AnimationOptions{}.codec);  // Defaults: the render library's.
-    RenderResultsOptions options;
+    RenderResultsOptions options;  // Its output flags; the drawing from the scene keys below.
+    SceneKeyValues keys;           // --outputs.plot.*, .video.*, .velocity_map.*, .strain_map.*
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("RESULTS", args->results, "results.h5 written by `impactdic run`")->required();
@@ -40,26 +41,24 @@ void RegisterRenderCommand(CLI::App& app) {
   cmd->add_flag("--force", args->options.force,
                 "replace an output folder another command wrote (a campaign, a synth scene); "
                 "files impactdic did not write are never replaced");
-  cmd->add_option("--codec", args->codec,
-                  "video codec: auto (H.264 MP4, else MJPG AVI), h264 (or fail), mjpg")
-      ->capture_default_str();
-  cmd->add_option("--fps", args->options.animation_options.fps,
-                  "playback frame rate of the animation, in " + AnimationOptions::kFpsRange.Text())
-      ->capture_default_str();
-  cmd->callback([args, output] {
+  AddSceneKeyFlags(cmd,
+                   {"outputs.plot", "outputs.video", "outputs.velocity_map", "outputs.strain_map"},
+                   &args->keys);
+  cmd->callback([args, cmd, output] {
     // RenderResults checks the options before any work, named as flags here.
     if (output->count() > 0) CheckOutputFolderName(args->options.output_dir, "-o");
-    RenderResultsOptions& options = args->options;
-    std::cout << WithFlagNames({{"video codec", "--codec"},
-                                {"AnimationOptions.fps", "--fps"},
-                                {"png_frames", "--png-frames"},
-                                {"results file", "RESULTS"}},
-                               [&] {
-                                 options.animation_options.codec =
-                                     VideoCodecFromString(args->codec);
-                                 return RenderResults(args->results, options);
-                               })
-                     .FullReport();
+    Scene scene;
+    ApplySceneKeyFlags(*cmd, args->keys, &scene);
+    RenderResultsOptions options = SceneRenderOptions(scene);
+    const RenderResultsOptions& given = args->options;
+    options.output_dir = given.output_dir;
+    options.figures = given.figures;
+    options.animation = given.animation;
+    options.png_frames = given.png_frames;
+    options.force = given.force;
+    std::cout << WithFlagNames({{"png_frames", "--png-frames"}, {"results file", "RESULTS"}}, [&] {
+                   return RenderResults(args->results, options);
+                 }).FullReport();
   });
 }
 

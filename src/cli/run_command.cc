@@ -27,7 +27,7 @@ void RegisterRunCommand(CLI::App& app) {
     bool allow_partial = false;
     bool force = false;
     std::string format = "text";
-    SceneKeyValues keys;  // --sensor.*, --momentum.*, --outputs.*: override the scene file.
+    SceneKeyValues keys;  // --dic.*, --sensor.*, --outputs.* ...: override the scene file.
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -52,10 +52,12 @@ void RegisterRunCommand(CLI::App& app) {
                 "that holds other commands' outputs; files impactdic did not write are never "
                 "replaced");
   cmd->add_option("--format", args->format, "Summary on stdout: text or json");
-  AddSceneKeyFlags(cmd, {"sensor", "momentum", "outputs"}, &args->keys);
+  AddSceneKeyFlags(
+      cmd, {"test", "preprocess", "dic", "sensor", "momentum", "model", "strain", "outputs"},
+      &args->keys);
   cmd->footer(
-      "A --sensor.*, --momentum.* or --outputs.* flag overrides that key of the scene file "
-      "(-o overrides --outputs.folder).");
+      "A --SECTION.KEY flag overrides that key of the scene file (-o overrides --outputs.folder, "
+      "--threads --dic.threads); the inputs.* paths come from the scene file.");
   cmd->callback([args, cmd, output] {
     if (output->count() > 0) CheckOutputFolderName(args->output, "-o");
     if (args->threads) CheckThreadCount(*args->threads, "--threads");

@@ -14,6 +14,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "impactdic/core/error.h"
@@ -55,6 +56,20 @@ void AddOptional(YamlOptionTable& t, const std::string& key, std::optional<doubl
       [field, range](const YAML::Node& n) {
         double v = 0;
         if (!DecodeNumber(n, range, &v)) return false;
+        *field = v;
+        return true;
+      },
+      doc);
+}
+
+// "auto" (stored as NaN) or a number in `range`.
+void AddAutoNumber(YamlOptionTable& t, const std::string& key, double* field,
+                   const ValueRange& range, const std::string& what, const std::string& doc) {
+  t.AddNumber(
+      key, "auto or " + ExpectedText(what, range), std::isnan(*field) ? "auto" : Num(*field),
+      [field, range](const YAML::Node& n) {
+        double v = kNaN;
+        if (!(n.IsScalar() && n.Scalar() == "auto") && !DecodeNumber(n, range, &v)) return false;
         *field = v;
         return true;
       },
@@ -463,6 +478,88 @@ YamlOptionTable OutputsTable(Scene* s) {
   return t;
 }
 
+// The display keys of a field drawn over its frames (the velocity and strain maps).
+void AddDisplayKeys(YamlOptionTable& t, int* min_width_px, int* max_width_px, double* low,
+                    double* high) {
+  t.Add("min_width_px", min_width_px, kDisplayWidthRange, "display width",
+        "Frames narrower than this are scaled up for display");
+  t.Add("max_width_px", max_width_px, kDisplayWidthRange, "display width",
+        "Frames wider than this are scaled down for display (>= min_width_px)");
+  t.Add("contrast_low_percentile", low, kContrastPercentileRange, "a percentile",
+        "16-bit and float frames: this percentile of the first frame is drawn black");
+  t.Add("contrast_high_percentile", high, kContrastPercentileRange, "a percentile",
+        "... and this one white (> contrast_low_percentile)");
+}
+
+// How the figures and animations are drawn (SceneOutputs: plot, video, velocity_map, strain_map).
+std::vector<YamlOptionTable> RenderTables(Scene* s) {
+  SceneOutputs& o = s->outputs;
+  YamlOptionTable plot("outputs.plot");
+  plot.Add("width_px", &o.plot.width_px, PlotOptions::kWidthRange, "figure width",
+           "Width of the gnuplot figures (PNG)");
+  plot.Add("height_px", &o.plot.height_px, PlotOptions::kHeightRange, "figure height",
+           "Height of the gnuplot figures");
+  plot.Add("font_size_pt", &o.plot.font_size_pt, PlotOptions::kFontSizeRange, "font size",
+           "Base font size of the figures");
+  plot.Add("font", &o.plot.font, "Font of the figures (a font name without quotes)");
+  plot.Add("gnuplot", &o.plot.gnuplot_binary,
+           "gnuplot program; empty: $IMPACTDIC_GNUPLOT, else gnuplot from PATH");
+  YamlOptionTable video("outputs.video");
+  video.Add("fps", &o.video.fps, AnimationOptions::kFpsRange, "a playback frame rate",
+            "Playback rate of the animations (the footage plays in slow motion)");
+  video.AddCustom(
+      "h264_fourccs", "four-character codes separated by commas", Join(o.video.h264_fourccs, ","),
+      [&o](const YAML::Node& n) {
+        std::vector<std::string> codes;
+        if (n.IsSequence()) {
+          for (const YAML::Node& c : n) codes.push_back(c.IsScalar() ? c.Scalar() : "");
+        } else if (n.IsScalar()) {
+          std::stringstream ss(n.Scalar());
+          for (std::string c; std::getline(ss, c, ',');) codes.push_back(c);
+        }
+        const bool ok = !codes.empty() && std::all_of(codes.begin(), codes.end(),
+                                                      [](const auto& c) { return c.size() == 4; });
+        if (ok) o.video.h264_fourccs = codes;
+        return ok;
+      },
+      "The H.264 encoders tried in order (OpenCV fourccs)");
+  video.AddChoice(
+      "codec", kVideoCodecNames.Names(), ToString(o.video.codec),
+      [&o](const std::string& v) { o.video.codec = VideoCodecFromString(v); },
+      "auto (H.264 MP4, else MJPG AVI), h264 (or fail) or mjpg");
+  YamlOptionTable velocity("outputs.velocity_map");
+  VelocityOverlayOptions& v = o.velocity_map;
+  velocity.Add("opacity", &v.opacity, kOverlayOpacityRange, "an opacity",
+               "Opacity of the colour map over the frame");
+  AddAutoNumber(velocity, "max_speed_mm_s", &v.max_speed_mm_s,
+                ValueRange{0, 1e300, "mm/s", /*min_open=*/true}, "a speed",
+                "Top of the colour scale; auto: the 99th percentile of the valid speeds");
+  velocity.AddChoice(
+      "unit", {"auto", "mm/s", "m/s"}, ToString(v.unit),
+      [&v](const std::string& u) { v.unit = VelocityDisplayUnitFromString(u); },
+      "Unit of the colour bar; auto: m/s when the scale's top is >= 1000 mm/s");
+  velocity.Add("arrows", &v.arrows, "Arrows of the displacement direction");
+  velocity.Add("arrow_spacing_px", &v.arrow_spacing_display_px,
+               VelocityOverlayOptions::kArrowSpacingRange, "an arrow spacing",
+               "Least distance between arrows on the display (denser grids are thinned)");
+  AddDisplayKeys(velocity, &v.min_width_px, &v.max_width_px, &v.contrast_low_percentile,
+                 &v.contrast_high_percentile);
+  YamlOptionTable strain("outputs.strain_map");
+  StrainOverlayOptions& m = o.strain_map;
+  strain.Add("opacity", &m.opacity, kOverlayOpacityRange, "an opacity",
+             "Opacity of the colour maps over the frame");
+  AddAutoNumber(strain, "eps_v_limit", &m.eps_v_limit, ValueRange{0, 1e300, "", true},
+                "a volumetric strain", "Colour limits of eps_v (+-); auto: from `percentile`");
+  AddAutoNumber(strain, "gamma_max_limit", &m.gamma_max_limit, ValueRange{0, 1e300, "", true},
+                "a shear strain", "Top of the gamma_max colours; auto: from `percentile`");
+  strain.Add("percentile", &m.percentile, StrainOverlayOptions::kPercentileRange, "a percentile",
+             "auto limits: this percentile of |eps_v| (of gamma_max) over every frame");
+  strain.Add("shear_bands", &m.shear_bands, "Dots at the shear-band ridges");
+  AddDisplayKeys(strain, &m.min_width_px, &m.max_width_px, &m.contrast_low_percentile,
+                 &m.contrast_high_percentile);
+  return {plot, video, velocity, strain};
+}
+
 // `stages:` in pipeline order whatever order the file lists them in.
 void ReadStages(YamlSection& top, Scene* scene) {
   const auto& all = AllSceneStages();
@@ -630,6 +727,7 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
     MakeModelParameters(scene, scene.ImpactVelocity());
     scene.solver.Check();
     scene.strain.Check();
+    SceneRenderOptions(scene).Check();
   } catch (const Error& e) {
     problems->Add(root, "(options)", e.what());
   }
@@ -658,6 +756,7 @@ std::vector<YamlOptionTable> SceneOptionTables(Scene* scene) {
   for (YamlOptionTable& t : PreprocessTables(scene)) tables.push_back(std::move(t));
   for (auto make : {DicTable, SensorTable, MomentumTable, ModelTable, StrainTable, OutputsTable})
     tables.push_back(make(scene));
+  for (YamlOptionTable& t : RenderTables(scene)) tables.push_back(std::move(t));
   return tables;
 }
 
@@ -679,22 +778,42 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path) {
   YamlSection top(root, "", &problems);
   top.Read("name", &scene.name);
   ReadStages(top, &scene);
-  YamlSection preprocess = top.Sub("preprocess");
+  // A nested table ("outputs.plot") is read from its parent's section, which is finished after
+  // its children (its unknown keys reported then).
+  std::map<std::string, YamlSection> parents;
   for (const YamlOptionTable& table : SceneOptionTables(&scene)) {
     const std::string& name = table.section();
-    const bool nested = name.rfind("preprocess.", 0) == 0;
-    YamlSection section = nested ? preprocess.Sub(name.substr(11)) : top.Sub(name);
+    const std::size_t dot = name.find('.');
+    const std::string head = name.substr(0, dot);
+    YamlSection& parent = parents.try_emplace(head, top.Sub(head)).first->second;
+    YamlSection nested = dot == std::string::npos ? parent : parent.Sub(name.substr(dot + 1));
+    YamlSection& section = dot == std::string::npos ? parent : nested;
     table.Read(section);
     if (name == "dic") ReadDicRegions(section, &scene.dic);
     if (name == "momentum") ReadMomentumRect(section, &scene.momentum.options);
-    section.Finish();
+    if (dot != std::string::npos) section.Finish();
   }
-  preprocess.Finish();
+  for (auto& [head, section] : parents) section.Finish();
   top.Finish();
   CheckScene(scene, root, &problems);
   problems.ThrowIfAny("scene file");
   scene.model.impact_velocity_m_s = scene.ImpactVelocity();
   return scene;
+}
+
+RenderResultsOptions SceneRenderOptions(const Scene& scene) {
+  const SceneOutputs& o = scene.outputs;
+  RenderResultsOptions r;
+  r.figures = o.figures;
+  r.snapshot = o.figures;
+  r.animation = o.animation;
+  r.png_frames = o.animation && o.png_frames;
+  r.plot = o.plot;
+  r.animation_options = o.video;
+  r.animation_options.overlay = o.velocity_map;
+  r.snapshot_overlay = o.velocity_map;
+  r.strain_overlay = o.strain_map;
+  return r;
 }
 
 SensorOptions MakeSensorOptions(const Scene& scene) {

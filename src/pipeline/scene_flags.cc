@@ -77,6 +77,8 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"model", "model.error_estimator", "--error-estimate"},
       {"model", "model.ode45_defaults", "--ode45-defaults"},
       {"model", "model.t_max_s", "--t-max"},
+      {"render", "outputs.video.codec", "--codec"},
+      {"render", "outputs.video.fps", "--fps"},
   };
   return kAliases;
 }

@@ -56,10 +56,11 @@ double RoundUpToTick(double top, int target_ticks, double* step) {
 
 void CheckDisplayOptions(const std::string& type_name, int min_width_px, int max_width_px,
                          double contrast_low_percentile, double contrast_high_percentile) {
-  CheckValue(min_width_px >= 160 && min_width_px <= 8000, type_name + ".min_width_px",
-             std::to_string(min_width_px), "160..8000");
-  CheckValue(max_width_px >= min_width_px && max_width_px <= 8000, type_name + ".max_width_px",
-             std::to_string(max_width_px), "min_width_px..8000");
+  CheckRange(min_width_px, kDisplayWidthRange, type_name + ".min_width_px", "a display width");
+  CheckRange(max_width_px, kDisplayWidthRange, type_name + ".max_width_px", "a display width");
+  CheckValue(max_width_px >= min_width_px, type_name + ".max_width_px",
+             std::to_string(max_width_px),
+             ">= min_width_px (" + std::to_string(min_width_px) + ")");
   CheckValue(contrast_low_percentile >= 0 && contrast_high_percentile <= 100 &&
                  contrast_low_percentile < contrast_high_percentile,
              type_name + ".contrast_low_percentile/contrast_high_percentile",

@@ -65,12 +65,9 @@ const char* ToString(LegendPosition position) {
 }
 
 void PlotOptions::Check() const {
-  CheckValue(width_px >= 320 && width_px <= 8000, "PlotOptions.width_px", std::to_string(width_px),
-             "320..8000");
-  CheckValue(height_px >= 240 && height_px <= 8000, "PlotOptions.height_px",
-             std::to_string(height_px), "240..8000");
-  CheckValue(font_size_pt >= 6 && font_size_pt <= 72, "PlotOptions.font_size_pt",
-             std::to_string(font_size_pt), "6..72");
+  CheckRange(width_px, kWidthRange, "PlotOptions.width_px", "a figure width");
+  CheckRange(height_px, kHeightRange, "PlotOptions.height_px", "a figure height");
+  CheckRange(font_size_pt, kFontSizeRange, "PlotOptions.font_size_pt", "a font size");
   CheckValue(!font.empty() && font.find_first_of("'\"\n") == std::string::npos, "PlotOptions.font",
              font, "a font name without quotes");
 }

@@ -36,6 +36,7 @@ void RenderResultsOptions::Check() const {
   plot.Check();
   animation_options.Check();
   snapshot_overlay.Check();
+  strain_overlay.Check();
 }
 
 std::string RenderResultsSummary::BriefReport() const {

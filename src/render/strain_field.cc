@@ -62,16 +62,14 @@ void StrainFieldSequence::Check() const {
 }
 
 void StrainOverlayOptions::Check() const {
-  CheckValue(opacity >= 0 && opacity <= 1, "StrainOverlayOptions.opacity", R::Fmt("%g", opacity),
-             "0..1");
+  CheckRange(opacity, kOverlayOpacityRange, "StrainOverlayOptions.opacity", "an opacity");
   for (const auto& [value, name] :
        {std::pair{eps_v_limit, "StrainOverlayOptions.eps_v_limit"},
         std::pair{gamma_max_limit, "StrainOverlayOptions.gamma_max_limit"}}) {
     CheckValue(std::isnan(value) || (value > 0 && std::isfinite(value)), name, R::Fmt("%g", value),
                "> 0, or NaN for automatic");
   }
-  CheckValue(percentile > 50 && percentile <= 100, "StrainOverlayOptions.percentile",
-             R::Fmt("%g", percentile), "(50, 100]");
+  CheckRange(percentile, kPercentileRange, "StrainOverlayOptions.percentile", "a percentile");
   R::CheckDisplayOptions("StrainOverlayOptions", min_width_px, max_width_px,
                          contrast_low_percentile, contrast_high_percentile);
 }

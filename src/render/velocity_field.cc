@@ -66,14 +66,12 @@ void VelocityFieldSequence::Check() const {
 }
 
 void VelocityOverlayOptions::Check() const {
-  CheckValue(opacity >= 0 && opacity <= 1, "VelocityOverlayOptions.opacity", Fmt("%g", opacity),
-             "0..1");
+  CheckRange(opacity, kOverlayOpacityRange, "VelocityOverlayOptions.opacity", "an opacity");
   CheckValue(std::isnan(max_speed_mm_s) || (max_speed_mm_s > 0 && std::isfinite(max_speed_mm_s)),
              "VelocityOverlayOptions.max_speed_mm_s", Fmt("%g", max_speed_mm_s),
              "> 0, or NaN for automatic");
-  CheckValue(arrow_spacing_display_px >= 4 && arrow_spacing_display_px <= 500,
-             "VelocityOverlayOptions.arrow_spacing_display_px", Fmt("%g", arrow_spacing_display_px),
-             "4..500");
+  CheckRange(arrow_spacing_display_px, kArrowSpacingRange,
+             "VelocityOverlayOptions.arrow_spacing_display_px", "an arrow spacing");
   render_internal::CheckDisplayOptions("VelocityOverlayOptions", min_width_px, max_width_px,
                                        contrast_low_percentile, contrast_high_percentile);
 }

@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
@@ -135,6 +137,56 @@ tset: {}
             std::string::npos)
       << msg;
   EXPECT_NE(msg.find("tset: unknown key (did you mean 'test'?)"), std::string::npos) << msg;
+}
+
+// outputs.plot/.video/.velocity_map/.strain_map: how the figures and animations are drawn, read
+// into the render options of the run (and of `impactdic render`, the same keys as flags).
+TEST(Scene, DrawingKeysReachTheRenderOptions) {
+  const Scene defaults = ParseScene("inputs: {frames: f}\ntest: {drop_height_m: 1}\n", "s.yaml");
+  const RenderResultsOptions d = SceneRenderOptions(defaults);
+  EXPECT_EQ(d.plot.width_px, PlotOptions{}.width_px);
+  EXPECT_TRUE(std::isnan(d.snapshot_overlay.max_speed_mm_s));
+  EXPECT_TRUE(std::isnan(d.strain_overlay.eps_v_limit));
+  const Scene s = ParseScene(R"(
+inputs: {frames: f}
+test: {drop_height_m: 1}
+outputs:
+  png_frames: true
+  plot: {width_px: 640, font: Liberation Sans}
+  video: {fps: 10, codec: mjpg, h264_fourccs: [avc1]}
+  velocity_map: {max_speed_mm_s: 500, unit: m/s, arrows: false, max_width_px: 1000}
+  strain_map: {eps_v_limit: 0.02, gamma_max_limit: auto, shear_bands: false}
+)",
+                             "s.yaml");
+  const RenderResultsOptions r = SceneRenderOptions(s);
+  EXPECT_EQ(r.plot.width_px, 640);
+  EXPECT_EQ(r.plot.font, "Liberation Sans");
+  EXPECT_EQ(r.animation_options.fps, 10);
+  EXPECT_EQ(r.animation_options.codec, VideoCodec::kMjpg);
+  EXPECT_EQ(r.animation_options.h264_fourccs, std::vector<std::string>{"avc1"});
+  EXPECT_TRUE(r.png_frames);
+  for (const VelocityOverlayOptions& v : {r.snapshot_overlay, r.animation_options.overlay}) {
+    EXPECT_EQ(v.max_speed_mm_s, 500);
+    EXPECT_EQ(v.unit, VelocityDisplayUnit::kMPerS);
+    EXPECT_FALSE(v.arrows);
+    EXPECT_EQ(v.max_width_px, 1000);
+  }
+  EXPECT_EQ(r.strain_overlay.eps_v_limit, 0.02);
+  EXPECT_TRUE(std::isnan(r.strain_overlay.gamma_max_limit));
+  EXPECT_FALSE(r.strain_overlay.shear_bands);
+
+  const std::string base = "inputs: {frames: f}\ntest: {drop_height_m: 1}\noutputs:\n";
+  std::string msg = LoadError(base + "  plot: {widht_px: 640}\n");
+  EXPECT_NE(msg.find("outputs.plot.widht_px: unknown key (did you mean 'width_px'?)"),
+            std::string::npos)
+      << msg;
+  msg = LoadError(base + "  velocity_map: {max_speed_mm_s: -1}\n");
+  EXPECT_NE(msg.find("outputs.velocity_map.max_speed_mm_s"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("auto or a speed > 0 mm/s"), std::string::npos) << msg;
+  msg = LoadError(base + "  strain_map: {min_width_px: 900, max_width_px: 800}\n");
+  EXPECT_NE(msg.find("max_width_px"), std::string::npos) << msg;
+  msg = LoadError(base + "  video: {h264_fourccs: avc}\n");
+  EXPECT_NE(msg.find("outputs.video.h264_fourccs"), std::string::npos) << msg;
 }
 
 TEST(Scene, MissingFramesAndBadYamlAndMissingFile) {

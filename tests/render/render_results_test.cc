@@ -204,6 +204,26 @@ TEST(RenderCli, RendersEverythingWithPngFrames) {
   EXPECT_NE(r.output.find("velocity.avi"), std::string::npos) << r.output;
 }
 
+// The drawing is the scene's outputs.* keys, as flags: the figure and the display size follow them.
+TEST(RenderCli, SceneDrawingKeysAsFlags) {
+  ScratchDir dir("cli");
+  Parts few;
+  few.frame_count = 4;
+  WriteResults(dir / "results.h5", few);
+  const CliResult r = RunCli("render " + (dir / "results.h5") + " -o " + (dir / "out") +
+                             " --no-animation --outputs.plot.width_px 500 --outputs.plot.height_px "
+                             "300 --outputs.velocity_map.min_width_px 320 "
+                             "--outputs.velocity_map.max_width_px 320");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(IsPngOfSize(dir / "out/momentum.png", 500, 300)) << r.output;
+  EXPECT_TRUE(IsPngOfSize(dir / "out/velocity_field_te.png", 320, 240)) << r.output;
+  const CliResult bad = RunCli("render " + (dir / "results.h5") + " -o " + (dir / "bad") +
+                               " --outputs.plot.width_px 100");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("--outputs.plot.width_px"), std::string::npos) << bad.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad"));
+}
+
 TEST(RenderCli, MissingFileFails) {
   ScratchDir dir("cli");
   const CliResult r = RunCli("render " + (dir / "nope.h5"));

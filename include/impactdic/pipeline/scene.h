@@ -31,6 +31,11 @@
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/preprocess/preprocess.h"
+#include "impactdic/render/animation.h"
+#include "impactdic/render/gnuplot.h"
+#include "impactdic/render/render_results.h"
+#include "impactdic/render/strain_field.h"
+#include "impactdic/render/velocity_field.h"
 #include "impactdic/sensor/sensor.h"
 #include "impactdic/strain/strain.h"
 
@@ -138,6 +143,14 @@ struct SceneOutputs {
   bool figures = true;
   bool animation = true;
   bool png_frames = false;
+  // How the figures and animations are drawn: `outputs.plot.*` (the gnuplot figures),
+  // `outputs.video.*` (the animations' rate and codec), `outputs.velocity_map.*` (the velocity
+  // snapshot and animation), `outputs.strain_map.*` (the strain maps and animation). `impactdic
+  // render` takes the same keys as flags (SceneRenderOptions).
+  PlotOptions plot;
+  AnimationOptions video;
+  VelocityOverlayOptions velocity_map;
+  StrainOverlayOptions strain_map;
 };
 
 struct Scene {
@@ -186,6 +199,10 @@ Scene ParseScene(const std::string& yaml_text, const std::string& path);
 
 // The library options the stages take, from the scene (the sensor's g and v0, the momentum's
 // pounder and soil from the test; the momentum footprint from the pixel position and the scale).
+// The drawing of the figures and animations the scene's outputs.* keys ask for (figures, animation,
+// png_frames, plot, video, velocity_map, strain_map); the output folder and generation are the
+// caller's.
+RenderResultsOptions SceneRenderOptions(const Scene& scene);
 SensorOptions MakeSensorOptions(const Scene& scene);
 MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px);
 // The model's parameters for impact velocity v0.

@@ -12,8 +12,16 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
 
 namespace impactdic {
+
+// How a field is drawn over its frames (VelocityOverlayOptions, StrainOverlayOptions): the colour
+// map's opacity, the frame's width on screen and the percentiles of a 16-bit or float frame that
+// map to black and white.
+inline constexpr ValueRange kOverlayOpacityRange{0, 1, ""};
+inline constexpr ValueRange kDisplayWidthRange{160, 8000, "px"};
+inline constexpr ValueRange kContrastPercentileRange{0, 100, "%"};
 
 struct FieldSequence {
   // One grey camera frame per analysed time step (CV_8UC1, CV_16UC1 or CV_32FC1; all the same

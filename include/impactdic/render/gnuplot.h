@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
 
 namespace impactdic {
 
@@ -96,9 +97,12 @@ struct Plot {
 };
 
 struct PlotOptions {
-  int width_px = 1200;    // PNG size, [320, 8000]
-  int height_px = 800;    // [240, 8000]
-  int font_size_pt = 15;  // base font size, [6, 72]
+  int width_px = 1200;    // PNG size, in kWidthRange
+  int height_px = 800;    // in kHeightRange
+  int font_size_pt = 15;  // base font size, in kFontSizeRange
+  static constexpr ValueRange kWidthRange{320, 8000, "px"};
+  static constexpr ValueRange kHeightRange{240, 8000, "px"};
+  static constexpr ValueRange kFontSizeRange{6, 72, "pt"};
   std::string font = "DejaVu Sans";
   // gnuplot binary; empty = environment variable IMPACTDIC_GNUPLOT, else "gnuplot" from PATH.
   std::string gnuplot_binary;

@@ -48,18 +48,19 @@ struct StrainFieldSequence : FieldSequence {
 };
 
 struct StrainOverlayOptions {
-  double opacity = 0.85;  // alpha of the colour maps over the frame, [0, 1]
+  double opacity = 0.85;  // alpha of the colour maps over the frame, kOverlayOpacityRange
   // Colour limits, dimensionless: eps_v in [-eps_v_limit, +eps_v_limit], gamma_max in
   // [0, gamma_max_limit]; NaN = the `percentile` of |eps_v| (of gamma_max) over every frame and
   // subset of the sequence. Either is rounded up to a tick of its colour bar (drawn in percent).
   double eps_v_limit = kNaN;
   double gamma_max_limit = kNaN;
-  double percentile = 99.0;  // (50, 100]
-  bool shear_bands = true;   // dots at the shear-band ridge samples, when the sequence has them
+  double percentile = 99.0;  // kPercentileRange
+  static constexpr ValueRange kPercentileRange{50, 100, "%", /*min_open=*/true};
+  bool shear_bands = true;  // dots at the shear-band ridge samples, when the sequence has them
   // Each panel's frame is scaled for display so that its width lies in [min_width_px,
   // max_width_px].
-  int min_width_px = 480;  // [160, 8000]
-  int max_width_px = 960;  // [min_width_px, 8000]
+  int min_width_px = 480;  // kDisplayWidthRange
+  int max_width_px = 960;  // kDisplayWidthRange, >= min_width_px
   // Display contrast for 16-bit and float frames: these percentiles of the first frame map to
   // black and white, [0, 100], low < high.
   double contrast_low_percentile = 0.5;

@@ -55,17 +55,18 @@ const char* ToString(VelocityDisplayUnit unit);  // "auto", "mm/s", "m/s"
 VelocityDisplayUnit VelocityDisplayUnitFromString(const std::string& text);
 
 struct VelocityOverlayOptions {
-  double opacity = 0.7;  // alpha of the colour map over the frame, [0, 1]
+  double opacity = 0.7;  // alpha of the colour map over the frame, kOverlayOpacityRange
   // Top of the colour scale [mm/s]; NaN = the 99th percentile of all valid speeds of the
   // sequence (one scale for every frame, so colours are comparable over time).
   double max_speed_mm_s = kNaN;
   VelocityDisplayUnit unit = VelocityDisplayUnit::kAuto;
   bool arrows = true;
-  // Minimum distance between drawn arrows in display pixels, [4, 500]: denser grids are thinned.
+  // Minimum distance between drawn arrows in display pixels: denser grids are thinned.
   double arrow_spacing_display_px = 36.0;
+  static constexpr ValueRange kArrowSpacingRange{4, 500, "px"};
   // Frames are scaled for display so that their width lies in [min_width_px, max_width_px].
-  int min_width_px = 960;   // [160, 8000]
-  int max_width_px = 1920;  // [min_width_px, 8000]
+  int min_width_px = 960;   // kDisplayWidthRange
+  int max_width_px = 1920;  // kDisplayWidthRange, >= min_width_px
   // Display contrast for 16-bit and float frames: these percentiles of the first frame map to
   // black and white, [0, 100], low < high.
   double contrast_low_percentile = 0.5;

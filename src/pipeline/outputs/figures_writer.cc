@@ -49,12 +49,9 @@ class FiguresWriter : public OutputWriter {
   }
   void Write(OutputContext& c) const override {
     const Scene& scene = c.scene;
-    RenderResultsOptions r;
+    RenderResultsOptions r = SceneRenderOptions(scene);
     r.output_dir = c.folder;
     r.new_generation = false;  // Part of the run's generation.
-    r.figures = scene.outputs.figures;
-    r.snapshot = scene.outputs.figures;
-    r.animation = scene.outputs.animation;
     r.png_frames = r.animation && (c.options.png_frames || scene.outputs.png_frames);
     if (c.data.frames) {  // Re-read from the source, one at a time (results.h5 holds a preview).
       const std::shared_ptr<FrameStream> frames = c.data.frames;
