@@ -192,23 +192,48 @@ BoardSpec ParseBoard(const std::string& text, double square_mm, const std::strin
 }
 
 void DetectionOptions::Check() const {
-  CheckValue(subpix_half_window >= 2 && subpix_half_window <= 30, "detection.subpix_half_window",
-             std::to_string(subpix_half_window), "in [2, 30] px");
-  CheckValue(subpix_max_iterations >= 1, "detection.subpix_max_iterations",
-             std::to_string(subpix_max_iterations), ">= 1");
-  CheckValue(subpix_epsilon_px > 0, "detection.subpix_epsilon_px",
-             fmt::format("{}", subpix_epsilon_px), "> 0");
+  CheckRange(subpix_half_window, kHalfWindowRange, "calibration.detection.subpix_half_window",
+             "a search half-window");
+  CheckRange(subpix_max_iterations, kMaxIterationsRange,
+             "calibration.detection.subpix_max_iterations", "an iteration count");
+  CheckRange(subpix_epsilon_px, kEpsilonRange, "calibration.detection.subpix_epsilon_px",
+             "a corner movement");
 }
 
 void CalibrationOptions::Check() const {
   board.Check();
   detection.Check();
-  CheckValue(min_views >= 3, "calibration.min_views", std::to_string(min_views), ">= 3");
-  CheckValue(max_rms_px > 0 && !std::isnan(max_rms_px), "calibration.max_rms_px",
-             fmt::format("{}", max_rms_px), "> 0 px");
-  CheckValue(duplicate_tolerance_px >= 0 && duplicate_tolerance_px <= 100,
-             "calibration.duplicate_tolerance_px", fmt::format("{}", duplicate_tolerance_px),
-             "in [0, 100] px");
+  CheckRange(min_views, kMinViewsRange, "calibration.min_views", "a view count");
+  CheckRange(max_rms_px, kMaxRmsRange, "calibration.max_rms_px", "a reprojection RMS");
+  CheckRange(duplicate_tolerance_px, kDuplicateToleranceRange, "calibration.duplicate_tolerance_px",
+             "a corner distance");
+}
+
+std::vector<YamlOptionTable> CalibrationOptionTables(CalibrationOptions* o) {
+  YamlOptionTable t("calibration");
+  t.Add("min_views", &o->min_views, CalibrationOptions::kMinViewsRange, "view count",
+        "Fewest distinct views with a detected board (Zhang needs 3; 10-20 for distortion)");
+  t.Add("max_rms_px", &o->max_rms_px, CalibrationOptions::kMaxRmsRange, "a reprojection RMS",
+        "Refuse a calibration whose reprojection RMS exceeds this");
+  t.Add("fix_k3", &o->fix_k3, "Hold k3 = 0 (fewer views or mild distortion)");
+  t.Add("zero_tangential", &o->zero_tangential, "Hold p1 = p2 = 0 (no tangential distortion)");
+  t.Add("duplicate_tolerance_px", &o->duplicate_tolerance_px,
+        CalibrationOptions::kDuplicateToleranceRange, "a corner distance",
+        "A view whose corners all lie this close to an earlier view's repeats it (counted once)");
+  DetectionOptions& d = o->detection;
+  YamlOptionTable detection("calibration.detection");
+  detection.Add("adaptive_threshold", &d.adaptive_threshold,
+                "Adaptive thresholding in the board search (uneven light)");
+  detection.Add("normalize_image", &d.normalize_image,
+                "Equalise the image's histogram before the board search");
+  detection.Add("subpix_half_window", &d.subpix_half_window, DetectionOptions::kHalfWindowRange,
+                "search half-window", "Sub-pixel corner search half-window (< half a square)");
+  detection.Add("subpix_max_iterations", &d.subpix_max_iterations,
+                DetectionOptions::kMaxIterationsRange, "iteration count",
+                "Sub-pixel corner refinement: iteration cap");
+  detection.Add("subpix_epsilon_px", &d.subpix_epsilon_px, DetectionOptions::kEpsilonRange,
+                "a corner movement", "... and stop when a corner moves less than this");
+  return {t, detection};
 }
 
 cv::Point2d PlaneScale::ToMm(cv::Point2d px) const {

@@ -10,6 +10,8 @@
 #include "commands.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/error.h"
+#include "impactdic/io/yaml.h"
+#include "impactdic/pipeline/scene_flags.h"
 
 namespace impactdic::cli {
 namespace {
@@ -19,6 +21,7 @@ struct CalibrateArgs {
   double square_mm = 0;
   std::vector<std::string> images;
   CalibrationOptions options;  // Defaults: the calib library's.
+  SceneKeyValues keys;         // --calibration.*, --min-views, --max-rms.
 };
 
 }  // namespace
@@ -40,16 +43,11 @@ void RegisterCalibrateCommand(CLI::App& app) {
                   "Calibration YAML to write (.yaml or .yml; never one of the images)")
       ->required();
   cmd->add_option("--format", args->format, "Output format: text or json")->capture_default_str();
-  cmd->add_option("--max-rms", args->options.max_rms_px,
-                  "Refuse a calibration whose reprojection RMS exceeds this [px], > 0")
-      ->capture_default_str();
-  cmd->add_option("--min-views", args->options.min_views,
-                  "Fewest images in which the board must be found, >= 3")
-      ->capture_default_str();
-  cmd->add_flag("--fix-k3", args->options.fix_k3, "Hold k3 = 0 (fewer views or mild distortion)");
+  cmd->add_flag("--fix-k3", args->options.fix_k3, "Short for --calibration.fix_k3 true");
+  AddKeyFlags(cmd, OptionTableFlags(CalibrationOptionTables(&args->options)), &args->keys);
   cmd->add_option("images", args->images,
                   "Checkerboard images (files, folders or glob patterns), all the same size");
-  cmd->callback([args] {
+  cmd->callback([args, cmd] {
     // Every option checked before any work, by the library (the one definition), naming the flags.
     CheckFormat(args->format);
     const FlagNames flags = {{"calibration.max_rms_px", "--max-rms"},
@@ -59,6 +57,10 @@ void RegisterCalibrateCommand(CLI::App& app) {
                              {"calibration images", "IMAGES"},
                              {"output", "-o"}};
     CalibrationOptions& options = args->options;
+    const std::vector<YamlOptionTable> tables = CalibrationOptionTables(&options);
+    ApplyKeyFlags(*cmd, args->keys, [&](const auto& key, const auto& text, const auto& flag) {
+      SetOptionTableKey(tables, key, text, flag);
+    });
     CalibrationSummary summary;
     const CameraCalibration calibration = WithFlagNames(flags, [&] {
       options.board = ParseBoard(args->board, args->square_mm);

@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -61,12 +62,15 @@ inline constexpr const char* kAllowPartialFlag = "--allow-partial";
 // "PROBLEM; `impactdic COMMAND --allow-partial` REMEDY" (PartialResultsError's two texts).
 [[noreturn]] void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command);
 
-// Scene keys as flags (pipeline/scene_flags.h): each key of `sections` becomes a flag named as the
-// key ("--dic.max_iterations") and one per alias of the command ("--search-radius"), unless `cmd`
-// binds that name itself; their text is kept in `values` (flag -> key, text). ApplySceneKeyFlags
-// sets the ones given into `scene` (SetSceneKey, naming the flag used); a key given under two
-// names is an error.
+// Option-table keys as flags (pipeline/scene_flags.h): each key becomes a flag named as the key
+// ("--dic.max_iterations") and one per alias of the command ("--search-radius"), unless `cmd`
+// binds that name itself; their text is kept in `values` (flag -> key, text). ApplyKeyFlags
+// passes the ones given to `set` (key, text, flag used: SetSceneKey, SetOptionTableKey); a key
+// given under two names is an error. The Scene forms: the scene's tables named `sections`.
 using SceneKeyValues = std::map<std::string, std::pair<std::string, std::string>>;
+using SetKey = std::function<void(const std::string&, const std::string&, const std::string&)>;
+void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyValues* values);
+void ApplyKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, const SetKey& set);
 void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
                       SceneKeyValues* values);
 void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene);

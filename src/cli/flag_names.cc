@@ -37,7 +37,18 @@ void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& com
 
 void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
                       SceneKeyValues* values) {
-  for (const SceneKeyFlag& f : SceneKeyFlags(sections)) {
+  AddKeyFlags(cmd, SceneKeyFlags(sections), values);
+}
+
+void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene) {
+  ApplyKeyFlags(cmd, values,
+                [scene](const std::string& key, const std::string& text, const std::string& flag) {
+                  SetSceneKey(scene, key, text, flag);
+                });
+}
+
+void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyValues* values) {
+  for (const SceneKeyFlag& f : keys) {
     std::vector<std::string> names = {"--" + f.key};
     for (const SceneFlagAlias& a : SceneFlagAliases())
       if (cmd->get_name() == a.command && f.key == a.key) names.emplace_back(a.alias);
@@ -52,14 +63,14 @@ void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
   }
 }
 
-void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene) {
+void ApplyKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, const SetKey& set) {
   std::map<std::string, std::string> given;  // Key -> the flag that set it.
   for (const auto& [flag, key_text] : values) {
     const auto& [key, text] = key_text;
     if (cmd.count(flag) == 0) continue;
     const auto [first, inserted] = given.emplace(key, flag);
     CheckValue(inserted, first->second + "/" + flag, "both given", "one name of " + key);
-    SetSceneKey(scene, key, text, flag);
+    set(key, text, flag);
   }
 }
 

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -78,6 +79,8 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"model", "model.ode45_defaults", "--ode45-defaults"},
       {"model", "model.t_max_s", "--t-max"},
       {"render", "outputs.video.codec", "--codec"},
+      {"calibrate", "calibration.min_views", "--min-views"},
+      {"calibrate", "calibration.max_rms_px", "--max-rms"},
       {"render", "outputs.video.fps", "--fps"},
   };
   return kAliases;
@@ -108,9 +111,15 @@ bool InSections(const std::string& section, const std::vector<std::string>& sect
 
 std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections) {
   Scene defaults;
+  std::vector<YamlOptionTable> tables = SceneOptionTables(&defaults);
+  std::erase_if(tables,
+                [&](const YamlOptionTable& t) { return !InSections(t.section(), sections); });
+  return OptionTableFlags(tables);
+}
+
+std::vector<SceneKeyFlag> OptionTableFlags(const std::vector<YamlOptionTable>& tables) {
   std::vector<SceneKeyFlag> flags;
-  for (const YamlOptionTable& table : SceneOptionTables(&defaults)) {
-    if (!InSections(table.section(), sections)) continue;
+  for (const YamlOptionTable& table : tables) {
     for (const YamlOptionTable::Entry& e : table.entries())
       flags.push_back({table.section() + "." + e.key, e.doc + "; " + e.expected, e.default_text});
   }
@@ -143,7 +152,12 @@ void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
     scene->dic.roi = RoiFromText(value, flag);
     return;
   }
-  for (const YamlOptionTable& table : SceneOptionTables(scene)) {
+  SetOptionTableKey(SceneOptionTables(scene), key, value, flag);
+}
+
+void SetOptionTableKey(const std::vector<YamlOptionTable>& tables, const std::string& key,
+                       const std::string& value, const std::string& flag) {
+  for (const YamlOptionTable& table : tables) {
     for (const YamlOptionTable::Entry& e : table.entries()) {
       if (table.section() + "." + e.key != key) continue;
       // A number as written, text quoted (as the library's own messages show them).
@@ -152,7 +166,7 @@ void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
       return;
     }
   }
-  throw std::logic_error("SetSceneKey: no scene key " + key);
+  throw std::logic_error("SetOptionTableKey: no key " + key);
 }
 
 }  // namespace impactdic

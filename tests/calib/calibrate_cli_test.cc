@@ -44,6 +44,13 @@ TEST(CalibrateCli, TextOutputWithoutPlaneHasNoScale) {
   r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out + " --format json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(Contains(r.output, "\"mm_per_px\": null")) << r.output;
+  // Every CalibrationOptions field is a flag: no tangential distortion and k3 held at 0.
+  r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out +
+             " --calibration.zero_tangential true --fix-k3");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const cv::Mat dist = LoadCalibration(out).DistCoeffs();
+  EXPECT_NE(dist.at<double>(0), 0.0);                                              // k1 fitted
+  for (const int held : {2, 3, 4}) EXPECT_EQ(dist.at<double>(held), 0.0) << held;  // p1 p2 k3
 }
 
 TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
@@ -63,12 +70,17 @@ TEST(CalibrateCli, BadOptionsAreRefusedBeforeWork) {
             "/no/such/plane.png"},
            {"--board 9x6 --square 25 " + kViews + " -o /no/such/folder/out.yaml",
             "/no/such/folder"},
-           // CalibrationOptions::Check() decides (the one definition), naming the flag.
+           // CalibrationOptions' ranges decide (the one definition), naming the flag.
            {"--board 9x6 --square 25 --max-rms 0 " + kViews + " -o " + out,
-            "--max-rms: invalid value (got 0); expected > 0 px"},
+            "--max-rms: invalid value (got 0); expected a reprojection RMS in (0, 1000] px"},
            {"--board 9x6 --square 25 --max-rms nan " + kViews + " -o " + out, "--max-rms"},
            {"--board 9x6 --square 25 --min-views 2 " + kViews + " -o " + out,
-            "--min-views: invalid value (got 2); expected >= 3"},
+            "--min-views: invalid value (got 2); expected an integer view count in [3, 10000]"},
+           {"--board 9x6 --square 25 --calibration.detection.subpix_half_window 1 " + kViews +
+                " -o " + out,
+            "--calibration.detection.subpix_half_window: invalid value (got 1)"},
+           {"--board 9x6 --square 25 --calibration.zero_tangential maybe " + kViews + " -o " + out,
+            "--calibration.zero_tangential: invalid value (got 'maybe'); expected true or false"},
        }) {
     const CliResult r = RunCli("calibrate " + c.args);
     EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;

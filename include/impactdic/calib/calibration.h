@@ -32,6 +32,7 @@
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/range.h"
 #include "impactdic/io/json.h"
+#include "impactdic/io/yaml.h"
 
 namespace impactdic {
 
@@ -56,12 +57,15 @@ struct BoardSpec {
 BoardSpec ParseBoard(const std::string& text, double square_mm, const std::string& where = "board");
 
 struct DetectionOptions {
-  bool adaptive_threshold = true;   // cv::CALIB_CB_ADAPTIVE_THRESH.
-  bool normalize_image = true;      // cv::CALIB_CB_NORMALIZE_IMAGE.
-  int subpix_half_window = 5;       // cornerSubPix search window half-size [px], in [2, 30];
-                                    // keep it below half a square side.
-  int subpix_max_iterations = 100;  // >= 1.
-  double subpix_epsilon_px = 1e-4;  // Stop when a corner moves less than this [px], > 0.
+  bool adaptive_threshold = true;  // cv::CALIB_CB_ADAPTIVE_THRESH.
+  bool normalize_image = true;     // cv::CALIB_CB_NORMALIZE_IMAGE.
+  int subpix_half_window = 5;      // cornerSubPix search window half-size [px]; keep it
+                                   // below half a square side.
+  int subpix_max_iterations = 100;
+  double subpix_epsilon_px = 1e-4;  // Stop when a corner moves less than this [px].
+  static constexpr ValueRange kHalfWindowRange{2, 30, "px"};
+  static constexpr ValueRange kMaxIterationsRange{1, 1e6, ""};
+  static constexpr ValueRange kEpsilonRange{0, 1, "px", /*min_open=*/true};
   void Check() const;
 };
 
@@ -82,8 +86,16 @@ struct CalibrationOptions {
   // wrong camera (cx off by 46 px) with an RMS of 0.03 px. The corner detector repeats a still
   // board to about 0.01-0.1 px; views taken on purpose differ by tens of pixels.
   double duplicate_tolerance_px = 1.0;
+  static constexpr ValueRange kMinViewsRange{3, 1e4, ""};
+  static constexpr ValueRange kMaxRmsRange{0, 1e3, "px", /*min_open=*/true};
+  static constexpr ValueRange kDuplicateToleranceRange{0, 100, "px"};
   void Check() const;
 };
+
+// The options of `impactdic calibrate` as option tables (io/yaml.h), the keys named as in
+// CalibrationOptions::Check's errors: calibration.min_views, max_rms_px, fix_k3, zero_tangential,
+// duplicate_tolerance_px and calibration.detection.* (the board is --board and --square).
+std::vector<YamlOptionTable> CalibrationOptionTables(CalibrationOptions* options);
 
 // The scale of the measurement plane (the panel).
 struct PlaneScale {

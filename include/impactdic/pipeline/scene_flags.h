@@ -40,6 +40,9 @@ struct SceneKeyFlag {
 // The keys of the tables named `sections` or nested in them ("preprocess": preprocess.gaussian.*
 // and preprocess.clahe.*), in table order.
 std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections);
+// The same for any option tables (a command's own, e.g. calib's CalibrationOptionTables), all of
+// their keys; the defaults are the bound fields' values.
+std::vector<SceneKeyFlag> OptionTableFlags(const std::vector<YamlOptionTable>& tables);
 
 // Sets `key` of `scene` from the text given to its flag `flag`, parsed as the key's value in a
 // scene file (relative paths against scene->folder); dic.roi (a list in a scene file) as
@@ -48,6 +51,9 @@ std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections
 // error (std::logic_error).
 void SetSceneKey(Scene* scene, const std::string& key, const std::string& value,
                  const std::string& flag);
+// The same for the fields bound by `tables`.
+void SetOptionTableKey(const std::vector<YamlOptionTable>& tables, const std::string& key,
+                       const std::string& value, const std::string& flag);
 
 }  // namespace impactdic
 
