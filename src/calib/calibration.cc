@@ -566,8 +566,7 @@ CameraCalibration CalibrateToFile(const std::vector<std::string>& image_sources,
     inputs.insert(inputs.end(), listed.begin(), listed.end());
   }
   CheckOutputLocation(output, {"output", {".yaml", ".yml"}, inputs, {kCalibrationFirstLine}});
-  const CameraCalibration calibration =
-      CalibrateFromFiles(image_sources, plane_path, options, summary);
+  CameraCalibration calibration = CalibrateFromFiles(image_sources, plane_path, options, summary);
   SaveCalibration(calibration, output);
   return calibration;
 }

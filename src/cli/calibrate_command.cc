@@ -14,20 +14,16 @@
 #include "impactdic/pipeline/scene_flags.h"
 
 namespace impactdic::cli {
-namespace {
-
-struct CalibrateArgs {
-  std::string board, plane, output, format = "text";
-  double square_mm = 0;
-  std::vector<std::string> images;
-  CalibrationOptions options;  // Defaults: the calib library's.
-  SceneKeyValues keys;         // --calibration.*, --min-views, --max-rms.
-};
-
-}  // namespace
 
 void RegisterCalibrateCommand(CLI::App& app) {
-  auto args = std::make_shared<CalibrateArgs>();
+  struct Args {
+    std::string board, plane, output, format = "text";
+    double square_mm = 0;
+    std::vector<std::string> images;
+    CalibrationOptions options;  // Defaults: the calib library's.
+    SceneKeyValues keys;         // --calibration.*, --min-views, --max-rms, --fix-k3.
+  };
+  auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "calibrate",
       "Lens calibration from checkerboard images: intrinsics, Brown-Conrady distortion "
@@ -43,7 +39,6 @@ void RegisterCalibrateCommand(CLI::App& app) {
                   "Calibration YAML to write (.yaml or .yml; never one of the images)")
       ->required();
   cmd->add_option("--format", args->format, "Output format: text or json")->capture_default_str();
-  cmd->add_flag("--fix-k3", args->options.fix_k3, "Short for --calibration.fix_k3 true");
   AddKeyFlags(cmd, OptionTableFlags(CalibrationOptionTables(&args->options)), &args->keys);
   cmd->add_option("images", args->images,
                   "Checkerboard images (files, folders or glob patterns), all the same size");

@@ -5,7 +5,6 @@
 #define IMPACTDIC_CLI_COMMANDS_H_
 
 #include <CLI/CLI.hpp>
-#include <algorithm>
 #include <functional>
 #include <map>
 #include <string>

@@ -20,7 +20,7 @@ struct CorrelateArgs {
   std::string reference, frames, roi, gaussian, output;
   std::vector<std::string> deformed;
   long long first = 0, last = 0;
-  bool allow_partial = false, warp_gradient = false;
+  bool allow_partial = false;
   SceneKeyValues keys;  // --dic.*, --preprocess.* and their aliases.
 };
 
@@ -36,7 +36,6 @@ void Run(const CLI::App& cmd, const CorrelateArgs& a) {
   if (given("--last")) scene.dic.last_frame_number = a.last;
   if (!a.roi.empty()) SetSceneKey(&scene, "dic.roi", a.roi, given("--roi") ? "--roi" : "--dic.roi");
   if (given("--gaussian")) scene.preprocess.gaussian = GaussianFromString(a.gaussian, "--gaussian");
-  scene.dic.options.keep_warp_gradient |= a.warp_gradient;
   FlagNames flags = {{"dic.first_frame_number..last_frame_number", "--first/--last"}};
   for (const SceneFlagAlias& alias : SceneFlagAliases())
     if (cmd.get_name() == alias.command) flags.emplace_back(alias.key, alias.alias);
@@ -69,7 +68,6 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--gaussian", a->gaussian,
                   "auto | none | on | SIGMA[,KERNEL]: short for the --preprocess.gaussian.* flags")
       ->default_str(ToString(GaussianBlurOptions{}.mode));
-  cmd->add_flag("--warp-gradient", a->warp_gradient, "Short for --dic.keep_warp_gradient on");
   cmd->add_option("-o,--output", a->output, "Output file (.csv or .h5)");
   cmd->add_flag(kAllowPartialFlag, a->allow_partial,
                 "Write the output (exit 0) even when no subset is valid in any deformed image");

@@ -49,15 +49,19 @@ void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene
 
 void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyValues* values) {
   for (const SceneKeyFlag& f : keys) {
-    std::vector<std::string> names = {"--" + f.key};
+    std::vector<std::pair<std::string, bool>> names = {{"--" + f.key, false}};  // Name, switch.
     for (const SceneFlagAlias& a : SceneFlagAliases())
-      if (cmd->get_name() == a.command && f.key == a.key) names.emplace_back(a.alias);
-    for (const std::string& name : names) {
+      if (cmd->get_name() == a.command && f.key == a.key) names.emplace_back(a.alias, a.is_switch);
+    for (const auto& [name, is_switch] : names) {
       if (cmd->get_option_no_throw(name)) continue;  // The command binds it itself.
       const bool on_off = f.default_text == "true" || f.default_text == "false";
       auto& [key, text] = (*values)[name];
       key = f.key;
-      cmd->add_option(name, text, name == names[0] ? f.help : "Short for " + names[0])
+      if (is_switch) {
+        cmd->add_flag(name, text, "Short for " + names[0].first + " true");
+        continue;
+      }
+      cmd->add_option(name, text, name == names[0].first ? f.help : "Short for " + names[0].first)
           ->default_str(on_off ? (f.default_text == "true" ? "on" : "off") : f.default_text);
     }
   }

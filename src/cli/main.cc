@@ -27,15 +27,10 @@ std::string ConversionMessage(const CLI::App& app, const CLI::ConversionError& e
   if (message.rfind(head, 0) != 0 || eq == std::string::npos) return message;
   const std::string name = message.substr(head.size(), eq - head.size());
   std::string type;
-  // The subcommand being parsed first (an option name can mean different things in two).
-  std::vector<const CLI::App*> subs;
-  for (const CLI::App* sub : app.get_subcommands()) subs.push_back(sub);
-  for (const CLI::App* sub : app.get_subcommands({})) subs.push_back(sub);
-  for (const CLI::App* sub : subs) {
-    if (const CLI::Option* option = sub->get_option_no_throw(name)) {
-      type = option->get_type_name();
-      break;
-    }
+  // The parsed subcommand's option first (an option name can mean different things in two).
+  for (const CLI::App* sub : app.get_subcommands({})) {
+    const CLI::Option* option = sub->get_option_no_throw(name);
+    if (option != nullptr && (type.empty() || sub->parsed())) type = option->get_type_name();
   }
   const std::string what = type == "INT"     ? "an integer"
                            : type == "UINT"  ? "a non-negative integer"
@@ -71,21 +66,18 @@ int Main(int argc, char** argv) {
   cli::RegisterInitCommand(app);
 
   // An unknown first word is reported as such (CLI11 would only say a subcommand is required).
-  for (int i = 1; i < argc; ++i) {
-    const std::string word = argv[i];
-    if (word.empty() || word[0] == '-') continue;
-    std::string names;
-    bool known = false;
-    for (const auto* sub : app.get_subcommands({})) {
-      names += (names.empty() ? "" : ", ") + sub->get_name();
-      known = known || sub->get_name() == word;
-    }
-    if (!known) {
-      std::cerr << "impactdic: error: unknown subcommand '" << word
-                << "'; expected one of: " << names << "\n";
-      return 1;
-    }
-    break;
+  const auto* word =
+      std::find_if(argv + 1, argv + argc, [](const char* a) { return a[0] != '-' && a[0] != 0; });
+  std::string names;
+  bool known = word == argv + argc;
+  for (const auto* sub : app.get_subcommands({})) {
+    names += (names.empty() ? "" : ", ") + sub->get_name();
+    known = known || sub->get_name() == *word;
+  }
+  if (!known) {
+    std::cerr << "impactdic: error: unknown subcommand '" << *word
+              << "'; expected one of: " << names << "\n";
+    return 1;
   }
 
   try {

@@ -31,6 +31,7 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"correlate", "dic.first_frame_number", "--first"},
       {"correlate", "dic.last_frame_number", "--last"},
       {"correlate", "dic.threads", "--threads"},
+      {"correlate", "dic.keep_warp_gradient", "--warp-gradient", /*is_switch=*/true},
       {"correlate", "dic.search_radius_px", "--search-radius"},
       {"correlate", "dic.min_zncc", "--min-zncc"},
       {"correlate", "dic.max_uncertainty_px", "--max-uncertainty"},
@@ -81,6 +82,7 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"render", "outputs.video.codec", "--codec"},
       {"calibrate", "calibration.min_views", "--min-views"},
       {"calibrate", "calibration.max_rms_px", "--max-rms"},
+      {"calibrate", "calibration.fix_k3", "--fix-k3", /*is_switch=*/true},
       {"render", "outputs.video.fps", "--fps"},
   };
   return kAliases;

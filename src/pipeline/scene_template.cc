@@ -172,7 +172,7 @@ std::string WriteSceneTemplate(const std::string& folder, bool force) {
   std::error_code ec;
   MakeFolders(folder, ec);
   if (ec) throw Error(ErrorKind::kIo, folder + ": cannot create the folder: " + ec.message());
-  const std::string path = (std::filesystem::path(folder) / "scene.yaml").string();
+  std::string path = (std::filesystem::path(folder) / "scene.yaml").string();
   if (!force && std::filesystem::exists(path)) {
     throw Error(ErrorKind::kInvalidValue,
                 path + " exists; `impactdic init --force` overwrites it, or give another folder");

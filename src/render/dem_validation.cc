@@ -473,7 +473,7 @@ DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& r
     CheckOutputLocation(csv_path,
                         {"--csv", {".csv"}, {truth_h5, results_h5}, {CsvHeaderLine(columns)}});
   }
-  const DemValidation v = ValidateDemRun(truth_h5, results_h5, figures_dir);
+  DemValidation v = ValidateDemRun(truth_h5, results_h5, figures_dir);
   if (!csv_path.empty()) {
     WriteCsv(csv_path, columns,
              {v.t_s, v.p_pounder_tool_Ns, v.p_pounder_truth_Ns, v.p_gran_tool_Ns, v.p_gran_truth_Ns,

@@ -19,9 +19,10 @@ namespace impactdic {
 
 // `alias` is the short name of scene key `key` in `command`'s flags.
 struct SceneFlagAlias {
-  const char* command;  // "correlate"
-  const char* key;      // "dic.subset_size"
-  const char* alias;    // "--subset"
+  const char* command;     // "correlate"
+  const char* key;         // "dic.subset_size"
+  const char* alias;       // "--subset"
+  bool is_switch = false;  // Of an on/off key: given without a value, it sets true.
 };
 const std::vector<SceneFlagAlias>& SceneFlagAliases();
 
