@@ -14,7 +14,6 @@ namespace impactdic::cli {
 
 void RegisterModelCommand(CLI::App& app) {
   auto request = std::make_shared<ModelRequest>();
-  auto format = std::make_shared<std::string>("text");
   auto* cmd = app.add_subcommand(
       "model",
       "Simulate the added-mass impact model (Eq. 9): one test, the solvers' work-precision study "
@@ -37,7 +36,7 @@ void RegisterModelCommand(CLI::App& app) {
       AddSceneKeyOption(cmd, f.key, &request->keys[f.key], f.help, required ? "" : f.default_text);
     }
   }
-  cmd->add_option("--format", *format, "text | json (default text)");
+  cmd->add_option("--format", request->format, "text | json (default text)");
   cmd->add_option("-o,--output", request->output,
                   "single run: time series SERIES.csv | SERIES.h5; --work-precision / --table1: "
                   "TABLE.csv");
@@ -49,12 +48,15 @@ void RegisterModelCommand(CLI::App& app) {
                   "with --work-precision: solvers (default dopri5,stiff,auto,ode45)");
   cmd->add_option("--wp-cases", request->wp_cases,
                   "with --work-precision: cases (default exact,default,table1)");
+  cmd->add_option("--wp-tolerances", request->wp_tolerances,
+                  "with --work-precision: rtols, in [1e-14, 0.1] (default 1e-3,1e-4,...,1e-12)");
+  cmd->add_option("--wp-timing-budget", request->wp_timing_budget_s,
+                  "with --work-precision: repeat each run this long, keep the fastest [s]")
+      ->capture_default_str();
   cmd->add_flag(
       "--table1", request->table1,
       "the paper's 27 combinations (m_p 7/10/13 kg, h 0.2/0.7/1.2 m, D 0.10/0.15/0.20 m)");
-  cmd->callback([cmd, request, format] {
-    CheckFormat(*format);
-    request->json = *format == "json";
+  cmd->callback([cmd, request] {
     // Errors name each key by the flag typed for it (the key's own, else the short alias).
     for (const SceneKeyFlag& f : SceneKeyFlags({"test", "model"}))
       request->key_names[f.key] =

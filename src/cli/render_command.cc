@@ -7,7 +7,6 @@
 #include <string>
 
 #include "commands.h"
-#include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/render/render_results.h"

@@ -8,7 +8,6 @@
 #include <string>
 
 #include "commands.h"
-#include "impactdic/core/error.h"
 #include "impactdic/pipeline/synth_folder.h"
 
 namespace impactdic::cli {

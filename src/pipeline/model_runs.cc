@@ -241,10 +241,21 @@ WorkPrecisionOptions ModelRequestStudy(const ModelRequest& r) {
   }
   CheckValue(w.exact_cases || w.default_case || w.table1, "--wp-cases", r.wp_cases,
              "at least one case");
+  if (!r.wp_tolerances.empty()) w.tolerances.clear();
+  for (const std::string& t : SplitList(r.wp_tolerances)) {
+    const std::optional<double> rtol = ParseNumber(t);
+    CheckValue(rtol.has_value(), "--wp-tolerances", t, "a comma-separated list of numbers");
+    w.tolerances.push_back(*rtol);
+  }
+  w.timing_budget_s = r.wp_timing_budget_s;
+  Naming({{"work_precision.tolerances", "--wp-tolerances"},
+          {"work_precision.timing_budget_s", "--wp-timing-budget"}},
+         [&] { w.Check(); });
   return w;
 }
 
 void RunModelRequest(const ModelRequest& r, std::ostream& out) {
+  CheckValue(r.format == "text" || r.format == "json", "--format", r.format, "text or json");
   CheckValue(r.plot.empty() || r.work_precision, "--plot", r.plot,
              "only together with --work-precision");
   const ImpactModelParameters p = ModelRequestParameters(r);
@@ -257,7 +268,7 @@ void RunModelRequest(const ModelRequest& r, std::ostream& out) {
   } else if (r.table1) {
     RunModelTable1(p, ModelRequestSolverOptions(r), r.output, out);
   } else {
-    RunModelTest(p, ModelRequestSolverOptions(r), r.output, r.json, out);
+    RunModelTest(p, ModelRequestSolverOptions(r), r.output, r.format == "json", out);
   }
 }
 

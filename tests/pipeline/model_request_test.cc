@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -122,8 +123,26 @@ TEST(ModelRequest, SolverOptionsAndStudyListsAreChecked) {
   EXPECT_EQ(w.solvers, std::vector<std::string>{"stiff"});
   EXPECT_TRUE(w.exact_cases);
   EXPECT_FALSE(w.table1);
+  EXPECT_EQ(w.tolerances, WorkPrecisionOptions{}.tolerances);
+  r.wp_tolerances = "1e-4,1e-8";
+  r.wp_timing_budget_s = 0;
+  const WorkPrecisionOptions t = ModelRequestStudy(r);
+  EXPECT_EQ(t.tolerances, (std::vector<double>{1e-4, 1e-8}));
+  EXPECT_EQ(t.timing_budget_s, 0);
+  r.wp_tolerances = "1e-4,tight";
+  EXPECT_EQ(Refusal([&] { ModelRequestStudy(r); }).where(), "--wp-tolerances");
+  r.wp_tolerances = "0.5";
+  EXPECT_EQ(Refusal([&] { ModelRequestStudy(r); }).where(), "--wp-tolerances");
+  r.wp_tolerances = "";
+  r.wp_timing_budget_s = -1;
+  EXPECT_EQ(Refusal([&] { ModelRequestStudy(r); }).where(), "--wp-timing-budget");
+  r.wp_timing_budget_s = 0;
   r.wp_cases = ",";
   EXPECT_EQ(Refusal([&] { ModelRequestStudy(r); }).expected(), "at least one case");
+  r = SingleRun();
+  r.format = "xml";
+  std::ostringstream out;
+  EXPECT_EQ(Refusal([&] { RunModelRequest(r, out); }).where(), "--format");
 }
 
 // The solver options the command had only as flags are scene keys too (model.*), for `run`.

@@ -57,9 +57,11 @@ struct ModelRequest {
   bool work_precision = false;
   std::string wp_solvers = "dopri5,stiff,auto,ode45";
   std::string wp_cases = "exact,default,table1";
-  bool json = false;   // Single run: the summary as ImpactSummary::ToJson.
-  std::string output;  // -o: see RunModelTest / RunModelTable1 / RunModelWorkPrecision.
-  std::string plot;    // --plot: only with work_precision.
+  std::string wp_tolerances;  // Comma list of rtols; empty: WorkPrecisionOptions' (1e-3 .. 1e-12).
+  double wp_timing_budget_s = WorkPrecisionOptions{}.timing_budget_s;
+  std::string format = "text";  // text, or json: a single run's summary as ImpactSummary::ToJson.
+  std::string output;           // -o: see RunModelTest / RunModelTable1 / RunModelWorkPrecision.
+  std::string plot;             // --plot: only with work_precision.
 };
 
 // The request's model parameters (a single run: v0 from the height or the velocity given),
