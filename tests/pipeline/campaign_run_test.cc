@@ -173,7 +173,9 @@ int CompleteTests(const std::string& out) {
 
 TEST(CampaignRun, AnInterruptedCampaignKeepsFinishedTestsAndResumesTheOthers) {
   TestDir dir;
-  const std::string file = QuickCampaign(dir, "c.yaml", "[0.1, 0.125, 0.15, 0.175, 0.2]");
+  // Eight tests: on a loaded machine the polling below may see a few finish at once.
+  const std::string file =
+      QuickCampaign(dir, "c.yaml", "[0.1, 0.125, 0.15, 0.175, 0.2, 0.225, 0.25, 0.275]");
   const std::string out = dir.File("out");
   fs::create_directories(dir.File("tmp"));
   CliProcess child({"campaign", file, "-o", out, "--jobs", "1", "--threads", "1"}, dir.File("tmp"),
@@ -184,7 +186,7 @@ TEST(CampaignRun, AnInterruptedCampaignKeepsFinishedTestsAndResumesTheOthers) {
   EXPECT_TRUE(stopped.exited && stopped.code == 130) << stopped.Describe();
   const int kept = CompleteTests(out);
   ASSERT_GE(kept, 2);
-  ASSERT_LT(kept, 5) << "the campaign ended before the interrupt";
+  ASSERT_LT(kept, 8) << "the campaign ended before the interrupt";
   EXPECT_FALSE(fs::exists(out + "/campaign.csv"));  // Written only at the end.
   std::map<std::string, std::map<std::string, FileId>> finished;
   for (const auto& e : fs::directory_iterator(out)) {
@@ -199,7 +201,7 @@ TEST(CampaignRun, AnInterruptedCampaignKeepsFinishedTestsAndResumesTheOthers) {
   for (const auto& [name, files] : finished)
     EXPECT_EQ(Fingerprint(out + "/" + name), files) << name << " was processed again";
   const CsvTable t = ReadCampaignCsv(out + "/campaign.csv");
-  ASSERT_EQ(t.rows(), 5u);
+  ASSERT_EQ(t.rows(), 8u);
   for (const auto& s : t.TextColumn("status")) EXPECT_EQ(s, "ok");
 }
 
