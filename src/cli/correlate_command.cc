@@ -21,7 +21,7 @@ struct CorrelateArgs {
   std::vector<std::string> deformed;
   long long first = 0, last = 0;
   bool allow_partial = false;
-  SceneKeyValues keys;  // --dic.*, --preprocess.* and their aliases.
+  SceneKeyValues keys;  // --dic.*, --preprocess.*, --inputs.fps/calibration and their aliases.
 };
 
 // The scene of the flags, run; its stages' errors name the flags (SceneFlagAliases).
@@ -71,7 +71,7 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("-o,--output", a->output, "Output file (.csv or .h5)");
   cmd->add_flag(kAllowPartialFlag, a->allow_partial,
                 "Write the output (exit 0) even when no subset is valid in any deformed image");
-  AddSceneKeyFlags(cmd, {"dic", "preprocess"}, &a->keys);
+  AddSceneKeyFlags(cmd, {"dic", "preprocess", "inputs.fps", "inputs.calibration"}, &a->keys);
   cmd->callback([a, cmd] { Run(*cmd, *a); });
 }
 

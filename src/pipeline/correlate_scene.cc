@@ -84,7 +84,11 @@ void AsCorrelateFile(const Scene& scene, const FrameStream& frames, DicResultsTa
 
 PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bool allow_partial) {
   Scene scene = given;
+  // The calibrate stage only for a calibration given (the frames are then undistorted when it
+  // has distortion, as in `run`).
+  const bool calibrate = !scene.inputs.calibration.empty();
   scene.stages = {"frames", "correlate"};
+  if (calibrate) scene.stages.insert(scene.stages.begin(), "calibrate");
   CheckValue(!output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   CheckOutputLocation(output, {"-o/--output",
                                {".csv", ".h5", ".hdf5"},
@@ -96,6 +100,7 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
   SceneRunData data;
   const PipelineOptions options;  // threads -1: dic.threads.
   stages::StageContext context{scene, options, data, summary};
+  if (calibrate) stages::RunStage(*stages::MakeCalibrateStage(), context);
   stages::RunCorrelationStages(context);
   const DicSummary& dic = data.dic_summary;
   // As `run`'s correlate stage fails (DicSummary's one rule), naming the command's flag.

@@ -113,10 +113,14 @@ bool InSections(const std::string& section, const std::vector<std::string>& sect
 
 std::vector<SceneKeyFlag> SceneKeyFlags(const std::vector<std::string>& sections) {
   Scene defaults;
-  std::vector<YamlOptionTable> tables = SceneOptionTables(&defaults);
-  std::erase_if(tables,
-                [&](const YamlOptionTable& t) { return !InSections(t.section(), sections); });
-  return OptionTableFlags(tables);
+  std::vector<SceneKeyFlag> flags;
+  for (const YamlOptionTable& table : SceneOptionTables(&defaults)) {
+    const bool all = InSections(table.section(), sections);
+    for (const SceneKeyFlag& f : OptionTableFlags({table}))
+      if (all || std::find(sections.begin(), sections.end(), f.key) != sections.end())
+        flags.push_back(f);
+  }
+  return flags;
 }
 
 std::vector<SceneKeyFlag> OptionTableFlags(const std::vector<YamlOptionTable>& tables) {

@@ -64,6 +64,35 @@ TEST(CorrelateScene, RunsTheFramesAndCorrelateStagesOfRunBitForBit) {
   EXPECT_FALSE(cor.HasAttribute("/dic", "first_frame"));
 }
 
+// With inputs.calibration (`correlate --inputs.calibration`), the calibrate stage runs first and
+// the frames are undistorted as in `run`: the same /dic as the run's, unlike the raw frames'.
+TEST(CorrelateScene, ACalibrationIsAppliedAsInRun) {
+  const TestDir dir;
+  Scene scene = LoadScene(SampleScene(dir, {}));
+  ASSERT_FALSE(scene.inputs.calibration.empty());
+  scene.inputs.sensor.clear();
+  scene.dic.first_frame = 5;
+  scene.dic.last_frame = 7;
+  scene.dic.options.grid.step = 40;
+  scene.stages = {"calibrate", "frames", "correlate", "outputs"};
+  PipelineOptions options;
+  options.output_folder = dir.File("run");
+  RunScene(scene, options);
+  const PipelineSummary s = CorrelateScene(scene, dir.File("calibrated.h5"));
+  ASSERT_EQ(s.stages.size(), 3u);
+  EXPECT_EQ(s.stages[0].name, "calibrate");
+  EXPECT_TRUE(s.stages[0].ran);
+  scene.inputs.calibration.clear();
+  scene.inputs.mm_per_px = 0.5;
+  CorrelateScene(scene, dir.File("raw.h5"));
+  const H5Reader run(dir.File("run/results.h5")), cal(dir.File("calibrated.h5")),
+      raw(dir.File("raw.h5"));
+  for (const char* name : {"/dic/u_px", "/dic/v_px"}) {
+    EXPECT_TRUE(SameBits(run.ReadDouble(name), cal.ReadDouble(name))) << name;
+    EXPECT_FALSE(SameBits(raw.ReadDouble(name), cal.ReadDouble(name))) << name;
+  }
+}
+
 // The command is that function: its log shows the two stages, and its file is CorrelateScene's.
 TEST(CorrelateScene, TheCommandRunsTheStages) {
   const TestDir dir;

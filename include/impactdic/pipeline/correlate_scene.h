@@ -20,8 +20,9 @@
 
 namespace impactdic {
 
-// Runs the frames and correlate stages of `scene` (whatever its `stages` list; no calibration or
-// sensor record is read) and writes `output` (.csv, .h5 or .hdf5) atomically. The rows are
+// Runs the frames and correlate stages of `scene` (whatever its `stages` list), after the
+// calibrate stage when inputs.calibration is given (the frames undistorted, as in `run`; no
+// sensor record is read), and writes `output` (.csv, .h5 or .hdf5) atomically. The rows are
 // numbered from the reference (/dic/frame 0.., no first_frame attribute; /dic/frame_number the
 // source's own numbers). A correlation with no valid subset is PartialResultsError naming
 // `correlate --min-zncc`, nothing written, unless allow_partial (a warning). Returns the stages
