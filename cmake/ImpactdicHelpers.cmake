@@ -74,9 +74,6 @@ function(impactdic_test_precompiled_headers target)
     add_library(impactdic_test_pch OBJECT ${CMAKE_BINARY_DIR}/impactdic_test_pch.cc)
     target_link_libraries(impactdic_test_pch PRIVATE GTest::gtest impactdic_deps::opencv_codecs
                                                      impactdic::core)
-    target_compile_definitions(impactdic_test_pch PRIVATE
-        IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-        IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
     impactdic_target_defaults(impactdic_test_pch)
     target_precompile_headers(impactdic_test_pch PRIVATE
         <gtest/gtest.h> <opencv2/core.hpp> <opencv2/imgproc.hpp> <fmt/format.h>
@@ -98,10 +95,8 @@ function(impactdic_add_test)
   # Tests may read and write images with OpenCV directly (the library itself does not link it).
   target_link_libraries(${ARG_NAME} PRIVATE ${ARG_DEPS} impactdic_deps::opencv_codecs GTest::gtest
                                             GTest::gtest_main impactdic_test_worker_threads
+                                            impactdic_test_paths
                                             impactdic::core)
-  target_compile_definitions(${ARG_NAME} PRIVATE
-      IMPACTDIC_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
-      IMPACTDIC_CLI_PATH="$<TARGET_FILE:impactdic>")
   impactdic_target_defaults(${ARG_NAME})
   foreach(label IN LISTS ARG_LABELS)
     if(label IN_LIST IMPACTDIC_SKIP_TEST_LABELS)

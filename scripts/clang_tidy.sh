@@ -12,17 +12,10 @@ require_tool clang_tidy clang-tidy clang-tidy
 require_compile_commands clang_tidy "$build_dir"
 
 jobs=${IMPACTDIC_TIDY_JOBS:-2}
-log=$(mktemp)
-trap 'rm -f "$log"' EXIT
-echo "clang_tidy: $(clang-tidy --version | grep -m1 -o 'version [0-9.]*') over src/ with $jobs jobs"
-# --warnings-as-errors='*' makes every finding fail its clang-tidy process (and so xargs).
-status=0
-find src -name '*.cc' -print0 | sort -z |
-  xargs -0 -n 4 -P "$jobs" clang-tidy -p "$build_dir" --quiet --warnings-as-errors='*' \
-    > "$log" 2>&1 || status=$?
-grep -E '(warning|error):' "$log" | sort -u || true
-if [ "$status" -ne 0 ]; then
-  echo "clang_tidy: FAILED ($(grep -cE '(warning|error):' "$log" || true) findings; full log above)" >&2
-  exit 1
-fi
+# A file whose fingerprint (clang-tidy's version, .clang-tidy, its compile command and preprocessed
+# text) was clean before is not linted again (scripts/clang_tidy_files.py); IMPACTDIC_TIDY_CACHE=off
+# lints every file.
+cache=${IMPACTDIC_TIDY_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/impactdic/clang-tidy}
+echo "clang_tidy: $(clang-tidy --version | grep -m1 -o 'version [0-9.]*') over src/ with $jobs jobs (remembered clean results: $cache)"
+python3 scripts/clang_tidy_files.py "$build_dir" "$jobs" "$cache"
 echo "clang_tidy: clean"

@@ -16,6 +16,7 @@ PACKAGES=(
   gnuplot-nox                                   # figures (PNG through gnuplot's cairo/png terminal)
   python3-h5py                                  # tests check that h5py opens our files
   clang-tidy                                    # lint (.clang-tidy), run by scripts/test.sh
+  ccache                                        # compiler cache: a fresh clone reuses earlier objects (scripts/test.sh)
   python3-numpy                                 # bench/dic_challenge.py (and its tests)
   python3-meshio                                # tests: a real XDMF reader opens results.xdmf
   python3-matplotlib                            # tests: the h5py example of docs/python.md

@@ -8,12 +8,13 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "impactdic/calib/calibration.h"
 
 namespace impactdic {
 namespace {
 
-const std::string kSource = IMPACTDIC_SOURCE_DIR;
+const std::string kSource = impactdic::SourceDir();
 const std::string kViews = "'" + kSource + "/calibration/view_*.png'";
 
 bool Contains(const std::string& text, const std::string& part) {

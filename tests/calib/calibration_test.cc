@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "impactdic/core/error.h"
 #include "impactdic/synth/checkerboard.h"
 
@@ -428,7 +429,8 @@ namespace {
 // stage) matches the camera that rendered the images (SampleCamera, board on the panel at
 // 613.93 mm: 0.747786537 mm/px; see calibration/board.yaml).
 TEST(SampleCalibration, MatchesTheRenderedCamera) {
-  const CameraCalibration c = LoadCalibration(IMPACTDIC_SOURCE_DIR "/calibration/camera.yaml");
+  const CameraCalibration c =
+      LoadCalibration(std::string(SourceDir()) + "/calibration/camera.yaml");
   const SynthCamera truth = SampleCamera();
   EXPECT_EQ(c.ImageSize(), cv::Size(640, 480));
   EXPECT_NEAR(c.fx, truth.fx, 0.005 * truth.fx);

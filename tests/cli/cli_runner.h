@@ -1,5 +1,5 @@
 // Test helper: runs a shell command (RunShell), or the built `impactdic` binary (path compiled in
-// as IMPACTDIC_CLI_PATH) with arguments (RunCli), and captures stdout+stderr and the exit code.
+// as impactdic::CliPath()) with arguments (RunCli), and captures stdout+stderr and the exit code.
 // RunCli's `environment` ("NAME=value ...") is set for the binary only.
 #ifndef IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
 #define IMPACTDIC_TESTS_CLI_CLI_RUNNER_H_
@@ -8,6 +8,8 @@
 
 #include <cstdio>
 #include <string>
+
+#include "../core/test_paths.h"
 
 namespace impactdic {
 
@@ -31,8 +33,8 @@ inline CliResult RunShell(const std::string& command) {
 }
 
 inline CliResult RunCli(const std::string& arguments, const std::string& environment = "") {
-  return RunShell((environment.empty() ? "" : environment + " ") + std::string(IMPACTDIC_CLI_PATH) +
-                  " " + arguments);
+  return RunShell((environment.empty() ? "" : environment + " ") +
+                  std::string(impactdic::CliPath()) + " " + arguments);
 }
 
 }  // namespace impactdic

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/test_paths.h"
 #include "cli_runner.h"
 
 namespace impactdic {
@@ -18,7 +19,7 @@ TEST(Cli, VersionPrintsVersionAndRevision) {
   EXPECT_NE(r.output.find("impactdic 0."), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("git "), std::string::npos) << r.output;
   // Built from a git checkout, the revision is a commit hash (not "unknown").
-  if (std::filesystem::exists(std::string(IMPACTDIC_SOURCE_DIR) + "/.git")) {
+  if (std::filesystem::exists(std::string(impactdic::SourceDir()) + "/.git")) {
     EXPECT_TRUE(std::regex_search(r.output, std::regex("\\(git [0-9a-f]{7,}(-dirty)?\\)")))
         << r.output;
   }

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/test_paths.h"
 #include "../reliability/fault_util.h"
 #include "cli_runner.h"
 
@@ -25,7 +26,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kGuide = std::string(IMPACTDIC_SOURCE_DIR) + "/docs/guide.md";
+const std::string kGuide = std::string(impactdic::SourceDir()) + "/docs/guide.md";
 
 // A fenced code block of the page: its info string (bash, yaml, sh, text), its text, the file an
 // "<!-- edit FILE -->" line just above it names ("" without one) and the line it starts at.
@@ -180,13 +181,13 @@ TEST(GuideDocs, CommandsRunInOrderOnTheSample) {
   TestDir dir;
   const fs::path work = dir.path() / "my_test";
   fs::create_directories(work);
-  const fs::path source(IMPACTDIC_SOURCE_DIR);
+  const fs::path source(impactdic::SourceDir());
   fs::create_directory_symlink(source / "calibration", work / "checkerboard");
   fs::create_directory_symlink(source / "sample_frames" / "frames", work / "recording");
   fs::create_symlink(source / "sample_frames" / "sensor.csv", work / "daq.csv");
   // Each block runs from the work folder with the built impactdic first on the PATH.
   const std::string run_in_work =
-      "cd " + work.string() + " && PATH=" + fs::path(IMPACTDIC_CLI_PATH).parent_path().string() +
+      "cd " + work.string() + " && PATH=" + fs::path(impactdic::CliPath()).parent_path().string() +
       ":\"$PATH\" bash -e ";
 
   int commands = 0, edits = 0;

@@ -1,4 +1,4 @@
-// Test helper: runs the built `impactdic` binary (IMPACTDIC_CLI_PATH) as a child process and
+// Test helper: runs the built `impactdic` binary (impactdic::CliPath()) as a child process and
 // returns its exit code and its own peak resident set size (wait4's ru_maxrss), for tests that
 // bound memory (never time, so they do not depend on the load of the machine).
 #ifndef IMPACTDIC_TESTS_CLI_MEASURED_CHILD_H_
@@ -11,6 +11,8 @@
 #include <cstdio>
 #include <string>
 #include <vector>
+
+#include "../core/test_paths.h"
 
 extern char** environ;
 
@@ -25,7 +27,7 @@ struct MeasuredChild {
 // blocks stay in its quarantine (256 MB), so the resident set would grow with everything ever
 // allocated: the child runs without it.
 inline MeasuredChild RunMeasured(const std::vector<std::string>& args) {
-  std::vector<std::string> all = {IMPACTDIC_CLI_PATH};
+  std::vector<std::string> all = {impactdic::CliPath()};
   all.insert(all.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& a : all) argv.push_back(a.data());

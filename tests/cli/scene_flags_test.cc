@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "../reliability/fault_util.h"
 #include "cli_runner.h"
@@ -164,7 +165,7 @@ TEST(SceneFlags, RunAndAnalyzeFlagsOverrideTheSceneFile) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("--momentum.grid_cols: invalid value (got 0)"), std::string::npos)
       << r.output;
-  r = RunCli("analyze --sensor " + std::string(IMPACTDIC_SOURCE_DIR) +
+  r = RunCli("analyze --sensor " + std::string(impactdic::SourceDir()) +
              "/sample_frames/sensor.csv --from-release --momentum.grid_cols 3");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("--momentum.grid_cols only with the SCENE.yaml form"), std::string::npos)

@@ -8,7 +8,7 @@
 //   }
 //
 // The data folder is $IMPACTDIC_SHARED_DATA if set, else ../shared/data beside the project root
-// (IMPACTDIC_SOURCE_DIR, compiled into every test program). When it, or the sub-folder asked for,
+// (SourceDir(), tests/core/test_paths.h). When it, or the sub-folder asked for,
 // is absent or empty, the test is skipped with a message naming the folder, unless
 // IMPACTDIC_REQUIRE_SHARED_DATA is set to anything but "" or "0": then the test fails with that
 // message. scripts/test.sh (so CI) sets it to 1: a CI run without the data fails instead of
@@ -23,13 +23,15 @@
 #include <string>
 #include <system_error>
 
+#include "test_paths.h"
+
 namespace impactdic {
 
 // The shared data folder (it may not exist).
 inline std::filesystem::path SharedDataRoot() {
   const char* env = std::getenv("IMPACTDIC_SHARED_DATA");
   if (env && *env) return std::filesystem::path(env);
-  return (std::filesystem::path(IMPACTDIC_SOURCE_DIR) / ".." / "shared" / "data")
+  return (std::filesystem::path(impactdic::SourceDir()) / ".." / "shared" / "data")
       .lexically_normal();
 }
 

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <string>
 
+#include "test_paths.h"
+
 namespace impactdic {
 namespace {
 
@@ -45,7 +47,7 @@ class ScopedEnv {
 TEST(SharedData, DefaultsToTheFolderBesideTheProjectRoot) {
   const ScopedEnv env("IMPACTDIC_SHARED_DATA", nullptr);
   EXPECT_EQ(SharedDataRoot(),
-            (fs::path(IMPACTDIC_SOURCE_DIR) / ".." / "shared" / "data").lexically_normal());
+            (fs::path(impactdic::SourceDir()) / ".." / "shared" / "data").lexically_normal());
 }
 
 TEST(SharedData, AnAbsentOrEmptyFolderIsNamed) {

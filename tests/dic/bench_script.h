@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 
 namespace impactdic {
 
@@ -32,9 +33,9 @@ inline std::string ShellQuote(const std::filesystem::path& p) {
 // `bench/dic_challenge.py --binary IMPACTDIC --threads 2 ARGUMENTS` (ARGUMENTS already quoted).
 inline CliResult RunDicChallengeBench(const std::string& arguments) {
   const std::filesystem::path script =
-      std::filesystem::path(IMPACTDIC_SOURCE_DIR) / "bench" / "dic_challenge.py";
+      std::filesystem::path(impactdic::SourceDir()) / "bench" / "dic_challenge.py";
   return RunShell("/usr/bin/python3 " + ShellQuote(script) + " --binary " +
-                  ShellQuote(IMPACTDIC_CLI_PATH) + " --threads 2 " + arguments);
+                  ShellQuote(impactdic::CliPath()) + " --threads 2 " + arguments);
 }
 
 // The cells of the table rows "| a | b | ... |" of the first table after the line starting with

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "../core/test_paths.h"
+
 namespace {
 namespace fs = std::filesystem;
 
@@ -113,7 +115,7 @@ TEST(ResultsPaths, TheScannerFindsPathLiterals) {
 }
 
 TEST(ResultsPaths, NoResultsPathLiteralOutsideItsOwner) {
-  const std::vector<Hit> hits = ScanTree(IMPACTDIC_SOURCE_DIR);
+  const std::vector<Hit> hits = ScanTree(impactdic::SourceDir());
   std::ostringstream list;
   for (const Hit& h : hits) list << h.file << ":" << h.line << ": \"" << h.literal << "\"\n";
   EXPECT_TRUE(hits.empty()) << "results paths spelled outside their group's owner (use the "

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <string>
 
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"
@@ -18,7 +19,7 @@
 namespace impactdic {
 namespace {
 
-const std::string kSensorCsv = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/sensor.csv";
+const std::string kSensorCsv = std::string(impactdic::SourceDir()) + "/sample_frames/sensor.csv";
 
 // The sensor form's request with `flags` (flag -> value) set as the command line would.
 AnalyzeRequest SensorRequest(const std::vector<std::pair<std::string, std::string>>& flags) {

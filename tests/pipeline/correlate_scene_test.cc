@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "../reliability/fault_util.h"
 #include "impactdic/io/hdf5_store.h"
@@ -96,7 +97,7 @@ TEST(CorrelateScene, ACalibrationIsAppliedAsInRun) {
 // The command is that function: its log shows the two stages, and its file is CorrelateScene's.
 TEST(CorrelateScene, TheCommandRunsTheStages) {
   const TestDir dir;
-  const std::string frames = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/frames/*.png";
+  const std::string frames = std::string(impactdic::SourceDir()) + "/sample_frames/frames/*.png";
   const CliResult r = RunCli("correlate --frames '" + frames +
                              "' --dic.first_frame 5 --dic.last_frame 7 --step 64 --warp-gradient "
                              "-o " +

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
@@ -61,8 +62,8 @@ const Prepared& Prepare(Source source) {
     p.truth = p.dir->File("scene/truth.h5");
     if (synth.exit_code != 0) return cache.emplace(source, std::move(p)).first->second;
   } else {
-    scene = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/scene.yaml";
-    p.truth = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/truth.h5";
+    scene = std::string(impactdic::SourceDir()) + "/sample_frames/scene.yaml";
+    p.truth = std::string(impactdic::SourceDir()) + "/sample_frames/truth.h5";
   }
   const CliResult run = RunCli("run " + scene + " -o " + p.dir->File("out"));
   p.run_output += run.output;
@@ -300,7 +301,7 @@ TEST(EndToEndSample, SummaryEqualsTheCommittedReference) {
   ASSERT_TRUE(p.ok) << p.run_output;
   const YAML::Node run = LoadYamlFile(p.Out("summary.json"), "summary.json");
   const YAML::Node reference = LoadYamlFile(
-      std::string(IMPACTDIC_SOURCE_DIR) + "/tests/pipeline/data/sample_summary_reference.json",
+      std::string(impactdic::SourceDir()) + "/tests/pipeline/data/sample_summary_reference.json",
       "the reference summary");
   ASSERT_TRUE(reference.IsMap());
   ASSERT_GE(reference.size(), 20u);

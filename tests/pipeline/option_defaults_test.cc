@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "impactdic/calib/calibration.h"
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/options.h"
@@ -204,7 +205,7 @@ TEST(OptionDefaults, CliCommandsShowTheLibraryDefaults) {
 
 // Every key the scene reads is in the README's scene file reference.
 TEST(OptionDefaults, EverySceneKeyIsDocumentedInTheReadme) {
-  std::ifstream in(std::string(IMPACTDIC_SOURCE_DIR) + "/README.md");
+  std::ifstream in(std::string(impactdic::SourceDir()) + "/README.md");
   ASSERT_TRUE(in) << "README.md";
   std::stringstream text;
   text << in.rdbuf();
@@ -236,7 +237,7 @@ TEST(OptionDefaults, SceneKeyReferenceIsGeneratedFromTheBindings) {
       "into\nDIR/scene.yaml (pipeline/scene_template.h).\n\n"
       "| key | default | expected | meaning |\n|---|---|---|---|\n";
   for (const YamlOptionTable& table : SceneOptionTables(&scene)) expected += table.Reference();
-  const std::string path = std::string(IMPACTDIC_SOURCE_DIR) + "/docs/scene_keys.md";
+  const std::string path = std::string(impactdic::SourceDir()) + "/docs/scene_keys.md";
   if (std::getenv("IMPACTDIC_UPDATE_DOCS")) std::ofstream(path) << expected;
   std::ifstream in(path);
   std::stringstream text;

@@ -12,6 +12,7 @@
 #include <optional>
 #include <sstream>
 
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/model/impact_model.h"
@@ -76,7 +77,7 @@ TEST(OutputWriter, ARegisteredWriterIsInvokedWithTheRunsData) {
 // figures writer has nothing to draw and says so, instead of failing the finished run.
 TEST(OutputWriter, AFramesOnlyRunSkipsTheFiguresInsteadOfFailing) {
   TestDir dir;
-  const std::string sample = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/";
+  const std::string sample = std::string(impactdic::SourceDir()) + "/sample_frames/";
   const Scene scene =
       ParseScene("inputs: {frames: " + sample + "frames}\nstages: [frames, outputs]\n" +
                      "dic: {last_frame: 2}\noutputs: {folder: out, animation: false}\n",

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/pipeline/scene.h"
 
@@ -162,7 +163,7 @@ TEST_F(InitCommand, WritesTheTemplateRefusesToOverwriteAndForceOverwrites) {
 // scene that runs every stage.
 TEST_F(InitCommand, WrittenSceneFilledWithTheSampleInputsParses) {
   ASSERT_EQ(RunCli("init " + dir_).exit_code, 0);
-  const Scene sample = LoadScene(std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames/scene.yaml");
+  const Scene sample = LoadScene(std::string(impactdic::SourceDir()) + "/sample_frames/scene.yaml");
   ASSERT_TRUE(sample.momentum.pounder_center_x_px && sample.momentum.surface_y_px);
   std::string text = Read();
   const auto quoted = [](const std::string& path) {

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/core/interrupt.h"
@@ -87,7 +88,7 @@ TEST(ThreadCap, CampaignWithAHugeThreadCountRunsOnTheCoresAndLeavesNoTemporaries
   const std::string limit = "ulimit -v 4194304; ";
 #endif
   const CliResult r =
-      RunShell(limit + IMPACTDIC_CLI_PATH + std::string(" campaign ") + scene + " -o " +
+      RunShell(limit + impactdic::CliPath() + std::string(" campaign ") + scene + " -o " +
                dir.File("out") + " --threads 100000 --jobs 100000 --no-figures");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string cores = std::to_string(MachineCores());

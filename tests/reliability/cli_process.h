@@ -1,4 +1,4 @@
-// Test helpers for fault injection: start the built `impactdic` (IMPACTDIC_CLI_PATH) as a child
+// Test helpers for fault injection: start the built `impactdic` (impactdic::CliPath()) as a child
 // process in its own process group with its own TMPDIR, signal it when a condition holds, and
 // fingerprint the files of a folder to tell two generations of outputs apart.
 #ifndef IMPACTDIC_TESTS_RELIABILITY_CLI_PROCESS_H_
@@ -25,6 +25,8 @@
 #include <thread>
 #include <utility>
 #include <vector>
+
+#include "../core/test_paths.h"
 
 extern char** environ;
 
@@ -55,7 +57,7 @@ class CliProcess {
     for (char** e = environ; *e != nullptr; ++e)
       if (std::strncmp(*e, "TMPDIR=", 7) != 0) env.emplace_back(*e);
     env.push_back("TMPDIR=" + tmpdir);
-    std::vector<std::string> argv_storage = {IMPACTDIC_CLI_PATH};
+    std::vector<std::string> argv_storage = {impactdic::CliPath()};
     argv_storage.insert(argv_storage.end(), args.begin(), args.end());
     std::vector<char*> argv, envp;
     for (auto& a : argv_storage) argv.push_back(a.data());

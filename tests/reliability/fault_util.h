@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/image_io.h"
 
@@ -77,7 +78,7 @@ inline std::string Quoted(const std::string& text) { return "'" + text + "'"; }
 inline std::string SampleScene(const TestDir& dir,
                                const std::vector<std::pair<std::string, std::string>>& edits,
                                const std::string& extra = "") {
-  const std::string kSample = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames";
+  const std::string kSample = std::string(impactdic::SourceDir()) + "/sample_frames";
   std::string text = ReadBytes(kSample + "/scene.yaml");
   std::vector<std::pair<std::string, std::string>> all = {
       {"\"frames/frame_", "\"" + kSample + "/frames/frame_"},

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "cli_process.h"
 #include "fault_util.h"
 #include "impactdic/io/atomic_file.h"
@@ -29,7 +30,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSource = IMPACTDIC_SOURCE_DIR;
+const std::string kSource = impactdic::SourceDir();
 
 std::string Replace(std::string text, const std::string& from, const std::string& to) {
   const std::size_t at = text.find(from);
@@ -227,7 +228,8 @@ TEST(OutputOwnership, AFolderWhoseOutputsCannotBeRemovedIsRefusedBeforeAnyWork) 
   // The marker lists it: impactdic wrote it (e.g. an earlier version's folder).
   WriteBytes(out + "/" + kOutputMarkerName,
              ReadBytes(out + "/" + kOutputMarkerName) + std::string("kept\n"));
-  const CliResult r = RunShell(as_user + IMPACTDIC_CLI_PATH + " -q run " + s.quick + " -o " + out);
+  const CliResult r =
+      RunShell(as_user + impactdic::CliPath() + " -q run " + s.quick + " -o " + out);
   std::error_code ec;  // (Gone if the folder was replaced.)
   fs::permissions(out + "/kept", fs::perms::owner_all, ec);
   ExpectRefused(r, {out, "cannot replace it", "kept"});

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
 
@@ -20,7 +21,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSource = IMPACTDIC_SOURCE_DIR;
+const std::string kSource = impactdic::SourceDir();
 const std::string kSensorCsv = kSource + "/sample_frames/sensor.csv";
 const std::string kFrames = kSource + "/sample_frames/frames/";
 

@@ -19,6 +19,7 @@
 
 #include "../cli/cli_runner.h"
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "../momentum/synthetic_chain.h"
 #include "../sensor/synthetic_record.h"
@@ -34,7 +35,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSample = std::string(IMPACTDIC_SOURCE_DIR) + "/sample_frames";
+const std::string kSample = std::string(impactdic::SourceDir()) + "/sample_frames";
 
 bool Contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 
 namespace impactdic {
@@ -44,8 +45,9 @@ fs::path RunMockCtest(const TestDir& dir, const std::string& extra) {
 
 CliResult Classify(const fs::path& build) {
   return RunShell(
-      "bash " + Quote(fs::path(IMPACTDIC_SOURCE_DIR) / "scripts" / "lsan_tracer_crashes_only.sh") +
-      " " + Quote(build));
+      "bash " +
+      Quote(fs::path(impactdic::SourceDir()) / "scripts" / "lsan_tracer_crashes_only.sh") + " " +
+      Quote(build));
 }
 
 TEST(SanitizerCrashRetry, OnlyTracerCrashesAreRerun) {

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/calib/calibration.h"
@@ -24,7 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kSource = IMPACTDIC_SOURCE_DIR;
+const std::string kSource = impactdic::SourceDir();
 
 // Ten 96x80 frames and a scene using them (figures and animation off); `extra` is appended.
 std::string FrameScene(const TestDir& dir, const std::string& extra) {

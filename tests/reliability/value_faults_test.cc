@@ -7,6 +7,7 @@
 #include <string>
 
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/core/range.h"
@@ -87,7 +88,7 @@ TEST(ValueFaults, ModelOptionsShareTheSceneRanges) {
 TEST(ValueFaults, CalibrateSquareAndRenderFpsAreRefusedWithTheirRanges) {
   TestDir dir;
   // Was a raw OpenCV assertion "fabs(sc) > DBL_EPSILON" after detecting every board.
-  ExpectCliFailure("calibrate --board 9x6 --square 1e308 " + std::string(IMPACTDIC_SOURCE_DIR) +
+  ExpectCliFailure("calibrate --board 9x6 --square 1e308 " + std::string(impactdic::SourceDir()) +
                        "/calibration/view_00.png -o " + dir.File("cam.yaml"),
                    {"--square", "1e+308", "a square size in [0.01, 10000] mm"});
   // Was accepted and failed in the video writer ("Could not open codec mjpeg").

@@ -12,6 +12,7 @@
 
 #include "../cli/cli_runner.h"
 #include "../core/shared_data.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/io/hdf5_store.h"
@@ -71,7 +72,7 @@ using PythonDocs = SampleRun;
 TEST_F(XdmfReader, MeshioReadsTheSampleRunsFieldsAtEveryFrame) {
   IMPACTDIC_PYTHON_MODULE_OR_SKIP("meshio, h5py");
   ASSERT_TRUE(fs::exists(Folder() + "/" + L::kXdmfFile));
-  const CliResult r = RunShell(kPython + " " + IMPACTDIC_SOURCE_DIR +
+  const CliResult r = RunShell(kPython + " " + impactdic::SourceDir() +
                                "/tests/reliability/xdmf_meshio_check.py " + Folder());
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("xdmf-ok 49 frames 180 subsets"), std::string::npos) << r.output;
@@ -94,7 +95,7 @@ TEST(XdmfOutput, OutputsXdmfFalseWritesNeither) {
 // is from the folder holding results/sample: it prints the frame it plots and writes the PNG.
 TEST_F(PythonDocs, H5pyExampleRunsOnTheSampleRun) {
   IMPACTDIC_PYTHON_MODULE_OR_SKIP("h5py, numpy, matplotlib");
-  const std::string doc = ReadBytes(std::string(IMPACTDIC_SOURCE_DIR) + "/docs/python.md");
+  const std::string doc = ReadBytes(std::string(impactdic::SourceDir()) + "/docs/python.md");
   const std::string open = "```python\n";
   const std::size_t begin = doc.find(open);
   ASSERT_NE(begin, std::string::npos) << "no ```python block in docs/python.md";

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "../core/expect_error.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "fault_util.h"
 #include "impactdic/calib/calibration.h"
@@ -52,7 +53,7 @@ TEST(YamlFaults, DuplicateKeyInsideListsAndFlowMapsIsFound) {
 
 TEST(YamlFaults, DuplicateCalibrationKeyNamesBothLines) {
   TestDir dir;
-  std::string text = ReadBytes(std::string(IMPACTDIC_SOURCE_DIR) + "/calibration/camera.yaml");
+  std::string text = ReadBytes(std::string(impactdic::SourceDir()) + "/calibration/camera.yaml");
   const std::size_t fy = text.find("\nfy:");
   ASSERT_NE(fy, std::string::npos);
   text.insert(fy + 1, "fx: 900\n");  // A second fx right after the first.

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/render/dem_validation.h"
@@ -97,7 +98,7 @@ void ExpectStrainMatchesTheGrains(const std::string& truth_h5, const std::string
 }
 
 TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
-  const fs::path source = IMPACTDIC_SOURCE_DIR;
+  const fs::path source = impactdic::SourceDir();
   const fs::path bed = source / "validation/dem/reduced_bed.data.gz";
   ASSERT_TRUE(fs::is_regular_file(bed))
       << bed << " is missing (validation/dem/make_reduced_bed.sh)";
@@ -110,7 +111,7 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
     std::printf("NOTE: SCENE_DIC=\"%s\": this run does NOT use the default settings\n", extra);
   TestDir dir;
   const std::string work = dir.File("dem");
-  const CliResult r = RunShell("IMPACTDIC='" + std::string(IMPACTDIC_CLI_PATH) + "' BED='" +
+  const CliResult r = RunShell("IMPACTDIC='" + std::string(impactdic::CliPath()) + "' BED='" +
                                bed.string() + "' TAFTER=" + std::to_string(kTimeAfterContactS) +
                                " bash '" + (source / "validation/dem/run_case.sh").string() + "' " +
                                kCaseArgs + " '" + work + "'");

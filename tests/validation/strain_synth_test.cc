@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/test_paths.h"
 #include "../io/test_dir.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/strain/strain.h"
@@ -35,7 +36,8 @@ constexpr double kFps = 1600;  // the tiny preset
 // Synthesises the validation scene into dir/scene and runs it (no figures, no animation);
 // returns the results.h5 path.
 std::string SynthAndRun(const TestDir& dir) {
-  const std::string spec = std::string(IMPACTDIC_SOURCE_DIR) + "/validation/strain/synth_spec.yaml";
+  const std::string spec =
+      std::string(impactdic::SourceDir()) + "/validation/strain/synth_spec.yaml";
   const std::string scene = dir.File("scene");
   const CliResult synth = RunCli("-q synth '" + spec + "' --no-calibrate -o '" + scene + "'");
   EXPECT_EQ(synth.exit_code, 0) << synth.output;
