@@ -19,7 +19,6 @@ namespace {
 struct CorrelateArgs {
   std::string reference, frames, roi, gaussian, output;
   std::vector<std::string> deformed;
-  long long first = 0, last = 0;
   bool allow_partial = false;
   SceneKeyValues keys;  // --dic.*, --preprocess.*, --inputs.fps/calibration and their aliases.
 };
@@ -32,8 +31,6 @@ void Run(const CLI::App& cmd, const CorrelateArgs& a) {
   scene.inputs.frames = a.frames;
   if (!a.reference.empty() || !a.deformed.empty()) scene.inputs.frame_files = {a.reference};
   for (const std::string& d : a.deformed) scene.inputs.frame_files.push_back(d);
-  if (given("--first")) scene.dic.first_frame_number = a.first;
-  if (given("--last")) scene.dic.last_frame_number = a.last;
   if (!a.roi.empty()) SetSceneKey(&scene, "dic.roi", a.roi, given("--roi") ? "--roi" : "--dic.roi");
   if (given("--gaussian")) scene.preprocess.gaussian = GaussianFromString(a.gaussian, "--gaussian");
   FlagNames flags = {{"dic.first_frame_number..last_frame_number", "--first/--last"}};
@@ -59,10 +56,6 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--deformed", a->deformed, "Deformed image(s), in order");
   AddSceneKeyOption(cmd, "inputs.frames", &a->frames,
                     SceneKeyFlags({"inputs"}).front().help + " (the first is the reference)");
-  cmd->add_option("--first", a->first,
-                  "First frame (the reference) by the frames' own numbers: in a numbered file name "
-                  "(else the position), a video's index, a camera's (< 0: before the trigger)");
-  cmd->add_option("--last", a->last, "Last frame, numbered as --first");
   AddSceneKeyOption(cmd, "dic.roi", &a->roi,
                     "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
   cmd->add_option("--gaussian", a->gaussian,

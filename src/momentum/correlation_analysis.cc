@@ -1,11 +1,12 @@
 // The orchestration of one scene's analysis from its correlation (momentum/momentum.h
-// AnalyzeCorrelation): frame times, kinematics, then the momentum analysis of momentum.cc.
+// AnalyzeCorrelation): the frames' timeline (sensor MakeFrameTimeline), kinematics, then the
+// momentum analysis of momentum.cc.
 #include <cstddef>
 #include <vector>
 
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/momentum.h"
-#include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/frame_timeline.h"
 
 namespace impactdic {
 
@@ -13,12 +14,12 @@ SceneAnalysis AnalyzeCorrelation(const CorrelationSeries& dic, const PanelMappin
                                  const CameraClock& clock, const SensorResult& sensor,
                                  const MomentumOptions& options, std::size_t first_frame) {
   SceneAnalysis a;
+  const FrameTimeline frames = MakeFrameTimeline(static_cast<int>(first_frame),
+                                                 static_cast<int>(dic.frames), clock, &sensor);
   KinematicsOptions kopt;
-  kopt.fps = clock.fps;
+  kopt.fps = frames.fps;
   a.kinematics = ComputeKinematics(dic, mapping, kopt);
-  const std::vector<double> all =
-      FrameTimes(sensor, static_cast<int>(first_frame + dic.frames), clock);
-  a.frame_time_s.assign(all.begin() + static_cast<std::ptrdiff_t>(first_frame), all.end());
+  a.frame_time_s = frames.daq_time_s;
   a.momentum = AnalyzeMomentum(a.kinematics, a.frame_time_s, sensor, options);
   return a;
 }

@@ -15,6 +15,8 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string>
+#include <tuple>
 #include <utility>
 
 #include "impactdic/core/error.h"
@@ -193,6 +195,27 @@ void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
         "First frame to correlate; 0 with a sensor record: the last frame before the impact");
   t.Add("last_frame", &d.last_frame, ValueRange{-1, 1e300, ""}, "frame index (-1: the last)",
         "Last frame (inclusive); -1 = the last frame");
+  // The same selection by the frames' own numbers (io FrameSource::FrameNumber).
+  for (auto [key, field, doc] :
+       {std::tuple{"first_frame_number", &d.first_frame_number,
+                   "First frame to correlate (the reference) by the frames' own numbers: a "
+                   "numbered file name's, a video's index, a camera's (< 0: before the trigger); "
+                   "instead of first_frame"},
+        std::tuple{"last_frame_number", &d.last_frame_number,
+                   "Last frame (inclusive), numbered as first_frame_number; instead of "
+                   "last_frame"}}) {
+    std::optional<long long>* value = field;
+    t.AddNumber(
+        key, "an integer frame number (the frames' own numbering)",
+        value->has_value() ? std::to_string(**value) : "unset",
+        [value](const YAML::Node& n) {
+          long long v = 0;
+          if (!n.IsScalar() || !YAML::convert<long long>::decode(n, v)) return false;
+          *value = v;
+          return true;
+        },
+        doc);
+  }
 }
 
 // dic.continuity_<name>: a threshold of ContinuityCheckOptions (dic/options.h, kContinuityLimits).

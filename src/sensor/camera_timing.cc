@@ -112,10 +112,10 @@ void RequireExposureChannel(const SensorResult& result, const std::string& colum
       .WithFile(result.path);
 }
 
-int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s) {
+int ReferenceFrameForImpact(const std::vector<double>& daq_time_s, double impact_time_s) {
   int reference = 0;
-  for (std::size_t k = 0; k < frame_times_s.size(); ++k)
-    if (frame_times_s[k] <= impact_time_s) reference = static_cast<int>(k);
+  for (std::size_t k = 0; k < daq_time_s.size(); ++k)
+    if (daq_time_s[k] <= impact_time_s) reference = static_cast<int>(k);
   return reference;
 }
 

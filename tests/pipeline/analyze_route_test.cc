@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "../cli/cli_runner.h"
+#include "../core/route_compare.h"
 #include "../io/test_dir.h"
 #include "../reliability/fault_util.h"
 #include "impactdic/core/error.h"
@@ -26,63 +27,6 @@
 
 namespace impactdic {
 namespace {
-
-constexpr double kTolerance = 1e-12;  // Relative; the same stages on the same rows.
-
-bool Equal(double a, double b) {
-  if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
-  return std::abs(a - b) <= kTolerance * std::max({1e-300, std::abs(a), std::abs(b)});
-}
-
-// Every dataset below `group` (recursively), as paths.
-void Datasets(const H5Reader& in, const std::string& group, std::vector<std::string>* out) {
-  for (const std::string& name : in.List(group)) {
-    const std::string path = std::string(group).append("/").append(name);
-    bool dataset = true;
-    try {
-      in.Dimensions(path);
-    } catch (const Error&) {
-      dataset = false;  // A group.
-    }
-    if (dataset) {
-      out->push_back(path);
-    } else {
-      Datasets(in, path, out);
-    }
-  }
-}
-
-// The differences between two JSON values (numbers to kTolerance), each naming its key path.
-void Compare(const YAML::Node& a, const YAML::Node& b, const std::string& path,
-             std::vector<std::string>* differences) {
-  if (a.Type() != b.Type()) {
-    differences->push_back(path + ": of another type");
-  } else if (a.IsMap()) {
-    for (const auto& entry : b) {
-      const std::string key = entry.first.as<std::string>();
-      const std::string at = std::string(path).append(".").append(key);
-      if (!a[key]) {
-        differences->push_back(at + ": missing");
-      } else {
-        Compare(a[key], entry.second, at, differences);
-      }
-    }
-    if (a.size() != b.size()) differences->push_back(path + ": other keys");
-  } else if (a.IsSequence()) {
-    if (a.size() != b.size()) {
-      differences->push_back(path + ": another length");
-      return;
-    }
-    for (std::size_t i = 0; i < a.size(); ++i)
-      Compare(a[i], b[i], path + "[" + std::to_string(i) + "]", differences);
-  } else if (a.IsScalar()) {
-    double x = 0, y = 0;
-    const bool numbers = a.Tag() != "!" && b.Tag() != "!" && YAML::convert<double>::decode(a, x) &&
-                         YAML::convert<double>::decode(b, y);
-    if (numbers ? !Equal(x, y) : a.Scalar() != b.Scalar())
-      differences->push_back(path + ": " + a.Scalar() + " vs " + b.Scalar());
-  }
-}
 
 // The sample with its strain stage (strain.enabled), without the figures and views, run once
 // per process; `correlation` is the run's correlation alone (its analysis groups left out: what

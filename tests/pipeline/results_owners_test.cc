@@ -17,6 +17,7 @@
 #include "impactdic/model/model_results.h"
 #include "impactdic/momentum/momentum_results.h"
 #include "impactdic/render/render_results.h"
+#include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor_results.h"
 #include "impactdic/strain/strain_results.h"
 
@@ -69,6 +70,7 @@ TEST_F(ResultsOwners, EveryDatasetOfARunIsReadByItsGroupsOwner) {
   const MomentumResultsGroup momentum = ReadMomentumResults(in, file);
   const ModelResultsGroup model = ReadModelResults(in, file);
   const StrainResult strain = ReadStrainResults(in, file);
+  const FrameTimeline timeline = ReadFrameTimeline(in, file);
   // /time/t_ms and /frames (the run's own outputs): the figures' reader.
   const VelocityFieldSequence field = ReadVelocityFieldSequence(in);
   // Read by validate-dem by its name (dem_validation.cc): the frames' index in the input sequence.
@@ -102,6 +104,10 @@ TEST_F(ResultsOwners, EveryDatasetOfARunIsReadByItsGroupsOwner) {
   EXPECT_EQ(model.summary.crater_depth_m,
             in.ReadNumberAttribute("/summary", "crater_depth_model_m"));
   EXPECT_FALSE(field.frames.empty());
+  ASSERT_EQ(timeline.size(), dic.rows);
+  EXPECT_EQ(timeline.daq_time_s, kin.frame_time_daq_s);
+  EXPECT_EQ(timeline.index.front(), dic.first_frame);
+  EXPECT_DOUBLE_EQ(timeline.impact_time_s, sensor.sensor.summary.impact_time_s);
 }
 
 TEST_F(ResultsOwners, ModelCommandWritesTheRunsModelLayout) {

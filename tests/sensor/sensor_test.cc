@@ -3,13 +3,16 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "../core/expect_error.h"
 #include "../io/test_dir.h"
 #include "impactdic/core/error.h"
 #include "impactdic/io/csv.h"
+#include "impactdic/sensor/frame_timeline.h"
 #include "synthetic_record.h"
 
 namespace impactdic {
@@ -193,6 +196,64 @@ TEST(Sensor, FrameTimesFromOffsetAndCoverage) {
   });
   EXPECT_NE(msg2.find("pounder velocity"), std::string::npos) << msg2;
   EXPECT_NE(msg2.find("does not cover"), std::string::npos) << msg2;
+}
+
+// The frame timeline: analysed rows are source frames first.. with their numbers, timed on the
+// camera clock (time stamps, else index / fps) and on the DAQ clock (here the exposure edges) as
+// the frames of the whole source are; Rows keeps them together.
+TEST(FrameTimeline, RowsKeepTheirSourcePositionNumberAndTimes) {
+  const PulseMotion m = Motion();
+  const SyntheticRecord rec = Record(m, 0.05, 0.02, 3);
+  TestDir dir;
+  const std::string csv = dir.File("daq.csv");
+  WriteRecordCsv(csv, rec);
+  const SensorResult r = AnalyzeSensorCsv(csv, SensorOptions{});
+  const CameraClock clock{.fps = 1600};
+  const FrameTimeline all = MakeFrameTimeline(0, 20, clock, &r);
+  // Frames 5..9 numbered by a camera that saves every 2nd frame from -10 on.
+  const FrameTimeline part = MakeFrameTimeline(5, {0, 2, 4, 6, 8}, clock, &r);
+  ASSERT_EQ(part.size(), 5u);
+  EXPECT_EQ(part.index, (std::vector<int>{5, 6, 7, 8, 9}));
+  EXPECT_EQ(part.number, (std::vector<long long>{0, 2, 4, 6, 8}));
+  EXPECT_EQ(all.exposure_edges, part.exposure_edges);
+  EXPECT_NE(part.daq_clock.find("exposure edges"), std::string::npos) << part.daq_clock;
+  for (std::size_t k = 0; k < part.size(); ++k) {
+    EXPECT_EQ(part.daq_time_s[k], all.daq_time_s[5 + k]) << k;
+    EXPECT_NEAR(part.daq_time_s[k], rec.frame_times[5 + k], 1 / kFs) << k;
+    EXPECT_DOUBLE_EQ(part.camera_time_s[k], (5.0 + static_cast<double>(k)) / 1600) << k;
+  }
+  const FrameTimeline rows = all.Rows(5, 9);
+  EXPECT_EQ(rows.index, part.index);
+  EXPECT_EQ(rows.daq_time_s, part.daq_time_s);
+  EXPECT_EQ(all.RowOfIndex(7), 7u);
+  EXPECT_EQ(rows.RowOfIndex(7), 2u);
+  EXPECT_EQ(rows.RowOfIndex(4), rows.size());
+  // Since the impact on the DAQ clock.
+  const std::vector<double> ms = rows.MsSinceStart();
+  EXPECT_DOUBLE_EQ(ms[1], 1e3 * (rows.daq_time_s[1] - r.summary.impact_time_s));
+  EXPECT_THROW(all.Rows(3, 20), Error);
+}
+
+// Without a sensor record: the camera clock alone, by the camera's time stamps when it has them
+// (then any origin: times since the first frame), else index / fps; NaN without a rate.
+TEST(FrameTimeline, CameraClockWithoutASensorRecord) {
+  const FrameTimeline by_rate = MakeFrameTimeline(2, 3, CameraClock{.fps = 100}, nullptr);
+  EXPECT_FALSE(by_rate.OnDaqClock());
+  EXPECT_FALSE(by_rate.camera_stamps);
+  const std::vector<double> ms = by_rate.MsSinceStart();
+  ASSERT_EQ(ms.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k) EXPECT_NEAR(ms[k], 10.0 * static_cast<double>(k), 1e-12);
+  EXPECT_EQ(by_rate.number, (std::vector<long long>{2, 3, 4}));
+  CameraClock stamped{.fps = 100};
+  stamped.time_s = {-0.05, -0.04, -0.03, -0.02};
+  const FrameTimeline by_stamps = MakeFrameTimeline(1, {-4, -3}, stamped, nullptr);
+  EXPECT_TRUE(by_stamps.camera_stamps);
+  EXPECT_EQ(by_stamps.camera_time_s, (std::vector<double>{-0.04, -0.03}));
+  const FrameTimeline unknown = MakeFrameTimeline(0, 2, CameraClock{}, nullptr);
+  EXPECT_TRUE(std::isnan(unknown.camera_time_s[1]));
+  EXPECT_EQ(unknown.fps, 0);
+  // More frames than time stamps: an error, not a read past the end.
+  EXPECT_THROW(MakeFrameTimeline(3, {0, 1}, stamped, nullptr), Error);
 }
 
 TEST(Sensor, AccelerationInMetresPerSecondSquared) {

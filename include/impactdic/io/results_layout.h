@@ -6,8 +6,8 @@
 //   /dic         io/dic_results.h (names here)       /strain   strain/strain_results.h (names here)
 //   /sensor      sensor/sensor_results.h             /kinematics  kinematics/kinematics_results.h
 //   /momentum    momentum/momentum_results.h         /model    model/model_results.h
-//   /time, /frames, /xdmf, the output folder's file names: here (the run's outputs,
-//   pipeline/outputs).
+//   /time        sensor/frame_timeline.h (names here)
+//   /frames, /xdmf, the output folder's file names: here (the run's outputs, pipeline/outputs).
 // If a name changes, change it at its owner. Shapes: F = analysed frames, N = subsets,
 // R x C = frame rows x columns, K = samples.
 #ifndef IMPACTDIC_IO_RESULTS_LAYOUT_H_
@@ -17,10 +17,23 @@
 
 namespace impactdic::results_layout {
 
-// Time of every analysed frame since impact [ms], [F]; the frames' index in the input sequence
-// [F] (equal to kDicFrame).
+// The analysed frames' timeline (sensor/frame_timeline.h), [F] each: time since the impact on
+// the DAQ clock [ms] (without a sensor record: since the first analysed frame on the camera
+// clock); the frames' index in the input sequence (equal to kDicFrame); their number on the
+// source's own count (a camera's, with its start frame and save step; a numbered file name's);
+// their time on the camera clock [s] (NaN without a frame rate) and on the DAQ clock [s] (only
+// with a sensor record). Attributes on kTimeGroup say where the times come from. Owner:
+// sensor/frame_timeline.h (WriteFrameTimeline, ReadFrameTimeline).
+inline constexpr const char* kTimeGroup = "/time";
 inline constexpr const char* kTimeMs = "/time/t_ms";
 inline constexpr const char* kTimeFrameIndex = "/time/frame_index";
+inline constexpr const char* kTimeFrameNumber = "/time/frame_number";
+inline constexpr const char* kTimeCameraS = "/time/camera_time_s";
+inline constexpr const char* kTimeDaqS = "/time/daq_time_s";
+inline constexpr const char* kTimeCameraClockAttr = "camera_clock";
+inline constexpr const char* kTimeDaqClockAttr = "daq_clock";
+inline constexpr const char* kTimeFpsAttr = "fps";
+inline constexpr const char* kTimeImpactAttr = "impact_time_s";
 
 // --- The DIC results (/dic), layout version kDicLayoutVersion -------------------------------
 // Row f of every [F x N] dataset is analysed frame f; row 0 is the first reference image itself

@@ -151,15 +151,15 @@ struct MomentumResult {
   MomentumSummary summary;
 };
 
-// kin: soil kinematics; frame_time_s: the frames on the DAQ clock (FrameTimes); sensor: pounder.
+// kin: soil kinematics; frame_time_s: the frames on the DAQ clock (FrameTimeline::daq_time_s);
+// sensor: pounder.
 MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
                                const SensorResult& sensor, const MomentumOptions& options);
 
-// The whole analysis of one scene from the correlation arrays: frame times from the sensor
-// (sensor FrameTimes: exposure edges, or the camera clock), kinematics (dt = 1 / clock.fps),
-// momentum. `first_frame` is the
-// index in the camera sequence of the first correlated frame (the frame times are those of frames
-// first_frame .. first_frame + dic.frames - 1).
+// The whole analysis of one scene from the correlation arrays: the frames' timeline (sensor
+// MakeFrameTimeline of source frames first_frame .. first_frame + dic.frames - 1: exposure edges,
+// or the camera clock), kinematics (dt = 1 / the timeline's fps), momentum. `first_frame` is the
+// index in the camera sequence of the first correlated frame.
 struct SceneAnalysis {
   KinematicsResult kinematics;
   std::vector<double> frame_time_s;

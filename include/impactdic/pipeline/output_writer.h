@@ -16,10 +16,10 @@
 //     std::string name() const override { return "frame_times.csv"; }
 //     std::vector<std::string> FileNames() const override { return {"frame_times.csv"}; }
 //     std::string SkipReason(const Scene&, const SceneRunData& d) const override {
-//       return d.frame_times_s.empty() ? "no frame times" : "";
+//       return d.timeline.OnDaqClock() ? "" : "no DAQ frame times";
 //     }
 //     void Write(OutputContext& c) const override {
-//       WriteCsv(c.Path("frame_times.csv"), {"t_s"}, {c.data.frame_times_s});
+//       WriteCsv(c.Path("frame_times.csv"), {"t_s"}, {c.data.timeline.daq_time_s});
 //       c.summary.outputs.push_back(c.Path("frame_times.csv"));
 //     }
 //   };

@@ -20,6 +20,7 @@
 #include "impactdic/model/impact_model.h"
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor.h"
 #include "impactdic/strain/strain_results.h"
 
@@ -42,12 +43,13 @@ struct SceneRunData {
 
   // frames: the analysed frames first_frame..last_frame of the source's source_frames, read on
   // demand and preprocessed (pipeline/frame_stream.h: one frame in memory at a time; null = the
-  // stage did not run); the frame rate and the camera's time stamps; the DAQ time of every frame
-  // of the source (empty without a sensor record).
+  // stage did not run), and their timeline (sensor/frame_timeline.h: each analysed frame's source
+  // position, number, camera and DAQ times, the frame rate): the one record of when a frame was
+  // taken, read by every later stage and writer. load_dic builds it from the rows of the results
+  // file the same way (stages TimeSceneFrames).
   int source_frames = 0;
   int first_frame = 0, last_frame = -1;
-  CameraClock clock;  // How the frames are timed (pipeline SceneFrameClock).
-  std::vector<double> frame_times_s;
+  FrameTimeline timeline;
   std::shared_ptr<FrameStream> frames;
   std::string preprocess_note;  // What the preprocessing did (one line).
 
@@ -59,9 +61,8 @@ struct SceneRunData {
   std::string dic_file;  // The results file /dic was read from ("" = correlated in this run).
 
   // kinematics: subset motion on the panel from the analysed series (momentum.max_sigma_px
-  // applied); analysed_frame_times_s = frame_times_s[first_frame..last_frame] (may be empty).
+  // applied), dt = 1 / timeline.fps.
   std::optional<KinematicsResult> kinematics;
-  std::vector<double> analysed_frame_times_s;
 
   // momentum: the momentum balance (needs kinematics and the sensor record).
   std::optional<MomentumResult> momentum;

@@ -12,7 +12,7 @@
 //   opt.integrate_from = IntegrationStart::kRelease;
 //   SensorResult r = AnalyzeSensorCsv("daq.csv", opt);
 //   std::cout << r.summary.BriefReport();
-//   std::vector<double> t_frames = FrameTimes(r, /*n_frames=*/200, CameraClock{.fps = 1600});
+//   FrameTimeline frames = MakeFrameTimeline(0, /*count=*/200, CameraClock{.fps = 1600}, &r);  // frame_timeline.h
 #ifndef IMPACTDIC_SENSOR_SENSOR_H_
 #define IMPACTDIC_SENSOR_SENSOR_H_
 
@@ -250,7 +250,8 @@ struct CameraClock {
 // than frames or a frame lies outside the sensor record. With an exposure channel, fps (0 or NaN:
 // unknown) must agree with the rate of the frames' edges within kFrameRateTolerance (Error
 // naming clock.fps_name and both rates). `edges_found` (optional) receives the number of exposure
-// edges in the record (0 without an exposure channel).
+// edges in the record (0 without an exposure channel). Called by MakeFrameTimeline
+// (sensor/frame_timeline.h) alone: every other code reads a FrameTimeline.
 std::vector<double> FrameTimes(const SensorResult& result, int n_frames, const CameraClock& clock,
                                std::size_t* edges_found = nullptr);
 
@@ -261,8 +262,8 @@ std::vector<double> FrameTimes(const SensorResult& result, int n_frames, const C
 void RequireExposureChannel(const SensorResult& result, const std::string& column);
 
 // The first frame to correlate for an impact at impact_time_s (DAQ clock): the last frame exposed
-// at or before it (nothing earlier moves), 0 if none is; frame_times_s from FrameTimes.
-int ReferenceFrameForImpact(const std::vector<double>& frame_times_s, double impact_time_s);
+// at or before it (nothing earlier moves), 0 if none is; daq_time_s: FrameTimeline::daq_time_s.
+int ReferenceFrameForImpact(const std::vector<double>& daq_time_s, double impact_time_s);
 
 // --- Series of the record (src/sensor/sensor.cc) -----------------------------------------------
 

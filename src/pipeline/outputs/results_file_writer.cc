@@ -22,6 +22,7 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor_results.h"
 #include "impactdic/strain/strain_results.h"
 #include "writers.h"
@@ -29,19 +30,6 @@
 namespace impactdic::outputs {
 namespace L = results_layout;
 namespace {
-
-// /time: every analysed frame's time since the impact [ms] (AnalysedFrameTimesMs) and its index
-// in the input sequence.
-void WriteFrameTimes(H5Writer& out, const SceneRunData& d) {
-  const std::size_t F = d.dic->rows;
-  const auto first = static_cast<std::size_t>(d.first_frame);
-  std::vector<double> frame_index(F);
-  for (std::size_t f = 0; f < F; ++f) frame_index[f] = static_cast<double>(first + f);
-  out.Write(L::kTimeMs, AnalysedFrameTimesMs(d), "ms",
-            "time of each analysed frame since the impact");
-  out.Write(L::kTimeFrameIndex, frame_index, "1",
-            "index of the analysed frame in the input sequence");
-}
 
 // /frames/images: the analysed frames after preprocessing (outputs.frames: a preview, or all),
 // with their own depth (8 or 16 bit), re-read from their source one at a time; /frames/row: the
@@ -84,8 +72,7 @@ void WriteFrames(H5Writer& out, FrameStream& frames, FrameStorage storage) {
 // /sensor, /kinematics, /momentum, each by its owner's writer.
 void WriteMotion(H5Writer& out, const SceneRunData& d) {
   if (d.sensor) WriteSensorResults(out, *d.sensor);
-  if (d.kinematics)
-    WriteKinematicsResults(out, *d.kinematics, d.analysed_frame_times_s, d.mm_per_px);
+  if (d.kinematics) WriteKinematicsResults(out, *d.kinematics, d.timeline.daq_time_s, d.mm_per_px);
   if (d.momentum) WriteMomentumResults(out, *d.momentum, d.sensor->summary.impact_time_s);
 }
 
@@ -124,10 +111,7 @@ class ResultsFileWriter : public OutputWriter {
     H5Writer out(c.results_path, H5Writer::Mode::kCreate, "",
                  c.scene.outputs.hdf5 ? H5Writer::Backing::kFile : H5Writer::Backing::kMemory);
     WriteRunAttributes(out, c.scene, c.summary);
-    if (d.dic) {
-      WriteFrameTimes(out, d);
-      WriteDicResults(out, *d.dic);
-    }
+    if (d.dic) WriteDicResults(out, *d.dic);
     if (d.frames && c.scene.outputs.frames != FrameStorage::kNone)
       WriteFrames(out, *d.frames, c.scene.outputs.frames);
     WriteAnalysisResults(out, d);
@@ -144,24 +128,8 @@ class ResultsFileWriter : public OutputWriter {
 
 }  // namespace
 
-std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d) {
-  const std::size_t F = d.dic->rows;
-  const std::vector<double>& all = d.frame_times_s;
-  const auto first = static_cast<std::size_t>(d.first_frame);
-  const double t_ref = all.empty() ? 0.0 : all[first];
-  const double t_impact = d.sensor ? d.sensor->summary.impact_time_s : t_ref;
-  std::vector<double> t_ms(F);
-  for (std::size_t f = 0; f < F; ++f) {
-    const std::vector<double>& stamps = d.clock.time_s;
-    const double tf = !all.empty()     ? all[first + f]
-                      : stamps.empty() ? static_cast<double>(f) / d.clock.fps
-                                       : stamps[first + f] - stamps[first];
-    t_ms[f] = 1e3 * (tf - (all.empty() ? 0.0 : t_impact));
-  }
-  return t_ms;
-}
-
 void WriteAnalysisResults(H5Writer& out, const SceneRunData& d) {
+  if (d.dic) WriteFrameTimeline(out, d.timeline);  // Replaces an earlier analysis' /time.
   WriteMotion(out, d);
   if (d.model) {
     out.Remove(L::kModelGroup);  // An earlier analysis' (analyze SCENE).

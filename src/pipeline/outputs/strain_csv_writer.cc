@@ -42,13 +42,13 @@ class StrainCsvWriter : public OutputWriter {
     std::vector<std::string> names = {"frame", "t_ms", "subset", "x_px", "y_px"};
     for (const StrainMeasure& m : measures) names.push_back(m.Name());
     names.emplace_back("shear_band");
-    const std::vector<double> t_ms = AnalysedFrameTimesMs(d);
+    const std::vector<double> t_ms = d.timeline.MsSinceStart();
     const std::string path = c.Path(L::kStrainCsv);
     CsvRowWriter out(path, names);
     std::vector<std::string> row(names.size());
     const std::size_t ns = r.field.subsets;
     for (std::size_t f = 0; f < r.field.frames; ++f) {
-      const std::string frame = std::to_string(static_cast<std::size_t>(d.first_frame) + f);
+      const std::string frame = std::to_string(d.timeline.index[f]);
       const std::string t = Cell(t_ms[f]);
       for (std::size_t i = 0; i < ns; ++i) {
         const std::size_t j = f * ns + i;

@@ -21,11 +21,8 @@ void WriteXdmfViews(H5Writer& out);
 #include "output_writers.def"
 #undef IMPACTDIC_OUTPUT_WRITER
 
-// The time of each analysed frame since the impact [ms] (/time/t_ms; results_file_writer.cc):
-// without a sensor record from the first analysed frame, by the camera's time stamps or k / fps.
-std::vector<double> AnalysedFrameTimesMs(const SceneRunData& d);
-
-// The groups of the analysis stages that ran (results_file_writer.cc): /sensor, /kinematics (with
+// The analysed frames' timeline (/time) and the groups of the analysis stages that ran
+// (results_file_writer.cc): /sensor, /kinematics (with
 // the attribute mm_per_px), /momentum, /model, /strain; each replaces its group. The one writer
 // of results.h5 and of `impactdic analyze SCENE` (pipeline/scene_analysis.h).
 void WriteAnalysisResults(H5Writer& out, const SceneRunData& d);

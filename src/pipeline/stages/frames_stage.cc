@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "impactdic/calib/calibration.h"
@@ -61,6 +62,18 @@ void CheckFrameRange(const Scene& scene, int n) {
 // the field, the number and the source's span when no frame has it; at least two frames).
 void SelectFrameRange(const Scene& scene, SceneRunData& d) {
   const SceneDic& dic = scene.dic;
+  // One selection per end: by index or by number, never both (one would silently win).
+  for (const auto& [index_key, by_index, number_key, by_number] :
+       {std::tuple{"dic.first_frame", dic.first_frame != 0, "dic.first_frame_number",
+                   dic.first_frame_number.has_value()},
+        std::tuple{"dic.last_frame", dic.last_frame != -1, "dic.last_frame_number",
+                   dic.last_frame_number.has_value()}}) {
+    if (!by_index || !by_number) continue;
+    throw Error(ErrorKind::kInvalidValue, std::string(index_key) + " / " + number_key, "both given",
+                std::string("one of them: the frame's index in the source (") + index_key +
+                    ") or its own number (" + number_key + ")")
+        .WithFile(scene.path);
+  }
   CheckFrameRange(scene, d.source_frames);
   d.first_frame = dic.first_frame;
   d.last_frame = dic.last_frame < 0 ? d.source_frames - 1 : dic.last_frame;
@@ -102,21 +115,20 @@ void CheckSceneRoi(const Scene& scene, cv::Size frame) {
       .WithFile(scene.path);
 }
 
-// The DAQ time of every frame, and the first frame to correlate: the last one exposed before the
-// impact (sensor ReferenceFrameForImpact) unless the scene sets dic.first_frame. Returns a note
-// on the frames left out ("" if none).
-std::string TimeFrames(StageContext& c) {
+// The timeline of every frame of the source (stages TimeSceneFrames) and, with a sensor record,
+// the first frame to correlate: the last one exposed before the impact (sensor
+// ReferenceFrameForImpact) unless the scene selects it (dic.first_frame or
+// dic.first_frame_number). Returns a note on the frames left out ("" if none).
+std::string TimeFrames(StageContext& c, FrameTimeline* all) {
   const Scene& scene = c.scene;
   SceneRunData& d = c.data;
+  const FrameSource& source = d.frames->source();
   const int n = d.source_frames;
-  std::size_t edges = 0;  // Exposure edges in the record.
-  RequireExposureChannel(*d.sensor, scene.sensor.options.columns.exposure);
-  try {
-    d.frame_times_s = FrameTimes(*d.sensor, n, d.clock, &edges);
-  } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
-    if (e.file().empty()) e.WithFile(e.where() == "inputs.fps" ? scene.path : scene.inputs.sensor);
-    throw;
-  }
+  std::vector<long long> numbers(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) numbers[static_cast<std::size_t>(k)] = source.FrameNumber(k);
+  *all = TimeSceneFrames(c, /*first_index=*/0, std::move(numbers));
+  if (!d.sensor) return "";
+  const std::size_t edges = all->exposure_edges;
   if (edges > static_cast<std::size_t>(n)) {
     const std::string w = fmt::format(
         "{} exposure edges in {} for {} frames: frame k is timed by edge k, the last {} "
@@ -126,23 +138,18 @@ std::string TimeFrames(StageContext& c) {
     LogWarning("{}", w);
     c.summary.warnings.push_back("sensor: " + w);
   }
-  if (scene.dic.first_frame != 0) return "";
+  if (scene.dic.first_frame != 0 || scene.dic.first_frame_number) return "";
   const double impact_s = d.sensor->summary.impact_time_s;
-  d.first_frame = ReferenceFrameForImpact(d.frame_times_s, impact_s);
+  const std::vector<double>& t = all->daq_time_s;
+  d.first_frame = ReferenceFrameForImpact(t, impact_s);
   if (d.last_frame - d.first_frame < 2) {  // Was "frames: got 1 frames from 49 to 49".
-    throw Error(
-        ErrorKind::kInvalidValue, "frame times",
-        fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
-                    "fewer than 3 of them from the last one before the impact at "
-                    "{:.6g} s on",
-                    0, n - 1, d.frame_times_s.front(), d.frame_times_s.back(),
-                    edges > 0 ? "the exposure edges of " + scene.inputs.sensor
-                    : d.clock.time_s.empty()
-                        ? std::string("sensor.frame_time_offset_s + k / inputs.fps")
-                        : "sensor.frame_time_offset_s + the time stamps of " + scene.inputs.frames,
-                    impact_s),
-        "frames that film the impact: check sensor.frame_time_offset_s, the exposure "
-        "channel and dic.last_frame")
+    throw Error(ErrorKind::kInvalidValue, "frame times",
+                fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
+                            "fewer than 3 of them from the last one before the impact at "
+                            "{:.6g} s on",
+                            0, n - 1, t.front(), t.back(), all->daq_clock, impact_s),
+                "frames that film the impact: check sensor.frame_time_offset_s, the exposure "
+                "channel and dic.last_frame")
         .WithFile(scene.path);
   }
   if (d.first_frame == 0) return "";
@@ -194,9 +201,9 @@ class FramesStage : public Stage {
                    : std::make_shared<FrameStream>(MakeImageFileSource(files),
                                                    ScenePreprocessOptions(scene), calibration);
     d.source_frames = d.frames->source_frames();
-    d.clock = SceneFrameClock(scene);
     SelectFrameRange(scene, d);
-    const std::string skipped_note = d.sensor ? TimeFrames(c) : "";
+    FrameTimeline all;
+    const std::string skipped_note = TimeFrames(c, &all);
     if (const int min = MinFrames(scene); d.last_frame - d.first_frame < min - 1) {
       throw Error(
           ErrorKind::kInvalidValue, "frames",
@@ -207,15 +214,17 @@ class FramesStage : public Stage {
           .WithFile(files.empty() ? scene.inputs.frames : files.front());
     }
     d.frames->SetRange(d.first_frame, d.last_frame);
+    d.timeline =
+        all.Rows(static_cast<std::size_t>(d.first_frame), static_cast<std::size_t>(d.last_frame));
     const cv::Mat f0 = CheckFrames(c, *d.frames);
     d.preprocess_note = d.frames->PreprocessNote();
     if (!scene.HasStage("correlate")) {
       for (const auto& w : d.frames->warnings()) c.summary.warnings.push_back("frames: " + w);
     }
     const std::string rate =
-        d.clock.time_s.empty()
-            ? ""
-            : fmt::format(", {:.6g} fps and time stamps from the file", d.clock.fps);
+        d.timeline.camera_stamps
+            ? fmt::format(", {:.6g} fps and time stamps from the file", d.timeline.fps)
+            : "";
     return fmt::format("{} of {} frames ({}x{}, {}-bit{}){}; {}", d.frames->count(),
                        d.source_frames, f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, rate,
                        skipped_note, d.preprocess_note);

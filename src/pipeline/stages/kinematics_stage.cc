@@ -36,7 +36,7 @@ class KinematicsStage : public Stage {
     PanelMapping mapping;
     mapping.mm_per_px = d.mm_per_px;
     KinematicsOptions k;
-    k.fps = d.clock.fps;  // A camera file's own rate, else inputs.fps.
+    k.fps = d.timeline.fps;  // A camera file's own rate, else inputs.fps.
     {
       // The series the kinematics use, borrowing the rows of /dic (no copy): without the
       // uncertain samples (ExcludeUncertainSamplesOfScene marks them invalid and says how many;
@@ -53,12 +53,6 @@ class KinematicsStage : public Stage {
         throw;
       }
       d.kinematics = ComputeKinematics(series.series(), mapping, k);
-    }
-    // The analysed frames on the DAQ clock (exposure edges, or the scene's offset + k / fps when
-    // the record has no exposure channel); none without a sensor record.
-    if (!d.frame_times_s.empty()) {
-      d.analysed_frame_times_s.assign(d.frame_times_s.begin() + d.first_frame,
-                                      d.frame_times_s.begin() + d.last_frame + 1);
     }
     return d.kinematics->summary.BriefReport();
   }

@@ -37,7 +37,7 @@ class MomentumStage : public Stage {
     SceneRunData& d = c.data;
     const MomentumOptions options = MakeMomentumOptions(c.scene, d.mm_per_px);
     try {
-      d.momentum = AnalyzeMomentum(*d.kinematics, d.analysed_frame_times_s, *d.sensor, options);
+      d.momentum = AnalyzeMomentum(*d.kinematics, d.timeline.daq_time_s, *d.sensor, options);
     } catch (Error& e) {
       NameFileToFix(c, e);
       throw;

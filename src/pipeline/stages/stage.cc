@@ -4,11 +4,17 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
+#include "impactdic/pipeline/frame_stream.h"
+#include "impactdic/pipeline/run_data.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/frame_timeline.h"
+#include "impactdic/sensor/sensor.h"
 
 namespace impactdic::stages {
 
@@ -57,6 +63,21 @@ void NameFileToFix(const StageContext& context, Error& error) {
   const bool timing = error.where() == "exposure channel" || error.where() == "frame times";
   const bool exposure = context.data.sensor && !context.data.sensor->exposure.empty();
   error.WithFile(timing && exposure ? context.scene.inputs.sensor : context.scene.path);
+}
+
+FrameTimeline TimeSceneFrames(const StageContext& context, int first_index,
+                              std::vector<long long> numbers) {
+  const Scene& scene = context.scene;
+  const SceneRunData& d = context.data;
+  try {
+    if (d.sensor) RequireExposureChannel(*d.sensor, scene.sensor.options.columns.exposure);
+    return MakeFrameTimeline(first_index, std::move(numbers), SceneFrameClock(scene),
+                             d.sensor ? &*d.sensor : nullptr);
+  } catch (Error& e) {  // e.g. a record that ends before the last frame: name the file.
+    if (e.file().empty())
+      e.WithFile(e.where() == "inputs.fps" || !d.sensor ? scene.path : scene.inputs.sensor);
+    throw;
+  }
 }
 
 std::string NotListed(const Scene& scene, const char* name) {

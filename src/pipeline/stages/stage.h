@@ -7,6 +7,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/io/output_generation.h"
@@ -14,6 +15,7 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/sensor/frame_timeline.h"
 
 namespace impactdic::stages {
 
@@ -74,6 +76,13 @@ std::string FailedStagesText(const PipelineSummary& summary);
 // none: the DAQ record when its exposure channel times the frames ("exposure channel", "frame
 // times"), else the scene file (fps, frame_time_offset_s, the momentum grid).
 void NameFileToFix(const StageContext& context, Error& error);
+
+// The timeline of the source frames first_index.. numbered `numbers` (sensor MakeFrameTimeline)
+// on the scene's camera clock (SceneFrameClock: a camera file's rate and time stamps, else
+// inputs.fps) and, after the sensor stage, on the DAQ clock: how the frames and load_dic stages
+// both time frames. Errors name the file to fix: the scene for inputs.fps, else the DAQ record.
+FrameTimeline TimeSceneFrames(const StageContext& context, int first_index,
+                              std::vector<long long> numbers);
 
 // "not among the scene's stages" unless the scene lists `name` ("").
 std::string NotListed(const Scene& scene, const char* name);

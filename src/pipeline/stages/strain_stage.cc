@@ -92,7 +92,7 @@ StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries&
   StrainResult r;
   r.options = scene.strain;
   r.gradient = GradientOfScene(scene, *d.dic, series);
-  r.field = ComputeStrain(r.gradient, d.clock.fps);
+  r.field = ComputeStrain(r.gradient, d.timeline.fps);
   r.dry_density_kg_m3 = scene.model.density_kg_m3;
   r.density_kg_m3 = DensityField(r.field, r.dry_density_kg_m3);
   r.shear_band = ShearBands(r.field, series, r.options);
