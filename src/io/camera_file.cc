@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "impactdic/core/error.h"
 
@@ -16,6 +18,11 @@ std::string LowerExtension(const std::string& path) {
   return ext;
 }
 
+[[noreturn]] void ThrowNotACameraFile(const std::string& path, const std::string& ext) {
+  throw Error(ErrorKind::kFileFormat, path, "got '" + ext + "'",
+              "a camera file: a Phantom .cine or a Photron .mraw with its .cih/.cihx");
+}
+
 }  // namespace
 
 bool IsCameraFile(const std::string& path) {
@@ -27,8 +34,14 @@ std::unique_ptr<CameraFileReader> OpenCameraFile(const std::string& path) {
   const std::string ext = LowerExtension(path);
   if (ext == ".cine") return OpenCineFile(path);
   if (ext == ".mraw" || ext == ".cih" || ext == ".cihx") return OpenMrawFile(path);
-  throw Error(ErrorKind::kFileFormat, path, "got '" + ext + "'",
-              "a camera file: a Phantom .cine or a Photron .mraw with its .cih/.cihx");
+  ThrowNotACameraFile(path, ext);
+}
+
+std::vector<std::string> CameraFileParts(const std::string& path) {
+  const std::string ext = LowerExtension(path);
+  if (ext == ".cine") return {path};
+  if (ext == ".mraw" || ext == ".cih" || ext == ".cihx") return MrawFileParts(path);
+  ThrowNotACameraFile(path, ext);
 }
 
 }  // namespace impactdic

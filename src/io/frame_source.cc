@@ -195,6 +195,12 @@ std::unique_ptr<FrameSource> OpenFrameSource(const std::string& frames) {
   return MakeImageFileSource(ListFrameSequence(frames), frames);
 }
 
+std::vector<std::string> FrameSourceFiles(const std::string& frames) {
+  if (IsCameraFile(frames)) return CameraFileParts(frames);
+  if (IsVideoFile(frames)) return {frames};
+  return ListFrameSequence(frames);
+}
+
 int FrameIndexOf(const FrameSource& source, long long number, const std::string& where) {
   int lo = 0, hi = source.frame_count();  // Numbers increase with the index: bisect.
   while (lo < hi) {

@@ -366,7 +366,7 @@ void MrawReader::Decode(cv::Mat* frame) const {
 
 }  // namespace
 
-std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
+std::vector<std::string> MrawFileParts(const std::string& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) {
     throw Error(ErrorKind::kFileNotFound, path, "", "an existing .mraw, .cih or .cihx file");
@@ -389,6 +389,14 @@ std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
                   "the recording's frames: copy the .mraw next to its description (same name)");
     }
   }
+  return {description_path, mraw_path};
+}
+
+std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
+  const std::vector<std::string> parts = MrawFileParts(path);
+  const std::string& description_path = parts[0];
+  const std::string& mraw_path = parts[1];
+  std::error_code ec;
   Description description;
   description.path = description_path;
   description.xml = ToLower(fs::path(description_path).extension().string()) == ".cihx";

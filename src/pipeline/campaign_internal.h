@@ -46,12 +46,13 @@ class ContentHasher {
 };
 
 // What resuming compares for a scene-file test besides the plan's hash (the scene file's bytes):
-// every input file the scene reads -- each frame of inputs.frames (the glob's, the folder's or
-// the video), inputs.sensor, inputs.calibration, inputs.truth, dic.mask -- by its path as the
-// scene resolves it, its size and a hash of its bytes (not its mtime: a copy or a `touch` keeps
-// the results, a replaced or edited file re-runs the test). A file that cannot be read or listed
-// hashes as such (the test then fails and is never resumed). Reads every input once: about
-// 1 s per GB on one core.
+// every input file the scene reads -- each file of inputs.frames (io FrameSourceFiles: the glob's
+// or the folder's images, the video, a camera file with its companion: a .cih/.cihx and its
+// .mraw), or inputs.frame_files when given; inputs.sensor, inputs.calibration, inputs.truth,
+// dic.mask -- by its path as the scene resolves it, its size and a hash of its bytes (not its
+// mtime: a copy or a `touch` keeps the results, a replaced or edited file re-runs the test). A
+// file that cannot be read or listed (a missing .mraw or .cih) hashes as such (the test then
+// fails and is never resumed). Reads every input once: about 1 s per GB on one core.
 std::string SceneInputsHash(const Scene& scene);
 // Version() and GitRevision(): a result made by another build is not reused.
 std::string ToolVersion();

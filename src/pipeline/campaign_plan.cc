@@ -26,7 +26,7 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/version.h"
-#include "impactdic/io/image_io.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/model/impact_model.h"
 #include "impactdic/pipeline/campaign.h"
@@ -78,9 +78,10 @@ std::string SceneInputsHash(const Scene& scene) {
   ContentHasher h;
   h.Add("frames\n");
   try {
-    for (const std::string& frame : IsVideoFile(scene.inputs.frames)
-                                        ? std::vector<std::string>{scene.inputs.frames}
-                                        : ListFrameSequence(scene.inputs.frames))
+    // The frames stage reads inputs.frame_files in place of inputs.frames when they are given.
+    for (const std::string& frame : scene.inputs.frame_files.empty()
+                                        ? FrameSourceFiles(scene.inputs.frames)
+                                        : scene.inputs.frame_files)
       AddInputFile(frame, &h);
   } catch (const Error& e) {
     h.Add(std::string("not listed: ") + e.what());

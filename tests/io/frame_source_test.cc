@@ -101,6 +101,43 @@ TEST(FrameSource, CameraFileHasFrameNumbersTimeStampsAndBits) {
   EXPECT_NE(error.find("frames -2..1"), std::string::npos) << error;
 }
 
+// The files a source reads, the ones campaign resume hashes: a Photron recording is its
+// description and its .mraw whichever of them is named (the reader's own companion lookup), a
+// .cine is itself, an image sequence its images; a missing companion is the reader's error.
+TEST(FrameSource, FilesAreEveryFileTheSourceReads) {
+  const TestDir dir;
+  const std::vector<cv::Mat> frames{Frame(0), Frame(1)};
+  test::MrawWriteOptions o;
+  o.color_bit = 8;
+  const std::string cih = test::WriteMraw(dir.File("rec"), frames, o);
+  const std::string mraw = dir.File("rec.mraw");
+  const std::vector<std::string> parts{cih, mraw};
+  EXPECT_EQ(FrameSourceFiles(cih), parts);
+  EXPECT_EQ(FrameSourceFiles(mraw), parts);
+  EXPECT_EQ(CameraFileParts(mraw), parts);
+  // A .cihx is found before a .cih; the extension in upper case too.
+  o.cihx = true;
+  const std::string cihx = test::WriteMraw(dir.File("x"), frames, o);
+  std::filesystem::rename(dir.File("x.mraw"), dir.File("x.MRAW"));
+  EXPECT_EQ(FrameSourceFiles(cihx), (std::vector<std::string>{cihx, dir.File("x.MRAW")}));
+  std::filesystem::copy_file(cih, dir.File("x.cih"));
+  EXPECT_EQ(FrameSourceFiles(dir.File("x.MRAW")),
+            (std::vector<std::string>{cihx, dir.File("x.MRAW")}));
+  // A .cine alone, whether it exists or not (its reader names a missing one).
+  EXPECT_EQ(FrameSourceFiles(dir.File("shot.cine")),
+            std::vector<std::string>{dir.File("shot.cine")});
+  // A missing companion: the reader's error, naming the file given.
+  std::filesystem::remove(mraw);
+  ExpectErrorContaining([&] { FrameSourceFiles(cih); }, "no .mraw file of the same name");
+  ExpectErrorContaining([&] { OpenFrameSource(cih); }, "no .mraw file of the same name");
+  ExpectErrorContaining([&] { CameraFileParts(dir.File("rec.png")); }, "a camera file");
+  // Images: the sequence's files in order.
+  std::filesystem::create_directories(dir.path() / "frames");
+  for (int n : {1, 2}) WriteImage(dir.File("frames/f_" + std::to_string(n) + ".png"), Frame(n));
+  EXPECT_EQ(FrameSourceFiles(dir.File("frames/f_*.png")),
+            (std::vector<std::string>{dir.File("frames/f_1.png"), dir.File("frames/f_2.png")}));
+}
+
 TEST(FrameSource, PhantomSamplesOpenWithTheirCameraNumbering) {
   IMPACTDIC_SHARED_DATA_OR_SKIP(cine, "cine");
   const std::string path = (cine / "phantom_v1610.cine").string();

@@ -53,11 +53,21 @@ std::unique_ptr<CameraFileReader> OpenCineFile(const std::string& path);
 // found beside it by name): 8, 10, 12 and 16-bit raw frames as the .cih describes them.
 std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path);
 
+// The files OpenMrawFile reads for `path`: {the description (.cih or .cihx), the .mraw}, the one
+// `path` does not name found beside it by name (a .cihx before a .cih; the extension in lower or
+// upper case). Error kFileNotFound naming `path` when it or its companion does not exist.
+std::vector<std::string> MrawFileParts(const std::string& path);
+
 // True when `path` names a camera file by its extension (.cine, .mraw, .cih, .cihx; any case).
 bool IsCameraFile(const std::string& path);
 
 // OpenCineFile or OpenMrawFile by the extension; error for any other file.
 std::unique_ptr<CameraFileReader> OpenCameraFile(const std::string& path);
+
+// Every file OpenCameraFile(path) reads: a .cine alone; a Photron recording's description and its
+// .mraw (MrawFileParts: Error when one of them is missing). Error for any other extension, as
+// OpenCameraFile. What must be unchanged for a recording to read the same (campaign resume).
+std::vector<std::string> CameraFileParts(const std::string& path);
 
 }  // namespace impactdic
 

@@ -94,6 +94,12 @@ std::unique_ptr<FrameSource> MakeMemoryFrameSource(std::vector<cv::Mat> frames,
 // Error).
 std::unique_ptr<FrameSource> OpenFrameSource(const std::string& frames);
 
+// Every file OpenFrameSource(frames) reads, in a fixed order: a camera file's parts
+// (CameraFileParts: a .cine, or a Photron description and its .mraw), the video, or the
+// sequence's images (ListFrameSequence). Error as those when the files cannot be listed (a missing
+// Photron companion, no image matching, a gap in the numbering).
+std::vector<std::string> FrameSourceFiles(const std::string& frames);
+
 // The index of the frame numbered `number` (FrameNumber) in `source`. Error naming `where`, the
 // number and the source's span ("frames -12..87 of rec.cine") when no frame has that number.
 int FrameIndexOf(const FrameSource& source, long long number, const std::string& where);
