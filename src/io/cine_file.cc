@@ -18,7 +18,17 @@
 //     pixels.
 // TIME64 is 32.32 fixed point: u32 fractions of a second (/ 2^32; its 2 low bits are IRIG flags,
 // < 1 ns, left in), then u32 seconds.
+// The images of a cine are consecutive camera frames (FirstImageNo, FirstImageNo + 1, ...): the
+// format has no save step (SETUP's Decimation is the rate reduction of a Phantom's link to its
+// external i3 memory, not of the saved images; a frame rate profile, FRPSteps, changes the rate
+// within a recording and shows in the time stamps).
+// Checked at open: FrameRate in kCameraFpsRange and within 1 % of the median interval of the
+// time stamps (a setup that contradicts them is refused with both rates), and an image size that
+// fits in the file (a corrupt biWidth/biHeight is named as such, not as a truncated frame).
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -29,6 +39,7 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/camera_file.h"
 
 namespace impactdic {
@@ -50,6 +61,9 @@ constexpr std::uint16_t kCompressionJpeg = 1;
 constexpr std::uint16_t kCompressionColourRaw = 2;
 // Larger images than this are no camera's: a corrupt header, refused before allocating.
 constexpr std::int64_t kMaxSidePx = 1 << 16;
+// How far FrameRate may differ from the rate of the time stamps (their median interval): a
+// Phantom's clock and its stated integer rate agree far better.
+constexpr double kFrameRateTolerance = 0.01;
 
 const char* const kFormat = "Phantom cine";
 const char* const kResave =
@@ -113,6 +127,8 @@ class CineFile final : public CameraFileReader {
   void ReadBitmapHeader();
   void ReadSetup();
   void ReadTimeStamps();
+  // Error naming both rates when FrameRate differs from the rate of the time stamps.
+  void CheckRateAgainstTimeStamps() const;
   void ReadImageOffsets();
   cv::Mat Decode(const std::vector<char>& pixels) const;
 
@@ -238,11 +254,13 @@ void CineFile::ReadSetup() {
   // The setup's fixed start (up to its Length field), then as much of it as it says it has.
   const std::vector<char> start = ReadAt(setup_offset_, kSetupLengthOffset + 2, "the camera setup");
   double fps = U16(start, 0);  // FrameRate16, replaced by FrameRate where present.
+  const char* fps_field = "FrameRate16";
   if (start[kSetupMarkOffset] == 'S' && start[kSetupMarkOffset + 1] == 'T') {
     setup_length_ = U16(start, kSetupLengthOffset);
     const std::vector<char> setup = ReadAt(setup_offset_, setup_length_, "the camera setup");
     if (setup_length_ >= kSetupFrameRateOffset + 4 && U32(setup, kSetupFrameRateOffset) > 0) {
       fps = U32(setup, kSetupFrameRateOffset);
+      fps_field = "FrameRate";
     }
     if (setup_length_ >= kSetupRealBppOffset + 4) {
       const std::uint32_t real_bpp = U32(setup, kSetupRealBppOffset);
@@ -255,8 +273,10 @@ void CineFile::ReadSetup() {
       if (fits) info_.data_bits = static_cast<int>(real_bpp);
     }
   }
-  if (!(fps > 0)) {
-    throw FormatError("frame rate 0 in the camera setup", "a recording frame rate > 0 fps");
+  if (!kCameraFpsRange.Contains(fps)) {
+    throw Error(ErrorKind::kFileFormat, fps_field, fmt::format("{:g} frames/s", fps),
+                ExpectedText("a recording frame rate", kCameraFpsRange) + " in the camera setup")
+        .WithFile(info_.path);
   }
   info_.fps = fps;
 }
@@ -271,10 +291,26 @@ void CineFile::ReadImageOffsets() {
   }
   const std::vector<char> table = ReadAt(offsets_offset_, count * 8, "the image offsets");
   image_offsets_.resize(count);
+  for (std::uint64_t i = 0; i < count; ++i) image_offsets_[i] = U64(table, i * 8);
+  // Images closer together than the image header's size, or larger than the whole file: a corrupt
+  // biWidth/biHeight, not a truncated file (whose images lie where they should, up to its end).
+  const std::uint64_t image_bytes = kAnnotationMinBytes + layout_.frame_bytes;
+  const std::uint64_t spacing = count >= 2 && image_offsets_[1] > image_offsets_[0]
+                                    ? image_offsets_[1] - image_offsets_[0]
+                                    : 0;
+  if ((spacing > 0 && spacing < image_bytes) || image_bytes > file_bytes_) {
+    throw FormatError(
+        fmt::format("biWidth x biHeight {} x {} pixels of {} bits: {} bytes a frame, {}",
+                    layout_.width_px, layout_.height_px, layout_.container_bits,
+                    layout_.frame_bytes,
+                    spacing > 0 && spacing < image_bytes
+                        ? fmt::format("while the file's images are {} bytes apart", spacing)
+                        : fmt::format("more than the whole {}-byte file", file_bytes_)),
+        "image dimensions of the frames the file holds (a corrupt image header; save the cine "
+        "again from Phantom Camera Control)");
+  }
   for (std::uint64_t i = 0; i < count; ++i) {
-    image_offsets_[i] = U64(table, i * 8);
-    const std::uint64_t need = kAnnotationMinBytes + layout_.frame_bytes;
-    if (image_offsets_[i] > file_bytes_ || need > file_bytes_ - image_offsets_[i]) {
+    if (image_offsets_[i] > file_bytes_ || image_bytes > file_bytes_ - image_offsets_[i]) {
       throw Truncated(static_cast<long long>(i));
     }
   }
@@ -286,6 +322,26 @@ Error CineFile::Truncated(long long index) const {
                          std::to_string(info_.first_frame_number + index) + ")",
                      "a complete cine file: it is truncated (an interrupted copy or save?); copy "
                      "it again or save it again from the camera software");
+}
+
+void CineFile::CheckRateAgainstTimeStamps() const {
+  const std::vector<double>& t = info_.time_s;
+  if (t.size() < 2) return;
+  std::vector<double> dt(t.size() - 1);
+  for (std::size_t i = 0; i + 1 < t.size(); ++i) dt[i] = t[i + 1] - t[i];
+  const auto middle = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
+  std::nth_element(dt.begin(), middle, dt.end());
+  const double median_s = *middle;
+  if (std::abs(median_s * info_.fps - 1) <= kFrameRateTolerance) return;
+  throw Error(ErrorKind::kFileFormat, "FrameRate",
+              fmt::format("{:g} frames/s, while the time stamps say {:.6g} frames/s (median "
+                          "interval {:.6g} s of {} intervals)",
+                          info_.fps, 1 / median_s, median_s, dt.size()),
+              fmt::format("a frame rate within {:g} % of the time stamps' (the camera setup "
+                          "contradicts the time stamps: save the cine again from Phantom Camera "
+                          "Control)",
+                          100 * kFrameRateTolerance))
+      .WithFile(info_.path);
 }
 
 void CineFile::ReadTimeStamps() {
@@ -309,6 +365,7 @@ void CineFile::ReadTimeStamps() {
       for (std::size_t i = 0; i < count; ++i) {
         info_.time_s[i] = Time64Difference(stamps, 8 * i, trigger_fractions, trigger_seconds);
       }
+      CheckRateAgainstTimeStamps();
       return;
     }
     at += block_bytes;

@@ -125,9 +125,7 @@ class CameraFileSource : public FrameSource {
   std::string Name(int index) const override {
     return fmt::format("{} frame {}", path_, FrameNumber(index));
   }
-  long long FrameNumber(int index) const override {
-    return file_->info().first_frame_number + index;
-  }
+  long long FrameNumber(int index) const override { return file_->info().FrameNumber(index); }
   double TimeS(int index) const override {
     const std::vector<double>& t = file_->info().time_s;
     const auto k = static_cast<std::size_t>(index);

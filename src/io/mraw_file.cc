@@ -9,7 +9,9 @@
 // - .cihx: an XML document <cih> ... </cih>, in some versions after a binary preamble; the same
 //   values under recordInfo/recordRate, frameInfo/totalFrame, frameInfo/startFrame,
 //   imageDataInfo/resolution/width and /height, imageDataInfo/colorInfo/type and /bit,
-//   imageDataInfo/effectiveBit/depth and /side, imageFileInfo/fileFormat.
+//   imageDataInfo/effectiveBit/depth and /side, imageFileInfo/fileFormat, and the save step
+//   under frameInfo/skipFrame (1 when every recorded frame was saved, as "Save Step" 1: a
+//   .cihx of PFV holds <skipFrame>1</skipFrame> beside equal totalFrame and recordedFrame).
 // - .mraw: Total Frame frames one after the other, no header and no padding; each frame rows
 //   top-down, Image Width pixels each, as one stream of Color Bit bits per pixel: 8-bit one byte a
 //   pixel; 16-bit little-endian words; 10 and 12-bit packed most significant bit first (12-bit: 2
@@ -19,7 +21,10 @@
 //   down here so that values run 0 .. 2^depth - 1).
 // - Frame numbers: "Start Frame" is the camera's number of the file's first frame (negative for
 //   frames before the trigger); "Save Step" n keeps every n-th recorded frame, so file frame i is
-//   camera frame start + i * n, at time (start + i * n) / "Record Rate(fps)".
+//   camera frame start + i * n, at time (start + i * n) / "Record Rate(fps)"; the file's frames
+//   are then "Record Rate(fps)" / n per second apart.
+// - Text: ASCII (or UTF-8); a .cih saved as UTF-16 (by a text editor) is decoded when its text is
+//   ASCII, and refused by name otherwise.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -38,6 +43,7 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/range.h"
 #include "impactdic/core/strings.h"
 #include "impactdic/io/camera_file.h"
 
@@ -56,8 +62,7 @@ struct Key {
 constexpr Key kRecordRate{"Record Rate(fps)", "recordInfo/recordRate"};
 constexpr Key kTotalFrame{"Total Frame", "frameInfo/totalFrame"};
 constexpr Key kStartFrame{"Start Frame", "frameInfo/startFrame"};
-// Not known in .cihx files: there the step is taken as 1.
-constexpr Key kSaveStep{"Save Step", ""};
+constexpr Key kSaveStep{"Save Step", "frameInfo/skipFrame"};
 constexpr Key kWidth{"Image Width", "imageDataInfo/resolution/width"};
 constexpr Key kHeight{"Image Height", "imageDataInfo/resolution/height"};
 constexpr Key kColorType{"Color Type", "imageDataInfo/colorInfo/type"};
@@ -127,6 +132,47 @@ std::string ReadDescriptionBytes(const std::string& path) {
     throw Error(ErrorKind::kIo, path, "a failed read", "a readable file");
   }
   return bytes;
+}
+
+// The text of a .cih: its bytes when they hold no NUL; decoded when it is UTF-16 (a byte-order
+// mark, or no BOM and ASCII text, every other byte NUL), characters beyond ASCII read as '?' (the
+// keys and the values read are ASCII); else Error naming the file.
+std::string CihText(const std::string& bytes, const std::string& path) {
+  if (bytes.find('\0') == std::string::npos) return bytes;
+  const auto byte = [&](size_t i) {
+    return static_cast<unsigned>(static_cast<unsigned char>(bytes[i]));
+  };
+  size_t begin = 0;
+  bool little_endian = true;
+  bool utf16 = false;
+  if (bytes.size() >= 2 &&
+      ((byte(0) == 0xFF && byte(1) == 0xFE) || (byte(0) == 0xFE && byte(1) == 0xFF))) {
+    begin = 2;
+    little_endian = byte(0) == 0xFF;
+    utf16 = true;
+  } else if (bytes.size() >= 2) {  // No BOM: ASCII text has its high bytes NUL.
+    little_endian = bytes[0] != '\0';
+    utf16 = true;
+    for (size_t i = little_endian ? 1 : 0; i < std::min<size_t>(bytes.size(), 512); i += 2) {
+      utf16 = utf16 && bytes[i] == '\0';
+    }
+  }
+  std::string text;
+  for (size_t i = begin; utf16 && i < bytes.size(); i += 2) {
+    const unsigned unit = i + 1 >= bytes.size() ? 0
+                          : little_endian       ? byte(i) | (byte(i + 1) << 8)
+                                                : (byte(i) << 8) | byte(i + 1);
+    utf16 = unit != 0;  // A NUL character (or an odd byte count) is no text.
+    text.push_back(unit < 0x80 ? static_cast<char>(unit) : '?');
+  }
+  if (utf16) return text;
+  const size_t nul = bytes.find('\0');
+  throw Error(
+      ErrorKind::kFileFormat, path,
+      fmt::format("a NUL byte at byte {}: binary data, not text{}", nul,
+                  begin > 0 ? " (UTF-16 by its byte-order mark, with a NUL character)" : ""),
+      "a .cih description as ASCII or UTF-8 text (as Photron FASTCAM Viewer writes it; "
+      "save it again as such, or use the .cihx)");
 }
 
 // "Key : Value" lines up to a line "END" (after which the software appends other sections); the
@@ -217,16 +263,29 @@ struct MrawLayout {
   long long frame_bytes = 0;
 };
 
+constexpr const char* kColourUnsupported =
+    "colour .mraw files are not supported: export the frames as 16-bit monochrome TIFF from "
+    "Photron FASTCAM Viewer, or record in monochrome";
+
+// A colour type other than Mono is refused by that field; colour packing (24, 30, 36 or 48 bits:
+// three channels) by Color Bit, saying when Color Type claims Mono that the two contradict.
 void CheckMonochrome(const Description& d, long long color_bit) {
   const std::string* type = d.Find(kColorType);
-  const bool colour_bits = color_bit == 24 || color_bit == 30 || color_bit == 36 || color_bit == 48;
-  if ((type != nullptr && !type->empty() && ToLower(*type) != "mono" &&
-       ToLower(*type) != "monochrome") ||
-      colour_bits) {
-    throw Error(ErrorKind::kFileFormat, d.Name(kColorType),
-                type != nullptr ? "'" + *type + "'" : fmt::format("{}-bit colour", color_bit),
-                "a monochrome recording (colour .mraw files are not supported: export the frames "
-                "as 16-bit monochrome TIFF from Photron FASTCAM Viewer, or record in monochrome)")
+  const bool typed = type != nullptr && !type->empty();
+  if (typed && ToLower(*type) != "mono" && ToLower(*type) != "monochrome") {
+    throw Error(ErrorKind::kFileFormat, d.Name(kColorType), "'" + *type + "'",
+                fmt::format("a monochrome recording ({})", kColourUnsupported))
+        .WithFile(d.path);
+  }
+  if (color_bit == 24 || color_bit == 30 || color_bit == 36 || color_bit == 48) {
+    throw Error(ErrorKind::kFileFormat, d.Name(kColorBit),
+                fmt::format("{} bits, the packing of colour pixels (three channels of {} bits){}",
+                            color_bit, color_bit / 3,
+                            typed ? fmt::format(", while {} says '{}': the two fields contradict",
+                                                d.Name(kColorType), *type)
+                                  : ""),
+                fmt::format("a monochrome recording of 8, 10, 12 or 16 bits per pixel ({})",
+                            kColourUnsupported))
         .WithFile(d.path);
   }
 }
@@ -263,14 +322,26 @@ MrawLayout CheckLayout(const Description& d) {
   layout.frame_count = d.Integer(kTotalFrame, 1, std::numeric_limits<int>::max());
   layout.start_frame = d.Integer(kStartFrame, -(1LL << 40), 1LL << 40);
   layout.save_step = d.Integer(kSaveStep, 1, 1 << 20, /*fallback=*/1);
+  // The camera's rate and the rate of the saved frames, each a camera's (kCameraFpsRange): an
+  // absurd rate would make every velocity absurd.
   const std::string& rate_text = d.Require(kRecordRate);
   const std::optional<double> rate = ParseNumber(rate_text);
-  if (!rate || !std::isfinite(*rate) || *rate <= 0) {
+  if (!rate || !kCameraFpsRange.Contains(*rate)) {
     throw Error(ErrorKind::kFileFormat, d.Name(kRecordRate), "'" + rate_text + "'",
-                "a frame rate > 0 [1/s]")
+                ExpectedText("a recording frame rate", kCameraFpsRange))
         .WithFile(d.path);
   }
   layout.record_rate_fps = *rate;
+  const double saved_fps = *rate / static_cast<double>(layout.save_step);
+  if (!kCameraFpsRange.Contains(saved_fps)) {
+    throw Error(ErrorKind::kFileFormat, d.Name(kSaveStep),
+                fmt::format("{} ({:g} frames/s recorded, one in {} kept: {:g} frames/s)",
+                            layout.save_step, *rate, layout.save_step, saved_fps),
+                ExpectedText("a rate of the saved frames (" + d.Name(kRecordRate) + " / " +
+                                 d.Name(kSaveStep) + ")",
+                             kCameraFpsRange))
+        .WithFile(d.path);
+  }
   const long long frame_bits =
       static_cast<long long>(layout.width_px) * layout.height_px * layout.container_bits;
   if (frame_bits % 8 != 0) {
@@ -404,7 +475,7 @@ std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
   if (description.xml) {
     ParseCihx(bytes, &description);
   } else {
-    ParseCih(bytes, &description);
+    ParseCih(CihText(bytes, description_path), &description);
   }
   const MrawLayout layout = CheckLayout(description);
 
@@ -430,11 +501,12 @@ std::unique_ptr<CameraFileReader> OpenMrawFile(const std::string& path) {
   info.data_bits = layout.data_bits;
   info.frame_count = layout.frame_count;
   info.first_frame_number = layout.start_frame;
+  info.frame_step = layout.save_step;
   info.fps = layout.record_rate_fps / static_cast<double>(layout.save_step);
   info.time_s.resize(static_cast<size_t>(layout.frame_count));
   for (long long i = 0; i < layout.frame_count; ++i) {
     info.time_s[static_cast<size_t>(i)] =
-        static_cast<double>(layout.start_frame + i * layout.save_step) / layout.record_rate_fps;
+        static_cast<double>(info.FrameNumber(i)) / layout.record_rate_fps;
   }
   return std::make_unique<MrawReader>(std::move(info), layout);
 }

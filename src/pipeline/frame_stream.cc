@@ -94,9 +94,10 @@ CameraClock SceneFrameClock(const Scene& scene) {
   for (std::size_t k = 1; k < info.time_s.size(); ++k) {
     const double dt = info.time_s[k] - info.time_s[k - 1];
     if (std::abs(dt * fps - 1) <= kFrameRateTolerance) continue;
-    const long long number = info.first_frame_number + static_cast<long long>(k);
+    const long long number = info.FrameNumber(static_cast<long long>(k));
     throw Error(ErrorKind::kFileFormat, "time stamps",
-                fmt::format("frames {} and {} {:.6g} s apart", number - 1, number, dt),
+                fmt::format("frames {} and {} {:.6g} s apart",
+                            info.FrameNumber(static_cast<long long>(k) - 1), number, dt),
                 fmt::format("frames 1 / {:.6g} = {:.6g} s apart within {:.2g} % (a dropped or "
                             "repeated frame would make the velocities wrong): analyse the frames "
                             "on either side as separate recordings",

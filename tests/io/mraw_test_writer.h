@@ -19,8 +19,9 @@ struct MrawWriteOptions {
   std::string effective_side = "Lower";
   std::string color_type = "Mono";
   double fps = 5000;
+  std::string record_rate;  // Written as the rate instead of `fps` when not empty ("1e300").
   long long start_frame = 0;
-  int save_step = 0;                   // 0: no "Save Step" line.
+  int save_step = 0;                   // 0: no "Save Step" line (.cihx: no <skipFrame>).
   bool cihx = false;                   // XML description instead of text.
   bool binary_preamble = true;         // For .cihx: bytes before the XML, as some versions write.
   long long total_frame = -1;          // -1: the number of frames written.
@@ -83,6 +84,8 @@ inline std::string WriteMraw(const std::string& stem, const std::vector<cv::Mat>
   const long long total =
       o.total_frame >= 0 ? o.total_frame : static_cast<long long>(frames.size());
   const int effective = o.effective_bit > 0 ? o.effective_bit : o.color_bit;
+  const std::string rate =
+      o.record_rate.empty() ? std::to_string(static_cast<long long>(o.fps)) : o.record_rate;
   if (!o.cihx) {
     const std::string path = stem + ".cih";
     std::ofstream cih(path);
@@ -92,7 +95,7 @@ inline std::string WriteMraw(const std::string& stem, const std::vector<cv::Mat>
     cih << "#Camera Information Header\r\n";
     line("Date", "2026/11/27");
     line("Camera Type", "FASTCAM test writer");
-    line("Record Rate(fps)", std::to_string(static_cast<long long>(o.fps)));
+    line("Record Rate(fps)", rate);
     line("Shutter Speed(s)", "1/100000");
     line("Trigger Mode", "Center");
     line("Original Total Frame", std::to_string(total));
@@ -118,10 +121,12 @@ inline std::string WriteMraw(const std::string& stem, const std::vector<cv::Mat>
   }
   cihx << "<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"yes\"?>\n<cih>\n"
        << " <fileInfo><date>2026/11/27</date></fileInfo>\n"
-       << " <recordInfo version=\"1\">\n  <recordRate>" << static_cast<long long>(o.fps)
+       << " <recordInfo version=\"1\">\n  <recordRate>" << rate
        << "</recordRate>\n  <shutterSpeed>100000</shutterSpeed>\n </recordInfo>\n"
        << " <frameInfo>\n  <totalFrame>" << total << "</totalFrame>\n  <recordedFrame>" << total
-       << "</recordedFrame>\n  <startFrame>" << o.start_frame << "</startFrame>\n </frameInfo>\n"
+       << "</recordedFrame>\n  <startFrame>" << o.start_frame << "</startFrame>\n"
+       << (o.save_step > 0 ? "  <skipFrame>" + std::to_string(o.save_step) + "</skipFrame>\n" : "")
+       << " </frameInfo>\n"
        << " <imageDataInfo>\n  <resolution><width>" << width << "</width><height>" << height
        << "</height></resolution>\n  <colorInfo><type>" << o.color_type << "</type><bit>"
        << o.color_bit << "</bit></colorInfo>\n  <effectiveBit><depth>" << effective
