@@ -67,7 +67,12 @@ DisplacementGradient WarpGradient(const Scene& scene, const DicResultsTable& tab
 DisplacementGradient GradientOfScene(const Scene& scene, const DicResultsTable& table,
                                      const CorrelationSeries& series) {
   if (scene.strain.gradient == StrainGradient::kWarp) return WarpGradient(scene, table, series);
-  return FitDisplacementGradient(series, scene.strain.window);
+  try {
+    return FitDisplacementGradient(series, scene.strain.window);
+  } catch (Error& e) {  // strain.window against the correlation's grid: the scene's key.
+    if (e.where() == "strain.window" && e.file().empty()) e.WithFile(scene.path);
+    throw;
+  }
 }
 
 // The frame of t_e (the momentum stage's end of the peak stage), or why there is none.
@@ -99,12 +104,7 @@ StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries&
   const SceneRunData& d = c.data;
   StrainResult r;
   r.options = scene.strain;
-  try {
-    r.gradient = GradientOfScene(scene, *d.dic, series);
-  } catch (Error& e) {  // strain.window against the correlation's grid: the scene's key.
-    if (e.where() == "strain.window" && e.file().empty()) e.WithFile(scene.path);
-    throw;
-  }
+  r.gradient = GradientOfScene(scene, *d.dic, series);
   r.field = ComputeStrain(r.gradient, d.clock.fps);
   r.dry_density_kg_m3 = scene.model.density_kg_m3;
   r.density_kg_m3 = DensityField(r.field, r.dry_density_kg_m3);
