@@ -132,6 +132,7 @@ void PipelineOptions::Check() const {
 PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options) {
   options.Check();
   CheckSceneStages(scene);
+  CheckSceneOutputs(scene);  // The scene file's were checked when read; a flag's are not.
   const std::string folder =
       options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
   CheckOutputFolderHoldsNoInput(scene, folder,

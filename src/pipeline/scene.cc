@@ -703,6 +703,14 @@ void ReadMomentumRect(YamlSection& momentum, MomentumOptions* m) {
     m->rect_mm = rect;
 }
 
+// outputs.xdmf needs outputs.hdf5: results.xdmf holds no data, its fields are views of results.h5's
+// datasets (/xdmf), so it cannot be written without that file (CheckSceneOutputs).
+bool XdmfWithoutHdf5(const SceneOutputs& o) { return o.xdmf && !o.hdf5; }
+constexpr const char* kXdmfWithoutHdf5 = "true with outputs.hdf5 false";
+constexpr const char* kXdmfNeedsHdf5 =
+    "outputs.hdf5: true with it (results.xdmf's fields are views of results.h5's datasets, "
+    "written only with outputs.hdf5) or outputs.xdmf: false";
+
 // Rules across keys, and the library structs' own Check() as a last guard (it names the struct
 // field; every key's range above is the struct's, so it should never fire). A key already
 // reported (a bad value) is not judged again: it is not also "missing".
@@ -724,6 +732,9 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
     problems->Add(
         root["dic"], "dic.last_frame",
         fmt::format("got {}; expected > dic.first_frame ({}) or -1", d.last_frame, d.first_frame));
+  if (XdmfWithoutHdf5(scene.outputs) && !reported({"outputs", "outputs.hdf5", "outputs.xdmf"}))
+    problems->Add(root["outputs"], "outputs.xdmf",
+                  fmt::format("got {}; expected {}", kXdmfWithoutHdf5, kXdmfNeedsHdf5));
   // The momentum stage runs after the correlation: its grid must be known now.
   const SceneMomentum& m = scene.momentum;
   const bool momentum_runs = !scene.inputs.sensor.empty() && scene.HasStage("correlate") &&
@@ -757,6 +768,12 @@ void CheckScene(const Scene& scene, const YAML::Node& root, YamlProblems* proble
 }
 
 }  // namespace
+
+void CheckSceneOutputs(const Scene& scene) {
+  if (XdmfWithoutHdf5(scene.outputs))
+    throw Error(ErrorKind::kInvalidValue, "outputs.xdmf", kXdmfWithoutHdf5, kXdmfNeedsHdf5)
+        .WithFile(scene.path);
+}
 
 double Scene::ImpactVelocity() const {
   if (test.impact_velocity_m_s) return *test.impact_velocity_m_s;

@@ -156,6 +156,15 @@ DisplacementGradient FitDisplacementGradient(const CorrelationSeries& dic, int w
              fmt::format("{} entries", dic.valid.size()),
              fmt::format("empty or frames x subsets = {}", n));
   const GridIndex g = IndexGrid(dic);
+  // The window must fit inside the grid in both directions (strain.h, FitDisplacementGradient).
+  const std::ptrdiff_t side = std::min(g.cols, g.rows), largest = side % 2 == 1 ? side : side - 1;
+  CheckValue(window <= side, "strain.window",
+             fmt::format("{} on a subset grid of {} columns x {} rows", window, g.cols, g.rows),
+             largest >= 3 ? fmt::format("at most {} (the grid's smaller side), so that each fit "
+                                        "stays local; or a smaller dic.step",
+                                        largest)
+                          : std::string("a grid of at least 3 x 3 subsets for strain.gradient: "
+                                        "fit (a smaller dic.step), or strain.gradient: warp"));
   DisplacementGradient out;
   out.frames = dic.frames;
   out.subsets = dic.subsets;
@@ -278,11 +287,17 @@ CompactedZone FindCompactedZone(const StrainField& strain, const CorrelationSeri
   z.frame = frame;
   double deepest = top;
   const std::size_t row = frame * strain.subsets;
+  bool measured = false;  // Any finite eps_v in the frame.
   for (std::size_t i = 0; i < strain.subsets; ++i) {
     const double e = strain.eps_v[row + i];
+    measured = measured || std::isfinite(e);
     if (!(std::isfinite(e) && e > options.compaction_threshold)) continue;
     ++z.samples;
     deepest = std::max(deepest, dic.y_px[i]);
+  }
+  if (!measured) {
+    z.area_mm2 = z.depth_mm = kNaN;
+    return z;
   }
   z.area_mm2 = static_cast<double>(z.samples) * g.sx * g.sy * mm_per_px * mm_per_px;
   z.depth_mm = (deepest - top) * mm_per_px;

@@ -182,10 +182,50 @@ TEST(FitDisplacementGradient, NaNWhereInvalidOrTooFewNeighbours) {
 }
 
 TEST(FitDisplacementGradient, CollinearNeighboursGiveNaN) {
-  // A single row of subsets: no dY information.
-  const AffineSeries a = MakeAffine({0.01, 0, 0, 0}, 6, 1, {});
-  const DisplacementGradient g = FitDisplacementGradient(a.dic, /*window=*/5);
-  for (double v : g.dudx) EXPECT_TRUE(std::isnan(v));
+  // A 5 x 5 grid whose frame 2 keeps only its middle row valid: no dY information there.
+  AffineSeries a = MakeAffine({0.01, 0, 0, 0}, 5, 5, {});
+  CorrelationSeries& d = a.dic;
+  const std::size_t n = d.subsets;
+  for (std::size_t i = 0; i < n; ++i)
+    if (d.y_px[i] != 70) d.valid[2 * n + i] = 0;
+  const DisplacementGradient g = FitDisplacementGradient(d, /*window=*/5);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_TRUE(std::isnan(g.dudx[2 * n + i])) << "subset " << i;
+    EXPECT_NEAR(g.dudx[3 * n + i], a.scale[3] * 0.01, 1e-12) << "subset " << i;
+  }
+}
+
+// The window must fit inside the grid in both directions: on 18 x 10, 9 is the largest (window
+// 99 was one plane through the whole grid). A grid of fewer than 3 rows takes no window.
+TEST(FitDisplacementGradient, RefusesAWindowLargerThanTheGrid) {
+  const AffineSeries a = MakeAffine({0.01, 0, 0, -0.02}, 18, 10, {}, /*frames=*/2);
+  const DisplacementGradient g = FitDisplacementGradient(a.dic, /*window=*/9);
+  EXPECT_NEAR(g.dvdy[a.dic.subsets], -0.02, 1e-12);
+  for (int window : {11, 19, 99}) {
+    try {
+      FitDisplacementGradient(a.dic, window);
+      FAIL() << "window " << window << ": no error";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("strain.window"), std::string::npos) << what;
+      EXPECT_NE(what.find(std::to_string(window) + " on a subset grid of 18 columns x 10 rows"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("at most 9"), std::string::npos) << what;
+    }
+  }
+  // Holes do not shrink the grid (its extent is the ROI's): a 5 x 5 grid with a hole takes 5.
+  EXPECT_NO_THROW(FitDisplacementGradient(MakeAffine({0.01, 0, 0, 0}, 5, 5, {{2, 2}}).dic, 5));
+  // A single row or two: no window fits.
+  for (int rows : {1, 2}) {
+    try {
+      FitDisplacementGradient(MakeAffine({0.01, 0, 0, 0}, 6, rows, {}).dic, /*window=*/3);
+      FAIL() << rows << " row(s): no error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("a grid of at least 3 x 3 subsets"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 TEST(FitDisplacementGradient, RefusesAnOffGridSubsetAndABadWindow) {
@@ -293,6 +333,22 @@ TEST(FindCompactedZone, AreaAndDepthFromTheTopRowOrTheSurface) {
   EXPECT_EQ(c.area_mm2, 0.0);
   EXPECT_EQ(c.depth_mm, 0.0);
   EXPECT_THROW(FindCompactedZone(z.strain, z.dic, 2, options, 0.5), Error);
+}
+
+// A frame without any finite eps_v: the zone was not measured (NaN), not empty (0).
+TEST(FindCompactedZone, NaNWhenTheFrameHasNoFiniteStrain) {
+  ZoneCase z = MakeZoneCase();
+  const std::size_t n = z.dic.subsets;
+  for (std::size_t i = 0; i < n; ++i) z.strain.eps_v[n + i] = std::nan("");
+  const CompactedZone c = FindCompactedZone(z.strain, z.dic, 1, StrainOptions{}, 0.5);
+  EXPECT_EQ(c.samples, 0u);
+  EXPECT_TRUE(std::isnan(c.area_mm2));
+  EXPECT_TRUE(std::isnan(c.depth_mm));
+  // One finite sample below the threshold: measured, no compaction.
+  z.strain.eps_v[n + IdAt(z.dic, 120, 60)] = 0.0;
+  const CompactedZone one = FindCompactedZone(z.strain, z.dic, 1, StrainOptions{}, 0.5);
+  EXPECT_EQ(one.area_mm2, 0.0);
+  EXPECT_EQ(one.depth_mm, 0.0);
 }
 
 TEST(ShearBands, RidgesOfMaximumShearAboveTheThreshold) {

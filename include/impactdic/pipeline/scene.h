@@ -197,6 +197,12 @@ Scene LoadScene(const std::string& path);
 // Same, from text (`path` is used for messages and to resolve relative paths).
 Scene ParseScene(const std::string& yaml_text, const std::string& path);
 
+// The rule across the outputs.* keys, which a flag can break after the file was read (the flags
+// set one key at a time): outputs.xdmf needs outputs.hdf5 (results.xdmf's fields are views of
+// results.h5's datasets). Error(kInvalidValue) naming both keys and the scene file. ParseScene
+// reports the file's breach with its line; RunScene checks the scene it is given.
+void CheckSceneOutputs(const Scene& scene);
+
 // The library options the stages take, from the scene (the sensor's g and v0, the momentum's
 // pounder and soil from the test; the momentum footprint from the pixel position and the scale).
 // The drawing of the figures and animations the scene's outputs.* keys ask for (figures, animation,

@@ -45,7 +45,9 @@ inline constexpr EnumNames<StrainGradient, 2> kStrainGradientNames{
 struct StrainOptions {
   bool enabled = false;  // Scene key strain.enabled: compute /strain at all.
   StrainGradient gradient = StrainGradient::kFit;
-  // kFit: neighbourhood side in grid points, odd, >= 3. Default 3: docs/validation.md "Strain".
+  // kFit: neighbourhood side in grid points, odd, >= 3, and at most the subset grid's columns and
+  // rows (checked by FitDisplacementGradient, where the grid is known). Default 3:
+  // docs/validation.md "Strain".
   int window = 3;
   // The compacted zone: samples whose eps_v exceeds this (compression positive, dimensionless).
   double compaction_threshold = 0.01;
@@ -62,7 +64,12 @@ struct DisplacementGradient {
 };
 
 // kFit: the gradient from the neighbours' displacements. The grid is found from dic.x_px, dic.y_px
-// (a regular grid with one step in x and y, possibly with holes: ROI, mask). window odd >= 3.
+// (a regular grid with one step in x and y, possibly with holes: ROI, mask); cols x rows is its
+// extent, holes included. window odd >= 3, and window <= cols and window <= rows: the window must
+// fit inside the grid in both directions. A larger one reaches across the whole grid from the
+// subsets near the middle, and from every subset once window >= 2 max(cols, rows) - 1, where
+// the "local" fit is one plane through the whole grid. Error naming strain.window, the window and
+// cols x rows otherwise (a grid with fewer than 3 rows or columns takes no window).
 DisplacementGradient FitDisplacementGradient(const CorrelationSeries& dic, int window);
 
 // The strain measures of one gradient (tension positive except eps_v; see the file comment).
@@ -89,7 +96,8 @@ std::vector<double> DensityField(const StrainField& strain, double dry_density_k
 
 // The compacted zone in one frame: the valid samples with eps_v > compaction_threshold. Area =
 // their count times the grid cell area on the panel [mm^2]; depth = the deepest such subset's
-// reference y minus the soil surface's y, on the panel [mm] (0 and 0 when none; never < 0). The
+// reference y minus the soil surface's y, on the panel [mm] (0 and 0 when none; never < 0; NaN
+// and NaN when the frame has no finite eps_v at all: not measured, not "no compaction"). The
 // soil surface is surface_y_px (image y of the undisturbed surface, e.g. the scene's
 // momentum.surface_y_px) when finite, else the grid's top row y.
 struct CompactedZone {

@@ -67,7 +67,12 @@ DisplacementGradient WarpGradient(const Scene& scene, const DicResultsTable& tab
 DisplacementGradient GradientOfScene(const Scene& scene, const DicResultsTable& table,
                                      const CorrelationSeries& series) {
   if (scene.strain.gradient == StrainGradient::kWarp) return WarpGradient(scene, table, series);
-  return FitDisplacementGradient(series, scene.strain.window);
+  try {
+    return FitDisplacementGradient(series, scene.strain.window);
+  } catch (Error& e) {  // strain.window against the correlation's grid: the scene's key.
+    if (e.where() == "strain.window" && e.file().empty()) e.WithFile(scene.path);
+    throw;
+  }
 }
 
 // The frame of t_e (the momentum stage's end of the peak stage), or why there is none.
@@ -83,6 +88,14 @@ std::optional<std::size_t> TeFrame(const SceneRunData& d, std::size_t frames, st
     return std::nullopt;
   }
   return m.end_frame;
+}
+
+// Whether any strain is finite after the first reference (row 0, where the fit and the warp give
+// 0 for every valid subset).
+bool AnyStrainAfterReference(const StrainField& s) {
+  if (s.eps_v.size() <= s.subsets) return false;
+  return std::any_of(s.eps_v.begin() + static_cast<std::ptrdiff_t>(s.subsets), s.eps_v.end(),
+                     [](double e) { return std::isfinite(e); });
 }
 
 // The strain result of the series (the gradient, every measure, density, bands, zones).
@@ -110,6 +123,11 @@ StrainResult ComputeStrainResult(const StageContext& c, const CorrelationSeries&
     r.te_known = true;
     r.zone_te = FindCompactedZone(r.field, series, *te, r.options, d.mm_per_px, r.surface_y_px);
   }
+  if (!AnyStrainAfterReference(r.field)) {
+    // Nothing measured (the last frame may be the reference): no zone, not an empty one.
+    r.zone_end.area_mm2 = r.zone_end.depth_mm = kNaN;
+    r.zone_te.area_mm2 = r.zone_te.depth_mm = kNaN;
+  }
   if (!std::isfinite(r.surface_y_px)) {
     double top = series.y_px.front();
     for (double y : series.y_px) top = std::min(top, y);
@@ -134,6 +152,35 @@ StrainFigures FiguresOf(const StrainResult& r, const SceneRunData& d) {
   return s;
 }
 
+// Why the compacted zone is null where FindCompactedZone found no finite strain in its frame: no
+// finite strain after the reference is the stage's failure (it measured nothing); a zone at t_e or
+// at the last frame alone, a warning.
+void ReportUnmeasuredZones(StageContext& c, const StrainResult& r) {
+  if (!AnyStrainAfterReference(r.field)) {
+    c.summary.failures.push_back(
+        {"strain", fmt::format("no finite strain after the reference frame: in the {} later "
+                               "analysed frame(s) every subset is invalid{}, so the compacted "
+                               "zone was not measured",
+                               r.field.frames - std::min<std::size_t>(r.field.frames, 1),
+                               r.options.gradient == StrainGradient::kFit
+                                   ? " or has fewer than 3 valid, non-collinear neighbours in "
+                                     "its strain.window"
+                                   : "")});
+    return;
+  }
+  if (std::isnan(r.zone_end.area_mm2)) {
+    c.summary.warnings.push_back(
+        "strain: no finite strain in the last analysed frame: the compacted zone at the end is "
+        "null");
+  }
+  if (r.te_known && std::isnan(r.zone_te.area_mm2)) {
+    c.summary.warnings.push_back(
+        fmt::format("strain: no finite strain in the frame of t_e (analysed frame {}): the "
+                    "compacted zone at t_e is null",
+                    r.zone_te.frame));
+  }
+}
+
 class StrainStage : public Stage {
  public:
   const char* name() const override { return "strain"; }
@@ -156,16 +203,19 @@ class StrainStage : public Stage {
     }
     const StrainResult& r = *d.strain;
     c.summary.strain = FiguresOf(r, d);
+    ReportUnmeasuredZones(c, r);
+    const auto zone = [](const CompactedZone& z) {
+      return std::isnan(z.area_mm2)
+                 ? std::string("not measured (no finite strain)")
+                 : fmt::format("{:.4g} mm^2, {:.4g} mm deep", z.area_mm2, z.depth_mm);
+    };
     return fmt::format(
-        "{} gradient{}; compacted zone (eps_v > {}) at the end {:.4g} mm^2, {:.4g} mm deep (from "
-        "the {}); at t_e {}",
+        "{} gradient{}; compacted zone (eps_v > {}) at the end {} (from the {}); at t_e {}",
         kStrainGradientNames.Name(r.options.gradient),
         r.options.gradient == StrainGradient::kFit ? fmt::format(" ({0}x{0})", r.options.window)
                                                    : std::string(),
-        r.options.compaction_threshold, r.zone_end.area_mm2, r.zone_end.depth_mm, r.depth_from,
-        r.te_known
-            ? fmt::format("{:.4g} mm^2, {:.4g} mm deep", r.zone_te.area_mm2, r.zone_te.depth_mm)
-            : std::string("unknown"));
+        r.options.compaction_threshold, zone(r.zone_end), r.depth_from,
+        r.te_known ? zone(r.zone_te) : std::string("unknown"));
   }
 };
 
