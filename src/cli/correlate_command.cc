@@ -59,15 +59,22 @@ void RegisterCorrelateCommand(CLI::App& app) {
   cmd->add_option("--deformed", a->deformed, "Deformed image(s), in order");
   AddSceneKeyOption(cmd, "inputs.frames", &a->frames,
                     SceneKeyFlags({"inputs"}).front().help + " (the first is the reference)");
-  cmd->add_option("--first", a->first,
-                  "First frame (the reference) by the frames' own numbers: in a numbered file name "
-                  "(else the position), a video's index, a camera's (< 0: before the trigger)");
-  cmd->add_option("--last", a->last, "Last frame, numbered as --first");
+  // --first and --last choose the frames that --dic.first_frame and --dic.last_frame choose by
+  // index: one option each (CheckOneNamePerOption).
+  SetsKeys(cmd->add_option("--first", a->first,
+                           "First frame (the reference) by the frames' own numbers: in a numbered "
+                           "file name (else the position), a video's index, a camera's (< 0: "
+                           "before the trigger)"),
+           {"dic.first_frame", "dic.first_frame_number"});
+  SetsKeys(cmd->add_option("--last", a->last, "Last frame, numbered as --first"),
+           {"dic.last_frame", "dic.last_frame_number"});
   AddSceneKeyOption(cmd, "dic.roi", &a->roi,
                     "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
-  cmd->add_option("--gaussian", a->gaussian,
-                  "auto | none | on | SIGMA[,KERNEL]: short for the --preprocess.gaussian.* flags")
-      ->default_str(ToString(GaussianBlurOptions{}.mode));
+  SetsKeys(cmd->add_option("--gaussian", a->gaussian,
+                           "auto | none | on | SIGMA[,KERNEL]: short for the "
+                           "--preprocess.gaussian.* flags")
+               ->default_str(ToString(GaussianBlurOptions{}.mode)),
+           {"preprocess.gaussian"});
   cmd->add_option("-o,--output", a->output, "Output file (.csv or .h5)");
   cmd->add_flag(kAllowPartialFlag, a->allow_partial,
                 "Write the output (exit 0) even when no subset is valid in any deformed image");
