@@ -238,7 +238,7 @@ void AddOutlierKeys(YamlOptionTable& t, OutlierCheckOptions* o) {
         "The noise level epsilon of the normalized median test");
   t.Add("outlier_sigma_factor", &o->sigma_factor, kOutlierSigmaFactorRange, "a factor",
         "...and |d - median| above this times the subset's own sigma");
-  t.Add("outlier_min_neighbours", &o->min_neighbours, kOutlierNeighboursRange, "a neighbour count",
+  t.Add("outlier_min_neighbours", &o->min_neighbours, kOutlierNeighboursRange, "neighbour count",
         "Converged neighbours (of 8, in opposite pairs) needed to judge a subset");
 }
 
