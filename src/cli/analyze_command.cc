@@ -39,8 +39,10 @@ void RegisterAnalyzeCommand(CLI::App& app) {
                   "/sensor, /kinematics, /momentum (and /model, /strain when the scene has "
                   "them) into the results HDF5");
   cmd->add_option("--sensor", args->sensor, "DAQ CSV (time_s, accel_g [, exposure, force*])");
-  cmd->add_flag("--from-release", args->from_release,
-                "Short for --sensor.integrate_from release (--sensor: this or --impact-velocity)");
+  SetsKeys(cmd->add_flag(
+               "--from-release", args->from_release,
+               "Short for --sensor.integrate_from release (--sensor: this or --impact-velocity)"),
+           {"sensor.integrate_from"});
   AddSceneKeyOption(cmd, "sensor.cutoff_hz", &args->cutoff, "low-pass cut-off [Hz]",
                     fmt::format("{}", args->cutoff));
   AddSceneKeyOption(cmd, "sensor.accel_column", &args->accel_column,

@@ -61,11 +61,28 @@ inline constexpr const char* kAllowPartialFlag = "--allow-partial";
 // "PROBLEM; `impactdic COMMAND --allow-partial` REMEDY" (PartialResultsError's two texts).
 [[noreturn]] void RethrowWithPartialFlag(const PartialResultsError& e, const std::string& command);
 
+// One name per option. The scene keys a flag of a command sets (its own key, the key it is an
+// alias of, or the keys a short form sets together: correlate's --gaussian sets
+// preprocess.gaussian.*); a key names itself and the keys nested in it. AddKeyFlags and
+// AddSceneKeyOption record theirs; a flag a command binds by hand records its own here.
+void SetsKeys(const CLI::Option* flag, const std::vector<std::string>& keys);
+// Call once, with every command registered: every option that takes one value (or none: a switch)
+// keeps each value it is given, for CheckOneNamePerOption to judge (CLI11 would keep a switch's
+// last silently, and say "At Most 1 required" of an option).
+void PrepareOneNamePerOption(CLI::App* app);
+// After parsing, before any command runs (the app's parse_complete_callback): Error(kInvalidValue)
+// "A and B both given ..." when two flags given to the command set the same key (a key and its
+// alias, two aliases, a short form and one of its keys), or "--X given twice" when one option that
+// takes one value is given twice; each naming the flags as given, with their values. Whatever the
+// order, no name silently wins over another.
+void CheckOneNamePerOption(const CLI::App& app);
+
 // Option-table keys as flags (pipeline/scene_flags.h): each key becomes a flag named as the key
 // ("--dic.max_iterations") and one per alias of the command ("--search-radius"), unless `cmd`
 // binds that name itself; their text is kept in `values` (flag -> key, text). ApplyKeyFlags
 // passes the ones given to `set` (key, text, flag used: SetSceneKey, SetOptionTableKey); a key
-// given under two names is an error. The Scene forms: the scene's tables named `sections`.
+// given under two names never gets here (CheckOneNamePerOption). The Scene forms: the scene's
+// tables named `sections`.
 using SceneKeyValues = std::map<std::string, std::pair<std::string, std::string>>;
 using SetKey = std::function<void(const std::string&, const std::string&, const std::string&)>;
 void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyValues* values);
@@ -75,19 +92,20 @@ void AddSceneKeyFlags(CLI::App* cmd, const std::vector<std::string>& sections,
 void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene* scene);
 
 // A scene key the command binds itself (its own type and checks): the flag "--KEY" and the
-// command's aliases of it (SceneFlagAliases), all storing into `value`; an alias excludes the key
-// flag. `default_text` (if any) is shown as their default.
+// command's aliases of it (SceneFlagAliases), all storing into `value`; giving two of them is an
+// error (CheckOneNamePerOption). `default_text` (if any) is shown as their default.
 template <typename T>
 void AddSceneKeyOption(CLI::App* cmd, const std::string& key, T* value, const std::string& help,
                        const std::string& default_text = "") {
-  CLI::Option* key_flag = cmd->add_option("--" + key, *value, help);
-  std::vector<CLI::Option*> flags = {key_flag};
+  std::vector<CLI::Option*> flags = {cmd->add_option("--" + key, *value, help)};
   for (const SceneFlagAlias& a : SceneFlagAliases()) {
     if (cmd->get_name() == a.command && key == a.key)
-      flags.push_back(cmd->add_option(a.alias, *value, "Short for --" + key)->excludes(key_flag));
+      flags.push_back(cmd->add_option(a.alias, *value, "Short for --" + key));
   }
-  if (!default_text.empty())
-    for (CLI::Option* flag : flags) flag->default_str(default_text);
+  for (CLI::Option* flag : flags) {
+    SetsKeys(flag, {key});
+    if (!default_text.empty()) flag->default_str(default_text);
+  }
 }
 
 // --format of a report on stdout: "text" or "json", else Error naming --format.

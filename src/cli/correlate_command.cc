@@ -58,9 +58,11 @@ void RegisterCorrelateCommand(CLI::App& app) {
                     SceneKeyFlags({"inputs"}).front().help + " (the first is the reference)");
   AddSceneKeyOption(cmd, "dic.roi", &a->roi,
                     "Region of interest X0,Y0,X1,Y1 [px] (default: image)");
-  cmd->add_option("--gaussian", a->gaussian,
-                  "auto | none | on | SIGMA[,KERNEL]: short for the --preprocess.gaussian.* flags")
-      ->default_str(ToString(GaussianBlurOptions{}.mode));
+  SetsKeys(cmd->add_option("--gaussian", a->gaussian,
+                           "auto | none | on | SIGMA[,KERNEL]: short for the "
+                           "--preprocess.gaussian.* flags")
+               ->default_str(ToString(GaussianBlurOptions{}.mode)),
+           {"preprocess.gaussian"});
   cmd->add_option("-o,--output", a->output, "Output file (.csv or .h5)");
   cmd->add_flag(kAllowPartialFlag, a->allow_partial,
                 "Write the output (exit 0) even when no subset is valid in any deformed image");

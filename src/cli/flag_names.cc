@@ -1,8 +1,10 @@
-// RethrowWithFlagNames, RethrowWithPartialFlag, the scene key flags and CheckFormat (commands.h):
-// library field names and scene keys -> command-line flags.
+// RethrowWithFlagNames, RethrowWithPartialFlag, the scene key flags, one name per option and
+// CheckFormat (commands.h): library field names and scene keys -> command-line flags.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstddef>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -47,6 +49,96 @@ void ApplySceneKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, Scene
                 });
 }
 
+namespace {
+
+// The scene keys each flag sets (SetsKeys). The commands are registered once per process.
+std::map<const CLI::Option*, std::vector<std::string>>& FlagKeys() {
+  static std::map<const CLI::Option*, std::vector<std::string>> keys;
+  return keys;
+}
+
+// `a` is `b` or nested in it ("preprocess.gaussian.sigma" in "preprocess.gaussian"), or the
+// reverse.
+bool KeysOverlap(const std::string& a, const std::string& b) {
+  const auto nested = [](const std::string& inner, const std::string& outer) {
+    return inner.size() > outer.size() && inner.compare(0, outer.size(), outer) == 0 &&
+           inner[outer.size()] == '.';
+  };
+  // One end of the frame range chosen by index or by the frames' own number: one option.
+  static const std::vector<std::pair<std::string, std::string>> kTwoForms = {
+      {"dic.first_frame", "dic.first_frame_number"}, {"dic.last_frame", "dic.last_frame_number"}};
+  for (const auto& [index, number] : kTwoForms)
+    if ((a == index && b == number) || (a == number && b == index)) return true;
+  return a == b || nested(a, b) || nested(b, a);
+}
+
+// An option that takes one value, or none (a switch); a list (--deformed, IMAGES) takes many.
+bool TakesOneValue(const CLI::Option& o) { return o.get_items_expected_max() <= 1; }
+
+// Its names: "--subset", "-o/--output" (which of them was typed is not kept).
+std::string NamesOf(const CLI::Option& o) {
+  std::string names = o.get_name(/*positional=*/false, /*all=*/true);  // "-o,--output"
+  std::replace(names.begin(), names.end(), ',', '/');
+  return names;
+}
+
+// The flag as given on the command line: its names and, unless a switch, the value given
+// (`--subset 25`, `--warp-gradient`).
+std::string AsGiven(const CLI::Option& o, const std::string& value) {
+  return o.get_expected_min() == 0 ? NamesOf(o) : NamesOf(o) + " " + value;
+}
+
+void CheckCommand(const CLI::App& cmd) {
+  const std::vector<const CLI::Option*> given =
+      cmd.get_options([](const CLI::Option* o) { return o->count() > 0; });
+  for (const CLI::Option* o : given) {
+    if (!TakesOneValue(*o) || o->count() < 2) continue;
+    const std::vector<std::string>& values = o->results();
+    throw Error(ErrorKind::kInvalidValue,
+                fmt::format("{} and {}: {} given twice; expected it once (the value must not "
+                            "depend on which comes last)",
+                            AsGiven(*o, values[0]), AsGiven(*o, values[1]), NamesOf(*o)));
+  }
+  const auto& flag_keys = FlagKeys();
+  for (std::size_t i = 0; i < given.size(); ++i) {
+    const auto keys_i = flag_keys.find(given[i]);
+    if (keys_i == flag_keys.end()) continue;
+    for (std::size_t j = i + 1; j < given.size(); ++j) {
+      const auto keys_j = flag_keys.find(given[j]);
+      if (keys_j == flag_keys.end()) continue;
+      for (const std::string& a : keys_i->second) {
+        for (const std::string& b : keys_j->second) {
+          if (!KeysOverlap(a, b)) continue;
+          throw Error(ErrorKind::kInvalidValue,
+                      fmt::format("{} and {}: both given, and both set {}; expected one of them "
+                                  "(two names of one option)",
+                                  AsGiven(*given[i], given[i]->results().front()),
+                                  AsGiven(*given[j], given[j]->results().front()),
+                                  a.size() > b.size() ? a : b));
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void SetsKeys(const CLI::Option* flag, const std::vector<std::string>& keys) {
+  std::vector<std::string>& all = FlagKeys()[flag];
+  all.insert(all.end(), keys.begin(), keys.end());
+}
+
+void PrepareOneNamePerOption(CLI::App* app) {
+  for (CLI::Option* o : app->get_options())
+    if (TakesOneValue(*o)) o->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  for (CLI::App* sub : app->get_subcommands({})) PrepareOneNamePerOption(sub);
+}
+
+void CheckOneNamePerOption(const CLI::App& app) {
+  CheckCommand(app);
+  for (const CLI::App* sub : app.get_subcommands()) CheckOneNamePerOption(*sub);
+}
+
 void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyValues* values) {
   for (const SceneKeyFlag& f : keys) {
     std::vector<std::pair<std::string, bool>> names = {{"--" + f.key, false}};  // Name, switch.
@@ -58,23 +150,22 @@ void AddKeyFlags(CLI::App* cmd, const std::vector<SceneKeyFlag>& keys, SceneKeyV
       auto& [key, text] = (*values)[name];
       key = f.key;
       if (is_switch) {
-        cmd->add_flag(name, text, "Short for " + names[0].first + " true");
+        SetsKeys(cmd->add_flag(name, text, "Short for " + names[0].first + " true"), {f.key});
         continue;
       }
-      cmd->add_option(name, text, name == names[0].first ? f.help : "Short for " + names[0].first)
-          ->default_str(on_off ? (f.default_text == "true" ? "on" : "off") : f.default_text);
+      SetsKeys(
+          cmd->add_option(name, text,
+                          name == names[0].first ? f.help : "Short for " + names[0].first)
+              ->default_str(on_off ? (f.default_text == "true" ? "on" : "off") : f.default_text),
+          {f.key});
     }
   }
 }
 
 void ApplyKeyFlags(const CLI::App& cmd, const SceneKeyValues& values, const SetKey& set) {
-  std::map<std::string, std::string> given;  // Key -> the flag that set it.
   for (const auto& [flag, key_text] : values) {
     const auto& [key, text] = key_text;
-    if (cmd.count(flag) == 0) continue;
-    const auto [first, inserted] = given.emplace(key, flag);
-    CheckValue(inserted, first->second + "/" + flag, "both given", "one name of " + key);
-    set(key, text, flag);
+    if (cmd.count(flag) > 0) set(key, text, flag);
   }
 }
 

@@ -51,6 +51,7 @@ int Main(int argc, char** argv) {
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors");
   app.parse_complete_callback([&] {
     SetLogLevel(verbose ? LogLevel::kDebug : quiet ? LogLevel::kWarning : LogLevel::kInfo);
+    cli::CheckOneNamePerOption(app);  // Before any command runs.
   });
 
   cli::RegisterRunCommand(app);
@@ -64,6 +65,7 @@ int Main(int argc, char** argv) {
   cli::RegisterValidateDemCommand(app);
   cli::RegisterVersionCommand(app);
   cli::RegisterInitCommand(app);
+  cli::PrepareOneNamePerOption(&app);
 
   // An unknown first word is reported as such (CLI11 would only say a subcommand is required).
   const auto* word =

@@ -28,10 +28,10 @@ void RegisterModelCommand(CLI::App& app) {
                         f.key == "model.solver" ? &request->solver : &request->error_estimator,
                         f.help, f.default_text);
     } else if (f.key == "model.ode45_defaults") {
-      auto* key_flag = cmd->add_flag("--" + f.key, request->ode45_defaults, f.help);
-      cmd->add_flag(SceneFlagShortName("model", f.key), request->ode45_defaults,
-                    "Short for --" + f.key)
-          ->excludes(key_flag);
+      SetsKeys(cmd->add_flag("--" + f.key, request->ode45_defaults, f.help), {f.key});
+      SetsKeys(cmd->add_flag(SceneFlagShortName("model", f.key), request->ode45_defaults,
+                             "Short for --" + f.key),
+               {f.key});
     } else {
       AddSceneKeyOption(cmd, f.key, &request->keys[f.key], f.help, required ? "" : f.default_text);
     }

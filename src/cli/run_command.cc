@@ -37,12 +37,17 @@ void RegisterRunCommand(CLI::App& app) {
       "docs/strain.md) -> outputs; the sensor comes first because its impact time decides the "
       "first frame to correlate)");
   cmd->add_option("scene", args->scene, "Scene file (YAML)")->required();
+  // -o, --png-frames and --threads are short for scene keys (one name each when given).
   auto* output = cmd->add_option("-o,--output", args->output,
                                  "Output folder (default: the scene's outputs.folder)");
-  cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG");
-  cmd->add_option("--threads", args->threads,
-                  std::string("Correlation threads: ") + kThreadCountExpected +
-                      " (default: the scene's dic.threads)");
+  SetsKeys(output, {"outputs.folder"});
+  SetsKeys(
+      cmd->add_flag("--png-frames", args->png_frames, "Also write the animation frames as PNG"),
+      {"outputs.png_frames"});
+  SetsKeys(cmd->add_option("--threads", args->threads,
+                           std::string("Correlation threads: ") + kThreadCountExpected +
+                               " (default: the scene's dic.threads)"),
+           {"dic.threads"});
   cmd->add_flag(kAllowPartialFlag, args->allow_partial,
                 "Write the outputs (exit 0) even when a stage produced nothing usable (no valid "
                 "subset, no measurable t_e, a model solve that did not stop): the figures that "
@@ -56,8 +61,9 @@ void RegisterRunCommand(CLI::App& app) {
       cmd, {"test", "preprocess", "dic", "sensor", "momentum", "model", "strain", "outputs"},
       &args->keys);
   cmd->footer(
-      "A --SECTION.KEY flag overrides that key of the scene file (-o overrides --outputs.folder, "
-      "--threads --dic.threads); the inputs.* paths come from the scene file.");
+      "A --SECTION.KEY flag overrides that key of the scene file (-o is short for "
+      "--outputs.folder, --threads for --dic.threads, --png-frames for --outputs.png_frames true: "
+      "give one name of each); the inputs.* paths come from the scene file.");
   cmd->callback([args, cmd, output] {
     if (output->count() > 0) CheckOutputFolderName(args->output, "-o");
     if (args->threads) CheckThreadCount(*args->threads, "--threads");

@@ -107,12 +107,13 @@ void IcgnOptions::Check() const {
              std::to_string(max_iterations), "in " + kMaxIterationsRange.Text());
   CheckValue(kMinZnccRange.Contains(min_zncc), "dic.icgn.min_zncc", Num(min_zncc),
              "in " + kMinZnccRange.Text());
-  CheckValue(min_contrast >= 0 && std::isfinite(min_contrast), "dic.icgn.min_contrast",
-             Num(min_contrast), ">= 0 grey levels");
+  CheckValue(kMinContrastRange.Contains(min_contrast), "dic.icgn.min_contrast", Num(min_contrast),
+             "in " + kMinContrastRange.Text());
   CheckValue(max_uncertainty_px >= 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
              "> 0 px");
-  CheckValue(max_saturated_fraction > 0 && max_saturated_fraction <= 1,
-             "dic.icgn.max_saturated_fraction", Num(max_saturated_fraction), "in (0, 1]");
+  CheckValue(kMaxSaturatedFractionRange.Contains(max_saturated_fraction),
+             "dic.icgn.max_saturated_fraction", Num(max_saturated_fraction),
+             "in " + kMaxSaturatedFractionRange.Text());
 }
 
 void UpdateOptions::Check() const {

@@ -261,6 +261,28 @@ void AddOutlierKeys(YamlOptionTable& t, OutlierCheckOptions* o) {
         "The noise level epsilon of the normalized median test");
   t.Add("outlier_sigma_factor", &o->sigma_factor, kOutlierSigmaFactorRange, "a factor",
         "...and |d - median| above this times the subset's own sigma");
+  t.Add("outlier_min_neighbours", &o->min_neighbours, kOutlierNeighboursRange, "neighbour count",
+        "Converged neighbours (of 8, in opposite pairs) needed to judge a subset");
+}
+
+// The fields of DicOptions (dic/options.h) that no dic.* key reaches, and why. Every other field
+// is a key of DicTable, or dic.roi / dic.mask (SceneDic); the test
+// SceneFlags.EveryDicOptionIsASceneKeyOrInternal holds each field to one or the other.
+const std::vector<InternalOption>& InternalDicOptions() {
+  static const std::vector<InternalOption> kInternal = {
+      {"dic.init.seed_spacing",
+       "Where the integer-pixel search seeds the propagation: it decides which subsets start from "
+       "a "
+       "search rather than from a solved neighbour, not what a converged subset measures (IC-GN "
+       "from either start, judged by min_zncc); the search's reach is dic.search_radius_px"},
+      {"dic.init.min_search_zncc",
+       "The search's own acceptance of an integer-pixel start; IC-GN refines it and min_zncc "
+       "judges the result"},
+      {"dic.data_bits",
+       "A property of the frames, not a choice: the camera file states it, else it is measured "
+       "from the first reference (frames stage)"},
+  };
+  return kInternal;
 }
 
 YamlOptionTable DicTable(Scene* s) {
@@ -306,6 +328,13 @@ YamlOptionTable DicTable(Scene* s) {
         return std::isfinite(o.icgn.max_uncertainty_px) || n.Scalar() == "none";
       },
       "Converged subsets with sigma_u or sigma_v above it are uncertain (NaN)");
+  t.Add("min_contrast", &o.icgn.min_contrast, kMinContrastRange, "a grey-level standard deviation",
+        "Reference subsets whose grey-level standard deviation is below it are low_contrast "
+        "(failed); in 8-bit levels, scaled to the frames' bit depth");
+  t.Add("max_saturated_fraction", &o.icgn.max_saturated_fraction, kMaxSaturatedFractionRange,
+        "a fraction of the subset",
+        "Reference subsets with more than this fraction of pixels at 0 or full scale are "
+        "saturated (failed)");
   t.Add("max_iterations", &o.icgn.max_iterations, kMaxIterationsRange, "iteration cap",
         "IC-GN iteration cap");
   t.Add("convergence_px", &o.icgn.convergence_px, kConvergenceRange, "a convergence threshold",
@@ -790,6 +819,8 @@ const std::vector<std::string>& AllSceneStages() {
                                                    "model",      "strain", "outputs"};
   return kStages;
 }
+
+const std::vector<InternalOption>& InternalLibraryOptions() { return InternalDicOptions(); }
 
 std::vector<YamlOptionTable> SceneOptionTables(Scene* scene) {
   std::vector<YamlOptionTable> tables = {InputsTable(scene), TestTable(scene)};

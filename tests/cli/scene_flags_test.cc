@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cstddef>
+#include <functional>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -16,6 +19,7 @@
 #include "../reliability/fault_util.h"
 #include "cli_runner.h"
 #include "impactdic/core/error.h"
+#include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/scene.h"
@@ -55,6 +59,149 @@ TEST(SceneFlags, EveryKeyOfTheTablesIsAFlagOfItsCommand) {
                           "preprocess.gaussian.sigma", "preprocess.clahe.enabled",
                           "sensor.cutoff_hz", "momentum.grid_cols", "outputs.figures"})
     EXPECT_NE(std::find(keys.begin(), keys.end(), key), keys.end()) << key;
+}
+
+// The number of fields of the aggregate T: the most initializers T{...} takes.
+struct AnyField {
+  template <typename T>
+  operator T() const;  // NOLINT(google-explicit-constructor): only in unevaluated contexts.
+};
+template <typename T, typename... Fields>
+constexpr std::size_t FieldCount() {
+  if constexpr (requires { T{Fields{}..., AnyField{}}; }) {
+    return FieldCount<T, Fields..., AnyField>();
+  } else {
+    return sizeof...(Fields);
+  }
+}
+
+// A field of DicOptions, by its path in the struct (as its Check() names it), and the scene key
+// that reaches it with a value other than the default (none: InternalLibraryOptions).
+struct DicField {
+  const char* field;
+  const char* key;
+  const char* value;
+  std::function<bool(const Scene&)> changed;
+};
+
+// Every field of DicOptions (the static_asserts fail when one is added: list it here, with its
+// scene key or in InternalLibraryOptions).
+std::vector<DicField> DicFields() {
+  static_assert(FieldCount<GridOptions>() == 4);
+  static_assert(FieldCount<InitialGuessOptions>() == 3);
+  static_assert(FieldCount<IcgnOptions>() == 9);
+  static_assert(FieldCount<UpdateOptions>() == 2);
+  static_assert(FieldCount<ContinuityCheckOptions>() == 6);
+  static_assert(FieldCount<OutlierCheckOptions>() == 5);
+  static_assert(FieldCount<DicOptions>() == 9);
+  static const DicOptions d;  // Static: the predicates outlive this call.
+  static constexpr auto o = [](const Scene& s) -> const DicOptions& { return s.dic.options; };
+  return {
+      {"dic.mode", "dic.mode", "pairs", [&](const Scene& s) { return o(s).mode != d.mode; }},
+      {"dic.grid.subset_size", "dic.subset_size", "31",
+       [&](const Scene& s) { return o(s).grid.subset_size != d.grid.subset_size; }},
+      {"dic.grid.step", "dic.step", "7",
+       [&](const Scene& s) { return o(s).grid.step != d.grid.step; }},
+      // A scene's roi and mask become the grid's in the frames stage (the frames' size known).
+      {"dic.grid.roi", "dic.roi", "1,2,30,40",
+       [](const Scene& s) { return s.dic.roi != std::array<int, 4>{}; }},
+      {"dic.grid.mask", "dic.mask", "/m.png", [](const Scene& s) { return !s.dic.mask.empty(); }},
+      {"dic.init.search_radius_px", "dic.search_radius_px", "9",
+       [&](const Scene& s) { return o(s).init.search_radius_px != d.init.search_radius_px; }},
+      {"dic.init.seed_spacing", nullptr, nullptr, nullptr},
+      {"dic.init.min_search_zncc", nullptr, nullptr, nullptr},
+      {"dic.icgn.interpolation", "dic.interpolation", "biquintic",
+       [&](const Scene& s) { return o(s).icgn.interpolation != d.icgn.interpolation; }},
+      {"dic.icgn.shape", "dic.shape", "quadratic",
+       [&](const Scene& s) { return o(s).icgn.shape != d.icgn.shape; }},
+      {"dic.icgn.convergence_px", "dic.convergence_px", "0.01",
+       [&](const Scene& s) { return o(s).icgn.convergence_px != d.icgn.convergence_px; }},
+      {"dic.icgn.convergence_sigma_fraction", "dic.convergence_sigma_fraction", "0.5",
+       [&](const Scene& s) {
+         return o(s).icgn.convergence_sigma_fraction != d.icgn.convergence_sigma_fraction;
+       }},
+      {"dic.icgn.max_iterations", "dic.max_iterations", "7",
+       [&](const Scene& s) { return o(s).icgn.max_iterations != d.icgn.max_iterations; }},
+      {"dic.icgn.min_zncc", "dic.min_zncc", "0.5",
+       [&](const Scene& s) { return o(s).icgn.min_zncc != d.icgn.min_zncc; }},
+      {"dic.icgn.min_contrast", "dic.min_contrast", "9",
+       [&](const Scene& s) { return o(s).icgn.min_contrast != d.icgn.min_contrast; }},
+      {"dic.icgn.max_saturated_fraction", "dic.max_saturated_fraction", "0.5",
+       [&](const Scene& s) {
+         return o(s).icgn.max_saturated_fraction != d.icgn.max_saturated_fraction;
+       }},
+      {"dic.icgn.max_uncertainty_px", "dic.max_uncertainty_px", "0.1",
+       [&](const Scene& s) { return o(s).icgn.max_uncertainty_px != d.icgn.max_uncertainty_px; }},
+      {"dic.update.policy", "dic.reference_update", "incremental",
+       [&](const Scene& s) { return o(s).update.policy != d.update.policy; }},
+      {"dic.update.auto_min_zncc", "dic.auto_min_zncc", "0.9",
+       [&](const Scene& s) { return o(s).update.auto_min_zncc != d.update.auto_min_zncc; }},
+      {"dic.continuity.enabled", "dic.continuity_check", "true",
+       [&](const Scene& s) { return o(s).continuity.enabled != d.continuity.enabled; }},
+      {"dic.continuity.misfit_ratio", "dic.continuity_misfit_ratio", "3",
+       [&](const Scene& s) { return o(s).continuity.misfit_ratio != d.continuity.misfit_ratio; }},
+      {"dic.continuity.min_misfit", "dic.continuity_min_misfit", "0.5",
+       [&](const Scene& s) { return o(s).continuity.min_misfit != d.continuity.min_misfit; }},
+      {"dic.continuity.max_second_difference_px", "dic.continuity_max_second_difference_px", "1",
+       [&](const Scene& s) {
+         return o(s).continuity.max_second_difference_px != d.continuity.max_second_difference_px;
+       }},
+      {"dic.continuity.max_neighbour_difference_px", "dic.continuity_max_neighbour_difference_px",
+       "1",
+       [&](const Scene& s) {
+         return o(s).continuity.max_neighbour_difference_px !=
+                d.continuity.max_neighbour_difference_px;
+       }},
+      {"dic.continuity.local_ratio", "dic.continuity_local_ratio", "9",
+       [&](const Scene& s) { return o(s).continuity.local_ratio != d.continuity.local_ratio; }},
+      {"dic.outliers.enabled", "dic.outlier_check", "false",
+       [&](const Scene& s) { return o(s).outliers.enabled != d.outliers.enabled; }},
+      {"dic.outliers.threshold", "dic.outlier_threshold", "5",
+       [&](const Scene& s) { return o(s).outliers.threshold != d.outliers.threshold; }},
+      {"dic.outliers.noise_px", "dic.outlier_noise_px", "0.5",
+       [&](const Scene& s) { return o(s).outliers.noise_px != d.outliers.noise_px; }},
+      {"dic.outliers.sigma_factor", "dic.outlier_sigma_factor", "5",
+       [&](const Scene& s) { return o(s).outliers.sigma_factor != d.outliers.sigma_factor; }},
+      {"dic.outliers.min_neighbours", "dic.outlier_min_neighbours", "6",
+       [&](const Scene& s) { return o(s).outliers.min_neighbours != d.outliers.min_neighbours; }},
+      {"dic.data_bits", nullptr, nullptr, nullptr},
+      {"dic.keep_warp_gradient", "dic.keep_warp_gradient", "true",
+       [&](const Scene& s) { return o(s).keep_warp_gradient != d.keep_warp_gradient; }},
+  };
+}
+
+// Every option of the correlation library is reached by a scene key, which is a flag of
+// `correlate` and `run` (the test above), or is internal with its reason beside the scene's tables.
+TEST(SceneFlags, EveryDicOptionIsASceneKeyOrInternal) {
+  std::vector<std::string> keys = {"dic.roi"};  // Read by ParseScene itself, a flag all the same.
+  for (const SceneKeyFlag& f : SceneKeyFlags({"dic"})) keys.push_back(f.key);
+  const std::vector<InternalOption>& internal = InternalLibraryOptions();
+  const auto is_internal = [&internal](const std::string& field) {
+    return std::any_of(internal.begin(), internal.end(), [&field](const InternalOption& o) {
+      return field == o.field && std::string(o.reason).size() > 20;
+    });
+  };
+  const std::vector<DicField> fields = DicFields();
+  for (const DicField& f : fields) {
+    if (f.key == nullptr) {
+      EXPECT_TRUE(is_internal(f.field))
+          << f.field << ": no scene key reaches it, and it is not in InternalLibraryOptions";
+      continue;
+    }
+    EXPECT_FALSE(is_internal(f.field)) << f.field << " is a scene key and listed as internal";
+    if (std::find(keys.begin(), keys.end(), f.key) == keys.end()) {
+      ADD_FAILURE() << f.field << ": no scene key reaches it (" << f.key << " is not a key)";
+      continue;
+    }
+    Scene scene;
+    SetSceneKey(&scene, f.key, f.value, std::string("--") + f.key);
+    EXPECT_TRUE(f.changed(scene)) << "--" << f.key << " " << f.value << " leaves " << f.field;
+  }
+  for (const InternalOption& o : internal) {
+    EXPECT_TRUE(std::any_of(fields.begin(), fields.end(),
+                            [&o](const DicField& f) { return f.field == std::string(o.field); }))
+        << o.field << " (InternalLibraryOptions) is not a field of DicOptions";
+  }
 }
 
 TEST(SceneFlags, AFlagIsReadAsItsKeyInASceneFile) {

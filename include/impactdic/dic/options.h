@@ -44,6 +44,9 @@ inline constexpr ValueRange kMaxIterationsRange{1, 200, ""};
 inline constexpr ValueRange kMinZnccRange{-1, 1, "", /*min_open=*/false, /*max_open=*/true};
 inline constexpr ValueRange kAutoMinZnccRange{-1, 1, "", /*min_open=*/true};
 inline constexpr ValueRange kMinMisfitRange{0, 1, "", /*min_open=*/false, /*max_open=*/true};
+// An 8-bit image's standard deviation is at most 127.5 grey levels.
+inline constexpr ValueRange kMinContrastRange{0, 255, "grey levels"};
+inline constexpr ValueRange kMaxSaturatedFractionRange{0, 1, "", /*min_open=*/true};
 
 struct GridOptions {
   int subset_size = 25;  // Subset side S [px], odd, kSubsetSizeRange.
@@ -85,10 +88,10 @@ struct IcgnOptions {
   // UpdateOptions::auto_min_zncc.
   double min_zncc = 0.8;
   // Reference subsets whose intensity standard deviation is below this [grey levels of an 8-bit
-  // image; scaled by 257 for 16-bit] are `low_contrast`, >= 0.
+  // image; scaled by 257 for 16-bit] are `low_contrast`, kMinContrastRange.
   double min_contrast = 4.0;
   // Reference subsets with more than this fraction of pixels at 0 or full scale are
-  // `saturated`, in (0, 1].
+  // `saturated`, kMaxSaturatedFractionRange.
   double max_saturated_fraction = 0.2;
   // Converged subsets whose displacement standard deviation (the larger of sigma_u and sigma_v,
   // estimated from the residuals and the inverse Hessian, allowing for spatially correlated

@@ -191,6 +191,15 @@ const std::vector<std::string>& AllSceneStages();
 // roi, roi_polygon, rect_mm) are read by ParseScene itself.
 std::vector<YamlOptionTable> SceneOptionTables(Scene* scene);
 
+// A field of a library option struct that no scene key reaches, named by its path in the struct
+// ("dic.init.seed_spacing", as the struct's Check() names it), and why it is not a key.
+struct InternalOption {
+  const char* field;
+  const char* reason;
+};
+// Those of DicOptions; listed next to the scene's dic table (src/pipeline/scene.cc).
+const std::vector<InternalOption>& InternalLibraryOptions();
+
 // Loads and validates a scene file; throws Error (kFileNotFound / kInvalidValue / kFileFormat)
 // listing every problem found, one per line.
 Scene LoadScene(const std::string& path);
