@@ -64,7 +64,7 @@ FrameTimeline MakeFrameTimeline(int first_index, std::vector<long long> numbers,
   const bool stamped = !clock.time_s.empty();
   t.camera_stamps = stamped;
   t.camera_clock = stamped     ? "the camera's time stamps (" + clock.fps_name + ")"
-                   : t.fps > 0 ? "index / " + clock.fps_name
+                   : t.fps > 0 ? "k / " + clock.fps_name
                                : std::string("unknown (no frame rate)");
   const int last_index = first_index + static_cast<int>(n) - 1;
   if (stamped) {
@@ -85,7 +85,7 @@ FrameTimeline MakeFrameTimeline(int first_index, std::vector<long long> numbers,
     t.impact_time_s = sensor->summary.impact_time_s;
     t.daq_clock = !sensor->exposure.empty() ? "the exposure edges of " + sensor->path
                   : stamped ? "sensor.frame_time_offset_s + the camera's time stamps"
-                            : "sensor.frame_time_offset_s + index / " + clock.fps_name;
+                            : "sensor.frame_time_offset_s + k / " + clock.fps_name;
   }
   return t;
 }

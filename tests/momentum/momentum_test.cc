@@ -379,8 +379,10 @@ TEST(AnalyzeSceneCli, UnmeasurableTeFailsUnlessAllowPartial) {
   std::filesystem::create_directories(dir.path() / "results");
   const std::string results = dir.File("results/results.h5");
   {
-    // The current layout (io/dic_results.h): row 0 the reference.
+    // The current layout (io/dic_results.h): row 0 the reference, frame 0 of the scene's frames
+    // (first_frame: the rows' place in the frame source, as `run` writes it).
     DicResultsTable t;
+    t.first_frame = 0;
     t.rows = dic.frames;
     t.subsets = dic.subsets;
     t.x_px = dic.x_px;

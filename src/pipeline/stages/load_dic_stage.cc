@@ -37,20 +37,23 @@ std::string RowName(std::size_t row, const std::string& file) {
 }
 
 // The position in the scene's frame source of the results' row 0, after checking that the rows
-// are consecutive frames. A run's results say it (first_frame attribute, and /dic/frame holds the
-// positions); `correlate` numbers its rows from the reference, so its rows' frame numbers are
+// are consecutive frames. A run's results say it (first_frame attribute, or version 1 of the
+// layout, and /dic/frame holds the positions); `correlate` numbers its rows from the reference, so its rows' frame numbers are
 // found in the scene's frames (inputs.frames): Error naming the number and the frames when one is
 // not there, or when the file has neither.
 int SourceIndexOfFirstRow(const Scene& scene, const DicResultsTable& dic, const std::string& file) {
-  if (dic.first_frame >= 0) {
+  // Version 1 was written by `run` alone: its /dic/frame holds the positions.
+  const bool v1_positions = dic.layout_version == 1 && !dic.frame.empty();
+  if (dic.first_frame >= 0 || v1_positions) {
+    const long first = dic.first_frame >= 0 ? dic.first_frame : dic.frame.front();
     for (std::size_t r = 0; r < dic.frame.size(); ++r) {
-      if (dic.frame[r] == dic.first_frame + static_cast<long>(r)) continue;
+      if (dic.frame[r] == first + static_cast<long>(r)) continue;
       throw Error(ErrorKind::kFileFormat, results_layout::kDicFrame,
                   fmt::format("frame {} in row {}", dic.frame[r], r),
-                  fmt::format("the frames from first_frame = {} on, one per row", dic.first_frame))
+                  fmt::format("the frames from {} on, one per row", first))
           .WithFile(file);
     }
-    return static_cast<int>(dic.first_frame);
+    return static_cast<int>(first);
   }
   const bool numbered =
       !dic.frame_number.empty() && std::all_of(dic.frame_number.begin(), dic.frame_number.end(),
