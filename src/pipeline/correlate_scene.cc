@@ -17,6 +17,7 @@
 #include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene_flags.h"
+#include "route.h"
 #include "stages/stage.h"
 
 namespace impactdic {
@@ -84,8 +85,6 @@ void AsCorrelateFile(const Scene& scene, const FrameStream& frames, DicResultsTa
 
 PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bool allow_partial) {
   Scene scene = given;
-  // The calibrate stage only for a calibration given (the frames are then undistorted when it
-  // has distortion, as in `run`).
   const bool calibrate = !scene.inputs.calibration.empty();
   scene.stages = {"frames", "correlate"};
   if (calibrate) scene.stages.insert(scene.stages.begin(), "calibrate");
@@ -94,28 +93,28 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
                                {".csv", ".h5", ".hdf5"},
                                ListInputs(scene),
                                {CsvHeaderLine(DicCsvColumns())}});
-  WallTimer wall;
-  PipelineSummary summary;
-  summary.scene_name = scene.name;
+  PipelineOptions options;  // threads -1: dic.threads.
+  options.allow_partial = allow_partial;
+  options.flags_of = "correlate";  // The scene is correlate's flags: messages name them.
+  Route route;
+  route.run_stages = [calibrate](stages::StageContext& c) {
+    // The calibrate stage only for a calibration given (the frames are then undistorted when it
+    // has distortion, as in `run`).
+    if (calibrate) stages::RunStage(*stages::MakeCalibrateStage(), c);
+    stages::RunCorrelationStages(c);
+  };
+  route.nothing_written = fmt::format("Nothing was written ({} is as it was)", output);
+  route.partial_remedy = "writes it, every subset with its status";
+  route.write = [&output](stages::StageContext& c) {
+    for (const StageFailure& f : c.summary.failures)
+      LogWarning("correlate: partial results (--allow-partial): {}", f.reason);
+    AsCorrelateFile(c.scene, *c.data.frames, &*c.data.dic);
+    WriteDicResultsFile(output, *c.data.dic);
+    c.summary.outputs.push_back(output);
+  };
   SceneRunData data;
-  const PipelineOptions options;  // threads -1: dic.threads.
-  stages::StageContext context{scene, options, data, summary};
-  if (calibrate) stages::RunStage(*stages::MakeCalibrateStage(), context);
-  stages::RunCorrelationStages(context);
+  const PipelineSummary summary = RunRoute(scene, options, route, &data);
   const DicSummary& dic = data.dic_summary;
-  // As `run`'s correlate stage fails (DicSummary's one rule), naming the command's flag.
-  const std::string problem = dic.NothingUsable(SceneFlagShortName("correlate", "dic.min_zncc"),
-                                                scene.dic.options.icgn.min_zncc);
-  if (!problem.empty() && !allow_partial) {
-    throw PartialResultsError(
-        fmt::format("correlate: {}\nNothing was written ({} is as it was)", problem, output),
-        "writes it, every subset with its status");
-  }
-  if (!problem.empty()) LogWarning("correlate: partial results (--allow-partial): {}", problem);
-  AsCorrelateFile(scene, *data.frames, &*data.dic);
-  WriteDicResultsFile(output, *data.dic);
-  summary.outputs.push_back(output);
-  summary.seconds = wall.ElapsedSeconds();
   LogInfo("correlate: {}", dic.FullReport());
   LogInfo(
       "correlate: wrote {}; wall time {:.3f} s with reading the images and writing the "

@@ -13,9 +13,9 @@
 #include "impactdic/core/error.h"
 #include "impactdic/core/interrupt.h"
 #include "impactdic/core/threads.h"
-#include "impactdic/core/timer.h"
 #include "impactdic/io/output_generation.h"
 #include "impactdic/pipeline/run_data.h"
+#include "route.h"
 #include "stages/stage.h"
 
 namespace impactdic {
@@ -27,16 +27,6 @@ PartialResultsError::PartialResultsError(std::string problem, std::string remedy
       remedy_(std::move(remedy)) {}
 
 namespace {
-
-// Throws when a stage produced nothing usable, unless the options allow a partial run.
-void ThrowIfFailed(const PipelineSummary& summary, const PipelineOptions& options) {
-  if (summary.failures.empty() || options.allow_partial) return;
-  throw PartialResultsError(
-      fmt::format("{}\nNo output was written (outputs of an earlier run in {} are kept)",
-                  stages::FailedStagesText(summary), OutputPathForMessages(summary.output_folder)),
-      "writes them, with the figures that could not be measured as null and the reasons in "
-      "summary.json");
-}
 
 // The writers of a run: the built-in ones, then the caller's.
 OutputWriters RunOutputWriters(const PipelineOptions& options) {
@@ -64,28 +54,31 @@ void OpenOutputs(const Scene& scene, const PipelineOptions& options, const std::
   for (const auto& writer : writers) writer->CheckBeforeRun(scene);
 }
 
-// The stage graph (docs/architecture.md): each stage reads what the ones before it left in
-// SceneRunData. Nothing is written before every analysis stage has run and none has failed
-// (unless allow_partial).
+// The stage graph (docs/architecture.md) as the route of `run` (route.h): each stage reads what
+// the ones before it left in SceneRunData; the outputs stage writes one generation of the output
+// folder once every analysis stage has run and none has failed (unless allow_partial).
 PipelineSummary RunStages(const Scene& scene, const PipelineOptions& options) {
-  WallTimer total;
-  PipelineSummary summary;
-  summary.scene_name = scene.name;
-  summary.output_folder =
+  const std::string folder =
       options.output_folder.empty() ? scene.outputs.folder : options.output_folder;
   const OutputWriters writers = RunOutputWriters(options);
   std::optional<OutputGeneration> generation;  // Removed again unless committed at the end.
-  OpenOutputs(scene, options, summary.output_folder, writers, &generation);
+  OpenOutputs(scene, options, folder, writers, &generation);
+  Route route;
+  route.output_folder = folder;
+  route.run_stages = [](stages::StageContext& c) {
+    stages::RunAnalysisStages(c, /*results_file=*/"");
+  };
+  route.nothing_written =
+      fmt::format("No output was written (outputs of an earlier run in {} are kept)",
+                  OutputPathForMessages(folder));
+  route.partial_remedy =
+      "writes them, with the figures that could not be measured as null and the reasons in "
+      "summary.json";
+  route.write = [&](stages::StageContext& c) {
+    stages::RunStage(*stages::MakeOutputsStage(writers, generation ? &*generation : nullptr), c);
+  };
   SceneRunData data;
-  data.mm_per_px = scene.inputs.mm_per_px;
-  stages::StageContext context{scene, options, data, summary};
-  stages::RunAnalysisStages(context, /*results_file=*/"");
-  ThrowIfFailed(summary, options);
-  summary.seconds = total.ElapsedSeconds();  // timing.json: up to the outputs.
-  stages::RunStage(*stages::MakeOutputsStage(writers, generation ? &*generation : nullptr),
-                   context);
-  summary.seconds = total.ElapsedSeconds();
-  return summary;
+  return RunRoute(scene, options, route, &data);
 }
 
 }  // namespace

@@ -5,10 +5,10 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/strings.h"
-#include "impactdic/core/timer.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
@@ -19,6 +19,7 @@
 #include "impactdic/sensor/sensor.h"
 #include "impactdic/sensor/sensor_results.h"
 #include "outputs/writers.h"
+#include "route.h"
 #include "stages/scene_inputs.h"
 #include "stages/stage.h"
 
@@ -115,14 +116,26 @@ SensorRecordAnalysis AnalyzeSensorRecord(const AnalyzeRequest& request) {
                 "an existing DAQ CSV file")
         .WithFile(a.csv);
   }
-  a.result = WithGivenNames(request.given, kSensorFieldKeys, /*name_defaults=*/true,
-                            [&] { return AnalyzeSensorCsv(a.csv, a.options); });
-  if (!request.output.empty()) {
+  // The record alone through the one route: no stage of the graph needs a scene's test, so the
+  // record is analysed with the checked options and only /sensor is written.
+  Route route;
+  route.run_stages = [&](stages::StageContext& c) {
+    c.data.sensor = WithGivenNames(request.given, kSensorFieldKeys, /*name_defaults=*/true,
+                                   [&] { return AnalyzeSensorCsv(a.csv, a.options); });
+  };
+  route.nothing_written = "Nothing was written";
+  route.partial_remedy = "writes it";
+  route.write = [&](stages::StageContext& c) {
+    if (request.output.empty()) return;
     // Only /sensor is replaced: /dic, /frames, ... of an existing results file stay.
     H5Writer out(request.output, /*owned_groups=*/{results_layout::kSensorGroup});
-    WriteSensorResults(out, a.result);
+    WriteSensorResults(out, *c.data.sensor);
     out.Commit();
-  }
+    c.summary.outputs.push_back(request.output);
+  };
+  SceneRunData data;
+  RunRoute(request.scene, PipelineOptions{}, route, &data);
+  a.result = std::move(*data.sensor);
   return a;
 }
 
@@ -179,27 +192,25 @@ SceneAnalysisRun AnalyzeSceneResults(const Scene& scene, const std::string& resu
                                      bool allow_partial, const std::string& output_path) {
   CheckSceneForAnalysis(scene);
   CheckResultsAreOfScene(scene, results_path, "results file");
-  WallTimer total;
   SceneAnalysisRun run;
-  run.summary.scene_name = scene.name;
-  run.data.mm_per_px = scene.inputs.mm_per_px;
+  run.results_path = output_path.empty() ? results_path : output_path;
   PipelineOptions options;
   options.allow_partial = allow_partial;
-  stages::StageContext context{scene, options, run.data, run.summary};
-  stages::RunAnalysisStages(context, results_path);
-  if (!run.summary.failures.empty() && !allow_partial) {
-    throw PartialResultsError(fmt::format("{}\nNothing was written ({} is as it was)",
-                                          stages::FailedStagesText(run.summary), results_path),
-                              "writes it, with the figures that could not be measured as NaN");
-  }
-  run.results_path = output_path.empty() ? results_path : output_path;
-  H5Writer out(run.results_path, H5Writer::Mode::kUpdate, results_path);
-  out.Remove("/summary");
-  out.SetAttribute("/", "scene_name", scene.name);
-  outputs::WriteAnalysisResults(out, run.data);
-  out.Commit();
-  run.summary.outputs.push_back(run.results_path);
-  run.summary.seconds = total.ElapsedSeconds();
+  Route route;
+  route.run_stages = [&results_path](stages::StageContext& c) {
+    stages::RunAnalysisStages(c, results_path);
+  };
+  route.nothing_written = fmt::format("Nothing was written ({} is as it was)", results_path);
+  route.partial_remedy = "writes it, with the figures that could not be measured as NaN";
+  route.write = [&](stages::StageContext& c) {
+    H5Writer out(run.results_path, H5Writer::Mode::kUpdate, results_path);
+    out.Remove("/summary");
+    out.SetAttribute("/", "scene_name", scene.name);
+    outputs::WriteAnalysisResults(out, c.data);
+    out.Commit();
+    c.summary.outputs.push_back(run.results_path);
+  };
+  run.summary = RunRoute(scene, options, route, &run.data);
   return run;
 }
 

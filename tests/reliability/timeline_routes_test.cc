@@ -156,5 +156,24 @@ TEST(OneTimeline, FrameTimesAreComputedInOnePlace) {
   }
 }
 
+// One driver: `run`, `analyze` (both forms) and `correlate` build their stage context, apply the
+// failure rule and write through RunRoute (src/pipeline/route.h) alone, so a rule added there
+// holds for every route.
+TEST(OneDriver, EveryRouteRunsThroughRunRoute) {
+  for (const auto& [path, text] : Sources()) {
+    if (path == "src/pipeline/route.cc" || path.rfind("src/pipeline/stages/", 0) == 0) continue;
+    for (const char* own :
+         {"StageContext context{", "StageContext context(", "throw PartialResultsError("})
+      EXPECT_EQ(text.find(own), std::string::npos) << path << " has its own " << own;
+  }
+  for (const char* route : {"src/pipeline/pipeline.cc", "src/pipeline/scene_analysis.cc",
+                            "src/pipeline/correlate_scene.cc"}) {
+    std::ifstream in(std::string(SourceDir()) + "/" + route);
+    std::stringstream text;
+    text << in.rdbuf();
+    EXPECT_NE(text.str().find("RunRoute("), std::string::npos) << route;
+  }
+}
+
 }  // namespace
 }  // namespace impactdic

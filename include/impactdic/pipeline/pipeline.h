@@ -57,6 +57,9 @@ struct PipelineOptions {
   // holding other commands' outputs (io/output_generation.h); files impactdic did not write are
   // never replaced.
   bool force = false;
+  // The command whose flags made the scene ("correlate"), "" for a scene file: messages about a
+  // key then name the command's flag for it (SceneFlagShortName), not the key.
+  std::string flags_of;
   // Writers run after the built-in ones (results.h5, figures, summary.json, summary.csv) when the
   // scene has the outputs stage (pipeline/output_writer.h).
   OutputWriters extra_output_writers;

@@ -82,7 +82,7 @@ class CorrelateStage : public Stage {
           summary.Outliers()));
     }
     const std::string problem =
-        summary.NothingUsable("dic.min_zncc", scene.dic.options.icgn.min_zncc);
+        summary.NothingUsable(KeyName(c, "dic.min_zncc"), scene.dic.options.icgn.min_zncc);
     if (!problem.empty()) c.summary.failures.push_back({"correlate", problem});
     return summary.BriefReport();
   }

@@ -38,9 +38,9 @@ std::string RowName(std::size_t row, const std::string& file) {
 
 // The position in the scene's frame source of the results' row 0, after checking that the rows
 // are consecutive frames. A run's results say it (first_frame attribute, or version 1 of the
-// layout, and /dic/frame holds the positions); `correlate` numbers its rows from the reference, so its rows' frame numbers are
-// found in the scene's frames (inputs.frames): Error naming the number and the frames when one is
-// not there, or when the file has neither.
+// layout, and /dic/frame holds the positions); `correlate` numbers its rows from the reference, so
+// its rows' frame numbers are found in the scene's frames (inputs.frames): Error naming the number
+// and the frames when one is not there, or when the file has neither.
 int SourceIndexOfFirstRow(const Scene& scene, const DicResultsTable& dic, const std::string& file) {
   // Version 1 was written by `run` alone: its /dic/frame holds the positions.
   const bool v1_positions = dic.layout_version == 1 && !dic.frame.empty();

@@ -13,6 +13,7 @@
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/pipeline/scene_flags.h"
 #include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor.h"
 
@@ -51,7 +52,8 @@ void RunAnalysisStages(StageContext& context, const std::string& results_file) {
 
 std::string FailedStagesText(const PipelineSummary& summary) {
   std::string text =
-      fmt::format("scene {}: {} stage(s) produced nothing usable:", summary.scene_name,
+      fmt::format("{}{} stage(s) produced nothing usable:",
+                  summary.scene_name.empty() ? "" : "scene " + summary.scene_name + ": ",
                   summary.failures.size());
   for (const StageFailure& f : summary.failures)
     text += fmt::format("\n  {}: {}", f.stage, f.reason);
@@ -78,6 +80,11 @@ FrameTimeline TimeSceneFrames(const StageContext& context, int first_index,
       e.WithFile(e.where() == "inputs.fps" || !d.sensor ? scene.path : scene.inputs.sensor);
     throw;
   }
+}
+
+std::string KeyName(const StageContext& context, const std::string& key) {
+  const std::string& command = context.options.flags_of;
+  return command.empty() ? key : SceneFlagShortName(command, key);
 }
 
 std::string NotListed(const Scene& scene, const char* name) {

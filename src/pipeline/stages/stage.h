@@ -84,6 +84,10 @@ void NameFileToFix(const StageContext& context, Error& error);
 FrameTimeline TimeSceneFrames(const StageContext& context, int first_index,
                               std::vector<long long> numbers);
 
+// The name of scene key `key` in messages: the key, or the flag of the command whose flags made
+// the scene (PipelineOptions::flags_of).
+std::string KeyName(const StageContext& context, const std::string& key);
+
 // "not among the scene's stages" unless the scene lists `name` ("").
 std::string NotListed(const Scene& scene, const char* name);
 
