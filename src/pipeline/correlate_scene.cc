@@ -113,7 +113,7 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
     c.summary.outputs.push_back(output);
   };
   SceneRunData data;
-  const PipelineSummary summary = RunRoute(scene, options, route, &data);
+  PipelineSummary summary = RunRoute(scene, options, route, &data);
   const DicSummary& dic = data.dic_summary;
   LogInfo("correlate: {}", dic.FullReport());
   LogInfo(
