@@ -103,8 +103,9 @@ UndistortInterpolation UndistortInterpolationFromString(const std::string& text)
 }
 
 void UndistortOptions::Check() const {
-  CheckValue(skip_threshold_px >= 0 && std::isfinite(skip_threshold_px),
-             "undistort.skip_threshold_px", fmt::format("{}", skip_threshold_px), ">= 0 px");
+  CheckValue(
+      std::isfinite(skip_threshold_px) && kUndistortSkipThresholdRange.Contains(skip_threshold_px),
+      "undistort.skip_threshold_px", fmt::format("{}", skip_threshold_px), ">= 0 px");
   CheckValue(roi.width >= 0 && roi.height >= 0 && roi.x >= 0 && roi.y >= 0, "undistort.roi",
              fmt::format("{}x{} at ({}, {})", roi.width, roi.height, roi.x, roi.y),
              "a rectangle inside the frame (empty = whole frame)");

@@ -80,8 +80,8 @@ void SigmoidFitOptions::Check() const {
              ">= 1");
   CheckValue(step_tolerance > 0, "sigmoid.step_tolerance", fmt::format("{}", step_tolerance),
              "> 0");
-  CheckValue(confidence > 0 && confidence < 1, "sigmoid.confidence", fmt::format("{}", confidence),
-             "in (0, 1)");
+  CheckValue(kConfidenceRange.Contains(confidence), "sigmoid.confidence",
+             fmt::format("{}", confidence), "in (0, 1)");
 }
 
 std::string SigmoidFit::BriefReport() const {
@@ -221,7 +221,7 @@ std::string PowerLawFit::BriefReport() const {
 }
 
 PowerLawFit FitPowerLaw(const std::vector<PowerLawSample>& samples, double confidence) {
-  CheckValue(confidence > 0 && confidence < 1, "confidence", fmt::format("{}", confidence),
+  CheckValue(kConfidenceRange.Contains(confidence), "confidence", fmt::format("{}", confidence),
              "in (0, 1)");
   const std::size_t n = samples.size();
   CheckValue(n >= 5, "power-law regression", fmt::format("{} tests", n),

@@ -32,11 +32,11 @@ void MomentumOptions::Check() const {
                "momentum.rect_mm", fmt::format("[{}, {}, {}, {}]", r[0], r[1], r[2], r[3]),
                "finite x0 < x1 and y0 < y1");
   }
-  CheckValue(velocity_match_tolerance > 0 && velocity_match_tolerance <= 1,
+  CheckValue(kVelocityMatchToleranceRange.Contains(velocity_match_tolerance),
              "momentum.velocity_match_tolerance", fmt::format("{}", velocity_match_tolerance),
              "in (0, 1]");
-  CheckValue(sand_accel_tolerance >= 0 && sand_accel_tolerance < 1, "momentum.sand_accel_tolerance",
-             fmt::format("{}", sand_accel_tolerance), "in [0, 1)");
+  CheckValue(kSandAccelToleranceRange.Contains(sand_accel_tolerance),
+             "momentum.sand_accel_tolerance", fmt::format("{}", sand_accel_tolerance), "in [0, 1)");
   CheckValue(min_valid_fraction > 0 && min_valid_fraction <= 1, "momentum.min_valid_fraction",
              fmt::format("{}", min_valid_fraction), "a fraction of the grid's subsets in (0, 1]");
   sigmoid.Check();

@@ -18,7 +18,9 @@
 #include <string>
 #include <tuple>
 #include <utility>
+#include <vector>
 
+#include "impactdic/calib/undistort.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/core/strings.h"
@@ -26,6 +28,7 @@
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/input_file.h"
+#include "impactdic/momentum/fit.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -149,7 +152,24 @@ YamlOptionTable TestTable(Scene* s) {
   return t;
 }
 
+// Every field of PreprocessOptions is a key: undistort and undistortion.* of
+// preprocess.undistortion, gaussian and clahe of theirs; roi and undistortion.roi are dic.roi
+// (MakePreprocessOptions, pipeline.h).
 std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
+  PreprocessOptions& p = s->preprocess;
+  YamlOptionTable undistortion("preprocess.undistortion");
+  undistortion.Add("enabled", &p.undistort,
+                   "Undistort the frames when a calibration is given (and the lens moves a roi "
+                   "pixel by more than skip_threshold_px)");
+  undistortion.Add("skip_threshold_px", &p.undistortion.skip_threshold_px,
+                   kUndistortSkipThresholdRange, "a lens shift",
+                   "Skip the undistortion when no roi pixel moves by more than this");
+  undistortion.AddChoice(
+      "interpolation", kUndistortInterpolationNames.Names(), ToString(p.undistortion.interpolation),
+      [&p](const std::string& v) {
+        p.undistortion.interpolation = UndistortInterpolationFromString(v);
+      },
+      "Interpolation of the undistorted frames");
   GaussianBlurOptions& g = s->preprocess.gaussian;
   YamlOptionTable gauss("preprocess.gaussian");
   gauss.AddCustom(
@@ -175,7 +195,7 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
   clahe.Add("clip_limit", &c.clip_limit, kClaheClipLimitRange, "a clip limit",
             "Contrast limit relative to a flat histogram");
   clahe.Add("tile_grid", &c.tile_grid, kClaheTileGridRange, "tile count", "Tiles per side");
-  return {gauss, clahe};
+  return {undistortion, gauss, clahe};
 }
 
 void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
@@ -393,7 +413,45 @@ YamlOptionTable SensorTable(Scene* s) {
       "impact); detected = the record starts at rest");
   t.Add("impact_threshold_g", &o.impact_threshold_g, kImpactThresholdRange, "an impact threshold",
         "Reading [g] that is certainly the impact; the onset is found before it");
+  t.Add("quiet_guard_s", &o.quiet_guard_s, kQuietGuardRange, "a gap",
+        "Gap left between the quiet (offset and noise) windows and the impact or release");
+  t.Add("noise_band_sigma", &o.noise_band_sigma, kNoiseBandSigmaRange, "a number of sigmas",
+        "Impact onset: walk back to the last sample inside this many noise sigmas of free fall");
+  t.Add("stop_velocity_m_s", &o.stop_velocity_m_s, kStopVelocityRange, "a speed",
+        "The pounder has stopped once its velocity falls to this after the peak");
+  t.AddCustom(
+      "force_columns", "column names separated by commas (empty: every force* column)",
+      Join(o.columns.force, ","),
+      [&o](const YAML::Node& n) {
+        std::vector<std::string> names;
+        if (n.IsSequence()) {
+          for (const YAML::Node& c : n) names.push_back(c.IsScalar() ? c.Scalar() : "");
+        } else if (n.IsScalar()) {
+          std::stringstream ss(n.Scalar());
+          for (std::string c; std::getline(ss, c, ',');) names.push_back(c);
+        } else if (!n.IsNull()) {
+          return false;
+        }
+        if (std::any_of(names.begin(), names.end(), [](const auto& c) { return c.empty(); }))
+          return false;
+        o.columns.force = names;
+        return true;
+      },
+      "Force channels kept (filtered, /sensor/force); empty = every column named force*");
   return t;
+}
+
+// The fields of SensorOptions (sensor/sensor.h) that no key reaches, and why. g_m_s2 is
+// test.g_m_s2, impact_velocity_m_s and expected_impact_velocity_* the test's v0
+// (MakeSensorOptions); every other field is a key of SensorTable.
+const std::vector<InternalOption>& InternalSensorOptions() {
+  static const std::vector<InternalOption> kInternal = {
+      {"sensor.max_step_deviation",
+       "A check of the record, not a setting of the result: a time step further than this from "
+       "the median is refused (naming the rows), and an accepted record gives the same result "
+       "whatever it is"},
+  };
+  return kInternal;
 }
 
 YamlOptionTable MomentumTable(Scene* s) {
@@ -424,7 +482,31 @@ YamlOptionTable MomentumTable(Scene* s) {
         return true;
       },
       "Unless max_sigma_px: samples above this times the frame's median sigma are left out");
+  MomentumOptions& o = m.options;
+  t.Add("velocity_match_tolerance", &o.velocity_match_tolerance, kVelocityMatchToleranceRange,
+        "a fraction of v_p,max", "t_e: v_p - v_sand at most this times v_p,max");
+  t.Add("sand_accel_tolerance", &o.sand_accel_tolerance, kSandAccelToleranceRange,
+        "a fraction of the peak soil acceleration",
+        "t_e: ...and the soil's acceleration at most this times its peak");
+  t.Add("fit_sigmoid", &o.fit_sigmoid, "Fit the sigmoid M, b, T to the added mass (Eq. 6)");
+  t.Add("sigmoid_confidence", &o.sigmoid.confidence, kConfidenceRange, "a confidence level",
+        "Level of the sigmoid fit's confidence intervals");
   return t;
+}
+
+// The fields of MomentumOptions (momentum/momentum.h) that no key reaches, and why. The pounder
+// and soil are test.* and the footprint momentum.pounder_center_x_px / surface_y_px
+// (MakeMomentumOptions); every other field is a key of MomentumTable (rect_mm read by ParseScene).
+const std::vector<InternalOption>& InternalMomentumOptions() {
+  static const std::vector<InternalOption> kInternal = {
+      {"momentum.sigmoid.max_iterations",
+       "The Levenberg-Marquardt fit's iteration cap: a fit that converges gives the same M, b, T "
+       "whatever it is, and one that does not says so (converged, message)"},
+      {"momentum.sigmoid.step_tolerance",
+       "The fit's stopping rule on the relative parameter step (1e-10): it moves M, b, T far "
+       "below their standard errors"},
+  };
+  return kInternal;
 }
 
 // A solver tolerance: NaN (unset) means the solver's rule, shown as `unset_text`.
@@ -479,6 +561,30 @@ YamlOptionTable ModelTable(Scene* s) {
   t.Add("t_max_s", &o.t_max_s, ValueRange{0, 1e300, "s", /*min_open=*/true}, "a time",
         "Give up (warning) if v has not reached 0 by then");
   return t;
+}
+
+// The fields of ImpactSolverOptions (model/impact_model.h) that no model.* key reaches, and why:
+// they guard the integration, and the solution's accuracy is model.rtol / model.atol's. Every
+// field of ImpactModelParameters is a test.* or model.* key (impact_velocity_m_s: the test's v0,
+// or the sensor's measured one).
+const std::vector<InternalOption>& InternalModelOptions() {
+  static const std::vector<InternalOption> kInternal = {
+      {"solver.sigmoid_window",
+       "Step-size safeguard: the solver does not step over the sigmoid; the solution changes only "
+       "within the tolerances model.rtol / model.atol"},
+      {"solver.sigmoid_step",
+       "Step-size safeguard (the largest step near the sigmoid); the solution changes only within "
+       "the tolerances model.rtol / model.atol"},
+      {"solver.switch_velocity_fraction",
+       "When the solve changes to the end-phase variable: the same ODE in another variable, the "
+       "solution the same within the tolerances model.rtol / model.atol"},
+      {"solver.max_steps",
+       "A guard against a runaway solve (2e6 steps per phase); a solve that hits it is reported as "
+       "not usable, with the reason"},
+      {"solver.error_warning_factor",
+       "Only when a warning is given (error estimate above this times rtol), not what is solved"},
+  };
+  return kInternal;
 }
 
 }  // namespace
@@ -820,7 +926,16 @@ const std::vector<std::string>& AllSceneStages() {
   return kStages;
 }
 
-const std::vector<InternalOption>& InternalLibraryOptions() { return InternalDicOptions(); }
+const std::vector<InternalOption>& InternalLibraryOptions() {
+  static const std::vector<InternalOption> kAll = [] {
+    std::vector<InternalOption> all;
+    for (const auto* list : {&InternalDicOptions(), &InternalSensorOptions(),
+                             &InternalMomentumOptions(), &InternalModelOptions()})
+      all.insert(all.end(), list->begin(), list->end());
+    return all;
+  }();
+  return kAll;
+}
 
 std::vector<YamlOptionTable> SceneOptionTables(Scene* scene) {
   std::vector<YamlOptionTable> tables = {InputsTable(scene), TestTable(scene)};

@@ -76,8 +76,8 @@ void SensorOptions::Check() const {
              ExpectedText("a cut-off frequency", kCutoffRange) + ", below the Nyquist frequency");
   CheckValue(kQuietWindowRange.Contains(quiet_window_s), "sensor.quiet_window_s",
              fmt::format("{}", quiet_window_s), ExpectedText("a window length", kQuietWindowRange));
-  CheckValue(std::isfinite(quiet_guard_s) && quiet_guard_s >= 0, "sensor.quiet_guard_s",
-             fmt::format("{}", quiet_guard_s), ">= 0 s");
+  CheckValue(std::isfinite(quiet_guard_s) && kQuietGuardRange.Contains(quiet_guard_s),
+             "sensor.quiet_guard_s", fmt::format("{}", quiet_guard_s), ">= 0 s");
   if (integrate_from == IntegrationStart::kImpact) {
     CheckValue(std::isfinite(impact_velocity_m_s) && impact_velocity_m_s > 0,
                "sensor.impact_velocity_m_s", fmt::format("{}", impact_velocity_m_s),
@@ -93,10 +93,10 @@ void SensorOptions::Check() const {
       std::isfinite(impact_threshold_g) && kImpactThresholdRange.Contains(impact_threshold_g),
       "sensor.impact_threshold_g", fmt::format("{}", impact_threshold_g),
       ExpectedText("an impact threshold", kImpactThresholdRange));
-  CheckValue(std::isfinite(noise_band_sigma) && noise_band_sigma > 0, "sensor.noise_band_sigma",
-             fmt::format("{}", noise_band_sigma), "> 0");
-  CheckValue(std::isfinite(stop_velocity_m_s) && stop_velocity_m_s >= 0, "sensor.stop_velocity_m_s",
-             fmt::format("{}", stop_velocity_m_s), ">= 0 m/s");
+  CheckValue(std::isfinite(noise_band_sigma) && kNoiseBandSigmaRange.Contains(noise_band_sigma),
+             "sensor.noise_band_sigma", fmt::format("{}", noise_band_sigma), "> 0");
+  CheckValue(std::isfinite(stop_velocity_m_s) && kStopVelocityRange.Contains(stop_velocity_m_s),
+             "sensor.stop_velocity_m_s", fmt::format("{}", stop_velocity_m_s), ">= 0 m/s");
   CheckValue(
       std::isfinite(max_step_deviation) && max_step_deviation > 0 && max_step_deviation <= 0.5,
       "sensor.max_step_deviation", fmt::format("{}", max_step_deviation), "in (0, 0.5]");

@@ -8,10 +8,13 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <numeric>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "../core/test_paths.h"
@@ -22,6 +25,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/csv.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/synth/speckle.h"
 
@@ -75,18 +79,40 @@ constexpr std::size_t FieldCount() {
   }
 }
 
-// A field of DicOptions, by its path in the struct (as its Check() names it), and the scene key
-// that reaches it with a value other than the default (none: InternalLibraryOptions).
-struct DicField {
+// A field of a library's options, by its path in the struct after the library's name
+// (InternalOption), and the scene key that reaches it with a value other than the default (none:
+// InternalLibraryOptions). `changed` says whether the options the stage takes differ from the
+// default scene's: a field the pipeline sets from another key (sensor.g_m_s2 from test.g_m_s2)
+// is reached by that key.
+struct LibraryField {
   const char* field;
   const char* key;
   const char* value;
   std::function<bool(const Scene&)> changed;
 };
 
+// Equal, NaN equal to NaN (an unset tolerance or release time).
+template <typename T>
+bool Same(const T& a, const T& b) {
+  if constexpr (std::is_floating_point_v<T>) {
+    if (std::isnan(a) && std::isnan(b)) return true;
+  }
+  return a == b;
+}
+
+// `changed` of a field `get` of the options `make` builds from a scene: differs from the default
+// scene's.
+template <typename Make, typename Get>
+std::function<bool(const Scene&)> Differs(Make make, Get get) {
+  return [make, get](const Scene& s) {
+    const Scene defaults;
+    return !Same(get(make(s)), get(make(defaults)));
+  };
+}
+
 // Every field of DicOptions (the static_asserts fail when one is added: list it here, with its
-// scene key or in InternalLibraryOptions).
-std::vector<DicField> DicFields() {
+// scene key or in InternalLibraryOptions; the same for the lists below).
+std::vector<LibraryField> DicFields() {
   static_assert(FieldCount<GridOptions>() == 4);
   static_assert(FieldCount<InitialGuessOptions>() == 3);
   static_assert(FieldCount<IcgnOptions>() == 9);
@@ -170,19 +196,248 @@ std::vector<DicField> DicFields() {
   };
 }
 
-// Every option of the correlation library is reached by a scene key, which is a flag of
-// `correlate` and `run` (the test above), or is internal with its reason beside the scene's tables.
-TEST(SceneFlags, EveryDicOptionIsASceneKeyOrInternal) {
-  std::vector<std::string> keys = {"dic.roi"};  // Read by ParseScene itself, a flag all the same.
-  for (const SceneKeyFlag& f : SceneKeyFlags({"dic"})) keys.push_back(f.key);
+// The preprocessing the frames stage takes (MakePreprocessOptions).
+std::vector<LibraryField> PreprocessFields() {
+  static_assert(FieldCount<PreprocessOptions>() == 5);
+  static_assert(FieldCount<UndistortOptions>() == 3);
+  static_assert(FieldCount<GaussianBlurOptions>() == 4);
+  static_assert(FieldCount<ClaheOptions>() == 3);
+  const auto p = [](const Scene& s) { return MakePreprocessOptions(s); };
+  using O = PreprocessOptions;
+  return {
+      {"preprocess.undistort", "preprocess.undistortion.enabled", "false",
+       Differs(p, [](const O& o) { return o.undistort; })},
+      // The region the auto Gaussian measures and the undistortion judges: the correlation's.
+      {"preprocess.roi", "dic.roi", "1,2,30,40", Differs(p, [](const O& o) { return o.roi; })},
+      {"preprocess.undistortion.skip_threshold_px", "preprocess.undistortion.skip_threshold_px",
+       "0.5", Differs(p, [](const O& o) { return o.undistortion.skip_threshold_px; })},
+      {"preprocess.undistortion.interpolation", "preprocess.undistortion.interpolation", "bilinear",
+       Differs(p, [](const O& o) { return o.undistortion.interpolation; })},
+      {"preprocess.undistortion.roi", "dic.roi", "1,2,30,40",
+       Differs(p, [](const O& o) { return o.undistortion.roi; })},
+      {"preprocess.gaussian.mode", "preprocess.gaussian.enabled", "true",
+       Differs(p, [](const O& o) { return o.gaussian.mode; })},
+      {"preprocess.gaussian.sigma_px", "preprocess.gaussian.sigma", "1.5",
+       Differs(p, [](const O& o) { return o.gaussian.sigma_px; })},
+      {"preprocess.gaussian.kernel_size", "preprocess.gaussian.kernel", "7",
+       Differs(p, [](const O& o) { return o.gaussian.kernel_size; })},
+      {"preprocess.gaussian.auto_threshold_px", "preprocess.gaussian.auto_threshold_px", "0.01",
+       Differs(p, [](const O& o) { return o.gaussian.auto_threshold_px; })},
+      {"preprocess.clahe.enabled", "preprocess.clahe.enabled", "true",
+       Differs(p, [](const O& o) { return o.clahe.enabled; })},
+      {"preprocess.clahe.clip_limit", "preprocess.clahe.clip_limit", "3",
+       Differs(p, [](const O& o) { return o.clahe.clip_limit; })},
+      {"preprocess.clahe.tile_grid", "preprocess.clahe.tile_grid", "4",
+       Differs(p, [](const O& o) { return o.clahe.tile_grid; })},
+  };
+}
+
+// The sensor stage's options (MakeSensorOptions; the test's v0 reaches impact_velocity_m_s with
+// integrate_from impact).
+std::vector<LibraryField> SensorFields() {
+  static_assert(FieldCount<SensorColumns>() == 5);
+  static_assert(FieldCount<SensorOptions>() == 15);
+  const auto m = [](const Scene& s) { return MakeSensorOptions(s); };
+  const auto from_impact = [](const Scene& s) {
+    Scene c = s;
+    c.sensor.options.integrate_from = IntegrationStart::kImpact;
+    return MakeSensorOptions(c);
+  };
+  using O = SensorOptions;
+  return {
+      {"sensor.columns.time", "sensor.time_column", "t",
+       Differs(m, [](const O& o) { return o.columns.time; })},
+      {"sensor.columns.accel", "sensor.accel_column", "a",
+       Differs(m, [](const O& o) { return o.columns.accel; })},
+      {"sensor.columns.accel_unit", "sensor.accel_unit", "g",
+       Differs(m, [](const O& o) { return o.columns.accel_unit; })},
+      {"sensor.columns.exposure", "sensor.exposure_column", "",
+       Differs(m, [](const O& o) { return o.columns.exposure; })},
+      {"sensor.columns.force", "sensor.force_columns", "force_1,force_3",
+       Differs(m, [](const O& o) { return o.columns.force; })},
+      {"sensor.g_m_s2", "test.g_m_s2", "9.7", Differs(m, [](const O& o) { return o.g_m_s2; })},
+      {"sensor.cutoff_hz", "sensor.cutoff_hz", "1000",
+       Differs(m, [](const O& o) { return o.cutoff_hz; })},
+      {"sensor.offset_reference", "sensor.offset_reference", "rest",
+       Differs(m, [](const O& o) { return o.offset_reference; })},
+      {"sensor.quiet_window_s", "sensor.quiet_window_s", "0.01",
+       Differs(m, [](const O& o) { return o.quiet_window_s; })},
+      {"sensor.quiet_guard_s", "sensor.quiet_guard_s", "0.002",
+       Differs(m, [](const O& o) { return o.quiet_guard_s; })},
+      {"sensor.integrate_from", "sensor.integrate_from", "impact",
+       Differs(m, [](const O& o) { return o.integrate_from; })},
+      {"sensor.impact_velocity_m_s", "test.impact_velocity_m_s", "3",
+       Differs(from_impact, [](const O& o) { return o.impact_velocity_m_s; })},
+      {"sensor.release_time_s", "sensor.release_time_s", "0.1",
+       Differs(m, [](const O& o) { return o.release_time_s; })},
+      {"sensor.impact_threshold_g", "sensor.impact_threshold_g", "8",
+       Differs(m, [](const O& o) { return o.impact_threshold_g; })},
+      {"sensor.noise_band_sigma", "sensor.noise_band_sigma", "6",
+       Differs(m, [](const O& o) { return o.noise_band_sigma; })},
+      {"sensor.stop_velocity_m_s", "sensor.stop_velocity_m_s", "0.02",
+       Differs(m, [](const O& o) { return o.stop_velocity_m_s; })},
+      {"sensor.max_step_deviation", nullptr, nullptr, nullptr},
+      {"sensor.expected_impact_velocity_m_s", "test.drop_height_m", "1",
+       Differs(m, [](const O& o) { return o.expected_impact_velocity_m_s; })},
+      {"sensor.expected_impact_velocity_source", "test.impact_velocity_m_s", "3",
+       Differs(m, [](const O& o) { return o.expected_impact_velocity_source; })},
+  };
+}
+
+// The kinematics stage sets the frame rate from the frames' timeline: a camera file's own rate,
+// else inputs.fps (kinematics_stage.cc, SceneFrameClock).
+std::vector<LibraryField> KinematicsFields() {
+  static_assert(FieldCount<KinematicsOptions>() == 1);
+  return {{"kinematics.fps", "inputs.fps", "1000",
+           [](const Scene& s) { return s.inputs.fps != SceneInputs{}.fps; }}};
+}
+
+// The momentum stage's options (MakeMomentumOptions, with the pounder at (100, 50) px and 1 mm/px
+// unless the scene places it).
+std::vector<LibraryField> MomentumFields() {
+  static_assert(FieldCount<MomentumOptions>() == 13);
+  static_assert(FieldCount<PounderFootprint>() == 3);
+  static_assert(FieldCount<SigmoidFitOptions>() == 3);
+  const auto m = [](const Scene& s) {
+    Scene c = s;
+    if (!c.momentum.pounder_center_x_px) c.momentum.pounder_center_x_px = 100;
+    if (!c.momentum.surface_y_px) c.momentum.surface_y_px = 50;
+    return MakeMomentumOptions(c, /*mm_per_px=*/1);
+  };
+  using O = MomentumOptions;
+  return {
+      {"momentum.pounder_mass_kg", "test.mass_kg", "20",
+       Differs(m, [](const O& o) { return o.pounder_mass_kg; })},
+      {"momentum.pounder_width_m", "test.width_m", "0.2",
+       Differs(m, [](const O& o) { return o.pounder_width_m; })},
+      {"momentum.depth_m", "test.depth_m", "0.2", Differs(m, [](const O& o) { return o.depth_m; })},
+      {"momentum.density_kg_m3", "test.density_kg_m3", "1600",
+       Differs(m, [](const O& o) { return o.density_kg_m3; })},
+      {"momentum.grid_cols", "momentum.grid_cols", "4",
+       Differs(m, [](const O& o) { return o.grid_cols; })},
+      {"momentum.grid_rows", "momentum.grid_rows", "3",
+       Differs(m, [](const O& o) { return o.grid_rows; })},
+      {"momentum.rect_mm", "momentum.rect_mm", "[0, 0, 10, 5]",
+       Differs(m, [](const O& o) { return o.rect_mm; })},
+      {"momentum.footprint.x_left_mm", "momentum.pounder_center_x_px", "320",
+       Differs(m, [](const O& o) { return o.footprint.x_left_mm; })},
+      {"momentum.footprint.x_right_mm", "momentum.pounder_center_x_px", "320",
+       Differs(m, [](const O& o) { return o.footprint.x_right_mm; })},
+      {"momentum.footprint.bottom_y_mm", "momentum.surface_y_px", "200",
+       Differs(m, [](const O& o) { return o.footprint.bottom_y_mm; })},
+      {"momentum.velocity_match_tolerance", "momentum.velocity_match_tolerance", "0.1",
+       Differs(m, [](const O& o) { return o.velocity_match_tolerance; })},
+      {"momentum.sand_accel_tolerance", "momentum.sand_accel_tolerance", "0.1",
+       Differs(m, [](const O& o) { return o.sand_accel_tolerance; })},
+      {"momentum.min_valid_fraction", "momentum.min_valid_fraction", "0.8",
+       Differs(m, [](const O& o) { return o.min_valid_fraction; })},
+      {"momentum.fit_sigmoid", "momentum.fit_sigmoid", "false",
+       Differs(m, [](const O& o) { return o.fit_sigmoid; })},
+      {"momentum.sigmoid.max_iterations", nullptr, nullptr, nullptr},
+      {"momentum.sigmoid.step_tolerance", nullptr, nullptr, nullptr},
+      {"momentum.sigmoid.confidence", "momentum.sigmoid_confidence", "0.9",
+       Differs(m, [](const O& o) { return o.sigmoid.confidence; })},
+  };
+}
+
+// The model stage's parameters (MakeModelParameters at the test's v0; the sensor's measured v0
+// when there is one) and its solver options (Scene::solver).
+std::vector<LibraryField> ModelFields() {
+  static_assert(FieldCount<ImpactModelParameters>() == 13);
+  static_assert(FieldCount<ImpactSolverOptions>() == 11);
+  const auto p = [](const Scene& s) { return MakeModelParameters(s, s.ImpactVelocity()); };
+  const auto o = [](const Scene& s) { return s.solver; };
+  using P = ImpactModelParameters;
+  using O = ImpactSolverOptions;
+  return {
+      {"model.pounder_mass_kg", "test.mass_kg", "20",
+       Differs(p, [](const P& m) { return m.pounder_mass_kg; })},
+      {"model.impact_velocity_m_s", "test.drop_height_m", "1",
+       Differs(p, [](const P& m) { return m.impact_velocity_m_s; })},
+      {"model.width_m", "test.width_m", "0.2", Differs(p, [](const P& m) { return m.width_m; })},
+      {"model.depth_m", "test.depth_m", "0.2", Differs(p, [](const P& m) { return m.depth_m; })},
+      {"model.added_mass_kg", "model.added_mass_kg", "3",
+       Differs(p, [](const P& m) { return m.added_mass_kg; })},
+      {"model.friction_K", "model.K", "40", Differs(p, [](const P& m) { return m.friction_K; })},
+      {"model.damping_exponent_n", "model.n", "0.3",
+       Differs(p, [](const P& m) { return m.damping_exponent_n; })},
+      {"model.damping_factor_u", "model.u", "2",
+       Differs(p, [](const P& m) { return m.damping_factor_u; })},
+      {"model.sigmoid_delay_T_s", "model.T_s", "0.003",
+       Differs(p, [](const P& m) { return m.sigmoid_delay_T_s; })},
+      {"model.sigmoid_rate_b_per_s", "model.b_per_s", "2000",
+       Differs(p, [](const P& m) { return m.sigmoid_rate_b_per_s; })},
+      {"model.density_kg_m3", "test.density_kg_m3", "1600",
+       Differs(p, [](const P& m) { return m.density_kg_m3; })},
+      {"model.gravity_m_s2", "test.g_m_s2", "9.7",
+       Differs(p, [](const P& m) { return m.gravity_m_s2; })},
+      {"model.bed_height_m", "test.bed_height_m", "0.5",
+       Differs(p, [](const P& m) { return m.bed_height_m; })},
+      {"solver.solver", "model.solver", "stiff", Differs(o, [](const O& m) { return m.solver; })},
+      {"solver.rtol", "model.rtol", "1e-8", Differs(o, [](const O& m) { return m.rtol; })},
+      {"solver.atol", "model.atol", "1e-9", Differs(o, [](const O& m) { return m.atol; })},
+      {"solver.error_estimator", "model.error_estimator", "local",
+       Differs(o, [](const O& m) { return m.error_estimator; })},
+      {"solver.ode45_defaults", "model.ode45_defaults", "true",
+       Differs(o, [](const O& m) { return m.ode45_defaults; })},
+      {"solver.t_max_s", "model.t_max_s", "5", Differs(o, [](const O& m) { return m.t_max_s; })},
+      {"solver.sigmoid_window", nullptr, nullptr, nullptr},
+      {"solver.sigmoid_step", nullptr, nullptr, nullptr},
+      {"solver.switch_velocity_fraction", nullptr, nullptr, nullptr},
+      {"solver.max_steps", nullptr, nullptr, nullptr},
+      {"solver.error_warning_factor", nullptr, nullptr, nullptr},
+  };
+}
+
+// The strain stage's options (Scene::strain).
+std::vector<LibraryField> StrainFields() {
+  static_assert(FieldCount<StrainOptions>() == 5);
+  const auto o = [](const Scene& s) { return s.strain; };
+  using O = StrainOptions;
+  return {
+      {"strain.enabled", "strain.enabled", "true",
+       Differs(o, [](const O& m) { return m.enabled; })},
+      {"strain.gradient", "strain.gradient", "warp",
+       Differs(o, [](const O& m) { return m.gradient; })},
+      {"strain.window", "strain.window", "5", Differs(o, [](const O& m) { return m.window; })},
+      {"strain.compaction_threshold", "strain.compaction_threshold", "0.02",
+       Differs(o, [](const O& m) { return m.compaction_threshold; })},
+      {"strain.shear_band_threshold", "strain.shear_band_threshold", "0.05",
+       Differs(o, [](const O& m) { return m.shear_band_threshold; })},
+  };
+}
+
+// The default scene with `key` set to `value`: as its flag, or, for a key only a scene file has
+// (momentum.rect_mm, a list), read from one.
+Scene SceneWithKey(const std::string& key, const std::string& value) {
+  if (key == "momentum.rect_mm")
+    return ParseScene("inputs: {frames: f}\nmomentum: {rect_mm: " + value + "}\n", "scene.yaml");
+  Scene scene;
+  SetSceneKey(&scene, key, value, "--" + key);
+  return scene;
+}
+
+// Every option of the libraries a scene configures is reached by a scene key, which is a flag
+// of the commands that run it (the test above; momentum.rect_mm only in a scene file), directly
+// or through the options the pipeline builds from it, or is internal with its reason beside the
+// scene's tables.
+TEST(SceneFlags, EveryLibraryOptionIsASceneKeyOrInternal) {
+  // dic.roi and momentum.rect_mm are read by ParseScene itself (dic.roi a flag all the same).
+  std::vector<std::string> keys = {"dic.roi", "momentum.rect_mm"};
+  Scene defaults;
+  for (const YamlOptionTable& t : SceneOptionTables(&defaults))
+    for (const auto& e : t.entries()) keys.push_back(t.section() + "." + e.key);
   const std::vector<InternalOption>& internal = InternalLibraryOptions();
   const auto is_internal = [&internal](const std::string& field) {
     return std::any_of(internal.begin(), internal.end(), [&field](const InternalOption& o) {
       return field == o.field && std::string(o.reason).size() > 20;
     });
   };
-  const std::vector<DicField> fields = DicFields();
-  for (const DicField& f : fields) {
+  std::vector<LibraryField> fields;
+  for (auto list : {DicFields, PreprocessFields, SensorFields, KinematicsFields, MomentumFields,
+                    ModelFields, StrainFields})
+    for (LibraryField& f : list()) fields.push_back(std::move(f));
+  for (const LibraryField& f : fields) {
     if (f.key == nullptr) {
       EXPECT_TRUE(is_internal(f.field))
           << f.field << ": no scene key reaches it, and it is not in InternalLibraryOptions";
@@ -193,14 +448,14 @@ TEST(SceneFlags, EveryDicOptionIsASceneKeyOrInternal) {
       ADD_FAILURE() << f.field << ": no scene key reaches it (" << f.key << " is not a key)";
       continue;
     }
-    Scene scene;
-    SetSceneKey(&scene, f.key, f.value, std::string("--") + f.key);
-    EXPECT_TRUE(f.changed(scene)) << "--" << f.key << " " << f.value << " leaves " << f.field;
+    EXPECT_TRUE(f.changed(SceneWithKey(f.key, f.value)))
+        << f.key << ": " << f.value << " leaves " << f.field;
   }
   for (const InternalOption& o : internal) {
-    EXPECT_TRUE(std::any_of(fields.begin(), fields.end(),
-                            [&o](const DicField& f) { return f.field == std::string(o.field); }))
-        << o.field << " (InternalLibraryOptions) is not a field of DicOptions";
+    EXPECT_TRUE(
+        std::any_of(fields.begin(), fields.end(),
+                    [&o](const LibraryField& f) { return f.field == std::string(o.field); }))
+        << o.field << " (InternalLibraryOptions) is not a field of a library's options";
   }
 }
 

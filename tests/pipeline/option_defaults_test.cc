@@ -99,6 +99,8 @@ TEST(OptionDefaults, ScenePreprocessSensorAndMomentumKeysDefaultToTheirLibraries
   EXPECT_EQ(scene.preprocess.clahe.clip_limit, pd.clahe.clip_limit);
   EXPECT_EQ(scene.preprocess.clahe.tile_grid, pd.clahe.tile_grid);
   EXPECT_EQ(scene.preprocess.undistort, pd.undistort);
+  EXPECT_EQ(scene.preprocess.undistortion.skip_threshold_px, pd.undistortion.skip_threshold_px);
+  EXPECT_EQ(scene.preprocess.undistortion.interpolation, pd.undistortion.interpolation);
 
   const SensorOptions s = MakeSensorOptions(scene), sd;
   EXPECT_EQ(s.columns.time, sd.columns.time);
@@ -111,6 +113,10 @@ TEST(OptionDefaults, ScenePreprocessSensorAndMomentumKeysDefaultToTheirLibraries
   EXPECT_EQ(s.quiet_window_s, sd.quiet_window_s);
   EXPECT_EQ(s.integrate_from, sd.integrate_from);
   EXPECT_EQ(s.impact_threshold_g, sd.impact_threshold_g);
+  EXPECT_EQ(s.quiet_guard_s, sd.quiet_guard_s);
+  EXPECT_EQ(s.noise_band_sigma, sd.noise_band_sigma);
+  EXPECT_EQ(s.stop_velocity_m_s, sd.stop_velocity_m_s);
+  EXPECT_EQ(s.columns.force, sd.columns.force);
 
   // The pounder and soil reach the momentum stage from test.*: the same defaults as the
   // momentum library's own.
@@ -126,6 +132,10 @@ TEST(OptionDefaults, ScenePreprocessSensorAndMomentumKeysDefaultToTheirLibraries
   EXPECT_EQ(m.grid_rows, md.grid_rows);
   EXPECT_EQ(m.rect_mm, md.rect_mm);
   EXPECT_EQ(m.min_valid_fraction, md.min_valid_fraction);
+  EXPECT_EQ(m.velocity_match_tolerance, md.velocity_match_tolerance);
+  EXPECT_EQ(m.sand_accel_tolerance, md.sand_accel_tolerance);
+  EXPECT_EQ(m.fit_sigmoid, md.fit_sigmoid);
+  EXPECT_EQ(m.sigmoid.confidence, md.sigmoid.confidence);
 }
 
 // What CLI11 shows as an option's default ("--subset INT=25") for `value` (it formats with a

@@ -22,6 +22,7 @@
 
 #include "impactdic/calib/calibration.h"
 #include "impactdic/core/enum_names.h"
+#include "impactdic/core/range.h"
 
 namespace impactdic {
 
@@ -33,8 +34,13 @@ const char* ToString(UndistortInterpolation interpolation);
 // A name of kUndistortInterpolationNames; Error(kInvalidValue) otherwise.
 UndistortInterpolation UndistortInterpolationFromString(const std::string& text);
 
+// The skip thresholds UndistortOptions::Check() accepts (the scene's
+// preprocess.undistortion.skip_threshold_px).
+inline constexpr ValueRange kUndistortSkipThresholdRange{0, 1e300, "px"};
+
 struct UndistortOptions {
-  double skip_threshold_px = 0.01;  // Skip if no ROI pixel moves by more than this [px], >= 0.
+  // Skip if no ROI pixel moves by more than this [px], kUndistortSkipThresholdRange.
+  double skip_threshold_px = 0.01;
   UndistortInterpolation interpolation = UndistortInterpolation::kBicubic;
   cv::Rect roi;  // Region of interest [px] in the frame; empty = the whole frame.
   void Check() const;

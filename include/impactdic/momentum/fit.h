@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "impactdic/core/range.h"
+
 namespace impactdic {
 
 // Regularised incomplete beta I_x(a, b), continued fraction by the modified Lentz method
@@ -22,10 +24,13 @@ double RegularizedIncompleteBeta(double a, double b, double x);
 double StudentTCdf(double t, double dof);
 double StudentTQuantile(double p, double dof);
 
+// The levels of the reported intervals (SigmoidFitOptions::confidence).
+inline constexpr ValueRange kConfidenceRange{0, 1, "", /*min_open=*/true, /*max_open=*/true};
+
 struct SigmoidFitOptions {
   int max_iterations = 200;       // Levenberg-Marquardt iterations, >= 1.
   double step_tolerance = 1e-10;  // Stop when every relative parameter step is below this, > 0.
-  double confidence = 0.95;       // Level of the reported intervals, in (0, 1).
+  double confidence = 0.95;       // Level of the reported intervals, kConfidenceRange.
   void Check() const;
 };
 

@@ -53,6 +53,7 @@
 #include <vector>
 
 #include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/json.h"
 #include "impactdic/kinematics/kinematics.h"
@@ -71,6 +72,12 @@ struct PounderFootprint {
   double bottom_y_mm = kNaN;
 };
 
+// The allowed values of the t_e tolerances, read by MomentumOptions::Check() and the scene's
+// momentum.* keys.
+inline constexpr ValueRange kVelocityMatchToleranceRange{0, 1, "", /*min_open=*/true};
+inline constexpr ValueRange kSandAccelToleranceRange{0, 1, "", /*min_open=*/false,
+                                                     /*max_open=*/true};
+
 struct MomentumOptions {
   double pounder_mass_kg = 10;                   // m_p [kg], > 0.
   double pounder_width_m = 0.15;                 // D [m], > 0 (default footprint only).
@@ -80,8 +87,9 @@ struct MomentumOptions {
   int grid_rows = 2;                             // Subset rows beneath the pounder, >= 1.
   std::optional<std::array<double, 4>> rect_mm;  // x0, y0, x1, y1 [mm], x0 < x1, y0 < y1.
   PounderFootprint footprint;
-  double velocity_match_tolerance = 0.05;  // Of v_p,max, in (0, 1].
-  double sand_accel_tolerance = 0.05;      // Of the maximum soil acceleration, in [0, 1).
+  double velocity_match_tolerance = 0.05;  // Of v_p,max, kVelocityMatchToleranceRange.
+  // Of the maximum soil acceleration, kSandAccelToleranceRange.
+  double sand_accel_tolerance = 0.05;
   // Per frame, the fraction of the grid's subsets that must be valid for p_gran to be measured
   // there (else NaN), in (0, 1]; scene key momentum.min_valid_fraction (this is its default).
   // p_gran stands for the whole grid's mass through the mean over its valid subsets, and subsets

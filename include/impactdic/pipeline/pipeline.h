@@ -43,6 +43,7 @@
 #include "impactdic/io/json.h"
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/preprocess/preprocess.h"
 
 namespace impactdic {
 
@@ -191,6 +192,10 @@ PipelineSummary RunScene(const Scene& scene, const PipelineOptions& options);
 // naming the key if invalid (dic.reference_update other than the default or fixed with dic.mode
 // pairs).
 DicOptions MakeDicOptions(const SceneDic& dic);
+
+// The preprocessing of a scene's frames: PreprocessOptions of the preprocess.* keys, measured and
+// undistorted over the correlation's region of interest (MakeDicOptions' grid.roi).
+PreprocessOptions MakePreprocessOptions(const Scene& scene);
 
 }  // namespace impactdic
 

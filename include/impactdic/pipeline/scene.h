@@ -192,12 +192,17 @@ const std::vector<std::string>& AllSceneStages();
 std::vector<YamlOptionTable> SceneOptionTables(Scene* scene);
 
 // A field of a library option struct that no scene key reaches, named by its path in the struct
-// ("dic.init.seed_spacing", as the struct's Check() names it), and why it is not a key.
+// after the library's name ("dic.init.seed_spacing", "sensor.max_step_deviation",
+// "momentum.sigmoid.max_iterations"; "model." for ImpactModelParameters, "solver." for
+// ImpactSolverOptions), and why it is not a key.
 struct InternalOption {
   const char* field;
   const char* reason;
 };
-// Those of DicOptions; listed next to the scene's dic table (src/pipeline/scene.cc).
+// Those of the libraries a scene configures (DicOptions, PreprocessOptions, SensorOptions,
+// KinematicsOptions, MomentumOptions, ImpactModelParameters, ImpactSolverOptions, StrainOptions),
+// each list next to its section's table (src/pipeline/scene.cc). A field set from other keys
+// (sensor.g_m_s2 from test.g_m_s2) is reached by them and not listed.
 const std::vector<InternalOption>& InternalLibraryOptions();
 
 // Loads and validates a scene file; throws Error (kFileNotFound / kInvalidValue / kFileFormat)

@@ -12,7 +12,8 @@
 //   opt.integrate_from = IntegrationStart::kRelease;
 //   SensorResult r = AnalyzeSensorCsv("daq.csv", opt);
 //   std::cout << r.summary.BriefReport();
-//   FrameTimeline frames = MakeFrameTimeline(0, /*count=*/200, CameraClock{.fps = 1600}, &r);  // frame_timeline.h
+//   FrameTimeline frames = MakeFrameTimeline(0, /*count=*/200, CameraClock{.fps = 1600}, &r);  //
+//   frame_timeline.h
 #ifndef IMPACTDIC_SENSOR_SENSOR_H_
 #define IMPACTDIC_SENSOR_SENSOR_H_
 
@@ -90,6 +91,9 @@ inline constexpr ValueRange kCutoffRange{0, 1e300, "Hz", /*min_open=*/true};
 inline constexpr ValueRange kQuietWindowRange{0, 1e3, "s", /*min_open=*/true};
 // A reading above the rest level (1 g).
 inline constexpr ValueRange kImpactThresholdRange{1, 1e300, "g", /*min_open=*/true};
+inline constexpr ValueRange kQuietGuardRange{0, 1e300, "s"};
+inline constexpr ValueRange kNoiseBandSigmaRange{0, 1e300, "", /*min_open=*/true};
+inline constexpr ValueRange kStopVelocityRange{0, 1e300, "m/s"};
 
 struct SensorOptions {
   SensorColumns columns;
@@ -97,7 +101,8 @@ struct SensorOptions {
   double cutoff_hz = 1500;  // Low-pass cut-off [Hz], kCutoffRange, < f_s / 2 (paper: 1500 Hz).
   OffsetReference offset_reference = OffsetReference::kFreeFall;
   double quiet_window_s = 0.005;  // Length of the offset / noise window [s], kQuietWindowRange.
-  double quiet_guard_s = 0.001;   // Gap between the free-fall window and the impact [s], >= 0.
+  double quiet_guard_s = 0.001;   // Gap between the free-fall window and the impact [s],
+                                  // kQuietGuardRange.
   IntegrationStart integrate_from = IntegrationStart::kRelease;
   // kImpact: the impact velocity [m/s], > 0 (NaN otherwise).
   double impact_velocity_m_s = kNaN;
@@ -108,9 +113,11 @@ struct SensorOptions {
   // A filtered reading above this [g] is certainly the impact (coarse search only; the impact time
   // is the onset found backwards from it), kImpactThresholdRange (above the rest level).
   double impact_threshold_g = 5;
-  // Half-width of the noise band around the free-fall level, in standard deviations, > 0.
+  // Half-width of the noise band around the free-fall level, in standard deviations,
+  // kNoiseBandSigmaRange.
   double noise_band_sigma = 4;
-  // The pounder has stopped when its velocity falls to this [m/s] (>= 0) after the peak.
+  // The pounder has stopped when its velocity falls to this [m/s] after the peak,
+  // kStopVelocityRange.
   double stop_velocity_m_s = 0.01;
   // Largest relative deviation of one time step from the median step, in (0, 0.5].
   double max_step_deviation = 0.01;

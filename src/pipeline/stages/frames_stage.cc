@@ -156,15 +156,6 @@ std::string TimeFrames(StageContext& c, FrameTimeline* all) {
   return fmt::format("; frames 0..{} before the impact are not correlated", d.first_frame - 1);
 }
 
-PreprocessOptions ScenePreprocessOptions(const Scene& scene) {
-  PreprocessOptions o;
-  o.gaussian = scene.preprocess.gaussian;
-  o.clahe = scene.preprocess.clahe;
-  o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
-  o.roi = o.undistortion.roi;  // Where the automatic pre-filter measures the first frame.
-  return o;
-}
-
 // Checks the first analysed frame (the roi, the calibration's size); without a correlation to
 // stream them, reads and preprocesses every frame once for the checks of the sequence (size,
 // depth, colour), keeping none.
@@ -197,9 +188,9 @@ class FramesStage : public Stage {
     const std::vector<std::string>& files = scene.inputs.frame_files;
     d.frames = files.empty()
                    ? std::make_shared<FrameStream>(scene.inputs.frames,
-                                                   ScenePreprocessOptions(scene), calibration)
+                                                   MakePreprocessOptions(scene), calibration)
                    : std::make_shared<FrameStream>(MakeImageFileSource(files),
-                                                   ScenePreprocessOptions(scene), calibration);
+                                                   MakePreprocessOptions(scene), calibration);
     d.source_frames = d.frames->source_frames();
     SelectFrameRange(scene, d);
     FrameTimeline all;

@@ -11,6 +11,8 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/pipeline.h"
+#include "impactdic/pipeline/scene.h"
+#include "impactdic/preprocess/preprocess.h"
 
 namespace impactdic {
 namespace stages {
@@ -96,6 +98,13 @@ DicOptions MakeDicOptions(const SceneDic& d) {
     o.grid.roi = o.grid.roi.area() > 0 ? (o.grid.roi & box) : box;
   }
   o.Check();
+  return o;
+}
+
+PreprocessOptions MakePreprocessOptions(const Scene& scene) {
+  PreprocessOptions o = scene.preprocess;
+  o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
+  o.roi = o.undistortion.roi;  // Where the automatic pre-filter measures the first frame.
   return o;
 }
 
