@@ -397,36 +397,41 @@ const double* TrueHessianInverse(const Shape& shape, const double* hinv,
         nn[a * n + b] = noise2[a / nm] * shape.monomial_moments[(a % nm) * 6 + b % nm];
     }
   }
-  const double mu = LargestNoiseRatio(hinv, nn, n, nm);
-  if (!(mu > 0)) return hinv;
-  const double lambda = mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu : 1.0;
+  // The eigenvalues of H^-1 N are real and >= 0, so the largest is at most their sum, the trace:
+  // when that is <= 1 - kMinTrueHessianFraction (nearly always), lambda = 1 without the power
+  // iteration.
+  double trace = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) trace += hinv[a * n + b] * nn[b * n + a];
+  if (!(trace > 0)) return hinv;
+  double lambda = 1;
+  if (trace > 1 - kMinTrueHessianFraction) {
+    const double mu = LargestNoiseRatio(hinv, nn, n, nm);
+    if (!(mu > 0)) return hinv;
+    if (mu > 1 - kMinTrueHessianFraction) lambda = (1 - kMinTrueHessianFraction) / mu;
+  }
   for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
   return SmallSpdInverse(ht, n, htinv) ? htinv : hinv;
 }
 
-// Along each row j of the subset, the polynomials of xi (degree <= 2) sum_q w[t][q] m_q(xi, eta)
-// of `terms` weight rows w[t] (nm each) into coef[3 (terms j + t) ..]: c0 + xi (c1 + xi c2),
-// from xi = 0, 1, -1. The influences a_i for u and v are those of the translation rows of
-// H'^-1 (times the x and y gradient), J_i dp that of the increment's two halves.
+// Along each row j of the subset (eta = j - half), the polynomials of xi sum_q w[t][q] m_q(xi, eta)
+// of `terms` weight rows w[t] (nm each) into coef[3 (terms j + t) ..] as c0 + xi (c1 + xi c2):
+// with m = (1, xi, eta, xi^2 / 2, xi eta, eta^2 / 2), c0 = w0 + w2 eta + w5 eta^2 / 2,
+// c1 = w1 + w4 eta, c2 = w3 / 2 (affine: w0 + w2 eta, w1, 0). The influences a_i for u and v are
+// those of the translation rows of H'^-1 (times the x and y gradient), J_i dp that of the
+// increment's two halves.
 void RowPolynomials(const Shape& shape, const double* const* w, int terms, float* coef) {
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm;
+  const int h = shape.half, size = 2 * h + 1;
+  const bool quad = shape.kind == ShapeFunction::kQuadratic;
   for (int j = 0; j < size; ++j) {
-    double m0[6], mp[6], mm[6];
-    Monomials(0, j - h, m0);
-    Monomials(1, j - h, mp);
-    Monomials(-1, j - h, mm);
+    const double eta = j - h;
     float* c = coef + static_cast<std::ptrdiff_t>(3) * terms * j;
     for (int t = 0; t < terms; ++t) {
-      double v0 = 0, vp = 0, vm = 0;
-      for (int q = 0; q < nm; ++q) {
-        v0 += w[t][q] * m0[q];
-        vp += w[t][q] * mp[q];
-        vm += w[t][q] * mm[q];
-      }
+      const double* wt = w[t];
       float* ct = c + static_cast<std::ptrdiff_t>(3) * t;
-      ct[0] = static_cast<float>(v0);
-      ct[1] = static_cast<float>(0.5 * (vp - vm));
-      ct[2] = static_cast<float>(0.5 * (vp + vm) - v0);
+      ct[0] = static_cast<float>(wt[0] + wt[2] * eta + (quad ? 0.5 * wt[5] * eta * eta : 0.0));
+      ct[1] = static_cast<float>(wt[1] + (quad ? wt[4] * eta : 0.0));
+      ct[2] = static_cast<float>(quad ? 0.5 * wt[3] : 0.0);
     }
   }
 }
