@@ -924,32 +924,40 @@ void CorrelatedSums(const ResidualInput& in, const float* r, const float* coef, 
       vj[i] = (c[6] + xi * (c[7] + xi * c[8])) * gx[i] + (c[9] + xi * (c[10] + xi * c[11])) * gy[i];
     }
   }
-  const auto lag = [&](std::ptrdiff_t off, double s[3]) {
-    LaneSums<3>(
+  // The lags d with dy > 0, or dy == 0 and dx >= 0 (d = 0 first), each standing for itself and
+  // its opposite -d: all kLags sums of one array in one sweep, each cell loaded once and multiplied
+  // by its kLags partners.
+  constexpr int kL = kResidualLagPx, kLags = 1 + kL + kL * (2 * kL + 1);
+  const auto lags = [&](const float* x, double out[kLags]) {
+    LaneSums<kLags>(
         in.length,
-        [&](int k, float t[3]) {
-          t[0] = rs[k] * rs[k + off];
-          t[1] = us[k] * us[k + off];
-          t[2] = vs[k] * vs[k + off];
+        [&](int k, float t[kLags]) {
+          const float xk = x[k];
+          int q = 0;
+          for (int dx = 0; dx <= kL; ++dx) t[q++] = xk * x[k + dx];
+          for (int dy = 1; dy <= kL; ++dy) {
+            const float* row = x + static_cast<std::ptrdiff_t>(dy) * stride;
+            for (int dx = -kL; dx <= kL; ++dx) t[q++] = xk * row[k + dx];
+          }
         },
-        s);
+        out);
   };
-  double s0[3];
-  lag(0, s0);
-  const double c0 = s0[0] / count;
-  sums[0] = s0[1];
-  sums[1] = s0[2];
+  double rr[kLags], uu[kLags], vv[kLags];
+  lags(rs, rr);
+  lags(us, uu);
+  lags(vs, vv);
+  const double c0 = rr[0] / count;
+  sums[0] = uu[0];
+  sums[1] = vv[0];
   if (!(c0 > 0)) return;
-  // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
-  for (int dy = 0; dy <= kResidualLagPx; ++dy) {
-    for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
-      if (dy == 0 && dx <= 0) continue;
+  // Each lag d and its opposite -d once, counted twice.
+  int q = 1;
+  for (int dy = 0; dy <= kL; ++dy) {
+    for (int dx = dy == 0 ? 1 : -kL; dx <= kL; ++dx, ++q) {
       const int adx = dx < 0 ? -dx : dx;
-      double c[3];
-      lag(static_cast<std::ptrdiff_t>(dy) * stride + dx, c);
-      const double rho = c[0] / (double(size - adx) * (size - dy)) / c0;
-      sums[0] += 2 * rho * c[1];
-      sums[1] += 2 * rho * c[2];
+      const double rho = rr[q] / (double(size - adx) * (size - dy)) / c0;
+      sums[0] += 2 * rho * uu[q];
+      sums[1] += 2 * rho * vv[q];
     }
   }
 }
