@@ -326,7 +326,7 @@ std::array<double, 2> GradientNoise(const double noise[2], int size, Interpolati
 // InvertSpd fails (a pivot L_jj^2 not above 1e-10 of A_jj). For the small matrices of the
 // uncertainty, where Eigen's dynamic-size solver costs far more than the arithmetic.
 bool SmallSpdInverse(const double* a, int n, double* inv) {
-  double l[144], m[144];
+  double l[144] = {}, m[144] = {};
   for (int j = 0; j < n; ++j) {
     double d = a[j * n + j];
     for (int k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];

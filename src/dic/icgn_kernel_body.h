@@ -860,7 +860,7 @@ void LaneSums(int length, Term term, double sums[kTerms]) {
   float acc[kTerms][kResidualLanes] = {};
   for (int k = 0; k < length; k += kResidualLanes) {
     for (int l = 0; l < kResidualLanes; ++l) {
-      float t[kTerms];
+      float t[kTerms] = {};
       term(k + l, t);
       for (int q = 0; q < kTerms; ++q) acc[q][l] += t[q];
     }
