@@ -242,9 +242,13 @@ double NodeGradientNoiseRatio(Interpolation kind) {
 }
 
 // Standard deviations of the warp's translation (u, v) at the solution p, from the residuals
-// r = (f - f_m) - (f_n / g_n) (g - g_m). The least-squares figure sigma_r sqrt(H^-1) assumes
-// independent residuals and exact reference gradients; both fail on real images (2.4x too small
-// on real sand, issue 21), so two corrections are made (docs/dic.md, "Uncertainty per subset"):
+// r = (f - f_m) - (f_n / g_n) (g - g_m). They are those of the pass that converged, taken to p to
+// first order: that pass sampled g at the warp before its increment dp, whose least-squares
+// residuals are r + J dp (less their mean), so no pixel is sampled again (against sampling g at p:
+// sigma within 1e-3 relative on the benchmark pair, docs/dic.md "Speed"). The least-squares figure
+// sigma_r sqrt(H^-1) assumes independent residuals and exact reference gradients; both fail on real
+// images (2.4x too small on real sand, issue 21), so two corrections are made (docs/dic.md,
+// "Uncertainty per subset"):
 //  * Correlated residuals (noise after demosaicing, JPEG blocks or blur; texture the warp does
 //    not follow): the translation's error is du = -sum_i a_i r_i with a_i = (H'^-1 J_i)_u, so
 //    var(u) = sum_i sum_j a_i a_j cov(r_i, r_j). The residuals' covariance is taken as stationary
@@ -267,74 +271,90 @@ constexpr double kMinTrueHessianFraction = 0.25;
 // static real sand pair at 1.03-1.06 (docs/dic.md, "Uncertainty per subset").
 constexpr double kGradientNoiseWeight = 0.5;
 
-// The residuals r = (f - f_m) - (f_n / g_n) (g - g_m) of the warp p over the subset (row-major).
-void SubsetResiduals(const Shape& shape, const RefImages& ref, const SubsetRef& s,
-                     const BsplineImage& spline, const Params& p, std::vector<double>* r) {
-  const int h = shape.half, size = 2 * h + 1, count = size * size;
-  r->resize(count);
-  const cv::Point rc = RefCentre(ref, s);
-  const int rx = rc.x - h, ry = rc.y - h;
-  // The warped subset g, sampled from the spline's coefficients in coordinates local to the
-  // subset centre (as IC-GN's pass does). Along row j the warped position is a polynomial of xi
-  // of degree <= 2: its coefficients from xi = 0, 1, -1.
-  thread_local std::vector<double> rows;
-  rows.resize(static_cast<std::size_t>(6) * size);
-  for (int j = 0; j < size; ++j) {
-    double du0, dv0, dup, dvp, dum, dvm;
-    Displacement(shape, p, 0, j - h, &du0, &dv0);
-    Displacement(shape, p, 1, j - h, &dup, &dvp);
-    Displacement(shape, p, -1, j - h, &dum, &dvm);
-    double* row = rows.data() + static_cast<std::size_t>(6) * j;
-    row[0] = du0;
-    row[1] = 1 + 0.5 * (dup - dum);
-    row[2] = 0.5 * (dup + dum) - du0;
-    row[3] = (j - h) + dv0;
-    row[4] = 0.5 * (dvp - dvm);
-    row[5] = 0.5 * (dvp + dvm) - dv0;
+// Per-thread buffers of the uncertainty: the warped subset of the last IC-GN pass and the padded
+// arrays of the residuals, the influences and the masks of the central differences (ResidualInput).
+struct UncertaintyScratch {
+  int size = 0;
+  ResidualInput layout;
+  std::vector<float> g, r, au, av, x_inside, y_inside;
+  // Sized (and the padding zeroed) for subsets of `size` pixels per side.
+  void Fit(int subset_size) {
+    if (size == subset_size) return;
+    size = subset_size;
+    const int stride = size + kResidualLagPx;
+    const auto round_up = [](int v) {
+      return (v + kResidualLanes - 1) / kResidualLanes * kResidualLanes;
+    };
+    layout.stride = stride;
+    layout.lead = round_up(stride);
+    layout.length = round_up(size * stride);
+    const std::size_t cells = static_cast<std::size_t>(layout.lead) + layout.length +
+                              std::size_t{3} * stride + kResidualLanes;
+    g.assign(static_cast<std::size_t>(size) * size, 0.0f);
+    for (auto* v : {&r, &au, &av, &x_inside, &y_inside}) v->assign(cells, 0.0f);
+    for (int j = 0; j < size; ++j) {
+      for (int i = 0; i < size; ++i) {
+        const std::size_t k = layout.lead + static_cast<std::size_t>(j) * stride + i;
+        x_inside[k] = (i >= 1 && i + 1 < size) ? 1.0f : 0.0f;
+        y_inside[k] = (j >= 1 && j + 1 < size) ? 1.0f : 0.0f;
+      }
+    }
+    layout.x_inside = x_inside.data();
+    layout.y_inside = y_inside.data();
   }
-  WarpedInput in;
-  in.half = h;
-  in.rows = rows.data();
-  in.stride = static_cast<std::ptrdiff_t>(spline.coefficients().step1());
-  in.centre = spline.coefficients().ptr<float>() +
-              static_cast<std::ptrdiff_t>(s.cy - spline.region().y) * in.stride +
-              (s.cx - spline.region().x);
-  in.iu = static_cast<int>(std::lround(p[0]));
-  in.iv = static_cast<int>(std::lround(p[shape.nm]));
-  const double gsum =
-      ActiveIcgnKernel().sample_warped[spline.kind() == Interpolation::kBicubic ? 0 : 1](in,
-                                                                                         r->data());
-  const double gm = gsum / count;
-  double gn2 = 0;
-  for (const double g : *r) gn2 += (g - gm) * (g - gm);
-  const double ratio = gn2 > 0 ? s.f_norm / std::sqrt(gn2) : 0;
-  for (int j = 0; j < size; ++j) {
-    const float* f = ref.f.ptr<float>(ry + j) + rx;
-    double* rj = r->data() + static_cast<std::size_t>(j) * size;
-    for (int i = 0; i < size; ++i) rj[i] = (f[i] - s.f_mean) - ratio * (rj[i] - gm);
-  }
+};
+
+UncertaintyScratch& ThreadUncertaintyScratch(int size) {
+  thread_local UncertaintyScratch scratch;
+  scratch.Fit(size);
+  return scratch;
 }
 
-// The variances of the reference gradients' noise in x and y, estimated from the residuals
-// (which carry the noise of both images): half the variance of their central differences, times
-// the node gradient's noise gain relative to the central difference, times kGradientNoiseWeight.
-std::array<double, 2> GradientNoise(const std::vector<double>& r, int size, Interpolation kind) {
-  const int count = size * size;
-  double dx2 = 0, dy2 = 0;
-  for (int j = 0; j < size; ++j) {
-    const double* rj = r.data() + static_cast<std::size_t>(j) * size;
-    for (int i = 1; i + 1 < size; ++i) {
-      const double d = 0.5 * (rj[i + 1] - rj[i - 1]);
-      dx2 += d * d;
+// The variances of the reference gradients' noise in x and y from the sums of the squares of the
+// residuals' central differences 2 dr/dx, 2 dr/dy (ResidualInput): half the variance of the
+// central differences, times the node gradient's noise gain relative to the central difference,
+// times kGradientNoiseWeight.
+std::array<double, 2> GradientNoise(const double noise[2], int size, Interpolation kind) {
+  const double pairs = double(size) * (size - 2);
+  const double scale =
+      kGradientNoiseWeight * 0.5 * NodeGradientNoiseRatio(kind) / pairs * 0.25;  // d = r'/2
+  return {scale * noise[0], scale * noise[1]};
+}
+
+// The inverse of a symmetric positive definite n x n matrix (row-major, n <= 12) by a Cholesky
+// factorisation A = L L^T in plain loops, inv = L^-T L^-1; false (inv unspecified) where
+// InvertSpd fails (a pivot L_jj^2 not above 1e-10 of A_jj). For the small matrices of the
+// uncertainty, where Eigen's dynamic-size solver costs far more than the arithmetic.
+bool SmallSpdInverse(const double* a, int n, double* inv) {
+  double l[144] = {}, m[144] = {};
+  for (int j = 0; j < n; ++j) {
+    double d = a[j * n + j];
+    for (int k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];
+    if (!(a[j * n + j] > 0) || !(d > 1e-10 * a[j * n + j])) return false;
+    const double ljj = std::sqrt(d);
+    l[j * n + j] = ljj;
+    for (int i = j + 1; i < n; ++i) {
+      double v = a[i * n + j];
+      for (int k = 0; k < j; ++k) v -= l[i * n + k] * l[j * n + k];
+      l[i * n + j] = v / ljj;
     }
   }
-  for (int k = size; k + size < count; ++k) {
-    const double d = 0.5 * (r[k + size] - r[k - size]);
-    dy2 += d * d;
+  for (int j = 0; j < n; ++j) {  // m = L^-1 (lower triangular).
+    m[j * n + j] = 1 / l[j * n + j];
+    for (int i = j + 1; i < n; ++i) {
+      double v = 0;
+      for (int k = j; k < i; ++k) v -= l[i * n + k] * m[k * n + j];
+      m[i * n + j] = v / l[i * n + i];
+    }
   }
-  const double pairs = double(size) * (size - 2);
-  const double scale = kGradientNoiseWeight * 0.5 * NodeGradientNoiseRatio(kind) / pairs;
-  return {scale * dx2, scale * dy2};
+  for (int i = 0; i < n; ++i) {  // inv = m^T m.
+    for (int j = 0; j <= i; ++j) {
+      double v = 0;
+      for (int k = i; k < n; ++k) v += m[k * n + i] * m[k * n + j];
+      inv[i * n + j] = inv[j * n + i] = v;
+    }
+  }
+  return true;
 }
 
 // The largest mu of N v = mu H v, i.e. the largest eigenvalue of H^-1 N (real, >= 0), by power
@@ -370,75 +390,90 @@ const double* TrueHessianInverse(const Shape& shape, const double* hinv,
                                  const std::array<double, 2>& noise2, double* htinv) {
   const int n = shape.n, nm = shape.nm;
   double hh[144], nn[144] = {}, ht[144];
-  if (!InvertSpd(hinv, n, hh)) return hinv;
+  if (!SmallSpdInverse(hinv, n, hh)) return hinv;
   for (int a = 0; a < n; ++a) {
     for (int b = 0; b < n; ++b) {
       if (a / nm == b / nm)
         nn[a * n + b] = noise2[a / nm] * shape.monomial_moments[(a % nm) * 6 + b % nm];
     }
   }
-  const double mu = LargestNoiseRatio(hinv, nn, n, nm);
-  if (!(mu > 0)) return hinv;
-  const double lambda = mu > 1 - kMinTrueHessianFraction ? (1 - kMinTrueHessianFraction) / mu : 1.0;
+  // The eigenvalues of H^-1 N are real and >= 0, so the largest is at most their sum, the trace:
+  // when that is <= 1 - kMinTrueHessianFraction (nearly always), lambda = 1 without the power
+  // iteration.
+  double trace = 0;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < n; ++b) trace += hinv[a * n + b] * nn[b * n + a];
+  if (!(trace > 0)) return hinv;
+  double lambda = 1;
+  if (trace > 1 - kMinTrueHessianFraction) {
+    const double mu = LargestNoiseRatio(hinv, nn, n, nm);
+    if (!(mu > 0)) return hinv;
+    if (mu > 1 - kMinTrueHessianFraction) lambda = (1 - kMinTrueHessianFraction) / mu;
+  }
   for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
-  return InvertSpd(ht, n, htinv) ? htinv : hinv;
+  return SmallSpdInverse(ht, n, htinv) ? htinv : hinv;
 }
 
-// a_i for u and v: the translation rows of hi (H'^-1) times J_i, over the subset (row-major). Along
-// a row, sum_q hi[t][q] m_q is a polynomial of xi of degree <= 2 (t: the u and v rows, times the
-// x and y gradient): its coefficients from xi = 0, 1, -1.
-void InfluenceOfEachPixel(const Shape& shape, const RefImages& ref, const SubsetRef& s,
-                          const double* hi, std::vector<double>* au, std::vector<double>* av) {
-  const int h = shape.half, size = 2 * h + 1, nm = shape.nm, n = shape.n;
-  au->resize(static_cast<std::size_t>(size) * size);
-  av->resize(au->size());
-  const cv::Point rc = RefCentre(ref, s);
-  const int rx = rc.x - h, ry = rc.y - h;
-  const double* rows[4] = {hi, hi + nm, hi + static_cast<std::ptrdiff_t>(nm) * n,
-                           hi + static_cast<std::ptrdiff_t>(nm) * n + nm};
+// Along each row j of the subset (eta = j - half), the polynomials of xi sum_q w[t][q] m_q(xi, eta)
+// of `terms` weight rows w[t] (nm each) into coef[3 (terms j + t) ..] as c0 + xi (c1 + xi c2):
+// with m = (1, xi, eta, xi^2 / 2, xi eta, eta^2 / 2), c0 = w0 + w2 eta + w5 eta^2 / 2,
+// c1 = w1 + w4 eta, c2 = w3 / 2 (affine: w0 + w2 eta, w1, 0). The influences a_i for u and v are
+// those of the translation rows of H'^-1 (times the x and y gradient), J_i dp that of the
+// increment's two halves.
+void RowPolynomials(const Shape& shape, const double* const* w, int terms, float* coef) {
+  const int h = shape.half, size = 2 * h + 1;
+  const bool quad = shape.kind == ShapeFunction::kQuadratic;
   for (int j = 0; j < size; ++j) {
-    const float* gx = ref.gx.ptr<float>(ry + j) + rx;
-    const float* gy = ref.gy.ptr<float>(ry + j) + rx;
-    double m0[6], mp[6], mm[6], coef[4][3];
-    Monomials(0, j - h, m0);
-    Monomials(1, j - h, mp);
-    Monomials(-1, j - h, mm);
-    for (int t = 0; t < 4; ++t) {
-      double v0 = 0, vp = 0, vm = 0;
-      for (int q = 0; q < nm; ++q) {
-        v0 += rows[t][q] * m0[q];
-        vp += rows[t][q] * mp[q];
-        vm += rows[t][q] * mm[q];
-      }
-      coef[t][0] = v0;
-      coef[t][1] = 0.5 * (vp - vm);
-      coef[t][2] = 0.5 * (vp + vm) - v0;
-    }
-    double* uj = au->data() + static_cast<std::size_t>(j) * size;
-    double* vj = av->data() + static_cast<std::size_t>(j) * size;
-    for (int i = 0; i < size; ++i) {
-      const double xi = i - h;
-      const double ux = coef[0][0] + xi * (coef[0][1] + xi * coef[0][2]);
-      const double uy = coef[1][0] + xi * (coef[1][1] + xi * coef[1][2]);
-      const double vx = coef[2][0] + xi * (coef[2][1] + xi * coef[2][2]);
-      const double vy = coef[3][0] + xi * (coef[3][1] + xi * coef[3][2]);
-      uj[i] = ux * gx[i] + uy * gy[i];
-      vj[i] = vx * gx[i] + vy * gy[i];
+    const double eta = j - h;
+    float* c = coef + static_cast<std::ptrdiff_t>(3) * terms * j;
+    for (int t = 0; t < terms; ++t) {
+      const double* wt = w[t];
+      float* ct = c + static_cast<std::ptrdiff_t>(3) * t;
+      ct[0] = static_cast<float>(wt[0] + wt[2] * eta + (quad ? 0.5 * wt[5] * eta * eta : 0.0));
+      ct[1] = static_cast<float>(wt[1] + (quad ? wt[4] * eta : 0.0));
+      ct[2] = static_cast<float>(quad ? 0.5 * wt[3] : 0.0);
     }
   }
 }
 
+// The uncertainty from the residuals of the pass that converged: its warped subset g' = g - f_m
+// (in scratch.g), their mean g_mean and ratio = f_n / g_n.
 void CorrelatedResidualSigma(const Shape& shape, const RefImages& ref, const SubsetRef& s,
-                             const double* hinv, const BsplineImage& spline, const Params& p,
-                             double var_r, float* sigma_u, float* sigma_v) {
+                             const double* hinv, Interpolation kind, double g_mean, double ratio,
+                             const Params& dp, double var_r, UncertaintyScratch* scratch,
+                             float* sigma_u, float* sigma_v) {
   const int size = 2 * shape.half + 1, nm = shape.nm, n = shape.n;
-  thread_local std::vector<double> r, au, av;
-  SubsetResiduals(shape, ref, s, spline, p, &r);
+  const IcgnKernel& kernel = ActiveIcgnKernel();
+  const MomentInput ref_in = RefMoments(shape, ref, s);
+  ResidualInput in = scratch->layout;
+  in.half = shape.half;
+  in.f = ref_in.f;
+  in.gx = ref_in.gx;
+  in.gy = ref_in.gy;
+  in.ref_stride = ref_in.stride;
+  // J dp less its mean (sum_j dp / N): the residuals keep a zero mean.
+  double step_mean = 0;
+  for (int q = 0; q < n; ++q) step_mean += s.sum_j[q] * dp[q];
+  in.f_mean = static_cast<float>(s.f_mean + step_mean / (double(size) * size));
+  in.g = scratch->g.data();
+  in.g_mean = static_cast<float>(g_mean);
+  in.ratio = static_cast<float>(ratio);
+  thread_local std::vector<float> step, coef;
+  step.resize(static_cast<std::size_t>(6) * size);
+  coef.resize(static_cast<std::size_t>(12) * size);
+  const double* dp_rows[2] = {dp.data(), dp.data() + nm};
+  RowPolynomials(shape, dp_rows, /*terms=*/2, step.data());
+  in.step = step.data();
+  double noise[2];
+  kernel.residuals(in, scratch->r.data(), noise);
   double htinv[144];
-  const double* hi = TrueHessianInverse(shape, hinv, GradientNoise(r, size, spline.kind()), htinv);
-  InfluenceOfEachPixel(shape, ref, s, hi, &au, &av);
+  const double* hi = TrueHessianInverse(shape, hinv, GradientNoise(noise, size, kind), htinv);
+  const double* h_rows[4] = {hi, hi + nm, hi + static_cast<std::ptrdiff_t>(nm) * n,
+                             hi + static_cast<std::ptrdiff_t>(nm) * n + nm};
+  RowPolynomials(shape, h_rows, /*terms=*/4, coef.data());
   double sums[2];
-  ActiveIcgnKernel().correlated_sums(r.data(), au.data(), av.data(), size, sums);
+  kernel.correlated_sums(in, scratch->r.data(), coef.data(), scratch->au.data(), scratch->av.data(),
+                         sums);
   *sigma_u = static_cast<float>(std::sqrt(var_r * std::max(sums[0], hinv[0])));
   *sigma_v = static_cast<float>(std::sqrt(var_r * std::max(sums[1], hinv[nm * n + nm])));
 }
@@ -500,6 +535,8 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
   in.f_mean = s.f_mean;
   in.stride = static_cast<std::ptrdiff_t>(coef.step1());
   in.nm = nm;
+  UncertaintyScratch& scratch = ThreadUncertaintyScratch(2 * h + 1);
+  in.g_out = scratch.g.data();
   Params& p = result.p;
   // The standard deviation of a subset corner's displacement per unit residual standard deviation
   // (independent residuals), the largest over the four corners: sqrt(m^T H^-1_uu m + m^T H^-1_vv
@@ -573,14 +610,16 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s,
     const double var_r = r2 / (count - n);
     if (move < std::max(options.convergence_px,
                         options.convergence_sigma_fraction * std::sqrt(var_r) * corner_sd)) {
-      // The converged warp is sampled once more (the residuals of the uncertainty): it must stay
-      // in the valid region too (a quadratic subset's last step read past the image).
+      // The converged warp must stay in the valid region too (a quadratic subset's last step can
+      // leave it).
       if (!WarpedSubsetInside(shape, s, p, def)) {
         result.status = SubsetStatus::kOutOfImage;
         return result;
       }
-      CorrelatedResidualSigma(shape, ref, s, hinv, spline, p, var_r, &result.sigma_u_px,
-                              &result.sigma_v_px);
+      // The uncertainty from the residuals of this last pass, at the warp before its increment
+      // (which moved no corner by more than the convergence limit): var_r is theirs too.
+      CorrelatedResidualSigma(shape, ref, s, hinv, spline.kind(), gm, ratio, dp, var_r, &scratch,
+                              &result.sigma_u_px, &result.sigma_v_px);
       result.sigma_px = std::max(result.sigma_u_px, result.sigma_v_px);
       if (result.zncc < options.min_zncc) {
         result.status = SubsetStatus::kLowCorrelation;

@@ -6,10 +6,10 @@
 // inline function of a library header: see icgn_kernels.h).
 //
 // The passes are those of icgn.cc (the IC-GN expansion at its top): one pass over a subset per
-// iteration, the reference moments of PrepareSubset, the warped subset and the residuals' lag
-// sums of the uncertainty estimate. The vectorised versions evaluate the same expressions in
-// another order of summation (per-lane sums, FMA), so the kernels agree to float rounding
-// (tests/dic/kernel_agreement_test.cc).
+// iteration (which also keeps the warped subset), the reference moments of PrepareSubset, and the
+// residuals, influences and lag sums of the uncertainty estimate. The vectorised versions evaluate
+// the same expressions in another order of summation (per-lane sums, FMA), so the kernels agree to
+// float rounding (tests/dic/kernel_agreement_test.cc).
 #ifndef IMPACTDIC_DIC_KERNEL_NS
 #error "define IMPACTDIC_DIC_KERNEL_NS and IMPACTDIC_DIC_KERNEL_LEVEL before including this file"
 #endif
@@ -169,6 +169,7 @@ void AccumulateScalar(const PassInput& in, PassSums* out) {
         }
       }
       const float gp = g - fm;
+      in.g_out[j * size + i] = gp;
       sg += gp;
       sgg += gp * gp;
       sfg += fr[i] * gp;
@@ -399,9 +400,14 @@ void AccumulateAvx2(const PassInput& in, PassSums* out) {
         }
       }
       __m256 gp = _mm256_fmsub_ps(g, Splat(1 / kScale2), fm);
+      float* g_out = in.g_out + static_cast<std::ptrdiff_t>(j) * size + i0;
       if (i0 != 8 * b) {  // Mask the lanes of the previous block.
-        gp = _mm256_and_ps(gp,
-                           _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ));
+        const __m256 fresh_lanes =
+            _mm256_cmp_ps(lane, Splat(static_cast<float>(8 * b - i0)), _CMP_GE_OQ);
+        gp = _mm256_and_ps(gp, fresh_lanes);
+        _mm256_maskstore_ps(g_out, _mm256_castps_si256(fresh_lanes), gp);
+      } else {
+        _mm256_storeu_ps(g_out, gp);
       }
       sg = _mm256_add_ps(sg, gp);
       sgg = _mm256_fmadd_ps(gp, gp, sgg);
@@ -707,6 +713,7 @@ void AccumulateAvx512(const PassInput& in, PassSums* out) {
       }
       const __m512 g = SampleBlock16<kTaps>(centre, istride, x, y, m);
       const __m512 gp = _mm512_maskz_fmsub_ps(m, g, Splat16(1 / kScale2), fm);
+      _mm512_mask_storeu_ps(in.g_out + static_cast<std::ptrdiff_t>(j) * size + i0, m, gp);
       sg = _mm512_add_ps(sg, gp);
       sgg = _mm512_fmadd_ps(gp, gp, sgg);
       sfg = _mm512_fmadd_ps(_mm512_maskz_loadu_ps(m, fr + i0), gp, sfg);
@@ -846,179 +853,111 @@ void Pass(const PassInput& in, PassSums* out) {
   AccumulateScalar<kTaps, kQuad>(in, out);
 }
 
-// The deformed image's spline at the warped subset's pixels, one at a time (double positions).
-template <int kTaps>
-double SampleWarpedScalar(const WarpedInput& in, double* g) {
-  constexpr int kLow = kTaps == 4 ? 1 : 2;
-  const int h = in.half, size = 2 * h + 1;
-  const std::ptrdiff_t stride = in.stride;
-  double sum = 0;
+// sum_k term(k) over k = 0 .. length - 1 (a multiple of kResidualLanes) in kResidualLanes float
+// lanes (which the compiler maps onto the unit's vector registers), added up in a fixed order.
+template <int kTerms, typename Term>
+void LaneSums(int length, Term term, double sums[kTerms]) {
+  float acc[kTerms][kResidualLanes] = {};
+  for (int k = 0; k < length; k += kResidualLanes) {
+    for (int l = 0; l < kResidualLanes; ++l) {
+      float t[kTerms] = {};
+      term(k + l, t);
+      for (int q = 0; q < kTerms; ++q) acc[q][l] += t[q];
+    }
+  }
+  for (int q = 0; q < kTerms; ++q) {
+    for (int w = kResidualLanes / 2; w >= 1; w /= 2) {
+      for (int l = 0; l < w; ++l) acc[q][l] += acc[q][l + w];
+    }
+    sums[q] = acc[q][0];
+  }
+}
+
+void Residuals(const ResidualInput& in, float* r, double noise[2]) {
+  const int size = 2 * in.half + 1, stride = in.stride;
+  float* rs = r + in.lead;
+  const float fm = in.f_mean, gm = in.g_mean, ratio = in.ratio;
+  const int h = in.half;
   for (int j = 0; j < size; ++j) {
-    const double* row = in.rows + static_cast<std::ptrdiff_t>(6) * j;
-    const double x0 = row[0], x1 = row[1], x2 = row[2], y0 = row[3], y1 = row[4], y2 = row[5];
+    const std::ptrdiff_t roff = static_cast<std::ptrdiff_t>(j) * in.ref_stride;
+    const float* f = in.f + roff;
+    const float* gx = in.gx + roff;
+    const float* gy = in.gy + roff;
+    const float* g = in.g + static_cast<std::ptrdiff_t>(j) * size;
+    const float* c = in.step + static_cast<std::ptrdiff_t>(6) * j;
+    float* rj = rs + static_cast<std::ptrdiff_t>(j) * stride;
     for (int i = 0; i < size; ++i) {
-      const double xi = i - h;
-      const double x = x0 + xi * (x1 + xi * x2), y = y0 + xi * (y1 + xi * y2);
-      const double fx = __builtin_floor(x), fy = __builtin_floor(y);
-      float wx[kTaps], wy[kTaps];
-      if constexpr (kTaps == 4) {
-        CubicWeightsF(static_cast<float>(x - fx), wx);
-        CubicWeightsF(static_cast<float>(y - fy), wy);
-      } else {
-        QuinticWeightsF(static_cast<float>(x - fx), wx);
-        QuinticWeightsF(static_cast<float>(y - fy), wy);
-      }
-      const float* c =
-          in.centre + (static_cast<int>(fy) - kLow) * stride + (static_cast<int>(fx) - kLow);
-      float value = 0;
-      for (int r = 0; r < kTaps; ++r) {
-        const float* cr = c + r * stride;
-        float line = 0;
-        for (int k = 0; k < kTaps; ++k) line += wx[k] * cr[k];
-        value += wy[r] * line;
-      }
-      g[j * size + i] = value;
-      sum += value;
+      const float xi = static_cast<float>(i - h);
+      rj[i] = ((f[i] - fm) - ratio * (g[i] - gm)) +
+              ((c[0] + xi * (c[1] + xi * c[2])) * gx[i] + (c[3] + xi * (c[4] + xi * c[5])) * gy[i]);
     }
   }
-  return sum;
+  const float* xm = in.x_inside + in.lead;
+  const float* ym = in.y_inside + in.lead;
+  LaneSums<2>(
+      in.length,
+      [&](int k, float t[2]) {
+        const float dx = rs[k + 1] - rs[k - 1], dy = rs[k + stride] - rs[k - stride];
+        t[0] = xm[k] * (dx * dx);
+        t[1] = ym[k] * (dy * dy);
+      },
+      noise);
 }
 
-#if IMPACTDIC_DIC_AVX512
-// The warped subset 16 pixels at a time (SampleBlock16): positions in float relative to the
-// subset centre moved by the warp's integer translation, as in the IC-GN pass.
-template <int kTaps>
-double SampleWarpedAvx512(const WarpedInput& in, double* g) {
-  const int h = in.half, size = 2 * h + 1;
-  const int istride = static_cast<int>(in.stride);
-  const float* centre = in.centre + static_cast<std::ptrdiff_t>(in.iv) * istride + in.iu;
-  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
-  constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
-  __m512d sum = _mm512_setzero_pd();
+// The influences, then sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx
+// (d = 0 included): the variance of u and v per unit residual variance.
+void CorrelatedSums(const ResidualInput& in, const float* r, const float* coef, float* au,
+                    float* av, double sums[2]) {
+  const int h = in.half, size = 2 * h + 1, stride = in.stride, count = size * size;
+  const float* rs = r + in.lead;
+  float* us = au + in.lead;
+  float* vs = av + in.lead;
   for (int j = 0; j < size; ++j) {
-    const double* row = in.rows + static_cast<std::ptrdiff_t>(6) * j;
-    const __m512 x0 = Splat16(static_cast<float>(row[0] - in.iu)),
-                 x1 = Splat16(static_cast<float>(row[1])), x2 = Splat16(static_cast<float>(row[2]));
-    const __m512 y0 = Splat16(static_cast<float>(row[3] - in.iv)),
-                 y1 = Splat16(static_cast<float>(row[4])), y2 = Splat16(static_cast<float>(row[5]));
-    double* gj = g + static_cast<std::ptrdiff_t>(j) * size;
-    for (int i0 = 0; i0 < size; i0 += 16) {
-      const int valid = Min(16, size - i0);
-      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
-      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
-      const __m512 x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, x2, x1), xi, x0);
-      const __m512 y = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, y2, y1), xi, y0);
-      const __m512 v =
-          _mm512_mul_ps(SampleBlock16<kTaps>(centre, istride, x, y, m), Splat16(1 / kScale2));
-      const __m512d lo = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 0));
-      const __m512d hi = _mm512_maskz_cvtps_pd(0xFF, _mm512_maskz_extractf32x8_ps(0xFF, v, 1));
-      const __mmask8 mlo = static_cast<__mmask8>(m & 0xFF), mhi = static_cast<__mmask8>(m >> 8);
-      _mm512_mask_storeu_pd(gj + i0, mlo, lo);
-      _mm512_mask_storeu_pd(gj + i0 + 8, mhi, hi);
-      sum = _mm512_add_pd(sum, _mm512_maskz_add_pd(mlo, lo, _mm512_maskz_mov_pd(mhi, hi)));
+    const float* gx = in.gx + static_cast<std::ptrdiff_t>(j) * in.ref_stride;
+    const float* gy = in.gy + static_cast<std::ptrdiff_t>(j) * in.ref_stride;
+    const float* c = coef + static_cast<std::ptrdiff_t>(12) * j;
+    float* uj = us + static_cast<std::ptrdiff_t>(j) * stride;
+    float* vj = vs + static_cast<std::ptrdiff_t>(j) * stride;
+    for (int i = 0; i < size; ++i) {
+      const float xi = static_cast<float>(i - h);
+      uj[i] = (c[0] + xi * (c[1] + xi * c[2])) * gx[i] + (c[3] + xi * (c[4] + xi * c[5])) * gy[i];
+      vj[i] = (c[6] + xi * (c[7] + xi * c[8])) * gx[i] + (c[9] + xi * (c[10] + xi * c[11])) * gy[i];
     }
   }
-  alignas(64) double lanes[8];
-  _mm512_store_pd(lanes, sum);
-  double total = 0;
-  for (double l : lanes) total += l;
-  return total;
-}
-#endif  // IMPACTDIC_DIC_AVX512
-
-template <int kTaps>
-double SampleWarped(const WarpedInput& in, double* g) {
-#if IMPACTDIC_DIC_AVX512
-  return SampleWarpedAvx512<kTaps>(in, g);
-#else
-  return SampleWarpedScalar<kTaps>(in, g);
-#endif
-}
-
-// Three dot products sum_i a_t[i] b_t[i] (t = 0, 1, 2) accumulated over several runs of
-// pixels: 8 lanes at a time with AVX-512 (a run's last block masked), else 4 lanes at a time
-// where AVX2 is compiled in with the runs' remainders apart; the lanes are added up in a fixed
-// order.
-class Dot3 {
- public:
-  void Add(const double* const a[3], const double* const b[3], int len) {
-    int i = 0;
-#if IMPACTDIC_DIC_AVX512
-    for (; i < len; i += 8) {
-      const __mmask8 m = static_cast<__mmask8>(len - i >= 8 ? 0xFF : (1u << (len - i)) - 1);
-      for (int t = 0; t < 3; ++t) {
-        lanes_[t] = _mm512_mask3_fmadd_pd(_mm512_maskz_loadu_pd(m, a[t] + i),
-                                          _mm512_maskz_loadu_pd(m, b[t] + i), lanes_[t], m);
-      }
-    }
-#elif IMPACTDIC_DIC_AVX2
-    for (; i + 4 <= len; i += 4) {
-      for (int t = 0; t < 3; ++t)
-        lanes_[t] =
-            _mm256_fmadd_pd(_mm256_loadu_pd(a[t] + i), _mm256_loadu_pd(b[t] + i), lanes_[t]);
-    }
-#endif
-    for (; i < len; ++i) {
-      for (int t = 0; t < 3; ++t) rest_[t] += a[t][i] * b[t][i];
-    }
-  }
-  void Sum(double s[3]) const {
-    for (int t = 0; t < 3; ++t) s[t] = rest_[t];
-#if IMPACTDIC_DIC_AVX512
-    for (int t = 0; t < 3; ++t) {
-      alignas(64) double l[8];
-      _mm512_store_pd(l, lanes_[t]);
-      s[t] += ((l[0] + l[1]) + (l[2] + l[3])) + ((l[4] + l[5]) + (l[6] + l[7]));
-    }
-#elif IMPACTDIC_DIC_AVX2
-    for (int t = 0; t < 3; ++t) {
-      alignas(32) double l[4];
-      _mm256_store_pd(l, lanes_[t]);
-      s[t] += (l[0] + l[1]) + (l[2] + l[3]);
-    }
-#endif
-  }
-
- private:
-#if IMPACTDIC_DIC_AVX512
-  __m512d lanes_[3] = {_mm512_setzero_pd(), _mm512_setzero_pd(), _mm512_setzero_pd()};
-#elif IMPACTDIC_DIC_AVX2
-  __m256d lanes_[3] = {_mm256_setzero_pd(), _mm256_setzero_pd(), _mm256_setzero_pd()};
-#endif
-  double rest_[3] = {};
-};
-
-// sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx (d = 0 included), for the
-// influences au and av: the variance of u and v per unit residual variance.
-void CorrelatedSums(const double* r, const double* au, const double* av, int size, double sums[2]) {
-  const double* data[3] = {r, au, av};
-  const int count = size * size;
-  Dot3 zero_lag;
-  zero_lag.Add(data, data, count);
-  double s0[3];
-  zero_lag.Sum(s0);
-  const double c0 = s0[0] / count;
-  sums[0] = s0[1];
-  sums[1] = s0[2];
+  // The lags d with dy > 0, or dy == 0 and dx >= 0 (d = 0 first), each standing for itself and
+  // its opposite -d: all kLags sums of one array in one sweep, each cell loaded once and multiplied
+  // by its kLags partners.
+  constexpr int kL = kResidualLagPx, kLags = 1 + kL + kL * (2 * kL + 1);
+  const auto lags = [&](const float* x, double out[kLags]) {
+    LaneSums<kLags>(
+        in.length,
+        [&](int k, float t[kLags]) {
+          const float xk = x[k];
+          int q = 0;
+          for (int dx = 0; dx <= kL; ++dx) t[q++] = xk * x[k + dx];
+          for (int dy = 1; dy <= kL; ++dy) {
+            const float* row = x + static_cast<std::ptrdiff_t>(dy) * stride;
+            for (int dx = -kL; dx <= kL; ++dx) t[q++] = xk * row[k + dx];
+          }
+        },
+        out);
+  };
+  double rr[kLags], uu[kLags], vv[kLags];
+  lags(rs, rr);
+  lags(us, uu);
+  lags(vs, vv);
+  const double c0 = rr[0] / count;
+  sums[0] = uu[0];
+  sums[1] = vv[0];
   if (!(c0 > 0)) return;
-  // Each lag d and its opposite -d once (dy > 0, or dy == 0 and dx > 0), counted twice.
-  for (int dy = 0; dy <= kResidualLagPx; ++dy) {
-    for (int dx = -kResidualLagPx; dx <= kResidualLagPx; ++dx) {
-      if (dy == 0 && dx <= 0) continue;
-      const int i0 = dx < 0 ? -dx : 0, i1 = size - (dx > 0 ? dx : 0);
-      const std::ptrdiff_t off = static_cast<std::ptrdiff_t>(dy) * size + dx;
-      Dot3 lag;
-      for (int j = 0; j + dy < size; ++j) {
-        const std::ptrdiff_t k0 = static_cast<std::ptrdiff_t>(j) * size + i0;
-        const double* a[3] = {data[0] + k0, data[1] + k0, data[2] + k0};
-        const double* b[3] = {a[0] + off, a[1] + off, a[2] + off};
-        lag.Add(a, b, i1 - i0);
-      }
-      double c[3];
-      lag.Sum(c);
-      const double rho = c[0] / (double(i1 - i0) * (size - dy)) / c0;
-      sums[0] += 2 * rho * c[1];
-      sums[1] += 2 * rho * c[2];
+  // Each lag d and its opposite -d once, counted twice.
+  int q = 1;
+  for (int dy = 0; dy <= kL; ++dy) {
+    for (int dx = dy == 0 ? 1 : -kL; dx <= kL; ++dx, ++q) {
+      const int adx = dx < 0 ? -dx : dx;
+      const double rho = rr[q] / (double(size - adx) * (size - dy)) / c0;
+      sums[0] += 2 * rho * uu[q];
+      sums[1] += 2 * rho * vv[q];
     }
   }
 }
@@ -1033,7 +972,7 @@ const IcgnKernel* Kernel() {
                                                 : DicKernel::kAvx512,
       .accumulate = {{Pass<4, false>, Pass<4, true>}, {Pass<6, false>, Pass<6, true>}},
       .moments = Moments,
-      .sample_warped = {SampleWarped<4>, SampleWarped<6>},
+      .residuals = Residuals,
       .correlated_sums = CorrelatedSums,
   };
   return &kKernel;

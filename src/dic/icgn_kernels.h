@@ -42,6 +42,9 @@ struct PassInput {
   const double* p = nullptr;
   int nm = 3;
   double u = 0, v = 0;
+  // Where the pass writes g' = g - f_mean of every pixel (row-major, (2 half + 1)^2 floats): the
+  // residuals of the uncertainty are taken from the pass that converged.
+  float* g_out = nullptr;
 };
 
 // The reference moments of PrepareSubset over one subset: gg[k][p][q] = sum g_a g_b xi^p eta^q
@@ -61,19 +64,39 @@ struct MomentInput {
   int pmax = 2;  // 2 (affine) or 4 (quadratic).
 };
 
-// The deformed image's spline at a warped subset's pixels. Along row j the warped position
-// relative to the subset centre is x = x0 + xi (x1 + xi x2), y = y0 + xi (y1 + xi y2) with the
-// six coefficients in rows[6 j .. 6 j + 5] (x0, x1, x2, y0, y1, y2) [px].
-struct WarpedInput {
-  int half = 0;
-  const double* rows = nullptr;
-  const float* centre = nullptr;  // The coefficients at the (unmoved) subset centre.
-  std::ptrdiff_t stride = 0;
-  int iu = 0, iv = 0;  // The warp's integer translation.
-};
-
 // Half-width [px] of the lag window over which the residuals' spatial covariance is estimated.
 constexpr int kResidualLagPx = 2;
+// Float lanes of the uncertainty's sums (one AVX-512 register; the per-lane sums are added up in a
+// fixed order, so every kernel sums in the same order).
+constexpr int kResidualLanes = 16;
+
+// The per-pixel arrays of the uncertainty (residuals r, influences au and av) in a padded layout:
+// pixel (i, j) of the subset at lead + j * stride + i, stride = 2 half + 1 + kResidualLagPx, the
+// other cells zero (the last kResidualLagPx of each row, lead cells before the subset and enough
+// after it), so a lag d = (dx, dy) with |dx|, dy <= kResidualLagPx is one dot product of the whole
+// array with itself moved by dy stride + dx: a pixel whose partner lies outside the subset meets a
+// zero. Sums run over `length` cells from `lead` (a multiple of kResidualLanes covering the
+// subset); the array holds lead + length + 2 stride + kResidualLanes cells at least.
+struct ResidualInput {
+  int half = 0;
+  // The reference subset's top-left pixel in f, gx and gy, their floats per row and the subset's
+  // mean intensity (SubsetRef::f_mean).
+  const float *f = nullptr, *gx = nullptr, *gy = nullptr;
+  std::ptrdiff_t ref_stride = 0;
+  float f_mean = 0;
+  // The converged pass's g' = g - f_mean (PassInput::g_out), their mean and f_norm / g_norm: the
+  // residuals are r = (f - f_mean) - ratio (g' - g'_mean).
+  const float* g = nullptr;
+  float g_mean = 0, ratio = 0;
+  // The pass's increment dp as J dp along each row: (c0 + xi (c1 + xi c2)) gx + (c3 + xi (c4 +
+  // xi c5)) gy with step[6 j .. 6 j + 5]; added to the residuals, it takes them to the converged
+  // warp to first order (the least-squares residuals of the pass).
+  const float* step = nullptr;
+  int stride = 0, lead = 0, length = 0;
+  // 1 at the cells whose central differences in x (resp. y) lie inside the subset (columns
+  // 1 .. size - 2, resp. rows 1 .. size - 2), else 0; same layout.
+  const float *x_inside = nullptr, *y_inside = nullptr;
+};
 
 // One kernel: the passes of IC-GN in one instruction set. taps: 4 (bicubic) or 6 (biquintic);
 // quad: the quadratic shape function.
@@ -82,12 +105,16 @@ struct IcgnKernel {
   // One IC-GN pass (accumulate[taps == 6][quad]).
   void (*accumulate[2][2])(const PassInput& in, PassSums* out) = {};
   void (*moments)(const MomentInput& in, MomentSums* out) = nullptr;
-  // Writes the warped subset (row-major, (2 half + 1)^2 values) into g; returns their sum.
-  double (*sample_warped[2])(const WarpedInput& in, double* g) = {};
-  // sum_d rho(d) A(d) over the lags d with |dx|, |dy| <= kResidualLagPx for the influences au
-  // and av (icgn.cc, CorrelatedResidualSigma), from the residuals r; all size x size row-major.
-  void (*correlated_sums)(const double* r, const double* au, const double* av, int size,
-                          double sums[2]) = nullptr;
+  // The residuals r = (f - f_mean) - ratio (g' - g'_mean) + J dp into r (padded layout) and the
+  // sums of the squares of their central differences 2 dr/dx, 2 dr/dy over the subset into noise
+  // (icgn.cc, GradientNoise).
+  void (*residuals)(const ResidualInput& in, float* r, double noise[2]) = nullptr;
+  // The influences a_u, a_v of each pixel (au, av, padded layout): along row j,
+  // a = (c0 + xi (c1 + xi c2)) gx + (c3 + xi (c4 + xi c5)) gy with coef[12 j .. 12 j + 5] for u
+  // and coef[12 j + 6 .. 12 j + 11] for v; then sum_d rho(d) A(d) over the lags d with |dx|,
+  // |dy| <= kResidualLagPx for u and v (icgn.cc, CorrelatedResidualSigma) into sums.
+  void (*correlated_sums)(const ResidualInput& in, const float* r, const float* coef, float* au,
+                          float* av, double sums[2]) = nullptr;
 };
 
 // The kernel of each unit (icgn_kernel_<name>.cc; icgn_kernels.cc refers only to those the
