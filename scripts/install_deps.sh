@@ -21,6 +21,7 @@ PACKAGES=(
   python3-meshio                                # tests: a real XDMF reader opens results.xdmf
   python3-matplotlib                            # tests: the h5py example of docs/python.md
   lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
+  slurm-wlm munge                               # a one-node Slurm for the job-array test (label slurm; docs/campaign.md)
 )
 
 # shellcheck source=scripts/common.sh
