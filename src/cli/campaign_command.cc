@@ -57,7 +57,7 @@ void RegisterCampaignCommand(CLI::App& app) {
     const CampaignSummary summary = WithFlagNames(flags, [&] { return RunCampaignRequest(*r); });
     std::cout << (*format == "json" ? summary.RegressionJson().Dump() + "\n"
                                     : summary.FullReport());
-    if (r->RunsTests()) summary.ThrowIfEveryTestFailed(r->options.output_folder);
+    if (r->table.empty()) summary.ThrowIfEveryTestFailed(r->options.output_folder);
   });
 }
 

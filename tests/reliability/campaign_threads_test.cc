@@ -169,6 +169,38 @@ TEST(NothingUsable, CampaignWhoseEveryTestFailedExitsNonZero) {
   EXPECT_TRUE(Temporaries(dir.path()).empty());
 }
 
+// A shard is part of a campaign: every one of its tests failing is rows for the merge to report
+// (exit 0, so a Slurm array task's merge submitted with --dependency=afterok still runs), and the
+// merge fails when every test of the whole campaign failed, as one run over all tests does.
+TEST(NothingUsable, AShardWhoseTestsAllFailedExitsZeroTheMergeOfAllFailedExitsOne) {
+  TestDir dir;
+  const std::string a = TinyScene(dir.File("a"), 1), b = TinyScene(dir.File("b"), 2);
+  dir.Write("a/sensor.csv", "time_s,accel_g,exposure\n");
+  const std::string scenes = " " + a + " " + b + " --no-figures";
+  CliResult s1 = RunCli("campaign" + scenes + " --shard 1/2 -o " + dir.File("s1"));
+  EXPECT_EQ(s1.exit_code, 0) << s1.output;
+  EXPECT_TRUE(Contains(s1.output, "1 failed")) << s1.output;
+  CliResult s2 = RunCli("-q campaign" + scenes + " --shard 2/2 -o " + dir.File("s2"));
+  ASSERT_EQ(s2.exit_code, 0) << s2.output;
+  CliResult merged = RunCli("campaign --merge " + dir.File("s1") + " " + dir.File("s2") + " -o " +
+                            dir.File("m"));
+  EXPECT_EQ(merged.exit_code, 0) << merged.output;
+  EXPECT_TRUE(Contains(merged.output, "1 failed")) << merged.output;
+  EXPECT_TRUE(Contains(merged.output, "sensor.csv")) << merged.output;  // The failed test's error.
+
+  // Both tests failing: each shard still exits 0; the merge exits 1 naming how many.
+  dir.Write("b/sensor.csv", "time_s,accel_g,exposure\n");
+  s2 = RunCli("-q campaign" + scenes + " --shard 2/2 -o " + dir.File("s2"));
+  EXPECT_EQ(s2.exit_code, 0) << s2.output;
+  merged = RunCli("-q campaign --merge " + dir.File("s1") + " " + dir.File("s2") + " -o " +
+                  dir.File("m"));
+  EXPECT_EQ(merged.exit_code, 1) << merged.output;
+  EXPECT_TRUE(Contains(merged.output, "all 2 tests failed, none has results")) << merged.output;
+  // The same campaign as one shard of one (the whole campaign) is the run over all tests: exit 1.
+  const CliResult whole = RunCli("-q campaign" + scenes + " --shard 1/1 -o " + dir.File("w"));
+  EXPECT_EQ(whole.exit_code, 1) << whole.output;
+}
+
 // ---- Item 11: campaign resume after an input changed -----------------------------------------
 
 // Resuming compared the scene file's hash only: a replaced sensor record or frame kept the old

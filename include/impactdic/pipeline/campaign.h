@@ -150,7 +150,9 @@ struct CampaignSummary {
   std::string FullReport() const;
   // A campaign none of whose tests has results (every one failed) is a failed command: Error
   // kNumerical naming how many failed, the first error and `folder`/campaign.csv, which lists each
-  // test's error. Some failed tests among good ones are not an error (docs/campaign.md).
+  // test's error. Some failed tests among good ones are not an error (docs/campaign.md), nor is a
+  // shard (rows of part of the campaign) whose tests all failed: the merge, which holds every
+  // test, reports them, and is the failed command when every test of the campaign failed.
   void ThrowIfEveryTestFailed(const std::string& folder) const;
 };
 
