@@ -374,7 +374,7 @@ if [ "$cases" = all ]; then
   wait_jobs "${cut}_1"
   expect_state "${cut}_1" CANCELLED
   kept=$(complete_tests "$jobs_dir/cut/shard-1-of-2")
-  log "case 2: task ${cut}_1 cancelled with $(wc -l <<< "$kept") complete tests:" $kept
+  log "case 2: task ${cut}_1 cancelled with $(wc -l <<< "$kept") complete tests: ${kept//$'\n'/ }"
   [ ! -e "$jobs_dir/cut/shard-1-of-2/campaign.csv" ] ||
     fail "case 2: task ${cut}_1 had finished before the scancel: nothing was cut off"
   before=$(for t in $kept; do fingerprint "$jobs_dir/cut/shard-1-of-2/$t"; done)

@@ -182,8 +182,8 @@ TEST(NothingUsable, AShardWhoseTestsAllFailedExitsZeroTheMergeOfAllFailedExitsOn
   EXPECT_TRUE(Contains(s1.output, "1 failed")) << s1.output;
   CliResult s2 = RunCli("-q campaign" + scenes + " --shard 2/2 -o " + dir.File("s2"));
   ASSERT_EQ(s2.exit_code, 0) << s2.output;
-  CliResult merged = RunCli("campaign --merge " + dir.File("s1") + " " + dir.File("s2") + " -o " +
-                            dir.File("m"));
+  CliResult merged =
+      RunCli("campaign --merge " + dir.File("s1") + " " + dir.File("s2") + " -o " + dir.File("m"));
   EXPECT_EQ(merged.exit_code, 0) << merged.output;
   EXPECT_TRUE(Contains(merged.output, "1 failed")) << merged.output;
   EXPECT_TRUE(Contains(merged.output, "sensor.csv")) << merged.output;  // The failed test's error.
