@@ -69,10 +69,12 @@ cleanup() {
   local code=$?
   trap - EXIT INT TERM
   set +e
-  if [ -n "${slurm_up:-}" ]; then
-    scancel --quiet --full --user=root 2> /dev/null  # Only this cluster's jobs ($SLURM_CONF).
+  # Only this cluster's jobs ($SLURM_CONF); bounded: the Slurm commands retry for minutes when
+  # slurmctld is gone.
+  if [ -n "${slurm_up:-}" ] && kill -0 "$ctld_pid" 2> /dev/null; then
+    timeout 10 scancel --quiet --full --user=root 2> /dev/null
     for _ in $(seq 20); do
-      [ -z "$(squeue -h -o %i 2> /dev/null)" ] && break
+      [ -z "$(timeout 5 squeue -h -o %i 2> /dev/null)" ] && break
       sleep 0.5
     done
   fi
@@ -167,7 +169,8 @@ munge -S "$state/munge/munge.socket" -n < /dev/null | unmunge -S "$state/munge/m
   > /dev/null 2>&1 || fail "munged did not start: $(tail -n 3 "$state/munged.out.log")"
 
 env "$marker" slurmctld -D -i > "$state/slurmctld.out.log" 2>&1 &
-daemon_pids+=($!)
+ctld_pid=$!
+daemon_pids+=("$ctld_pid")
 env "$marker" slurmd -D > "$state/slurmd.out.log" 2>&1 &
 daemon_pids+=($!)
 slurm_up=1
@@ -196,7 +199,7 @@ submit() {
 wait_jobs() {
   local queued
   while true; do
-    queued=$(squeue -h -r -j "$1" -t PD,CF,R,CG,S -o %i) ||
+    queued=$(timeout 30 squeue -h -r -j "$1" -t PD,CF,R,CG,S -o %i) ||
       fail "squeue does not answer while waiting for $1: slurmctld died? $(tail -n 3 "$state/slurmctld.log")"
     [ -z "$queued" ] && return 0
     ((SECONDS < deadline)) ||
