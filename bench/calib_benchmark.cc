@@ -1,4 +1,4 @@
-// Speed of the calibration and preprocessing stages (issue 6):
+// Speed of the calibration and preprocessing stages:
 // - undistortion of a full camera frame (1920x1440, 8- and 16-bit, bicubic and bilinear) with the
 //   precomputed maps, and the map setup itself (once per sequence);
 // - the whole preprocessing chain (undistort -> Gaussian 5x5 -> CLAHE 8x8) per frame;

@@ -1,4 +1,4 @@
-// Speed and accuracy of the correlation engine (issue 3, "Speed").
+// Speed and accuracy of the correlation engine (docs/dic_speed.md).
 //
 // The case: a 1920x1440 synthetic speckle pair (u = 0.3, v = -0.7 px, noise sigma 2 grey levels,
 // 8-bit), subset 25, step 10, bicubic, affine, 2 threads. Images are rendered once into a cache

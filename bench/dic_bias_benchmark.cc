@@ -1,5 +1,5 @@
-// Sub-pixel bias of the correlation engine on an analogue of DIC Challenge 1.0 Sample 3 (issue 13,
-// item 1; the analysis is in docs/dic.md, "Sub-pixel bias (issue 13, item 1)").
+// Sub-pixel bias of the correlation engine on an analogue of DIC Challenge 1.0 Sample 3 (the
+// analysis is in docs/dic_accuracy.md, "Sub-pixel bias").
 //
 // The analogue: one speckle image (`sharp`: painted-style dots with sharp edges, synth
 // SharpSpeckle; `blob`: the smooth Gaussian-blob speckle of the tests), translated in x by

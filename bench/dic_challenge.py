@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Public benchmark images through `impactdic correlate`: every figure of issue 21's "Done when".
+"""Public benchmark images through `impactdic correlate`: every figure of the accuracy targets.
 
     bench/dic_challenge.py [--binary IMPACTDIC] [--data DIR] [--json FILE] [-- CORRELATE FLAGS...]
 
@@ -102,7 +102,7 @@ S14_REFERENCE = re.compile(r"^sample\s*14 reference\.tiff?$", re.I)
 S14_DEFORMED = re.compile(r"^sample\s*14 l(\d+) amp(\d+(?:\.\d+)?)[a-z]?\.tiff?$", re.I)
 S14_TRUTH = "Sample 14 Commanded Displacement.csv"
 
-# The issue's targets (issue 21, "Done when"; --check). The tests assert their own copy.
+# The accuracy targets (--check). The tests assert their own copy.
 TARGET_S3_MAX_BIAS_PX = 0.001
 TARGET_SIGMA_RATIO = (0.7, 1.3)  # reported sigma within +-30 % of the observed scatter
 TARGET_SAND_VALID_PERCENT = 98.0
@@ -965,7 +965,7 @@ def main():
             results[name], ok = {"error": str(e)}, False
         all_ok = all_ok and ok
     if args.check:
-        print("## Targets (issue 21, Done when)\n")
+        print("## Targets\n")
         print("| target | measured | required | result |")
         print("|---|---|---|---|")
         for name, value, required, good in targets(results):

@@ -1,4 +1,4 @@
-// Time per frame of long sequences of large frames (issue 23, "Throughput on large frames"), as
+// Time per frame of long sequences of large frames ("Throughput on large frames"), as
 // `impactdic correlate` runs them: the one driver (CorrelateFrames) over a FrameStream of JPEG
 // files (decoding, the pre-filter,
 // coefficients, reference updates, initial guesses, IC-GN), default options but the grid, the

@@ -7,13 +7,13 @@ max of --runs runs, the programs taking turns so that load from other jobs hits 
 --threads 2 -o /dev/shm/...h5` for each --impactdic binary, and, with --anchor, another DIC
 program on the same pair. Prints the phases impactdic reports (coefficients, reference, initial
 guess, IC-GN; the rest of the wall time is start-up, reading and writing) and, per binary, the
-anchor's median over its own. The pair is the one of docs/dic.md ("Speed"), written by
+anchor's median over its own. The pair is the one of docs/dic_speed.md ("Speed"), written by
 bench/dic_benchmark into /tmp/impactdic_dic_bench.
 
   bench/pair_benchmark.py --impactdic build/release/src/cli/impactdic \\
       [--impactdic /path/to/older/impactdic] [--anchor 'CMD {ref} {def}'] [--runs 15]
 
-The anchor of issue 38 is OpenCorr (https://github.com/vincentjzy/OpenCorr; not vendored, not a
+The speed anchor is OpenCorr (https://github.com/vincentjzy/OpenCorr; not vendored, not a
 dependency): FFT-CC initial guess + first-order IC-GN (bicubic B-spline), subset 25 (radius 12),
 POIs every 10 px over the image less 16 px of border, 2 OpenMP threads, images read with its own
 OpenCV loader. Build its example `test_2d_dic_fftcc_icgn1` (FFTW 3, Eigen 3, OpenCV) with

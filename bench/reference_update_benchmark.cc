@@ -1,5 +1,5 @@
 // Random walk of the reference-update policies on a long sequence, under GeoPIV-RG's scheme names
-// (issue 21, item 4; docs/dic.md, "GeoPIV-RG's analysis schemes"): per scheme, the reference
+// (docs/dic.md, "GeoPIV-RG's analysis schemes"): per scheme, the reference
 // updates, the RMS error of the accumulated displacement at frames 25, 50, 100 and the last, the
 // growth exponent of that error with the frame number (slope of log RMS against log k over frames
 // 10..last: 0.5 for a random walk), the lowest fraction of subsets converged in a frame, and the

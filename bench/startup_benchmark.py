@@ -3,7 +3,7 @@
 
 Times whole processes (wall clock, median / min / max of --runs runs, the binaries taking turns so
 that load from other jobs hits them alike): `impactdic version` (start-up and exit only) and
-`impactdic correlate` of the pair of docs/dic.md ("Speed"; written by bench/dic_benchmark into
+`impactdic correlate` of the pair of docs/dic_speed.md ("Speed"; written by bench/dic_benchmark into
 /tmp/impactdic_dic_bench). Also prints, per binary, how many shared libraries the loader maps
 (ldd) and which OpenCV libraries the correlate run loads (LD_DEBUG=files).
 

@@ -1,6 +1,6 @@
 #!/bin/bash
 # Peak memory and time per frame of `impactdic run` and `impactdic correlate` against the number
-# of frames (issue 13, item 5; issue 23, item 2; docs/architecture.md "Memory", docs/dic.md "Long
+# of frames (docs/development.md "Memory", docs/dic_input.md "Long
 # recordings and camera files"). Synthesises one impact sequence of COUNT frames of WIDTHxHEIGHT
 # (8-bit PNG, ideal lens), then for each N given, as a child of /usr/bin/time:
 #  - runs the whole pipeline on its first N frames (dic.last_frame = N + 1; analysed frames: from
@@ -14,7 +14,7 @@
 # growth: the peak above the first N's; results: the results' own size in memory, per subset and
 # frame 40 bytes of correlation (u, v, ZNCC, three sigmas, iterations, status) and, for `run`,
 # 48 bytes of kinematics (displacement, velocity, acceleration: 6 doubles), 88 in all; bound: what
-# issue 23 allows the growth, the results' own size plus 10 %.
+# the streaming design allows the growth, the results' own size plus 10 %.
 # A benchmark, not a test: the times depend on the machine and its load; the memory does not.
 #
 #   bench/streaming_memory.sh [-b BINARY] [-w WIDTH] [-h HEIGHT] [-d DIR] [-t THREADS]

@@ -38,7 +38,7 @@ endfunction()
 # by a registration list: each line `IMPACTDIC_<WHAT>(..., "file.cc")` of the list (a file included
 # by the C++ code to declare and table the built-ins) names the file defining that entry, relative
 # to the list's folder. So a built-in policy, ODE method or output writer is one new file and one
-# line in its list, with no CMake edit (docs/architecture.md, "Extension points"); CMake configures
+# line in its list, with no CMake edit (docs/development.md, "Extension points"); CMake configures
 # again when the list changes, and a line naming a missing file stops the configuration.
 function(impactdic_registered_sources var list_file)
   get_filename_component(list_path ${list_file} ABSOLUTE)

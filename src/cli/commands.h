@@ -33,6 +33,13 @@ void RegisterValidateDemCommand(CLI::App& app);
 void RegisterVersionCommand(CLI::App& app);
 void RegisterInitCommand(CLI::App& app);
 
+// What `impactdic --version` prints: the version, the git commit the build was configured from
+// ("unknown" outside a checkout) and the IC-GN SIMD kernels built, run by this CPU and in use.
+std::string VersionText();
+// What `impactdic` without arguments prints: each subcommand of `app` with its one-line
+// description, and where the help and the documentation are.
+std::string CommandTable(const CLI::App& app);
+
 // Library errors name option struct fields and YAML keys ("sensor.cutoff_hz"); a command maps the
 // ones it exposes as flags ({"sensor.cutoff_hz", "--cutoff"}). Throws `e` again, naming the flag
 // (file and line kept) when its `where` is in `flags`, or a free-form message with each "(FIELD)"

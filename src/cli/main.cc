@@ -44,8 +44,12 @@ int Main(int argc, char** argv) {
   using namespace impactdic;
   CLI::App app{
       "impactdic: DIC of pounder impacts on sand, momentum validation and the added-mass impact "
-      "model"};
+      "model",
+      "impactdic"};  // The name in every usage line, whatever path the binary was started by.
   app.require_subcommand(1);
+  app.set_version_flag(
+      "-V,--version", [] { return cli::VersionText(); },
+      "Print the version, the git commit and the SIMD kernels, and exit");
   bool verbose = false, quiet = false;
   app.add_flag("-v,--verbose", verbose, "More log output (debug level)");
   app.add_flag("-q,--quiet", quiet, "Only warnings and errors");
@@ -66,6 +70,12 @@ int Main(int argc, char** argv) {
   cli::RegisterVersionCommand(app);
   cli::RegisterInitCommand(app);
   cli::PrepareOneNamePerOption(&app);
+
+  // No arguments: what the tool can do, not an error.
+  if (argc == 1) {
+    std::cout << cli::CommandTable(app);
+    return 0;
+  }
 
   // An unknown first word is reported as such (CLI11 would only say a subcommand is required).
   const auto* word =
@@ -88,6 +98,9 @@ int Main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    std::cout << e.what();  // VersionText(), ending in a newline.
+    return 0;
   } catch (const CLI::ConversionError& e) {
     std::cerr << "impactdic: error: " << ConversionMessage(app, e) << "\n";
     std::cerr << "Run with --help for the allowed options.\n";

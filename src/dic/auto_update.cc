@@ -1,4 +1,4 @@
-// "auto": switch the reference when subsets decorrelate (docs/dic.md, "Reference updates").
+// "auto": switch the reference when subsets decorrelate (docs/dic.md, "Reference updating").
 #include <cstddef>
 #include <memory>
 #include <span>

@@ -1,6 +1,6 @@
 // "fixed" and "incremental", the policies whose answer does not depend on the frame: every frame
 // is correlated against the first image, or against the previous frame (docs/dic.md, "Reference
-// updates").
+// updating").
 #include <memory>
 #include <string>
 #include <utility>

@@ -245,10 +245,10 @@ double NodeGradientNoiseRatio(Interpolation kind) {
 // r = (f - f_m) - (f_n / g_n) (g - g_m). They are those of the pass that converged, taken to p to
 // first order: that pass sampled g at the warp before its increment dp, whose least-squares
 // residuals are r + J dp (less their mean), so no pixel is sampled again (against sampling g at p:
-// sigma within 1e-3 relative on the benchmark pair, docs/dic.md "Speed"). The least-squares figure
-// sigma_r sqrt(H^-1) assumes independent residuals and exact reference gradients; both fail on real
-// images (2.4x too small on real sand, issue 21), so two corrections are made (docs/dic.md,
-// "Uncertainty per subset"):
+// sigma within 1e-3 relative on the benchmark pair, docs/dic_speed.md "Speed"). The least-squares
+// figure sigma_r sqrt(H^-1) assumes independent residuals and exact reference gradients; both fail
+// on real images (2.4x too small on real sand before these corrections), so two corrections are
+// made (docs/dic.md, "Uncertainty per subset"):
 //  * Correlated residuals (noise after demosaicing, JPEG blocks or blur; texture the warp does
 //    not follow): the translation's error is du = -sum_i a_i r_i with a_i = (H'^-1 J_i)_u, so
 //    var(u) = sum_i sum_j a_i a_j cov(r_i, r_j). The residuals' covariance is taken as stationary

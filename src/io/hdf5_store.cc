@@ -114,7 +114,7 @@ auto Guard(const std::string& file, const std::string& what, Fn&& fn) -> decltyp
 // The file is built by HDF5's core driver (no backing store) and written to the disk by us, not
 // by HDF5: in HDF5 1.10 a close whose final flush fails (a full disk) frees the file but leaves
 // its id registered, and the next close of that id, or the library's own clean-up at exit, reads
-// freed memory (the segfault of issue 11); the C++ objects' destructors also printed "H5Dclose
+// freed memory (an earlier segfault); the C++ objects' destructors also printed "H5Dclose
 // failed" lines. Disk errors now come only from our own checked calls, as one Error naming the
 // file.
 constexpr std::size_t kCoreIncrement = std::size_t{4} << 20;  // growth step of the image [bytes]

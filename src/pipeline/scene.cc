@@ -184,7 +184,7 @@ std::vector<YamlOptionTable> PreprocessTables(Scene* s) {
         return true;
       },
       "Gaussian blur: true, false, or auto = when the first frame's near-Nyquist bias figure is "
-      "above auto_threshold_px (docs/dic.md, Sub-pixel bias)");
+      "above auto_threshold_px (docs/dic_accuracy.md, Sub-pixel bias)");
   gauss.Add("sigma", &g.sigma_px, kGaussianSigmaRange, "a sigma", "Standard deviation of the blur");
   AddOdd(gauss, "kernel", &g.kernel_size, kGaussianKernelRange, "Kernel size");
   gauss.Add("auto_threshold_px", &g.auto_threshold_px, kNyquistBiasThresholdRange, "a bias figure",
@@ -372,7 +372,7 @@ YamlOptionTable DicTable(Scene* s) {
       "correlated against the first alone (reference_update does not apply)");
   t.Add("keep_warp_gradient", &o.keep_warp_gradient,
         "Keep each subset's warp gradient since the first reference: /dic/dudx_warp, dudy_warp, "
-        "dvdx_warp, dvdy_warp (docs/dic.md, Warp gradient); on with strain.gradient warp");
+        "dvdx_warp, dvdy_warp (docs/dic_accuracy.md, Warp gradient); on with strain.gradient warp");
   AddContinuityKeys(t, &o.continuity);
   AddOutlierKeys(t, &o.outliers);
   AddDicFrameKeys(t, s);

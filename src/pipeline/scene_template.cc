@@ -137,8 +137,8 @@ std::string Header() {
       "# test (pounder, soil: the defaults are the paper's sample test) and whatever else your\n"
       "# test needs, then run:\n"
       "#   impactdic run scene.yaml\n"
-      "# Relative paths resolve against this file's folder. Every key: docs/scene_keys.md; the\n"
-      "# format: README.md (\"Scene file\"). A key left empty (or deleted) keeps its default.\n"
+      "# Relative paths resolve against this file's folder. Every key and the format:\n"
+      "# docs/scene_keys.md. A key left empty (or deleted) keeps its default.\n"
       "\n"
       "# name: my_test  Free-form name; not set (the default): the file's stem.\n"
       "# stages: [{}]  Stages to run; not set (the default): all whose inputs exist.\n",

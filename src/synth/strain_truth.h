@@ -1,5 +1,5 @@
-// The strain of the soil in truth.h5 (docs/synth.md "Truth file", docs/validation.md "Strain"):
-// the displacement gradient at the DIC subset centres and every strain measure of
+// The strain of the soil in truth.h5 (docs/synth.md "Truth file", docs/validation_strain.md
+// "Strain"): the displacement gradient at the DIC subset centres and every strain measure of
 // strain/strain.h computed from it, under the same names as results.h5's /strain, so a run's
 // /strain compares with truth.h5's soil/ name by name. Internal to the synth module.
 #ifndef IMPACTDIC_SRC_SYNTH_STRAIN_TRUTH_H_

@@ -1,4 +1,4 @@
-// docs/guide.md run as written on the sample (issue 24 item 6), so the guide and the tool cannot
+// docs/guide.md run as written on the sample, so the guide and the tool cannot
 // drift apart: every ```bash block of the page runs in order from one fresh folder in which the
 // guide's names for a user's files are links to the sample's (checkerboard/ -> calibration/,
 // recording/ -> sample_frames/frames/, daq.csv -> sample_frames/sensor.csv); a ```yaml block right

@@ -1,4 +1,4 @@
-// The correlation path stays light (issue 13, item 6): `impactdic correlate` of greyscale PNGs
+// The correlation path stays light: `impactdic correlate` of greyscale PNGs
 // must not load OpenCV's image codecs or video I/O (with them the dynamic loader maps ~250
 // libraries, ~0.1-0.17 s per process), and of TIFFs only the image codecs (the images plugin),
 // never the video I/O with FFmpeg and GStreamer. Checked on the real binary through the dynamic

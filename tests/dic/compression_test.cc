@@ -1,4 +1,4 @@
-// Large compression in a 100-frame sequence where the fixed reference decorrelates (issue 3).
+// Large compression in a 100-frame sequence where the fixed reference decorrelates.
 //
 // Why the decorrelation is not geometric: whatever the field, the affine subset's model error at
 // a subset centre (about u'' h^2 / 6 for a half-size h) is what the ZNCC and the least-squares
@@ -100,7 +100,7 @@ TEST(Compression, AutoUpdatesTheReferenceWhereTheFixedOneDecorrelates) {
   }
 
   DicOptions options;  // Bicubic, affine, `auto` at ZNCC 0.95.
-  // The limit of the defaults before issue 21: the fixed reference's decorrelation shows as
+  // The limit of the defaults before 2026-11-27: the fixed reference's decorrelation shows as
   // `uncertain` subsets, the trigger of `auto` this test is about.
   options.icgn.max_uncertainty_px = 0.025;
   options.grid.subset_size = 21;

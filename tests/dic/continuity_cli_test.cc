@@ -55,8 +55,8 @@ class ContinuityCli : public ::testing::Test {
            " --mode pairs --subset 21 --step 10";
   }
   // Runs `Pair() + flags` and evaluates its results.
-  // The check is off by default since issue 21 (docs/dic.md); this test runs it as designed, on
-  // the engine of before issue 21 (a 0.025 px uncertainty limit, no outlier test, no automatic
+  // The check is off by default since 2026-11-27 (docs/dic.md); this test runs it as designed, on
+  // the engine of before 2026-11-27 (a 0.025 px uncertainty limit, no outlier test, no automatic
   // pre-filter).
   static Correlated Run(const std::string& flags, const std::string& name, std::string* log) {
     const std::string out = Path(name + ".h5");

@@ -1,8 +1,9 @@
-// bench/dic_challenge.py measures what it says (docs/dic.md, "DIC Challenge 1.0 and real sand"):
-// on the public images in ../shared/data (tests/core/shared_data.h: skipped when absent, failed
-// under IMPACTDIC_REQUIRE_SHARED_DATA=1) its tables find the known truth within bounds that hold
-// for any sensible settings (these tests do not judge the defaults: dic_challenge_targets_test
-// does), and a figure it cannot measure is "n/a" with the reason, never a number.
+// bench/dic_challenge.py measures what it says (docs/dic_real_images.md, "DIC Challenge 1.0 and
+// real sand"): on the public images in ../shared/data (tests/core/shared_data.h: skipped when
+// absent, failed under IMPACTDIC_REQUIRE_SHARED_DATA=1) its tables find the known truth within
+// bounds that hold for any sensible settings (these tests do not judge the defaults:
+// dic_challenge_targets_test does), and a figure it cannot measure is "n/a" with the reason, never
+// a number.
 #include <gtest/gtest.h>
 
 #include <cmath>

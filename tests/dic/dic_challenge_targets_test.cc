@@ -1,6 +1,6 @@
-// Issue 21's accuracy targets with DEFAULT settings, on the public benchmark images
+// The accuracy targets with DEFAULT settings, on the public benchmark images
 // (../shared/data) and a synthetic noise scene: the fast subset of bench/dic_challenge.py
-// (--quick; docs/dic.md, "DIC Challenge 1.0 and real sand"). Each test runs the bench on one
+// (--quick; docs/dic_real_images.md). Each test runs the bench on one
 // section with no extra correlate flag and asserts the target on the figure it prints in its
 // "Targets" table:
 //   Sample 3 (11 shifts 0..1 px, bicubic and biquintic, pairs, subset 25, step 10): max |bias|
@@ -28,9 +28,9 @@
 namespace impactdic {
 namespace {
 
-constexpr double kMaxBiasPx = 0.001;       // issue 21, Deliver 3
-constexpr double kSigmaTolerance = 0.30;   // issue 21, Deliver 2: sigma within +-30 %
-constexpr double kMinValidPercent = 98.0;  // issue 21, Done when: real sand with defaults
+constexpr double kMaxBiasPx = 0.001;       // bias target
+constexpr double kSigmaTolerance = 0.30;   // sigma within +-30 % of the measured scatter
+constexpr double kMinValidPercent = 98.0;  // real sand with defaults
 
 class DicChallengeTargets : public ::testing::Test {
  protected:

@@ -1,4 +1,4 @@
-// GeoPIV-RG's scheme names through `impactdic correlate` (issue 21, item 4): listed by --help,
+// GeoPIV-RG's scheme names through `impactdic correlate`: listed by --help,
 // accepted by --reference-update, recorded as written in the HDF5 results.
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-// GeoPIV-RG's analysis schemes by name (issue 21, item 4; docs/dic.md, "GeoPIV-RG's analysis
+// GeoPIV-RG's analysis schemes by name (docs/dic.md, "GeoPIV-RG's analysis
 // schemes"): "sequential", "leapfrog[:Z]" and "preconditioned" are the policies incremental, auto
 // and fixed under GeoPIV-RG's names, and the random-walk comparison of the schemes on a long
 // sequence (the table in docs/dic.md comes from bench/reference_update_benchmark.cc, which builds

@@ -1,4 +1,4 @@
-// Issue 24: the IC-GN kernels (src/dic/icgn_kernels.h) give the same correlation. Every kernel
+// The IC-GN kernels (src/dic/icgn_kernels.h) give the same correlation. Every kernel
 // this machine runs correlates the same synthetic pair (speckle under a known subpixel translation
 // with a small strain and rotation, noise) for both interpolators and both shape functions; each
 // kernel's displacements, uncertainties and outcomes are compared with the scalar kernel's.

@@ -1,4 +1,4 @@
-// Memory independent of the number of frames (issue 23, item 2): a long recording costs the
+// Memory independent of the number of frames: a long recording costs the
 // correlator its results, not its frames.
 //
 // The sequence: a speckle image that a black curtain covers from the left, one more subset column

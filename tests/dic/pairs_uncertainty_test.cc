@@ -201,8 +201,8 @@ TEST(Sequence, AutoUpdateToAFrameWithHiddenSubsetsKeepsTryingThem) {
 // Noisy translation, no uncertainty limit: over many independent subsets, the scatter of the
 // errors (sd about their mean) matches the mean reported sigma (rms of sigma) per component.
 // Measured (noise 6 grey levels): the observed sd is 1.17x the reported sigma (1.30x with the
-// least-squares sigma of before issue 21, which left the noise of the reference gradients out).
-// Stated tolerance: issue 21's +-30 %, the ratio in [1/1.3, 1.3].
+// least-squares sigma of before 2026-11-27, which left the noise of the reference gradients out).
+// Stated tolerance: the accuracy targets' +-30 %, the ratio in [1/1.3, 1.3].
 TEST(Uncertainty, ReportedSigmaMatchesTheObservedScatter) {
   Scene scene(420, 420, /*noise_sigma=*/6, /*seed=*/17, /*supersampling=*/2);
   const cv::Mat ref = scene.Render(ZeroField(), 1);
@@ -245,7 +245,7 @@ TEST(Uncertainty, ReportedSigmaMatchesTheObservedScatter) {
 // blob sigma 2 px), noise 2.6 grey levels, u = 0.1 sin(2 pi X / 100 px). A limit of 0.025 px drops
 // some subsets as `uncertain`; with no limit (0 or +inf) the same subsets are reported,
 // converged, with a sigma above the limit; the others keep their results (up to IC-GN's start).
-// The default is no limit (issue 21): DefaultReportsEverySubsetWithItsSigma.
+// The default is no limit: DefaultReportsEverySubsetWithItsSigma.
 // Prints the fraction uncertain before and after and the RMS error over all subsets (docs/dic.md).
 TEST(Uncertainty, NoLimitReportsEverySubsetWithItsSigma) {
   const int size = 300;
@@ -258,7 +258,7 @@ TEST(Uncertainty, NoLimitReportsEverySubsetWithItsSigma) {
   const cv::Mat def = scene.Render(truth, 2);
   DicOptions options;
   options.grid.step = 5;
-  constexpr double kLimitPx = 0.025;  // The default until issue 21.
+  constexpr double kLimitPx = 0.025;  // The default until 2026-11-27.
   options.icgn.max_uncertainty_px = kLimitPx;
   const DicResult limited = CorrelateSequence({ref, def}, options);
   const int n = static_cast<int>(limited.positions.size());
@@ -295,7 +295,7 @@ TEST(Uncertainty, NoLimitReportsEverySubsetWithItsSigma) {
   }
 }
 
-// Issue 21: no fixed uncertainty limit by default. The same Sample 14 analogue with DicOptions{}:
+// No fixed uncertainty limit by default. The same Sample 14 analogue with DicOptions{}:
 // every subset converged and reported with its sigma (the old default, 0.025 px, made some of
 // them `uncertain`, above), and the sigma matches the observed error.
 TEST(Uncertainty, DefaultReportsEverySubsetWithItsSigma) {
@@ -329,7 +329,7 @@ TEST(Uncertainty, DefaultReportsEverySubsetWithItsSigma) {
 // noise blurred by a Gaussian of 0.8 px, 3 grey levels after the blur, independent in both
 // images): over independent subsets the observed scatter matches the reported sigma within
 // +-30 % (measured 1.19). The least-squares sigma of independent residuals, sigma_r sqrt(H^-1)
-// (the model until issue 21), leaves the correlation out; on real sand it was 1.7-2.4x too small.
+// (the model until 2026-11-27), leaves the correlation out; on real sand it was 1.7-2.4x too small.
 TEST(Uncertainty, ReportedSigmaAllowsForCorrelatedNoise) {
   Scene scene(420, 420, /*noise_sigma=*/0, /*seed=*/23, /*supersampling=*/2);
   const DisplacementField truth = Translation(0.35, -0.45);
@@ -368,7 +368,7 @@ TEST(Uncertainty, ReportedSigmaAllowsForCorrelatedNoise) {
   EXPECT_LT(e.sd_v / sigma_v, 1.3);
 }
 
-// Issue 21: convergence is judged against the subset's own uncertainty. On poor texture (blurry
+// Convergence is judged against the subset's own uncertainty. On poor texture (blurry
 // low-contrast grains, noise) an increment of 1e-3 px is far below what a subset resolves and IC-GN
 // ran into the iteration cap (`max_iterations`, NaN); by default such subsets converge and are
 // reported with their (large) sigma. convergence_sigma_fraction = 0 is the old criterion.

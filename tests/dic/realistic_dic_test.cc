@@ -140,7 +140,7 @@ TEST(RealisticDic, StraddlingSubsetsAreFlaggedAndTheRestIsAccurate) {
     options.grid.subset_size = 21;
     options.grid.step = 10;
     options.mode = SequenceMode::kPairs;
-    // The engine of before issue 21, on which the check was designed: a 0.025 px uncertainty
+    // The engine of before 2026-11-27, on which the check was designed: a 0.025 px uncertainty
     // limit, no outlier test (the defaults now: no limit, the outlier test, the check off).
     options.icgn.max_uncertainty_px = 0.025;
     options.outliers.enabled = false;

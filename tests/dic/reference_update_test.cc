@@ -1,4 +1,4 @@
-// Reference-update policies as an extension point (docs/architecture.md, "Extension points"): a
+// Reference-update policies as an extension point (docs/development.md, "Extension points"): a
 // policy written here, registered at run time and selected by name like the built-in ones.
 #include "impactdic/dic/reference_update.h"
 

@@ -85,7 +85,7 @@ TEST(Sequence, RigidMotionAutoKeepsTheReferenceIncrementalRandomWalks) {
 }
 
 // Subsets the block covers are not silent garbage: mostly covered ones fail, and a partly covered
-// one that still converges (no uncertainty limit by default, issue 21) is reported with a sigma
+// one that still converges (no uncertainty limit by default) is reported with a sigma
 // that covers its error (measured: |error| / sigma up to 3.2, rms 1.1 over the 36 partly covered
 // subsets that converged; their sigma 0.06-0.9 px against 0.01 px for the clean ones).
 TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
@@ -171,7 +171,7 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
   PaintBlocks(&images);
   DicOptions options;
   options.grid.step = 10;
-  // The limit of the defaults before issue 21: the blurred frame defeats the subsets (they become
+  // The limit of the defaults before 2026-11-27: the blurred frame defeats the subsets (they become
   // `uncertain`), the case of `auto` this test is about; without it they converge with a larger
   // sigma.
   options.icgn.max_uncertainty_px = 0.025;
@@ -248,7 +248,7 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
   cv::GaussianBlur(images[bad], images[bad], cv::Size(0, 0), 3.0);
   DicOptions options;
   options.grid.step = 12;
-  // The limit of the defaults before issue 21: the blurred frame makes the subsets `uncertain`,
+  // The limit of the defaults before 2026-11-27: the blurred frame makes the subsets `uncertain`,
   // the case of `auto` this test is about (without a limit they converge there with a larger
   // sigma, and nothing is left to recover).
   options.icgn.max_uncertainty_px = 0.025;

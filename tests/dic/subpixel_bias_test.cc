@@ -1,5 +1,5 @@
-// Sub-pixel bias on an analogue of DIC Challenge 1.0 Sample 3 (issue 13, item 1; docs/dic.md,
-// "Sub-pixel bias (issue 13, item 1)"): a sharp speckle translated by an exact band-limited
+// Sub-pixel bias on an analogue of DIC Challenge 1.0 Sample 3 (docs/dic_accuracy.md,
+// "Sub-pixel bias"): a sharp speckle translated by an exact band-limited
 // (Fourier) shift, 8-bit, with noise. Its bias is the B-spline interpolation bias of image content
 // near the Nyquist frequency (it is there without noise), and the Gaussian pre-filter of both
 // images (the preprocess module's blur, `correlate --gaussian`) removes it.

@@ -1,4 +1,4 @@
-// The throughput changes of issue 23 keep the numbers: node gradients over a rectangle, the
+// The throughput changes for long recordings keep the numbers: node gradients over a rectangle, the
 // reference images' patch layout and the reused coefficient buffer give the values of the
 // whole-image computation bit for bit, and a sparse grid on a sequence of known motion is tracked
 // as before.

@@ -1,4 +1,4 @@
-// The displacement gradient of the subset warp (DicOptions::keep_warp_gradient, issue 25): IC-GN's
+// The displacement gradient of the subset warp (DicOptions::keep_warp_gradient): IC-GN's
 // affine parameters since the first reference, composed across reference updates, in
 // FrameResult, the /dic table (*_warp), the CSV and `correlate --warp-gradient`.
 #include <gtest/gtest.h>
@@ -110,7 +110,8 @@ DicOptions GradientOptions(const std::string& policy) {
 
 // (a) A uniform affine field (stretch, shear and rotation together), against the first reference:
 // the kept gradient is the field's L. Tolerances from the measurement at noise 1 grey level,
-// subset 25 (docs/dic.md "Warp gradient"): mean error per component 0.7e-4 (< 2.5e-4), rms 5e-4
+// subset 25 (docs/dic_accuracy.md "Warp gradient"): mean error per component 0.7e-4 (< 2.5e-4), rms
+// 5e-4
 // (< 1e-3), largest 1.4e-3 (< 3e-3).
 TEST(WarpGradient, UniformAffineFieldGivesItsGradient) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/11, /*supersampling=*/2);
@@ -176,9 +177,9 @@ TEST(WarpGradient, ComposesAcrossReferenceUpdatesInTheOrderOfTheMotion) {
 // A smooth non-uniform field with the reference updated on every frame: the gradient of each
 // material point composes with the warp of the subset found at its position in the new reference
 // (F_r at x_r). An affine subset measures a sinusoid's gradient averaged over the subset (the
-// error grows with the amplitude: rms 0.65e-3 to 1.9e-3 here, docs/dic.md "Warp gradient"), so
-// the composed gradients are held to the same images correlated against the first reference
-// alone: as accurate within 15 % + 2e-4, and below 2.5e-3 rms.
+// error grows with the amplitude: rms 0.65e-3 to 1.9e-3 here, docs/dic_accuracy.md "Warp
+// gradient"), so the composed gradients are held to the same images correlated against the first
+// reference alone: as accurate within 15 % + 2e-4, and below 2.5e-3 rms.
 TEST(WarpGradient, FollowsTheMaterialPointThroughUpdatesOfANonUniformField) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/13, /*supersampling=*/2);
   const FieldSequence seq =
@@ -293,9 +294,9 @@ TEST(WarpGradient, DoNotDependOnTheThreadCount) {
   }
 }
 
-// The accuracy table of docs/dic.md ("Warp gradient"): RMS and mean error of the kept gradient
-// against the first reference, by subset size, on a uniform affine field and on a sinusoidal one
-// (noise 1 grey level of 8 bits; 0 for the sinusoid's systematic part). Run by hand:
+// The accuracy table of docs/dic_accuracy.md ("Warp gradient"): RMS and mean error of the kept
+// gradient against the first reference, by subset size, on a uniform affine field and on a
+// sinusoidal one (noise 1 grey level of 8 bits; 0 for the sinusoid's systematic part). Run by hand:
 //   tests/dic/dic_warp_gradient_test --gtest_also_run_disabled_tests
 //     --gtest_filter='*MeasureAccuracy*'
 TEST(WarpGradient, DISABLED_MeasureAccuracy) {

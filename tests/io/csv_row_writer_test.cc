@@ -1,4 +1,4 @@
-// CsvRowWriter and AtomicStreamWriter (issue 23, item 2): a long table written as it is formatted
+// CsvRowWriter and AtomicStreamWriter: a long table written as it is formatted
 // gives the bytes WriteCsvRows gives, appears only when complete, and keeps the promise of a full
 // disk (docs/reliability.md, section 1) when the disk fills up in the middle of the rows, long
 // before the commit.

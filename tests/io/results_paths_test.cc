@@ -1,4 +1,4 @@
-// Issue 24 item 3: each results group's names are declared once, by its owner (io/results_layout.h
+// Each results group's names are declared once, by its owner (io/results_layout.h
 // lists them). No other source file of the library spells a results path ("/sensor/t_s",
 // "momentum/p_gran", "/model") as a string literal: it uses the owner's names, so that a renamed
 // dataset cannot leave a writer or reader behind.

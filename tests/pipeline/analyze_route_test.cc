@@ -1,4 +1,4 @@
-// Issue 24: one analysis route. `impactdic analyze SCENE` runs the stages of `run` after the
+// One analysis route. `impactdic analyze SCENE` runs the stages of `run` after the
 // correlation on the /dic group of a results file (pipeline/scene_analysis.h: a load_dic stage in
 // place of frames and correlate), so on a run's own results.h5 it gives the run's analysis: every
 // dataset of /sensor, /kinematics, /momentum, /model and /strain, and every key figure of
@@ -118,7 +118,7 @@ TEST(AnalyzeRoute, AnalyzeOfARunsResultsEqualsTheRunsOwnAnalysis) {
   EXPECT_GE(run_summary.size(), 20u);
 }
 
-// Issue 24 item 2: the stages hand each other typed outputs in SceneRunData (the summary is only
+// The stages hand each other typed outputs in SceneRunData (the summary is only
 // written): the model's v0 is the sensor record's, the peak stage is t_e from the momentum stage
 // and the measured peak deceleration is read over it (it was read back out of the summary's
 // figures by a step outside the stages).

@@ -1,4 +1,4 @@
-// `impactdic run` on a camera file (issue 23, item 4): the frames of a synthesised scene written
+// `impactdic run` on a camera file: the frames of a synthesised scene written
 // as a Photron .mraw recording give exactly the results of the same frames as PNG files, with the
 // frame rate taken from the file (the scene needs no inputs.fps), whether the frames are timed by
 // the DAQ's exposure channel or by the camera's own time stamps; an inputs.fps that disagrees with

@@ -1,4 +1,4 @@
-// Issue 24 item 1: `impactdic correlate` is a scene run through the one stage graph
+// `impactdic correlate` is a scene run through the one stage graph
 // (pipeline/correlate_scene.h): CorrelateScene runs the frames and correlate stages of `run`, so on
 // the same scene its /dic is the run's own, bit for bit (NaNs included); only the row numbering
 // differs (from the reference, no first_frame attribute, as `correlate -o` always wrote). Before,

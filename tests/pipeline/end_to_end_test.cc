@@ -1,7 +1,8 @@
 // End to end: `impactdic synth` renders a small impact scene with known truth, `impactdic run`
-// processes it, and the results are compared with the truth (issue 7's tolerances); the same
-// for the committed sample (sample_frames/, the README's first command) and its committed truth,
-// and the sample's summary.json against a committed reference ("behaviour unchanged").
+// processes it, and the results are compared with the truth (tolerances stated at each check); the
+// same for the committed sample (sample_frames/, what the quick start's first command runs) and its
+// committed truth, and the sample's summary.json against a committed reference ("behaviour
+// unchanged").
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -34,7 +35,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // What the tests compare: the generated scene above, or the committed sample (the scene the
-// README's first command runs; its truth is committed with it).
+// quick start's first command runs; its truth is committed with it).
 enum class Source { kGenerated, kCommittedSample };
 
 struct Prepared {
@@ -194,7 +195,7 @@ TEST_P(EndToEnd, FiguresAndAnimationAreComplete) {
   }
   EXPECT_TRUE(fs::exists(p_->Out("summary.json")));
   EXPECT_TRUE(fs::exists(p_->Out("summary.csv")));
-  // The strain maps and animation (issue 25): the committed sample asks for the strain
+  // The strain maps and animation: the committed sample asks for the strain
   // (strain.enabled), the generated scene does not, and gets neither them nor /strain.
   const bool strain = GetParam() == Source::kCommittedSample;
   EXPECT_EQ(results.Exists(results_layout::kStrainGroup), strain);
@@ -220,10 +221,10 @@ TEST_P(EndToEnd, FiguresAndAnimationAreComplete) {
     EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 }
 
-// "Behaviour unchanged" (issue 14): the committed sample's summary.json equals a committed
+// "Behaviour unchanged": the committed sample's summary.json equals a committed
 // reference (tests/pipeline/data/sample_summary_reference.json, `impactdic -q run
 // sample_frames/scene.yaml` on main before the architecture redesign; changes listed in
-// docs/architecture.md, "Behaviour preserved"). summary.json holds nothing that varies from run
+// docs/development.md, "Behaviour preserved"). summary.json holds nothing that varies from run
 // to run (no path, version, time or rate: the correlation's wall-time rate is in timing.json).
 // Same keys at every level, same strings, nulls and booleans; numbers equal to a relative 1e-6, not
 // exactly. Measured on the sample: Eigen's LLT (which replaced a hand-written SPD inversion) moved

@@ -15,6 +15,7 @@
 #include "../cli/cli_runner.h"
 #include "../core/test_paths.h"
 #include "impactdic/calib/calibration.h"
+#include "impactdic/core/error.h"
 #include "impactdic/dic/bspline.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/yaml.h"
@@ -213,40 +214,80 @@ TEST(OptionDefaults, CliCommandsShowTheLibraryDefaults) {
   ExpectHelpDefault(render.output, "--codec", ToString(AnimationOptions{}.codec));
 }
 
-// Every key the scene reads is in the README's scene file reference.
-TEST(OptionDefaults, EverySceneKeyIsDocumentedInTheReadme) {
-  std::ifstream in(std::string(impactdic::SourceDir()) + "/README.md");
-  ASSERT_TRUE(in) << "README.md";
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string readme = text.str();
-  const std::size_t begin = readme.find("## Scene file");
-  ASSERT_NE(begin, std::string::npos);
-  const std::string section = readme.substr(begin, readme.find("\n## ", begin + 1) - begin);
-  Scene scene;
-  for (const YamlOptionTable& table : SceneOptionTables(&scene)) {
-    for (const auto& entry : table.entries()) {
-      EXPECT_NE(section.find(entry.key + ":"), std::string::npos)
-          << table.section() << "." << entry.key << " is not in README.md's \"Scene file\"";
-    }
+// The scene keys that are not one field of an option table (ParseScene reads them itself): the
+// key, a value as YAML, its default and its meaning. docs/scene_keys.md lists them after the
+// tables' keys, so that page is the one place every key is.
+struct ExtraKey {
+  std::string section, key, example, default_text, meaning;
+};
+
+std::vector<ExtraKey> ExtraKeys() {
+  std::string stages;
+  for (const std::string& s : AllSceneStages()) stages += (stages.empty() ? "" : ", ") + s;
+  return {
+      {"", "name", "t10-h07-d15", "the file's stem", "Free-form name of the test"},
+      {"", "stages", "[" + stages + "]", "all whose inputs exist",
+       "The stages to run, a list of " + stages +
+           " (correlate needs frames; frames alone reads and checks them)"},
+      {"dic", "roi", "[10, 10, 200, 150]", "the whole image less margins",
+       "Region of interest [x0, y0, x1, y1] in px of the first frame, inside it"},
+      {"dic", "roi_polygon", "[[10, 10], [200, 10], [100, 150]]", "none",
+       "Only subsets centred inside this polygon ([[x, y], ...] in px, >= 3 vertices)"},
+      {"momentum", "rect_mm", "[0, 0, 50, 20]", "from the pounder's position",
+       "Momentum grid rectangle [x0, y0, x1, y1] in panel mm instead of the pounder's position"},
+  };
+}
+
+// Each key the page adds to the tables' is one ParseScene reads: its example parses, and the same
+// key misspelt is refused (so the check can fail).
+TEST(OptionDefaults, TheSceneReferencesExtraKeysAreRead) {
+  for (const ExtraKey& k : ExtraKeys()) {
+    const auto yaml = [&](const std::string& key) {
+      std::string text = "inputs: {frames: f/*.png}\n";
+      return text + (k.section.empty() ? key + ": " + k.example + "\n"
+                                       : k.section + ":\n  " + key + ": " + k.example + "\n");
+    };
+    EXPECT_NO_THROW(ParseScene(yaml(k.key), "x/scene.yaml")) << k.key;
+    EXPECT_THROW(ParseScene(yaml(k.key + "_x"), "x/scene.yaml"), Error) << k.key;
   }
 }
 
-// docs/scene_keys.md is the scene tables' own reference (YamlOptionTable::Reference: key, default
-// = the bound struct's value, expected values, meaning). Run with IMPACTDIC_UPDATE_DOCS=1 to
-// rewrite it after changing an option.
+// docs/scene_keys.md is the scene's one reference: the format, then every key of the scene tables
+// (YamlOptionTable::Reference: key, default = the bound struct's value, expected values, meaning)
+// and the keys ParseScene reads itself. Run with IMPACTDIC_UPDATE_DOCS=1 to rewrite it after
+// changing an option.
 TEST(OptionDefaults, SceneKeyReferenceIsGeneratedFromTheBindings) {
   Scene scene;
   std::string expected =
-      "# Scene keys\n\nGenerated from the scene's option tables (`SceneOptionTables`, "
-      "src/pipeline/scene.cc) by\n`IMPACTDIC_UPDATE_DOCS=1 build/release/tests/pipeline/"
-      "pipeline_test --gtest_filter='OptionDefaults.*'`;\nthe defaults are the library structs' "
-      "(docs/architecture.md, \"Options\"). Besides these keys: `name`,\n`stages`, "
-      "`dic.roi`, `dic.roi_polygon`, `momentum.rect_mm` (README.md, \"Scene file\").\n"
-      "`impactdic init [DIR]` writes all of them, with these defaults and meanings as comments, "
-      "into\nDIR/scene.yaml (pipeline/scene_template.h).\n\n"
+      "# Scene keys\n\n"
+      "<!-- Generated from the scene's option tables (`SceneOptionTables`, src/pipeline/scene.cc) "
+      "by\n`IMPACTDIC_UPDATE_DOCS=1 build/release/tests/pipeline/pipeline_test "
+      "--gtest_filter='OptionDefaults.*'`;\nthe test fails when this page is out of date. -->\n\n"
+      "A scene is a YAML file naming one test's inputs and parameters; `impactdic run "
+      "SCENE.yaml` runs it.\n`impactdic init DIR` writes DIR/scene.yaml with every key below at "
+      "its default, its range and\nmeaning as comments (pipeline/scene_template.h); fill in the "
+      "lines marked `# REQUIRED` (the frames,\nthe frame rate, the scale: a calibration or "
+      "`inputs.mm_per_px`; with a sensor CSV, the pounder's\nposition). The sample's scene is "
+      "`sample_frames/scene.yaml`; the guide ([guide.md](guide.md)) writes one\nstep by step.\n\n"
+      "Every key is optional except `inputs.frames`; a key left out has the default of the "
+      "library option\nstruct it is bound to (the paper's values; where each is defined: "
+      "[architecture.md](architecture.md#options)).\nEvery value is checked when the scene is "
+      "loaded, before any frame is read, and relative paths\nresolve against the scene file's "
+      "folder. Loading reports every problem at once with the file, line,\nkey path, the value "
+      "found and what is expected; unknown keys are errors with a \"did you mean\"\nsuggestion, "
+      "and a key given twice in one map is an error naming both lines. Every key is also a\n"
+      "flag of the commands that use it (`--dic.subset_size 31`: "
+      "[command_line.md](command_line.md#options-and-errors)).\n\n"
+      "## Keys of the option tables\n\n"
       "| key | default | expected | meaning |\n|---|---|---|---|\n";
   for (const YamlOptionTable& table : SceneOptionTables(&scene)) expected += table.Reference();
+  expected +=
+      "\n## Keys that are not one option field\n\n"
+      "| key | example | default | meaning |\n|---|---|---|---|\n";
+  for (const ExtraKey& k : ExtraKeys()) {
+    expected += "| `" + (k.section.empty() ? "" : k.section + ".") + k.key + "` | `" + k.example +
+                "` | " + k.default_text + " | " + k.meaning + " |\n";
+  }
   const std::string path = std::string(impactdic::SourceDir()) + "/docs/scene_keys.md";
   if (std::getenv("IMPACTDIC_UPDATE_DOCS")) std::ofstream(path) << expected;
   std::ifstream in(path);

@@ -73,8 +73,9 @@ TEST(OutputWriter, ARegisteredWriterIsInvokedWithTheRunsData) {
   EXPECT_TRUE(fs::exists(fs::path(dir.File("out")) / "summary.json"));
 }
 
-// Reading and checking the frames alone (README: `frames` alone) with the default figures on: the
-// figures writer has nothing to draw and says so, instead of failing the finished run.
+// Reading and checking the frames alone (docs/architecture.md: `frames` alone) with the default
+// figures on: the figures writer has nothing to draw and says so, instead of failing the finished
+// run.
 TEST(OutputWriter, AFramesOnlyRunSkipsTheFiguresInsteadOfFailing) {
   TestDir dir;
   const std::string sample = std::string(impactdic::SourceDir()) + "/sample_frames/";

@@ -1,4 +1,4 @@
-// Issue 24 item 3: every dataset of a run's results.h5 is read by the reader of its group's owner
+// Every dataset of a run's results.h5 is read by the reader of its group's owner
 // (io/results_layout.h lists them), and `model -o` writes the run's /model layout.
 #include <gtest/gtest.h>
 

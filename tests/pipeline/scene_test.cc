@@ -204,7 +204,7 @@ TEST(Scene, MissingFramesAndBadYamlAndMissingFile) {
 }
 
 // dic.min_zncc is the validity threshold; the auto reference update has its own key, bound to
-// UpdateOptions::auto_min_zncc (the README says so).
+// UpdateOptions::auto_min_zncc (docs/scene_keys.md says so).
 TEST(Scene, MinZnccAndAutoMinZnccSetTheirOwnLibraryFields) {
   const Scene s =
       ParseScene("inputs: {frames: f}\ndic: {min_zncc: 0.7, auto_min_zncc: 0.9}\n", "x/scene.yaml");

@@ -1,4 +1,4 @@
-// The strain stage through `run` (issue 25, items 1 and 2): on the small synthesised scene, a run
+// The strain stage through `run`: on the small synthesised scene, a run
 // with strain.enabled writes /strain (datasets [F x N] with units, the conventions and the
 // compacted zone as attributes), strain.csv and the summary's strain figures next to the crater
 // depths; with strain.enabled false (the default) results.h5 has no /strain and the folder no

@@ -1,4 +1,4 @@
-// Bounded memory (issue 13, item 5): `impactdic run` streams the frames through reading,
+// Bounded memory: `impactdic run` streams the frames through reading,
 // correlation and rendering, so its peak memory does not grow with the number of frames; only
 // the DIC results (subsets x frames) do. One synthesised sequence (1024 x 768, 8-bit) is run
 // twice as child processes, once over its first 8 frames (dic.last_frame) and once over all 32,
@@ -13,7 +13,7 @@
 // fails it (main at ecf0ddb: 110.6 -> 175.0 MB). The animation is off: the H.264 encoder holds
 // its own lookahead of up to about 40 canvas frames (+80 MB at 1024 x 768 from 8 to 31 frames,
 // the same with or without streaming), a bound of the encoder, not of the recording
-// (docs/architecture.md, "Memory"); the snapshot still re-reads its frame.
+// (docs/development.md, "Memory"); the snapshot still re-reads its frame.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -251,9 +251,9 @@ TEST_F(StreamingRun, RunStreamsTheFramesOfAVideo) {
   EXPECT_TRUE(std::filesystem::exists(dir_->File("video/velocity_field_te.png")));
 }
 
-// A long recording (issue 23, item 2): 200 frames of 320 x 240 against 20 of the same sequence,
+// A long recording: 200 frames of 320 x 240 against 20 of the same sequence,
 // 2736 subsets (dic.step 4), the animation off (its encoder's lookahead is bounded by the encoder,
-// docs/architecture.md "Memory"). What grows with the frames is the results, held once: the
+// docs/development.md "Memory"). What grows with the frames is the results, held once: the
 // correlation rows (40 bytes per subset and frame) and the kinematics (48), 88 bytes; results.h5
 // is built on the disk, the kinematics borrow the rows instead of copying them, and the rows and
 // kinematics are released once results.h5 is written, before rendering. The peak may grow by the

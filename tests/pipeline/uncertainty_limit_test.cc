@@ -1,4 +1,4 @@
-// momentum.max_sigma_px end to end (issue 13, item 2: "let downstream stages weight or exclude by
+// momentum.max_sigma_px end to end (item 2: "let downstream stages weight or exclude by
 // it"): a synthesised scene is run without a limit, the limit is then set between the reported
 // sigmas, and `run` and `analyze` must leave out exactly the valid samples above it (counted in the
 // warning), keep them in /dic, and still measure the momentum from the others.
@@ -71,7 +71,7 @@ TEST(SigmaLimit, RunAndAnalyzeLeaveOutExactlyTheSamplesAboveItAndKeepThemInDic) 
   const CorrelationSeries all = ReadCorrelationSeries(dir.File("plain/results.h5"), &first);
   ASSERT_FALSE(all.sigma_u_px.empty());
   // Without momentum.max_sigma_px the default rule applied: samples above 50 x their frame's
-  // median sigma (momentum.max_sigma_ratio, issue 21), named in a warning when there are any.
+  // median sigma (momentum.max_sigma_ratio), named in a warning when there are any.
   CorrelationSeries by_default = all;
   const std::size_t left_out_by_default = ExcludeSamplesAboveMedianSigma(
       SceneMomentum::kDefaultMaxSigmaRatio, "momentum.max_sigma_ratio", &by_default);

@@ -1,6 +1,6 @@
 // WriteXdmfViews (src/pipeline/outputs/xdmf_writer.cc): the /xdmf views of results.xdmf list
 // every [F x N] dataset of /strain and the /dic and /kinematics fields the file holds, and only
-// those (issue 25 item 4: the strain group is another module's; a file without it has no strain
+// those (the strain group is another module's; a file without it has no strain
 // views, one with it needs no change here).
 #include <gtest/gtest.h>
 

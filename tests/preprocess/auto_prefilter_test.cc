@@ -1,4 +1,4 @@
-// The automatic pre-filter, the default (issue 21, item 3; docs/dic.md, "Sub-pixel bias"): with
+// The automatic pre-filter, the default (docs/dic_accuracy.md, "Sub-pixel bias"): with
 // default options a sharp speckle, whose content near the Nyquist frequency biases sub-pixel
 // displacements, is pre-filtered and unbiased; a smooth speckle is left as it is.
 #include <gtest/gtest.h>

@@ -1,5 +1,6 @@
-// `impactdic correlate` with the automatic pre-filter (docs/dic.md, "Sub-pixel bias"): decided from
-// the reference, logged, recorded in /dic, switched by --gaussian auto | none | on | SIGMA.
+// `impactdic correlate` with the automatic pre-filter (docs/dic_accuracy.md, "Sub-pixel bias"):
+// decided from the reference, logged, recorded in /dic, switched by --gaussian auto | none | on |
+// SIGMA.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-// Fault injection (issue 22, items 3, 9, 11 and the duplicate --deformed message): thread counts
+// Fault injection (11 and the duplicate --deformed message): thread counts
 // beyond the machine, a correlation or a campaign that produced nothing, campaign resume after an
 // input changed, and `analyze` of another scene's results or of a run folder's results.h5.
 // Scenes are tiny synthesised ones (160 x 120 px, no figures or video: a second or less a run).

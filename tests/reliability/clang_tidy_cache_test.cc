@@ -1,6 +1,7 @@
-// The lint step of CI remembers clean files (scripts/clang_tidy_files.py, README.md "Quick
-// start"): a file is skipped only when nothing it is made of changed. Each test lints a one-file
-// project of its own, with a copy of the script, one clang-tidy check and its own cache folder.
+// The lint step of CI remembers clean files (scripts/clang_tidy_files.py, docs/development.md
+// "Building and testing"): a file is skipped only when nothing it is made of changed. Each test
+// lints a one-file project of its own, with a copy of the script, one clang-tidy check and its own
+// cache folder.
 #include <gtest/gtest.h>
 
 #include <filesystem>

@@ -1,4 +1,4 @@
-// Full disk (issue 11 item 1, docs/reliability.md): every writer of every command exits 1 with
+// Full disk (docs/reliability.md): every writer of every command exits 1 with
 // one message naming the file and "no space left", leaves no temporary file, keeps an older file
 // of that name intact, and does not crash. The disk is a small tmpfs mounted for each test and
 // filled to leave chosen room, so that the space runs out at a chosen output. Mounting needs root:

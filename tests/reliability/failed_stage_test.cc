@@ -1,4 +1,4 @@
-// Fault injection (issue 11, item 2): a stage that produces nothing usable must never yield
+// Fault injection: a stage that produces nothing usable must never yield
 // plausible figures. Frames whose momentum grid has too few valid subsets get a NaN p_gran; when
 // t_e cannot be measured, t_e and everything that depends on it is NaN with the reason; `run`
 // fails naming the stage (no output written) unless --allow-partial; `campaign` keeps such a

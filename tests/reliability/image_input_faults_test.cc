@@ -1,4 +1,4 @@
-// Issue 22, item 10 and the "Messages" list: frames, images and videos that are truncated, empty,
+// Frames, images and videos that are truncated, empty,
 // corrupt or not regular files fail with one message of ours naming the file and what is wrong,
 // and no line of libpng, libjpeg, OpenCV, FFmpeg or GStreamer reaches the terminal. The bad files
 // are made here: a JPEG cut short, a PNG whose CRCs are right but whose rows are not, a folder, a

@@ -1,4 +1,4 @@
-// Interrupted runs (issue 11, item 3; docs/reliability.md). `impactdic run` of a 12 kg scene over
+// Interrupted runs (docs/reliability.md). `impactdic run` of a 12 kg scene over
 // a folder holding the results of the 10 kg scene, ended by SIGKILL, SIGTERM or SIGINT at many
 // points (when its staging folder appears, when results.h5, the first figure or summary.json is
 // complete in it, and at delays spread over a whole run): the folder is always entirely the old

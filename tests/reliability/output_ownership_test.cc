@@ -1,4 +1,4 @@
-// No command destroys another's outputs (issue 22 items 1, 2, 4 and 10, docs/reliability.md): a
+// No command destroys another's outputs (docs/reliability.md): a
 // folder written by another kind of command (a campaign, a synth scene, a run) is refused unless
 // --force, naming what is there; a second writer of a folder is refused naming the first one's
 // pid; an existing CSV or YAML the command did not write is kept; a folder whose earlier outputs

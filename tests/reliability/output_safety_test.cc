@@ -1,4 +1,4 @@
-// Outputs never destroy inputs or other commands' data (issue 11 item 4, docs/reliability.md):
+// Outputs never destroy inputs or other commands' data (docs/reliability.md):
 // an output that is an input, or has the wrong extension, is refused before any work and the file
 // is left as it was; writing into an existing HDF5 file replaces only the groups the command owns;
 // an existing file of another kind under an .h5 name is kept.

@@ -1,4 +1,4 @@
-// Fault injection (issue 22, items 5, 6, 7 and 11): inputs that used to give a plausible but wrong
+// Fault injection: inputs that used to give a plausible but wrong
 // figure with exit 0 and `usable: true`. Each now gives the right figure, a warning, or an error
 // naming the key, the values and what is expected; and summary.json is the same bytes for two
 // runs of one scene.

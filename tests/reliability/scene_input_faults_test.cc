@@ -1,4 +1,4 @@
-// Fault injection (issue 22): scene files, calibration views and validate-dem inputs that were
+// Fault injection: scene files, calibration views and validate-dem inputs that were
 // accepted silently or reported poorly: a second YAML document, empty or repeated stages,
 // non-finite numbers (one problem, naming the list element), repeated calibration views, and a
 // file of the wrong kind given to validate-dem.

@@ -1,4 +1,4 @@
-// Fault injection (issue 11, item 6): a model solve that does not reach the end of motion is a
+// Fault injection: a model solve that does not reach the end of motion is a
 // failure, not a result, and the error the solver reports for itself is never 0 when the true
 // error is not. True errors come from the exact solution (b) of docs/model.md (no added mass, no
 // damping: harmonic motion with a closed-form stop time and crater depth).

@@ -1,4 +1,4 @@
-// The sample run's results for other tools (issue 25 items 4 and 5, docs/python.md): results.xdmf
+// The sample run's results for other tools (docs/python.md): results.xdmf
 // opens in a real XDMF reader (meshio, xdmf_meshio_check.py) that finds results.h5's values at
 // every frame and subset, and the h5py example of docs/python.md runs as written on the run.
 // The Python modules come from scripts/install_deps.sh; without one a test is skipped, except

@@ -1,4 +1,4 @@
-// The strain maps and animation drawn from a results file (issue 25 item 2): written when the file
+// The strain maps and animation drawn from a results file: written when the file
 // has /strain and nothing extra when it has not, eps_v coloured with compression at the positive
 // (red) end, and one colour scale for every frame of the animation.
 #include <gtest/gtest.h>

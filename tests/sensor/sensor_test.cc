@@ -124,7 +124,7 @@ TEST(Sensor, RestOffsetReference) {
 }
 
 // A record that starts in free fall cannot be integrated from the release: the release is not in
-// it, and a release time before the record would assume a free fall nobody recorded (issue 22:
+// it, and a release time before the record would assume a free fall nobody recorded (once,
 // `--release-time -5` gave v0 = 52.8 m/s). A given release time inside a whole record is used.
 TEST(Sensor, RecordStartingInFreeFallNeedsTheImpactVelocity) {
   const PulseMotion m = Motion();

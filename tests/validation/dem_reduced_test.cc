@@ -1,5 +1,5 @@
-// The physics validation in CI (docs/validation.md, "The reduced case in CI"): a DEM impact that
-// nobody here wrote the physics of, run end to end with the DEFAULT settings of every stage.
+// The physics validation in CI (docs/validation_dem.md, "The reduced case in CI"): a DEM impact
+// that nobody here wrote the physics of, run end to end with the DEFAULT settings of every stage.
 // validation/dem/run_case.sh does the four steps: LAMMPS (`lmp`) drops the 10 kg, 0.15 m wide
 // pounder at sqrt(2 g 0.7 m) onto the committed settled bed validation/dem/reduced_bed.data.gz,
 // `impactdic synth --dem` films it with validation/dem/camera_spec.yaml, `impactdic run` processes
@@ -61,10 +61,10 @@ std::pair<double, double> RangeOver(const std::vector<double>& t, const std::vec
 
 // The strain of the run's displacements (the strain module's fit, window 3: the DEM grid's step
 // of 32 px makes larger windows span most of the bed) against the strain of the grains
-// (truth.h5: the least-squares affine fit of each subset's grains, docs/validation.md "Strain")
-// and against the same fit of the grains' cell-mean displacements (a perfect correlation). The
-// bounds are 1.5 x what this case gives; the grain scale is a few grains per subset, so the
-// grains' own strain is rough and the first comparison is loose.
+// (truth.h5: the least-squares affine fit of each subset's grains, docs/validation_strain.md
+// "Strain") and against the same fit of the grains' cell-mean displacements (a perfect
+// correlation). The bounds are 1.5 x what this case gives; the grain scale is a few grains per
+// subset, so the grains' own strain is rough and the first comparison is loose.
 void ExpectStrainMatchesTheGrains(const std::string& truth_h5, const std::string& results_h5) {
   using strain_validation::ErrorStats;
   const strain_validation::RunDic run = strain_validation::ReadRunDic(results_h5);
@@ -142,7 +142,7 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   EXPECT_LE(v.t_e_truth_s, kTimeAfterContactS / 2) << "the record must outlast the peak stage";
 
   // 1. p_gran through the peak stage: within 5 % of p_max of the grains' at every analysed
-  // frame (issue 21), and within 1 % of what a perfect DIC gives at this frame rate (the DIC's
+  // frame, and within 1 % of what a perfect DIC gives at this frame rate (the DIC's
   // own error: 3 x its RMS velocity error against a perfect DIC, ~32 mm/s, over the grid's
   // 2.1 kg, all 12 subsets erring together, is 0.5 % of p_max). p_max from the accelerometer
   // within 1 % of the DEM pounder's.
@@ -197,7 +197,7 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
       (kMassKg + m_add_at_te) * (0.01 + v_p_rel), 100 * v.conservation_tool, 100 * c_lo, 100 * c_hi,
       100 * conservation_at_te);
 
-  // 5. The strain against the grains' (issue 25).
+  // 5. The strain against the grains'.
   ExpectStrainMatchesTheGrains(truth_h5, results_h5);
 }
 

@@ -1,7 +1,7 @@
-// Test helper of the strain validation (docs/validation.md, "Strain"): the errors of a strain
-// field (strain/strain.h) against the strain of a truth.h5 (soil/dudx ..., soil/eps_v ..., written
-// by `impactdic synth`, analytic or DEM), and the correlation results of a run as the strain
-// module's input.
+// Test helper of the strain validation (docs/validation_strain.md, "Strain"): the errors of a
+// strain field (strain/strain.h) against the strain of a truth.h5 (soil/dudx ..., soil/eps_v ...,
+// written by `impactdic synth`, analytic or DEM), and the correlation results of a run as the
+// strain module's input.
 #ifndef IMPACTDIC_TESTS_VALIDATION_STRAIN_COMPARE_H_
 #define IMPACTDIC_TESTS_VALIDATION_STRAIN_COMPARE_H_
 

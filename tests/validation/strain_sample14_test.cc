@@ -1,4 +1,5 @@
-// The strain validation on DIC Challenge 1.0 Sample 14 (docs/validation.md, "Strain"): reference
+// The strain validation on DIC Challenge 1.0 Sample 14 (docs/validation_strain.md, "Strain"):
+// reference
 // -> L3 and L5 (pairs, subset 25, step 5), exx by the strain module's fit (windows 3, 5, 7) and
 // the subset warp's gradient (correlate --warp-gradient) against the commanded exx of
 // `Sample 14 Commanded Displacement.csv`. The sinusoid's amplitude is 0.1 px and its period

@@ -1,9 +1,9 @@
-// The strain validation against the synthetic truth (docs/validation.md, "Strain"): `impactdic
-// synth validation/strain/synth_spec.yaml` (the analytic soil field, its Jacobian in truth.h5),
-// `impactdic run`, and the strain module on the run's displacements against the truth, under
-// bounds measured with this scene (docs/validation.md gives the figures and the commands). The
-// scene's shear is large enough that a flipped gradient sign or a Green-Lagrange strain without
-// its H^T H term misses the bounds by far: the test checks that too.
+// The strain validation against the synthetic truth (docs/validation_strain.md, "Strain"):
+// `impactdic synth validation/strain/synth_spec.yaml` (the analytic soil field, its Jacobian in
+// truth.h5), `impactdic run`, and the strain module on the run's displacements against the truth,
+// under bounds measured with this scene (docs/validation_strain.md gives the figures and the
+// commands). The scene's shear is large enough that a flipped gradient sign or a Green-Lagrange
+// strain without its H^T H term misses the bounds by far: the test checks that too.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -163,8 +163,8 @@ TEST(StrainSynthTruth, FitGradientMatchesTheAnalyticStrain) {
   ExpectTruthConsistent(truth, run);
   const NamedFields analytic = Named(truth);
   // RMS bounds (gradient, eps_v, gamma_max, Green-Lagrange, H^T H / 2): 1.5 x what this scene
-  // gives (docs/validation.md, "Strain"). Against the analytic strain the window's smoothing of
-  // the steep shear beside the pounder dominates; against the same fit of the truth
+  // gives (docs/validation_strain.md, "Strain"). Against the analytic strain the window's smoothing
+  // of the steep shear beside the pounder dominates; against the same fit of the truth
   // displacements (a perfect correlation) what is left is the correlation's own error.
   const Bounds analytic_bounds[] = {{1.05e-2, 9.5e-3, 1.3e-2, 8.7e-3, 1.2e-3},
                                     {1.8e-2, 1.5e-2, 2.2e-2, 1.4e-2, 2.0e-3},

@@ -4,9 +4,13 @@
 
 namespace impactdic {
 
-const char* Version();  // e.g. "0.1.0"
-const char*
-GitRevision();  // short hash, with "-dirty" for uncommitted changes; "unknown" outside git
+// The project version, e.g. "0.1.0".
+const char* Version();
+// The commit the build was configured from, as `git describe --always --dirty`: a short hash,
+// with "-dirty" for uncommitted changes; "unknown" when built outside a git checkout.
+const char* GitRevision();
+// The same commit's full hash (40 hex digits); "unknown" outside a git checkout.
+const char* GitCommit();
 
 }  // namespace impactdic
 

@@ -1,6 +1,7 @@
-// A post-check of a correlated frame (docs/dic.md, "Straddling subsets"): flags converged
-// subsets that are likely to straddle a discontinuity (a body edge, a shear band), whose
-// displacement is then a mixture of both sides and not the motion of their centre.
+// A post-check of a correlated frame (docs/dic_real_images.md, "Realistic footage: straddling
+// subsets"): flags converged subsets that are likely to straddle a discontinuity (a body edge, a
+// shear band), whose displacement is then a mixture of both sides and not the motion of their
+// centre.
 //
 // The correlator cannot see this by itself: on realistic footage (synth/realistic.h) a subset half
 // on the pounder and half on the static wall converges with ZNCC 0.998 and an error of 1 px.

@@ -88,7 +88,8 @@ struct FrameResult {
   // NaN unless status == kConverged. Against the first reference it is IC-GN's affine parameters
   // (du/dx, du/dy, dv/dx, dv/dy); after reference updates the warps compose,
   // F = F_r(x_r) F_prev(X): F_r the warp's against the current reference at the subset's point
-  // x_r in it, F_prev the total when that reference was made (docs/dic.md, "Warp gradient").
+  // x_r in it, F_prev the total when that reference was made (docs/dic_accuracy.md, "Warp
+  // gradient").
   std::vector<double> dudx, dudy, dvdx, dvdy;
   std::vector<int> iterations;  // IC-GN iterations of the final attempt.
   std::vector<SubsetStatus> status;

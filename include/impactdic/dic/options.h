@@ -100,8 +100,9 @@ struct IcgnOptions {
   // sigma_v (FrameResult) for downstream stages to weight or exclude (the kinematics leave out
   // samples far above the frame's median sigma: momentum.max_sigma_ratio). No fixed limit by
   // default: what a subset can resolve depends on the texture, and a fixed 0.025 px dropped 18 %
-  // of good subsets on real sand and all of them on a low-resolution recording (issue 21). The one
-  // default of the scene key `dic.max_uncertainty_px` and of `correlate --max-uncertainty`.
+  // of good subsets on real sand and all of them on a low-resolution recording (measured
+  // 2026-11-27). The one default of the scene key `dic.max_uncertainty_px` and of `correlate
+  // --max-uncertainty`.
   double max_uncertainty_px = std::numeric_limits<double>::infinity();
   bool LimitsUncertainty() const {
     return max_uncertainty_px > 0 && std::isfinite(max_uncertainty_px);
@@ -146,10 +147,10 @@ std::string MaxUncertaintyText(double max_uncertainty_px);
 // The post-check of each correlated frame for subsets straddling a discontinuity (a body edge, a
 // shear band): converged subsets whose result is a mixture of both sides rather than the motion
 // of their centre become `discontinuous` (NaN). Criteria and evidence: dic/continuity_check.h,
-// docs/dic.md ("Realistic footage: straddling subsets"). Scene keys dic.continuity_*, flags
-// `correlate --continuity-*`.
+// docs/dic_real_images.md ("Realistic footage: straddling subsets"). Scene keys dic.continuity_*,
+// flags `correlate --continuity-*`.
 struct ContinuityCheckOptions {
-  // Run the check on every correlated frame. Off by default since issue 21: on the DEM
+  // Run the check on every correlated frame. Off by default since 2026-11-27: on the DEM
   // validation it removed the coherent high-gradient motion under the pounder in the peak stage
   // (84 subset results, t_e not measurable); spurious vectors are found by the normalized median
   // test (OutlierCheckOptions) instead. On for footage with body edges inside the grid.
@@ -256,9 +257,9 @@ struct DicOptions {
   // Keep, per subset and frame, the displacement gradient of the subset warp since the first
   // reference (FrameResult::dudx ... dvdy; the /dic datasets *_warp, `correlate --warp-gradient`):
   // IC-GN's affine parameters at the tracked point, composed across reference updates
-  // (docs/dic.md, "Warp gradient"). Off by default: the frames' results then hold no gradient
-  // (4 doubles per subset and frame more when on). Both shape functions (affine, quadratic)
-  // carry a gradient.
+  // (docs/dic_accuracy.md, "Warp gradient"). Off by default: the frames' results then hold no
+  // gradient (4 doubles per subset and frame more when on). Both shape functions (affine,
+  // quadratic) carry a gradient.
   bool keep_warp_gradient = false;
   void Check() const;
 };

@@ -1,5 +1,5 @@
 // The layout of the results files: the names of the datasets and attributes of results.h5
-// (`impactdic run`) and of `impactdic correlate -o X.h5` (README.md "HDF5 layout",
+// (`impactdic run`) and of `impactdic correlate -o X.h5` (docs/results.md,
 // docs/render.md). Each group has one owner, which declares its names in this namespace beside its
 // writer and reader; every other file uses those names (a test, results_paths_test, keeps string
 // literals of results paths out of the rest of src/):

@@ -3,7 +3,7 @@
 // src/model/ode.cc does everything else (landmarks, step limits, domain exits, step counting,
 // stopping). The built-in methods are "dopri5", "ode45", "rodas3" and "auto"
 // (src/model/ode_*.cc). Adding one: a class deriving from OdeStepper in one new file and one line
-// in the table of src/model/ode.cc (docs/architecture.md, "Extension points"); RegisterOdeMethod
+// in the table of src/model/ode.cc (docs/development.md, "Extension points"); RegisterOdeMethod
 // adds one at run time (tests/model/ode_test.cc, the Heun-Euler example).
 #ifndef IMPACTDIC_MODEL_ODE_STEPPER_H_
 #define IMPACTDIC_MODEL_ODE_STEPPER_H_

@@ -1,7 +1,7 @@
 // The analysed frames of a sequence, read on demand from their source (io/frame_source.h: image
 // files, a video, a camera file, frames in memory) and preprocessed by the one preprocessing route
 // (preprocess Preprocessor: undistortion, Gaussian pre-filter, CLAHE), so a run holds one frame at
-// a time whatever the length of the recording (docs/architecture.md, "Memory"). `run` and
+// a time whatever the length of the recording (docs/development.md, "Memory"). `run` and
 // `correlate` read their frames through it; it is itself a FrameSource of the analysed frames,
 // which the correlation driver (dic CorrelateFrames) reads:
 //

@@ -1,5 +1,6 @@
-// The whole pipeline on one scene (README.md, "The pipeline"; the stage graph and the data between
-// the stages in docs/architecture.md): calibrate -> sensor -> frames -> correlate -> kinematics
+// The whole pipeline on one scene (docs/architecture.md, "The stage graph"; the stage graph and the
+// data between the stages in docs/architecture.md): calibrate -> sensor -> frames -> correlate ->
+// kinematics
 // -> momentum -> model -> strain -> outputs, skipping what the scene does not need and saying so
 // (strain only with strain.enabled). Each
 // stage is a unit in src/pipeline/stages/, the data between them is SceneRunData
@@ -24,7 +25,7 @@
 // (io/output_generation.h): written into a staging folder beside it and swapped in only when all
 // are complete, so the folder never holds files of two runs; a failed or interrupted run leaves the
 // previous outputs as they were. The folder must be new, empty or one impactdic wrote. Files:
-//   results.h5      everything (layout: README.md "HDF5 layout", names in io/results_layout.h)
+//   results.h5      everything (layout: docs/results.md, names in io/results_layout.h)
 //   summary.json    key figures (measured and modelled), summary.csv the same as one CSV row
 //   timing.json     wall times of the run and its stages, the correlation's subsets per second
 //   strain.csv      the strain series (strain.enabled and outputs.csv; docs/strain.md)

@@ -1,6 +1,7 @@
 // The scene file (YAML): one impact test, its inputs, the stages and outputs wanted, and the
-// options of each stage. The full format with every key is documented in README.md ("Scene
-// file"); docs/architecture.md ("Options") says where each option is defined.
+// options of each stage. The full format with every key is documented in docs/scene_keys.md
+// (generated from the option tables); docs/architecture.md ("Options") says where each option is
+// defined.
 //
 //   Scene scene = LoadScene("sample_frames/scene.yaml");   // throws Error listing every problem
 //   double v0 = scene.ImpactVelocity();

@@ -1,6 +1,6 @@
 // The scene's keys as command-line flags: every key of the option tables (SceneOptionTables) is a
 // flag named as its key path, and a command may keep the short alias it always had, listed here
-// once (the README's flag lists and `--help` show both names):
+// once (docs/command_line.md and `--help` show both names):
 //
 //   impactdic correlate --frames 'f/*.png' --dic.max_iterations 20 --subset 25 -o d.h5
 //

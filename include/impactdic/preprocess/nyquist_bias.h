@@ -1,6 +1,6 @@
 // How much of an image's content lies near the Nyquist frequency, expressed as the sub-pixel bias
 // it would cause: the figure that decides the automatic Gaussian pre-filter (preprocess.h,
-// GaussianMode::kAuto; docs/dic.md, "Sub-pixel bias").
+// GaussianMode::kAuto; docs/dic_accuracy.md, "Sub-pixel bias").
 //
 //   const NyquistBias b = MeasureNyquistBias(reference, roi);
 //   if (b.measured() && b.bias_px > 0.0025) ...   // near-Nyquist content: pre-filter

@@ -8,8 +8,9 @@
 //                    the filter act on a warped pixel grid (a blur kernel stretched by the lens);
 //   2. Gaussian   -- removes sensor noise before contrast is raised; by default (mode auto) only
 //                    when the first reference frame carries content near the Nyquist frequency
-//                    that biases sub-pixel displacements (nyquist_bias.h; docs/dic.md, "Sub-pixel
-//                    bias"): the pre-filter of B. Pan, Opt. Lasers Eng. 51 (2013) 1161-1167;
+//                    that biases sub-pixel displacements (nyquist_bias.h; docs/dic_accuracy.md,
+//                    "Sub-pixel bias"): the pre-filter of B. Pan, Opt. Lasers Eng. 51 (2013)
+//                    1161-1167;
 //   3. CLAHE      -- last, so it does not amplify the noise the blur removes, and its local
 //                    histograms see the final geometry.
 // Each step that is off, or that the skip rule leaves out, is an exact no-op (the frame's pixels
@@ -64,12 +65,12 @@ struct GaussianBlurOptions {
   GaussianMode mode = GaussianMode::kAuto;
   // Standard deviation [px], kGaussianSigmaRange. 0.7 px with the 5 px kernel brings DIC
   // Challenge 1.0 Sample 3 to max |bias| 0.0008 px at 1.06x the sd (0.8 px: 0.0007 px at 1.08x,
-  // and 1.8x the extra sd on real sand; docs/dic.md, "Sub-pixel bias").
+  // and 1.8x the extra sd on real sand; docs/dic_accuracy.md, "Sub-pixel bias").
   double sigma_px = 0.7;
   int kernel_size = 5;  // Kernel side [px], odd, kGaussianKernelRange (the scene's kernel).
   // kAuto: blur when the near-Nyquist bias figure [px] is above this, kNyquistBiasThresholdRange.
   // 0.0025 px sends DIC Challenge 1.0 Sample 3 (figure 0.0034 px) to the filter and leaves
-  // Sample 14 (0.0019 px) alone (docs/dic.md, "Sub-pixel bias").
+  // Sample 14 (0.0019 px) alone (docs/dic_accuracy.md, "Sub-pixel bias").
   double auto_threshold_px = 0.0025;
   void Check() const;
 };

@@ -1,5 +1,5 @@
 // Comparison of an `impactdic run` on footage filmed from a DEM simulation with the truth
-// measured on the grains (issue 15; docs/validation.md). Reads the truth.h5 of
+// measured on the grains (docs/validation.md). Reads the truth.h5 of
 // `impactdic synth --dem` and the results.h5 of `impactdic run`, and reports next to each other:
 // the DIC velocity field error, p_gran of the tool against the grains' momentum in the same 6 x 2
 // grid, p_max, t_e, the conservation error (Eq. 3) of the physics and of the tool, m_add(t) and

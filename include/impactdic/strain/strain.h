@@ -47,7 +47,7 @@ struct StrainOptions {
   StrainGradient gradient = StrainGradient::kFit;
   // kFit: neighbourhood side in grid points, odd, >= 3, and at most the subset grid's columns and
   // rows (checked by FitDisplacementGradient, where the grid is known). Default 3:
-  // docs/validation.md "Strain".
+  // docs/validation_strain.md "Strain".
   int window = 3;
   // The compacted zone: samples whose eps_v exceeds this (compression positive, dimensionless).
   double compaction_threshold = 0.01;

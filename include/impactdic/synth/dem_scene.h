@@ -1,5 +1,5 @@
 // Footage, accelerometer record and ground truth rendered from a discrete-element (DEM)
-// simulation of the impact (issue 15; docs/validation.md). The DEM (validation/dem/, LAMMPS) is
+// simulation of the impact (docs/validation.md). The DEM (validation/dem/, LAMMPS) is
 // physics nobody here wrote: a quasi-2D bed of polydisperse discs (each a cylinder spanning the
 // panel depth t_z, so masses and forces are those of the whole slab) hit by a rigid flat pounder.
 // This module reads its output, films it with the camera, lens, noise and DAQ of the synthetic
@@ -89,7 +89,7 @@ struct DemTruth {
   // Per frame x DIC subset: the gradient (du/dX, du/dY, dv/dX, dv/dY) [px/px] of the
   // least-squares affine fit u = a + H (X - centre) of the displacements of the grains whose
   // reference centre lies in the subset (|X - cx|, |Y - cy| <= subset_size / 2); NaN for fewer
-  // than 3 such grains or nearly collinear ones (docs/validation.md "Strain").
+  // than 3 such grains or nearly collinear ones (docs/validation_strain.md "Strain").
   std::vector<double> dudx, dudy, dvdx, dvdy;
   std::vector<int> grains_per_subset;
   // Default momentum grid (cols x rows cells).

@@ -1,6 +1,6 @@
 // Exactly band-limited translations of a pixel image and the sharp speckle used to study
-// sub-pixel bias (docs/dic.md, "Sub-pixel bias"): the DIC Challenge 1.0 translation samples
-// (Reu et al., "DIC Challenge: developing images and guidelines for evaluating accuracy and
+// sub-pixel bias (docs/dic_accuracy.md, "Sub-pixel bias"): the DIC Challenge 1.0 translation
+// samples (Reu et al., "DIC Challenge: developing images and guidelines for evaluating accuracy and
 // resolution of 2D analyses", Exp. Mech. 58 (2018) 1067, doi:10.1007/s11340-017-0349-0) were
 // made this way, by a Fourier shift of one camera image, then 8-bit rounding and noise.
 //

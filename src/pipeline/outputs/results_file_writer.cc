@@ -1,5 +1,5 @@
 // results.h5: everything the run measured and modelled (layout: io/results_layout.h and the
-// groups' owners it lists, README.md "HDF5 layout"): each group written by its owner. Without
+// groups' owners it lists, docs/results.md): each group written by its owner. Without
 // outputs.hdf5 it is still built, in memory, when the figures or the animation need it
 // (OutputContext::results_in_memory), and not kept.
 #include <algorithm>

@@ -1,6 +1,6 @@
 // results.xdmf: the subset grid and its fields per analysed frame, described in XDMF 3 for
 // ParaView, VisIt and meshio, without copying results.h5's data (layout: io/results_layout.h,
-// kXdmfFile; README.md "HDF5 layout", docs/render.md "ParaView and VisIt").
+// kXdmfFile; docs/results.md, docs/render.md "ParaView and VisIt").
 //
 // An XDMF reader takes the heavy data from HDF5 datasets, either whole or by hyperslab. meshio
 // (and other light readers) take only whole datasets, so the rows of results.h5's [F x N]
