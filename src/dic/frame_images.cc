@@ -87,6 +87,9 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   RefImages& im = ref.images;
   im.region = spline->region();
   im.full_scale = full_scale;
+  const internal::ImageLevels levels = internal::ImageLevelsOf(raw, region);
+  im.noise = levels.noise;
+  im.range = levels.range;
   const long long tracked = std::count_if(tracks.begin(), tracks.end(),
                                           [](const internal::SubsetTrack& t) { return t.active; });
   const bool patches = tracked * size * size < static_cast<long long>(im.region.area());

@@ -152,6 +152,29 @@ Params ComposeInverse(const Shape& s, const Params& p, const Params& dp) {
 
 namespace {
 
+double NodeGradientNoiseRatio(Interpolation kind);
+bool SmallSpdInverse(const double* a, int n, double* inv);
+
+// The displacement standard deviation [px] the uncertainty model predicts for a subset of Hessian
+// h (n x n) in noise of standard deviation `noise` [grey levels] in both images: the residuals
+// carry the noise of both, 2 noise^2, on the inverse of the Hessian of the true gradients,
+// h - s^2 M with s^2 the node gradients' noise variance (errors in variables, as the sigma model
+// after correlation: TrueHessianInverse, here without its bound). Infinite where the noise
+// accounts for the whole gradient energy (h - s^2 M not positive definite): nothing to correlate.
+double PredictedSigmaPx(const Shape& shape, const double* h, double noise, Interpolation kind) {
+  const int n = shape.n, nm = shape.nm;
+  const double s2 = noise * noise * 0.5 * NodeGradientNoiseRatio(kind);
+  double ht[144], inv[144];
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      ht[a * n + b] = h[a * n + b];
+      if (a / nm == b / nm) ht[a * n + b] -= s2 * shape.monomial_moments[(a % nm) * 6 + b % nm];
+    }
+  }
+  if (!SmallSpdInverse(ht, n, inv)) return std::numeric_limits<double>::infinity();
+  return std::sqrt(2 * noise * noise * std::max(inv[0], inv[nm * n + nm]));
+}
+
 // The pointers of subset s's reference pixels for the kernels (f, gx and gy share their layout).
 MomentInput RefMoments(const Shape& shape, const RefImages& ref, const SubsetRef& s) {
   assert(ref.gx.step1() == ref.f.step1() && ref.gy.step1() == ref.f.step1());
@@ -213,8 +236,13 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
     s->status = SubsetStatus::kSingularHessian;
     return;
   }
-  const double contrast = std::sqrt(ss / count) * 255.0 / ref.full_scale;
-  if (contrast < options.min_contrast) {
+  // The grey-level limit is relative to the levels the frame uses (a short exposure fills a
+  // fraction of the data's range), never wider than the data's full scale.
+  const double range = ref.range > 0 ? std::min(ref.range, ref.full_scale) : ref.full_scale;
+  const double contrast = std::sqrt(ss / count) * 255.0 / range;
+  if (contrast < options.min_contrast ||
+      !(PredictedSigmaPx(shape, H, ref.noise, options.interpolation) <=
+        options.max_predicted_uncertainty_px)) {
     s->status = SubsetStatus::kLowContrast;
     return;
   }

@@ -66,6 +66,10 @@ struct RefImages {
   cv::Rect region;
   cv::Mat f, gx, gy;
   double full_scale = 255;
+  // The reference frame's estimated noise and used grey-level range (ImageLevelsOf): the noise
+  // of the predicted uncertainty (IcgnOptions::max_predicted_uncertainty_px) and the scale of
+  // IcgnOptions::min_contrast (full_scale when 0).
+  double noise = 0, range = 0;
   int patch_size = 0, patch_cols = 0;
   // The square of patch k in f, gx and gy.
   cv::Rect Patch(int k) const {
@@ -80,8 +84,26 @@ inline cv::Point RefCentre(const RefImages& ref, const SubsetRef& s) {
   return {p.x + p.width / 2, p.y + p.height / 2};
 }
 
+// What a reference image's grey levels say about the contrast its subsets need.
+struct ImageLevels {
+  // The standard deviation of the image's noise [grey levels], by Immerkaer's estimator (1996):
+  // the mean absolute response to the difference of two Laplacians, which cancels locally planar
+  // intensity and passes white noise with a known gain. Texture with power near the Nyquist
+  // frequency raises it (sharp speckle: 2.5x the pair-difference noise on DIC Challenge Sample
+  // 3; the Phantom v7 sample: about 2.7x), noise low-passed by compression lowers it (0.4x on 4k
+  // JPEG sand): good for a limit that tells texture from noise, not for a measurement.
+  double noise = 0;
+  // The grey levels the image uses: its 99.9th less its 0.1st percentile (0: unknown).
+  double range = 0;
+};
+// ImageLevels of region of a one-channel image; rows are sampled in bands so that at most about
+// 2^18 pixels are read.
+ImageLevels ImageLevelsOf(const cv::Mat& image, const cv::Rect& region);
+
 // Computes the subset's reference data and its inverse Hessian (n x n, row-major, into hinv),
-// setting the status to kOutOfImage / kSaturated / kSingularHessian / kLowContrast if unusable.
+// setting the status to kOutOfImage / kSaturated / kSingularHessian / kLowContrast if unusable
+// (low contrast: IcgnOptions::max_predicted_uncertainty_px with ref.noise, min_contrast with
+// ref.range).
 void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& options,
                    SubsetRef* subset, double* hinv);
 

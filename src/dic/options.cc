@@ -109,6 +109,9 @@ void IcgnOptions::Check() const {
              "in " + kMinZnccRange.Text());
   CheckValue(kMinContrastRange.Contains(min_contrast), "dic.icgn.min_contrast", Num(min_contrast),
              "in " + kMinContrastRange.Text());
+  CheckValue(kMaxPredictedUncertaintyRange.Contains(max_predicted_uncertainty_px),
+             "dic.icgn.max_predicted_uncertainty_px", Num(max_predicted_uncertainty_px),
+             "in " + kMaxPredictedUncertaintyRange.Text());
   CheckValue(max_uncertainty_px >= 0, "dic.icgn.max_uncertainty_px", Num(max_uncertainty_px),
              "> 0 px");
   CheckValue(kMaxSaturatedFractionRange.Contains(max_saturated_fraction),

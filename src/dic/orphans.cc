@@ -132,6 +132,8 @@ std::shared_ptr<const OrphanRef> Correlator::Impl::KeepForOrphan(int i) const {
   const SubsetRef& s = kept->subset;
   const RefImages& im = ref.images;
   kept->images.full_scale = im.full_scale;
+  kept->images.noise = im.noise;
+  kept->images.range = im.range;
   if (s.patch >= 0) {  // Patch layout: its own square, kept as a layout of one patch.
     const cv::Rect square = im.Patch(s.patch);
     kept->images.region = im.region;

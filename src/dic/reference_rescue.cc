@@ -48,6 +48,8 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
       return;
     last.raw(im.region).convertTo(im.f, CV_32F);
     im.full_scale = full_scale;
+    im.noise = ref.images.noise;  // The camera's noise and range: the reference's.
+    im.range = ref.images.range;
     im.gx.create(size, size, CV_32F);
     im.gy.create(size, size, CV_32F);
     for (int r = 0; r < size; ++r) {

@@ -348,9 +348,13 @@ YamlOptionTable DicTable(Scene* s) {
         return std::isfinite(o.icgn.max_uncertainty_px) || n.Scalar() == "none";
       },
       "Converged subsets with sigma_u or sigma_v above it are uncertain (NaN)");
+  t.Add("max_predicted_uncertainty_px", &o.icgn.max_predicted_uncertainty_px,
+        kMaxPredictedUncertaintyRange, "a predicted standard deviation",
+        "Reference subsets whose displacement standard deviation, predicted from their gradients "
+        "and the frame's noise before correlating, exceeds it are low_contrast (failed)");
   t.Add("min_contrast", &o.icgn.min_contrast, kMinContrastRange, "a grey-level standard deviation",
         "Reference subsets whose grey-level standard deviation is below it are low_contrast "
-        "(failed); in 8-bit levels, scaled to the frames' bit depth");
+        "(failed); in 8-bit levels, scaled to the grey-level range the reference frame uses");
   t.Add("max_saturated_fraction", &o.icgn.max_saturated_fraction, kMaxSaturatedFractionRange,
         "a fraction of the subset",
         "Reference subsets with more than this fraction of pixels at 0 or full scale are "

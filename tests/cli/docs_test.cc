@@ -210,6 +210,11 @@ std::set<std::string> HelpFlags() {
 const std::map<std::string, std::string>& OtherProgramsFlags() {
   static const std::map<std::string, std::string> flags = {
       {"--anchor", "bench/pair_benchmark.py"},
+      // Slurm's sbatch, as the job-array test submits it.
+      {"--array", "tests/pipeline/slurm_campaign_test.sh"},
+      {"--cpus-per-task", "tests/pipeline/slurm_campaign_test.sh"},
+      {"--kill-on-invalid-dep", "tests/pipeline/slurm_campaign_test.sh"},
+      {"--parsable", "tests/pipeline/slurm_campaign_test.sh"},
       {"--cache", "bench/dic_throughput_benchmark.cc"},
       {"--check", "bench/dic_challenge.py"},
       {"--data", "bench/dic_challenge.py"},

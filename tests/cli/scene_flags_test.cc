@@ -115,7 +115,7 @@ std::function<bool(const Scene&)> Differs(Make make, Get get) {
 std::vector<LibraryField> DicFields() {
   static_assert(FieldCount<GridOptions>() == 4);
   static_assert(FieldCount<InitialGuessOptions>() == 3);
-  static_assert(FieldCount<IcgnOptions>() == 9);
+  static_assert(FieldCount<IcgnOptions>() == 10);
   static_assert(FieldCount<UpdateOptions>() == 2);
   static_assert(FieldCount<ContinuityCheckOptions>() == 6);
   static_assert(FieldCount<OutlierCheckOptions>() == 5);
@@ -150,6 +150,10 @@ std::vector<LibraryField> DicFields() {
        [&](const Scene& s) { return o(s).icgn.max_iterations != d.icgn.max_iterations; }},
       {"dic.icgn.min_zncc", "dic.min_zncc", "0.5",
        [&](const Scene& s) { return o(s).icgn.min_zncc != d.icgn.min_zncc; }},
+      {"dic.icgn.max_predicted_uncertainty_px", "dic.max_predicted_uncertainty_px", "0.25",
+       [&](const Scene& s) {
+         return o(s).icgn.max_predicted_uncertainty_px != d.icgn.max_predicted_uncertainty_px;
+       }},
       {"dic.icgn.min_contrast", "dic.min_contrast", "9",
        [&](const Scene& s) { return o(s).icgn.min_contrast != d.icgn.min_contrast; }},
       {"dic.icgn.max_saturated_fraction", "dic.max_saturated_fraction", "0.5",

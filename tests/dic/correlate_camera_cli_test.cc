@@ -53,6 +53,63 @@ std::vector<cv::Mat> ShiftedFrames(int count, int bits) {
 
 std::string Quiet(const std::string& args) { return "correlate " + args + " --threads 1"; }
 
+// A high-speed camera's low-contrast 12-bit recording (phantom_v7_raw_16bpp: grey levels 110..1731
+// of 4095; a subset's standard deviation 30-60 counts, under 4 grey levels of an 8-bit image)
+// correlates with the default options: its subsets' grey-level spread is judged against the range
+// the frame uses, and subsets are refused by their predicted uncertainty (signal to noise). The
+// left of the frame is static (the right has an object coming in), so every frame against the first
+// (pairs) measures the noise floor, and the reported sigma must match the observed scatter of the
+// displacements about zero.
+TEST(CorrelateCameraCli, ALowContrastTwelveBitRecordingCorrelatesWithDefaultsAndAnHonestSigma) {
+  IMPACTDIC_SHARED_DATA_OR_SKIP(cine, "cine");
+  const TestDir dir;
+  const std::string cine_file = (cine / "phantom_v7_raw_16bpp.cine").string();
+  const std::string out = dir.File("v7.h5");
+  const std::string args =
+      fmt::format("--frames {} --subset 21 --step 20 --roi 0,0,110,128 --mode pairs", cine_file);
+  const CliResult r = RunCli(Quiet(args + " -o " + out));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  H5Reader h5(out);
+  const std::vector<std::int32_t> status = h5.ReadInt("/dic/status");
+  const std::vector<double> u = h5.ReadDouble("/dic/u_px"), v = h5.ReadDouble("/dic/v_px");
+  const std::vector<float> su = h5.ReadFloat("/dic/sigma_u_px"),
+                           sv = h5.ReadFloat("/dic/sigma_v_px");
+  const std::size_t subsets = h5.ReadDouble("/dic/x_px").size();
+  ASSERT_EQ(subsets, 25u);
+  ASSERT_EQ(status.size(), 6 * subsets);  // The reference row and five frames.
+  int valid = 0, results = 0;
+  double uu = 0, vv = 0;
+  std::vector<double> sigma_u, sigma_v;
+  for (std::size_t k = subsets; k < status.size(); ++k) {
+    ++results;
+    if (status[k] != static_cast<int>(SubsetStatus::kConverged)) continue;
+    ++valid;
+    uu += u[k] * u[k];
+    vv += v[k] * v[k];
+    sigma_u.push_back(su[k]);
+    sigma_v.push_back(sv[k]);
+  }
+  EXPECT_GE(valid, 0.9 * results) << r.output;  // Measured 94.4 %: two spots change in the frames.
+  const auto median = [](std::vector<double> x) {
+    std::nth_element(x.begin(), x.begin() + x.size() / 2, x.end());
+    return x[x.size() / 2];
+  };
+  ASSERT_GT(valid, 10);
+  const double ratio_u = median(sigma_u) / std::sqrt(uu / valid);
+  const double ratio_v = median(sigma_v) / std::sqrt(vv / valid);
+  EXPECT_GE(ratio_u, 0.7);  // Measured 0.90 (sigma 0.043 px, RMS 0.048 px).
+  EXPECT_LE(ratio_u, 1.3);
+  EXPECT_GE(ratio_v, 0.7);  // Measured 0.90 (0.040 px, 0.045 px).
+  EXPECT_LE(ratio_v, 1.3);
+  // The subsets' contrast was judged on the container's scale before (4 levels of 255 = 64 counts
+  // of 4095: every subset refused); on the frame's used range it passes, and the predicted
+  // uncertainty decides: at a limit below what it predicts here (0.01 px) every subset is refused.
+  const CliResult strict = RunCli(
+      Quiet(args + " --dic.max_predicted_uncertainty_px 0.01 -o " + dir.File("v7_strict.h5")));
+  EXPECT_NE(strict.exit_code, 0);
+  EXPECT_NE(strict.output.find("low_contrast"), std::string::npos) << strict.output;
+}
+
 TEST(CorrelateCameraCli, EveryPhantomSampleCorrelatesWithItsFrameNumbersAndTimes) {
   IMPACTDIC_SHARED_DATA_OR_SKIP(cine, "cine");
   const TestDir dir;
