@@ -86,11 +86,11 @@ inline cv::Point RefCentre(const RefImages& ref, const SubsetRef& s) {
 
 // What a reference image's grey levels say about the contrast its subsets need.
 struct ImageLevels {
-  // The standard deviation of the image's noise [grey levels], by Immerkaer's estimator (1996):
-  // the mean absolute response to the difference of two Laplacians, which cancels locally planar
-  // intensity and passes white noise with a known gain. Texture with power near the Nyquist
-  // frequency raises it (sharp speckle: 2.5x the pair-difference noise on DIC Challenge Sample
-  // 3; the Phantom v7 sample: about 2.7x), noise low-passed by compression lowers it (0.4x on 4k
+  // The standard deviation of the image's noise [grey levels] by Immerkaer's estimator (1996, the
+  // mean absolute response to the difference of two Laplacians, which cancels locally planar
+  // intensity and passes white noise with a known gain) in 16 x 16 px blocks: the flattest
+  // tenth of the blocks. Texture everywhere raises it (sharp speckle, DIC Challenge Sample 3:
+  // about 2x the pair-difference noise); compression that removes the fine noise lowers it (4k
   // JPEG sand): good for a limit that tells texture from noise, not for a measurement.
   double noise = 0;
   // The grey levels the image uses: its 99.9th less its 0.1st percentile (0: unknown).
