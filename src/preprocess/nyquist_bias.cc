@@ -4,7 +4,9 @@
 #include <cmath>
 #include <complex>
 #include <cstddef>
+#include <limits>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 
 namespace impactdic {
 namespace {
@@ -103,6 +105,154 @@ NyquistBias MeasureNyquistBias(const cv::Mat& image, cv::Rect roi) {
     out.bias_y_px = std::max(out.bias_y_px, std::abs(PredictedBicubicBiasPx(py, n, t)));
   }
   out.bias_px = std::max(out.bias_x_px, out.bias_y_px);
+  return out;
+}
+
+namespace {
+
+// The response of a symmetric 1-D kernel (odd length) at w: sum_j k_j cos(w j).
+double KernelResponse(const cv::Mat& kernel, double w) {
+  const int len = kernel.rows * kernel.cols, half = len / 2;
+  double g = 0;
+  for (int j = 0; j < len; ++j) g += kernel.at<double>(j) * std::cos(w * (j - half));
+  return g;
+}
+
+// The max over t of |predicted bias| of a one-sided marginal spectrum.
+double MaxBias(const std::vector<double>& power, int n) {
+  double out = 0;
+  for (int i = 1; i < 20; ++i)
+    out = std::max(out, std::abs(PredictedBicubicBiasPx(power, n, 0.05 * i)));
+  return out;
+}
+
+// Marginal spectra of one axis, accumulated over tiles.
+struct AxisSpectra {
+  std::vector<double> p, pg, nz, nzg;  // Reference, reference filtered, noise, noise filtered.
+  explicit AxisSpectra(int n)
+      : p(static_cast<std::size_t>(n / 2 + 1)), pg(p.size()), nz(p.size()), nzg(p.size()) {}
+};
+
+// var(u) of the header's formula along one axis, with or without the filter.
+double RandomVariance(const AxisSpectra& a, int n, int subset_px, bool filtered) {
+  double num = 0, den = 0;
+  for (int k = 1; k <= n / 2; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    const double w = 2 * kPi * k / n;
+    const double d = 3 * std::sin(w) / (2 + std::cos(w));
+    const double noise = filtered ? a.nzg[i] : a.nz[i];
+    const double signal = std::max((filtered ? a.pg[i] : a.p[i]) - 0.5 * noise, 0.0);
+    const double ak = signal * d * d;
+    num += ak * noise / 2;
+    den += ak;
+  }
+  return den > 0 ? double(n) / subset_px * num / (den * den)
+                 : std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
+
+PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& next, cv::Rect roi,
+                                     const cv::Mat& kernel_in, int subset_size) {
+  PrefilterTrade out;
+  if (next.empty() || next.size() != reference.size() || subset_size < 1) return out;
+  if (roi.empty()) roi = cv::Rect(0, 0, reference.cols, reference.rows);
+  roi &= cv::Rect(0, 0, reference.cols, reference.rows);
+  int n = 64;
+  while (n > 32 && (roi.width < n || roi.height < n)) n /= 2;
+  if (roi.width < n || roi.height < n) return out;
+  cv::Mat kernel;
+  kernel_in.convertTo(kernel, CV_64F);
+  std::vector<double> g2(static_cast<std::size_t>(n));  // |G|^2 per DFT index.
+  for (int u = 0; u < n; ++u) {
+    const double gu = KernelResponse(kernel, 2 * kPi * (u <= n / 2 ? u : u - n) / n);
+    g2[static_cast<std::size_t>(u)] = gu * gu;
+  }
+  const int per_axis = std::max(1, static_cast<int>(std::sqrt(double(kMaxTradeTiles))));
+  const std::vector<int> xs = TileOrigins(roi.width, n, per_axis);
+  const std::vector<int> ys = TileOrigins(roi.height, n, per_axis);
+  const cv::Mat window = HannWindow(n);
+  const cv::Rect image(0, 0, reference.cols, reference.rows);
+  struct Tile {
+    cv::Mat f0, d;  // Reference spectrum, residual spectrum (complex).
+    double residual = 0;
+  };
+  std::vector<Tile> tiles;
+  cv::Mat t0, t1, t1s;
+  for (int y0 : ys) {
+    for (int x0 : xs) {
+      const cv::Rect r0(roi.x + x0, roi.y + y0, n, n);
+      reference(r0).convertTo(t0, CV_64F);
+      next(r0).convertTo(t1, CV_64F);
+      // The tile's shift of the next image against the reference (content at x in the reference
+      // is at x + s in the next one).
+      const cv::Point2d s = cv::phaseCorrelate(t0, t1, window);
+      const cv::Point whole(static_cast<int>(std::lround(s.x)), static_cast<int>(std::lround(s.y)));
+      const cv::Rect r1 = r0 + whole;
+      if ((r1 & image) != r1) continue;
+      next(r1).convertTo(t1s, CV_64F);
+      reference(r0).convertTo(t0, CV_64F);  // Again: phaseCorrelate may leave its input windowed.
+      const double fx = s.x - whole.x, fy = s.y - whole.y;
+      Tile tile;
+      t0 -= cv::mean(t0)[0];
+      t1s -= cv::mean(t1s)[0];
+      cv::dft(t0.mul(window), tile.f0, cv::DFT_COMPLEX_OUTPUT);
+      cv::Mat f1;
+      cv::dft(t1s.mul(window), f1, cv::DFT_COMPLEX_OUTPUT);
+      tile.d.create(n, n, CV_64FC2);
+      for (int v = 0; v < n; ++v) {
+        const double wv = 2 * kPi * (v <= n / 2 ? v : v - n) / n;
+        const cv::Vec2d* a = tile.f0.ptr<cv::Vec2d>(v);
+        const cv::Vec2d* b = f1.ptr<cv::Vec2d>(v);
+        cv::Vec2d* d = tile.d.ptr<cv::Vec2d>(v);
+        for (int u = 0; u < n; ++u) {
+          const double wu = 2 * kPi * (u <= n / 2 ? u : u - n) / n;
+          // F1 = F0 e^{-i w s} for a shift s: undo the fractional part.
+          const std::complex<double> shifted =
+              std::complex<double>(a[u][0], a[u][1]) * std::polar(1.0, -(wu * fx + wv * fy));
+          const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - shifted;
+          d[u] = cv::Vec2d(r.real(), r.imag());
+          tile.residual += std::norm(r);
+        }
+      }
+      tiles.push_back(std::move(tile));
+    }
+  }
+  if (tiles.empty()) return out;
+  std::vector<double> residuals;
+  for (const Tile& t : tiles) residuals.push_back(t.residual);
+  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+  const double limit = 2 * residuals[residuals.size() / 2];
+  AxisSpectra ax(n), ay(n);
+  double noise_energy = 0;
+  for (const Tile& t : tiles) {
+    if (t.residual > limit) continue;
+    ++out.tiles;
+    noise_energy += t.residual;
+    for (int v = 0; v < n; ++v) {
+      const auto fv = static_cast<std::size_t>(v <= n / 2 ? v : n - v);
+      const cv::Vec2d* a = t.f0.ptr<cv::Vec2d>(v);
+      const cv::Vec2d* d = t.d.ptr<cv::Vec2d>(v);
+      for (int u = 0; u < n; ++u) {
+        const auto fu = static_cast<std::size_t>(u <= n / 2 ? u : n - u);
+        const double p = a[u][0] * a[u][0] + a[u][1] * a[u][1];
+        const double q = d[u][0] * d[u][0] + d[u][1] * d[u][1];
+        const double g = g2[static_cast<std::size_t>(u)] * g2[static_cast<std::size_t>(v)];
+        ax.p[fu] += p, ax.pg[fu] += p * g, ax.nz[fu] += q, ax.nzg[fu] += q * g;
+        ay.p[fv] += p, ay.pg[fv] += p * g, ay.nz[fv] += q, ay.nzg[fv] += q * g;
+      }
+    }
+  }
+  // Parseval: a tile's spectrum sums to n^2 sum (f w)^2; per pixel, less the window's mean square.
+  const double window_ms = cv::mean(window.mul(window))[0];
+  out.noise_grey = std::sqrt(noise_energy / (2.0 * out.tiles * double(n) * n * n * n * window_ms));
+  const int subset_px = subset_size * subset_size;
+  out.bias_px = std::hypot(MaxBias(ax.p, n), MaxBias(ay.p, n));
+  out.bias_filtered_px = std::hypot(MaxBias(ax.pg, n), MaxBias(ay.pg, n));
+  out.random_px =
+      std::sqrt(RandomVariance(ax, n, subset_px, false) + RandomVariance(ay, n, subset_px, false));
+  out.random_filtered_px =
+      std::sqrt(RandomVariance(ax, n, subset_px, true) + RandomVariance(ay, n, subset_px, true));
   return out;
 }
 
