@@ -21,13 +21,16 @@ double Beta3(double x) {
   return 0;
 }
 
-// A Hann window of side n, separable.
-cv::Mat HannWindow(int n) {
+// A Hann window of side n, separable, its centre moved by (dx, dy) px.
+cv::Mat HannWindow(int n, double dx = 0, double dy = 0) {
   cv::Mat w(n, n, CV_64F);
-  std::vector<double> h(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) h[i] = 0.5 - 0.5 * std::cos(2 * kPi * (i + 0.5) / n);
+  std::vector<double> hx(static_cast<std::size_t>(n)), hy = hx;
+  for (int i = 0; i < n; ++i) {
+    hx[i] = 0.5 - 0.5 * std::cos(2 * kPi * (i + 0.5 - dx) / n);
+    hy[i] = 0.5 - 0.5 * std::cos(2 * kPi * (i + 0.5 - dy) / n);
+  }
   for (int y = 0; y < n; ++y)
-    for (int x = 0; x < n; ++x) w.at<double>(y, x) = h[y] * h[x];
+    for (int x = 0; x < n; ++x) w.at<double>(y, x) = hy[y] * hx[x];
   return w;
 }
 
@@ -126,27 +129,28 @@ double MaxBias(const std::vector<double>& power, int n) {
   return out;
 }
 
-// Marginal spectra of one axis, accumulated over tiles.
-struct AxisSpectra {
-  std::vector<double> p, pg, nz, nzg;  // Reference, reference filtered, noise, noise filtered.
-  explicit AxisSpectra(int n)
-      : p(static_cast<std::size_t>(n / 2 + 1)), pg(p.size()), nz(p.size()), nzg(p.size()) {}
-};
-
-// var(u) of the header's formula along one axis, with or without the filter.
-double RandomVariance(const AxisSpectra& a, int n, int subset_px, bool filtered) {
+// var(u) (axis 0) or var(v) (axis 1) of the header's formula from the tiles' summed 2-D spectra
+// of the reference (p) and of the pair's residual (r), n x n, with the filter's |G|^2 (g) or
+// without it (g empty).
+double RandomVariance(const cv::Mat& p, const cv::Mat& r, const cv::Mat& g, int axis,
+                      int subset_px) {
+  const int n = p.rows;
   double num = 0, den = 0;
-  for (int k = 1; k <= n / 2; ++k) {
-    const auto i = static_cast<std::size_t>(k);
-    const double w = 2 * kPi * k / n;
-    const double d = 3 * std::sin(w) / (2 + std::cos(w));
-    const double noise = filtered ? a.nzg[i] : a.nz[i];
-    const double signal = std::max((filtered ? a.pg[i] : a.p[i]) - 0.5 * noise, 0.0);
-    const double ak = signal * d * d;
-    num += ak * noise / 2;
-    den += ak;
+  for (int v = 0; v < n; ++v) {
+    for (int u = 0; u < n; ++u) {
+      const int k = axis == 0 ? u : v;
+      const double w = 2 * kPi * (k <= n / 2 ? k : k - n) / n;
+      const double d = 3 * std::sin(w) / (2 + std::cos(w));
+      const double gain = g.empty() ? 1.0 : g.at<double>(v, u);
+      const double noise = r.at<double>(v, u);
+      const double signal = std::max(p.at<double>(v, u) - 0.5 * noise, 0.0);
+      const double sg = signal * d * d * gain;
+      num += sg * noise * gain;
+      den += sg;
+    }
   }
-  return den > 0 ? double(n) / subset_px * num / (den * den)
+  // The spectra's common scale (Parseval, the window, the tiles) cancels.
+  return den > 0 ? double(n) * n / subset_px * num / (den * den)
                  : std::numeric_limits<double>::infinity();
 }
 
@@ -192,13 +196,42 @@ PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& ne
       if ((r1 & image) != r1) continue;
       next(r1).convertTo(t1s, CV_64F);
       reference(r0).convertTo(t0, CV_64F);  // Again: phaseCorrelate may leave its input windowed.
-      const double fx = s.x - whole.x, fy = s.y - whole.y;
       Tile tile;
       t0 -= cv::mean(t0)[0];
       t1s -= cv::mean(t1s)[0];
       cv::dft(t0.mul(window), tile.f0, cv::DFT_COMPLEX_OUTPUT);
       cv::Mat f1;
-      cv::dft(t1s.mul(window), f1, cv::DFT_COMPLEX_OUTPUT);
+      // The fractional shift f minimising sum |F1 - F0 e^{-i w f}|^2 (phase correlation's own
+      // sub-pixel estimate is off by a few hundredths of a pixel, which would count |w f|^2 of
+      // the texture's power as noise): Gauss-Newton from it. The deformed tile's window moves
+      // with its content (w(x - f)), else the window's edge counts as noise (on a 0.5 px shift of
+      // sharp speckle, 5 grey levels^2 of it).
+      double fx = s.x - whole.x, fy = s.y - whole.y;
+      for (int it = 0; it < 6; ++it) {
+        if (it % 2 == 0) cv::dft(t1s.mul(HannWindow(n, fx, fy)), f1, cv::DFT_COMPLEX_OUTPUT);
+        double jxx = 0, jxy = 0, jyy = 0, gx = 0, gy = 0;
+        for (int v = 0; v < n; ++v) {
+          const double wv = 2 * kPi * (v <= n / 2 ? v : v - n) / n;
+          const cv::Vec2d* a = tile.f0.ptr<cv::Vec2d>(v);
+          const cv::Vec2d* b = f1.ptr<cv::Vec2d>(v);
+          for (int u = 0; u < n; ++u) {
+            const double wu = 2 * kPi * (u <= n / 2 ? u : u - n) / n;
+            const std::complex<double> m =
+                std::complex<double>(a[u][0], a[u][1]) * std::polar(1.0, -(wu * fx + wv * fy));
+            const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - m;
+            const double p = std::norm(m);
+            // dr/df = i w m: conj(i m) r = -i conj(m) r, real part = Im(conj(m) r).
+            const double q = (std::conj(m) * r).imag();
+            jxx += wu * wu * p, jxy += wu * wv * p, jyy += wv * wv * p;
+            gx += wu * q, gy += wv * q;
+          }
+        }
+        const double det = jxx * jyy - jxy * jxy;
+        if (!(det > 0)) break;
+        // Gauss-Newton: (J^H J) delta = -Re(J^H r).
+        fx -= (jyy * gx - jxy * gy) / det;
+        fy -= (jxx * gy - jxy * gx) / det;
+      }
       tile.d.create(n, n, CV_64FC2);
       for (int v = 0; v < n; ++v) {
         const double wv = 2 * kPi * (v <= n / 2 ? v : v - n) / n;
@@ -223,36 +256,48 @@ PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& ne
   for (const Tile& t : tiles) residuals.push_back(t.residual);
   std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
   const double limit = 2 * residuals[residuals.size() / 2];
-  AxisSpectra ax(n), ay(n);
+  cv::Mat p2 = cv::Mat::zeros(n, n, CV_64F), r2 = cv::Mat::zeros(n, n, CV_64F);
   double noise_energy = 0;
   for (const Tile& t : tiles) {
     if (t.residual > limit) continue;
     ++out.tiles;
     noise_energy += t.residual;
     for (int v = 0; v < n; ++v) {
-      const auto fv = static_cast<std::size_t>(v <= n / 2 ? v : n - v);
       const cv::Vec2d* a = t.f0.ptr<cv::Vec2d>(v);
       const cv::Vec2d* d = t.d.ptr<cv::Vec2d>(v);
+      double* pp = p2.ptr<double>(v);
+      double* rr = r2.ptr<double>(v);
       for (int u = 0; u < n; ++u) {
-        const auto fu = static_cast<std::size_t>(u <= n / 2 ? u : n - u);
-        const double p = a[u][0] * a[u][0] + a[u][1] * a[u][1];
-        const double q = d[u][0] * d[u][0] + d[u][1] * d[u][1];
-        const double g = g2[static_cast<std::size_t>(u)] * g2[static_cast<std::size_t>(v)];
-        ax.p[fu] += p, ax.pg[fu] += p * g, ax.nz[fu] += q, ax.nzg[fu] += q * g;
-        ay.p[fv] += p, ay.pg[fv] += p * g, ay.nz[fv] += q, ay.nzg[fv] += q * g;
+        pp[u] += a[u][0] * a[u][0] + a[u][1] * a[u][1];
+        rr[u] += d[u][0] * d[u][0] + d[u][1] * d[u][1];
       }
     }
   }
-  // Parseval: a tile's spectrum sums to n^2 sum (f w)^2; per pixel, less the window's mean square.
+  cv::Mat g(n, n, CV_64F);
+  for (int v = 0; v < n; ++v)
+    for (int u = 0; u < n; ++u)
+      g.at<double>(v, u) = g2[static_cast<std::size_t>(u)] * g2[static_cast<std::size_t>(v)];
+  // Per-pixel scale of the summed spectra (Parseval, the window's mean square, the tiles).
   const double window_ms = cv::mean(window.mul(window))[0];
-  out.noise_grey = std::sqrt(noise_energy / (2.0 * out.tiles * double(n) * n * n * n * window_ms));
+  const double scale = 1.0 / (double(n) * n * n * n * window_ms * out.tiles);
+  out.noise_grey = std::sqrt(noise_energy * scale / 2);
+  // The bias from the axes' marginals of the reference spectrum (MeasureNyquistBias's model).
+  std::vector<double> px(static_cast<std::size_t>(n / 2 + 1)), py = px, pgx = px, pgy = px;
+  for (int v = 0; v < n; ++v) {
+    const auto fv = static_cast<std::size_t>(v <= n / 2 ? v : n - v);
+    for (int u = 0; u < n; ++u) {
+      const auto fu = static_cast<std::size_t>(u <= n / 2 ? u : n - u);
+      const double pw = p2.at<double>(v, u), pg = pw * g.at<double>(v, u);
+      px[fu] += pw, py[fv] += pw, pgx[fu] += pg, pgy[fv] += pg;
+    }
+  }
   const int subset_px = subset_size * subset_size;
-  out.bias_px = std::hypot(MaxBias(ax.p, n), MaxBias(ay.p, n));
-  out.bias_filtered_px = std::hypot(MaxBias(ax.pg, n), MaxBias(ay.pg, n));
-  out.random_px =
-      std::sqrt(RandomVariance(ax, n, subset_px, false) + RandomVariance(ay, n, subset_px, false));
-  out.random_filtered_px =
-      std::sqrt(RandomVariance(ax, n, subset_px, true) + RandomVariance(ay, n, subset_px, true));
+  out.bias_px = std::hypot(MaxBias(px, n), MaxBias(py, n));
+  out.bias_filtered_px = std::hypot(MaxBias(pgx, n), MaxBias(pgy, n));
+  out.random_px = std::sqrt(
+      (RandomVariance(p2, r2, {}, 0, subset_px) + RandomVariance(p2, r2, {}, 1, subset_px)));
+  out.random_filtered_px = std::sqrt(
+      (RandomVariance(p2, r2, g, 0, subset_px) + RandomVariance(p2, r2, g, 1, subset_px)));
   return out;
 }
 
