@@ -7,6 +7,11 @@ function(impactdic_target_defaults target)
   if(IMPACTDIC_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
+  if(CMAKE_POSITION_INDEPENDENT_CODE)
+    # Position-independent code (for the Python module): our functions are not replaced at load
+    # time, so GCC may inline them as in the executable's code.
+    target_compile_options(${target} PRIVATE -fno-semantic-interposition)
+  endif()
   if(IMPACTDIC_SANITIZE)
     # GCC 12's -Wmaybe-uninitialized gives false positives inside libstdc++ (std::regex,
     # std::function) once the sanitizers instrument the code; the Release build keeps the warning.
