@@ -29,6 +29,7 @@
 #include "impactdic/core/version.h"
 #include "impactdic/io/frame_source.h"
 #include "impactdic/io/hdf5_store.h"
+#include "impactdic/io/json.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/pipeline/correlate_scene.h"
 #include "impactdic/pipeline/pipeline.h"
@@ -49,8 +50,8 @@ PyObject* g_nothing_usable = nullptr;  // impactdic.NothingUsableError (impactdi
 const std::vector<std::string>& CorrelateKeys() {
   static const std::vector<std::string> keys = [] {
     std::vector<std::string> k;
-    for (const SceneKeyFlag& f : SceneKeyFlags({"dic", "preprocess", "inputs.fps",
-                                                "inputs.calibration"}))
+    for (const SceneKeyFlag& f :
+         SceneKeyFlags({"dic", "preprocess", "inputs.fps", "inputs.calibration"}))
       k.push_back(f.key);
     k.push_back("dic.roi");
     return k;
@@ -58,17 +59,15 @@ const std::vector<std::string>& CorrelateKeys() {
   return keys;
 }
 
-// Sets each (key, value text) on `scene` with the key's own parser. A key `correlate` does not
-// take: Error naming it, with the closest key.
-void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys, Scene* scene) {
-  const std::vector<std::string>& known = CorrelateKeys();
+// Sets each (key, value text) on `scene` with the key's own parser. A key not `known`: Error
+// naming it, what is `expected` and the closest key.
+void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys,
+               const std::vector<std::string>& known, const std::string& expected, Scene* scene) {
   for (const auto& [key, value] : keys) {
     if (std::find(known.begin(), known.end(), key) == known.end()) {
       const std::string close = ClosestMatch(key, known);
       throw Error(ErrorKind::kInvalidValue, key, "unknown option",
-                  "a key of the scene's dic or preprocess section, inputs.fps or "
-                  "inputs.calibration" +
-                      (close.empty() ? std::string() : " (did you mean '" + close + "'?)"));
+                  expected + (close.empty() ? std::string() : " (did you mean '" + close + "'?)"));
     }
     SetSceneKey(scene, key, value, key);
   }
@@ -115,9 +114,8 @@ py::dict TableDict(std::shared_ptr<DicResultsTable> table) {
   const DicResultsTable& t = *table;
   // One capsule owns the table for every array over it.
   auto* holder = new std::shared_ptr<DicResultsTable>(std::move(table));
-  const py::capsule owner(holder, [](void* p) {
-    delete static_cast<std::shared_ptr<DicResultsTable>*>(p);
-  });
+  const py::capsule owner(
+      holder, [](void* p) { delete static_cast<std::shared_ptr<DicResultsTable>*>(p); });
   const auto rows = static_cast<py::ssize_t>(t.rows), n = static_cast<py::ssize_t>(t.subsets);
   py::dict d;
   d["x"] = ArrayOf(t.x_px, {n}, owner);
@@ -174,7 +172,9 @@ py::tuple Correlate(const py::object& frames,
                     const std::vector<std::pair<std::string, std::string>>& keys,
                     bool allow_partial) {
   Scene scene;
-  ApplyKeys(keys, &scene);
+  ApplyKeys(keys, CorrelateKeys(),
+            "a key of the scene's dic or preprocess section, inputs.fps or inputs.calibration",
+            &scene);
   std::unique_ptr<FrameSource> source;
   if (py::isinstance<py::str>(frames)) {
     scene.inputs.frames = frames.cast<std::string>();
@@ -272,6 +272,41 @@ py::dict ReadH5(const std::string& file) {
   return d;
 }
 
+// The scene keys `run` takes: those of `impactdic run`'s flags.
+const std::vector<std::string>& RunKeys() {
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> k;
+    for (const SceneKeyFlag& f : SceneKeyFlags(
+             {"test", "preprocess", "dic", "sensor", "momentum", "model", "strain", "outputs"}))
+      k.push_back(f.key);
+    k.push_back("dic.roi");
+    return k;
+  }();
+  return keys;
+}
+
+// _run(scene_file, scene_text, output, keys, allow_partial, force): RunScene on the scene file,
+// or on `scene_text` (YAML or JSON; relative paths against the working folder) when scene_file
+// is empty, with `keys` set on it as `impactdic run`'s flags set them; `output` the output folder
+// ("" = the scene's outputs.folder). Returns summary.json's text.
+std::string Run(const std::string& scene_file, const std::string& scene_text,
+                const std::string& output,
+                const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
+                bool force) {
+  Scene scene = scene_file.empty() ? ParseScene(scene_text, "scene.yaml") : LoadScene(scene_file);
+  ApplyKeys(keys, RunKeys(),
+            "a key of the scene's test, preprocess, dic, sensor, momentum, "
+            "model, strain or outputs section",
+            &scene);
+  MakeSensorOptions(scene);  // The keys' values checked together, as the scene file's.
+  PipelineOptions options;
+  options.output_folder = output;
+  options.allow_partial = allow_partial;
+  options.force = force;
+  const py::gil_scoped_release release;
+  return RunScene(scene, options).ToJson().Dump();
+}
+
 // The library's messages at `level` and above ("debug", "info", "warning", "error", "off").
 void SetLogLevelByName(const std::string& level) {
   static const std::vector<std::pair<std::string, LogLevel>> kLevels = {
@@ -298,19 +333,11 @@ void Translate(std::exception_ptr p) {
     PyErr_SetString(g_nothing_usable, e.what());
   } catch (const Error& e) {
     switch (e.kind()) {
-      case ErrorKind::kInvalidValue:
-        PyErr_SetString(PyExc_ValueError, e.what());
-        break;
-      case ErrorKind::kFileNotFound:
-        PyErr_SetString(PyExc_FileNotFoundError, e.what());
-        break;
+      case ErrorKind::kInvalidValue: PyErr_SetString(PyExc_ValueError, e.what()); break;
+      case ErrorKind::kFileNotFound: PyErr_SetString(PyExc_FileNotFoundError, e.what()); break;
       case ErrorKind::kFileFormat:
-      case ErrorKind::kIo:
-        PyErr_SetString(PyExc_OSError, e.what());
-        break;
-      case ErrorKind::kNumerical:
-        PyErr_SetString(g_error, e.what());
-        break;
+      case ErrorKind::kIo: PyErr_SetString(PyExc_OSError, e.what()); break;
+      case ErrorKind::kNumerical: PyErr_SetString(g_error, e.what()); break;
     }
   }
 }
@@ -331,6 +358,9 @@ PYBIND11_MODULE(_impactdic, m) {
   m.attr("correlate_keys") = CorrelateKeys();
   m.def("_correlate", &Correlate, py::arg("frames"), py::arg("keys"), py::arg("allow_partial"));
   m.def("_read_h5", &ReadH5, py::arg("path"));
+  m.def("_run", &Run, py::arg("scene_file"), py::arg("scene_text"), py::arg("output"),
+        py::arg("keys"), py::arg("allow_partial"), py::arg("force"));
+  m.attr("run_keys") = RunKeys();
   m.def("set_log_level", &SetLogLevelByName, py::arg("level"),
         "Shows the library's messages at `level` and above: debug, info, warning, error or off");
 }

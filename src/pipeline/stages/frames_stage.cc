@@ -188,8 +188,8 @@ class FramesStage : public Stage {
     const CameraCalibration* calibration = d.calibration ? &*d.calibration : nullptr;
     const std::vector<std::string>& files = scene.inputs.frame_files;
     std::unique_ptr<FrameSource> source = std::move(d.given_frames);
-    if (!source) source = files.empty() ? OpenFrameSource(scene.inputs.frames)
-                                        : MakeImageFileSource(files);
+    if (!source)
+      source = files.empty() ? OpenFrameSource(scene.inputs.frames) : MakeImageFileSource(files);
     d.frames =
         std::make_shared<FrameStream>(std::move(source), MakePreprocessOptions(scene), calibration);
     d.source_frames = d.frames->source_frames();

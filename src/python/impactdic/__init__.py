@@ -15,18 +15,28 @@ import os as _os
 
 import numpy as _np
 
+# OpenCV's image and video plugins (io/opencv_codecs.h: TIFF, JPEG, video) installed beside the
+# module, unless their variables name others; in the build tree the library finds them itself.
+for _variable, _plugin in (("IMPACTDIC_OPENCV_CODECS", "libimpactdic_opencv_codecs.so"),
+                           ("IMPACTDIC_OPENCV_VIDEO", "libimpactdic_opencv_video.so")):
+    _path = _os.path.join(_os.path.dirname(_os.path.abspath(__file__)), _plugin)
+    if not _os.environ.get(_variable) and _os.path.exists(_path):
+        _os.environ[_variable] = _path
+
 from ._impactdic import (  # noqa: F401 (the package's interface)
     Error,
     NothingUsableError,
     __version__,
     _correlate,
     _read_h5,
+    _run,
     correlate_keys,
+    run_keys,
     set_log_level,
 )
 
-__all__ = ["correlate", "CorrelationResult", "read_results", "Results", "Group", "Error",
-           "NothingUsableError", "set_log_level", "correlate_keys", "__version__"]
+__all__ = ["correlate", "CorrelationResult", "run", "read_results", "Results", "Group", "Error",
+           "NothingUsableError", "set_log_level", "correlate_keys", "run_keys", "__version__"]
 
 # The library's progress and notes stay off the notebook unless asked for (set_log_level("info")).
 set_log_level("warning")
@@ -57,7 +67,7 @@ def _flatten(prefix, value, out):
         out.append((prefix, _key_text(value)))
 
 
-def _scene_keys(options):
+def _scene_keys(options, sections=_SECTIONS):
     """The keyword options as (scene key, value text) pairs, in the order given.
 
     `threads` is dic.threads (the command line's --threads); a section given as a dict is
@@ -66,7 +76,7 @@ def _scene_keys(options):
     for name, value in options.items():
         if name == "threads":
             name = "dic.threads"
-        if name in _SECTIONS and not isinstance(value, dict):
+        if name in sections and not isinstance(value, dict):
             raise ValueError(f"{name}: invalid value (got {value!r}); expected a dict of its keys")
         _flatten(name, value, keys)
     seen = set()
@@ -270,3 +280,31 @@ def read_results(path):
         group.units[name] = attrs.get("units", "")
         group.descriptions[name] = attrs.get("description", "")
     return root
+
+
+_RUN_SECTIONS = ("test", "preprocess", "dic", "sensor", "momentum", "model", "strain", "outputs")
+
+
+def run(scene, output=None, *, allow_partial=False, force=False, **overrides):
+    """Runs a scene as `impactdic run` does; the summary, as a dict with summary.json's keys.
+
+    scene: a scene file, or a dict of its sections (relative paths against the working folder).
+    output: the output folder (default: the scene's outputs.folder); read_results(output +
+      "/results.h5") reads what it wrote.
+    overrides: scene keys of the test, preprocess, dic, sensor, momentum, model, strain and
+      outputs sections (dic={"subset_size": 25}, **{"outputs.figures": False}); threads=N is
+      dic.threads.
+    allow_partial, force: as the command's --allow-partial and --force.
+    Raises ValueError for a bad key or value, OSError for files, NothingUsableError when a stage
+    produced nothing usable (unless allow_partial).
+    """
+    import json
+
+    if isinstance(scene, dict):
+        scene_file, scene_text = "", json.dumps(scene)
+    else:
+        scene_file, scene_text = _os.fspath(scene), ""
+    keys = _scene_keys(overrides, _RUN_SECTIONS)
+    summary = _run(scene_file, scene_text, "" if output is None else _os.fspath(output), keys,
+                   bool(allow_partial), bool(force))
+    return json.loads(summary)
