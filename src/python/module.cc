@@ -6,7 +6,7 @@
 //
 //   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False)
 //
-// `frames` is a list of grey images (numpy arrays: uint8, uint16, float32, float64), a list of
+// `frames` is a list of grey images (numpy arrays: uint8, uint16), a list of
 // image files (the first the reference) or one `inputs.frames` setting (a folder, glob, video or
 // camera file). Library errors become Python exceptions: ErrorKind::kInvalidValue ValueError,
 // kFileNotFound FileNotFoundError, kFileFormat and kIo OSError, PartialResultsError
@@ -73,31 +73,31 @@ void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys,
   }
 }
 
-// A grey image of a numpy array (2-D; uint8, uint16, float32, or float64 stored as float32), in
-// a buffer of its own. Error naming `what` otherwise.
+// A grey image of a numpy array (2-D; uint8, or uint16 with any bit depth of the data: the frames
+// the pipeline reads, as from image files), in a buffer of its own. Error naming `what` otherwise.
 cv::Mat ImageOfArray(const py::array& array, const std::string& what) {
   const py::dtype dtype = array.dtype();
-  int type = -1;
-  if (dtype.is(py::dtype::of<std::uint8_t>())) type = CV_8U;
-  if (dtype.is(py::dtype::of<std::uint16_t>())) type = CV_16U;
-  if (dtype.is(py::dtype::of<float>()) || dtype.is(py::dtype::of<double>())) type = CV_32F;
-  CheckValue(type >= 0, what, "dtype " + std::string(py::str(dtype)),
-             "uint8, uint16, float32 or float64");
+  const bool bits8 = dtype.is(py::dtype::of<std::uint8_t>());
+  CheckValue(bits8 || dtype.is(py::dtype::of<std::uint16_t>()), what,
+             "dtype " + py::str(static_cast<py::handle>(dtype)).cast<std::string>(),
+             "uint8 or uint16 (8- or 16-bit frames, as image files hold them)");
   CheckValue(array.ndim() == 2, what, std::to_string(array.ndim()) + "-D array",
              "a 2-D grey image (rows, columns)");
   const int rows = static_cast<int>(array.shape(0)), cols = static_cast<int>(array.shape(1));
   CheckValue(rows > 0 && cols > 0, what, std::to_string(rows) + "x" + std::to_string(cols),
              "a non-empty image");
-  cv::Mat image(rows, cols, type);
-  const auto copy = [&](auto tag, const py::array& source) {
+  cv::Mat image(rows, cols, bits8 ? CV_8U : CV_16U);
+  const auto copy = [&](auto tag) {
     using T = decltype(tag);
-    const auto a = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(source);
+    const auto a = py::array_t<T, py::array::c_style>::ensure(array);
     std::copy_n(a.data(), static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols),
                 image.ptr<T>());
   };
-  if (type == CV_8U) copy(std::uint8_t{}, array);
-  if (type == CV_16U) copy(std::uint16_t{}, array);
-  if (type == CV_32F) copy(float{}, array);  // float64: converted (forcecast).
+  if (bits8) {
+    copy(std::uint8_t{});
+  } else {
+    copy(std::uint16_t{});
+  }
   return image;
 }
 

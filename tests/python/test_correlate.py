@@ -28,14 +28,12 @@ def test_version():
     assert isinstance(impactdic.__version__, str)
 
 
-@pytest.mark.parametrize("dtype", ["uint8", "uint16", "float32", "float64"])
+@pytest.mark.parametrize("dtype", ["uint8", "uint16"])
 def test_shifted_arrays_give_the_shift(pair, pair8, dtype):
     if dtype == "uint8":
         images = pair8
-    elif dtype == "uint16":  # 12-bit data in 16-bit words, as a Phantom camera's.
+    else:  # 12-bit data in 16-bit words, as a Phantom camera's.
         images = tuple(to_uint16_12bit(image) for image in pair)
-    else:
-        images = tuple((255 * image).astype(dtype) for image in pair)
     result = impactdic.correlate(*images, **OPTIONS)
     check_shift(result)
     assert result.u.shape == (2, result.x.size) and result.x.shape == result.y.shape
@@ -125,7 +123,7 @@ def cli_error(cli, key, value):
 
 BAD_VALUES = {"dic.subset_size": 4, "dic.step": 0, "dic.interpolation": "nearest-ish",
               "dic.min_zncc": 2.5, "dic.shape": "quintic", "dic.reference_update": "never",
-              "preprocess.gaussian.mode": "maybe", "inputs.fps": -1, "dic.roi": [5, 5, 2, 2],
+              "preprocess.gaussian.enabled": "maybe", "inputs.fps": -1, "dic.roi": [5, 5, 2, 2],
               "dic.keep_warp_gradient": "perhaps"}
 
 
@@ -143,13 +141,13 @@ def test_every_key_refuses_a_bad_value_as_the_cli(cli):
     enum: the key's parser decides, with the command line's message (keys taking any text, as
     paths, accept it in both)."""
     keys = [k for k in impactdic.correlate_keys if k != "dic.threads"]
-    assert "dic.subset_size" in keys and "preprocess.gaussian.mode" in keys
+    assert "dic.subset_size" in keys and "preprocess.gaussian.enabled" in keys
     refused = 0
     for key in keys:
         message = option_error(**{key: "@bad"})
         expected = cli_error(cli, key, "@bad")
-        if message is None:
-            assert key not in expected, (key, expected)
+        if message is None:  # Accepted (a path): neither refuses the value itself.
+            assert not expected.startswith(f"--{key}: invalid value"), (key, expected)
         else:
             refused += 1
             assert message == expected.replace("--" + key, key), key
@@ -169,6 +167,8 @@ def test_missing_file_is_an_os_error(tmp_path):
 def test_bad_array_is_a_value_error(pair8):
     with pytest.raises(ValueError, match="dtype int64"):
         impactdic.correlate(pair8[0].astype(np.int64), pair8[1])
+    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype float32\)"):
+        impactdic.correlate(pair8[0].astype(np.float32), pair8[1])
     with pytest.raises(ValueError, match="frame 1: invalid value"):
         impactdic.correlate(pair8[0], np.zeros((4, 5, 3), np.uint8)[..., 0][None, None])
 
@@ -191,11 +191,11 @@ def rss_kb():
 
 
 def test_memory_bounded_over_many_calls():
-    """1,000 correlations of a small pair: the resident memory after the first 100 grows by less
-    than 8 MB over the next 900 (a leak of the ~20 kB of results and frames per call would be
-    18 MB)."""
-    reference = to_uint8(speckle((64, 64), seed=3))
-    deformed = to_uint8(fourier_shift(speckle((64, 64), seed=3), 0.5, 0.25))
+    """1,000 correlations of a 128 x 128 pair: the resident memory after the first 100 grows by
+    less than 8 MB over the next 900 (measured: 4 kB). Each call copies 32 kB of frames and
+    returns about 20 kB of results: leaking either would add 45 MB."""
+    reference = to_uint8(speckle((128, 128), seed=3))
+    deformed = to_uint8(fourier_shift(speckle((128, 128), seed=3), 0.5, 0.25))
     options = {"dic": {"subset_size": 15, "step": 8}, "threads": 1}
     for _ in range(100):
         impactdic.correlate(reference, deformed, **options)
@@ -203,5 +203,5 @@ def test_memory_bounded_over_many_calls():
     for _ in range(900):
         result = impactdic.correlate(reference, deformed, **options)
     growth_kb = rss_kb() - before
-    assert result.summary["usable"]
+    assert result.summary["usable"] and result.x.size == 196
     assert growth_kb < 8 * 1024, f"RSS grew by {growth_kb} kB over 900 calls"

@@ -1,5 +1,5 @@
 """The ```py blocks of docs/python.md run as written, in order, in one namespace, from a folder
-holding sample_frames/ (a link to the repository's)."""
+holding sample_frames/ and calibration/ (links to the repository's), as from a clone."""
 import os
 import re
 
@@ -10,7 +10,8 @@ def test_python_doc_blocks_run(tmp_path, monkeypatch, capsys):
     with open(os.path.join(SOURCE_DIR, "docs", "python.md")) as f:
         blocks = re.findall(r"^```py\n(.*?)^```$", f.read(), flags=re.M | re.S)
     assert len(blocks) >= 3
-    os.symlink(os.path.join(SOURCE_DIR, "sample_frames"), tmp_path / "sample_frames")
+    for folder in ("sample_frames", "calibration"):
+        os.symlink(os.path.join(SOURCE_DIR, folder), tmp_path / folder)
     monkeypatch.chdir(tmp_path)
     namespace = {}
     for block in blocks:

@@ -159,8 +159,8 @@ class CorrelationResult:
 def correlate(reference, deformed=None, *, allow_partial=False, **options):
     """Subset DIC of `deformed` against `reference`; the CorrelationResult.
 
-    reference, deformed: 2-D numpy arrays (uint8, uint16 with the data's bit depth, float32 or
-      float64, grey), image files, or lists of either; deformed may be a 3-D array (frames, rows,
+    reference, deformed: 2-D numpy arrays (grey, uint8 or uint16 with any bit depth of the data,
+      as image files hold them), image files, or lists of either; deformed may be a 3-D array (frames, rows,
       columns) or a list. Or `reference` alone: a 3-D array or list (the first frame the
       reference), or a folder, glob, video or camera file (the scene's inputs.frames).
     options: scene keys (dic={"subset_size": 25}, **{"dic.subset_size": 25}, preprocess={...},
