@@ -65,9 +65,10 @@ void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys,
                const std::vector<std::string>& known, const std::string& expected, Scene* scene) {
   for (const auto& [key, value] : keys) {
     if (std::find(known.begin(), known.end(), key) == known.end()) {
-      const std::string close = ClosestMatch(key, known);
-      throw Error(ErrorKind::kInvalidValue, key, "unknown option",
-                  expected + (close.empty() ? std::string() : " (did you mean '" + close + "'?)"));
+      std::string allowed = expected;
+      if (const std::string close = ClosestMatch(key, known); !close.empty())
+        allowed += " (did you mean '" + close + "'?)";
+      throw Error(ErrorKind::kInvalidValue, key, "unknown option", allowed);
     }
     SetSceneKey(scene, key, value, key);
   }
@@ -326,7 +327,8 @@ void SetLogLevelByName(const std::string& level) {
 }
 
 // An impactdic::Error as the Python exception of its kind (file comment).
-void Translate(std::exception_ptr p) {
+// pybind11 hands the exception by value (py::register_exception_translator's signature).
+void Translate(std::exception_ptr p) {  // NOLINT(performance-unnecessary-value-param)
   try {
     if (p) std::rethrow_exception(p);
   } catch (const PartialResultsError& e) {
