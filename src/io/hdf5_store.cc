@@ -921,9 +921,9 @@ std::vector<std::string> H5Reader::AttributeNames(const std::string& object_path
   }
   return Guard(impl_->path, "attributes of " + p, [&] {
     const auto names = [](const H5::H5Object& object) {
-      std::vector<std::string> v;
-      for (int k = 0; k < object.getNumAttrs(); ++k)
-        v.push_back(object.openAttribute(static_cast<unsigned>(k)).getName());
+      std::vector<std::string> v(static_cast<std::size_t>(object.getNumAttrs()));
+      for (std::size_t k = 0; k < v.size(); ++k)
+        v[k] = object.openAttribute(static_cast<unsigned>(k)).getName();
       return v;
     };
     if (p != "/" && impl_->file.childObjType(p) == H5O_TYPE_DATASET)
