@@ -18,8 +18,11 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,6 +35,7 @@
 #include "impactdic/io/json.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/pipeline/correlate_scene.h"
+#include "impactdic/pipeline/model_runs.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/pipeline/scene_flags.h"
@@ -59,17 +63,21 @@ const std::vector<std::string>& CorrelateKeys() {
   return keys;
 }
 
-// Sets each (key, value text) on `scene` with the key's own parser. A key not `known`: Error
-// naming it, what is `expected` and the closest key.
+// A key not `known`: Error naming it, what is `expected` and the closest key.
+void ApplyKeyCheck(const std::string& key, const std::vector<std::string>& known,
+                   const std::string& expected) {
+  if (std::find(known.begin(), known.end(), key) != known.end()) return;
+  std::string allowed = expected;
+  if (const std::string close = ClosestMatch(key, known); !close.empty())
+    allowed += " (did you mean '" + close + "'?)";
+  throw Error(ErrorKind::kInvalidValue, key, "unknown option", allowed);
+}
+
+// Sets each (key, value text) on `scene` with the key's own parser (ApplyKeyCheck first).
 void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys,
                const std::vector<std::string>& known, const std::string& expected, Scene* scene) {
   for (const auto& [key, value] : keys) {
-    if (std::find(known.begin(), known.end(), key) == known.end()) {
-      std::string allowed = expected;
-      if (const std::string close = ClosestMatch(key, known); !close.empty())
-        allowed += " (did you mean '" + close + "'?)";
-      throw Error(ErrorKind::kInvalidValue, key, "unknown option", allowed);
-    }
+    ApplyKeyCheck(key, known, expected);
     SetSceneKey(scene, key, value, key);
   }
 }
@@ -308,6 +316,33 @@ std::string Run(const std::string& scene_file, const std::string& scene_text,
   return RunScene(scene, options).ToJson().Dump();
 }
 
+// _model(numbers, solver, error_estimator, ode45_defaults, output): `impactdic model` of one test
+// (pipeline RunModelRequest) with the test.* and model.* keys given: the numbers by key, the
+// solver's names ("" = default) and the switch. Returns the summary's JSON text (ImpactSummary
+// ToJson); writes the series to `output` (.csv, .h5; "" = none).
+std::string Model(const std::map<std::string, double>& numbers, const std::string& solver,
+                  const std::string& error_estimator, bool ode45_defaults,
+                  const std::string& output) {
+  std::vector<std::string> known;
+  for (const SceneKeyFlag& f : SceneKeyFlags({"test", "model"})) known.push_back(f.key);
+  ModelRequest request;
+  for (const auto& [key, value] : numbers) {
+    ApplyKeyCheck(key, known, "a key of the scene's test or model section");
+    request.keys[key] = value;
+  }
+  if (!solver.empty()) request.solver = solver;
+  if (!error_estimator.empty()) request.error_estimator = error_estimator;
+  request.ode45_defaults = ode45_defaults;
+  request.format = "json";
+  request.output = output;
+  std::ostringstream out;
+  {
+    const py::gil_scoped_release release;
+    RunModelRequest(request, out);
+  }
+  return out.str();
+}
+
 // The library's messages at `level` and above ("debug", "info", "warning", "error", "off").
 void SetLogLevelByName(const std::string& level) {
   static const std::vector<std::pair<std::string, LogLevel>> kLevels = {
@@ -363,6 +398,8 @@ PYBIND11_MODULE(_impactdic, m) {
   m.def("_run", &Run, py::arg("scene_file"), py::arg("scene_text"), py::arg("output"),
         py::arg("keys"), py::arg("allow_partial"), py::arg("force"));
   m.attr("run_keys") = RunKeys();
+  m.def("_model", &Model, py::arg("numbers"), py::arg("solver"), py::arg("error_estimator"),
+        py::arg("ode45_defaults"), py::arg("output"));
   m.def("set_log_level", &SetLogLevelByName, py::arg("level"),
         "Shows the library's messages at `level` and above: debug, info, warning, error or off");
 }

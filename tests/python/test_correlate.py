@@ -205,3 +205,31 @@ def test_memory_bounded_over_many_calls():
     growth_kb = rss_kb() - before
     assert result.summary["usable"] and result.x.size == 196
     assert growth_kb < 8 * 1024, f"RSS grew by {growth_kb} kB over 900 calls"
+
+
+def test_the_gil_is_released_while_correlating():
+    """A Python thread runs while a correlation of a 512 x 512 pair computes: it counts far more
+    often than the one time a held GIL would let it in."""
+    import threading
+    reference = to_uint8(speckle((512, 512), seed=5))
+    deformed = to_uint8(fourier_shift(speckle((512, 512), seed=5), 0.7, 0.2))
+    done = threading.Event()
+    ticks = []
+
+    def count():
+        while not done.is_set():
+            ticks.append(1)
+            done.wait(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    try:
+        before = len(ticks)
+        result = impactdic.correlate(reference, deformed, threads=1,
+                                     dic={"subset_size": 21, "step": 6})
+        during = len(ticks) - before
+    finally:
+        done.set()
+        counter.join()
+    assert result.summary["seconds"] > 0.05, result.summary["seconds"]  # Long enough to tell.
+    assert during >= 10, f"{during} ticks during {result.summary['seconds']:.3f} s"

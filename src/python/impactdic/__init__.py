@@ -28,6 +28,7 @@ from ._impactdic import (  # noqa: F401 (the package's interface)
     NothingUsableError,
     __version__,
     _correlate,
+    _model,
     _read_h5,
     _run,
     correlate_keys,
@@ -35,7 +36,7 @@ from ._impactdic import (  # noqa: F401 (the package's interface)
     set_log_level,
 )
 
-__all__ = ["correlate", "CorrelationResult", "run", "read_results", "Results", "Group", "Error",
+__all__ = ["correlate", "CorrelationResult", "run", "model", "read_results", "Results", "Group", "Error",
            "NothingUsableError", "set_log_level", "correlate_keys", "run_keys", "__version__"]
 
 # The library's progress and notes stay off the notebook unless asked for (set_log_level("info")).
@@ -307,4 +308,41 @@ def run(scene, output=None, *, allow_partial=False, force=False, **overrides):
     keys = _scene_keys(overrides, _RUN_SECTIONS)
     summary = _run(scene_file, scene_text, "" if output is None else _os.fspath(output), keys,
                    bool(allow_partial), bool(force))
+    return json.loads(summary)
+
+
+def model(output=None, **keys):
+    """The added-mass impact model (Eq. 9, docs/model.md) of one test, as `impactdic model
+    --format json`: its summary (a dict: the solve's figures and the solver's report).
+
+    keys: the scene's test and model keys, nested (test={"mass_kg": 10, "width_m": 0.15,
+      "drop_height_m": 0.7}) or dotted (**{"model.K": 2.0e6}); test.mass_kg, test.width_m and one
+      of test.drop_height_m / test.impact_velocity_m_s are required; model.solver and
+      model.error_estimator take their names, model.ode45_defaults True or False.
+    output: also write the time series (.csv or .h5; read_results reads the .h5).
+    Raises ValueError for a bad key or value, impactdic.Error when the solve does not reach the
+    end of the motion.
+    """
+    import json
+
+    numbers, texts, ode45_defaults = {}, {"model.solver": "", "model.error_estimator": ""}, False
+    for key, text in _scene_keys(keys, ("test", "model")):
+        value = keys.get(key)
+        if value is None:  # Given nested: find the value again.
+            section, name = key.split(".", 1)
+            value = keys[section][name]
+        if key in texts:
+            texts[key] = str(value)
+        elif key == "model.ode45_defaults":
+            if not isinstance(value, (bool, _np.bool_)):
+                raise ValueError(f"{key}: invalid value (got {value!r}); expected True or False")
+            ode45_defaults = bool(value)
+        else:
+            try:
+                numbers[key] = float(value)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"{key}: invalid value (got {value!r}); expected a number") from None
+    summary = _model(numbers, texts["model.solver"], texts["model.error_estimator"],
+                     ode45_defaults, "" if output is None else _os.fspath(output))
     return json.loads(summary)
