@@ -21,7 +21,6 @@
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <optional>
 #include <sstream>
 #include <string>
 #include <utility>

@@ -252,7 +252,8 @@ class Results(Group):
 def read_results(path):
     """Every group and numeric dataset of a results file (results.h5 of `impactdic run`, or the
     output of `impactdic correlate -o X.h5`) as a Results: groups as attributes, datasets as numpy
-    arrays (integers of up to 4 bytes as int32), their units and descriptions in each group's
+    arrays (float32 and float64 as stored, integers as int32 up to int32 and uint16, wider ones as
+    float64), their units and descriptions in each group's
     `units` and `descriptions`. Text datasets are left out (their paths in `skipped`).
     OSError when the file is missing or not HDF5."""
     raw = _read_h5(_os.fspath(path))
