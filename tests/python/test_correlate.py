@@ -208,8 +208,8 @@ def test_memory_bounded_over_many_calls():
 
 
 def test_the_gil_is_released_while_correlating():
-    """A Python thread runs while a correlation of a 512 x 512 pair computes: it counts far more
-    often than the one time a held GIL would let it in."""
+    """A Python thread runs while a correlation of a 512 x 512 pair (15,000 subsets) computes: it
+    counts far more often than the one time a held GIL would let it in."""
     import threading
     reference = to_uint8(speckle((512, 512), seed=5))
     deformed = to_uint8(fourier_shift(speckle((512, 512), seed=5), 0.7, 0.2))
@@ -226,7 +226,7 @@ def test_the_gil_is_released_while_correlating():
     try:
         before = len(ticks)
         result = impactdic.correlate(reference, deformed, threads=1,
-                                     dic={"subset_size": 21, "step": 6})
+                                     dic={"subset_size": 21, "step": 4})
         during = len(ticks) - before
     finally:
         done.set()
