@@ -4,13 +4,14 @@
 // from scene keys by SetSceneKey (pipeline/scene_flags.h), as `impactdic correlate` builds its
 // scene from its flags: the same keys, parsers, ranges and messages.
 //
-//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False)
+//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False, time_s=[])
 //
 // `frames` is a list of grey images (numpy arrays: uint8, uint16), a list of
 // image files (the first the reference) or one `inputs.frames` setting (a folder, glob, video or
-// camera file). Library errors become Python exceptions: ErrorKind::kInvalidValue ValueError,
-// kFileNotFound FileNotFoundError, kFileFormat and kIo OSError, PartialResultsError
-// impactdic.NothingUsableError, other kNumerical impactdic.Error; the message is the library's.
+// camera file); `time_s` the arrays' time stamps [s] (one per frame; empty: none). Library errors
+// become Python exceptions: ErrorKind::kInvalidValue ValueError, kFileNotFound FileNotFoundError,
+// kFileFormat and kIo OSError, PartialResultsError impactdic.NothingUsableError, other kNumerical
+// impactdic.Error; the message is the library's.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -178,19 +179,23 @@ py::dict SummaryDict(const SceneCorrelation& c) {
 // dict). The library computes without the GIL.
 py::tuple Correlate(const py::object& frames,
                     const std::vector<std::pair<std::string, std::string>>& keys,
-                    bool allow_partial) {
+                    bool allow_partial, std::vector<double> time_s) {
   Scene scene;
   ApplyKeys(keys, CorrelateKeys(),
             "a key of the scene's dic or preprocess section, inputs.fps or inputs.calibration",
             &scene);
   std::unique_ptr<FrameSource> source;
   if (py::isinstance<py::str>(frames)) {
+    CheckValue(time_s.empty(), "time_s", "given with " + frames.cast<std::string>(),
+               "time stamps of frames given as arrays only (files and cameras have their own)");
     scene.inputs.frames = frames.cast<std::string>();
   } else {
     const auto list = frames.cast<py::list>();
     bool arrays = false, files = false;
     for (const py::handle item : list) (py::isinstance<py::str>(item) ? files : arrays) = true;
     CheckValue(!(arrays && files), "frames", "arrays and file names", "one or the other");
+    CheckValue(!files || time_s.empty(), "time_s", "given with image files",
+               "time stamps of frames given as arrays only (files and cameras have their own)");
     if (files) {
       scene.inputs.frame_files = list.cast<std::vector<std::string>>();
     } else {
@@ -201,7 +206,7 @@ py::tuple Correlate(const py::object& frames,
       }
       CheckValue(images.size() >= 2, "frames", std::to_string(images.size()) + " image(s)",
                  "a reference and at least one deformed image");
-      source = MakeMemoryFrameSource(std::move(images));
+      source = MakeMemoryFrameSource(std::move(images), std::move(time_s));
     }
   }
   std::shared_ptr<SceneCorrelation> result;
@@ -392,7 +397,8 @@ PYBIND11_MODULE(_impactdic, m) {
   m.attr("__version__") = impactdic::Version();
   m.attr("git_revision") = impactdic::GitRevision();
   m.attr("correlate_keys") = CorrelateKeys();
-  m.def("_correlate", &Correlate, py::arg("frames"), py::arg("keys"), py::arg("allow_partial"));
+  m.def("_correlate", &Correlate, py::arg("frames"), py::arg("keys"), py::arg("allow_partial"),
+        py::arg("time_s"));
   m.def("_read_h5", &ReadH5, py::arg("path"));
   m.def("_run", &Run, py::arg("scene_file"), py::arg("scene_text"), py::arg("output"),
         py::arg("keys"), py::arg("allow_partial"), py::arg("force"));

@@ -86,6 +86,11 @@ def test_sequence_as_a_3d_array(pair8):
     split = impactdic.correlate(frames[0], frames[1:], **OPTIONS)
     np.testing.assert_array_equal(as_list.u, result.u)
     np.testing.assert_array_equal(split.u, result.u)
+    timed = impactdic.correlate(frames, time_s=[0.0, 2e-4, 4e-4, 6e-4], **OPTIONS)
+    np.testing.assert_array_equal(timed.time_s, [0.0, 2e-4, 4e-4, 6e-4])
+    np.testing.assert_array_equal(timed.u, result.u)
+    with pytest.raises(ValueError, match="one per frame"):
+        impactdic.correlate(frames, time_s=[0.0, 1.0], **OPTIONS)
 
 
 def test_threads_do_not_change_the_results(pair8):

@@ -122,7 +122,8 @@ class CorrelationResult:
       sigma_u, sigma_v estimated standard deviation of u, v [px]
       zncc, iterations, status (codes; status_names maps them to names, valid: status == 0)
       frame            row -> index in the input sequence; frame_number the source's numbers;
-                       time_s the source's time stamps [s] (None when it has none)
+                       time_s the source's time stamps [s] (a camera file's, or the time_s
+                       given with arrays; None when there are none)
       summary          the correlation's summary (valid fraction, status counts, reports)
       attributes       the /dic group's attributes (options, preprocessing)
     """
@@ -157,7 +158,7 @@ class CorrelationResult:
                 f"subsets, {100 * self.summary['valid_fraction']:.1f} % valid>")
 
 
-def correlate(reference, deformed=None, *, allow_partial=False, **options):
+def correlate(reference, deformed=None, *, allow_partial=False, time_s=None, **options):
     """Subset DIC of `deformed` against `reference`; the CorrelationResult.
 
     reference, deformed: 2-D numpy arrays (grey, uint8 or uint16 with any bit depth of the data,
@@ -167,12 +168,14 @@ def correlate(reference, deformed=None, *, allow_partial=False, **options):
     options: scene keys (dic={"subset_size": 25}, **{"dic.subset_size": 25}, preprocess={...},
       inputs={"fps": 5000}); threads=N is dic.threads (0: all cores).
     allow_partial: return results with no valid subset instead of raising NothingUsableError.
+    time_s: the time stamps [s] of frames given as arrays, one per frame (the result's time_s).
 
     Raises ValueError for a bad option or input (the scene file's message), OSError for files,
     NothingUsableError when no subset is valid in any deformed frame.
     """
+    times = [] if time_s is None else [float(t) for t in time_s]
     table, summary = _correlate(_frames(reference, deformed), _scene_keys(options),
-                                bool(allow_partial))
+                                bool(allow_partial), times)
     return CorrelationResult(table, summary)
 
 
