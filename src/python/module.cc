@@ -306,7 +306,8 @@ std::string Run(const std::string& scene_file, const std::string& scene_text,
                 const std::string& output,
                 const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
                 bool force) {
-  Scene scene = scene_file.empty() ? ParseScene(scene_text, "scene.yaml") : LoadScene(scene_file);
+  // A dict's text is one line of JSON: messages name "(scene dict):1" and the key path.
+  Scene scene = scene_file.empty() ? ParseScene(scene_text, "(scene dict)") : LoadScene(scene_file);
   ApplyKeys(keys, RunKeys(),
             "a key of the scene's test, preprocess, dic, sensor, momentum, "
             "model, strain or outputs section",

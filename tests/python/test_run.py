@@ -53,3 +53,18 @@ def test_run_override_is_the_flags(tmp_path, cli):
 def test_run_missing_scene_is_an_os_error(tmp_path):
     with pytest.raises(FileNotFoundError):
         impactdic.run(tmp_path / "missing.yaml")
+
+
+def test_a_scene_dict(tmp_path, monkeypatch):
+    """A scene given as a dict (relative paths against the working folder): five frames of the
+    sample correlated and differentiated; its bad value named by the key path."""
+    monkeypatch.chdir(SOURCE_DIR)
+    scene = {"inputs": {"frames": "sample_frames/frames/frame_000[0-4].png", "mm_per_px": 0.3,
+                        "fps": 5000},
+             "stages": ["frames", "correlate", "kinematics", "outputs"], **QUICK}
+    summary = impactdic.run(scene, tmp_path / "out", dic={"subset_size": 25, "step": 32})
+    assert summary["usable"] and summary["dic_valid_fraction"] > 0.5
+    results = impactdic.read_results(tmp_path / "out" / "results.h5")
+    assert results.dic.u_px.shape[0] == 5 and "kinematics" in results.groups
+    with pytest.raises(ValueError, match=r"\(scene dict\):1: dic\.subset_size: got '4'"):
+        impactdic.run(dict(scene, dic={"subset_size": 4}), tmp_path / "out2")
