@@ -46,10 +46,14 @@ void FrameStream::SetRange(int first, int last) {
 cv::Mat FrameStream::ReadRaw(int k) {
   CheckValue(k >= 0 && k < count(), "analysed frame", std::to_string(k),
              fmt::format("0..{}", count() - 1));
+  // The first frame read is kept (the checks of the first frame, the pre-filter's decision and
+  // the correlation's reference all read it): decoded once, a copy of it for each reader.
+  if (first_ + k == first_index_) return first_raw_.clone();
   cv::Mat image = source_->Read(first_ + k);
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
     first_name_ = Name(k);
+    first_index_ = first_ + k;
   }
   CheckSameSize({first_raw_, image}, {first_name_, Name(k)});
   return image;
