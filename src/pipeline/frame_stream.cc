@@ -49,6 +49,9 @@ cv::Mat FrameStream::ReadRaw(int k) {
   // The first frame read is kept (the checks of the first frame, the pre-filter's decision and
   // the correlation's reference all read it): decoded once, a copy of it for each reader.
   if (first_ + k == first_index_) return first_raw_.clone();
+  // The frame after the first one read is decoded meanwhile (on another thread, where the source
+  // can): a pair's two images decode in parallel.
+  if (first_raw_.empty() && k + 1 < count()) source_->ReadAhead(first_ + k + 1);
   cv::Mat image = source_->Read(first_ + k);
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
