@@ -324,8 +324,11 @@ std::array<double, 2> GradientNoise(const double noise[2], int size, Interpolati
 // The inverse of a symmetric positive definite n x n matrix (row-major, n <= 12) by a Cholesky
 // factorisation A = L L^T in plain loops, inv = L^-T L^-1; false (inv unspecified) where
 // InvertSpd fails (a pivot L_jj^2 not above 1e-10 of A_jj). For the small matrices of the
-// uncertainty, where Eigen's dynamic-size solver costs far more than the arithmetic.
-bool SmallSpdInverse(const double* a, int n, double* inv) {
+// uncertainty, where Eigen's dynamic-size solver costs far more than the arithmetic. kN > 0: the
+// size known when compiling (the loops unrolled; the same operations in the same order), else n.
+template <int kN>
+bool SmallSpdInverse(const double* a, int n_runtime, double* inv) {
+  const int n = kN > 0 ? kN : n_runtime;
   double l[144] = {}, m[144] = {};
   for (int j = 0; j < n; ++j) {
     double d = a[j * n + j];
@@ -355,6 +358,12 @@ bool SmallSpdInverse(const double* a, int n, double* inv) {
     }
   }
   return true;
+}
+
+bool SmallSpdInverse(const double* a, int n, double* inv) {
+  if (n == 6) return SmallSpdInverse<6>(a, n, inv);    // Affine.
+  if (n == 12) return SmallSpdInverse<12>(a, n, inv);  // Quadratic.
+  return SmallSpdInverse<0>(a, n, inv);
 }
 
 // The largest mu of N v = mu H v, i.e. the largest eigenvalue of H^-1 N (real, >= 0), by power
