@@ -12,6 +12,7 @@
 
 #include "correlator_impl.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/memory.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
@@ -99,6 +100,10 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
     im.gy.create(atlas, CV_32F);
   } else {
     spline->NodeGradients(&im.gx, &im.gy);
+    if (im.f.size() != im.region.size() || im.f.type() != CV_32F) {
+      im.f.create(im.region.size(), CV_32F);
+      AdviseHugePages(im.f.data, im.f.total() * im.f.elemSize());
+    }
     raw(im.region).convertTo(im.f, CV_32F);
   }
   ref.subsets.assign(n, SubsetRef{});
