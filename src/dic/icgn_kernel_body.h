@@ -31,8 +31,8 @@
 #endif
 #endif
 #if IMPACTDIC_DIC_KERNEL_LEVEL >= 2
-#if !defined(__AVX512F__) || !defined(__AVX512DQ__)
-#error "the AVX-512 kernel needs -mavx512f -mavx512dq"
+#if !defined(__AVX512F__) || !defined(__AVX512DQ__) || !defined(__AVX512VL__)
+#error "the AVX-512 kernel needs -mavx512f -mavx512dq -mavx512vl"
 #endif
 #define IMPACTDIC_DIC_AVX512 1
 #else
