@@ -106,8 +106,14 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
     }
     raw(im.region).convertTo(im.f, CV_32F);
   }
+  // Several MB each for a dense grid: allocated, advised, then filled.
+  const std::size_t hinv_size = static_cast<std::size_t>(n) * shape.n * shape.n;
+  ref.subsets.reserve(n);
+  ref.hinv.reserve(hinv_size);
+  AdviseHugePages(ref.subsets.data(), ref.subsets.capacity() * sizeof(SubsetRef));
+  AdviseHugePages(ref.hinv.data(), ref.hinv.capacity() * sizeof(double));
   ref.subsets.assign(n, SubsetRef{});
-  ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
+  ref.hinv.assign(hinv_size, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
     SubsetRef& s = ref.subsets[i];
     if (!tracks[i].active) {
