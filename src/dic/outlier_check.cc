@@ -23,12 +23,13 @@ bool Valid(const FrameResult& r, int i) { return r.status[i] == SubsetStatus::kC
 // One of each pair of opposite grid neighbours (row, column offsets).
 constexpr std::array<std::pair<int, int>, 4> kHalfNeighbourhood{{{0, 1}, {1, -1}, {1, 0}, {1, 1}}};
 
-// Median of the first n values (reordered).
+// Median of the first n values (sorted in place; n <= 8 here, where sorting costs less than
+// nth_element): the middle one, or the mean of the two middle ones.
 double Median(double* values, int n) {
-  std::nth_element(values, values + n / 2, values + n);
+  std::sort(values, values + n);
   const double upper = values[n / 2];
   if (n % 2 == 1) return upper;
-  return 0.5 * (upper + *std::max_element(values, values + n / 2));
+  return 0.5 * (upper + values[n / 2 - 1]);
 }
 
 // The normalized median test of subset i: flags->normalized_residual[i] and flags->outlier[i]
