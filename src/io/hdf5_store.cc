@@ -34,6 +34,8 @@ namespace {
 // Datasets at least this large are chunked and deflate-compressed.
 constexpr std::size_t kCompressThreshold = 4096;
 constexpr int kDeflateLevel = 4;
+// Values of datasets whose chunks are filtered on workers before the writer writes them.
+constexpr std::size_t kMaxDeferredBytes = std::size_t{16} << 20;
 
 std::vector<std::string> SplitPath(const std::string& path) {
   std::vector<std::string> parts;
@@ -320,10 +322,16 @@ struct H5Writer::Impl {
   std::vector<std::unique_ptr<DeferredChunk>> deferred;
   tbb::task_group filtering;
 
+  std::size_t deferred_bytes = 0;
+
+  // At most kMaxDeferredBytes of values wait (then they are written): the writer's memory stays
+  // bounded whatever the number of datasets.
   void Defer(std::unique_ptr<DeferredChunk> chunk) {
     DeferredChunk* c = chunk.get();
+    deferred_bytes += c->raw.size();
     deferred.push_back(std::move(chunk));
     filtering.run([c] { ShuffleDeflate(c); });
+    if (deferred_bytes > kMaxDeferredBytes) Flush();
   }
   bool Deferred(const std::string& path) const {
     return std::any_of(deferred.begin(), deferred.end(),
@@ -346,6 +354,7 @@ struct H5Writer::Impl {
       });
     }
     deferred.clear();
+    deferred_bytes = 0;
     ThrowIfNoRoom(image, final_path);
   }
 
