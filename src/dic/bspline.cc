@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/memory.h"
 
 namespace impactdic {
 namespace {
@@ -175,8 +176,10 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   const int w = region.width, h = region.height;
   // The buffer is kept from the last Build when it is large enough (no new pages to fault in
   // for every frame of a sequence).
-  if (storage_.rows < h || storage_.cols < w)
+  if (storage_.rows < h || storage_.cols < w) {
     storage_.create(std::max(h, storage_.rows), std::max(w, storage_.cols), CV_32F);
+    AdviseHugePages(storage_.data, storage_.total() * storage_.elemSize());
+  }
   coefficients_ = storage_(cv::Rect(0, 0, w, h));
   cv::Mat source = image(region);
 
@@ -285,8 +288,11 @@ void BsplineImage::ValueGradient(double x, double y, double* value, double* gx, 
 }
 
 void BsplineImage::NodeGradients(cv::Mat* gx, cv::Mat* gy) const {
-  gx->create(region_.height, region_.width, CV_32F);
-  gy->create(region_.height, region_.width, CV_32F);
+  for (cv::Mat* g : {gx, gy}) {
+    if (g->rows == region_.height && g->cols == region_.width && g->type() == CV_32F) continue;
+    g->create(region_.height, region_.width, CV_32F);
+    AdviseHugePages(g->data, g->total() * g->elemSize());
+  }
   NodeGradients(region_, gx, gy);
 }
 

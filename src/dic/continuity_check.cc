@@ -1,6 +1,9 @@
 // Post-check of straddling subsets (see continuity_check.h).
 #include "impactdic/dic/continuity_check.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -27,25 +30,28 @@ std::vector<std::uint8_t> AboveLocalMedian(const std::vector<double>& q, int col
   const int n = cols * rows;
   std::vector<std::uint8_t> flag(n, 0);
   if (!std::isfinite(floor)) return flag;
-  std::vector<double> near;
-  for (int i = 0; i < n; ++i) {
-    if (!(q[i] > floor)) continue;
-    if (!std::isfinite(ratio)) {
-      flag[i] = 1;
-      continue;
-    }
-    near.clear();
-    const int row = i / cols, col = i % cols;
-    for (int rr = std::max(0, row - kReach); rr <= std::min(rows - 1, row + kReach); ++rr) {
-      for (int cc = std::max(0, col - kReach); cc <= std::min(cols - 1, col + kReach); ++cc) {
-        const int j = rr * cols + cc;
-        if (j != i && std::isfinite(q[j])) near.push_back(q[j]);
+  // Each subset on its own (in parallel): the flags do not depend on the order.
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& range) {
+    std::vector<double> near;
+    for (int i = range.begin(); i < range.end(); ++i) {
+      if (!(q[i] > floor)) continue;
+      if (!std::isfinite(ratio)) {
+        flag[i] = 1;
+        continue;
       }
+      near.clear();
+      const int row = i / cols, col = i % cols;
+      for (int rr = std::max(0, row - kReach); rr <= std::min(rows - 1, row + kReach); ++rr) {
+        for (int cc = std::max(0, col - kReach); cc <= std::min(cols - 1, col + kReach); ++cc) {
+          const int j = rr * cols + cc;
+          if (j != i && std::isfinite(q[j])) near.push_back(q[j]);
+        }
+      }
+      if (near.size() < 6) continue;
+      std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
+      flag[i] = q[i] > ratio * near[near.size() / 2];
     }
-    if (near.size() < 6) continue;
-    std::nth_element(near.begin(), near.begin() + near.size() / 2, near.end());
-    flag[i] = q[i] > ratio * near[near.size() / 2];
-  }
+  });
   return flag;
 }
 
@@ -64,22 +70,27 @@ void Differences(const FrameResult& r, int cols, int rows, std::vector<double> s
     second[d].assign(n, kNaNd);
     jump[d].assign(n, kNaNd);
   }
-  for (int i = 0; i < n; ++i) {
-    if (!Valid(r, i)) continue;
-    const int row = i / cols, col = i % cols;
-    const int pairs[2][2][2] = {{{row, col - 1}, {row, col + 1}}, {{row - 1, col}, {row + 1, col}}};
-    for (int d = 0; d < 2; ++d) {
-      const auto& p = pairs[d];
-      const bool a_in = p[0][0] >= 0 && p[0][1] >= 0, b_in = p[1][0] < rows && p[1][1] < cols;
-      const int a = a_in ? p[0][0] * cols + p[0][1] : -1, b = b_in ? p[1][0] * cols + p[1][1] : -1;
-      for (const int j : {a, b}) {
-        if (j >= 0 && Valid(r, j))
-          jump[d][i] = std::fmax(jump[d][i], dist(i, r.u_px[j], r.v_px[j]));
+  // Each subset on its own (in parallel).
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& range) {
+    for (int i = range.begin(); i < range.end(); ++i) {
+      if (!Valid(r, i)) continue;
+      const int row = i / cols, col = i % cols;
+      const int pairs[2][2][2] = {{{row, col - 1}, {row, col + 1}},
+                                  {{row - 1, col}, {row + 1, col}}};
+      for (int d = 0; d < 2; ++d) {
+        const auto& p = pairs[d];
+        const bool a_in = p[0][0] >= 0 && p[0][1] >= 0, b_in = p[1][0] < rows && p[1][1] < cols;
+        const int a = a_in ? p[0][0] * cols + p[0][1] : -1;
+        const int b = b_in ? p[1][0] * cols + p[1][1] : -1;
+        for (const int j : {a, b}) {
+          if (j >= 0 && Valid(r, j))
+            jump[d][i] = std::fmax(jump[d][i], dist(i, r.u_px[j], r.v_px[j]));
+        }
+        if (a < 0 || b < 0 || !Valid(r, a) || !Valid(r, b)) continue;
+        second[d][i] = dist(i, 0.5 * (r.u_px[a] + r.u_px[b]), 0.5 * (r.v_px[a] + r.v_px[b]));
       }
-      if (a < 0 || b < 0 || !Valid(r, a) || !Valid(r, b)) continue;
-      second[d][i] = dist(i, 0.5 * (r.u_px[a] + r.u_px[b]), 0.5 * (r.v_px[a] + r.v_px[b]));
     }
-  }
+  });
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "correlator_impl.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/memory.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
@@ -102,10 +103,20 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
     im.gy.create(atlas, CV_32F);
   } else {
     spline->NodeGradients(&im.gx, &im.gy);
+    if (im.f.size() != im.region.size() || im.f.type() != CV_32F) {
+      im.f.create(im.region.size(), CV_32F);
+      AdviseHugePages(im.f.data, im.f.total() * im.f.elemSize());
+    }
     raw(im.region).convertTo(im.f, CV_32F);
   }
+  // Several MB each for a dense grid: allocated, advised, then filled.
+  const std::size_t hinv_size = static_cast<std::size_t>(n) * shape.n * shape.n;
+  ref.subsets.reserve(n);
+  ref.hinv.reserve(hinv_size);
+  AdviseHugePages(ref.subsets.data(), ref.subsets.capacity() * sizeof(SubsetRef));
+  AdviseHugePages(ref.hinv.data(), ref.hinv.capacity() * sizeof(double));
   ref.subsets.assign(n, SubsetRef{});
-  ref.hinv.assign(static_cast<std::size_t>(n) * shape.n * shape.n, 0.0);
+  ref.hinv.assign(hinv_size, 0.0);
   tbb::parallel_for(0, n, [&](int i) {
     SubsetRef& s = ref.subsets[i];
     if (!tracks[i].active) {

@@ -351,42 +351,6 @@ std::array<double, 2> GradientNoise(const double noise[2], int size, Interpolati
   return {scale * noise[0], scale * noise[1]};
 }
 
-// The inverse of a symmetric positive definite n x n matrix (row-major, n <= 12) by a Cholesky
-// factorisation A = L L^T in plain loops, inv = L^-T L^-1; false (inv unspecified) where
-// InvertSpd fails (a pivot L_jj^2 not above 1e-10 of A_jj). For the small matrices of the
-// uncertainty, where Eigen's dynamic-size solver costs far more than the arithmetic.
-bool SmallSpdInverse(const double* a, int n, double* inv) {
-  double l[144] = {}, m[144] = {};
-  for (int j = 0; j < n; ++j) {
-    double d = a[j * n + j];
-    for (int k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];
-    if (!(a[j * n + j] > 0) || !(d > 1e-10 * a[j * n + j])) return false;
-    const double ljj = std::sqrt(d);
-    l[j * n + j] = ljj;
-    for (int i = j + 1; i < n; ++i) {
-      double v = a[i * n + j];
-      for (int k = 0; k < j; ++k) v -= l[i * n + k] * l[j * n + k];
-      l[i * n + j] = v / ljj;
-    }
-  }
-  for (int j = 0; j < n; ++j) {  // m = L^-1 (lower triangular).
-    m[j * n + j] = 1 / l[j * n + j];
-    for (int i = j + 1; i < n; ++i) {
-      double v = 0;
-      for (int k = j; k < i; ++k) v -= l[i * n + k] * m[k * n + j];
-      m[i * n + j] = v / l[i * n + i];
-    }
-  }
-  for (int i = 0; i < n; ++i) {  // inv = m^T m.
-    for (int j = 0; j <= i; ++j) {
-      double v = 0;
-      for (int k = i; k < n; ++k) v += m[k * n + i] * m[k * n + j];
-      inv[i * n + j] = inv[j * n + i] = v;
-    }
-  }
-  return true;
-}
-
 // The largest mu of N v = mu H v, i.e. the largest eigenvalue of H^-1 N (real, >= 0), by power
 // iteration from the translation directions (n x n, row-major).
 double LargestNoiseRatio(const double* hinv, const double* nn, int n, int nm) {
@@ -420,7 +384,7 @@ const double* TrueHessianInverse(const Shape& shape, const double* hinv,
                                  const std::array<double, 2>& noise2, double* htinv) {
   const int n = shape.n, nm = shape.nm;
   double hh[144], nn[144] = {}, ht[144];
-  if (!SmallSpdInverse(hinv, n, hh)) return hinv;
+  if (!InvertSpd(hinv, n, hh)) return hinv;
   for (int a = 0; a < n; ++a) {
     for (int b = 0; b < n; ++b) {
       if (a / nm == b / nm)
@@ -441,7 +405,7 @@ const double* TrueHessianInverse(const Shape& shape, const double* hinv,
     if (mu > 1 - kMinTrueHessianFraction) lambda = (1 - kMinTrueHessianFraction) / mu;
   }
   for (int a = 0; a < n * n; ++a) ht[a] = hh[a] - lambda * nn[a];
-  return SmallSpdInverse(ht, n, htinv) ? htinv : hinv;
+  return InvertSpd(ht, n, htinv) ? htinv : hinv;
 }
 
 // Along each row j of the subset (eta = j - half), the polynomials of xi sum_q w[t][q] m_q(xi, eta)

@@ -32,8 +32,9 @@ struct Shape {
 Shape MakeShape(ShapeFunction kind, int half);
 
 // Inverse of a symmetric positive definite n x n matrix (row-major, 1 <= n <= 12) by Cholesky
-// factorisation A = L L^T (Eigen::LLT). Returns false, leaving inv unspecified, if a pivot
-// L_jj^2 is not above 1e-10 of its diagonal entry A_jj (the data cannot determine a parameter).
+// factorisation A = L L^T, inv = L^-T L^-1, in plain loops (spd_inverse.cc). Returns false, leaving
+// inv unspecified, if a pivot L_jj^2 is not above 1e-10 of its diagonal entry A_jj (the data cannot
+// determine a parameter).
 bool InvertSpd(const double* a, int n, double* inv);
 
 // Displacement (du, dv) of the warp at (xi, eta).

@@ -31,8 +31,8 @@
 #endif
 #endif
 #if IMPACTDIC_DIC_KERNEL_LEVEL >= 2
-#if !defined(__AVX512F__) || !defined(__AVX512DQ__)
-#error "the AVX-512 kernel needs -mavx512f -mavx512dq"
+#if !defined(__AVX512F__) || !defined(__AVX512DQ__) || !defined(__AVX512VL__)
+#error "the AVX-512 kernel needs -mavx512f -mavx512dq -mavx512vl"
 #endif
 #define IMPACTDIC_DIC_AVX512 1
 #else
@@ -855,6 +855,14 @@ void Pass(const PassInput& in, PassSums* out) {
 
 // sum_k term(k) over k = 0 .. length - 1 (a multiple of kResidualLanes) in kResidualLanes float
 // lanes (which the compiler maps onto the unit's vector registers), added up in a fixed order.
+// a[l] += a[l + kW] for l < kW, then the same with kW / 2, ..., 1: a[0] is the sum of the 2 kW
+// lanes, in a fixed order (each step one vector addition where the unit has the width).
+template <int kW>
+inline void FoldLanes(float* a) {
+  for (int l = 0; l < kW; ++l) a[l] += a[l + kW];
+  if constexpr (kW > 1) FoldLanes<kW / 2>(a);
+}
+
 template <int kTerms, typename Term>
 void LaneSums(int length, Term term, double sums[kTerms]) {
   float acc[kTerms][kResidualLanes] = {};
@@ -866,9 +874,7 @@ void LaneSums(int length, Term term, double sums[kTerms]) {
     }
   }
   for (int q = 0; q < kTerms; ++q) {
-    for (int w = kResidualLanes / 2; w >= 1; w /= 2) {
-      for (int l = 0; l < w; ++l) acc[q][l] += acc[q][l + w];
-    }
+    FoldLanes<kResidualLanes / 2>(acc[q]);
     sums[q] = acc[q][0];
   }
 }

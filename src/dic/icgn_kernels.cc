@@ -48,7 +48,7 @@ bool CpuRuns(DicKernel kernel) {
     case DicKernel::kAvx512:
 #if defined(__x86_64__) || defined(__i386__)
       return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-             CpuRuns(DicKernel::kAvx2);
+             __builtin_cpu_supports("avx512vl") && CpuRuns(DicKernel::kAvx2);
 #else
       return false;
 #endif

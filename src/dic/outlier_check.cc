@@ -1,6 +1,9 @@
 // The normalized median test on a correlated frame (see outlier_check.h).
 #include "impactdic/dic/outlier_check.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -20,12 +23,56 @@ bool Valid(const FrameResult& r, int i) { return r.status[i] == SubsetStatus::kC
 // One of each pair of opposite grid neighbours (row, column offsets).
 constexpr std::array<std::pair<int, int>, 4> kHalfNeighbourhood{{{0, 1}, {1, -1}, {1, 0}, {1, 1}}};
 
-// Median of the first n values (reordered).
+// Median of the first n values (sorted in place; n <= 8 here, where sorting costs less than
+// nth_element): the middle one, or the mean of the two middle ones.
 double Median(double* values, int n) {
-  std::nth_element(values, values + n / 2, values + n);
+  std::sort(values, values + n);
   const double upper = values[n / 2];
   if (n % 2 == 1) return upper;
-  return 0.5 * (upper + *std::max_element(values, values + n / 2));
+  return 0.5 * (upper + values[n / 2 - 1]);
+}
+
+// The normalized median test of subset i: flags->normalized_residual[i] and flags->outlier[i]
+// (left as they are where the test does not apply).
+void FlagOutlier(const FrameResult& result, int cols, int rows, const OutlierCheckOptions& options,
+                 bool has_sigma, int i, OutlierFlags* flags) {
+  if (!Valid(result, i)) return;
+  const int row = i / cols, col = i % cols;
+  // The neighbours in opposite pairs (both converged), so that a linear field's median is the
+  // centre's value: a one-sided neighbourhood (a grid edge, a failed neighbour) would put the
+  // median off by the local gradient and flag coherent motion.
+  std::array<int, 8> near{};
+  int count = 0;
+  for (const auto& [dr, dc] : kHalfNeighbourhood) {
+    const int r0 = row + dr, c0 = col + dc, r1 = row - dr, c1 = col - dc;
+    if (r0 < 0 || r0 >= rows || c0 < 0 || c0 >= cols || r1 < 0 || r1 >= rows || c1 < 0 ||
+        c1 >= cols)
+      continue;
+    const int a = r0 * cols + c0, b = r1 * cols + c1;
+    if (!Valid(result, a) || !Valid(result, b)) continue;
+    near[count++] = a;
+    near[count++] = b;
+  }
+  if (count < options.min_neighbours) return;
+  std::array<double, 8> u{}, v{}, r{};
+  for (int k = 0; k < count; ++k) {
+    u[k] = result.u_px[near[k]];
+    v[k] = result.v_px[near[k]];
+  }
+  const double um = Median(u.data(), count), vm = Median(v.data(), count);
+  for (int k = 0; k < count; ++k)
+    r[k] = std::hypot(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
+  const double rm = Median(r.data(), count);
+  const double deviation = std::hypot(result.u_px[i] - um, result.v_px[i] - vm);
+  const double normalized = deviation / (rm + options.noise_px);
+  flags->normalized_residual[i] = normalized;
+  double sigma = 0;
+  if (has_sigma) {
+    const double su = result.sigma_u_px[i], sv = result.sigma_v_px[i];
+    if (std::isfinite(su) && std::isfinite(sv)) sigma = std::hypot(su, sv);
+  }
+  if (normalized > options.threshold && deviation > options.sigma_factor * sigma)
+    flags->outlier[i] = 1;
 }
 
 }  // namespace
@@ -41,47 +88,12 @@ OutlierFlags FindOutliers(const FrameResult& result, int cols, int rows,
   flags.outlier.assign(n, 0);
   flags.normalized_residual.assign(n, std::numeric_limits<double>::quiet_NaN());
   const bool has_sigma = result.sigma_px.size() == static_cast<std::size_t>(n);
-  for (int i = 0; i < n; ++i) {
-    if (!Valid(result, i)) continue;
-    const int row = i / cols, col = i % cols;
-    // The neighbours in opposite pairs (both converged), so that a linear field's median is the
-    // centre's value: a one-sided neighbourhood (a grid edge, a failed neighbour) would put the
-    // median off by the local gradient and flag coherent motion.
-    std::array<int, 8> near{};
-    int count = 0;
-    for (const auto& [dr, dc] : kHalfNeighbourhood) {
-      const int r0 = row + dr, c0 = col + dc, r1 = row - dr, c1 = col - dc;
-      if (r0 < 0 || r0 >= rows || c0 < 0 || c0 >= cols || r1 < 0 || r1 >= rows || c1 < 0 ||
-          c1 >= cols)
-        continue;
-      const int a = r0 * cols + c0, b = r1 * cols + c1;
-      if (!Valid(result, a) || !Valid(result, b)) continue;
-      near[count++] = a;
-      near[count++] = b;
-    }
-    if (count < options.min_neighbours) continue;
-    std::array<double, 8> u{}, v{}, r{};
-    for (int k = 0; k < count; ++k) {
-      u[k] = result.u_px[near[k]];
-      v[k] = result.v_px[near[k]];
-    }
-    const double um = Median(u.data(), count), vm = Median(v.data(), count);
-    for (int k = 0; k < count; ++k)
-      r[k] = std::hypot(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
-    const double rm = Median(r.data(), count);
-    const double deviation = std::hypot(result.u_px[i] - um, result.v_px[i] - vm);
-    const double normalized = deviation / (rm + options.noise_px);
-    flags.normalized_residual[i] = normalized;
-    double sigma = 0;
-    if (has_sigma) {
-      const double su = result.sigma_u_px[i], sv = result.sigma_v_px[i];
-      if (std::isfinite(su) && std::isfinite(sv)) sigma = std::hypot(su, sv);
-    }
-    if (normalized > options.threshold && deviation > options.sigma_factor * sigma) {
-      flags.outlier[i] = 1;
-      ++flags.flagged;
-    }
-  }
+  // Each subset on its own (in parallel): the flags do not depend on the order.
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 256), [&](const tbb::blocked_range<int>& range) {
+    for (int i = range.begin(); i < range.end(); ++i)
+      FlagOutlier(result, cols, rows, options, has_sigma, i, &flags);
+  });
+  flags.flagged = static_cast<int>(std::count(flags.outlier.begin(), flags.outlier.end(), 1));
   return flags;
 }
 

@@ -10,6 +10,7 @@
 
 #include "correlator_impl.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/memory.h"
 #include "impactdic/io/image_io.h"
 
 namespace impactdic {
@@ -60,6 +61,8 @@ void Correlator::Impl::SetUpGrid(const cv::Mat& image) {
   ny = (roi.height - size) / g.step + 1;
   const int n = nx * ny;
   initial.resize(n);
+  tracks.reserve(n);  // Several MB for a dense grid: allocated, advised, then filled.
+  AdviseHugePages(tracks.data(), tracks.capacity() * sizeof(internal::SubsetTrack));
   tracks.assign(n, internal::SubsetTrack{});
   for (int r = 0; r < ny; ++r) {
     for (int c = 0; c < nx; ++c) {

@@ -1,11 +1,14 @@
 #include "impactdic/io/frame_source.h"
 
 #include <fmt/format.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <exception>
 #include <limits>
+#include <memory>
 #include <utility>
 
 #include "impactdic/core/error.h"
@@ -44,11 +47,40 @@ class ImageFileSource : public FrameSource {
     for (const std::string& f : files_) CheckImageFileExists(f);
     numbers_ = FrameNumbers(files_);
   }
+  ~ImageFileSource() override {
+    if (ahead_) ahead_->group.wait();  // Its result or error is dropped.
+  }
+  ImageFileSource(const ImageFileSource&) = delete;
+  ImageFileSource& operator=(const ImageFileSource&) = delete;
   int frame_count() const override { return static_cast<int>(files_.size()); }
+  // The file is decoded in a task of the TBB arena (so within the run's thread limit); only the
+  // decoding runs there, the checks of the sequence stay in Read, in file order.
+  void ReadAhead(int index) override {
+    if (ahead_ || index < 0 || index >= frame_count()) return;
+    ahead_ = std::make_unique<Ahead>();
+    Ahead* a = ahead_.get();
+    a->index = index;
+    a->group.run([a, path = files_[static_cast<std::size_t>(index)]] {
+      try {
+        a->image = ReadGreyImage(path, &a->channels);
+      } catch (...) {
+        a->error = std::current_exception();
+      }
+    });
+  }
   cv::Mat Read(int index) override {
     const std::string& path = files_.at(static_cast<std::size_t>(index));
     int channels = 1;
-    cv::Mat image = ReadGreyImage(path, &channels);
+    cv::Mat image;
+    if (ahead_ && ahead_->index == index) {
+      const std::unique_ptr<Ahead> a = std::move(ahead_);
+      a->group.wait();
+      if (a->error) std::rethrow_exception(a->error);
+      image = std::move(a->image);
+      channels = a->channels;
+    } else {
+      image = ReadGreyImage(path, &channels);
+    }
     if (index > colour_checked_) {  // Each file's warning once, in the order of the files.
       const std::string warning = colour_.Check(path, channels);
       if (!warning.empty()) AddWarning(warning);
@@ -70,6 +102,15 @@ class ImageFileSource : public FrameSource {
   std::vector<long long> numbers_;  // Empty: not one numbered series.
   SequenceColourCheck colour_;
   int colour_checked_ = -1;  // Highest index whose colour was checked.
+  // A frame being decoded ahead (ReadAhead).
+  struct Ahead {
+    int index = -1;
+    cv::Mat image;
+    int channels = 1;
+    std::exception_ptr error;
+    tbb::task_group group;
+  };
+  std::unique_ptr<Ahead> ahead_;
 };
 
 class VideoSource : public FrameSource {

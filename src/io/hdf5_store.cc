@@ -3,7 +3,9 @@
 #include <H5Cpp.h>
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <tbb/task_group.h>
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -14,6 +16,7 @@
 #include <ctime>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <optional>
 #include <set>
@@ -31,6 +34,8 @@ namespace {
 // Datasets at least this large are chunked and deflate-compressed.
 constexpr std::size_t kCompressThreshold = 4096;
 constexpr int kDeflateLevel = 4;
+// Values of datasets whose chunks are filtered on workers before the writer writes them.
+constexpr std::size_t kMaxDeferredBytes = std::size_t{16} << 20;
 
 std::vector<std::string> SplitPath(const std::string& path) {
   std::vector<std::string> parts;
@@ -271,6 +276,41 @@ void SetImageCallbacks(H5::FileAccPropList& access, CoreImage* image) {
     throw H5::PropListIException("H5Pset_file_image_callbacks", "cannot set the image callbacks");
 }
 
+namespace {
+
+// The one chunk of a compressed dataset, filtered on a worker while the writer goes on (HDF5's
+// serial library compresses a chunk only when the dataset is closed, one dataset after the other):
+// the values in the file's byte layout, then shuffled and deflated as HDF5's shuffle and deflate
+// filters do (byte k of every value together, then zlib's compress2 at kDeflateLevel), and
+// written as the filtered chunk (H5Dwrite_chunk) when the writer flushes. Readers see the same
+// dataset; the file's bytes are those HDF5 would write, in another order.
+struct DeferredChunk {
+  std::string path;
+  int rank = 0;
+  std::size_t element_size = 0;
+  std::vector<unsigned char> raw;
+  std::vector<unsigned char> filtered;  // Empty: not filtered (raw is written through HDF5).
+};
+
+void ShuffleDeflate(DeferredChunk* chunk) {
+  try {
+    const std::size_t size = chunk->element_size, n = chunk->raw.size() / size;
+    std::vector<unsigned char> shuffled(chunk->raw.size());
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t b = 0; b < size; ++b) shuffled[b * n + i] = chunk->raw[i * size + b];
+    uLongf bytes = compressBound(static_cast<uLong>(shuffled.size()));
+    std::vector<unsigned char> out(bytes);
+    if (compress2(out.data(), &bytes, shuffled.data(), static_cast<uLong>(shuffled.size()),
+                  kDeflateLevel) != Z_OK)
+      return;
+    out.resize(bytes);
+    chunk->filtered = std::move(out);
+  } catch (const std::bad_alloc&) {  // Left to HDF5's own filters.
+  }
+}
+
+}  // namespace
+
 struct H5Writer::Impl {
   std::string final_path;
   std::optional<AtomicFile>
@@ -278,6 +318,45 @@ struct H5Writer::Impl {
   CoreImage image;  // Before `file`: the file is closed (and its image freed) first.
   H5::H5File file;
   bool open = false;
+  // Chunks being filtered (DeferredChunk), written by Flush in the order of their datasets.
+  std::vector<std::unique_ptr<DeferredChunk>> deferred;
+  tbb::task_group filtering;
+
+  std::size_t deferred_bytes = 0;
+
+  // At most kMaxDeferredBytes of values wait (then they are written): the writer's memory stays
+  // bounded whatever the number of datasets.
+  void Defer(std::unique_ptr<DeferredChunk> chunk) {
+    DeferredChunk* c = chunk.get();
+    deferred_bytes += c->raw.size();
+    deferred.push_back(std::move(chunk));
+    filtering.run([c] { ShuffleDeflate(c); });
+    if (deferred_bytes > kMaxDeferredBytes) Flush();
+  }
+  bool Deferred(const std::string& path) const {
+    return std::any_of(deferred.begin(), deferred.end(),
+                       [&path](const auto& c) { return c->path == path; });
+  }
+  // Writes the deferred chunks into their datasets.
+  void Flush() {
+    filtering.wait();
+    for (const auto& c : deferred) {
+      Guard(final_path, "dataset " + c->path, [&] {
+        H5::DataSet ds = file.openDataSet(c->path);
+        if (c->filtered.empty()) {
+          ds.write(c->raw.data(), ds.getDataType());  // The memory layout is the file's.
+          return;
+        }
+        const std::array<hsize_t, 4> offset{};
+        if (H5Dwrite_chunk(ds.getId(), H5P_DEFAULT, /*filters=*/0, offset.data(),
+                           c->filtered.size(), c->filtered.data()) < 0)
+          throw H5::DataSetIException("H5Dwrite_chunk", "cannot write the chunk");
+      });
+    }
+    deferred.clear();
+    deferred_bytes = 0;
+    ThrowIfNoRoom(image, final_path);
+  }
 
   // Closes the temporary file; its error number (0 = none). The file itself is kept.
   int CloseSpill() {
@@ -345,6 +424,7 @@ H5Writer::H5Writer(const std::string& final_path, const std::vector<std::string>
 }
 
 void H5Writer::Remove(const std::string& path) {
+  impl_->Flush();
   Guard(final_path(), "remove " + path, [&] {
     std::string current;
     for (const auto& part : SplitPath(path)) {
@@ -360,6 +440,7 @@ void H5Writer::Remove(const std::string& path) {
 // Closing the file cannot fail on the disk (HDF5 writes only to the driver's buffer); nothing is
 // under the final name unless Commit() ran (the temporary file is removed).
 H5Writer::~H5Writer() {
+  impl_->filtering.wait();  // Chunks not flushed are dropped with the file.
   if (impl_->open) {
     try {
       impl_->file.close();
@@ -384,11 +465,14 @@ void H5Writer::CreateGroup(const std::string& path) {
 
 namespace {
 
+// With `defer`, a dataset compressed as one chunk whose values have the file's layout in memory
+// is handed to it (DeferredChunk) instead of written.
 template <typename T>
 void WriteDataset(H5::H5File& file, const std::string& file_name, const std::string& path,
                   const std::vector<T>& data, const Dims& dims, const H5::PredType& mem_type,
                   const H5::PredType& file_type, const std::string& units,
-                  const std::string& description) {
+                  const std::string& description,
+                  const std::function<void(std::unique_ptr<DeferredChunk>)>& defer = {}) {
   if (dims.empty() || dims.size() > 4) {
     throw Error(ErrorKind::kInvalidValue, "dataset " + path, std::to_string(dims.size()) + " dims",
                 "1 to 4 dimensions");
@@ -403,6 +487,7 @@ void WriteDataset(H5::H5File& file, const std::string& file_name, const std::str
   std::vector<hsize_t> h_dims(dims.begin(), dims.end());
   H5::DataSpace space(static_cast<int>(h_dims.size()), h_dims.data());
   H5::DSetCreatPropList props = UntimedDatasetProperties();
+  bool one_chunk = false;
   if (count >= kCompressThreshold) {
     // Chunks of whole trailing dimensions, about 64k elements each.
     std::vector<hsize_t> chunk = h_dims;
@@ -416,56 +501,83 @@ void WriteDataset(H5::H5File& file, const std::string& file_name, const std::str
     props.setChunk(static_cast<int>(chunk.size()), chunk.data());
     props.setShuffle();
     props.setDeflate(kDeflateLevel);
+    one_chunk = chunk == h_dims;
   }
+  const bool deferred = defer && one_chunk && H5Tequal(mem_type.getId(), file_type.getId()) > 0;
   Guard(file_name, "dataset " + path, [&] {
     if (file.nameExists(path)) file.unlink(path);
     H5::DataSet ds = file.createDataSet(path, file_type, space, props);
-    if (count > 0) ds.write(data.data(), mem_type);
+    if (count > 0 && !deferred) ds.write(data.data(), mem_type);
     WriteStringAttribute(ds, "units", units);
     WriteStringAttribute(ds, "description", description);
   });
+  if (deferred) {
+    auto chunk = std::make_unique<DeferredChunk>();
+    chunk->path = path;
+    chunk->rank = static_cast<int>(dims.size());
+    chunk->element_size = sizeof(T);
+    chunk->raw.resize(count * sizeof(T));
+    std::memcpy(chunk->raw.data(), data.data(), chunk->raw.size());
+    defer(std::move(chunk));
+  }
 }
 
 }  // namespace
 
 void H5Writer::Write(const std::string& path, const std::vector<double>& data, const Dims& dims,
                      const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (impl_->Deferred(name)) impl_->Flush();  // Replaced: its old chunk first.
   CreateGroup(ParentOf(path));
-  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_DOUBLE,
-               H5::PredType::IEEE_F64LE, units, description);
+  WriteDataset(impl_->file, final_path(), name, data, dims, H5::PredType::NATIVE_DOUBLE,
+               H5::PredType::IEEE_F64LE, units, description,
+               [this](std::unique_ptr<DeferredChunk> c) { impl_->Defer(std::move(c)); });
   ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<float>& data, const Dims& dims,
                      const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (impl_->Deferred(name)) impl_->Flush();  // Replaced: its old chunk first.
   CreateGroup(ParentOf(path));
-  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_FLOAT,
-               H5::PredType::IEEE_F32LE, units, description);
+  WriteDataset(impl_->file, final_path(), name, data, dims, H5::PredType::NATIVE_FLOAT,
+               H5::PredType::IEEE_F32LE, units, description,
+               [this](std::unique_ptr<DeferredChunk> c) { impl_->Defer(std::move(c)); });
   ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::int32_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (impl_->Deferred(name)) impl_->Flush();  // Replaced: its old chunk first.
   CreateGroup(ParentOf(path));
-  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_INT32,
-               H5::PredType::STD_I32LE, units, description);
+  WriteDataset(impl_->file, final_path(), name, data, dims, H5::PredType::NATIVE_INT32,
+               H5::PredType::STD_I32LE, units, description,
+               [this](std::unique_ptr<DeferredChunk> c) { impl_->Defer(std::move(c)); });
   ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::uint8_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (impl_->Deferred(name)) impl_->Flush();  // Replaced: its old chunk first.
   CreateGroup(ParentOf(path));
-  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT8,
-               H5::PredType::STD_U8LE, units, description);
+  WriteDataset(impl_->file, final_path(), name, data, dims, H5::PredType::NATIVE_UINT8,
+               H5::PredType::STD_U8LE, units, description,
+               [this](std::unique_ptr<DeferredChunk> c) { impl_->Defer(std::move(c)); });
   ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::Write(const std::string& path, const std::vector<std::uint16_t>& data,
                      const Dims& dims, const std::string& units, const std::string& description) {
+  const std::string name = Normalise(path);
+  if (impl_->Deferred(name)) impl_->Flush();  // Replaced: its old chunk first.
   CreateGroup(ParentOf(path));
-  WriteDataset(impl_->file, final_path(), Normalise(path), data, dims, H5::PredType::NATIVE_UINT16,
-               H5::PredType::STD_U16LE, units, description);
+  WriteDataset(impl_->file, final_path(), name, data, dims, H5::PredType::NATIVE_UINT16,
+               H5::PredType::STD_U16LE, units, description,
+               [this](std::unique_ptr<DeferredChunk> c) { impl_->Defer(std::move(c)); });
   ThrowIfNoRoom(impl_->image, final_path());
 }
 void H5Writer::WriteStack(const std::string& path, const Dims& dims, int bits,
                           const std::function<void(std::size_t, void*)>& fill,
                           const std::string& units, const std::string& description) {
+  impl_->Flush();
   const std::string name = Normalise(path);
   if (dims.size() != 3 || (bits != 8 && bits != 16)) {
     throw Error(ErrorKind::kInvalidValue, "dataset " + name,
@@ -581,6 +693,7 @@ H5::DataSpace ViewSourceSelection(const H5::DataSet& source, const std::string& 
 void H5Writer::WriteView(const std::string& path, const Dims& dims,
                          const std::vector<ViewPart>& parts, const std::string& units,
                          const std::string& description) {
+  impl_->Flush();
   if (dims.empty() || dims.size() > 2 || parts.empty()) {
     throw Error(ErrorKind::kInvalidValue, "view " + path,
                 std::to_string(dims.size()) + " dims, " + std::to_string(parts.size()) + " parts",
@@ -675,6 +788,7 @@ void H5Writer::WriteProvenance(const std::string& scene_yaml_text) {
 }
 
 std::vector<char> H5Writer::CloseToImage() {
+  impl_->Flush();
   std::vector<char> image;
   Guard(final_path(), "close", [&] {
     impl_->file.flush(H5F_SCOPE_GLOBAL);
@@ -697,6 +811,7 @@ std::vector<char> H5Writer::CloseToImage() {
 // private copy of the mapping (MAP_FIXED over it), so the file keeps exactly those bytes; it is
 // then cut to `eoa`, synced and renamed.
 void H5Writer::Commit() {
+  impl_->Flush();
   const char* data = nullptr;
   std::size_t size = 0;
   Guard(final_path(), "close", [&] {

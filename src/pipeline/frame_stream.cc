@@ -46,15 +46,22 @@ void FrameStream::SetRange(int first, int last) {
 cv::Mat FrameStream::ReadRaw(int k) {
   CheckValue(k >= 0 && k < count(), "analysed frame", std::to_string(k),
              fmt::format("0..{}", count() - 1));
+  // The first frame read is kept (the checks of the first frame, the pre-filter's decision and
+  // the correlation's reference all read it): decoded once, a copy of it for each reader.
+  if (first_ + k == first_index_) return first_raw_.clone();
   cv::Mat image;
   if (k == 1 && !next_raw_.empty()) {
-    std::swap(image, next_raw_);
+    std::swap(image, next_raw_);  // Read for the pre-filter's decision: decoded once.
   } else {
+    // The frame after the first one read is decoded meanwhile (on another thread, where the
+    // source can): a pair's two images decode in parallel.
+    if (first_raw_.empty() && k + 1 < count()) source_->ReadAhead(first_ + k + 1);
     image = source_->Read(first_ + k);
   }
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
     first_name_ = Name(k);
+    first_index_ = first_ + k;
   }
   CheckSameSize({first_raw_, image}, {first_name_, Name(k)});
   return image;

@@ -202,7 +202,7 @@ std::vector<LibraryField> DicFields() {
 
 // The preprocessing the frames stage takes (MakePreprocessOptions).
 std::vector<LibraryField> PreprocessFields() {
-  static_assert(FieldCount<PreprocessOptions>() == 5);
+  static_assert(FieldCount<PreprocessOptions>() == 6);
   static_assert(FieldCount<UndistortOptions>() == 3);
   static_assert(FieldCount<GaussianBlurOptions>() == 4);
   static_assert(FieldCount<ClaheOptions>() == 3);
@@ -213,6 +213,8 @@ std::vector<LibraryField> PreprocessFields() {
        Differs(p, [](const O& o) { return o.undistort; })},
       // The region the auto Gaussian measures and the undistortion judges: the correlation's.
       {"preprocess.roi", "dic.roi", "1,2,30,40", Differs(p, [](const O& o) { return o.roi; })},
+      {"preprocess.subset_size", "dic.subset_size", "31",
+       Differs(p, [](const O& o) { return o.subset_size; })},
       {"preprocess.undistortion.skip_threshold_px", "preprocess.undistortion.skip_threshold_px",
        "0.5", Differs(p, [](const O& o) { return o.undistortion.skip_threshold_px; })},
       {"preprocess.undistortion.interpolation", "preprocess.undistortion.interpolation", "bilinear",

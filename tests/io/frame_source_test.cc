@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -72,6 +73,29 @@ TEST(FrameSource, ListedImagesAreNumberedByIndexAndAColourImageIsWarnedOnce) {
   EXPECT_NE(source->warnings()[0].find(b), std::string::npos) << source->warnings()[0];
   // A missing file is named before anything is decoded.
   ExpectErrorContaining([&] { MakeImageFileSource({a, dir.File("missing.png")}); }, "missing.png");
+}
+
+// A frame decoded ahead (on another thread) reads as one decoded on demand, with the colour
+// warning in file order; a file that fails to decode is reported by the Read of that frame; a
+// frame read ahead but never read is dropped.
+TEST(FrameSource, ImageDecodedAheadReadsAsDecodedOnDemand) {
+  const TestDir dir;
+  const std::string a = dir.File("ref.png"), b = dir.File("def.png"), bad = dir.File("bad.png");
+  WriteImage(a, Frame(0));
+  cv::Mat colour;
+  cv::cvtColor(Frame(1), colour, cv::COLOR_GRAY2BGR);
+  WriteImage(b, colour);
+  { std::ofstream(bad) << "not a png"; }
+  const auto source = MakeImageFileSource({a, b, bad});
+  source->ReadAhead(1);
+  EXPECT_TRUE(Same(source->Read(0), Frame(0)));
+  EXPECT_TRUE(source->warnings().empty());
+  EXPECT_TRUE(Same(source->Read(1), Frame(1)));
+  ASSERT_EQ(source->warnings().size(), 1u);
+  EXPECT_NE(source->warnings()[0].find(b), std::string::npos) << source->warnings()[0];
+  source->ReadAhead(2);
+  ExpectErrorContaining([&] { source->Read(2); }, "bad.png");
+  source->ReadAhead(0);  // Never read: the source still closes.
 }
 
 TEST(FrameSource, CameraFileHasFrameNumbersTimeStampsAndBits) {

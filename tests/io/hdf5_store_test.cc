@@ -14,6 +14,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/version.h"
@@ -113,6 +115,43 @@ TEST(Hdf5Store, LargeDatasetsAreChunkedAndCompressed) {
   EXPECT_EQ(props.getLayout(), H5D_CHUNKED);
   EXPECT_GE(props.getNfilters(), 1);
   EXPECT_LT(ds.getStorageSize(), field.size() * sizeof(float) / 10);  // constant data compresses
+}
+
+// Compressed datasets of one chunk are filtered on workers and their chunks written when the file
+// is flushed: every type reads back exactly, a dataset written twice keeps its second values, one
+// removed is gone, and the chunks carry HDF5's shuffle and deflate filters.
+TEST(Hdf5Store, DeferredChunksReadBackAsWritten) {
+  TestDir dir;
+  const std::string path = dir.File("deferred.h5");
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> value(-1, 1);
+  std::vector<double> d(5000), replaced(5000, 2.5);
+  for (double& v : d) v = value(random);
+  std::vector<float> f(6000);
+  for (float& v : f) v = static_cast<float>(value(random));
+  std::vector<std::int32_t> i(4096);
+  for (std::size_t k = 0; k < i.size(); ++k) i[k] = static_cast<std::int32_t>(k * 7919 % 1000);
+  {
+    H5Writer out(path);
+    out.Write("a/d", replaced, {50, 100}, "px", "first, replaced");
+    out.Write("a/d", d, {50, 100}, "px", "random");
+    out.Write("a/f", f, {6000}, "1", "random");
+    out.Write("a/i", i, {64, 64}, "1", "pattern");
+    out.Write("a/gone", d, {5000}, "1", "removed");
+    out.Remove("a/gone");
+    // 40 x 512 KB: more than the writer keeps waiting, so some are written on the way.
+    for (int k = 0; k < 40; ++k)
+      out.Write("many/" + std::to_string(k), std::vector<double>(65536, k), {65536}, "1", "k");
+    out.Commit();
+  }
+  H5Reader in(path);
+  EXPECT_EQ(in.ReadDouble("a/d"), d);
+  EXPECT_EQ(in.ReadFloat("a/f"), f);
+  EXPECT_EQ(in.ReadInt("a/i"), i);
+  for (int k : {0, 17, 39}) EXPECT_EQ(in.ReadDouble("many/" + std::to_string(k)).at(65535), k);
+  H5::H5File file(path, H5F_ACC_RDONLY);
+  EXPECT_FALSE(file.nameExists("/a/gone"));
+  EXPECT_EQ(file.openDataSet("/a/d").getCreatePlist().getNfilters(), 2);  // shuffle, deflate
 }
 
 // Commit() writes the file from the core driver's buffer (the temporary file itself, or memory)

@@ -33,6 +33,10 @@ class FrameSource {
   // frames given in memory), rows top-down, in a buffer of its own. Error naming the frame
   // (Name) when it cannot be read.
   virtual cv::Mat Read(int index) = 0;
+  // A hint that frame `index` will be read soon: a source that can decode it on another thread
+  // (image files) starts doing so, and the Read(index) that follows takes the result (or its
+  // error). At most one frame ahead; the default does nothing.
+  virtual void ReadAhead(int /*index*/) {}
   // The frame's name in messages: "frame_0012.png", "clip.mp4 frame 12", "rec.cine frame -12".
   virtual std::string Name(int index) const = 0;
   // The frame's number in the source's own numbering: the number in the file name for a

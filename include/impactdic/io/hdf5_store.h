@@ -70,7 +70,10 @@ class H5Writer {
   void Remove(const std::string& path);
 
   // Writes a dataset at `path` (parent groups are created). dims has 1..4 entries whose product
-  // equals data.size(). Datasets of >= 4096 elements are chunked and deflate-compressed.
+  // equals data.size(). Datasets of >= 4096 elements are chunked and deflate-compressed; one of a
+  // single chunk is compressed on a worker while the writer goes on (its values copied, at most
+  // 16 MB of them waiting), and its chunk reaches the file at the next Commit, Remove, WriteStack
+  // or WriteView (a full disk is then reported there).
   void Write(const std::string& path, const std::vector<double>& data, const Dims& dims,
              const std::string& units, const std::string& description);
   void Write(const std::string& path, const std::vector<float>& data, const Dims& dims,

@@ -9,8 +9,9 @@
 //   frames.SetRange(first, last);           // analysed frames first..last of the source
 //   for (int k = 0; k < frames.count(); ++k) Use(frames.Read(k));  // k = 0: frame `first`
 //
-// Reading in increasing order decodes each frame once; going back re-opens a video and decodes it
-// from its start (image and camera files are read directly).
+// Reading in increasing order decodes each frame once; the first frame read is kept, so reading it
+// again costs a copy; going back further re-opens a video and decodes it from its start (image and
+// camera files are read directly).
 #ifndef IMPACTDIC_PIPELINE_FRAME_STREAM_H_
 #define IMPACTDIC_PIPELINE_FRAME_STREAM_H_
 
@@ -117,7 +118,8 @@ class FrameStream : public FrameSource {
   const CameraCalibration* calibration_;
   int first_ = 0, last_ = -1;
   std::optional<Preprocessor> pre_;
-  cv::Mat first_raw_;  // The first frame read: the size and depth every frame must have.
+  cv::Mat first_raw_;     // The first frame read: the size and depth every frame must have.
+  int first_index_ = -1;  // Its index in the source (-1: none read yet).
   std::string first_name_;
   cv::Mat next_raw_;  // Analysed frame 1 (raw) when the pre-filter decision read it first.
 };
