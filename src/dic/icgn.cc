@@ -159,7 +159,6 @@ namespace {
 constexpr double kGradientNoiseWeight = 0.5;
 
 double NodeGradientNoiseRatio(Interpolation kind);
-bool SmallSpdInverse(const double* a, int n, double* inv);
 
 // The displacement standard deviation [px] the uncertainty model predicts for a subset of Hessian
 // h (n x n) in noise of standard deviation `noise` [grey levels] in both images: the residuals
@@ -178,7 +177,7 @@ double PredictedSigmaPx(const Shape& shape, const double* h, double noise, Inter
       if (a / nm == b / nm) ht[a * n + b] -= s2 * shape.monomial_moments[(a % nm) * 6 + b % nm];
     }
   }
-  if (!SmallSpdInverse(ht, n, inv)) return std::numeric_limits<double>::infinity();
+  if (!InvertSpd(ht, n, inv)) return std::numeric_limits<double>::infinity();
   return std::sqrt(2 * noise * noise * std::max(inv[0], inv[nm * n + nm]));
 }
 
