@@ -14,3 +14,15 @@ endif()
 if(IMPACTDIC_BUILD_BENCHMARKS)
   find_package(benchmark 1.7 REQUIRED)
 endif()
+# The Python module (src/python, docs/python.md): Python 3.11's development files (python3-dev)
+# and pybind11 2.10 (pybind11-dev). Optional: IMPACTDIC_PYTHON defaults to ON when both are found.
+# Python3 is found first so that pybind11 uses CMake's FindPython.
+# Debian's /usr/bin/python3 (its python3-numpy is what the module and its tests use) unless
+# -DPython3_EXECUTABLE=... names another: a python3 earlier in PATH (pyenv, a venv) is not taken.
+if(NOT Python3_EXECUTABLE AND EXISTS /usr/bin/python3)
+  set(Python3_EXECUTABLE /usr/bin/python3)
+endif()
+find_package(Python3 3.9 COMPONENTS Interpreter Development.Module)
+if(Python3_FOUND)
+  find_package(pybind11 2.10 CONFIG QUIET)
+endif()

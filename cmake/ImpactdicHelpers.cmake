@@ -7,6 +7,12 @@ function(impactdic_target_defaults target)
   if(IMPACTDIC_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
+  if(IMPACTDIC_PYTHON)
+    # The module libraries are position-independent code for the Python module
+    # (impactdic_add_module): our functions are not replaced at load time, so GCC may inline them
+    # as in an executable's code.
+    target_compile_options(${target} PRIVATE -fno-semantic-interposition)
+  endif()
   if(IMPACTDIC_SANITIZE)
     # GCC 12's -Wmaybe-uninitialized gives false positives inside libstdc++ (std::regex,
     # std::function) once the sanitizers instrument the code; the Release build keeps the warning.
@@ -28,6 +34,9 @@ function(impactdic_add_module)
                                               $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${target} PUBLIC ${ARG_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
   impactdic_target_defaults(${target})
+  if(IMPACTDIC_PYTHON)  # Linked into the Python module, a shared object.
+    set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  endif()
   # Installed as impactdic::<NAME> of the exported package (top CMakeLists.txt, "Install").
   set_target_properties(${target} PROPERTIES EXPORT_NAME ${ARG_NAME})
   install(TARGETS ${target} EXPORT impactdicTargets ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}

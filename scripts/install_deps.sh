@@ -20,6 +20,8 @@ PACKAGES=(
   python3-numpy                                 # bench/dic_challenge.py (and its tests)
   python3-meshio                                # tests: a real XDMF reader opens results.xdmf
   python3-matplotlib                            # tests: the h5py example of docs/python.md
+  python3-dev pybind11-dev                      # the Python module (src/python; docs/python.md)
+  python3-pytest python3-xarray                 # its tests (tests/python) and to_xarray()
   lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
   slurm-wlm munge                               # a one-node Slurm for the job-array test (label slurm; docs/campaign.md)
 )

@@ -905,6 +905,44 @@ std::vector<std::string> H5Reader::List(const std::string& group_path) const {
   return GroupMembers(impl_->file, impl_->path, group_path);
 }
 
+bool H5Reader::IsGroup(const std::string& path) const {
+  const std::string p = Normalise(path);
+  if (p == "/") return true;
+  if (!Exists(p)) return false;
+  return Guard(impl_->path, "object " + p,
+               [&] { return impl_->file.childObjType(p) == H5O_TYPE_GROUP; });
+}
+
+std::vector<std::string> H5Reader::AttributeNames(const std::string& object_path) const {
+  const std::string p = Normalise(object_path);
+  if (!Exists(p)) {
+    throw Error(ErrorKind::kFileFormat, "object " + p, "missing", "the group or dataset to exist")
+        .WithFile(impl_->path);
+  }
+  return Guard(impl_->path, "attributes of " + p, [&] {
+    const auto names = [](const H5::H5Object& object) {
+      std::vector<std::string> v(static_cast<std::size_t>(object.getNumAttrs()));
+      for (std::size_t k = 0; k < v.size(); ++k)
+        v[k] = object.openAttribute(static_cast<unsigned>(k)).getName();
+      return v;
+    };
+    if (p != "/" && impl_->file.childObjType(p) == H5O_TYPE_DATASET)
+      return names(impl_->file.openDataSet(p));
+    return names(impl_->file.openGroup(p));
+  });
+}
+
+bool H5Reader::IsTextAttribute(const std::string& object_path, const std::string& name) const {
+  if (!HasAttribute(object_path, name)) {
+    throw Error(ErrorKind::kFileFormat, "attribute " + name + " of " + object_path, "missing",
+                "the attribute to exist")
+        .WithFile(impl_->path);
+  }
+  return Guard(impl_->path, "attribute " + name, [&] {
+    return OpenAttribute(impl_->file, object_path, name).getTypeClass() == H5T_STRING;
+  });
+}
+
 std::vector<std::string> H5Reader::DatasetsRead() const {
   return {impl_->datasets_read.begin(), impl_->datasets_read.end()};
 }

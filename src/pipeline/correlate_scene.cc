@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -81,13 +83,24 @@ void AsCorrelateFile(const Scene& scene, const FrameStream& frames, DicResultsTa
   }
 }
 
+// The scene with the stages of a correlation: calibrate (only for a calibration given: the frames
+// are then undistorted when it has distortion, as in `run`), frames and correlate.
+Scene CorrelationScene(const Scene& given) {
+  Scene scene = given;
+  scene.stages = {"frames", "correlate"};
+  if (!scene.inputs.calibration.empty()) scene.stages.insert(scene.stages.begin(), "calibrate");
+  return scene;
+}
+
+void RunCorrelationRoute(stages::StageContext& c) {
+  if (c.scene.HasStage("calibrate")) stages::RunStage(*stages::MakeCalibrateStage(), c);
+  stages::RunCorrelationStages(c);
+}
+
 }  // namespace
 
 PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bool allow_partial) {
-  Scene scene = given;
-  const bool calibrate = !scene.inputs.calibration.empty();
-  scene.stages = {"frames", "correlate"};
-  if (calibrate) scene.stages.insert(scene.stages.begin(), "calibrate");
+  const Scene scene = CorrelationScene(given);
   CheckValue(!output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   CheckOutputLocation(output, {"-o/--output",
                                {".csv", ".h5", ".hdf5"},
@@ -97,12 +110,7 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
   options.allow_partial = allow_partial;
   options.flags_of = "correlate";  // The scene is correlate's flags: messages name them.
   Route route;
-  route.run_stages = [calibrate](stages::StageContext& c) {
-    // The calibrate stage only for a calibration given (the frames are then undistorted when it
-    // has distortion, as in `run`).
-    if (calibrate) stages::RunStage(*stages::MakeCalibrateStage(), c);
-    stages::RunCorrelationStages(c);
-  };
+  route.run_stages = RunCorrelationRoute;
   route.nothing_written = fmt::format("Nothing was written ({} is as it was)", output);
   route.partial_remedy = "writes it, every subset with its status";
   route.write = [&output](stages::StageContext& c) {
@@ -124,6 +132,28 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
     LogWarning("correlate: only {:.1f}% of the subset results are valid", 100 * dic.valid_fraction);
   }
   return summary;
+}
+
+SceneCorrelation CorrelateSceneInMemory(const Scene& given, std::unique_ptr<FrameSource> frames,
+                                        bool allow_partial) {
+  const Scene scene = CorrelationScene(given);
+  if (!frames) ListInputs(scene);  // The files named, each image once (as CorrelateScene).
+  PipelineOptions options;         // threads -1: dic.threads.
+  options.allow_partial = allow_partial;
+  Route route;
+  route.run_stages = RunCorrelationRoute;
+  route.nothing_written = "No results were returned";
+  route.partial_remedy = "returns them, every subset with its status";
+  route.write = [](stages::StageContext& c) {
+    AsCorrelateFile(c.scene, *c.data.frames, &*c.data.dic);
+  };
+  SceneRunData data;
+  data.given_frames = std::move(frames);
+  SceneCorrelation result;
+  result.summary = RunRoute(scene, options, route, &data);
+  result.table = std::move(*data.dic);
+  result.dic = data.dic_summary;
+  return result;
 }
 
 }  // namespace impactdic

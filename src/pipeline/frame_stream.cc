@@ -46,7 +46,12 @@ void FrameStream::SetRange(int first, int last) {
 cv::Mat FrameStream::ReadRaw(int k) {
   CheckValue(k >= 0 && k < count(), "analysed frame", std::to_string(k),
              fmt::format("0..{}", count() - 1));
-  cv::Mat image = source_->Read(first_ + k);
+  cv::Mat image;
+  if (k == 1 && !next_raw_.empty()) {
+    std::swap(image, next_raw_);
+  } else {
+    image = source_->Read(first_ + k);
+  }
   if (first_raw_.empty()) {
     first_raw_ = image.clone();
     first_name_ = Name(k);
@@ -60,9 +65,18 @@ cv::Mat FrameStream::Read(int k) {
   if (!pre_) {
     if (calibration_) CheckFrameSize(*calibration_, image.size(), Name(k));
     pre_.emplace(options_, calibration_, image.size());
-    // The first analysed frame (the correlation's first reference) decides the automatic
-    // pre-filter for every frame.
-    pre_->DecideFrom(k == 0 ? image : ReadRaw(0));
+    // The first analysed frame (the correlation's first reference) and the one after it decide
+    // the automatic pre-filter for every frame (the pair's noise against the bias).
+    const cv::Mat first = k == 0 ? image : ReadRaw(0);
+    NextFrame next;
+    if (count() > 1) {
+      next = [this, k, &image] {
+        if (k == 1) return image;
+        next_raw_ = ReadRaw(1);  // Kept for Read(1): decoded once.
+        return next_raw_;
+      };
+    }
+    pre_->DecideFrom(first, next);
   }
   return pre_->Apply(image);
 }

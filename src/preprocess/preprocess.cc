@@ -76,21 +76,39 @@ std::string GaussianDecision::Text() const {
     case GaussianMode::kAuto: break;
   }
   if (!figure.measured()) return fmt::format("auto, skipped: {} (region too small)", measured);
+  if (trade.measured() && figure.bias_px > threshold_px) {
+    const std::string errors = fmt::format(
+        "expected error per subset {:.4f} -> {:.4f} px (bias {:.4f} -> {:.4f}, random {:.4f} -> "
+        "{:.4f} px, noise {:.2f} grey levels)",
+        trade.Error(false), trade.Error(true), trade.bias_px, trade.bias_filtered_px,
+        trade.random_px, trade.random_filtered_px, trade.noise_grey);
+    return applied ? fmt::format("auto, {} applied: {} above {} px; {}", blur, measured,
+                                 threshold_px, errors)
+                   : fmt::format("auto, skipped: {} above {} px, but noise-limited: {}", measured,
+                                 threshold_px, errors);
+  }
   return applied ? fmt::format("auto, {} applied: {} above {} px", blur, measured, threshold_px)
                  : fmt::format("auto, skipped: {} not above {} px", measured, threshold_px);
 }
 
 GaussianDecision DecideGaussian(const GaussianBlurOptions& options, const cv::Mat& reference,
-                                cv::Rect roi) {
+                                cv::Rect roi, const NextFrame& next, int subset_size) {
   GaussianDecision d;
   d.mode = options.mode;
   d.sigma_px = options.sigma_px;
   d.kernel_size = options.kernel_size;
   d.threshold_px = options.auto_threshold_px;
   if (!reference.empty()) d.figure = MeasureNyquistBias(reference, roi);
+  const bool biased = d.figure.measured() && d.figure.bias_px > options.auto_threshold_px;
+  if (options.mode == GaussianMode::kAuto && biased && next && subset_size > 0) {
+    const cv::Mat next_frame = next();
+    d.trade = MeasurePrefilterTrade(
+        reference, next_frame, roi,
+        cv::getGaussianKernel(options.kernel_size, options.sigma_px, CV_64F), subset_size);
+  }
   d.applied = options.mode == GaussianMode::kOn ||
-              (options.mode == GaussianMode::kAuto && d.figure.measured() &&
-               d.figure.bias_px > options.auto_threshold_px);
+              (options.mode == GaussianMode::kAuto && biased &&
+               (!d.trade.measured() || d.trade.Error(true) < d.trade.Error(false)));
   return d;
 }
 
@@ -184,6 +202,8 @@ void PrefilterAttributes(const GaussianDecision& decision,
   (*number_attributes)["prefilter_applied"] = decision.applied ? 1.0 : 0.0;
   (*number_attributes)["nyquist_bias_px"] = decision.figure.bias_px;
   (*number_attributes)["prefilter_threshold_px"] = decision.threshold_px;
+  (*number_attributes)["prefilter_error_px"] = decision.trade.Error(false);
+  (*number_attributes)["prefilter_error_filtered_px"] = decision.trade.Error(true);
 }
 
 cv::Mat GaussianBlurFrame(const GaussianBlurOptions& options, const cv::Mat& frame) {
@@ -205,10 +225,11 @@ void Preprocessor::CheckFrame(const cv::Mat& frame) const {
                             frame.rows, frame_size_.width, frame_size_.height));
 }
 
-void Preprocessor::Decide(const cv::Mat& undistorted_reference) {
+void Preprocessor::Decide(const cv::Mat& undistorted_reference, const NextFrame& undistorted_next) {
   WallTimer timer;
   const GaussianMode mode = options_.gaussian.mode;
-  summary_.gaussian = DecideGaussian(options_.gaussian, undistorted_reference, options_.roi);
+  summary_.gaussian = DecideGaussian(options_.gaussian, undistorted_reference, options_.roi,
+                                     undistorted_next, options_.subset_size);
   decided_ = true;
   blur_ = summary_.gaussian.applied;
   PreprocessStep& step = summary_.steps[1];
@@ -218,10 +239,19 @@ void Preprocessor::Decide(const cv::Mat& undistorted_reference) {
   LogInfo("pre-filter: {}", summary_.gaussian.Text());
 }
 
-void Preprocessor::DecideFrom(const cv::Mat& reference_frame) {
+void Preprocessor::DecideFrom(const cv::Mat& reference_frame, const NextFrame& next_frame) {
   if (decided_) return;
   CheckFrame(reference_frame);
-  Decide(undistorter_ ? undistorter_->Apply(reference_frame) : reference_frame);
+  NextFrame next;
+  if (next_frame) {
+    next = [this, &next_frame] {
+      const cv::Mat f = next_frame();
+      if (f.empty()) return f;
+      CheckFrame(f);
+      return undistorter_ ? undistorter_->Apply(f) : f;
+    };
+  }
+  Decide(undistorter_ ? undistorter_->Apply(reference_frame) : reference_frame, next);
 }
 
 cv::Mat Preprocessor::Apply(const cv::Mat& frame) {
@@ -229,7 +259,7 @@ cv::Mat Preprocessor::Apply(const cv::Mat& frame) {
   WallTimer timer;
   cv::Mat out = frame;
   if (undistorter_) out = undistorter_->Apply(out);
-  if (!decided_) Decide(out);
+  if (!decided_) Decide(out, {});
   if (blur_) out = GaussianBlurFrame(options_.gaussian, out);
   if (options_.clahe.enabled) {
     // A CLAHE object per call: cv::CLAHE keeps scratch buffers, so sharing one across threads

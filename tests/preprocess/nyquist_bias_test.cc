@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "impactdic/dic/bspline.h"
+#include "impactdic/preprocess/preprocess.h"
 #include "impactdic/synth/fourier_shift.h"
 
 namespace impactdic {
@@ -108,6 +109,88 @@ TEST(NyquistBias, TileCountIsBounded) {
   EXPECT_GE(b.tiles, kMaxNyquistTiles / 2);
   // Spread over the image, the tiles see the same texture as all of it would.
   EXPECT_NEAR(b.bias_px, MeasureNyquistBias(Sharp()).bias_px, 0.1 * b.bias_px);
+}
+
+// A pair of known noise: `texture` shifted by a sub-pixel amount (exact Fourier shift), 8-bit,
+// with noise of standard deviation `noise` in each image.
+struct Pair {
+  cv::Mat reference, deformed;
+};
+Pair NoisyPair(const cv::Mat& texture, double noise) {
+  return {QuantiseWithNoise(texture, noise, 8, 11),
+          QuantiseWithNoise(FourierShift(texture, 0.37, -0.21), noise, 8, 12)};
+}
+PrefilterTrade Trade(const Pair& p, int subset_size) {
+  return MeasurePrefilterTrade(p.reference, p.deformed, {}, cv::getGaussianKernel(5, 0.7, CV_64F),
+                               subset_size);
+}
+
+// The sharp dots blurred (sigma 1.5 px): no content near the Nyquist frequency, so a sub-pixel
+// shift is a phase shift of every component.
+const cv::Mat& Smooth() {
+  static const cv::Mat smooth = [] {
+    cv::Mat m;
+    cv::GaussianBlur(Sharp(), m, cv::Size(0, 0), 1.5, 1.5, cv::BORDER_REFLECT_101);
+    return m;
+  }();
+  return smooth;
+}
+
+// The noise from the pair (the shift undone per tile) is the noise put in; the random error is
+// the least-squares one of white noise, sqrt(2 noise^2 / (M <g^2>)) per axis (g the image's
+// central-difference gradient, M the subset's pixels), within the spline's and the window's
+// effects (15 %); a filter never lowers the random error of white noise (least squares is
+// optimal then).
+TEST(PrefilterTrade, NoiseAndRandomErrorOfAPairOfKnownNoise) {
+  cv::Mat gx, gy;
+  cv::Sobel(Smooth(), gx, CV_64F, 1, 0, 1, 0.5);  // Central differences.
+  cv::Sobel(Smooth(), gy, CV_64F, 0, 1, 1, 0.5);
+  const cv::Rect inner(2, 2, Smooth().cols - 4, Smooth().rows - 4);
+  const double g2 = (gx(inner).dot(gx(inner)) + gy(inner).dot(gy(inner))) / (2.0 * inner.area());
+  for (const double noise : {1.0, 4.0}) {
+    SCOPED_TRACE("noise " + std::to_string(noise));
+    const PrefilterTrade t = Trade(NoisyPair(Smooth(), noise), 21);
+    ASSERT_TRUE(t.measured());
+    // 4 x 4 tiles; at the image's border the Fourier shift wraps a mirrored copy in, which is
+    // no shift: those tiles' residual is over twice the median and they are left out.
+    EXPECT_GE(t.tiles, 12);
+    EXPECT_LE(t.tiles, 16);
+    const double var = noise * noise + 1.0 / 12;  // Quantisation adds 1/12 grey level^2.
+    EXPECT_NEAR(t.noise_grey, std::sqrt(var), 0.08 * noise);
+    const double expected = std::sqrt(2 * (2 * var / (21 * 21 * g2)));  // u and v.
+    EXPECT_NEAR(t.random_px, expected, 0.15 * expected);
+    EXPECT_GE(t.random_filtered_px, t.random_px);
+  }
+}
+
+// Bias-limited (sharp dots, little noise): the filter lowers the expected error; noise-limited
+// (much noise, a small subset): it raises it, and DecideGaussian (auto) leaves the frames alone,
+// saying why. On sharp content the pair's mismatch near the Nyquist frequency (not a phase
+// shift when sampled) counts as noise, as it does for the correlation.
+TEST(PrefilterTrade, TheFilterIsWorthItOnlyWhenTheBiasDominates) {
+  const Pair clean = NoisyPair(Sharp(), 0.5), noisy = NoisyPair(Sharp(), 20.0);
+  const PrefilterTrade bias_limited = Trade(clean, 41);
+  EXPECT_GT(bias_limited.bias_px, 0.005);
+  EXPECT_LT(bias_limited.bias_filtered_px, bias_limited.bias_px / 3);
+  EXPECT_LT(bias_limited.Error(true), bias_limited.Error(false));
+  const PrefilterTrade noise_limited = Trade(noisy, 11);
+  EXPECT_GT(noise_limited.Error(true), noise_limited.Error(false));
+  const GaussianBlurOptions options;                              // auto
+  EXPECT_TRUE(DecideGaussian(options, noisy.reference).applied);  // The bias figure alone.
+  const GaussianDecision weighed = DecideGaussian(
+      options, noisy.reference, {}, [&] { return noisy.deformed; }, 11);
+  EXPECT_FALSE(weighed.applied);
+  EXPECT_NE(weighed.Text().find("noise-limited"), std::string::npos) << weighed.Text();
+  EXPECT_TRUE(DecideGaussian(
+                  options, clean.reference, {}, [&] { return clean.deformed; }, 41)
+                  .applied);
+  // Without a second frame, or with one of another size: the bias figure alone, no trade.
+  EXPECT_TRUE(DecideGaussian(
+                  options, noisy.reference, {}, [] { return cv::Mat(); }, 11)
+                  .applied);
+  EXPECT_FALSE(MeasurePrefilterTrade(noisy.reference, noisy.deformed(cv::Rect(0, 0, 100, 100)), {},
+                                     cv::getGaussianKernel(5, 0.7, CV_64F), 11)
+                   .measured());
 }
 
 }  // namespace

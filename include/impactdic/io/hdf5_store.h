@@ -157,6 +157,12 @@ class H5Reader {
   bool HasAttribute(const std::string& object_path, const std::string& name) const;
   // Names of the members of a group.
   std::vector<std::string> List(const std::string& group_path) const;
+  // Whether `path` is a group ("/" is one); false for a dataset or a missing path.
+  bool IsGroup(const std::string& path) const;
+  // The names of the attributes of a group or dataset, in the file's order, and whether one holds
+  // text (else a number): what a reader of any file lists (the Python module's read_results).
+  std::vector<std::string> AttributeNames(const std::string& object_path) const;
+  bool IsTextAttribute(const std::string& object_path, const std::string& name) const;
   // The datasets read so far by ReadDouble / ReadFloat / ReadInt ("/dic/u_px", sorted, each
   // once): a test checks that the readers of a file's groups read every dataset in it.
   std::vector<std::string> DatasetsRead() const;

@@ -13,8 +13,12 @@
 #ifndef IMPACTDIC_PIPELINE_CORRELATE_SCENE_H_
 #define IMPACTDIC_PIPELINE_CORRELATE_SCENE_H_
 
+#include <memory>
 #include <string>
 
+#include "impactdic/dic/correlator.h"
+#include "impactdic/io/dic_results.h"
+#include "impactdic/io/frame_source.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 
@@ -29,6 +33,20 @@ namespace impactdic {
 // run, the warnings and the output.
 PipelineSummary CorrelateScene(const Scene& scene, const std::string& output,
                                bool allow_partial = false);
+
+// The same correlation kept in memory (the Python module's `correlate`): the table exactly as
+// CorrelateScene's output file holds it, the correlation's summary and the run's. `frames`, when
+// given, are the frames in place of the scene's inputs (frames in memory: io
+// MakeMemoryFrameSource), preprocessed and selected by the scene's keys as files are; null: the
+// scene's inputs.frames or inputs.frame_files. Messages name the scene keys (dic.min_zncc), not
+// `correlate`'s flags. Nothing usable is PartialResultsError unless allow_partial.
+struct SceneCorrelation {
+  DicResultsTable table;
+  DicSummary dic;
+  PipelineSummary summary;
+};
+SceneCorrelation CorrelateSceneInMemory(const Scene& scene, std::unique_ptr<FrameSource> frames,
+                                        bool allow_partial = false);
 
 }  // namespace impactdic
 

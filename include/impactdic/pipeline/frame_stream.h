@@ -119,6 +119,7 @@ class FrameStream : public FrameSource {
   std::optional<Preprocessor> pre_;
   cv::Mat first_raw_;  // The first frame read: the size and depth every frame must have.
   std::string first_name_;
+  cv::Mat next_raw_;  // Analysed frame 1 (raw) when the pre-filter decision read it first.
 };
 
 }  // namespace impactdic

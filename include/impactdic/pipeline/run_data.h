@@ -51,6 +51,9 @@ struct SceneRunData {
   int first_frame = 0, last_frame = -1;
   FrameTimeline timeline;
   std::shared_ptr<FrameStream> frames;
+  // Before the frames stage: the frames to read instead of the scene's inputs (frames in memory;
+  // pipeline CorrelateSceneInMemory), taken by the stage. Null: the scene's inputs.
+  std::unique_ptr<FrameSource> given_frames;
   std::string preprocess_note;  // What the preprocessing did (one line).
 
   // correlate: the correlation's rows (io/dic_results.h; row 0 = frame first_frame) and summary.

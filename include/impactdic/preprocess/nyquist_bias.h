@@ -51,6 +51,45 @@ struct NyquistBias {
 // region.
 NyquistBias MeasureNyquistBias(const cv::Mat& image, cv::Rect roi = {});
 
+// What a Gaussian pre-filter of both images trades for a subset of a given size: the predicted
+// bias above (max over t, the u and v parts in quadrature) and the expected random error of the
+// subset's translation (standard deviation, u and v in quadrature), without and with the filter.
+// The random error is the least-squares one of IC-GN in stationary texture and noise, over the
+// 2-D spectra (n x n bins) of the signal S and of the pair's residual noise N, for the subset's
+// M pixels (a product of the axes' marginals would credit the filter with noise it removes where
+// there is no signal):
+//
+//     var(u) = (n^2 / M) sum_k a_k b_k / (sum_k a_k)^2,   a = S d(w_x)^2 G^2,  b = N G^2,
+//
+// d the B-spline gradient's response, G the filter's (1 without it). N is measured from the
+// first pair itself, so coloured noise (JPEG, demosaicing) counts as it is: per tile, the
+// deformed tile is taken at the integer part of the tile's shift (phase correlation), its
+// fractional part s fitted by Gauss-Newton on sum |F1 - F0 e^(-i w s)|^2 with the deformed
+// tile's window moved by s (its content's position), and N = |F1 - F0 e^(-i w s)|^2 (both
+// images' noise, and content that does not move as a shift, e.g. near the Nyquist frequency);
+// tiles whose residual is over twice the median (deformation, occlusion) are left out.
+// S = the reference's spectrum less half of N. The filter is worth it when the total error
+// sqrt(bias^2 + random^2) falls. Sizes as MeasureNyquistBias (64 px tiles, here at most
+// kMaxTradeTiles of them).
+inline constexpr int kMaxTradeTiles = 64;
+struct PrefilterTrade {
+  double bias_px = std::nan(""), bias_filtered_px = std::nan("");
+  double random_px = std::nan(""), random_filtered_px = std::nan("");
+  double noise_grey = std::nan("");  // One image's noise standard deviation [grey levels].
+  int tiles = 0;                     // Tiles used (of those that fit the region).
+  bool measured() const { return !std::isnan(random_px) && !std::isnan(bias_px); }
+  double Error(bool filtered) const {
+    return filtered ? std::hypot(bias_filtered_px, random_filtered_px)
+                    : std::hypot(bias_px, random_px);
+  }
+};
+
+// The trade for the pair (reference, next) over roi (empty: the whole image), a 1-D filter
+// kernel applied along both axes (cv::getGaussianKernel) and subsets of subset_size px per side.
+// Not measured (NaN) when the region holds no 32 px tile or next is empty or of another size.
+PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& next, cv::Rect roi,
+                                     const cv::Mat& kernel, int subset_size);
+
 // The predicted bias [px] of a bicubic B-spline IC-GN translation at fractional shift t in (0, 1)
 // for the one-sided marginal power spectrum power[k], k = 0..n/2, of an n-point axis (frequency
 // w = 2 pi k / n; power[0], the mean, is ignored). Exposed for the tests.

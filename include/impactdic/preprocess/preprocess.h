@@ -26,6 +26,7 @@
 #define IMPACTDIC_PREPROCESS_PREPROCESS_H_
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <memory>
 #include <opencv2/core.hpp>
@@ -50,8 +51,11 @@ inline constexpr ValueRange kNyquistBiasThresholdRange{0, 1, "px"};
 
 // When the Gaussian blur runs: kOn always, kOff never, kAuto when the first reference frame's
 // near-Nyquist bias figure (MeasureNyquistBias over the region of interest) exceeds
-// GaussianBlurOptions::auto_threshold_px. Written "auto", "true" (also on, yes) and "false" (also
-// off, no, none): the scene's preprocess.gaussian.enabled and `correlate --gaussian`.
+// GaussianBlurOptions::auto_threshold_px and, when the next frame is known, the filter lowers the
+// expected total error of a subset (bias and random error in quadrature, MeasurePrefilterTrade):
+// a noise-limited recording is not blurred for a bias far below its random error. Written "auto",
+// "true" (also on, yes) and "false" (also off, no, none): the scene's preprocess.gaussian.enabled
+// and `correlate --gaussian`.
 enum class GaussianMode { kAuto, kOn, kOff };
 inline constexpr EnumNames<GaussianMode, 3> kGaussianModeNames{
     {{{GaussianMode::kAuto, "auto"},
@@ -86,15 +90,24 @@ struct GaussianDecision {
   double sigma_px = 0;
   int kernel_size = 0;
   double threshold_px = 0;
-  NyquistBias figure;  // Of the reference (measured in every mode when a reference is given).
+  NyquistBias figure;    // Of the reference (measured in every mode when a reference is given).
+  PrefilterTrade trade;  // Of the first pair (auto, figure above the threshold, next frame given).
   // "auto, Gaussian sigma 0.8 px (kernel 5x5) applied: near-Nyquist bias figure 0.0034 px above
-  // 0.0025 px", "auto, skipped: ... below ...", "on (set), ...", "off (set), ...".
+  // 0.0025 px; expected error per subset 0.0064 -> 0.0052 px", "auto, skipped: ... below ...",
+  // "auto, skipped: ... above ...; but the expected error ... would rise ...", "on (set), ...",
+  // "off (set), ...".
   std::string Text() const;
 };
 
-// Measures the reference (over `roi`, empty: all of it; none given: not measured) and decides.
+// The frame after the reference, read only when a decision needs it (empty function or Mat:
+// none).
+using NextFrame = std::function<cv::Mat()>;
+
+// Measures the reference (over `roi`, empty: all of it; none given: not measured) and decides;
+// in mode auto with the bias figure above the threshold, the next frame and the subset size,
+// weighs the bias against the random error (MeasurePrefilterTrade).
 GaussianDecision DecideGaussian(const GaussianBlurOptions& options, const cv::Mat& reference,
-                                cv::Rect roi = {});
+                                cv::Rect roi = {}, const NextFrame& next = {}, int subset_size = 0);
 
 // The decision as attributes of the results' /dic group (`correlate` and `run` alike): text
 // `prefilter` (GaussianDecision::Text), numbers `prefilter_applied` (0 or 1),
@@ -118,6 +131,9 @@ struct ClaheOptions {
 struct PreprocessOptions {
   bool undistort = true;  // Undistort when a calibration is given and the skip rule allows.
   cv::Rect roi;  // Where the auto Gaussian measures the reference [px]; empty = the whole frame.
+  // The correlation's subset side [px] (the DIC options'), for the auto Gaussian's random error;
+  // 0: unknown (the bias figure alone decides).
+  int subset_size = 0;
   UndistortOptions undistortion;
   GaussianBlurOptions gaussian;
   ClaheOptions clahe;
@@ -155,7 +171,9 @@ class Preprocessor {
   // is on) and, in mode auto, decides the Gaussian step from it (summary().gaussian, logged):
   // every frame is then filtered alike. Without it, the first frame passed to Apply is that
   // reference. Later calls change nothing.
-  void DecideFrom(const cv::Mat& reference_frame);
+  // `next_frame` (raw, optional, called only when needed): the frame after the reference, for the
+  // filter's random error.
+  void DecideFrom(const cv::Mat& reference_frame, const NextFrame& next_frame = {});
 
   // Runs the enabled steps on one single-channel 8- or 16-bit frame of frame_size; returns a
   // frame of the same size and type (the input itself when every step is skipped).
@@ -166,7 +184,7 @@ class Preprocessor {
   const PreprocessSummary& summary() const { return summary_; }
 
  private:
-  void Decide(const cv::Mat& undistorted_reference);
+  void Decide(const cv::Mat& undistorted_reference, const NextFrame& undistorted_next);
   void CheckFrame(const cv::Mat& frame) const;
 
   PreprocessOptions options_;

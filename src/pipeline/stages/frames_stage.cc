@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "impactdic/calib/calibration.h"
@@ -186,11 +187,11 @@ class FramesStage : public Stage {
     SceneRunData& d = c.data;
     const CameraCalibration* calibration = d.calibration ? &*d.calibration : nullptr;
     const std::vector<std::string>& files = scene.inputs.frame_files;
-    d.frames = files.empty()
-                   ? std::make_shared<FrameStream>(scene.inputs.frames,
-                                                   MakePreprocessOptions(scene), calibration)
-                   : std::make_shared<FrameStream>(MakeImageFileSource(files),
-                                                   MakePreprocessOptions(scene), calibration);
+    const PreprocessOptions preprocess = MakePreprocessOptions(scene);  // Checked first.
+    std::unique_ptr<FrameSource> source = std::move(d.given_frames);    // Frames in memory.
+    if (!source)
+      source = files.empty() ? OpenFrameSource(scene.inputs.frames) : MakeImageFileSource(files);
+    d.frames = std::make_shared<FrameStream>(std::move(source), preprocess, calibration);
     d.source_frames = d.frames->source_frames();
     SelectFrameRange(scene, d);
     FrameTimeline all;

@@ -103,8 +103,10 @@ DicOptions MakeDicOptions(const SceneDic& d) {
 
 PreprocessOptions MakePreprocessOptions(const Scene& scene) {
   PreprocessOptions o = scene.preprocess;
-  o.undistortion.roi = MakeDicOptions(scene.dic).grid.roi;
-  o.roi = o.undistortion.roi;  // Where the automatic pre-filter measures the first frame.
+  const DicOptions dic = MakeDicOptions(scene.dic);
+  o.undistortion.roi = dic.grid.roi;
+  o.subset_size = dic.grid.subset_size;  // The auto pre-filter weighs its random error.
+  o.roi = o.undistortion.roi;            // Where the automatic pre-filter measures the first frame.
   return o;
 }
 

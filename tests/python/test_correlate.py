@@ -1,0 +1,240 @@
+"""impactdic.correlate: known shifts, arrays against files against `impactdic correlate`, the
+option errors of the scene keys, sequences, and memory over many calls."""
+import os
+import resource
+
+import h5py
+import numpy as np
+import pytest
+
+import impactdic
+from conftest import CLI_OPTIONS, DX, DY, OPTIONS, fourier_shift, speckle, to_uint16_12bit, to_uint8
+
+# Subpixel accuracy of a Fourier-shifted 8-bit speckle with the default bicubic B-spline
+# interpolation: the median error over the subsets is a few thousandths of a pixel (measured
+# 0.002 px); 0.02 px leaves room for the quantization.
+SHIFT_TOLERANCE_PX = 0.02
+
+
+def check_shift(result, dx=DX, dy=DY, row=1):
+    valid = result.valid[row]
+    assert valid.mean() > 0.9, result.summary["brief_report"]
+    assert np.median(result.u[row][valid]) == pytest.approx(dx, abs=SHIFT_TOLERANCE_PX)
+    assert np.median(result.v[row][valid]) == pytest.approx(dy, abs=SHIFT_TOLERANCE_PX)
+
+
+def test_version():
+    assert impactdic.__version__
+    assert isinstance(impactdic.__version__, str)
+
+
+@pytest.mark.parametrize("dtype", ["uint8", "uint16"])
+def test_shifted_arrays_give_the_shift(pair, pair8, dtype):
+    if dtype == "uint8":
+        images = pair8
+    else:  # 12-bit data in 16-bit words, as a Phantom camera's.
+        images = tuple(to_uint16_12bit(image) for image in pair)
+    result = impactdic.correlate(*images, **OPTIONS)
+    check_shift(result)
+    assert result.u.shape == (2, result.x.size) and result.x.shape == result.y.shape
+    assert result.u.dtype == np.float64 and result.zncc.dtype == np.float32
+    assert result.status.dtype == np.int32 and result.iterations.dtype == np.int32
+    assert np.all(result.u[0][result.valid[0]] == 0)  # Row 0: the reference.
+    assert list(result.frame) == [0, 1] and list(result.frame_number) == [0, 1]
+    assert result.time_s is None  # Arrays carry no time stamps.
+    assert result.status_name(0) == "converged"
+    assert result.summary["usable"] and result.summary["frames"] == 1
+    if dtype == "uint16":
+        assert result.summary["data_bits"] == 12
+
+
+def test_options_nested_and_dotted_are_one(pair8):
+    nested = impactdic.correlate(*pair8, dic={"subset_size": 21, "step": 12})
+    dotted = impactdic.correlate(*pair8, **{"dic.subset_size": 21, "dic.step": 12})
+    np.testing.assert_array_equal(nested.u, dotted.u)
+    assert nested.x.size == dotted.x.size
+
+
+def test_arrays_files_and_cli_agree_to_the_bit(pair8, png_pair, cli, tmp_path):
+    arrays = impactdic.correlate(*pair8, **OPTIONS)
+    files = impactdic.correlate(*png_pair, **OPTIONS)
+    output = str(tmp_path / "dic.h5")
+    code, stderr = cli("correlate", "--reference", png_pair[0], "--deformed", png_pair[1],
+                       "-o", output, *CLI_OPTIONS)
+    assert code == 0, stderr
+    with h5py.File(output, "r") as f:
+        cli_arrays = {name: f["dic/" + stored][()] for name, stored in [
+            ("x", "x_px"), ("y", "y_px"), ("u", "u_px"), ("v", "v_px"), ("status", "status"),
+            ("iterations", "iterations"), ("zncc", "zncc"), ("sigma_u", "sigma_u_px"),
+            ("sigma_v", "sigma_v_px"), ("frame", "frame"), ("frame_number", "frame_number")]}
+    for name, expected in cli_arrays.items():
+        np.testing.assert_array_equal(getattr(files, name), expected, err_msg=name)
+        np.testing.assert_array_equal(getattr(arrays, name), expected, err_msg=name)
+    check_shift(arrays)
+
+
+def test_sequence_as_a_3d_array(pair8):
+    reference = speckle((160, 160), seed=11)
+    shifts = [(0.0, 0.0), (0.4, 0.2), (0.9, -0.3), (1.6, -0.7)]
+    frames = np.stack([to_uint8(fourier_shift(reference, dx, dy)) for dx, dy in shifts])
+    result = impactdic.correlate(frames, **OPTIONS)
+    assert result.u.shape[0] == len(shifts)
+    for row, (dx, dy) in enumerate(shifts[1:], start=1):
+        check_shift(result, dx, dy, row)
+    # The same frames as reference and a 3-D array of deformed ones, and as a list.
+    as_list = impactdic.correlate(list(frames), **OPTIONS)
+    split = impactdic.correlate(frames[0], frames[1:], **OPTIONS)
+    np.testing.assert_array_equal(as_list.u, result.u)
+    np.testing.assert_array_equal(split.u, result.u)
+    timed = impactdic.correlate(frames, time_s=[0.0, 2e-4, 4e-4, 6e-4], **OPTIONS)
+    np.testing.assert_array_equal(timed.time_s, [0.0, 2e-4, 4e-4, 6e-4])
+    np.testing.assert_array_equal(timed.u, result.u)
+    with pytest.raises(ValueError, match="one per frame"):
+        impactdic.correlate(frames, time_s=[0.0, 1.0], **OPTIONS)
+
+
+def test_threads_do_not_change_the_results(pair8):
+    one = impactdic.correlate(*pair8, threads=1, **OPTIONS)
+    two = impactdic.correlate(*pair8, threads=2, **OPTIONS)
+    np.testing.assert_array_equal(one.u, two.u)
+    np.testing.assert_array_equal(one.v, two.v)
+
+
+def test_roi_as_a_list(pair8):
+    result = impactdic.correlate(*pair8, dic={"subset_size": 21, "step": 12,
+                                              "roi": [40, 40, 150, 150]})
+    assert result.x.min() >= 40 and result.x.max() <= 150
+    check_shift(result)
+
+
+def option_error(**options):
+    """The message of the ValueError `correlate` raises for `options` on missing files (None when
+    it raises none for the options: the files' error comes instead)."""
+    try:
+        impactdic.correlate("missing_reference.png", "missing_deformed.png", **options)
+    except ValueError as e:
+        return str(e)
+    except OSError:
+        return None
+    raise AssertionError("correlate of missing files returned")
+
+
+def cli_error(cli, key, value):
+    code, stderr = cli("correlate", "--reference", "missing_reference.png", "--deformed",
+                       "missing_deformed.png", "-o", "unused.h5", "--" + key, value)
+    assert code != 0
+    return stderr.removeprefix("impactdic: error: ").splitlines()[0]
+
+
+BAD_VALUES = {"dic.subset_size": 4, "dic.step": 0, "dic.interpolation": "nearest-ish",
+              "dic.min_zncc": 2.5, "dic.shape": "quintic", "dic.reference_update": "never",
+              "preprocess.gaussian.enabled": "maybe", "inputs.fps": -1, "dic.roi": [5, 5, 2, 2],
+              "dic.keep_warp_gradient": "perhaps"}
+
+
+@pytest.mark.parametrize("key", sorted(BAD_VALUES))
+def test_bad_option_is_the_clis_value_error(cli, key):
+    value = BAD_VALUES[key]
+    message = option_error(**{key: value})
+    assert message is not None and message.startswith(key + ":"), message
+    text = impactdic._key_text(value)
+    assert message == cli_error(cli, key, text).replace("--" + key, key)
+
+
+def test_every_key_refuses_a_bad_value_as_the_cli(cli):
+    """Each key the function takes, given text no key of the tables accepts as a number, list or
+    enum: the key's parser decides, with the command line's message (keys taking any text, as
+    paths, accept it in both)."""
+    keys = [k for k in impactdic.correlate_keys if k != "dic.threads"]
+    assert "dic.subset_size" in keys and "preprocess.gaussian.enabled" in keys
+    refused = 0
+    for key in keys:
+        message = option_error(**{key: "@bad"})
+        expected = cli_error(cli, key, "@bad")
+        if message is None:  # Accepted (a path): neither refuses the value itself.
+            assert not expected.startswith(f"--{key}: invalid value"), (key, expected)
+        else:
+            refused += 1
+            assert message == expected.replace("--" + key, key), key
+    assert refused > len(keys) // 2
+
+
+def test_unknown_option_names_the_closest_key():
+    with pytest.raises(ValueError, match=r"dic\.subset_sise: .*did you mean 'dic\.subset_size'"):
+        impactdic.correlate("a.png", "b.png", dic={"subset_sise": 21})
+
+
+def test_missing_file_is_an_os_error(tmp_path):
+    with pytest.raises(FileNotFoundError, match="missing.png"):
+        impactdic.correlate(str(tmp_path / "missing.png"), str(tmp_path / "missing2.png"))
+
+
+def test_bad_array_is_a_value_error(pair8):
+    with pytest.raises(ValueError, match="dtype int64"):
+        impactdic.correlate(pair8[0].astype(np.int64), pair8[1])
+    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype float32\)"):
+        impactdic.correlate(pair8[0].astype(np.float32), pair8[1])
+    with pytest.raises(ValueError, match="frame 1: invalid value"):
+        impactdic.correlate(pair8[0], np.zeros((4, 5, 3), np.uint8)[..., 0][None, None])
+
+
+def test_nothing_usable(pair8):
+    flat = np.full_like(pair8[0], 128)
+    with pytest.raises(impactdic.NothingUsableError, match="allow_partial"):
+        impactdic.correlate(pair8[0], flat, **OPTIONS)
+    partial = impactdic.correlate(pair8[0], flat, allow_partial=True, **OPTIONS)
+    assert not partial.valid[1].any()
+    assert issubclass(impactdic.NothingUsableError, impactdic.Error)
+
+
+def rss_kb():
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+
+
+def test_memory_bounded_over_many_calls():
+    """1,000 correlations of a 128 x 128 pair: the resident memory after the first 100 grows by
+    less than 8 MB over the next 900 (measured: 4 kB). Each call copies 32 kB of frames and
+    returns about 20 kB of results: leaking either would add 45 MB."""
+    reference = to_uint8(speckle((128, 128), seed=3))
+    deformed = to_uint8(fourier_shift(speckle((128, 128), seed=3), 0.5, 0.25))
+    options = {"dic": {"subset_size": 15, "step": 8}, "threads": 1}
+    for _ in range(100):
+        impactdic.correlate(reference, deformed, **options)
+    before = rss_kb()
+    for _ in range(900):
+        result = impactdic.correlate(reference, deformed, **options)
+    growth_kb = rss_kb() - before
+    assert result.summary["usable"] and result.x.size == 196
+    assert growth_kb < 8 * 1024, f"RSS grew by {growth_kb} kB over 900 calls"
+
+
+def test_the_gil_is_released_while_correlating():
+    """A Python thread runs while a correlation of a 512 x 512 pair (15,000 subsets) computes: it
+    counts far more often than the one time a held GIL would let it in."""
+    import threading
+    reference = to_uint8(speckle((512, 512), seed=5))
+    deformed = to_uint8(fourier_shift(speckle((512, 512), seed=5), 0.7, 0.2))
+    done = threading.Event()
+    ticks = []
+
+    def count():
+        while not done.is_set():
+            ticks.append(1)
+            done.wait(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    try:
+        before = len(ticks)
+        result = impactdic.correlate(reference, deformed, threads=1,
+                                     dic={"subset_size": 21, "step": 4})
+        during = len(ticks) - before
+    finally:
+        done.set()
+        counter.join()
+    assert result.summary["seconds"] > 0.05, result.summary["seconds"]  # Long enough to tell.
+    assert during >= 10, f"{during} ticks during {result.summary['seconds']:.3f} s"
