@@ -22,6 +22,7 @@ PACKAGES=(
   python3-matplotlib                            # tests: the h5py example of docs/python.md
   python3-dev pybind11-dev                      # the Python module (src/python; docs/python.md)
   python3-pytest python3-xarray                 # its tests (tests/python) and to_xarray()
+  python3-nbconvert python3-ipykernel           # CI executes docs/python_sample14.ipynb
   lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
   slurm-wlm munge                               # a one-node Slurm for the job-array test (label slurm; docs/campaign.md)
 )
