@@ -78,8 +78,8 @@ cv::Mat FrameStream::Read(int k) {
     NextFrame next;
     if (count() > 1) {
       next = [this, k, &image] {
-        if (k == 1) return image;
-        next_raw_ = ReadRaw(1);  // Kept for Read(1): decoded once.
+        if (k == 1) return cv::Mat(image);  // The frame being read is the next one.
+        next_raw_ = ReadRaw(1);             // Kept for Read(1): decoded once.
         return next_raw_;
       };
     }

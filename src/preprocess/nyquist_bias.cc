@@ -7,6 +7,7 @@
 #include <limits>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 
 namespace impactdic {
 namespace {
@@ -156,6 +157,126 @@ double RandomVariance(const cv::Mat& p, const cv::Mat& r, const cv::Mat& g, int 
 
 }  // namespace
 
+namespace {
+
+// One tile of the first pair: the reference's spectrum and the residual spectrum
+// F1 - F0 e^{-i w s} after the tile's shift s (complex, n x n), and its energy.
+struct TradeTile {
+  cv::Mat f0, d;
+  double residual = 0;
+};
+
+// The angular frequency of DFT index k of n.
+double Frequency(int k, int n) { return 2 * kPi * (k <= n / 2 ? k : k - n) / n; }
+
+// The fractional shift (fx, fy) minimising sum |F1 - F0 e^{-i w f}|^2 by Gauss-Newton from the
+// given start (phase correlation's own sub-pixel estimate is off by a few hundredths of a pixel,
+// which would count |w f|^2 of the texture's power as noise). The deformed tile's window moves
+// with its content (w(x - f)), else the window's edge counts as noise (on a 0.5 px shift of
+// sharp speckle, 5 grey levels^2 of it); f1 receives the deformed tile's spectrum.
+void FitShift(const cv::Mat& f0, const cv::Mat& t1, double* fx, double* fy, cv::Mat* f1) {
+  const int n = f0.rows;
+  for (int it = 0; it < 6; ++it) {
+    if (it % 2 == 0) cv::dft(t1.mul(HannWindow(n, *fx, *fy)), *f1, cv::DFT_COMPLEX_OUTPUT);
+    double jxx = 0, jxy = 0, jyy = 0, gx = 0, gy = 0;
+    for (int v = 0; v < n; ++v) {
+      const double wv = Frequency(v, n);
+      const cv::Vec2d* a = f0.ptr<cv::Vec2d>(v);
+      const cv::Vec2d* b = f1->ptr<cv::Vec2d>(v);
+      for (int u = 0; u < n; ++u) {
+        const double wu = Frequency(u, n);
+        const std::complex<double> m =
+            std::complex<double>(a[u][0], a[u][1]) * std::polar(1.0, -(wu * *fx + wv * *fy));
+        const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - m;
+        const double p = std::norm(m);
+        // dr/df = i w m: conj(i m) r = -i conj(m) r, real part = Im(conj(m) r).
+        const double q = (std::conj(m) * r).imag();
+        jxx += wu * wu * p, jxy += wu * wv * p, jyy += wv * wv * p;
+        gx += wu * q, gy += wv * q;
+      }
+    }
+    const double det = jxx * jyy - jxy * jxy;
+    if (!(det > 0)) break;
+    // Gauss-Newton: (J^H J) delta = -Re(J^H r).
+    *fx -= (jyy * gx - jxy * gy) / det;
+    *fy -= (jxx * gy - jxy * gx) / det;
+  }
+}
+
+// The tile at r0 of the pair, or nothing when its shift takes it out of the image.
+std::optional<TradeTile> MeasureTile(const cv::Mat& reference, const cv::Mat& next,
+                                     const cv::Rect& r0, const cv::Mat& window) {
+  const int n = r0.width;
+  cv::Mat t0, t1;
+  reference(r0).convertTo(t0, CV_64F);
+  next(r0).convertTo(t1, CV_64F);
+  // The tile's shift of the next image against the reference (content at x in the reference is
+  // at x + s in the next one). phaseCorrelate windows its inputs in place.
+  const cv::Point2d s = cv::phaseCorrelate(t0, t1, window);
+  const cv::Point whole(static_cast<int>(std::lround(s.x)), static_cast<int>(std::lround(s.y)));
+  const cv::Rect r1 = r0 + whole;
+  if ((r1 & cv::Rect(0, 0, next.cols, next.rows)) != r1) return std::nullopt;
+  next(r1).convertTo(t1, CV_64F);
+  reference(r0).convertTo(t0, CV_64F);
+  t0 -= cv::mean(t0)[0];
+  t1 -= cv::mean(t1)[0];
+  TradeTile tile;
+  cv::dft(t0.mul(window), tile.f0, cv::DFT_COMPLEX_OUTPUT);
+  double fx = s.x - whole.x, fy = s.y - whole.y;
+  cv::Mat f1;
+  FitShift(tile.f0, t1, &fx, &fy, &f1);
+  tile.d.create(n, n, CV_64FC2);
+  for (int v = 0; v < n; ++v) {
+    const double wv = Frequency(v, n);
+    const cv::Vec2d* a = tile.f0.ptr<cv::Vec2d>(v);
+    const cv::Vec2d* b = f1.ptr<cv::Vec2d>(v);
+    cv::Vec2d* d = tile.d.ptr<cv::Vec2d>(v);
+    for (int u = 0; u < n; ++u) {
+      // F1 = F0 e^{-i w s} for a shift s: undo the fractional part.
+      const std::complex<double> shifted = std::complex<double>(a[u][0], a[u][1]) *
+                                           std::polar(1.0, -(Frequency(u, n) * fx + wv * fy));
+      const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - shifted;
+      d[u] = cv::Vec2d(r.real(), r.imag());
+      tile.residual += std::norm(r);
+    }
+  }
+  return tile;
+}
+
+// The sums over `tiles` (those with a residual at most twice the median: deformation and
+// occlusion left out) of the reference's power spectrum (p2) and the residual's (r2), and the
+// residual energy; the count of tiles used.
+int SumSpectra(const std::vector<TradeTile>& tiles, cv::Mat* p2, cv::Mat* r2, double* energy) {
+  std::vector<double> residuals;
+  residuals.reserve(tiles.size());
+  for (const TradeTile& t : tiles) residuals.push_back(t.residual);
+  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
+  const double limit = 2 * residuals[residuals.size() / 2];
+  const int n = tiles.front().f0.rows;
+  *p2 = cv::Mat::zeros(n, n, CV_64F);
+  *r2 = cv::Mat::zeros(n, n, CV_64F);
+  *energy = 0;
+  int used = 0;
+  for (const TradeTile& t : tiles) {
+    if (t.residual > limit) continue;
+    ++used;
+    *energy += t.residual;
+    for (int v = 0; v < n; ++v) {
+      const cv::Vec2d* a = t.f0.ptr<cv::Vec2d>(v);
+      const cv::Vec2d* d = t.d.ptr<cv::Vec2d>(v);
+      double* pp = p2->ptr<double>(v);
+      double* rr = r2->ptr<double>(v);
+      for (int u = 0; u < n; ++u) {
+        pp[u] += a[u][0] * a[u][0] + a[u][1] * a[u][1];
+        rr[u] += d[u][0] * d[u][0] + d[u][1] * d[u][1];
+      }
+    }
+  }
+  return used;
+}
+
+}  // namespace
+
 PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& next, cv::Rect roi,
                                      const cv::Mat& kernel_in, int subset_size) {
   PrefilterTrade out;
@@ -169,110 +290,26 @@ PrefilterTrade MeasurePrefilterTrade(const cv::Mat& reference, const cv::Mat& ne
   kernel_in.convertTo(kernel, CV_64F);
   std::vector<double> g2(static_cast<std::size_t>(n));  // |G|^2 per DFT index.
   for (int u = 0; u < n; ++u) {
-    const double gu = KernelResponse(kernel, 2 * kPi * (u <= n / 2 ? u : u - n) / n);
+    const double gu = KernelResponse(kernel, Frequency(u, n));
     g2[static_cast<std::size_t>(u)] = gu * gu;
   }
   const int per_axis = std::max(1, static_cast<int>(std::sqrt(double(kMaxTradeTiles))));
   const std::vector<int> xs = TileOrigins(roi.width, n, per_axis);
   const std::vector<int> ys = TileOrigins(roi.height, n, per_axis);
   const cv::Mat window = HannWindow(n);
-  const cv::Rect image(0, 0, reference.cols, reference.rows);
-  struct Tile {
-    cv::Mat f0, d;  // Reference spectrum, residual spectrum (complex).
-    double residual = 0;
-  };
-  std::vector<Tile> tiles;
-  cv::Mat t0, t1, t1s;
+  std::vector<TradeTile> tiles;
+  tiles.reserve(xs.size() * ys.size());
   for (int y0 : ys) {
     for (int x0 : xs) {
-      const cv::Rect r0(roi.x + x0, roi.y + y0, n, n);
-      reference(r0).convertTo(t0, CV_64F);
-      next(r0).convertTo(t1, CV_64F);
-      // The tile's shift of the next image against the reference (content at x in the reference
-      // is at x + s in the next one).
-      const cv::Point2d s = cv::phaseCorrelate(t0, t1, window);
-      const cv::Point whole(static_cast<int>(std::lround(s.x)), static_cast<int>(std::lround(s.y)));
-      const cv::Rect r1 = r0 + whole;
-      if ((r1 & image) != r1) continue;
-      next(r1).convertTo(t1s, CV_64F);
-      reference(r0).convertTo(t0, CV_64F);  // Again: phaseCorrelate may leave its input windowed.
-      Tile tile;
-      t0 -= cv::mean(t0)[0];
-      t1s -= cv::mean(t1s)[0];
-      cv::dft(t0.mul(window), tile.f0, cv::DFT_COMPLEX_OUTPUT);
-      cv::Mat f1;
-      // The fractional shift f minimising sum |F1 - F0 e^{-i w f}|^2 (phase correlation's own
-      // sub-pixel estimate is off by a few hundredths of a pixel, which would count |w f|^2 of
-      // the texture's power as noise): Gauss-Newton from it. The deformed tile's window moves
-      // with its content (w(x - f)), else the window's edge counts as noise (on a 0.5 px shift of
-      // sharp speckle, 5 grey levels^2 of it).
-      double fx = s.x - whole.x, fy = s.y - whole.y;
-      for (int it = 0; it < 6; ++it) {
-        if (it % 2 == 0) cv::dft(t1s.mul(HannWindow(n, fx, fy)), f1, cv::DFT_COMPLEX_OUTPUT);
-        double jxx = 0, jxy = 0, jyy = 0, gx = 0, gy = 0;
-        for (int v = 0; v < n; ++v) {
-          const double wv = 2 * kPi * (v <= n / 2 ? v : v - n) / n;
-          const cv::Vec2d* a = tile.f0.ptr<cv::Vec2d>(v);
-          const cv::Vec2d* b = f1.ptr<cv::Vec2d>(v);
-          for (int u = 0; u < n; ++u) {
-            const double wu = 2 * kPi * (u <= n / 2 ? u : u - n) / n;
-            const std::complex<double> m =
-                std::complex<double>(a[u][0], a[u][1]) * std::polar(1.0, -(wu * fx + wv * fy));
-            const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - m;
-            const double p = std::norm(m);
-            // dr/df = i w m: conj(i m) r = -i conj(m) r, real part = Im(conj(m) r).
-            const double q = (std::conj(m) * r).imag();
-            jxx += wu * wu * p, jxy += wu * wv * p, jyy += wv * wv * p;
-            gx += wu * q, gy += wv * q;
-          }
-        }
-        const double det = jxx * jyy - jxy * jxy;
-        if (!(det > 0)) break;
-        // Gauss-Newton: (J^H J) delta = -Re(J^H r).
-        fx -= (jyy * gx - jxy * gy) / det;
-        fy -= (jxx * gy - jxy * gx) / det;
-      }
-      tile.d.create(n, n, CV_64FC2);
-      for (int v = 0; v < n; ++v) {
-        const double wv = 2 * kPi * (v <= n / 2 ? v : v - n) / n;
-        const cv::Vec2d* a = tile.f0.ptr<cv::Vec2d>(v);
-        const cv::Vec2d* b = f1.ptr<cv::Vec2d>(v);
-        cv::Vec2d* d = tile.d.ptr<cv::Vec2d>(v);
-        for (int u = 0; u < n; ++u) {
-          const double wu = 2 * kPi * (u <= n / 2 ? u : u - n) / n;
-          // F1 = F0 e^{-i w s} for a shift s: undo the fractional part.
-          const std::complex<double> shifted =
-              std::complex<double>(a[u][0], a[u][1]) * std::polar(1.0, -(wu * fx + wv * fy));
-          const std::complex<double> r = std::complex<double>(b[u][0], b[u][1]) - shifted;
-          d[u] = cv::Vec2d(r.real(), r.imag());
-          tile.residual += std::norm(r);
-        }
-      }
-      tiles.push_back(std::move(tile));
+      std::optional<TradeTile> tile =
+          MeasureTile(reference, next, cv::Rect(roi.x + x0, roi.y + y0, n, n), window);
+      if (tile) tiles.push_back(std::move(*tile));
     }
   }
   if (tiles.empty()) return out;
-  std::vector<double> residuals;
-  for (const Tile& t : tiles) residuals.push_back(t.residual);
-  std::nth_element(residuals.begin(), residuals.begin() + residuals.size() / 2, residuals.end());
-  const double limit = 2 * residuals[residuals.size() / 2];
-  cv::Mat p2 = cv::Mat::zeros(n, n, CV_64F), r2 = cv::Mat::zeros(n, n, CV_64F);
+  cv::Mat p2, r2;
   double noise_energy = 0;
-  for (const Tile& t : tiles) {
-    if (t.residual > limit) continue;
-    ++out.tiles;
-    noise_energy += t.residual;
-    for (int v = 0; v < n; ++v) {
-      const cv::Vec2d* a = t.f0.ptr<cv::Vec2d>(v);
-      const cv::Vec2d* d = t.d.ptr<cv::Vec2d>(v);
-      double* pp = p2.ptr<double>(v);
-      double* rr = r2.ptr<double>(v);
-      for (int u = 0; u < n; ++u) {
-        pp[u] += a[u][0] * a[u][0] + a[u][1] * a[u][1];
-        rr[u] += d[u][0] * d[u][0] + d[u][1] * d[u][1];
-      }
-    }
-  }
+  out.tiles = SumSpectra(tiles, &p2, &r2, &noise_energy);
   cv::Mat g(n, n, CV_64F);
   for (int v = 0; v < n; ++v)
     for (int u = 0; u < n; ++u)

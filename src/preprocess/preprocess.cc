@@ -245,7 +245,7 @@ void Preprocessor::DecideFrom(const cv::Mat& reference_frame, const NextFrame& n
   NextFrame next;
   if (next_frame) {
     next = [this, &next_frame] {
-      const cv::Mat f = next_frame();
+      cv::Mat f = next_frame();
       if (f.empty()) return f;
       CheckFrame(f);
       return undistorter_ ? undistorter_->Apply(f) : f;
