@@ -181,6 +181,27 @@ double PredictedSigmaPx(const Shape& shape, const double* h, double noise, Inter
   return std::sqrt(2 * noise * noise * std::max(inv[0], inv[nm * n + nm]));
 }
 
+// Whether PredictedSigmaPx is at most limit, from the inverse hinv of h without inverting
+// h - s^2 M unless needed: the eigenvalues of s^2 h^-1 M are >= 0, so the largest, lambda, is at
+// most their sum t, and when t < 1, (h - s^2 M)^-1 <= h^-1 / (1 - t): a subset whose bound is
+// within the limit (nearly all) needs no second inverse.
+bool PredictedSigmaWithin(const Shape& shape, const double* h, const double* hinv, double noise,
+                          Interpolation kind, double limit) {
+  if (!(noise > 0)) return true;
+  const int n = shape.n, nm = shape.nm;
+  const double s2 = kGradientNoiseWeight * noise * noise * 0.5 * NodeGradientNoiseRatio(kind);
+  double t = 0;
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      if (a / nm == b / nm) t += hinv[a * n + b] * shape.monomial_moments[(b % nm) * 6 + a % nm];
+    }
+  }
+  t *= s2;
+  const double bound2 = 2 * noise * noise * std::max(hinv[0], hinv[nm * n + nm]) / (1 - t);
+  if (t < 1 && bound2 <= limit * limit) return true;
+  return PredictedSigmaPx(shape, h, noise, kind) <= limit;
+}
+
 // The pointers of subset s's reference pixels for the kernels (f, gx and gy share their layout).
 MomentInput RefMoments(const Shape& shape, const RefImages& ref, const SubsetRef& s) {
   assert(ref.gx.step1() == ref.f.step1() && ref.gy.step1() == ref.f.step1());
@@ -247,8 +268,8 @@ void PrepareSubset(const Shape& shape, const RefImages& ref, const IcgnOptions& 
   const double range = ref.range > 0 ? std::min(ref.range, ref.full_scale) : ref.full_scale;
   const double contrast = std::sqrt(ss / count) * 255.0 / range;
   if (contrast < options.min_contrast ||
-      !(PredictedSigmaPx(shape, H, ref.noise, options.interpolation) <=
-        options.max_predicted_uncertainty_px)) {
+      !PredictedSigmaWithin(shape, H, hinv, ref.noise, options.interpolation,
+                            options.max_predicted_uncertainty_px)) {
     s->status = SubsetStatus::kLowContrast;
     return;
   }
