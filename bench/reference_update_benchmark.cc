@@ -53,7 +53,7 @@ struct Config {
   std::vector<std::string> schemes = {"sequential", "every:10", "leapfrog", "preconditioned"};
 };
 
-FieldSequence Fields(const Config& c) {
+DisplacementSequence Fields(const Config& c) {
   return LinearSequence(Sum({Translation(c.drift_u, c.drift_v),
                              ExponentialCompression(/*surface_strain=*/0.03,
                                                     /*decay_length_px=*/80, /*y_surface_px=*/0,
@@ -61,7 +61,7 @@ FieldSequence Fields(const Config& c) {
                         c.frames);
 }
 
-std::vector<cv::Mat> Images(const Config& c, const FieldSequence& fields, double tone,
+std::vector<cv::Mat> Images(const Config& c, const DisplacementSequence& fields, double tone,
                             std::uint64_t noise_seed) {
   SpeckleOptions speckle;
   speckle.blob_radius_px = 2.0;
@@ -95,7 +95,7 @@ struct Row {
   double seconds = 0;
 };
 
-void Accumulate(const DicResult& r, const FieldSequence& fields, Row* row) {
+void Accumulate(const DicResult& r, const DisplacementSequence& fields, Row* row) {
   for (const FrameResult& f : r.frames) {
     const DisplacementField truth = fields.at(f.frame);
     long long valid = 0;
@@ -132,7 +132,7 @@ double GrowthExponent(const Row& row, int frames) {
 }
 
 void Table(const Config& c, double tone) {
-  const FieldSequence fields = Fields(c);
+  const DisplacementSequence fields = Fields(c);
   std::vector<std::vector<cv::Mat>> sets;
   sets.reserve(c.realisations);
   for (int r = 0; r < c.realisations; ++r) sets.push_back(Images(c, fields, tone, 2021 + r));

@@ -418,13 +418,29 @@ RenderResultsSummary RenderResults(const H5Reader& reader, const std::string& re
 
 namespace {
 
+// The stored frame nearest t_e and the title of `what` drawn there: "at the end of the peak stage
+// (t_e = ...)" when the frame's time reads as t_e, else the frame's own time and that it is the
+// frame nearest t_e (a preview stores every few frames only, so the nearest may be far from t_e).
+std::size_t FrameAtTe(const FieldSequence& seq, double t_e_s, const std::string& what,
+                      std::string* title) {
+  const std::size_t frame = FrameNearestTime(seq, 1e3 * t_e_s);
+  const std::string at_te = FormatMs(t_e_s);
+  const std::string at_frame =
+      frame < seq.time_ms.size() ? FormatMs(1e-3 * seq.time_ms[frame]) : at_te;
+  if (at_frame == at_te) {
+    *title = what + " at the end of the peak stage (t_e = " + at_te + ")";
+  } else {
+    *title = what + " at t = " + at_frame + ", the stored frame nearest t_e = " + at_te;
+    LogInfo("render: no stored frame at t_e = {}: the {} is drawn at the nearest, t = {}", at_te,
+            ToLower(what), at_frame);
+  }
+  return frame;
+}
+
 // The frame of the velocity snapshot: the one nearest t_e, else (no t_e) the one of the largest
 // mean speed; *title says which.
 std::size_t SnapshotFrame(const VelocityFieldSequence& seq, double t_e_s, std::string* title) {
-  if (std::isfinite(t_e_s)) {
-    *title = "Velocity field at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")";
-    return FrameNearestTime(seq, 1e3 * t_e_s);
-  }
+  if (std::isfinite(t_e_s)) return FrameAtTe(seq, t_e_s, "Velocity field", title);
   std::size_t frame = 0;
   double best = -1;
   for (std::size_t i = 0; i < seq.num_frames(); ++i) {
@@ -512,8 +528,9 @@ void DrawStrainField(const H5Reader& reader, double t_e_s, const RenderResultsOp
       summary.written.push_back(out(name));
     };
     if (std::isfinite(t_e_s)) {
-      write(FrameNearestTime(seq, 1e3 * t_e_s), names.strain_te,
-            "Strain at the end of the peak stage (t_e = " + FormatMs(t_e_s) + ")");
+      std::string title;
+      const std::size_t frame = FrameAtTe(seq, t_e_s, "Strain", &title);
+      write(frame, names.strain_te, title);
     } else {
       const std::string reason = std::string("no ") + L::kTeAttr + " attribute on " +
                                  L::kMomentumGroup + " (only the last frame is drawn)";

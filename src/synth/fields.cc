@@ -94,7 +94,7 @@ DisplacementField Scaled(const DisplacementField& field, double s) {
           [=](double X, double Y) { return s * field.gradient(X, Y); }};
 }
 
-FieldSequence LinearSequence(const DisplacementField& final_field, int frames) {
+DisplacementSequence LinearSequence(const DisplacementField& final_field, int frames) {
   CheckValue(frames >= 2, "LinearSequence.frames", std::to_string(frames), ">= 2");
   return {frames, [=](int k) { return Scaled(final_field, double(k) / (frames - 1)); }};
 }

@@ -89,7 +89,7 @@ TEST(Compression, AutoUpdatesTheReferenceWhereTheFixedOneDecorrelates) {
   const double e0 = kMeanStrain * kHeight / (kDecayPx * (1 - std::exp(-kHeight / kDecayPx)));
   const DisplacementField final_field = ExponentialCompression(e0, kDecayPx, 0, kHeight);
   ASSERT_NEAR(final_field.u(0, 0)[1], kMeanStrain * kHeight, 1e-9);
-  const FieldSequence seq = LinearSequence(final_field, kFrames);
+  const DisplacementSequence seq = LinearSequence(final_field, kFrames);
   const double wet_depth_px = kDecayPx * std::log(e0 / kWettingStrain);  // e > 0.2 above it.
   const SpecklePattern pattern(testing::Scene::MakeSpeckle(/*seed=*/21), kWidth, kHeight,
                                /*margin_px=*/80);

@@ -108,7 +108,7 @@ TEST(GeopivSchemes, EachSchemeDecidesAsThePolicyItNames) {
 constexpr int kWidth = 240, kHeight = 160;
 
 struct LongSequence {
-  FieldSequence fields;
+  DisplacementSequence fields;
   std::vector<cv::Mat> images;
 };
 

@@ -46,7 +46,7 @@ void RegisterOnce() {
 TEST(ReferenceUpdate, ATestOnlyPolicyIsSelectedByNameAndDrivesTheCorrelator) {
   RegisterOnce();
   testing::Scene scene(160, 120, /*noise_sigma=*/1, /*seed=*/5, /*supersampling=*/2);
-  const FieldSequence seq = LinearSequence(Translation(2.5, -1.5), 6);
+  const DisplacementSequence seq = LinearSequence(Translation(2.5, -1.5), 6);
   std::vector<cv::Mat> images;
   images.reserve(seq.frames);
   for (int k = 0; k < seq.frames; ++k) images.push_back(scene.Render(seq.at(k), 300 + k));

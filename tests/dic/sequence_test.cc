@@ -25,7 +25,7 @@ using testing::Errors;
 using testing::ErrorStats;
 using testing::Scene;
 
-std::vector<cv::Mat> RenderSequence(Scene& scene, const FieldSequence& seq) {
+std::vector<cv::Mat> RenderSequence(Scene& scene, const DisplacementSequence& seq) {
   std::vector<cv::Mat> images;
   for (int k = 0; k < seq.frames; ++k) images.push_back(scene.Render(seq.at(k), 1000 + k));
   return images;
@@ -57,7 +57,7 @@ TEST(Sequence, RigidMotionAutoKeepsTheReferenceIncrementalRandomWalks) {
   // 100 frames (99 increments of 0.2 px), 20 px in total at 30 degrees, noise sigma 2.
   Scene scene(160, 160, /*noise_sigma=*/2, /*seed=*/3, /*supersampling=*/2);
   const double total = 0.2 * 99;
-  const FieldSequence seq =
+  const DisplacementSequence seq =
       LinearSequence(Translation(total * std::cos(M_PI / 6), total * std::sin(M_PI / 6)), 100);
   const std::vector<cv::Mat> images = RenderSequence(scene, seq);
   DicOptions options;
@@ -93,7 +93,7 @@ TEST(Sequence, DarkBlockEnteringTheViewFailsOnlyTheSubsetsItCovers) {
   // frame, in front of it.
   Scene scene(200, 200, /*noise_sigma=*/2, /*seed=*/9, /*supersampling=*/2);
   const int frames = 12;
-  const FieldSequence seq = LinearSequence(Translation(0.9, 0.6), frames);
+  const DisplacementSequence seq = LinearSequence(Translation(0.9, 0.6), frames);
   std::vector<cv::Mat> images = RenderSequence(scene, seq);
   PaintBlocks(&images);
   DicOptions options;
@@ -166,7 +166,7 @@ TEST(Sequence, AutoDoesNotUpdateForABlockThatCoversMoreSubsetsEveryFrame) {
   // 0.0272 px for `fixed`. Now: no update, results identical to `fixed`.
   Scene scene(200, 200, /*noise_sigma=*/2, /*seed=*/9, /*supersampling=*/2);
   const int frames = 20;
-  const FieldSequence seq = LinearSequence(Translation(0, 0), frames);
+  const DisplacementSequence seq = LinearSequence(Translation(0, 0), frames);
   std::vector<cv::Mat> images = RenderSequence(scene, seq);
   PaintBlocks(&images);
   DicOptions options;
@@ -276,7 +276,7 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
 
 TEST(Sequence, ResultsDoNotDependOnTheThreadCount) {
   Scene scene(200, 160, /*noise_sigma=*/2, /*seed=*/11, /*supersampling=*/2);
-  const FieldSequence seq = LinearSequence(Sum({Rotation(0.02, 100, 80), Translation(3, -2)}), 5);
+  const DisplacementSequence seq = LinearSequence(Sum({Rotation(0.02, 100, 80), Translation(3, -2)}), 5);
   const std::vector<cv::Mat> images = RenderSequence(scene, seq);
   DicOptions options;
   options.grid.step = 7;

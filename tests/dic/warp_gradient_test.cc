@@ -90,7 +90,7 @@ GradientErrors ErrorsOf(const std::vector<cv::Point2d>& positions, const FrameRe
   return e;
 }
 
-std::vector<cv::Mat> Render(testing::Scene& scene, const FieldSequence& seq) {
+std::vector<cv::Mat> Render(testing::Scene& scene, const DisplacementSequence& seq) {
   std::vector<cv::Mat> images;
   images.reserve(seq.frames);
   for (int k = 0; k < seq.frames; ++k) images.push_back(scene.Render(seq.at(k), 700 + k));
@@ -116,7 +116,7 @@ DicOptions GradientOptions(const std::string& policy) {
 TEST(WarpGradient, UniformAffineFieldGivesItsGradient) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/11, /*supersampling=*/2);
   const Mat2 l{0.012, 0.006, -0.004, -0.015};
-  const FieldSequence seq = LinearSequence(AffineOf(l, kCx, kCy), 3);
+  const DisplacementSequence seq = LinearSequence(AffineOf(l, kCx, kCy), 3);
   const std::vector<cv::Mat> images = Render(scene, seq);
   // The quadratic shape function's gradient at the tracked point is read from its parameters
   // the same way (its first-order terms moved to the point): the same field, the same bounds.
@@ -158,7 +158,7 @@ TEST(WarpGradient, ComposesAcrossReferenceUpdatesInTheOrderOfTheMotion) {
     EXPECT_GT(MaxAbs(Minus(total[k], wrong_order[k])), 5 * kTolerance) << k;
     EXPECT_GT(MaxAbs(Minus(Minus(total[k], kIdentity), added[k])), 5 * kTolerance) << k;
   }
-  FieldSequence seq;
+  DisplacementSequence seq;
   seq.frames = static_cast<int>(total.size());
   seq.at = [&total](int k) { return AffineOf(Minus(total[k], kIdentity), kCx, kCy); };
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/12, /*supersampling=*/2);
@@ -182,7 +182,7 @@ TEST(WarpGradient, ComposesAcrossReferenceUpdatesInTheOrderOfTheMotion) {
 // reference alone: as accurate within 15 % + 2e-4, and below 2.5e-3 rms.
 TEST(WarpGradient, FollowsTheMaterialPointThroughUpdatesOfANonUniformField) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/13, /*supersampling=*/2);
-  const FieldSequence seq =
+  const DisplacementSequence seq =
       LinearSequence(Sum({Sinusoidal(2.0, 1.5, /*wavelength_px=*/160), Translation(1.5, -2)}), 5);
   const std::vector<cv::Mat> images = Render(scene, seq);
   const DicResult composed = CorrelateSequence(images, GradientOptions("incremental"));
@@ -209,7 +209,7 @@ TEST(WarpGradient, LostSubsetsComposeAgainstTheReferenceTheyWereLastFoundIn) {
   const std::vector<Mat2> steps = {{1, g, 0, 1}, {1, 0, g, 1}, {1 + g, 0, 0, 1}, {1, 0, 0, 1 - g}};
   std::vector<Mat2> total{kIdentity};
   for (const Mat2& f : steps) total.push_back(Mul(f, total.back()));
-  FieldSequence seq;
+  DisplacementSequence seq;
   seq.frames = static_cast<int>(total.size());
   seq.at = [&total](int k) { return AffineOf(Minus(total[k], kIdentity), kCx, kCy); };
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/17, /*supersampling=*/2);
@@ -251,7 +251,7 @@ TEST(WarpGradient, LostSubsetsComposeAgainstTheReferenceTheyWereLastFoundIn) {
 // so is the affine subsets' error (rms up to 5.4e-3 against the first reference alone).
 TEST(WarpGradient, ComposesThroughTheAutoRescue) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/0.5, /*seed=*/16, /*supersampling=*/2);
-  const FieldSequence seq =
+  const DisplacementSequence seq =
       LinearSequence(Sum({Sinusoidal(3.0, 2.5, /*wavelength_px=*/120), Translation(1, 1)}), 6);
   const std::vector<cv::Mat> images = Render(scene, seq);
   DicOptions options = GradientOptions("auto");
@@ -273,7 +273,7 @@ TEST(WarpGradient, ComposesThroughTheAutoRescue) {
 // The same gradients, bit for bit, with 1 and 2 threads (reference updates and orphans included).
 TEST(WarpGradient, DoNotDependOnTheThreadCount) {
   testing::Scene scene(kWidth, kHeight, /*noise_sigma=*/1, /*seed=*/18, /*supersampling=*/2);
-  const FieldSequence seq =
+  const DisplacementSequence seq =
       LinearSequence(Sum({Sinusoidal(2.0, 1.5, /*wavelength_px=*/160), Translation(1.5, -2)}), 4);
   std::vector<cv::Mat> images = Render(scene, seq);
   images[2](cv::Rect(60, 40, 40, 40)).setTo(0);
@@ -343,7 +343,7 @@ class WarpGradientFiles : public ::testing::Test {
   // A short sequence under a uniform affine field, with reference updates.
   static DicResult Correlate(bool keep) {
     testing::Scene scene(120, 100, /*noise_sigma=*/1, /*seed=*/14, /*supersampling=*/2);
-    const FieldSequence seq = LinearSequence(AffineOf({0.01, 0, 0, -0.01}, 60, 50), 3);
+    const DisplacementSequence seq = LinearSequence(AffineOf({0.01, 0, 0, -0.01}, 60, 50), 3);
     DicOptions options = GradientOptions("incremental");
     options.keep_warp_gradient = keep;
     return CorrelateSequence(Render(scene, seq), options);

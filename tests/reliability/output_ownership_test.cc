@@ -260,6 +260,27 @@ TEST(OutputOwnership, RenderOfAPreviewKeepsTheRunsAnimation) {
   EXPECT_LT(CountVideoFrames(run + "/velocity_preview.mp4"), 20u);
 }
 
+// A preview that stores every 4th frame has no frame at the sample's t_e (3.33 ms, analysed frame
+// 6): the snapshot and the strain map are drawn at the nearest stored frame and say so, not
+// "t_e = 3.33 ms" over the 2.22 ms frame.
+TEST(OutputOwnership, RenderOfAPreviewSaysWhichFrameItDrawsForTe) {
+  TestDir dir;
+  const std::string run = dir.File("run");
+  const CliResult ran = RunCli("-q run " + kSource +
+                               "/sample_frames/scene.yaml --outputs.frames preview "
+                               "--outputs.animation false --outputs.figures false -o " + run);
+  ASSERT_EQ(ran.exit_code, 0) << ran.output;
+  const CliResult r = RunCli("render " + run + "/results.h5 --no-figures");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const std::string what : {"velocity field", "strain"}) {
+    EXPECT_NE(r.output.find("no stored frame at t_e = 3.33 ms: the " + what +
+                            " is drawn at the nearest, t = 2.22 ms"),
+              std::string::npos)
+        << r.output;
+  }
+  EXPECT_TRUE(fs::exists(run + "/velocity_field_te_preview.png"));
+}
+
 // Messages: an over-long output name, an empty -o, and info lines naming the staging folder.
 TEST(OutputOwnership, OutputNameMessagesSayWhatIsWrong) {
   const Scenes& s = Prepare();

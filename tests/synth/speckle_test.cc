@@ -98,7 +98,7 @@ TEST(Speckle, NoiseDoesNotDependOnThreadCount) {
 }
 
 TEST(Speckle, SequenceRampsTheField) {
-  const FieldSequence seq = LinearSequence(Translation(2.0, -4.0), 5);
+  const DisplacementSequence seq = LinearSequence(Translation(2.0, -4.0), 5);
   EXPECT_EQ(seq.frames, 5);
   EXPECT_NEAR(seq.at(0).u(3, 4)[0], 0, 1e-15);
   EXPECT_NEAR(seq.at(2).u(3, 4)[1], -2.0, 1e-15);

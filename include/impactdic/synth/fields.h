@@ -48,13 +48,13 @@ DisplacementField Scaled(const DisplacementField& field, double s);
 
 // A sequence: frame k (0 = reference) has the field `at(k)`; `frames` is the number of frames
 // including the reference.
-struct FieldSequence {
+struct DisplacementSequence {
   int frames = 0;
   std::function<DisplacementField(int frame)> at;
 };
 
 // Linear ramp: frame k has field Scaled(final, k / (frames - 1)).
-FieldSequence LinearSequence(const DisplacementField& final_field, int frames);
+DisplacementSequence LinearSequence(const DisplacementField& final_field, int frames);
 
 }  // namespace impactdic
 
