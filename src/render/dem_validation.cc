@@ -332,13 +332,30 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
     out->notes.push_back(
         "the results hold no camera frames (outputs.frames: none): no velocity-field figure");
   } else {
-    // Velocity fields at the stored frame nearest t_e / 2 of the grains, one colour scale.
-    const double t_show = std::isfinite(t.t_e) ? 0.5 * t.t_e : 0.002;
-    std::size_t j_show = 0;
-    for (std::size_t j = 0; j < image_rows.size(); ++j)
-      if (std::abs(v.t_s[image_rows[j]] - t_show) < std::abs(v.t_s[image_rows[j_show]] - t_show))
+    // Velocity fields at the stored frame nearest the grains' t_e (the end of the peak stage),
+    // one colour scale; only frames after the contact qualify while there are any (before it
+    // only noise moves). A preview (outputs.frames: preview) may have none near t_e: the note
+    // says how far it is.
+    const double t_show = std::isfinite(t.t_e) ? t.t_e : 0.002;
+    const bool any_after = std::any_of(image_rows.begin(), image_rows.end(),
+                                       [&](std::size_t f) { return v.t_s[f] > 0; });
+    std::size_t j_show = image_rows.size();
+    for (std::size_t j = 0; j < image_rows.size(); ++j) {
+      if (any_after && !(v.t_s[image_rows[j]] > 0)) continue;
+      if (j_show == image_rows.size() ||
+          std::abs(v.t_s[image_rows[j]] - t_show) < std::abs(v.t_s[image_rows[j_show]] - t_show))
         j_show = j;
+    }
     const std::size_t f_show = image_rows[j_show];
+    out->velocity_figure_t_s = v.t_s[f_show];
+    const double interval = v.t_s.size() > 1 ? (v.t_s.back() - v.t_s.front()) / (v.t_s.size() - 1)
+                                             : kNaN;
+    if (!(std::abs(v.t_s[f_show] - t_show) <= 0.5 * interval + 1e-12))
+      out->notes.push_back(fmt::format(
+          "the velocity-field figure is drawn at t = {:.2f} ms, the stored frame nearest t_e = "
+          "{:.2f} ms (the results store a preview of the frames; `run --outputs.frames all` "
+          "stores every one)",
+          1e3 * v.t_s[f_show], 1e3 * t_show));
     const cv::Mat& frame = images[j_show];
     VelocityOverlayOptions o;
     double vmax = 0;

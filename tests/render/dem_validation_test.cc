@@ -162,6 +162,19 @@ TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
   const std::string figures = dir + "/figures";
   const DemValidation v = ValidateDemRun(report.truth_h5, results, figures);
   EXPECT_GT(v.dic_samples, 100u);
+  // The velocity field is drawn after the contact, at the stored frame nearest the grains' t_e.
+  ASSERT_TRUE(std::isfinite(v.t_e_truth_s));
+  EXPECT_GT(v.velocity_figure_t_s, 0);
+  {
+    const H5Reader in(results);
+    double nearest = HUGE_VAL;
+    const std::vector<double> rows = in.ReadDouble(results_layout::kFrameRows);
+    for (double row : rows) {
+      const double t = v.t_s.at(static_cast<std::size_t>(row));
+      if (t > 0 && std::abs(t - v.t_e_truth_s) < std::abs(nearest - v.t_e_truth_s)) nearest = t;
+    }
+    EXPECT_EQ(v.velocity_figure_t_s, nearest);
+  }
   for (const char* png : {"velocity_field_compare.png", "velocity_field_compare_small.png",
                           "frame_small.png", "momentum_compare.png", "deceleration_compare.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(figures) / png)) << png;
@@ -170,6 +183,16 @@ TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
                                dir + "/figures_cli");
   EXPECT_EQ(cli.exit_code, 0) << cli.output;
   EXPECT_TRUE(fs::is_regular_file(fs::path(dir) / "figures_cli/velocity_field_compare.png"));
+  // Every frame stored (as validation/dem/run_case.sh runs it): the figure is within half a frame
+  // interval of the grains' t_e, with no note about a preview.
+  const CliResult all = RunCli("run " + report.scene_yaml + " --outputs.frames all -o " + run + "_all");
+  ASSERT_EQ(all.exit_code, 0) << all.output;
+  const DemValidation w = ValidateDemRun(report.truth_h5, run + "_all/results.h5", figures + "_all");
+  const double interval = (w.t_s.back() - w.t_s.front()) / (w.t_s.size() - 1);
+  EXPECT_NEAR(w.velocity_figure_t_s, w.t_e_truth_s, 0.5 * interval + 1e-12);
+  EXPECT_FALSE(std::any_of(w.notes.begin(), w.notes.end(), [](const std::string& n) {
+    return n.find("velocity-field figure is drawn") != std::string::npos;
+  }));
   fs::remove_all(dir);
 }
 

@@ -66,7 +66,9 @@ if [ -n "${SCENE_DIC:-}" ]; then
   awk -v extra="$extra" '{ print } /^dic:/ { print extra }' "$scene/scene.yaml" > "$scene/scene.yaml.tmp"
   mv "$scene/scene.yaml.tmp" "$scene/scene.yaml"
 fi
-"$impactdic" run "$scene/scene.yaml" -o "$run" > "$run.log" 2>&1 || {
+# Every frame stored in results.h5 (66 small frames), so that validate-dem draws the velocity
+# field at the grains' t_e, not at the nearest frame of a preview.
+"$impactdic" run "$scene/scene.yaml" --outputs.frames all -o "$run" > "$run.log" 2>&1 || {
   cat "$run.log" >&2
   exit 1
 }

@@ -50,6 +50,9 @@ struct DemValidation {
          model_t_peak_s = kNaN;
   double dem_max_penetration_m = kNaN, model_crater_depth_m = kNaN;
   double decel_rms_g = kNaN;  // model - DEM over [0, min(t_end model, end of DEM record)]
+  // The time of the velocity-field figure: the stored frame after the contact nearest the
+  // grains' t_e (NaN when no figure was drawn).
+  double velocity_figure_t_s = kNaN;
   std::vector<std::string> notes;
 
   std::string Report() const;  // The table of docs/validation.md for this case, as text.
