@@ -160,8 +160,12 @@ def test_every_key_refuses_a_bad_value_as_the_cli(cli):
 
 
 def test_unknown_option_names_the_closest_key():
-    with pytest.raises(ValueError, match=r"dic\.subset_sise: .*did you mean 'dic\.subset_size'"):
+    with pytest.raises(ValueError, match=r"^dic\.subset_sise: unknown option \(did you mean "
+                                         r"'dic\.subset_size'\?\); expected a key of the scene's "
+                                         r"dic or preprocess section"):
         impactdic.correlate("a.png", "b.png", dic={"subset_sise": 21})
+    with pytest.raises(ValueError, match=r"^dic\.bogus: unknown option; expected a key"):
+        impactdic.correlate("a.png", "b.png", dic={"bogus": 21})
 
 
 def test_missing_file_is_an_os_error(tmp_path):
@@ -170,12 +174,154 @@ def test_missing_file_is_an_os_error(tmp_path):
 
 
 def test_bad_array_is_a_value_error(pair8):
-    with pytest.raises(ValueError, match="dtype int64"):
+    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype int64\)"):
         impactdic.correlate(pair8[0].astype(np.int64), pair8[1])
-    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype float32\)"):
-        impactdic.correlate(pair8[0].astype(np.float32), pair8[1])
     with pytest.raises(ValueError, match="frame 1: invalid value"):
         impactdic.correlate(pair8[0], np.zeros((4, 5, 3), np.uint8)[..., 0][None, None])
+    # Every frame as the reference: its shape and dtype (not left to the frame reader's OSError).
+    with pytest.raises(ValueError, match=r"frame 1: invalid value \(got 192x192 uint16\); "
+                                         r"expected 192x192 uint8 like the reference"):
+        impactdic.correlate(pair8[0], pair8[1].astype(np.uint16))
+    with pytest.raises(ValueError, match=r"frame 1: invalid value \(got 100x192 uint8\)"):
+        impactdic.correlate(pair8[0], pair8[1][:100])
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_float_arrays_are_grey_levels_as_they_are(pair, pair8, dtype):
+    """Float images are grey levels as they are, in any range: the speckle in [0, 1] gives the
+    shift; the 8-bit images' values as floats give the 8-bit images' results to the last bit
+    (the correlator computes in float32 either way; float64 is converted to float32 once)."""
+    result = impactdic.correlate(*(image.astype(dtype) for image in pair), **OPTIONS)
+    check_shift(result)
+    assert result.summary["data_bits"] == 0  # No bit depth: the contrast limits follow the data.
+    as_float = impactdic.correlate(*(image.astype(dtype) for image in pair8), **OPTIONS)
+    as_uint8 = impactdic.correlate(*pair8, **OPTIONS)
+    for name in ("u", "v", "status", "zncc", "iterations"):
+        np.testing.assert_array_equal(getattr(as_float, name), getattr(as_uint8, name),
+                                      err_msg=name)
+
+
+@pytest.mark.parametrize("value, found", [(np.nan, "NaN"), (np.inf, "infinity"),
+                                          (-np.inf, "infinity")])
+def test_non_finite_float_is_a_value_error_naming_the_array(pair, value, found):
+    reference, deformed = (image.astype(np.float32) for image in pair)
+    bad = deformed.copy()
+    bad[3, 5] = value
+    with pytest.raises(ValueError, match=rf"^frame 1: invalid value \(got {found} at row 3, "
+                                         r"column 5\); expected finite grey levels$"):
+        impactdic.correlate(reference, bad, **OPTIONS)
+    with pytest.raises(ValueError, match=rf"^reference: invalid value \(got {found} at row 3, "):
+        impactdic.correlate(bad, reference, **OPTIONS)
+
+
+def test_float_arrays_refuse_clahe(pair):
+    with pytest.raises(ValueError, match=r"preprocess\.clahe\.enabled: .*8- or 16-bit frames"):
+        impactdic.correlate(*(image.astype(np.float32) for image in pair),
+                            preprocess={"clahe": {"enabled": True}}, **OPTIONS)
+
+
+def test_duplicate_image_names_the_python_arguments(png_pair):
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got '.*reference\.png', the "
+                                         r"reference image\); expected each deformed image once"):
+        impactdic.correlate(png_pair[0], [png_pair[1], png_pair[0]])
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got '.*deformed\.png', given "
+                                         r"twice\)"):
+        impactdic.correlate(png_pair[0], [png_pair[1], png_pair[1]])
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got missing\); expected at "
+                                         r"least one deformed image"):
+        impactdic.correlate([png_pair[0]])
+
+
+def test_progress_callback(pair8):
+    """progress(done, total) after each deformed frame; its exception stops the correlation
+    (no further frame) and is raised by correlate itself."""
+    frames = np.stack([pair8[0], pair8[1], pair8[0], pair8[1]])
+    calls = []
+    result = impactdic.correlate(frames, progress=lambda done, total: calls.append((done, total)),
+                                 **OPTIONS)
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert result.u.shape[0] == 4
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_first(done, total):
+        calls.append((done, total))
+        raise Stop(f"stopped at {done} of {total}")
+
+    calls.clear()
+    with pytest.raises(Stop, match="stopped at 1 of 3"):
+        impactdic.correlate(frames, progress=stop_at_first, **OPTIONS)
+    assert calls == [(1, 3)]
+    with pytest.raises(ValueError, match="progress: invalid value"):
+        impactdic.correlate(*pair8, progress=3, **OPTIONS)
+    # Still usable after a stop.
+    check_shift(impactdic.correlate(*pair8, **OPTIONS))
+
+
+# A correlation of several seconds in a process of its own: 327,184 subsets (600 x 600, step 1).
+LONG_CORRELATION = """
+import sys, time
+import numpy as np
+import impactdic
+from conftest import fourier_shift, speckle, to_uint8
+reference = speckle((600, 600), seed=3)
+pair = to_uint8(reference), to_uint8(fourier_shift(reference, 0.4, 0.2))
+print("ready", flush=True)
+start = time.monotonic()
+try:
+    impactdic.correlate(*pair, dic={"subset_size": 21, "step": 1}, threads=2)
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", flush=True)
+"""
+
+
+@pytest.mark.parametrize("delay_s", [0.3, 1.5])
+def test_ctrl_c_interrupts_a_long_correlation(tmp_path, delay_s):
+    """SIGINT while the library computes (in the reference's precomputation at 0.3 s, in IC-GN at
+    1.5 s; the whole takes about 7 s on 2 cores): KeyboardInterrupt within 2 s (measured: under
+    0.4 s), neither a hang nor a crash, nothing finished."""
+    import signal
+    import subprocess
+    import sys
+    import time
+    script = tmp_path / "long_correlation.py"
+    script.write_text(LONG_CORRELATION)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [os.environ.get("PYTHONPATH", ""), os.path.dirname(os.path.abspath(__file__))]))
+    process = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        assert process.stdout.readline().strip() == "ready"
+        time.sleep(delay_s)
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=20)
+        ended_s = time.monotonic() - sent
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, err
+    assert out.strip() == "KeyboardInterrupt", (out, err)
+    assert ended_s < 2.0, f"{ended_s:.2f} s from SIGINT to the end"
+
+
+def test_result_arrays_are_views_of_the_library_results(pair8):
+    """The result's arrays are numpy views of the library's table (no copy): they do not own
+    their data and all share one owner, which keeps the table alive after the result is gone."""
+    result = impactdic.correlate(*pair8, **OPTIONS)
+    arrays = [getattr(result, name) for name in ("x", "y", "u", "v", "sigma_u", "sigma_v", "zncc",
+                                                 "status", "iterations", "frame", "frame_number")]
+    assert all(not a.flags.owndata for a in arrays)
+    assert len({id(a.base) for a in arrays}) == 1
+    u = result.u
+    expected = u.copy()
+    del result, arrays
+    import gc
+    gc.collect()
+    np.testing.assert_array_equal(u, expected)
 
 
 def test_nothing_usable(pair8):
