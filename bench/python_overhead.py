@@ -8,7 +8,8 @@ kept running and asked for one correlation at a time (so neither side pays start
 side is impactdic.correlate(reference, deformed, threads=2) on uint8 arrays, whose time includes
 what the module adds (copying the arrays, the options, the result's arrays and summary). They take
 turns, the order alternating, so that load from other jobs hits them alike; medians of --runs
-runs each, after one warm-up call each. With --cli, the whole `impactdic correlate` process on the
+runs each, after one warm-up call each; wall and CPU seconds (every thread's, user + system: less
+sensitive to other jobs than the wall time). With --cli, the whole `impactdic correlate` process on the
 PNG files takes a turn too, for scale (start-up, decoding, writing the .h5 file).
 
   /usr/bin/python3 bench/python_overhead.py --build build/bench [--runs 9] [--cli]
@@ -19,6 +20,7 @@ timed tests.
 """
 import argparse
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -54,26 +56,39 @@ def main():
            args.pair[0], "--deformed", args.pair[1], "--threads", str(args.threads), "-o",
            "/dev/shm/impactdic_python_overhead.h5"]
 
+    def cpu(who):
+        usage = resource.getrusage(who)
+        return usage.ru_utime + usage.ru_stime, usage.ru_minflt
+
+    # Each returns (wall seconds, CPU seconds of every thread, minor page faults, subsets).
     def run_cpp():
         cpp.stdin.write("run\n")
         cpp.stdin.flush()
-        seconds, subsets = cpp.stdout.readline().split()
-        return float(seconds), int(subsets)
+        seconds, cpu_s, faults, subsets = cpp.stdout.readline().split()
+        return float(seconds), float(cpu_s), int(faults), int(subsets)
 
     def run_python():
+        cpu0, faults0 = cpu(resource.RUSAGE_SELF)
         start = time.perf_counter()
         result = impactdic.correlate(*arrays, threads=args.threads)
-        return time.perf_counter() - start, result.x.size
+        wall = time.perf_counter() - start
+        cpu1, faults1 = cpu(resource.RUSAGE_SELF)
+        return wall, cpu1 - cpu0, faults1 - faults0, result.x.size
 
     def run_cli():
+        cpu0, faults0 = cpu(resource.RUSAGE_CHILDREN)
         start = time.perf_counter()
         subprocess.run(cli, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        return time.perf_counter() - start, None
+        wall = time.perf_counter() - start
+        cpu1, faults1 = cpu(resource.RUSAGE_CHILDREN)
+        return wall, cpu1 - cpu0, faults1 - faults0, None
 
     contenders = {"C++ library call": run_cpp, "Python correlate(arrays)": run_python}
     if args.cli:
         contenders["impactdic correlate process"] = run_cli
-    times = {name: [] for name in contenders}
+    walls = {name: [] for name in contenders}
+    cpus = {name: [] for name in contenders}
+    faults = {name: [] for name in contenders}
     subsets = {}
     for run in contenders.values():  # Warm-up: page cache, TBB threads, allocations.
         run()
@@ -81,8 +96,10 @@ def main():
     for k in range(args.runs):
         order = list(contenders) if k % 2 == 0 else list(reversed(contenders))
         for name in order:
-            seconds, n = contenders[name]()
-            times[name].append(seconds)
+            wall, cpu_s, fault_count, n = contenders[name]()
+            walls[name].append(wall)
+            cpus[name].append(cpu_s)
+            faults[name].append(fault_count)
             if n is not None:
                 subsets[name] = n
         load.append(os.getloadavg()[0])
@@ -95,13 +112,18 @@ def main():
           f"{os.cpu_count()} CPUs, load average (1 min) {min(load):.2f}-{max(load):.2f}; "
           f"{arrays[0].shape[1]}x{arrays[0].shape[0]} pair {args.pair[0]} {args.pair[1]}, "
           f"{next(iter(subsets.values()))} subsets (subset 25, step 10), {args.threads} threads")
-    for name, values in times.items():
-        print(f"  {name:28s} median {statistics.median(values):.4f} s "
-              f"(min {min(values):.4f}, max {max(values):.4f})")
-    ratio = (statistics.median(times["Python correlate(arrays)"]) /
-             statistics.median(times["C++ library call"]))
-    print(f"  Python / C++ (medians): {ratio:.4f} ({100 * (ratio - 1):+.1f} %)")
-
+    for name in contenders:
+        w, c = walls[name], cpus[name]
+        print(f"  {name:28s} wall median {statistics.median(w):.4f} s (min {min(w):.4f}, max "
+              f"{max(w):.4f}); CPU median {statistics.median(c):.4f} s; "
+              f"{statistics.median(faults[name]):.0f} page faults")
+    py, cc = "Python correlate(arrays)", "C++ library call"
+    for what, values in (("wall", walls), ("CPU", cpus)):
+        ratio = statistics.median(values[py]) / statistics.median(values[cc])
+        # The turns in pairs: the median of the ratios of one turn each, back to back.
+        paired = statistics.median(p / c for p, c in zip(values[py], values[cc]))
+        print(f"  Python / C++ {what}: {ratio:.4f} of the medians ({100 * (ratio - 1):+.1f} %), "
+              f"{paired:.4f} median of the paired turns ({100 * (paired - 1):+.1f} %)")
 
 if __name__ == "__main__":
     main()

@@ -4,11 +4,13 @@
 // from scene keys by SetSceneKey (pipeline/scene_flags.h), as `impactdic correlate` builds its
 // scene from its flags: the same keys, parsers, ranges and messages.
 //
-//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False, time_s=[])
+//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False, time_s=[], progress=None)
 //
-// `frames` is a list of grey images (numpy arrays: uint8, uint16), a list of
+// `frames` is a list of grey images (numpy arrays: uint8, uint16, float32, float64), a list of
 // image files (the first the reference) or one `inputs.frames` setting (a folder, glob, video or
-// camera file); `time_s` the arrays' time stamps [s] (one per frame; empty: none). Library errors
+// camera file); `time_s` the arrays' time stamps [s] (one per frame; empty: none); `progress`
+// None or a callable progress(done, total). The library runs without the GIL, watched at its stop
+// points (core/progress.h) for Ctrl-C and the callback's errors (PythonWatch). Library errors
 // become Python exceptions: ErrorKind::kInvalidValue ValueError, kFileNotFound FileNotFoundError,
 // kFileFormat and kIo OSError, PartialResultsError impactdic.NothingUsableError, other kNumerical
 // impactdic.Error; the message is the library's.
