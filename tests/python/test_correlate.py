@@ -1,6 +1,5 @@
 """impactdic.correlate: known shifts, arrays against files against `impactdic correlate`, the
 option errors of the scene keys, sequences, and memory over many calls."""
-import os
 import resource
 
 import h5py
@@ -8,7 +7,8 @@ import numpy as np
 import pytest
 
 import impactdic
-from conftest import CLI_OPTIONS, DX, DY, OPTIONS, fourier_shift, speckle, to_uint16_12bit, to_uint8
+from conftest import (CLI_OPTIONS, DX, DY, OPTIONS, fourier_shift, interrupt_after, speckle,
+                      to_uint16_12bit, to_uint8)
 
 # Subpixel accuracy of a Fourier-shifted 8-bit speckle with the default bicubic B-spline
 # interpolation: the median error over the subsets is a few thousandths of a pixel (measured
@@ -282,29 +282,8 @@ def test_ctrl_c_interrupts_a_long_correlation(tmp_path, delay_s):
     """SIGINT while the library computes (in the reference's precomputation at 0.3 s, in IC-GN at
     1.5 s; the whole takes about 7 s on 2 cores): KeyboardInterrupt within 2 s (measured: under
     0.4 s), neither a hang nor a crash, nothing finished."""
-    import signal
-    import subprocess
-    import sys
-    import time
-    script = tmp_path / "long_correlation.py"
-    script.write_text(LONG_CORRELATION)
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        [os.environ.get("PYTHONPATH", ""), os.path.dirname(os.path.abspath(__file__))]))
-    process = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=env)
-    try:
-        assert process.stdout.readline().strip() == "ready"
-        time.sleep(delay_s)
-        sent = time.monotonic()
-        process.send_signal(signal.SIGINT)
-        out, err = process.communicate(timeout=20)
-        ended_s = time.monotonic() - sent
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 0, err
-    assert out.strip() == "KeyboardInterrupt", (out, err)
+    out, ended_s = interrupt_after(LONG_CORRELATION, delay_s, tmp_path)
+    assert out == "KeyboardInterrupt"
     assert ended_s < 2.0, f"{ended_s:.2f} s from SIGINT to the end"
 
 

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import impactdic
+from conftest import interrupt_after
 
 SOURCE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SCENE = os.path.join(SOURCE_DIR, "sample_frames", "scene.yaml")
@@ -84,3 +85,21 @@ def test_run_without_hdf5_returns_no_results(tmp_path, monkeypatch):
     summary, results = impactdic.run(scene, tmp_path / "out", dic={"subset_size": 25, "step": 32})
     assert summary["usable"] and results is None
     assert not (tmp_path / "out" / "results.h5").exists()
+
+
+def test_ctrl_c_interrupts_a_run(tmp_path):
+    """SIGINT 1 s into the sample scene's run (about 10 s): KeyboardInterrupt within 2 s, and the
+    output folder as it was (not made)."""
+    code = f"""
+import impactdic
+print("ready", flush=True)
+try:
+    impactdic.run({SCENE!r}, "out", outputs={{"figures": False, "animation": False}})
+    print("finished")
+except KeyboardInterrupt:
+    print("KeyboardInterrupt")
+"""
+    out, ended_s = interrupt_after(code, 1.0, tmp_path)
+    assert out == "KeyboardInterrupt"
+    assert ended_s < 2.0, f"{ended_s:.2f} s from SIGINT to the end"
+    assert not (tmp_path / "out").exists()
