@@ -364,3 +364,21 @@ def test_the_gil_is_released_while_correlating():
         counter.join()
     assert result.summary["seconds"] > 0.05, result.summary["seconds"]  # Long enough to tell.
     assert during >= 10, f"{during} ticks during {result.summary['seconds']:.3f} s"
+
+
+def test_correlate_from_another_thread(pair8):
+    """A correlation started from a Python thread other than the main one (which alone runs
+    signal handlers): the same results, and its progress callback called there."""
+    import threading
+    expected = impactdic.correlate(*pair8, **OPTIONS)
+    found, calls = {}, []
+
+    def work():
+        found["result"] = impactdic.correlate(
+            pair8[0], [pair8[1], pair8[1]], progress=lambda d, t: calls.append((d, t)), **OPTIONS)
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join()
+    assert calls == [(1, 2), (2, 2)]
+    np.testing.assert_array_equal(found["result"].u[1], expected.u[1])
