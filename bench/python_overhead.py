@@ -12,11 +12,11 @@ runs each, after one warm-up call each; wall and CPU seconds (every thread's, us
 sensitive to other jobs than the wall time). With --cli, the whole `impactdic correlate` process on the
 PNG files takes a turn too, for scale (start-up, decoding, writing the .h5 file).
 
-  /usr/bin/python3 bench/python_overhead.py --build build/bench [--runs 9] [--cli]
+  /usr/bin/python3 bench/python_overhead.py --build build/bench [--runs 21] [--cli]
 
-The pair is the one of docs/dic_speed.md, written by bench/dic_benchmark into
-/tmp/impactdic_dic_bench (--pair REF DEF for another). Speed figures belong in docs, never in
-timed tests.
+The pair (read with python3-pil) is the one of docs/dic_speed.md, written by bench/dic_benchmark
+into /tmp/impactdic_dic_bench (--pair REF DEF for another). Speed figures belong in docs, never
+in timed tests.
 """
 import argparse
 import os
@@ -31,7 +31,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--build", default="build/bench",
                     help="a build with the benchmarks and the module (the bench preset)")
-    ap.add_argument("--runs", type=int, default=9)
+    ap.add_argument("--runs", type=int, default=21)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--cli", action="store_true", help="time the `impactdic correlate` process too")
     ap.add_argument("--pair", nargs=2, default=["/tmp/impactdic_dic_bench/frame_0.png",
