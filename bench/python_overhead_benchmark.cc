@@ -3,8 +3,8 @@
 // grey images decoded once, with the scene keys given, as `impactdic correlate` builds its scene
 // from its flags. It waits on stdin: each line "run" correlates once and prints the wall seconds
 // of the call, its CPU seconds (the process's, every thread's: user + system), its minor page
-// faults and the number of subsets; end of input ends it. So the Python script keeps one warm process and takes turns
-// with it. Messages below warnings are off, as in the module.
+// faults and the number of subsets; end of input ends it. So the Python script keeps one warm
+// process and takes turns with it. Messages below warnings are off, as in the module.
 //
 //   python_overhead_benchmark REF.png DEF.png [KEY=VALUE ...]     e.g. dic.threads=2
 #include <sys/resource.h>
@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
           impactdic::CorrelateSceneInMemory(scene, impactdic::MakeMemoryFrameSource(images));
       const std::chrono::duration<double> seconds = std::chrono::steady_clock::now() - start;
       const auto [cpu_end, faults_end] = ProcessCpu();
-      std::cout << seconds.count() << " " << cpu_end - cpu_start << " "
-                << faults_end - faults_start << " " << result.dic.subsets << std::endl;
+      std::cout << seconds.count() << " " << cpu_end - cpu_start << " " << faults_end - faults_start
+                << " " << result.dic.subsets << std::endl;
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "python_overhead_benchmark: %s\n", e.what());

@@ -14,8 +14,7 @@ thread_local ProgressObserver* t_observer = nullptr;
 
 }  // namespace
 
-ScopedProgressObserver::ScopedProgressObserver(ProgressObserver* observer)
-    : previous_(t_observer) {
+ScopedProgressObserver::ScopedProgressObserver(ProgressObserver* observer) : previous_(t_observer) {
   t_observer = observer;
 }
 

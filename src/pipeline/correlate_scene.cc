@@ -37,11 +37,11 @@ void CheckEachImageOnce(const std::vector<std::string>& paths, const Correlation
   if (!repeated) return;
   const auto [earlier, i] = *repeated;
   const std::string& first = paths[earlier];
-  const std::string found =
-      "'" + paths[i] + "', " +
-      (earlier == 0 ? "the " + names.reference + " image" + (first == paths[i] ? "" : " '" + first + "'")
-       : first == paths[i] ? std::string("given twice")
-                           : "the same file as '" + first + "'");
+  const std::string found = "'" + paths[i] + "', " +
+                            (earlier == 0 ? "the " + names.reference + " image" +
+                                                (first == paths[i] ? "" : " '" + first + "'")
+                             : first == paths[i] ? std::string("given twice")
+                                                 : "the same file as '" + first + "'");
   throw Error(ErrorKind::kInvalidValue, names.deformed, found,
               "each deformed image once, and none of them the reference");
 }
@@ -53,9 +53,9 @@ std::vector<std::string> ListInputs(const Scene& scene, const CorrelationInputNa
   const std::string& frames = scene.inputs.frames;
   if (inputs.empty() == frames.empty()) {
     throw Error(ErrorKind::kInvalidValue, "input",
-                frames.empty() ? "none"
-                               : "both " + names.reference + "/" + names.deformed + " and " +
-                                     names.frames,
+                frames.empty()
+                    ? "none"
+                    : "both " + names.reference + "/" + names.deformed + " and " + names.frames,
                 "either " + names.reference + " REF " + names.deformed + " DEF [DEF ...] or " +
                     names.frames + " GLOB");
   }
@@ -144,7 +144,7 @@ SceneCorrelation CorrelateSceneInMemory(const Scene& given, std::unique_ptr<Fram
                                         bool allow_partial, const CorrelationInputNames& names) {
   const Scene scene = CorrelationScene(given);
   if (!frames) ListInputs(scene, names);  // The files named, each image once (as CorrelateScene).
-  PipelineOptions options;         // threads -1: dic.threads.
+  PipelineOptions options;                // threads -1: dic.threads.
   options.allow_partial = allow_partial;
   Route route;
   route.run_stages = RunCorrelationRoute;

@@ -75,9 +75,9 @@ void ApplyKeyCheck(const std::string& key, const std::vector<std::string>& known
                    const std::string& expected) {
   if (std::find(known.begin(), known.end(), key) != known.end()) return;
   const std::string close = ClosestMatch(key, known);
-  throw Error(ErrorKind::kInvalidValue, key + ": unknown option" +
-                                            (close.empty() ? "" : " (did you mean '" + close + "'?)") +
-                                            "; expected " + expected);
+  throw Error(ErrorKind::kInvalidValue,
+              key + ": unknown option" + (close.empty() ? "" : " (did you mean '" + close + "'?)") +
+                  "; expected " + expected);
 }
 
 // Sets each (key, value text) on `scene` with the key's own parser (ApplyKeyCheck first).
@@ -401,9 +401,9 @@ const std::vector<std::string>& RunKeys() {
 // is empty, with `keys` set on it as `impactdic run`'s flags set them; `output` the output folder
 // ("" = the scene's outputs.folder). Returns (summary.json's text, the files written).
 py::tuple Run(const std::string& scene_file, const std::string& scene_text,
-                const std::string& output,
-                const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
-                bool force) {
+              const std::string& output,
+              const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
+              bool force) {
   // A dict's text is one line of JSON: messages name "(scene dict):1" and the key path.
   Scene scene = scene_file.empty() ? ParseScene(scene_text, "(scene dict)") : LoadScene(scene_file);
   ApplyKeys(keys, RunKeys(),
@@ -415,7 +415,8 @@ py::tuple Run(const std::string& scene_file, const std::string& scene_text,
   options.output_folder = output;
   options.allow_partial = allow_partial;
   options.force = force;
-  const PipelineSummary summary = Interruptible(py::none(), [&] { return RunScene(scene, options); });
+  const PipelineSummary summary =
+      Interruptible(py::none(), [&] { return RunScene(scene, options); });
   return py::make_tuple(summary.ToJson().Dump(), summary.outputs);
 }
 

@@ -40,10 +40,11 @@ TEST(ProgressObserver, SeesTheBarsOfItsThreadOnly) {
     ProgressBar bar("correlate", 3);
     bar.Advance();
     bar.Advance(2);
-    std::thread([] {  // Another thread's bar: not this observer's.
+    std::thread elsewhere([] {  // Another thread's bar: not this observer's.
       ProgressBar other("frames", 2);
       other.Advance();
-    }).join();
+    });
+    elsewhere.join();
   }
   ProgressBar after("correlate", 2);  // The observer's scope ended.
   after.Advance();

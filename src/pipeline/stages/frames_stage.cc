@@ -218,9 +218,8 @@ class FramesStage : public Stage {
         d.timeline.camera_stamps
             ? fmt::format(", {:.6g} fps and time stamps from the file", d.timeline.fps)
             : "";
-    return fmt::format("{} of {} frames ({}x{}, {}{}){}; {}", d.frames->count(),
-                       d.source_frames, f0.cols, f0.rows, DepthName(f0), rate,
-                       skipped_note, d.preprocess_note);
+    return fmt::format("{} of {} frames ({}x{}, {}{}){}; {}", d.frames->count(), d.source_frames,
+                       f0.cols, f0.rows, DepthName(f0), rate, skipped_note, d.preprocess_note);
   }
 };
 
