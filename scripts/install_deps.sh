@@ -23,6 +23,7 @@ PACKAGES=(
   python3-dev pybind11-dev                      # the Python module (src/python; docs/python.md)
   python3-pytest python3-xarray                 # its tests (tests/python) and to_xarray()
   python3-nbconvert python3-ipykernel           # CI executes docs/python_sample14.ipynb
+  python3-pil                                   # bench/python_overhead.py reads the pair
   lammps                                        # DEM validation (`lmp`; tests/validation, docs/validation.md)
   slurm-wlm munge                               # a one-node Slurm for the job-array test (label slurm; docs/campaign.md)
 )

@@ -8,6 +8,21 @@
 #include "impactdic/core/log.h"
 
 namespace impactdic {
+namespace {
+
+thread_local ProgressObserver* t_observer = nullptr;
+
+}  // namespace
+
+ScopedProgressObserver::ScopedProgressObserver(ProgressObserver* observer) : previous_(t_observer) {
+  t_observer = observer;
+}
+
+ScopedProgressObserver::~ScopedProgressObserver() { t_observer = previous_; }
+
+void StopPoint() {
+  if (t_observer != nullptr && t_observer->ShouldStop()) throw Stopped();
+}
 
 ProgressBar::ProgressBar(std::string label, std::size_t total)
     : label_(std::move(label)),
@@ -20,6 +35,10 @@ ProgressBar::~ProgressBar() { Finish(); }
 
 void ProgressBar::Advance(std::size_t steps) {
   done_ += steps;
+  if (t_observer != nullptr) {
+    t_observer->Advanced(label_, done_, total_);
+    StopPoint();
+  }
   if (!enabled_) return;
   const auto now = std::chrono::steady_clock::now();
   if (done_ >= total_ || now - last_draw_ > std::chrono::milliseconds(100)) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "correlator_impl.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
 #include "impactdic/dic/reference_update.h"
 #include "impactdic/io/image_io.h"
@@ -34,6 +35,7 @@ Correlator::~Correlator() = default;
 void Correlator::SetReference(const cv::Mat& image) {
   Impl& m = *impl_;
   m.SetUpGrid(image);
+  StopPoint();  // Stop points (core/progress.h) between the phases.
   const int n = static_cast<int>(m.initial.size());
   m.last_index = 0;
   m.summary = DicSummary{};
@@ -45,6 +47,7 @@ void Correlator::SetReference(const cv::Mat& image) {
   cv::Mat image32 = image;
   if (image.depth() != CV_8U && image.depth() != CV_32F) image.convertTo(image32, CV_32F);
   m.BuildReference(0, image, nullptr, image32, &timing);
+  StopPoint();
   m.summary.seconds_coefficients += timing.seconds_coefficients;
   m.summary.seconds_reference += timing.seconds_reference;
   m.summary.seconds_total += timer.ElapsedSeconds();
@@ -78,7 +81,9 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   std::unique_ptr<internal::Frame> frame = m.NewFrame();
   m.MakeFrame(image, out.frame, frame.get());
   out.seconds_coefficients += timer.ElapsedSeconds();
+  StopPoint();
   std::vector<Attempt> at = m.Solve(*frame, &out);
+  StopPoint();
   m.RedoIfThePolicyAsks(*frame, &at, &out);
   out.reference_frame = m.ref.frame;
 

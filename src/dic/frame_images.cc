@@ -117,7 +117,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   AdviseHugePages(ref.hinv.data(), ref.hinv.capacity() * sizeof(double));
   ref.subsets.assign(n, SubsetRef{});
   ref.hinv.assign(hinv_size, 0.0);
-  tbb::parallel_for(0, n, [&](int i) {
+  internal::ParallelForWithStops(n, [&](int i) {
     SubsetRef& s = ref.subsets[i];
     if (!tracks[i].active) {
       s.status = tracks[i].permanent;

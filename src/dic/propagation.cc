@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "correlator_impl.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/core/timer.h"
 
 namespace impactdic {
@@ -168,7 +169,7 @@ class Correlator::Impl::FrameSolver {
     std::vector<int> list;
     for (int i = 0; i < n_; ++i)
       if (usable_[i] && !std::isnan(m_.tracks[i].pos_last.x)) list.push_back(i);
-    tbb::parallel_for(0, static_cast<int>(list.size()), [&](int k) {
+    internal::ParallelForWithStops(static_cast<int>(list.size()), [&](int k) {
       const int i = list[k];
       Params p0;
       Predict(i, &p0);
@@ -260,9 +261,9 @@ class Correlator::Impl::FrameSolver {
 
   // 2. Reliability-guided propagation in deterministic waves on the lattice of `stride`, with
   // searches at seeds when no wave can start.
+  // A stop point after each wave (core/progress.h).
   void Propagate(int stride) {
-    while (PropagateWave(stride) || SearchSeeds(stride)) {
-    }
+    while (PropagateWave(stride) || SearchSeeds(stride)) StopPoint();
   }
 
   // One wave: every unsolved lattice subset with a solved neighbour starts from it (stride 1:
@@ -380,7 +381,7 @@ class Correlator::Impl::FrameSolver {
       if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride))
         fill.push_back(i);
     timer_.Restart();
-    tbb::parallel_for(0, static_cast<int>(fill.size()), [&](int k) {
+    internal::ParallelForWithStops(static_cast<int>(fill.size()), [&](int k) {
       const int i = fill[k], r = i / grid_nx, c = i % grid_nx;
       const SubsetRef& si = m_.ref.subsets[i];
       std::array<int, 8> from;

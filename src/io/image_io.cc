@@ -525,6 +525,15 @@ int DataBits(const cv::Mat& image) {
   return max_value <= 4095 ? 12 : 16;
 }
 
+std::string DepthName(const cv::Mat& image) {
+  switch (image.depth()) {
+    case CV_8U: return "8-bit";
+    case CV_16U: return "16-bit";
+    case CV_32F: return "32-bit float";
+    default: return "depth code " + std::to_string(image.depth());
+  }
+}
+
 std::string SequenceColourCheck::Check(const std::string& path, int file_channels) {
   if (first_path_.empty()) {
     first_path_ = path;
@@ -722,11 +731,10 @@ void CheckSameSize(const std::vector<cv::Mat>& images, const std::vector<std::st
     if (images[i].size() != images[0].size() || images[i].depth() != images[0].depth()) {
       const std::string name = i < names.size() ? names[i] : "frame " + std::to_string(i);
       throw Error(ErrorKind::kFileFormat, "image size",
-                  std::to_string(images[i].cols) + "x" + std::to_string(images[i].rows) +
-                      (images[i].depth() == CV_16U ? " 16-bit" : " 8-bit"),
-                  std::to_string(images[0].cols) + "x" + std::to_string(images[0].rows) +
-                      (images[0].depth() == CV_16U ? " 16-bit" : " 8-bit") +
-                      " like the first image")
+                  std::to_string(images[i].cols) + "x" + std::to_string(images[i].rows) + " " +
+                      DepthName(images[i]),
+                  std::to_string(images[0].cols) + "x" + std::to_string(images[0].rows) + " " +
+                      DepthName(images[0]) + " like the first image")
           .WithFile(name);
     }
   }

@@ -25,38 +25,44 @@
 namespace impactdic {
 namespace {
 
+// How `correlate`'s flags name the inputs in messages.
+const CorrelationInputNames kCorrelateFlags = {"--reference", "--deformed", "--frames"};
+
 // Each image of inputs.frame_files once: the same file given twice (under any spelling of its
 // path, a symbolic or a hard link) would be correlated twice and numbered alike. Error naming
-// `correlate --deformed` and both spellings. Files that cannot be examined are left to the image
-// reader's message.
-void CheckEachImageOnce(const std::vector<std::string>& paths) {
+// the deformed images' input and both spellings. Files that cannot be examined are left to the
+// image reader's message.
+void CheckEachImageOnce(const std::vector<std::string>& paths, const CorrelationInputNames& names) {
   const auto repeated = FirstRepeatedFile(paths);
   if (!repeated) return;
   const auto [earlier, i] = *repeated;
   const std::string& first = paths[earlier];
-  const std::string found =
-      "'" + paths[i] + "', " +
-      (earlier == 0        ? "the --reference image" + (first == paths[i] ? "" : " '" + first + "'")
-       : first == paths[i] ? std::string("given twice")
-                           : "the same file as '" + first + "'");
-  throw Error(ErrorKind::kInvalidValue, "--deformed", found,
+  const std::string found = "'" + paths[i] + "', " +
+                            (earlier == 0 ? "the " + names.reference + " image" +
+                                                (first == paths[i] ? "" : " '" + first + "'")
+                             : first == paths[i] ? std::string("given twice")
+                                                 : "the same file as '" + first + "'");
+  throw Error(ErrorKind::kInvalidValue, names.deformed, found,
               "each deformed image once, and none of them the reference");
 }
 
 // The files the correlation reads, listed (not decoded): the images, or the video or camera
-// file, and the mask. The output must be none of them. Errors name `correlate`'s flags.
-std::vector<std::string> ListInputs(const Scene& scene) {
+// file, and the mask. The output must be none of them. Errors name the inputs by `names`.
+std::vector<std::string> ListInputs(const Scene& scene, const CorrelationInputNames& names) {
   std::vector<std::string> inputs = scene.inputs.frame_files;
   const std::string& frames = scene.inputs.frames;
   if (inputs.empty() == frames.empty()) {
     throw Error(ErrorKind::kInvalidValue, "input",
-                frames.empty() ? "none" : "both --reference/--deformed and --frames",
-                "either --reference REF --deformed DEF [DEF ...] or --frames GLOB");
+                frames.empty()
+                    ? "none"
+                    : "both " + names.reference + "/" + names.deformed + " and " + names.frames,
+                "either " + names.reference + " REF " + names.deformed + " DEF [DEF ...] or " +
+                    names.frames + " GLOB");
   }
   if (!inputs.empty()) {
-    CheckValue(!inputs[0].empty(), "--reference", "missing", "the reference image");
-    CheckValue(inputs.size() >= 2, "--deformed", "missing", "at least one deformed image");
-    CheckEachImageOnce(inputs);
+    CheckValue(!inputs[0].empty(), names.reference, "missing", "the reference image");
+    CheckValue(inputs.size() >= 2, names.deformed, "missing", "at least one deformed image");
+    CheckEachImageOnce(inputs, names);
   } else if (IsCameraFile(frames) || IsVideoFile(frames)) {
     inputs.push_back(frames);
   } else {
@@ -104,7 +110,7 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
   CheckValue(!output.empty(), "-o/--output", "missing", "an output file ending in .csv or .h5");
   CheckOutputLocation(output, {"-o/--output",
                                {".csv", ".h5", ".hdf5"},
-                               ListInputs(scene),
+                               ListInputs(scene, kCorrelateFlags),
                                {CsvHeaderLine(DicCsvColumns())}});
   PipelineOptions options;  // threads -1: dic.threads.
   options.allow_partial = allow_partial;
@@ -135,10 +141,10 @@ PipelineSummary CorrelateScene(const Scene& given, const std::string& output, bo
 }
 
 SceneCorrelation CorrelateSceneInMemory(const Scene& given, std::unique_ptr<FrameSource> frames,
-                                        bool allow_partial) {
+                                        bool allow_partial, const CorrelationInputNames& names) {
   const Scene scene = CorrelationScene(given);
-  if (!frames) ListInputs(scene);  // The files named, each image once (as CorrelateScene).
-  PipelineOptions options;         // threads -1: dic.threads.
+  if (!frames) ListInputs(scene, names);  // The files named, each image once (as CorrelateScene).
+  PipelineOptions options;                // threads -1: dic.threads.
   options.allow_partial = allow_partial;
   Route route;
   route.run_stages = RunCorrelationRoute;

@@ -215,10 +215,13 @@ cv::Mat GaussianBlurFrame(const GaussianBlurOptions& options, const cv::Mat& fra
 }
 
 void Preprocessor::CheckFrame(const cv::Mat& frame) const {
-  CheckValue(frame.channels() == 1 && (frame.depth() == CV_8U || frame.depth() == CV_16U),
-             "frame type",
-             fmt::format("{} channel(s), depth code {}", frame.channels(), frame.depth()),
-             "a single-channel 8- or 16-bit frame");
+  const int depth = frame.depth();
+  CheckValue(frame.channels() == 1 && (depth == CV_8U || depth == CV_16U || depth == CV_32F),
+             "frame type", fmt::format("{} channel(s), depth code {}", frame.channels(), depth),
+             "a single-channel 8- or 16-bit or 32-bit float frame");
+  // OpenCV's CLAHE equalises 8- and 16-bit images only (float frames come from memory: Python).
+  CheckValue(!options_.clahe.enabled || depth != CV_32F, "preprocess.clahe.enabled",
+             "true with 32-bit float frames", "false (CLAHE takes 8- or 16-bit frames)");
   if (frame.size() != frame_size_)
     throw Error(ErrorKind::kInvalidValue,
                 fmt::format("frame has size {}x{} but the sequence's frames are {}x{}", frame.cols,

@@ -4,11 +4,13 @@
 // from scene keys by SetSceneKey (pipeline/scene_flags.h), as `impactdic correlate` builds its
 // scene from its flags: the same keys, parsers, ranges and messages.
 //
-//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False, time_s=[])
+//   _correlate(frames, [("dic.subset_size", "25")], allow_partial=False, time_s=[], progress=None)
 //
-// `frames` is a list of grey images (numpy arrays: uint8, uint16), a list of
+// `frames` is a list of grey images (numpy arrays: uint8, uint16, float32, float64), a list of
 // image files (the first the reference) or one `inputs.frames` setting (a folder, glob, video or
-// camera file); `time_s` the arrays' time stamps [s] (one per frame; empty: none). Library errors
+// camera file); `time_s` the arrays' time stamps [s] (one per frame; empty: none); `progress`
+// None or a callable progress(done, total). The library runs without the GIL, watched at its stop
+// points (core/progress.h) for Ctrl-C and the callback's errors (PythonWatch). Library errors
 // become Python exceptions: ErrorKind::kInvalidValue ValueError, kFileNotFound FileNotFoundError,
 // kFileFormat and kIo OSError, PartialResultsError impactdic.NothingUsableError, other kNumerical
 // impactdic.Error; the message is the library's.
@@ -17,6 +19,8 @@
 #include <pybind11/stl.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <map>
@@ -24,11 +28,13 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/core/version.h"
 #include "impactdic/io/frame_source.h"
 #include "impactdic/io/hdf5_store.h"
@@ -63,14 +69,15 @@ const std::vector<std::string>& CorrelateKeys() {
   return keys;
 }
 
-// A key not `known`: Error naming it, what is `expected` and the closest key.
+// A key not `known`: "KEY: unknown option (did you mean 'CLOSEST'?); expected EXPECTED", as the
+// scene file's "unknown key (did you mean ...)" (the closest key when one is close).
 void ApplyKeyCheck(const std::string& key, const std::vector<std::string>& known,
                    const std::string& expected) {
   if (std::find(known.begin(), known.end(), key) != known.end()) return;
-  std::string allowed = expected;
-  if (const std::string close = ClosestMatch(key, known); !close.empty())
-    allowed += " (did you mean '" + close + "'?)";
-  throw Error(ErrorKind::kInvalidValue, key, "unknown option", allowed);
+  const std::string close = ClosestMatch(key, known);
+  throw Error(ErrorKind::kInvalidValue,
+              key + ": unknown option" + (close.empty() ? "" : " (did you mean '" + close + "'?)") +
+                  "; expected " + expected);
 }
 
 // Sets each (key, value text) on `scene` with the key's own parser (ApplyKeyCheck first).
@@ -82,30 +89,54 @@ void ApplyKeys(const std::vector<std::pair<std::string, std::string>>& keys,
   }
 }
 
-// A grey image of a numpy array (2-D; uint8, or uint16 with any bit depth of the data: the frames
-// the pipeline reads, as from image files), in a buffer of its own. Error naming `what` otherwise.
+// A grey image of a numpy array, in a buffer of its own (the library works on its own frames):
+// 2-D; uint8, uint16 with any bit depth of the data (the frames image files give), float32 or
+// float64 grey levels as they are (the correlator's float images: any range, the contrast limits
+// relative to the reference's largest value; float64 becomes float32, the precision the
+// correlator computes in). Error naming `what` otherwise, and for a float that is not finite.
 cv::Mat ImageOfArray(const py::array& array, const std::string& what) {
   const py::dtype dtype = array.dtype();
+  const std::string dtype_name = py::str(static_cast<py::handle>(dtype)).cast<std::string>();
   const bool bits8 = dtype.is(py::dtype::of<std::uint8_t>());
-  CheckValue(bits8 || dtype.is(py::dtype::of<std::uint16_t>()), what,
-             "dtype " + py::str(static_cast<py::handle>(dtype)).cast<std::string>(),
-             "uint8 or uint16 (8- or 16-bit frames, as image files hold them)");
+  const bool bits16 = dtype.is(py::dtype::of<std::uint16_t>());
+  const bool float32 = dtype.is(py::dtype::of<float>());
+  const bool float64 = dtype.is(py::dtype::of<double>());
+  CheckValue(bits8 || bits16 || float32 || float64, what, "dtype " + dtype_name,
+             "uint8 or uint16 (8- or 16-bit frames, as image files hold them) or float32 or "
+             "float64 (grey levels as they are)");
   CheckValue(array.ndim() == 2, what, std::to_string(array.ndim()) + "-D array",
              "a 2-D grey image (rows, columns)");
   const int rows = static_cast<int>(array.shape(0)), cols = static_cast<int>(array.shape(1));
   CheckValue(rows > 0 && cols > 0, what, std::to_string(rows) + "x" + std::to_string(cols),
              "a non-empty image");
-  cv::Mat image(rows, cols, bits8 ? CV_8U : CV_16U);
-  const auto copy = [&](auto tag) {
+  cv::Mat image(rows, cols, bits8 ? CV_8U : bits16 ? CV_16U : CV_32F);
+  const auto n = static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols);
+  const auto copy = [&](auto tag, auto* out) {
     using T = decltype(tag);
     const auto a = py::array_t<T, py::array::c_style>::ensure(array);
-    std::copy_n(a.data(), static_cast<std::size_t>(rows) * static_cast<std::size_t>(cols),
-                image.ptr<T>());
+    const T* in = a.data();
+    using Out = std::remove_pointer_t<decltype(out)>;
+    if constexpr (std::is_floating_point_v<T>) {
+      const T* bad = std::find_if(in, in + n, [](T v) { return !std::isfinite(v); });
+      if (bad != in + n) {
+        const auto k = static_cast<std::size_t>(bad - in);
+        throw Error(ErrorKind::kInvalidValue, what,
+                    std::string(std::isnan(*bad) ? "NaN" : "infinity") + " at row " +
+                        std::to_string(k / static_cast<std::size_t>(cols)) + ", column " +
+                        std::to_string(k % static_cast<std::size_t>(cols)),
+                    "finite grey levels");
+      }
+    }
+    std::transform(in, in + n, out, [](T v) { return static_cast<Out>(v); });
   };
   if (bits8) {
-    copy(std::uint8_t{});
+    copy(std::uint8_t{}, image.ptr<std::uint8_t>());
+  } else if (bits16) {
+    copy(std::uint16_t{}, image.ptr<std::uint16_t>());
+  } else if (float32) {
+    copy(float{}, image.ptr<float>());
   } else {
-    copy(std::uint16_t{});
+    copy(double{}, image.ptr<float>());
   }
   return image;
 }
@@ -175,11 +206,72 @@ py::dict SummaryDict(const SceneCorrelation& c) {
   return d;
 }
 
+// Watches a library call made without the GIL on the calling thread (core/progress.h): each step
+// of the "correlate" loop calls `progress(done, total)`, taking the GIL for just that, and on
+// Python's main thread (the only one that runs signal handlers) a stop point at least
+// kSignalCheck after the last check runs Python's signal handlers (Ctrl-C: KeyboardInterrupt), so
+// the GIL is taken at most 20 times a second: a busy Python thread holding it delays the library
+// little. A Python error either raises stops the call at the next stop point; it stays set in the
+// thread's error indicator, raised when the call has unwound (Interruptible). Made, and used, on
+// the calling thread.
+class PythonWatch : public ProgressObserver {
+ public:
+  // With the GIL held.
+  explicit PythonWatch(py::object progress)
+      : progress_(std::move(progress)), main_thread_(IsMainThread()) {}
+  void Advanced(const std::string& label, std::size_t done, std::size_t total) override {
+    if (label != "correlate" || progress_.is_none() || stop_) return;
+    const py::gil_scoped_acquire gil;
+    try {
+      progress_(done, total);
+    } catch (py::error_already_set& e) {
+      e.restore();
+      stop_ = true;
+    }
+  }
+  bool ShouldStop() override {
+    if (stop_ || !main_thread_) return stop_;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_check_ < kSignalCheck) return false;
+    last_check_ = now;
+    const py::gil_scoped_acquire gil;
+    stop_ = PyErr_CheckSignals() != 0;
+    return stop_;
+  }
+
+ private:
+  static bool IsMainThread() {
+    const py::module_ threading = py::module_::import("threading");
+    return threading.attr("current_thread")().is(threading.attr("main_thread")());
+  }
+
+  static constexpr std::chrono::milliseconds kSignalCheck{50};
+  py::object progress_;
+  bool main_thread_;
+  bool stop_ = false;  // A Python error is set: stop.
+  std::chrono::steady_clock::time_point last_check_;
+};
+
+// `work()` without the GIL, watched by a PythonWatch; a stop raises the Python error that asked
+// for it (KeyboardInterrupt, the progress callback's exception).
+template <typename Work>
+auto Interruptible(const py::object& progress, Work work) {
+  PythonWatch watch(progress);
+  try {
+    const py::gil_scoped_release release;
+    const ScopedProgressObserver watching(&watch);
+    return work();
+  } catch (const Stopped&) {  // The GIL is held again here.
+    if (PyErr_Occurred() != nullptr) throw py::error_already_set();
+    throw;
+  }
+}
+
 // _correlate(frames, keys, allow_partial): see the file comment. Returns (table dict, summary
 // dict). The library computes without the GIL.
 py::tuple Correlate(const py::object& frames,
                     const std::vector<std::pair<std::string, std::string>>& keys,
-                    bool allow_partial, std::vector<double> time_s) {
+                    bool allow_partial, std::vector<double> time_s, const py::object& progress) {
   Scene scene;
   ApplyKeys(keys, CorrelateKeys(),
             "a key of the scene's dic or preprocess section, inputs.fps or inputs.calibration",
@@ -203,18 +295,24 @@ py::tuple Correlate(const py::object& frames,
       for (std::size_t k = 0; k < list.size(); ++k) {
         const std::string what = k == 0 ? "reference" : "frame " + std::to_string(k);
         images.push_back(ImageOfArray(py::array::ensure(list[k]), what));
+        const cv::Mat& first = images.front();
+        CheckValue(images.back().size() == first.size() && images.back().type() == first.type(),
+                   what,
+                   std::to_string(images.back().rows) + "x" + std::to_string(images.back().cols) +
+                       " " + py::str(list[k].attr("dtype")).cast<std::string>(),
+                   std::to_string(first.rows) + "x" + std::to_string(first.cols) + " " +
+                       py::str(list[0].attr("dtype")).cast<std::string>() +
+                       " like the reference (rows x columns, dtype)");
       }
       CheckValue(images.size() >= 2, "frames", std::to_string(images.size()) + " image(s)",
                  "a reference and at least one deformed image");
       source = MakeMemoryFrameSource(std::move(images), std::move(time_s));
     }
   }
-  std::shared_ptr<SceneCorrelation> result;
-  {
-    const py::gil_scoped_release release;
-    result = std::make_shared<SceneCorrelation>(
-        CorrelateSceneInMemory(scene, std::move(source), allow_partial));
-  }
+  const auto result = Interruptible(progress, [&] {
+    return std::make_shared<SceneCorrelation>(CorrelateSceneInMemory(
+        scene, std::move(source), allow_partial, {"reference", "deformed", "reference"}));
+  });
   py::dict summary = SummaryDict(*result);
   auto table = std::make_shared<DicResultsTable>(std::move(result->table));
   return py::make_tuple(TableDict(std::move(table)), summary);
@@ -301,11 +399,11 @@ const std::vector<std::string>& RunKeys() {
 // _run(scene_file, scene_text, output, keys, allow_partial, force): RunScene on the scene file,
 // or on `scene_text` (YAML or JSON; relative paths against the working folder) when scene_file
 // is empty, with `keys` set on it as `impactdic run`'s flags set them; `output` the output folder
-// ("" = the scene's outputs.folder). Returns summary.json's text.
-std::string Run(const std::string& scene_file, const std::string& scene_text,
-                const std::string& output,
-                const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
-                bool force) {
+// ("" = the scene's outputs.folder). Returns (summary.json's text, the files written).
+py::tuple Run(const std::string& scene_file, const std::string& scene_text,
+              const std::string& output,
+              const std::vector<std::pair<std::string, std::string>>& keys, bool allow_partial,
+              bool force) {
   // A dict's text is one line of JSON: messages name "(scene dict):1" and the key path.
   Scene scene = scene_file.empty() ? ParseScene(scene_text, "(scene dict)") : LoadScene(scene_file);
   ApplyKeys(keys, RunKeys(),
@@ -317,8 +415,9 @@ std::string Run(const std::string& scene_file, const std::string& scene_text,
   options.output_folder = output;
   options.allow_partial = allow_partial;
   options.force = force;
-  const py::gil_scoped_release release;
-  return RunScene(scene, options).ToJson().Dump();
+  const PipelineSummary summary =
+      Interruptible(py::none(), [&] { return RunScene(scene, options); });
+  return py::make_tuple(summary.ToJson().Dump(), summary.outputs);
 }
 
 // _model(numbers, solver, error_estimator, ode45_defaults, output): `impactdic model` of one test
@@ -399,7 +498,7 @@ PYBIND11_MODULE(_impactdic, m) {
   m.attr("git_revision") = impactdic::GitRevision();
   m.attr("correlate_keys") = CorrelateKeys();
   m.def("_correlate", &Correlate, py::arg("frames"), py::arg("keys"), py::arg("allow_partial"),
-        py::arg("time_s"));
+        py::arg("time_s"), py::arg("progress"));
   m.def("_read_h5", &ReadH5, py::arg("path"));
   m.def("_run", &Run, py::arg("scene_file"), py::arg("scene_text"), py::arg("output"),
         py::arg("keys"), py::arg("allow_partial"), py::arg("force"));

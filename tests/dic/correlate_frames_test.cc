@@ -15,6 +15,7 @@
 
 #include "../core/expect_error.h"
 #include "impactdic/core/error.h"
+#include "impactdic/core/progress.h"
 #include "impactdic/dic/correlator.h"
 #include "impactdic/dic/dic_io.h"
 #include "impactdic/dic/options.h"
@@ -103,6 +104,48 @@ TEST(CorrelateFrames, SameResultsAsTheCorrelatorsOwnLoop) {
   ASSERT_EQ(sequence.frames.size(), expected.size());
   for (std::size_t k = 0; k < expected.size(); ++k)
     EXPECT_EQ(sequence.frames[k].u_px, result.frames[k].u_px);
+}
+
+// Counts the steps and the stop points; stops at stop point `stop_at` (0: never).
+class CountingObserver : public ProgressObserver {
+ public:
+  explicit CountingObserver(int stop_at) : stop_at_(stop_at) {}
+  void Advanced(const std::string& label, std::size_t done, std::size_t total) override {
+    if (label == "correlate") steps.push_back(static_cast<int>(done * 100 + total));
+  }
+  bool ShouldStop() override { return ++asked == stop_at_; }
+
+  std::vector<int> steps;  // done * 100 + total.
+  int asked = 0;
+
+ private:
+  int stop_at_;
+};
+
+// Stop points ask the observer several times per frame (the reference's precomputation, each
+// phase and propagation wave), change no result, and a stop at any of them ends the correlation
+// with Stopped.
+TEST(CorrelateFrames, AnObserverSeesEachFrameAndCanStopAtAnyStopPoint) {
+  const std::vector<cv::Mat> frames = ShiftedFrames(4);
+  const DicResult plain = CorrelateSequence(frames, SmallOptions());
+  CountingObserver watch_all(/*stop_at=*/0);
+  DicResult watched;
+  {
+    const ScopedProgressObserver scope(&watch_all);
+    watched = CorrelateSequence(frames, SmallOptions());
+  }
+  EXPECT_EQ(watch_all.steps, (std::vector<int>{103, 203, 303}));
+  const int stop_points = watch_all.asked;
+  EXPECT_GE(stop_points, 3 * 4);  // At least a few per frame.
+  ASSERT_EQ(watched.frames.size(), plain.frames.size());
+  for (std::size_t k = 0; k < plain.frames.size(); ++k)
+    EXPECT_EQ(watched.frames[k].u_px, plain.frames[k].u_px);
+  for (const int stop_at : {1, stop_points / 2, stop_points}) {
+    CountingObserver stopper(stop_at);
+    const ScopedProgressObserver scope(&stopper);
+    EXPECT_THROW(CorrelateSequence(frames, SmallOptions()), Stopped) << "stop point " << stop_at;
+    EXPECT_EQ(stopper.asked, stop_at);
+  }
 }
 
 TEST(CorrelateFrames, HandsEachFrameToTheSinkInOrder) {

@@ -94,6 +94,36 @@ def cli():
     return run
 
 
+def interrupt_after(code, delay_s, folder):
+    """Runs the Python `code` in a process of its own (this folder's modules importable; working
+    folder `folder`), sends it SIGINT `delay_s` after it printed "ready": (what it printed after,
+    stripped; seconds from the signal to its end). Fails if it exits with an error or does not
+    end within 20 s (killed)."""
+    import signal
+    import sys
+    import time
+    script = os.path.join(folder, "interrupted.py")
+    with open(script, "w") as f:
+        f.write(code)
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [os.environ.get("PYTHONPATH", ""), os.path.dirname(os.path.abspath(__file__))]))
+    process = subprocess.Popen([sys.executable, script], stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=env, cwd=folder)
+    try:
+        assert process.stdout.readline().strip() == "ready"
+        time.sleep(delay_s)
+        sent = time.monotonic()
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=20)
+        ended_s = time.monotonic() - sent
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, err
+    return out.strip(), ended_s
+
+
 # Small, fast options shared by the tests (the defaults but the subset size and step).
 OPTIONS = {"dic": {"subset_size": 21, "step": 12}}
 CLI_OPTIONS = ["--dic.subset_size", "21", "--dic.step", "12"]

@@ -1,6 +1,5 @@
 """impactdic.correlate: known shifts, arrays against files against `impactdic correlate`, the
 option errors of the scene keys, sequences, and memory over many calls."""
-import os
 import resource
 
 import h5py
@@ -8,7 +7,8 @@ import numpy as np
 import pytest
 
 import impactdic
-from conftest import CLI_OPTIONS, DX, DY, OPTIONS, fourier_shift, speckle, to_uint16_12bit, to_uint8
+from conftest import (CLI_OPTIONS, DX, DY, OPTIONS, fourier_shift, interrupt_after, speckle,
+                      to_uint16_12bit, to_uint8)
 
 # Subpixel accuracy of a Fourier-shifted 8-bit speckle with the default bicubic B-spline
 # interpolation: the median error over the subsets is a few thousandths of a pixel (measured
@@ -160,8 +160,12 @@ def test_every_key_refuses_a_bad_value_as_the_cli(cli):
 
 
 def test_unknown_option_names_the_closest_key():
-    with pytest.raises(ValueError, match=r"dic\.subset_sise: .*did you mean 'dic\.subset_size'"):
+    with pytest.raises(ValueError, match=r"^dic\.subset_sise: unknown option \(did you mean "
+                                         r"'dic\.subset_size'\?\); expected a key of the scene's "
+                                         r"dic or preprocess section"):
         impactdic.correlate("a.png", "b.png", dic={"subset_sise": 21})
+    with pytest.raises(ValueError, match=r"^dic\.bogus: unknown option; expected a key"):
+        impactdic.correlate("a.png", "b.png", dic={"bogus": 21})
 
 
 def test_missing_file_is_an_os_error(tmp_path):
@@ -170,12 +174,134 @@ def test_missing_file_is_an_os_error(tmp_path):
 
 
 def test_bad_array_is_a_value_error(pair8):
-    with pytest.raises(ValueError, match="dtype int64"):
+    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype int64\)"):
         impactdic.correlate(pair8[0].astype(np.int64), pair8[1])
-    with pytest.raises(ValueError, match=r"reference: invalid value \(got dtype float32\)"):
-        impactdic.correlate(pair8[0].astype(np.float32), pair8[1])
     with pytest.raises(ValueError, match="frame 1: invalid value"):
         impactdic.correlate(pair8[0], np.zeros((4, 5, 3), np.uint8)[..., 0][None, None])
+    # Every frame as the reference: its shape and dtype (not left to the frame reader's OSError).
+    with pytest.raises(ValueError, match=r"frame 1: invalid value \(got 192x192 uint16\); "
+                                         r"expected 192x192 uint8 like the reference"):
+        impactdic.correlate(pair8[0], pair8[1].astype(np.uint16))
+    with pytest.raises(ValueError, match=r"frame 1: invalid value \(got 100x192 uint8\)"):
+        impactdic.correlate(pair8[0], pair8[1][:100])
+
+
+@pytest.mark.parametrize("dtype", ["float32", "float64"])
+def test_float_arrays_are_grey_levels_as_they_are(pair, pair8, dtype):
+    """Float images are grey levels as they are, in any range: the speckle in [0, 1] gives the
+    shift; the 8-bit images' values as floats give the 8-bit images' results to the last bit
+    (the correlator computes in float32 either way; float64 is converted to float32 once)."""
+    result = impactdic.correlate(*(image.astype(dtype) for image in pair), **OPTIONS)
+    check_shift(result)
+    assert result.summary["data_bits"] == 0  # No bit depth: the contrast limits follow the data.
+    as_float = impactdic.correlate(*(image.astype(dtype) for image in pair8), **OPTIONS)
+    as_uint8 = impactdic.correlate(*pair8, **OPTIONS)
+    for name in ("u", "v", "status", "zncc", "iterations"):
+        np.testing.assert_array_equal(getattr(as_float, name), getattr(as_uint8, name),
+                                      err_msg=name)
+
+
+@pytest.mark.parametrize("value, found", [(np.nan, "NaN"), (np.inf, "infinity"),
+                                          (-np.inf, "infinity")])
+def test_non_finite_float_is_a_value_error_naming_the_array(pair, value, found):
+    reference, deformed = (image.astype(np.float32) for image in pair)
+    bad = deformed.copy()
+    bad[3, 5] = value
+    with pytest.raises(ValueError, match=rf"^frame 1: invalid value \(got {found} at row 3, "
+                                         r"column 5\); expected finite grey levels$"):
+        impactdic.correlate(reference, bad, **OPTIONS)
+    with pytest.raises(ValueError, match=rf"^reference: invalid value \(got {found} at row 3, "):
+        impactdic.correlate(bad, reference, **OPTIONS)
+
+
+def test_float_arrays_refuse_clahe(pair):
+    with pytest.raises(ValueError, match=r"preprocess\.clahe\.enabled: .*8- or 16-bit frames"):
+        impactdic.correlate(*(image.astype(np.float32) for image in pair),
+                            preprocess={"clahe": {"enabled": True}}, **OPTIONS)
+
+
+def test_duplicate_image_names_the_python_arguments(png_pair):
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got '.*reference\.png', the "
+                                         r"reference image\); expected each deformed image once"):
+        impactdic.correlate(png_pair[0], [png_pair[1], png_pair[0]])
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got '.*deformed\.png', given "
+                                         r"twice\)"):
+        impactdic.correlate(png_pair[0], [png_pair[1], png_pair[1]])
+    with pytest.raises(ValueError, match=r"^deformed: invalid value \(got missing\); expected at "
+                                         r"least one deformed image"):
+        impactdic.correlate([png_pair[0]])
+
+
+def test_progress_callback(pair8):
+    """progress(done, total) after each deformed frame; its exception stops the correlation
+    (no further frame) and is raised by correlate itself."""
+    frames = np.stack([pair8[0], pair8[1], pair8[0], pair8[1]])
+    calls = []
+    result = impactdic.correlate(frames, progress=lambda done, total: calls.append((done, total)),
+                                 **OPTIONS)
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+    assert result.u.shape[0] == 4
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_first(done, total):
+        calls.append((done, total))
+        raise Stop(f"stopped at {done} of {total}")
+
+    calls.clear()
+    with pytest.raises(Stop, match="stopped at 1 of 3"):
+        impactdic.correlate(frames, progress=stop_at_first, **OPTIONS)
+    assert calls == [(1, 3)]
+    with pytest.raises(ValueError, match="progress: invalid value"):
+        impactdic.correlate(*pair8, progress=3, **OPTIONS)
+    # Still usable after a stop.
+    check_shift(impactdic.correlate(*pair8, **OPTIONS))
+
+
+# A correlation of several seconds in a process of its own: 327,184 subsets (600 x 600, step 1).
+LONG_CORRELATION = """
+import sys, time
+import numpy as np
+import impactdic
+from conftest import fourier_shift, speckle, to_uint8
+reference = speckle((600, 600), seed=3)
+pair = to_uint8(reference), to_uint8(fourier_shift(reference, 0.4, 0.2))
+print("ready", flush=True)
+start = time.monotonic()
+try:
+    impactdic.correlate(*pair, dic={"subset_size": 21, "step": 1}, threads=2)
+    print("finished", flush=True)
+except KeyboardInterrupt:
+    print("KeyboardInterrupt", flush=True)
+"""
+
+
+@pytest.mark.parametrize("delay_s", [0.3, 1.5])
+def test_ctrl_c_interrupts_a_long_correlation(tmp_path, delay_s):
+    """SIGINT while the library computes (in the reference's precomputation at 0.3 s, further on
+    at 1.5 s; the whole takes 7 s on 2 free cores, twice that when other jobs load them):
+    KeyboardInterrupt, neither a hang nor a crash, nothing finished, within 4 s (measured: under
+    0.4 s at load 6, up to 2 s at load 8 on the 2-core build machine)."""
+    out, ended_s = interrupt_after(LONG_CORRELATION, delay_s, tmp_path)
+    assert out == "KeyboardInterrupt"
+    assert ended_s < 4.0, f"{ended_s:.2f} s from SIGINT to the end"
+
+
+def test_result_arrays_are_views_of_the_library_results(pair8):
+    """The result's arrays are numpy views of the library's table (no copy): they do not own
+    their data and all share one owner, which keeps the table alive after the result is gone."""
+    result = impactdic.correlate(*pair8, **OPTIONS)
+    arrays = [getattr(result, name) for name in ("x", "y", "u", "v", "sigma_u", "sigma_v", "zncc",
+                                                 "status", "iterations", "frame", "frame_number")]
+    assert all(not a.flags.owndata for a in arrays)
+    assert len({id(a.base) for a in arrays}) == 1
+    u = result.u
+    expected = u.copy()
+    del result, arrays
+    import gc
+    gc.collect()
+    np.testing.assert_array_equal(u, expected)
 
 
 def test_nothing_usable(pair8):
@@ -238,3 +364,21 @@ def test_the_gil_is_released_while_correlating():
         counter.join()
     assert result.summary["seconds"] > 0.05, result.summary["seconds"]  # Long enough to tell.
     assert during >= 10, f"{during} ticks during {result.summary['seconds']:.3f} s"
+
+
+def test_correlate_from_another_thread(pair8):
+    """A correlation started from a Python thread other than the main one (which alone runs
+    signal handlers): the same results, and its progress callback called there."""
+    import threading
+    expected = impactdic.correlate(*pair8, **OPTIONS)
+    found, calls = {}, []
+
+    def work():
+        found["result"] = impactdic.correlate(
+            pair8[0], [pair8[1], pair8[1]], progress=lambda d, t: calls.append((d, t)), **OPTIONS)
+
+    thread = threading.Thread(target=work)
+    thread.start()
+    thread.join()
+    assert calls == [(1, 2), (2, 2)]
+    np.testing.assert_array_equal(found["result"].u[1], expected.u[1])

@@ -42,6 +42,9 @@ cv::Mat ReadGreyImage(const std::string& path, int* file_channels = nullptr);
 // saturation limits are relative to (judged on the first reference, so for the whole sequence).
 int DataBits(const cv::Mat& image);
 
+// The pixel type of a grey image in words: "8-bit", "16-bit", "32-bit float", else "depth code D".
+std::string DepthName(const cv::Mat& image);
+
 // Watches the colour layout of the images of one sequence, in order: the first image sets it,
 // and Check() returns (and logs) a warning naming an image whose layout differs, e.g. an RGB
 // frame in a greyscale sequence, which would otherwise be converted to grey silently. The first

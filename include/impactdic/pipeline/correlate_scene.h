@@ -39,14 +39,22 @@ PipelineSummary CorrelateScene(const Scene& scene, const std::string& output,
 // given, are the frames in place of the scene's inputs (frames in memory: io
 // MakeMemoryFrameSource), preprocessed and selected by the scene's keys as files are; null: the
 // scene's inputs.frames or inputs.frame_files. Messages name the scene keys (dic.min_zncc), not
-// `correlate`'s flags. Nothing usable is PartialResultsError unless allow_partial.
+// `correlate`'s flags, and the inputs as `names` say (the Python module: its arguments). Nothing
+// usable is PartialResultsError unless allow_partial.
 struct SceneCorrelation {
   DicResultsTable table;
   DicSummary dic;
   PipelineSummary summary;
 };
+// How messages name the inputs: the reference image, the deformed images, a sequence.
+struct CorrelationInputNames {
+  std::string reference = "inputs.frame_files[0]";
+  std::string deformed = "inputs.frame_files";
+  std::string frames = "inputs.frames";
+};
 SceneCorrelation CorrelateSceneInMemory(const Scene& scene, std::unique_ptr<FrameSource> frames,
-                                        bool allow_partial = false);
+                                        bool allow_partial = false,
+                                        const CorrelationInputNames& names = {});
 
 }  // namespace impactdic
 

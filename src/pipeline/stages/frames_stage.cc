@@ -20,6 +20,7 @@
 #include "impactdic/core/progress.h"
 #include "impactdic/dic/options.h"
 #include "impactdic/io/frame_source.h"
+#include "impactdic/io/image_io.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
@@ -217,9 +218,8 @@ class FramesStage : public Stage {
         d.timeline.camera_stamps
             ? fmt::format(", {:.6g} fps and time stamps from the file", d.timeline.fps)
             : "";
-    return fmt::format("{} of {} frames ({}x{}, {}-bit{}){}; {}", d.frames->count(),
-                       d.source_frames, f0.cols, f0.rows, f0.depth() == CV_16U ? 16 : 8, rate,
-                       skipped_note, d.preprocess_note);
+    return fmt::format("{} of {} frames ({}x{}, {}{}){}; {}", d.frames->count(), d.source_frames,
+                       f0.cols, f0.rows, DepthName(f0), rate, skipped_note, d.preprocess_note);
   }
 };
 

@@ -158,24 +158,34 @@ class CorrelationResult:
                 f"subsets, {100 * self.summary['valid_fraction']:.1f} % valid>")
 
 
-def correlate(reference, deformed=None, *, allow_partial=False, time_s=None, **options):
+def correlate(reference, deformed=None, *, allow_partial=False, time_s=None, progress=None,
+              **options):
     """Subset DIC of `deformed` against `reference`; the CorrelationResult.
 
-    reference, deformed: 2-D numpy arrays (grey, uint8 or uint16 with any bit depth of the data,
-      as image files hold them), image files, or lists of either; deformed may be a 3-D array (frames, rows,
-      columns) or a list. Or `reference` alone: a 3-D array or list (the first frame the
-      reference), or a folder, glob, video or camera file (the scene's inputs.frames).
+    reference, deformed: 2-D numpy arrays (grey: uint8, or uint16 with any bit depth of the data,
+      as image files hold them; or float32 / float64 grey levels as they are, any range, finite),
+      image files, or lists of either; deformed may be a 3-D array (frames, rows, columns) or a
+      list. Or `reference` alone: a 3-D array or list (the first frame the reference), or a
+      folder, glob, video or camera file (the scene's inputs.frames). Every array of one call
+      has the reference's shape and dtype.
     options: scene keys (dic={"subset_size": 25}, **{"dic.subset_size": 25}, preprocess={...},
       inputs={"fps": 5000}); threads=N is dic.threads (0: all cores).
     allow_partial: return results with no valid subset instead of raising NothingUsableError.
     time_s: the time stamps [s] of frames given as arrays, one per frame (the result's time_s).
+    progress: a callable, called as progress(done, total) after each deformed frame (done of the
+      total deformed frames); an exception it raises stops the correlation and is raised here.
+
+    Ctrl-C (KeyboardInterrupt) stops the correlation within a fraction of a second.
 
     Raises ValueError for a bad option or input (the scene file's message), OSError for files,
     NothingUsableError when no subset is valid in any deformed frame.
     """
     times = [] if time_s is None else [float(t) for t in time_s]
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress: invalid value (got {progress!r}); expected a callable "
+                         "progress(done, total) or None")
     table, summary = _correlate(_frames(reference, deformed), _scene_keys(options),
-                                bool(allow_partial), times)
+                                bool(allow_partial), times, progress)
     return CorrelationResult(table, summary)
 
 
@@ -291,17 +301,21 @@ _RUN_SECTIONS = ("test", "preprocess", "dic", "sensor", "momentum", "model", "st
 
 
 def run(scene, output=None, *, allow_partial=False, force=False, **overrides):
-    """Runs a scene as `impactdic run` does; the summary, as a dict with summary.json's keys.
+    """Runs a scene as `impactdic run` does; (summary, results).
+
+    summary: a dict with summary.json's keys (the same values as the file).
+    results: the results.h5 it wrote, as read_results gives it (None when the scene writes no
+      HDF5 file: outputs.hdf5 false).
 
     scene: a scene file, or a dict of its sections (relative paths against the working folder).
-    output: the output folder (default: the scene's outputs.folder); read_results(output +
-      "/results.h5") reads what it wrote.
+    output: the output folder (default: the scene's outputs.folder).
     overrides: scene keys of the test, preprocess, dic, sensor, momentum, model, strain and
       outputs sections (dic={"subset_size": 25}, **{"outputs.figures": False}); threads=N is
       dic.threads.
     allow_partial, force: as the command's --allow-partial and --force.
     Raises ValueError for a bad key or value, OSError for files, NothingUsableError when a stage
-    produced nothing usable (unless allow_partial).
+    produced nothing usable (unless allow_partial); Ctrl-C (KeyboardInterrupt) stops the run, its
+    output folder as it was.
     """
     import json
 
@@ -310,9 +324,12 @@ def run(scene, output=None, *, allow_partial=False, force=False, **overrides):
     else:
         scene_file, scene_text = _os.fspath(scene), ""
     keys = _scene_keys(overrides, _RUN_SECTIONS)
-    summary = _run(scene_file, scene_text, "" if output is None else _os.fspath(output), keys,
-                   bool(allow_partial), bool(force))
-    return json.loads(summary)
+    summary_text, outputs = _run(scene_file, scene_text,
+                                 "" if output is None else _os.fspath(output), keys,
+                                 bool(allow_partial), bool(force))
+    summary = json.loads(summary_text)
+    results_file = next((f for f in outputs if _os.path.basename(f) == "results.h5"), None)
+    return summary, (None if results_file is None else read_results(results_file))
 
 
 def model(output=None, **keys):
