@@ -217,6 +217,7 @@ const std::map<std::string, std::string>& OtherProgramsFlags() {
       {"--parsable", "tests/pipeline/slurm_campaign_test.sh"},
       {"--cache", "bench/dic_throughput_benchmark.cc"},
       {"--check", "bench/dic_challenge.py"},
+      {"--cli", "bench/python_overhead.py"},
       {"--data", "bench/dic_challenge.py"},
       {"--diagonal", "bench/dic_bias_benchmark.cc"},
       {"--json", "bench/dic_challenge.py"},
