@@ -653,7 +653,11 @@ BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
   ch.peak_time_s = peak.time_s;
   ch.peak_force_n = peak.value;
   OnsetOptions onset;
-  onset.threshold_g = 0.5 * peak.value;  // Any unit: the channel's [N].
+  // The accelerometer's threshold as a fraction of its peak reading (free fall 0 g), so that both
+  // onsets are fitted over the same part of their rise. Any unit: the channel's [N].
+  const double fraction =
+      std::clamp(options.impact_threshold_g / (1 + s.peak_deceleration_g), 0.05, 0.5);
+  onset.threshold_g = fraction * peak.value;
   onset.noise_band_sigma = options.noise_band_sigma;
   onset.window_s = options.quiet_window_s;
   onset.guard_s = options.quiet_guard_s;

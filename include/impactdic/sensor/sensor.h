@@ -230,9 +230,11 @@ struct SensorSummary {
 //  * peak: the largest filtered dynamic force after the impact (PeakDecelerationSample, the
 //    accelerometer's definition, refined by the same parabola, RefinePeak);
 //  * onset (arrival): DetectImpactOnset, the accelerometer's impact onset, on the channel with the
-//    threshold at half the peak: walk back from the first filtered sample above it to the last
-//    one inside the noise band (noise_band_sigma standard deviations of the filtered pre-impact
-//    rest), then the change-point fit on the raw dynamic force;
+//    threshold at the fraction of its peak that impact_threshold_g is of the accelerometer's peak
+//    reading (clamped to [0.05, 0.5]), so that both onsets are fitted over the same part of their
+//    rise: walk back from the first filtered sample above it to the last one inside the noise
+//    band (noise_band_sigma standard deviations of the filtered pre-impact rest), then the
+//    change-point fit on the raw dynamic force;
 //  * an arrival needs a peak above kBaseArrivalSigma standard deviations of the filtered rest;
 //    without one, onset and peak are NaN and `problem` says why.
 // A channel whose largest excursion after the impact is negative (and beyond the noise) reads
