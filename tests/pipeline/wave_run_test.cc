@@ -25,6 +25,7 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/sensor/wave_results.h"
+#include "scene_text.h"
 
 namespace impactdic {
 namespace {
@@ -32,20 +33,6 @@ namespace L = results_layout;
 
 constexpr double kWaveSpeed = 80;    // [m/s], not the default 65: the speed comes from the spec.
 constexpr double kStressRatio = 0.05;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 class WaveRun : public ::testing::Test {
  protected:
