@@ -204,9 +204,9 @@ std::string PipelineSummary::FullReport() const {
           "ratio {:.4g}, return {:.4g} ms, reflection {}\n",
           c.column, c.speed_peak_m_s, c.speed_peak_sigma_m_s, c.speed_onset_m_s,
           c.speed_onset_sigma_m_s, c.stress_ratio, 1e3 * c.return_time_s,
-          !c.reflection.checked            ? "not checked"
-          : c.reflection.local_maximum     ? "local maximum"
-                                           : "none");
+          !c.reflection.checked        ? "not checked"
+          : c.reflection.local_maximum ? "local maximum"
+                                       : "none");
     }
   }
   for (const auto& w : warnings) text += "  warning: " + w + "\n";

@@ -393,8 +393,8 @@ bool ReadListItems(const YAML::Node& n, std::vector<std::string>* items) {
     std::stringstream ss(n.Scalar());
     for (std::string c; std::getline(ss, c, ',');) {
       const std::size_t first = c.find_first_not_of(' ');
-      read.push_back(first == std::string::npos ? "" : c.substr(first, c.find_last_not_of(' ') -
-                                                                             first + 1));
+      read.push_back(
+          first == std::string::npos ? "" : c.substr(first, c.find_last_not_of(' ') - first + 1));
     }
   } else if (!n.IsNull()) {
     return false;
@@ -408,8 +408,8 @@ bool ReadListItems(const YAML::Node& n, std::vector<std::string>* items) {
 void AddNumberList(YamlOptionTable& t, const std::string& key, std::vector<double>* field,
                    const ValueRange& range, const std::string& what, const std::string& doc) {
   t.AddCustom(
-      key, "numbers separated by commas, one per sensor.base_columns, each " +
-               ExpectedText(what, range),
+      key,
+      "numbers separated by commas, one per sensor.base_columns, each " + ExpectedText(what, range),
       fmt::format("{}", fmt::join(*field, ",")),
       [field, range](const YAML::Node& n) {
         std::vector<std::string> items;
@@ -740,9 +740,9 @@ std::vector<YamlOptionTable> RenderTables(Scene* s) {
       "h264_fourccs", "four-character codes separated by commas", Join(o.video.h264_fourccs, ","),
       [&o](const YAML::Node& n) {
         std::vector<std::string> codes;
-        const bool ok = ReadListItems(n, &codes) && !codes.empty() &&
-                        std::all_of(codes.begin(), codes.end(),
-                                    [](const auto& c) { return c.size() == 4; });
+        const bool ok =
+            ReadListItems(n, &codes) && !codes.empty() &&
+            std::all_of(codes.begin(), codes.end(), [](const auto& c) { return c.size() == 4; });
         if (ok) o.video.h264_fourccs = codes;
         return ok;
       },

@@ -611,14 +611,14 @@ BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
   // The pre-impact rest: the quiet window before the impact (as the accelerometer's free-fall
   // window), at least 8 samples.
   const std::size_t r1 = FirstIndexAtOrAfter(t, s.impact_time_s - options.quiet_guard_s);
-  const std::size_t r0 = FirstIndexAtOrAfter(
-      t, s.impact_time_s - options.quiet_guard_s - options.quiet_window_s);
+  const std::size_t r0 =
+      FirstIndexAtOrAfter(t, s.impact_time_s - options.quiet_guard_s - options.quiet_window_s);
   if (r1 < r0 + 8) {
-    throw Error(ErrorKind::kInvalidValue, "base force column '" + ch.column + "'",
-                fmt::format("{} samples of rest before the impact at {:.6g} s", r1 - r0,
-                            s.impact_time_s),
-                "at least 8 samples in sensor.quiet_window_s before the impact (less "
-                "sensor.quiet_guard_s) to take the offset from")
+    throw Error(
+        ErrorKind::kInvalidValue, "base force column '" + ch.column + "'",
+        fmt::format("{} samples of rest before the impact at {:.6g} s", r1 - r0, s.impact_time_s),
+        "at least 8 samples in sensor.quiet_window_s before the impact (less "
+        "sensor.quiet_guard_s) to take the offset from")
         .WithFile(record.path);
   }
   std::vector<double> raw(n);
@@ -628,12 +628,11 @@ BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
   ch.force_n = FiltFilt(lp, raw);
   ch.noise_n = StdDev(ch.force_n, r0, r1);
   const std::size_t ki = s.impact_index;
-  const auto [lo, hi] = std::minmax_element(ch.force_n.begin() + static_cast<std::ptrdiff_t>(ki),
-                                            ch.force_n.end());
+  const auto [lo, hi] =
+      std::minmax_element(ch.force_n.begin() + static_cast<std::ptrdiff_t>(ki), ch.force_n.end());
   const double noise_floor = kBaseArrivalSigma * ch.noise_n;
   if (-*lo > *hi && -*lo > noise_floor) {
-    throw Error(ErrorKind::kInvalidValue,
-                "sensor.base_columns: column '" + ch.column + "'",
+    throw Error(ErrorKind::kInvalidValue, "sensor.base_columns: column '" + ch.column + "'",
                 fmt::format("a dynamic force of {:.4g} N at t = {:.6g} s after the impact, larger "
                             "in magnitude than its largest positive {:.4g} N",
                             *lo, t[static_cast<std::size_t>(lo - ch.force_n.begin())], *hi),

@@ -103,8 +103,8 @@ void Speed(double distance_m, double travel_s, double sigma_t_s, const std::stri
   *sigma = c_m_s * sigma_t_s / travel_s;
 }
 
-WaveChannel AnalyzeChannel(const SensorResult& sensor, const SensorOptions& options,
-                           std::size_t k, const WaveResult& w) {
+WaveChannel AnalyzeChannel(const SensorResult& sensor, const SensorOptions& options, std::size_t k,
+                           const WaveResult& w) {
   const BaseForceChannel& b = sensor.base[k];
   const SensorSummary& s = sensor.summary;
   WaveChannel c;
@@ -147,8 +147,7 @@ WaveChannel AnalyzeChannel(const SensorResult& sensor, const SensorOptions& opti
         "peak stress {:.4g} kPa ({:.4g} N over {:.4g} mm^2) is {:.3g} times the pounder's "
         "{:.4g} kPa: the bed cannot raise the stress; check the unit (sensor.base_units: {} "
         "given; kN for a record in N multiplies it by 1000) and the area (sensor.base_areas_mm2)",
-        1e-3 * stress, b.peak_force_n, c.area_mm2, ratio, 1e-3 * w.pounder_peak_stress_pa,
-        c.unit));
+        1e-3 * stress, b.peak_force_n, c.area_mm2, ratio, 1e-3 * w.pounder_peak_stress_pa, c.unit));
   }
   c.reflection = CheckReflection(sensor, w, c.return_time_s, c.return_time_sigma_s);
   return c;

@@ -731,7 +731,8 @@ void ImpactScene::AddBaseForce(SensorRecord* rec) const {
       truth[i] = scale * std::max(0.0, reading_g);
     });
     Rng noise(SplitMix64(spec_.seed + 17 * (k + 1)) ^ 0xBA5E5E45ull);
-    for (std::size_t i = 0; i < n; ++i) written[i] = truth[i] + b.offset_n + b.noise_n * noise.Normal();
+    for (std::size_t i = 0; i < n; ++i)
+      written[i] = truth[i] + b.offset_n + b.noise_n * noise.Normal();
     rec->base_force_true_n.push_back(std::move(truth));
     rec->base_force_n.push_back(std::move(written));
   }

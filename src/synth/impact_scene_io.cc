@@ -328,7 +328,8 @@ std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibra
     o << fmt::format(
         "  base_columns: [{}]\n  base_units: [{}]\n  base_offsets_mm: [{}]\n"
         "  base_depths_mm: [{}]\n  base_areas_mm2: [{}]\n",
-        fmt::join(b.columns, ", "), fmt::join(std::vector<std::string>(b.columns.size(), "N"), ", "),
+        fmt::join(b.columns, ", "),
+        fmt::join(std::vector<std::string>(b.columns.size(), "N"), ", "),
         fmt::join(b.offset_mm, ", "), fmt::join(b.depth_mm, ", "), fmt::join(b.area_mm2, ", "));
   }
   o << fmt::format(
@@ -604,8 +605,7 @@ void WriteBaseSensorTruth(const ImpactScene& scene, const ImpactScene::SensorRec
     ratio.push_back(b.stress_ratio * std::pow(b.depth_mm[k] / r, b.spreading_exponent));
     const std::vector<double>& f = rec.base_force_true_n[k];
     const auto it = std::max_element(f.begin(), f.end());
-    peak_t.push_back(rec.time_s[static_cast<std::size_t>(it - f.begin())] -
-                     rec.impact_daq_time_s);
+    peak_t.push_back(rec.time_s[static_cast<std::size_t>(it - f.begin())] - rec.impact_daq_time_s);
     peak_stress.push_back(*it / (1e-6 * b.area_mm2[k]));
     measured_ratio.push_back(peak_stress.back() / pounder_stress);
     out.Write("base_sensors/force_true_N/" + b.columns[k], f, "N",

@@ -211,9 +211,8 @@ TEST(ResultsReference, IsGeneratedFromTheFileARunWrites) {
   TestDir dir("ResultsReference");
   // 30 frames: more than the preview stores, so P and F differ.
   const CliResult synth =
-      RunCli("-q synth " +
-             dir.Write("spec.yaml", SmallSceneSpec({.frames = 30}) + kBaseSensors) + " -o " +
-             dir.File("scene"));
+      RunCli("-q synth " + dir.Write("spec.yaml", SmallSceneSpec({.frames = 30}) + kBaseSensors) +
+             " -o " + dir.File("scene"));
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   // Every optional group on; the figures off (not part of results.h5).
   const CliResult run = RunCli("-q run " + dir.File("scene/scene.yaml") + " -o " + dir.File("out") +

@@ -31,7 +31,7 @@ namespace impactdic {
 namespace {
 namespace L = results_layout;
 
-constexpr double kWaveSpeed = 80;    // [m/s], not the default 65: the speed comes from the spec.
+constexpr double kWaveSpeed = 80;  // [m/s], not the default 65: the speed comes from the spec.
 constexpr double kStressRatio = 0.05;
 
 class WaveRun : public ::testing::Test {
@@ -113,17 +113,25 @@ TEST_F(WaveRun, RecoversWaveSpeedAndStressRatio) {
   EXPECT_EQ(results.ReadStringAttribute(L::kWaveGroup, L::kWaveColumnsAttr),
             "base_center_N,base_offset_N");
   EXPECT_TRUE(results.Exists(std::string(L::kWaveForceGroup) + "/base_center_N"));
+  const WaveResult back = ReadWaveResults(results, "results.h5");
+  ASSERT_EQ(back.channels.size(), 2u);
+  EXPECT_EQ(back.channels[1].column, "base_offset_N");
+  EXPECT_EQ(back.channels[1].unit, "N");
+  EXPECT_DOUBLE_EQ(back.channels[1].stress_ratio, s.wave->channels[1].stress_ratio);
+  EXPECT_DOUBLE_EQ(back.channels[0].reflection.prominence_g,
+                   s.wave->channels[0].reflection.prominence_g);
+  EXPECT_TRUE(back.channels[0].reflection.checked);
+  EXPECT_DOUBLE_EQ(back.travel_time_sigma_s, s.wave->travel_time_sigma_s);
   const std::string json = ReadText(dir_->File("out_good/summary.json"));
   EXPECT_NE(json.find("\"wave\""), std::string::npos);
   EXPECT_NE(json.find("\"speed_peak_m_s\""), std::string::npos);
 }
 
 TEST_F(WaveRun, ReversedSignIsRefusedNamingTheColumn) {
-  const std::string text = WithEditedCsv(
-      "reversed.csv", "base_offset_N",
-      [](const std::vector<double>&, std::vector<double>* f) {
-        for (double& x : *f) x = -x;
-      });
+  const std::string text = WithEditedCsv("reversed.csv", "base_offset_N",
+                                         [](const std::vector<double>&, std::vector<double>* f) {
+                                           for (double& x : *f) x = -x;
+                                         });
   ExpectErrorContaining([&] { Run("reversed", text); },
                         "sensor.base_columns: column 'base_offset_N'");
 }
@@ -140,6 +148,9 @@ TEST_F(WaveRun, KilonewtonsForNewtonsReportsTheStressImplausible) {
   EXPECT_FALSE(std::isnan(s.wave->channels[1].stress_ratio));  // The other channel is sound.
   EXPECT_NE(ReadText(dir_->File("out_kn/summary.json")).find("sensor.base_units"),
             std::string::npos);
+  const WaveResult back = ReadWaveResults(H5Reader(dir_->File("out_kn/results.h5")), "results.h5");
+  EXPECT_EQ(back.channels[0].problems, c.problems);
+  EXPECT_TRUE(back.channels[1].problems.empty());
 }
 
 TEST_F(WaveRun, DepthGivingAnAbsurdSpeedIsReportedNotUsed) {
@@ -178,9 +189,8 @@ TEST_F(WaveRun, SensorPeakingBeforeThePounderIsReportedNotUsed) {
 }
 
 TEST_F(WaveRun, MissingColumnNamesTheFileAndColumn) {
-  const std::string text =
-      Replace(scene_text_, "base_columns: [base_center_N, base_offset_N]",
-              "base_columns: [base_centre_N, base_offset_N]");
+  const std::string text = Replace(scene_text_, "base_columns: [base_center_N, base_offset_N]",
+                                   "base_columns: [base_centre_N, base_offset_N]");
   const std::string message = ErrorText([&] { Run("missing", text); });
   EXPECT_NE(message.find("base_centre_N"), std::string::npos) << message;
   EXPECT_NE(message.find("sensor.csv"), std::string::npos) << message;

@@ -159,8 +159,8 @@ TEST(ImpactScene, BaseSensorRecordIsTheDelayedScaledContactForce) {
     const double delay = 1e-3 * r_mm / spec.soil.wave_speed_m_s;
     const double ratio = spec.base_sensors.stress_ratio *
                          std::sqrt(spec.base_sensors.depth_mm[k] / r_mm);  // Exponent 1/2.
-    const double to_force = ratio * 1e-6 * spec.base_sensors.area_mm2[k] * spec.pounder_mass_kg *
-                            spec.g_m_s2 / area_m2;
+    const double to_force =
+        ratio * 1e-6 * spec.base_sensors.area_mm2[k] * spec.pounder_mass_kg * spec.g_m_s2 / area_m2;
     // Where the delay is a whole number of samples the record is the reading shifted exactly.
     const auto shift = static_cast<std::size_t>(std::floor(delay / dt));
     int compared = 0;
@@ -173,8 +173,7 @@ TEST(ImpactScene, BaseSensorRecordIsTheDelayedScaledContactForce) {
       // smooth reading): within 1 % of the peak force.
       const double reading = (1 - frac) * rec.accel_true_g[i] +
                              frac * (i > 0 ? rec.accel_true_g[i - 1] : rec.accel_true_g[i]);
-      EXPECT_NEAR(rec.base_force_true_n[k][i + shift], to_force * reading,
-                  0.01 * to_force * 60)
+      EXPECT_NEAR(rec.base_force_true_n[k][i + shift], to_force * reading, 0.01 * to_force * 60)
           << "sensor " << k << " at " << t_after << " s";
     }
     EXPECT_GT(compared, 150) << "the record ends too soon after the impact";

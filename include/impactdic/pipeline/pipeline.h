@@ -169,9 +169,9 @@ struct PipelineSummary {
   std::string BriefReport() const;
   std::string FullReport() const;
   // summary.json: the figures' keys (SceneFigures::ToJson), "strain" (StrainFigures::ToJson, when
-  // the strain stage ran), "wave" (WaveJson, with base force channels), then "usable", "failures" (stage ->
-  // reason) and "warnings". Nothing that varies between runs of one scene (no time, rate, path
-  // or version).
+  // the strain stage ran), "wave" (WaveJson, with base force channels), then "usable", "failures"
+  // (stage -> reason) and "warnings". Nothing that varies between runs of one scene (no time, rate,
+  // path or version).
   JsonObject ToJson() const;
   // timing.json: "seconds" (the run up to its outputs), "stages" (name -> seconds, the stages that
   // ran) and "dic_subsets_per_s" (null without a correlation).

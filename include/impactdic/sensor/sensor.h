@@ -99,7 +99,7 @@ double NewtonsPer(ForceUnit unit);  // 1 or 1000.
 // Where each base force sensor sits and what it senses: lists parallel to
 // SensorColumns::base_force (entry k describes column k; each list as long as it). Positions are
 // relative to the pounder's impact point on the undisturbed sand surface.
-inline constexpr ValueRange kBaseOffsetRange{-1e5, 1e5, "mm"};           // Horizontal offset.
+inline constexpr ValueRange kBaseOffsetRange{-1e5, 1e5, "mm"};                 // Horizontal offset.
 inline constexpr ValueRange kBaseDepthRange{0, 1e5, "mm", /*min_open=*/true};  // Below the surface.
 inline constexpr ValueRange kBaseAreaRange{0, 1e8, "mm^2", /*min_open=*/true};  // Sensing area.
 struct BaseForceOptions {
@@ -184,8 +184,8 @@ struct SensorRecord {
   std::vector<std::vector<double>> force;  // force[channel][sample], units as in the file.
   // SensorColumns::base_force's columns as read [sample], units as in the file.
   std::vector<std::vector<double>> base_force;
-  double sample_rate_hz = 0;               // 1 / median time step.
-  std::vector<std::string> column_names;   // Every column of the file, in its order.
+  double sample_rate_hz = 0;              // 1 / median time step.
+  std::vector<std::string> column_names;  // Every column of the file, in its order.
 };
 
 // Reads and validates the DAQ CSV: columns present, every value finite, time strictly increasing

@@ -71,8 +71,8 @@ struct WaveOptions {
 
 // Reflection check of one channel's return time (definitions in the file comment).
 struct ReflectionCheck {
-  bool checked = false;                      // The window lies inside the record.
-  std::string note;                          // Why not checked ("" when checked).
+  bool checked = false;                        // The window lies inside the record.
+  std::string note;                            // Why not checked ("" when checked).
   std::array<double, 2> window_s{kNaN, kNaN};  // After the impact.
   double prominence_g = kNaN;  // The largest local maximum's prominence in the window (0: none).
   double threshold_g = kNaN;   // kReflectionSigma x the filtered pre-impact noise.
@@ -83,8 +83,8 @@ struct WaveChannel {
   std::string column;
   std::string unit;  // The column's unit as given (N, kN).
   double offset_mm = kNaN, depth_mm = kNaN, area_mm2 = kNaN;
-  double distance_mm = kNaN;                  // r = sqrt(offset^2 + depth^2).
-  double onset_s = kNaN, peak_s = kNaN;       // Arrival after the impact.
+  double distance_mm = kNaN;             // r = sqrt(offset^2 + depth^2).
+  double onset_s = kNaN, peak_s = kNaN;  // Arrival after the impact.
   double travel_onset_s = kNaN, travel_peak_s = kNaN;
   double speed_peak_m_s = kNaN, speed_peak_sigma_m_s = kNaN;
   double speed_onset_m_s = kNaN, speed_onset_sigma_m_s = kNaN;

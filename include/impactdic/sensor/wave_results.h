@@ -1,11 +1,14 @@
 // The wave figures' results (the /wave group of results.h5, only when the scene has base force
-// channels): the names and the writer. Definitions: sensor/wave.h, docs/wave.md.
+// channels): the names, the writer and the reader. Definitions: sensor/wave.h, docs/wave.md.
 //
 //   H5Writer out("run/results.h5");
 //   WriteWaveResults(out, sensor, wave);  // wave = AnalyzeWave(sensor, options, wave_options)
 //   out.Commit();
+//   const WaveResult back = ReadWaveResults(H5Reader("run/results.h5"), "results.h5");
 #ifndef IMPACTDIC_SENSOR_WAVE_RESULTS_H_
 #define IMPACTDIC_SENSOR_WAVE_RESULTS_H_
+
+#include <string>
 
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/sensor/sensor.h"
@@ -51,7 +54,8 @@ inline constexpr const char* kWaveForceGroup = "/wave/force_N";
 // Number attributes of kWaveGroup: pounder_peak_stress_Pa, pounder_peak_s, sample_interval_s,
 // filter_time_constant_s, travel_time_sigma_s, noise_g (WaveResult); string attributes:
 inline constexpr const char* kWaveColumnsAttr = "columns";
-inline constexpr const char* kWaveUnitsAttr = "units";  // The columns' units as given, comma-separated.
+inline constexpr const char* kWaveUnitsAttr =
+    "units";  // The columns' units as given, comma-separated.
 inline constexpr const char* kWaveProblemsAttr = "problems";
 inline constexpr const char* kWaveDefinitionsAttr = "definitions";
 
@@ -59,6 +63,11 @@ inline constexpr const char* kWaveDefinitionsAttr = "definitions";
 
 // Writes /wave (replacing an existing group), with units and descriptions on every dataset.
 void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResult& wave);
+
+// Reads /wave back: every channel's figures, problems and the reflection check's outcome and
+// statistic (not its note), and the group's numbers. Error kFileFormat naming `file` and the
+// group or dataset when it is missing or a dataset's length differs from the columns'.
+WaveResult ReadWaveResults(const H5Reader& in, const std::string& file);
 
 }  // namespace impactdic
 
