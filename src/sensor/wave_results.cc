@@ -93,10 +93,12 @@ void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResul
   std::vector<WaveChannel> channels = wave.channels;  // Figure binds mutable fields.
   for (const Figure& f : Figures()) {
     std::vector<double> v;
+    v.reserve(channels.size());
     for (WaveChannel& c : channels) v.push_back(f.field(c));
     out.Write(f.path, v, f.units, f.description);
   }
   std::vector<double> local_maximum;
+  local_maximum.reserve(channels.size());
   for (const WaveChannel& c : channels)
     local_maximum.push_back(c.reflection.checked ? (c.reflection.local_maximum ? 1.0 : 0.0) : kNaN);
   out.Write(L::kWaveReflectionLocalMax, local_maximum, "1",
