@@ -632,12 +632,14 @@ BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
       std::minmax_element(ch.force_n.begin() + static_cast<std::ptrdiff_t>(ki), ch.force_n.end());
   const double noise_floor = kBaseArrivalSigma * ch.noise_n;
   if (-*lo > *hi && -*lo > noise_floor) {
-    throw Error(ErrorKind::kInvalidValue, "sensor.base_columns: column '" + ch.column + "'",
-                fmt::format("a dynamic force of {:.4g} N at t = {:.6g} s after the impact, larger "
-                            "in magnitude than its largest positive {:.4g} N",
-                            *lo, t[static_cast<std::size_t>(lo - ch.force_n.begin())], *hi),
-                "compression reading positive (a wave loads a base sensor): the channel's sign is "
-                "reversed (wiring or DAQ setting), or the column is not a base force sensor")
+    throw Error(
+        ErrorKind::kInvalidValue, "sensor.base_columns: column '" + ch.column + "'",
+        fmt::format("a dynamic force of {:.4g} N at t = {:.6g} s after the impact, larger "
+                    "in magnitude than its largest positive {:.4g} N",
+                    *lo, t[static_cast<std::size_t>(lo - ch.force_n.begin())] - s.impact_time_s,
+                    *hi),
+        "compression reading positive (a wave loads a base sensor): the channel's sign is "
+        "reversed (wiring or DAQ setting), or the column is not a base force sensor")
         .WithFile(record.path);
   }
   if (!(*hi > noise_floor)) {
