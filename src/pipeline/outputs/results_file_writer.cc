@@ -73,7 +73,11 @@ void WriteFrames(H5Writer& out, FrameStream& frames, FrameStorage storage) {
 // /sensor, /wave, /kinematics, /momentum, each by its owner's writer.
 void WriteMotion(H5Writer& out, const SceneRunData& d) {
   if (d.sensor) WriteSensorResults(out, *d.sensor);
-  if (d.wave) WriteWaveResults(out, *d.sensor, *d.wave);  // Only with base force channels.
+  if (d.wave) {
+    WriteWaveResults(out, *d.sensor, *d.wave);  // Only with base force channels.
+  } else {
+    out.Remove(L::kWaveGroup);  // An earlier analysis' (analyze SCENE), when the scene has none.
+  }
   if (d.kinematics) WriteKinematicsResults(out, *d.kinematics, d.timeline.daq_time_s, d.mm_per_px);
   if (d.momentum) WriteMomentumResults(out, *d.momentum, d.sensor->summary.impact_time_s);
 }
