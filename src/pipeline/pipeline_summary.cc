@@ -91,6 +91,53 @@ JsonObject StrainFigures::ToJson() const {
   return j;
 }
 
+JsonObject WaveJson(const WaveResult& wave) {
+  JsonObject channels;
+  for (const WaveChannel& c : wave.channels) {
+    const ReflectionCheck& r = c.reflection;
+    JsonObject reflection;
+    reflection.Add("checked", r.checked);
+    if (r.checked) {
+      reflection.Add("window_s", std::vector<double>{r.window_s[0], r.window_s[1]})
+          .Add("statistic", "largest prominence of a local maximum of the filtered deceleration")
+          .Add("prominence_g", r.prominence_g)
+          .Add("threshold_g", r.threshold_g)
+          .Add("local_maximum", r.local_maximum);
+    } else {
+      reflection.Add("note", r.note);
+    }
+    JsonObject j;
+    j.Add("unit", c.unit)
+        .Add("offset_mm", c.offset_mm)
+        .Add("depth_mm", c.depth_mm)
+        .Add("distance_mm", c.distance_mm)
+        .Add("area_mm2", c.area_mm2)
+        .Add("onset_s", c.onset_s)
+        .Add("peak_s", c.peak_s)
+        .Add("speed_peak_m_s", c.speed_peak_m_s)
+        .Add("speed_peak_sigma_m_s", c.speed_peak_sigma_m_s)
+        .Add("speed_onset_m_s", c.speed_onset_m_s)
+        .Add("speed_onset_sigma_m_s", c.speed_onset_sigma_m_s)
+        .Add("return_time_s", c.return_time_s)
+        .Add("return_time_sigma_s", c.return_time_sigma_s)
+        .Add("peak_force_N", c.peak_force_n)
+        .Add("peak_stress_Pa", c.peak_stress_pa)
+        .Add("stress_ratio", c.stress_ratio)
+        .Add("reflection", reflection)
+        .Add("plausible", c.problems.empty())
+        .Add("problems", c.problems);
+    channels.Add(c.column, j);
+  }
+  JsonObject j;
+  j.Add("pounder_peak_stress_Pa", wave.pounder_peak_stress_pa)
+      .Add("pounder_peak_s", wave.pounder_peak_s)
+      .Add("sample_interval_s", wave.sample_interval_s)
+      .Add("filter_time_constant_s", wave.filter_time_constant_s)
+      .Add("travel_time_sigma_s", wave.travel_time_sigma_s)
+      .Add("channels", channels);
+  return j;
+}
+
 std::string PipelineSummary::FailureText() const {
   std::string text;
   for (const StageFailure& f : failures)
@@ -111,6 +158,7 @@ std::string PipelineSummary::BriefReport() const {
 JsonObject PipelineSummary::ToJson() const {
   JsonObject j = figures.ToJson();
   if (strain) j.Add("strain", strain->ToJson());
+  if (wave) j.Add("wave", WaveJson(*wave));
   JsonObject failed;
   for (const StageFailure& f : failures) failed.Add(f.stage, f.reason);
   j.Add("usable", IsUsable()).Add("failures", failed).Add("warnings", warnings);
@@ -148,6 +196,18 @@ std::string PipelineSummary::FullReport() const {
       text += fmt::format("  {:<32} {:.6g}\n", strain_names[i], strain_values[i]);
     text += "  strain compacted depth from the " + strain->depth_from +
             (strain->te_note.empty() ? "" : "; " + strain->te_note) + "\n";
+  }
+  if (wave) {
+    for (const WaveChannel& c : wave->channels) {
+      text += fmt::format(
+          "  wave {}: speed {:.4g} +- {:.2g} m/s (peak), {:.4g} +- {:.2g} m/s (onset), stress "
+          "ratio {:.4g}, return {:.4g} ms, reflection {}\n",
+          c.column, c.speed_peak_m_s, c.speed_peak_sigma_m_s, c.speed_onset_m_s,
+          c.speed_onset_sigma_m_s, c.stress_ratio, 1e3 * c.return_time_s,
+          !c.reflection.checked        ? "not checked"
+          : c.reflection.local_maximum ? "local maximum"
+                                       : "none");
+    }
   }
   for (const auto& w : warnings) text += "  warning: " + w + "\n";
   text += "Outputs:\n";

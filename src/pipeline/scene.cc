@@ -383,6 +383,86 @@ YamlOptionTable DicTable(Scene* s) {
   return t;
 }
 
+// A list key's items: a YAML list of scalars, or one scalar of items separated by commas (the
+// form its flag takes); null: none. False (nothing set) for another node or an empty item.
+bool ReadListItems(const YAML::Node& n, std::vector<std::string>* items) {
+  std::vector<std::string> read;
+  if (n.IsSequence()) {
+    for (const YAML::Node& c : n) read.push_back(c.IsScalar() ? c.Scalar() : "");
+  } else if (n.IsScalar()) {
+    std::stringstream ss(n.Scalar());
+    for (std::string c; std::getline(ss, c, ',');) {
+      const std::size_t first = c.find_first_not_of(' ');
+      read.push_back(
+          first == std::string::npos ? "" : c.substr(first, c.find_last_not_of(' ') - first + 1));
+    }
+  } else if (!n.IsNull()) {
+    return false;
+  }
+  if (std::any_of(read.begin(), read.end(), [](const auto& c) { return c.empty(); })) return false;
+  *items = std::move(read);
+  return true;
+}
+
+// A list key of numbers in `range` (ReadListItems' forms), one per base force channel.
+void AddNumberList(YamlOptionTable& t, const std::string& key, std::vector<double>* field,
+                   const ValueRange& range, const std::string& what, const std::string& doc) {
+  t.AddCustom(
+      key,
+      "numbers separated by commas, one per sensor.base_columns, each " + ExpectedText(what, range),
+      fmt::format("{}", fmt::join(*field, ",")),
+      [field, range](const YAML::Node& n) {
+        std::vector<std::string> items;
+        if (!ReadListItems(n, &items)) return false;
+        std::vector<double> values;
+        for (const std::string& item : items) {
+          const std::optional<double> v = ParseNumber(item);
+          if (!v || !range.Contains(*v)) return false;
+          values.push_back(*v);
+        }
+        *field = std::move(values);
+        return true;
+      },
+      doc);
+}
+
+// The base force channels (docs/wave.md): parallel lists, entry k of each describing column k of
+// sensor.base_columns (SensorOptions::Check holds them to its length). Lists follow the other list
+// keys (force_columns): a YAML list or comma-separated, so each is also one flag.
+void AddBaseForceKeys(YamlOptionTable& t, SensorOptions* o) {
+  t.AddCustom(
+      "base_columns", "column names separated by commas (empty: none)",
+      Join(o->columns.base_force, ","),
+      [o](const YAML::Node& n) { return ReadListItems(n, &o->columns.base_force); },
+      "Base force sensors under the bed (docs/wave.md): their CSV columns; the wave figures "
+      "(summary.json wave, /wave) need them");
+  std::vector<std::string> unit_names;
+  for (const ForceUnit u : o->base.units) unit_names.emplace_back(ToString(u));
+  t.AddCustom(
+      "base_units", "N or kN for each of sensor.base_columns, separated by commas",
+      Join(unit_names, ","),
+      [o](const YAML::Node& n) {
+        std::vector<std::string> items;
+        if (!ReadListItems(n, &items)) return false;
+        std::vector<ForceUnit> units;
+        try {
+          for (const std::string& item : items)
+            units.push_back(kForceUnitNames.Parse(item, "sensor.base_units"));
+        } catch (const Error&) {
+          return false;
+        }
+        o->base.units = std::move(units);
+        return true;
+      },
+      "Unit of each base column");
+  AddNumberList(t, "base_offsets_mm", &o->base.offset_mm, kBaseOffsetRange, "a horizontal offset",
+                "Horizontal offset of each base sensor from the pounder's centre line");
+  AddNumberList(t, "base_depths_mm", &o->base.depth_mm, kBaseDepthRange,
+                "a depth below the surface", "Depth of each base sensor below the sand surface");
+  AddNumberList(t, "base_areas_mm2", &o->base.area_mm2, kBaseAreaRange, "a sensing area",
+                "Sensing area of each base sensor (stress = force / area)");
+}
+
 YamlOptionTable SensorTable(Scene* s) {
   YamlOptionTable t("sensor");
   SensorOptions& o = s->sensor.options;
@@ -426,22 +506,9 @@ YamlOptionTable SensorTable(Scene* s) {
   t.AddCustom(
       "force_columns", "column names separated by commas (empty: every force* column)",
       Join(o.columns.force, ","),
-      [&o](const YAML::Node& n) {
-        std::vector<std::string> names;
-        if (n.IsSequence()) {
-          for (const YAML::Node& c : n) names.push_back(c.IsScalar() ? c.Scalar() : "");
-        } else if (n.IsScalar()) {
-          std::stringstream ss(n.Scalar());
-          for (std::string c; std::getline(ss, c, ',');) names.push_back(c);
-        } else if (!n.IsNull()) {
-          return false;
-        }
-        if (std::any_of(names.begin(), names.end(), [](const auto& c) { return c.empty(); }))
-          return false;
-        o.columns.force = names;
-        return true;
-      },
+      [&o](const YAML::Node& n) { return ReadListItems(n, &o.columns.force); },
       "Force channels kept (filtered, /sensor/force); empty = every column named force*");
+  AddBaseForceKeys(t, &o);
   return t;
 }
 
@@ -673,14 +740,9 @@ std::vector<YamlOptionTable> RenderTables(Scene* s) {
       "h264_fourccs", "four-character codes separated by commas", Join(o.video.h264_fourccs, ","),
       [&o](const YAML::Node& n) {
         std::vector<std::string> codes;
-        if (n.IsSequence()) {
-          for (const YAML::Node& c : n) codes.push_back(c.IsScalar() ? c.Scalar() : "");
-        } else if (n.IsScalar()) {
-          std::stringstream ss(n.Scalar());
-          for (std::string c; std::getline(ss, c, ',');) codes.push_back(c);
-        }
-        const bool ok = !codes.empty() && std::all_of(codes.begin(), codes.end(),
-                                                      [](const auto& c) { return c.size() == 4; });
+        const bool ok =
+            ReadListItems(n, &codes) && !codes.empty() &&
+            std::all_of(codes.begin(), codes.end(), [](const auto& c) { return c.size() == 4; });
         if (ok) o.video.h264_fourccs = codes;
         return ok;
       },
@@ -1018,6 +1080,16 @@ SensorOptions MakeSensorOptions(const Scene& scene) {
                         scene.test.drop_height_m);
   o.Check();
   return o;
+}
+
+WaveOptions MakeWaveOptions(const Scene& scene) {
+  WaveOptions w;
+  w.pounder_mass_kg = scene.model.pounder_mass_kg;
+  w.pounder_width_m = scene.model.width_m;
+  w.pounder_depth_m = scene.model.depth_m;
+  w.g_m_s2 = scene.model.gravity_m_s2;
+  w.Check();
+  return w;
 }
 
 MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px) {

@@ -54,10 +54,12 @@ const FieldKeys kSensorFieldKeys = {{"sensor.columns.time", "sensor.time_column"
                                     {"offset_reference", "sensor.offset_reference"},
                                     {"sensor.impact_velocity_m_s", "test.impact_velocity_m_s"}};
 
-// The keys of the accelerometer record alone: the others need frames or a scene's test.
+// The keys of the accelerometer record alone: the others need frames or a scene's test (the base
+// force channels' wave figures need the pounder's mass and area, test.*: sensor/wave.h).
 bool IsSensorRecordKey(const std::string& key) {
   return key == "inputs.sensor" || key == "test.impact_velocity_m_s" ||
-         (key.rfind("sensor.", 0) == 0 && key != "sensor.frame_time_offset_s");
+         (key.rfind("sensor.", 0) == 0 && key != "sensor.frame_time_offset_s" &&
+          key.rfind("sensor.base_", 0) != 0);
 }
 
 // The options of AnalyzeSensorRecord, checked (see there).

@@ -67,6 +67,43 @@ IntegrationStart IntegrationStartFromString(const std::string& text) {
   return kIntegrationStartNames.Parse(text, "integrate_from");
 }
 
+const char* ToString(ForceUnit unit) { return kForceUnitNames.Name(unit); }
+
+ForceUnit ForceUnitFromString(const std::string& text) {
+  return kForceUnitNames.Parse(text, "sensor.base_units");
+}
+
+double NewtonsPer(ForceUnit unit) { return unit == ForceUnit::kKilonewton ? 1000.0 : 1.0; }
+
+namespace {
+
+// The base channels' lists (BaseForceOptions) against sensor.base_columns: each as long, every
+// value in its range. Named by their scene keys.
+void CheckBaseForce(const std::vector<std::string>& columns, const BaseForceOptions& base) {
+  const std::size_t n = columns.size();
+  for (const std::string& c : columns)
+    CheckValue(!c.empty(), "sensor.base_columns", "an empty column name", "column names");
+  const auto length = [n](std::size_t size, const char* key) {
+    CheckValue(size == n, key, fmt::format("{} values for {} base columns", size, n),
+               fmt::format("one value per column of sensor.base_columns ({})", n));
+  };
+  length(base.units.size(), "sensor.base_units");
+  length(base.offset_mm.size(), "sensor.base_offsets_mm");
+  length(base.depth_mm.size(), "sensor.base_depths_mm");
+  length(base.area_mm2.size(), "sensor.base_areas_mm2");
+  const auto in_range = [](const std::vector<double>& values, const ValueRange& range,
+                           const char* key, const char* what) {
+    for (std::size_t k = 0; k < values.size(); ++k)
+      CheckValue(range.Contains(values[k]), fmt::format("{}[{}]", key, k),
+                 fmt::format("{}", values[k]), ExpectedText(what, range));
+  };
+  in_range(base.offset_mm, kBaseOffsetRange, "sensor.base_offsets_mm", "a horizontal offset");
+  in_range(base.depth_mm, kBaseDepthRange, "sensor.base_depths_mm", "a depth below the surface");
+  in_range(base.area_mm2, kBaseAreaRange, "sensor.base_areas_mm2", "a sensing area");
+}
+
+}  // namespace
+
 void SensorOptions::Check() const {
   CheckValue(!columns.time.empty(), "sensor.columns.time", "an empty name", "a column name");
   CheckValue(std::isfinite(g_m_s2) && g_m_s2 > 0, "sensor.g_m_s2", fmt::format("{}", g_m_s2),
@@ -104,6 +141,7 @@ void SensorOptions::Check() const {
                  (std::isfinite(expected_impact_velocity_m_s) && expected_impact_velocity_m_s > 0),
              "sensor.expected_impact_velocity_m_s", fmt::format("{}", expected_impact_velocity_m_s),
              "> 0 m/s or NaN (not checked)");
+  CheckBaseForce(columns.base_force, base);
 }
 
 SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns, double g_m_s2,
@@ -164,6 +202,14 @@ SensorRecord ReadSensorCsv(const std::string& path, const SensorColumns& columns
     r.force_names = columns.force;
   }
   for (const auto& n : r.force_names) r.force.push_back(table.Column(n));
+  for (const auto& n : columns.base_force) {
+    if (!table.Has(n)) {
+      throw Error(ErrorKind::kFileFormat, "base force column '" + n + "' (sensor.base_columns)",
+                  "missing; columns are " + names, "a column named as in sensor.base_columns")
+          .WithFile(path);
+    }
+    r.base_force.push_back(table.Column(n));
+  }
 
   const std::size_t n = r.time_s.size();
   if (n < 32) {
@@ -545,19 +591,80 @@ void FindPeakDeceleration(const std::vector<double>& t, const std::vector<double
   const std::size_t n = t.size();
   std::size_t kp = PeakDecelerationSample(t, acc, t[ki], 0.0, t[std::min(kend, n - 1)] - t[ki]);
   if (kp >= n) kp = ki;
-  double tp = t[kp], peak = acc[kp] - 1;
-  if (kp > 0 && kp + 1 < n) {
-    const double ym = acc[kp - 1], y0 = acc[kp], yp = acc[kp + 1];
-    const double den = ym - 2 * y0 + yp;
-    if (den < 0) {
-      const double d = 0.5 * (ym - yp) / den;
-      tp = t[kp] + d * (t[kp + 1] - t[kp - 1]) / 2;
-      peak = y0 - 0.25 * (ym - yp) * d - 1;
-    }
+  const RefinedPeak peak = RefinePeak(t, acc, kp);
+  s->peak_deceleration_g = peak.value - 1;
+  s->peak_time_s = peak.time_s;
+  s->t_peak_s = peak.time_s - s->impact_time_s;
+}
+
+// One base force channel (BaseForceChannel): unit, offset over the pre-impact rest, filter,
+// sign, peak and onset.
+BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
+                                    const SensorOptions& options, const FirstOrderLowpass& lp,
+                                    const SensorSummary& s) {
+  const std::vector<double>& t = record.time_s;
+  const std::size_t n = t.size();
+  BaseForceChannel ch;
+  ch.column = options.columns.base_force[c];
+  ch.unit = options.base.units[c];
+  const double to_n = NewtonsPer(ch.unit);
+  // The pre-impact rest: the quiet window before the impact (as the accelerometer's free-fall
+  // window), at least 8 samples.
+  const std::size_t r1 = FirstIndexAtOrAfter(t, s.impact_time_s - options.quiet_guard_s);
+  const std::size_t r0 =
+      FirstIndexAtOrAfter(t, s.impact_time_s - options.quiet_guard_s - options.quiet_window_s);
+  if (r1 < r0 + 8) {
+    throw Error(
+        ErrorKind::kInvalidValue, "base force column '" + ch.column + "'",
+        fmt::format("{} samples of rest before the impact at {:.6g} s", r1 - r0, s.impact_time_s),
+        "at least 8 samples in sensor.quiet_window_s before the impact (less "
+        "sensor.quiet_guard_s) to take the offset from")
+        .WithFile(record.path);
   }
-  s->peak_deceleration_g = peak;
-  s->peak_time_s = tp;
-  s->t_peak_s = tp - s->impact_time_s;
+  std::vector<double> raw(n);
+  for (std::size_t i = 0; i < n; ++i) raw[i] = to_n * record.base_force[c][i];
+  ch.offset_n = Mean(raw, r0, r1);
+  for (double& f : raw) f -= ch.offset_n;
+  ch.force_n = FiltFilt(lp, raw);
+  ch.noise_n = StdDev(ch.force_n, r0, r1);
+  const std::size_t ki = s.impact_index;
+  const auto [lo, hi] =
+      std::minmax_element(ch.force_n.begin() + static_cast<std::ptrdiff_t>(ki), ch.force_n.end());
+  const double noise_floor = kBaseArrivalSigma * ch.noise_n;
+  if (-*lo > *hi && -*lo > noise_floor) {
+    throw Error(
+        ErrorKind::kInvalidValue, "sensor.base_columns: column '" + ch.column + "'",
+        fmt::format("a dynamic force of {:.4g} N at t = {:.6g} s after the impact, larger "
+                    "in magnitude than its largest positive {:.4g} N",
+                    *lo, t[static_cast<std::size_t>(lo - ch.force_n.begin())] - s.impact_time_s,
+                    *hi),
+        "compression reading positive (a wave loads a base sensor): the channel's sign is "
+        "reversed (wiring or DAQ setting), or the column is not a base force sensor")
+        .WithFile(record.path);
+  }
+  if (!(*hi > noise_floor)) {
+    ch.problem = fmt::format(
+        "no arrival: the largest dynamic force after the impact, {:.3g} N, is not above {} "
+        "standard deviations ({:.3g} N) of the filtered pre-impact rest",
+        *hi, kBaseArrivalSigma, noise_floor);
+    return ch;
+  }
+  const auto kp = static_cast<std::size_t>(hi - ch.force_n.begin());
+  const RefinedPeak peak = RefinePeak(t, ch.force_n, kp);
+  ch.peak_time_s = peak.time_s;
+  ch.peak_force_n = peak.value;
+  OnsetOptions onset;
+  // The accelerometer's threshold as a fraction of its peak reading (free fall 0 g), so that both
+  // onsets are fitted over the same part of their rise. Any unit: the channel's [N].
+  const double fraction =
+      std::clamp(options.impact_threshold_g / (1 + s.peak_deceleration_g), 0.05, 0.5);
+  onset.threshold_g = fraction * peak.value;
+  onset.noise_band_sigma = options.noise_band_sigma;
+  onset.window_s = options.quiet_window_s;
+  onset.guard_s = options.quiet_guard_s;
+  std::size_t index = 0;
+  ch.onset_time_s = DetectImpactOnset(t, raw, ch.force_n, ki, onset, &index);
+  return ch;
 }
 
 }  // namespace
@@ -616,6 +723,11 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
   out.column_names = record.column_names;
   out.force_names = record.force_names;
   for (const auto& f : record.force) out.force.push_back(FiltFilt(lp, f));
+  CheckValue(record.base_force.size() == options.columns.base_force.size(), "sensor record",
+             fmt::format("{} base force channels", record.base_force.size()),
+             fmt::format("the {} of sensor.base_columns", options.columns.base_force.size()));
+  for (std::size_t c = 0; c < record.base_force.size(); ++c)
+    out.base.push_back(ProcessBaseChannel(record, c, options, lp, s));
   s.seconds = timer.ElapsedSeconds();
   for (const auto& wmsg : s.warnings) LogWarning("sensor: {}", wmsg);
   return out;
@@ -664,6 +776,21 @@ std::size_t PeakDecelerationSample(const std::vector<double>& time_s,
     const double dt = time_s[i] - t_ref_s;
     if (dt >= from_s && dt <= to_s && (peak == time_s.size() || accel_g[i] > accel_g[peak]))
       peak = i;
+  }
+  return peak;
+}
+
+RefinedPeak RefinePeak(const std::vector<double>& time_s, const std::vector<double>& series,
+                       std::size_t k) {
+  RefinedPeak peak{time_s[k], series[k]};
+  if (k > 0 && k + 1 < time_s.size()) {
+    const double ym = series[k - 1], y0 = series[k], yp = series[k + 1];
+    const double den = ym - 2 * y0 + yp;
+    if (den < 0) {
+      const double d = 0.5 * (ym - yp) / den;
+      peak.time_s = time_s[k] + d * (time_s[k + 1] - time_s[k - 1]) / 2;
+      peak.value = y0 - 0.25 * (ym - yp) * d;
+    }
   }
   return peak;
 }

@@ -84,6 +84,32 @@ void SceneSensorOptions::Check() const {
              "a duration > 0 [s]");
 }
 
+void SceneBaseSensorOptions::Check() const {
+  auto num = [](double v) { return fmt::format("{}", v); };
+  const std::size_t n = columns.size();
+  for (const auto& c : columns)
+    CheckValue(!c.empty(), "base_sensors.columns", "an empty name", "column names");
+  for (const auto& [size, key] : {std::pair{offset_mm.size(), "base_sensors.offsets_mm"},
+                                  std::pair{depth_mm.size(), "base_sensors.depths_mm"},
+                                  std::pair{area_mm2.size(), "base_sensors.areas_mm2"}}) {
+    CheckValue(size == n, key, fmt::format("{} values for {} columns", size, n),
+               "one value per column of base_sensors.columns");
+  }
+  for (double x : offset_mm)
+    CheckValue(std::isfinite(x), "base_sensors.offsets_mm", num(x), "finite offsets [mm]");
+  for (double d : depth_mm)
+    CheckValue(d > 0 && std::isfinite(d), "base_sensors.depths_mm", num(d), "depths > 0 [mm]");
+  for (double a : area_mm2)
+    CheckValue(a > 0 && std::isfinite(a), "base_sensors.areas_mm2", num(a), "areas > 0 [mm^2]");
+  CheckValue(stress_ratio > 0 && stress_ratio <= 1, "base_sensors.stress_ratio", num(stress_ratio),
+             "a ratio in (0, 1]");
+  CheckValue(spreading_exponent >= 0 && std::isfinite(spreading_exponent),
+             "base_sensors.spreading_exponent", num(spreading_exponent), "an exponent >= 0");
+  CheckValue(std::isfinite(offset_n), "base_sensors.offset_n", num(offset_n), "a finite force [N]");
+  CheckValue(noise_n >= 0 && std::isfinite(noise_n), "base_sensors.noise_n", num(noise_n),
+             "a noise level >= 0 [N rms]");
+}
+
 double ImpactSceneSpec::ImpactVelocity() const {
   return std::isnan(impact_velocity_m_s) ? std::sqrt(2 * g_m_s2 * drop_height_m)
                                          : impact_velocity_m_s;
@@ -151,6 +177,7 @@ void ImpactSceneSpec::Check() const {
   }
   soil.Check();
   sensor.Check();
+  base_sensors.Check();
   CheckValue(sensor.exposure_s < 1 / fps, "sensor.exposure_s", num(sensor.exposure_s),
              fmt::format("an exposure shorter than the frame interval 1/fps = {} s", 1 / fps));
   CheckValue(subset_size >= 5 && subset_size % 2 == 1, "dic.subset_size",
@@ -680,7 +707,35 @@ ImpactScene::SensorRecord ImpactScene::MakeSensorRecord() const {
     }
     rec.exposure[i] = e;
   }
+  AddBaseForce(&rec);
   return rec;
+}
+
+void ImpactScene::AddBaseForce(SensorRecord* rec) const {
+  const SceneBaseSensorOptions& b = spec_.base_sensors;
+  const std::size_t n = rec->time_s.size();
+  const double dt = 1 / spec_.sensor.rate_hz, g = spec_.g_m_s2;
+  const double area_m2 = spec_.width_m * spec_.depth_m;
+  for (std::size_t k = 0; k < b.columns.size(); ++k) {
+    const double r_mm = std::hypot(b.offset_mm[k], b.depth_mm[k]);
+    const double delay_s = 1e-3 * r_mm / spec_.soil.wave_speed_m_s;
+    const double ratio = b.stress_ratio * std::pow(b.depth_mm[k] / r_mm, b.spreading_exponent);
+    const double scale = ratio * 1e-6 * b.area_mm2[k] * spec_.pounder_mass_kg * g / area_m2;
+    std::vector<double> truth(n, 0.0), written(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      // The accelerometer's cell average (MakeSensorRecord) at the delayed time.
+      const double t = daq_origin_s_ + static_cast<double>(i) * dt - delay_s;
+      if (t + 0.5 * dt <= 0) return;  // Before the contact (truth[i] stays 0).
+      const double reading_g =
+          1 - (Pounder(t + 0.5 * dt).v_m_s - Pounder(t - 0.5 * dt).v_m_s) / (g * dt);
+      truth[i] = scale * std::max(0.0, reading_g);
+    });
+    Rng noise(SplitMix64(spec_.seed + 17 * (k + 1)) ^ 0xBA5E5E45ull);
+    for (std::size_t i = 0; i < n; ++i)
+      written[i] = truth[i] + b.offset_n + b.noise_n * noise.Normal();
+    rec->base_force_true_n.push_back(std::move(truth));
+    rec->base_force_n.push_back(std::move(written));
+  }
 }
 
 }  // namespace impactdic

@@ -1,6 +1,7 @@
 // Synthetic impact scene: the spec YAML, the emitted scene file, and writing a scene to disk
 // (frames, sensor CSV, calibration images, truth HDF5). Layout documented in docs/synth.md.
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -45,7 +46,9 @@ constexpr const char* kSpecFileWhat = "a synthetic scene spec (YAML)";
 
 using synth_detail::Integer;
 using synth_detail::Number;
+using synth_detail::NumberList;
 using synth_detail::Seed;
+using synth_detail::TextList;
 
 YamlOptionTable TestAndModelKeys(ImpactSceneSpec* s, YamlOptionTable* model) {
   YamlOptionTable t("test");
@@ -142,6 +145,19 @@ YamlOptionTable SensorKeys(SceneSensorOptions* sensor) {
   return t;
 }
 
+YamlOptionTable BaseSensorKeys(SceneBaseSensorOptions* b) {
+  YamlOptionTable t("base_sensors");
+  TextList(t, "columns", &b->columns);
+  NumberList(t, "offsets_mm", &b->offset_mm);
+  NumberList(t, "depths_mm", &b->depth_mm);
+  NumberList(t, "areas_mm2", &b->area_mm2);
+  Number(t, "stress_ratio", &b->stress_ratio);
+  Number(t, "spreading_exponent", &b->spreading_exponent);
+  Number(t, "offset_n", &b->offset_n);
+  Number(t, "noise_n", &b->noise_n);
+  return t;
+}
+
 // The spec's sections (after `preset`, which sets the defaults they override).
 std::vector<YamlOptionTable> SpecTables(ImpactSceneSpec* s) {
   YamlOptionTable model("model");
@@ -163,6 +179,7 @@ std::vector<YamlOptionTable> SpecTables(ImpactSceneSpec* s) {
           SpeckleKeys(s),
           SoilKeys(&s->soil),
           SensorKeys(&s->sensor),
+          BaseSensorKeys(&s->base_sensors),
           dic,
           momentum,
           calibration};
@@ -252,6 +269,15 @@ std::string ImpactSceneSpecToYaml(const ImpactSceneSpec& s) {
       s.sensor.rate_hz, s.sensor.offset_g, s.sensor.noise_g, s.sensor.exposure_s,
       s.sensor.pre_release_s, s.sensor.tail_s);
   o << fmt::format("dic:\n  subset_size: {}\n  step: {}\n", s.subset_size, s.step);
+  const SceneBaseSensorOptions& b = s.base_sensors;
+  if (!b.columns.empty()) {  // Only with base sensors: other specs read as before.
+    o << fmt::format(
+        "base_sensors:\n  columns: [{}]\n  offsets_mm: [{}]\n  depths_mm: [{}]\n"
+        "  areas_mm2: [{}]\n  stress_ratio: {}\n  spreading_exponent: {}\n  offset_n: {}\n"
+        "  noise_n: {}\n",
+        fmt::join(b.columns, ", "), fmt::join(b.offset_mm, ", "), fmt::join(b.depth_mm, ", "),
+        fmt::join(b.area_mm2, ", "), b.stress_ratio, b.spreading_exponent, b.offset_n, b.noise_n);
+  }
   o << fmt::format("momentum:\n  grid_cols: {}\n  grid_rows: {}\n", s.grid_cols, s.grid_rows);
   o << fmt::format("calibration:\n  render: {}\n  views: {}\n",
                    s.render_calibration ? "true" : "false", s.calibration_views);
@@ -297,6 +323,15 @@ std::string ImpactSceneYaml(const ImpactScene& scene, const std::string& calibra
     << fmt::format("  quiet_window_s: {}\n",
                    std::min(0.005, 0.8 * s.sensor.pre_release_s > 0 ? 0.8 * s.sensor.pre_release_s
                                                                     : 0.005));
+  const SceneBaseSensorOptions& b = s.base_sensors;
+  if (!b.columns.empty()) {
+    o << fmt::format(
+        "  base_columns: [{}]\n  base_units: [{}]\n  base_offsets_mm: [{}]\n"
+        "  base_depths_mm: [{}]\n  base_areas_mm2: [{}]\n",
+        fmt::join(b.columns, ", "),
+        fmt::join(std::vector<std::string>(b.columns.size(), "N"), ", "),
+        fmt::join(b.offset_mm, ", "), fmt::join(b.depth_mm, ", "), fmt::join(b.area_mm2, ", "));
+  }
   o << fmt::format(
       "momentum:\n  pounder_center_x_px: {}\n  surface_y_px: {}\n  grid_cols: {}\n"
       "  grid_rows: {}\n",
@@ -544,6 +579,65 @@ void WriteSetupTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& 
   out.SetAttribute("camera", "fps", s.fps);
 }
 
+// truth.h5, base_sensors/ (only with base sensors): the wave model's parameters, each sensor's
+// position, travel time and stress ratio, and the figures the tool measures computed from the
+// noise-free records (docs/synth.md).
+void WriteBaseSensorTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
+                          H5Writer& out) {
+  const ImpactSceneSpec& s = scene.spec();
+  const SceneBaseSensorOptions& b = s.base_sensors;
+  if (b.columns.empty()) return;
+  const double area_m2 = s.width_m * s.depth_m, c = s.soil.wave_speed_m_s;
+  // The pounder's noise-free peak deceleration after the impact (the record's samples).
+  double peak_decel_g = 0, pounder_peak_t = kNaN;
+  for (std::size_t i = 0; i < rec.time_s.size(); ++i) {
+    if (rec.time_s[i] >= rec.impact_daq_time_s && rec.accel_true_g[i] - 1 > peak_decel_g) {
+      peak_decel_g = rec.accel_true_g[i] - 1;
+      pounder_peak_t = rec.time_s[i] - rec.impact_daq_time_s;
+    }
+  }
+  const double pounder_stress = s.pounder_mass_kg * s.g_m_s2 * peak_decel_g / area_m2;
+  std::vector<double> distance, delay, ratio, peak_t, peak_stress, measured_ratio;
+  for (std::size_t k = 0; k < b.columns.size(); ++k) {
+    const double r = std::hypot(b.offset_mm[k], b.depth_mm[k]);
+    distance.push_back(r);
+    delay.push_back(1e-3 * r / c);
+    ratio.push_back(b.stress_ratio * std::pow(b.depth_mm[k] / r, b.spreading_exponent));
+    const std::vector<double>& f = rec.base_force_true_n[k];
+    const auto it = std::max_element(f.begin(), f.end());
+    peak_t.push_back(rec.time_s[static_cast<std::size_t>(it - f.begin())] - rec.impact_daq_time_s);
+    peak_stress.push_back(*it / (1e-6 * b.area_mm2[k]));
+    measured_ratio.push_back(peak_stress.back() / pounder_stress);
+    out.Write("base_sensors/force_true_N/" + b.columns[k], f, "N",
+              "noise-free dynamic base force (no offset); time axis: sensor.csv time_s");
+  }
+  out.Write("base_sensors/offset_mm", b.offset_mm, "mm", "horizontal offset from the pounder axis");
+  out.Write("base_sensors/depth_mm", b.depth_mm, "mm", "depth below the undisturbed surface");
+  out.Write("base_sensors/area_mm2", b.area_mm2, "mm^2", "sensing area");
+  out.Write("base_sensors/distance_mm", distance, "mm", "straight distance from the impact point");
+  out.Write("base_sensors/travel_time_s", delay, "s", "distance / wave speed: the pulse's delay");
+  out.Write("base_sensors/stress_ratio_model", ratio, "1",
+            "stress_ratio (depth / distance)^spreading_exponent");
+  out.Write("base_sensors/peak_s", peak_t, "s",
+            "peak of the noise-free base force after the impact (a sample time)");
+  out.Write("base_sensors/peak_stress_Pa", peak_stress, "Pa", "noise-free peak force / area");
+  out.Write("base_sensors/stress_ratio", measured_ratio, "1",
+            "noise-free peak stress / the pounder's noise-free peak stress m_p a_peak / (D t_z) "
+            "(the tool's definition, on the record's samples)");
+  out.SetAttribute("base_sensors", "wave_speed_m_s", c);
+  out.SetAttribute("base_sensors", "stress_ratio", b.stress_ratio);
+  out.SetAttribute("base_sensors", "spreading_exponent", b.spreading_exponent);
+  out.SetAttribute("base_sensors", "offset_n", b.offset_n);
+  out.SetAttribute("base_sensors", "noise_n", b.noise_n);
+  out.SetAttribute("base_sensors", "pounder_peak_stress_Pa", pounder_stress);
+  out.SetAttribute("base_sensors", "pounder_peak_s", pounder_peak_t);
+  out.SetAttribute("base_sensors", "columns", fmt::format("{}", fmt::join(b.columns, ",")));
+  out.SetAttribute("base_sensors", "model",
+                   "F_k(t) = ratio_k A_k m_p g max(0, decel_g(t - r_k / c)) / (D t_z), ratio_k = "
+                   "stress_ratio (depth_k / r_k)^spreading_exponent, r_k from the impact point; "
+                   "plus offset_n and noise_n");
+}
+
 void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
                 const std::string& path, const std::string& spec_yaml) {
   H5Writer out(path);
@@ -558,6 +652,7 @@ void WriteTruth(const ImpactScene& scene, const ImpactScene::SensorRecord& rec,
   WriteMomentumTruth(scene, t, out);
   WriteSeriesTruth(scene, rec, out);
   WriteSetupTruth(scene, rec, out);
+  WriteBaseSensorTruth(scene, rec, out);
   out.Commit();
 }
 
@@ -610,8 +705,13 @@ SceneFiles WriteSceneFiles(
                                                        : "";
 
   files.sensor_csv = (dir / "sensor.csv").string();
-  WriteCsv(files.sensor_csv, {"time_s", "accel_g", "exposure"},
-           {record.time_s, record.accel_g, record.exposure}, 10);
+  std::vector<std::string> names = {"time_s", "accel_g", "exposure"};
+  std::vector<std::vector<double>> columns = {record.time_s, record.accel_g, record.exposure};
+  for (std::size_t k = 0; k < record.base_force_n.size(); ++k) {
+    names.push_back(s.base_sensors.columns[k]);
+    columns.push_back(record.base_force_n[k]);
+  }
+  WriteCsv(files.sensor_csv, names, columns, 10);
   const std::string spec_yaml = ImpactSceneSpecToYaml(s);
   files.spec_yaml = (dir / "spec.yaml").string();
   WriteTextFileAtomic(files.spec_yaml, spec_yaml);

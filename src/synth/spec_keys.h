@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "impactdic/io/yaml.h"
 
@@ -43,6 +45,42 @@ inline void Seed(YamlOptionTable& t, const std::string& key, std::uint64_t* fiel
         unsigned long long v = 0;
         if (!n.IsScalar() || !YAML::convert<unsigned long long>::decode(n, v)) return false;
         *field = v;
+        return true;
+      },
+      "");
+}
+
+// A YAML list of names (any length).
+inline void TextList(YamlOptionTable& t, const std::string& key, std::vector<std::string>* field) {
+  t.AddCustom(
+      key, "a list of names", "[]",
+      [field](const YAML::Node& n) {
+        if (!n.IsSequence()) return false;
+        std::vector<std::string> v;
+        for (const YAML::Node& c : n) {
+          if (!c.IsScalar() || c.Scalar().empty()) return false;
+          v.push_back(c.Scalar());
+        }
+        *field = std::move(v);
+        return true;
+      },
+      "");
+}
+
+// A YAML list of finite numbers (any length).
+inline void NumberList(YamlOptionTable& t, const std::string& key, std::vector<double>* field) {
+  t.AddCustom(
+      key, "a list of numbers", "[]",
+      [field](const YAML::Node& n) {
+        if (!n.IsSequence()) return false;
+        std::vector<double> v;
+        for (const YAML::Node& c : n) {
+          double x = 0;
+          if (!c.IsScalar() || !YAML::convert<double>::decode(c, x) || !std::isfinite(x))
+            return false;
+          v.push_back(x);
+        }
+        *field = std::move(v);
         return true;
       },
       "");

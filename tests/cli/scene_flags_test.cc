@@ -241,9 +241,12 @@ std::vector<LibraryField> PreprocessFields() {
 // The sensor stage's options (MakeSensorOptions; the test's v0 reaches impact_velocity_m_s with
 // integrate_from impact).
 std::vector<LibraryField> SensorFields() {
-  static_assert(FieldCount<SensorColumns>() == 5);
-  static_assert(FieldCount<SensorOptions>() == 15);
+  static_assert(FieldCount<SensorColumns>() == 6);
+  static_assert(FieldCount<SensorOptions>() == 16);
   const auto m = [](const Scene& s) { return MakeSensorOptions(s); };
+  // The base channels' lists: one key alone is not a valid set (each list as long as
+  // base_columns, checked by MakeSensorOptions); the key reaches its field all the same.
+  const auto raw = [](const Scene& s) { return s.sensor.options; };
   const auto from_impact = [](const Scene& s) {
     Scene c = s;
     c.sensor.options.integrate_from = IntegrationStart::kImpact;
@@ -261,6 +264,8 @@ std::vector<LibraryField> SensorFields() {
        Differs(m, [](const O& o) { return o.columns.exposure; })},
       {"sensor.columns.force", "sensor.force_columns", "force_1,force_3",
        Differs(m, [](const O& o) { return o.columns.force; })},
+      {"sensor.columns.base_force", "sensor.base_columns", "base_1,base_2",
+       Differs(raw, [](const O& o) { return o.columns.base_force; })},
       {"sensor.g_m_s2", "test.g_m_s2", "9.7", Differs(m, [](const O& o) { return o.g_m_s2; })},
       {"sensor.cutoff_hz", "sensor.cutoff_hz", "1000",
        Differs(m, [](const O& o) { return o.cutoff_hz; })},
@@ -287,6 +292,14 @@ std::vector<LibraryField> SensorFields() {
        Differs(m, [](const O& o) { return o.expected_impact_velocity_m_s; })},
       {"sensor.expected_impact_velocity_source", "test.impact_velocity_m_s", "3",
        Differs(m, [](const O& o) { return o.expected_impact_velocity_source; })},
+      {"sensor.base.units", "sensor.base_units", "kN,N",
+       Differs(raw, [](const O& o) { return o.base.units; })},
+      {"sensor.base.offset_mm", "sensor.base_offsets_mm", "0,300",
+       Differs(raw, [](const O& o) { return o.base.offset_mm; })},
+      {"sensor.base.depth_mm", "sensor.base_depths_mm", "600,600",
+       Differs(raw, [](const O& o) { return o.base.depth_mm; })},
+      {"sensor.base.area_mm2", "sensor.base_areas_mm2", "2000,2000",
+       Differs(raw, [](const O& o) { return o.base.area_mm2; })},
   };
 }
 

@@ -61,6 +61,10 @@ TEST(AnalyzeRequest, SensorFormIntegratesFromExactlyOneStartNamingTheFlags) {
   e = SensorError(SensorRequest({{"--from-release", "release"}, {"--momentum.grid_cols", "3"}}));
   EXPECT_EQ(e.where(), "--momentum.grid_cols");
   EXPECT_EQ(e.expected(), "--momentum.grid_cols only with the SCENE.yaml form");
+  // The base force channels: their wave figures need the scene's pounder (test.*).
+  e = SensorError(
+      SensorRequest({{"--from-release", "release"}, {"--sensor.base_columns", "force_base"}}));
+  EXPECT_EQ(e.where(), "--sensor.base_columns");
   AnalyzeRequest partial = SensorRequest({{"--from-release", "release"}});
   partial.allow_partial = true;
   EXPECT_EQ(SensorError(partial).where(), "--allow-partial");

@@ -153,6 +153,7 @@ std::string Reference(const std::map<std::string, Object>& all) {
       {"R'", length("/frames/images", 1)},
       {"C'", length("/frames/images", 2)},
       {"G", length("/momentum/grid_subset_ids")},
+      {"C", length("/wave/depth_mm")},
   };
   std::map<hsize_t, std::string> symbol_of;
   for (const auto& [symbol, n] : symbols) {
@@ -200,12 +201,18 @@ std::string Reference(const std::map<std::string, Object>& all) {
   return text;
 }
 
+// Four base force sensors (a number no other dimension of the file has), so that /wave is written.
+constexpr const char* kBaseSensors =
+    "base_sensors:\n  columns: [base_a_N, base_b_N, base_c_N, base_d_N]\n"
+    "  offsets_mm: [0, 100, 200, 300]\n  depths_mm: [600, 600, 600, 600]\n"
+    "  areas_mm2: [2000, 2000, 2000, 2000]\n";
+
 TEST(ResultsReference, IsGeneratedFromTheFileARunWrites) {
   TestDir dir("ResultsReference");
   // 30 frames: more than the preview stores, so P and F differ.
   const CliResult synth =
-      RunCli("-q synth " + dir.Write("spec.yaml", SmallSceneSpec({.frames = 30})) + " -o " +
-             dir.File("scene"));
+      RunCli("-q synth " + dir.Write("spec.yaml", SmallSceneSpec({.frames = 30}) + kBaseSensors) +
+             " -o " + dir.File("scene"));
   ASSERT_EQ(synth.exit_code, 0) << synth.output;
   // Every optional group on; the figures off (not part of results.h5).
   const CliResult run = RunCli("-q run " + dir.File("scene/scene.yaml") + " -o " + dir.File("out") +
@@ -214,7 +221,7 @@ TEST(ResultsReference, IsGeneratedFromTheFileARunWrites) {
   ASSERT_EQ(run.exit_code, 0) << run.output;
   const std::map<std::string, Object> objects = Objects(dir.File("out/results.h5"));
   for (const char* group : {L::kTimeGroup, L::kDicGroup, "/sensor", "/kinematics", "/momentum",
-                            "/model", "/strain", "/frames", "/xdmf"}) {
+                            "/model", "/strain", "/frames", "/xdmf", "/wave"}) {
     EXPECT_TRUE(objects.count(group)) << group << " not written";
   }
   // Every dataset says what it holds.
@@ -226,9 +233,9 @@ TEST(ResultsReference, IsGeneratedFromTheFileARunWrites) {
   const std::string expected =
       "# Results reference: results.h5\n\n"
       "<!-- Generated from the results.h5 that `impactdic run` writes (a small synthesised scene "
-      "with\nstrain, XDMF views and preview frames on) by\n`IMPACTDIC_UPDATE_DOCS=1 "
-      "build/release/tests/pipeline/pipeline_results_reference_test`;\nthe test fails when this "
-      "page is out of date. -->\n\n"
+      "with\nstrain, XDMF views, preview frames and four base force sensors on) by\n"
+      "`IMPACTDIC_UPDATE_DOCS=1 build/release/tests/pipeline/pipeline_results_reference_test`;\n"
+      "the test fails when this page is out of date. -->\n\n"
       "`impactdic run` writes one HDF5 file, `results.h5`, with a group per stage; `correlate -o "
       "X.h5`\nwrites the same `/dic`, `model -o X.h5` the same `/model`. Plain HDF5, row-major "
       "(MATLAB's `h5read`\nshows the dimensions reversed); every dataset carries the `units` and "
@@ -236,13 +243,14 @@ TEST(ResultsReference, IsGeneratedFromTheFileARunWrites) {
       "Names are declared once, in\n`include/impactdic/io/results_layout.h` and the owner of each "
       "group (`io/dic_results.h`,\n`sensor/sensor_results.h`, `kinematics/kinematics_results.h`, "
       "`momentum/momentum_results.h`,\n`model/model_results.h`, `strain/strain_results.h`, "
-      "`sensor/frame_timeline.h`). Reading it in Python,\nParaView or VisIt: "
-      "[python.md](python.md).\n\n"
+      "`sensor/frame_timeline.h`,\n`sensor/wave_results.h`). Reading it in Python, ParaView or "
+      "VisIt: [python.md](python.md).\n\n"
       "Shapes: F = analysed frames (row 0 is the reference, the last frame before the impact), N = "
       "subsets,\nK = DAQ samples, K_a = DAQ samples of the peak stage's added mass, K_m = steps "
       "of the model's output,\nP = stored preview frames of R' x C' pixels, G = subsets of the "
-      "momentum grid. A group or dataset\nthat a scene does not ask for is absent: `/sensor` and "
-      "`/momentum` need a sensor record, `/strain`\n`strain.enabled`, `/xdmf` `outputs.xdmf`, "
+      "momentum grid, C = base force\nsensors. A group or dataset that a scene does not ask for is "
+      "absent: `/sensor` and `/momentum` need\na sensor record, `/wave` base force channels "
+      "(`sensor.base_columns`, docs/wave.md), `/strain`\n`strain.enabled`, `/xdmf` `outputs.xdmf`, "
       "`/frames` `outputs.frames` other than `none`. The key\nfigures are also in `summary.json` "
       "and `summary.csv` (a figure that could not be measured is null,\nwith the reason); wall "
       "times in `timing.json`.\n" +

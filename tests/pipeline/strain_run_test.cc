@@ -24,26 +24,13 @@
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/strain/strain_results.h"
+#include "scene_text.h"
 #include "small_scene_spec.h"
 
 namespace impactdic {
 namespace {
 namespace fs = std::filesystem;
 namespace L = results_layout;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Replace(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
-}
 
 std::set<std::string> FilesIn(const std::string& folder) {
   std::set<std::string> names;

@@ -120,6 +120,70 @@ TEST(ImpactSceneSpec, BadValuesGiveClearErrors) {
 
 // Before the impact nothing in the soil moves: a pre-impact frame equals the reference except
 // where the falling pounder is.
+// Base force sensors (the wave model of impact_scene.h): the spec round-trips, bad lists name
+// their key, and each noise-free record is the pounder's contact force delayed by r / c and
+// scaled by stress_ratio (d / r)^spreading_exponent.
+TEST(ImpactSceneSpec, BaseSensorsRoundTripAndBadListsNameTheKey) {
+  ImpactSceneSpec spec = TinySpec();
+  spec.base_sensors.columns = {"b0_N", "b1_N"};
+  spec.base_sensors.offset_mm = {0, 300};
+  spec.base_sensors.depth_mm = {600, 500};
+  spec.base_sensors.area_mm2 = {2000, 1000};
+  const ImpactSceneSpec back = ParseImpactSceneSpec(ImpactSceneSpecToYaml(spec), "spec.yaml");
+  EXPECT_EQ(back.base_sensors.columns, spec.base_sensors.columns);
+  EXPECT_EQ(back.base_sensors.depth_mm, spec.base_sensors.depth_mm);
+  EXPECT_DOUBLE_EQ(back.base_sensors.stress_ratio, spec.base_sensors.stress_ratio);
+  spec.base_sensors.depth_mm = {600};
+  try {
+    spec.Check();
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("base_sensors.depths_mm"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ImpactScene, BaseSensorRecordIsTheDelayedScaledContactForce) {
+  ImpactSceneSpec spec = TinySpec();
+  spec.base_sensors.columns = {"b0_N", "b1_N"};
+  spec.base_sensors.offset_mm = {0, 400};
+  spec.base_sensors.depth_mm = {600, 300};
+  spec.base_sensors.area_mm2 = {2000, 1000};
+  spec.sensor.tail_s = 0.06;  // Past the arrivals and the stop.
+  const ImpactScene scene(spec);
+  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
+  ASSERT_EQ(rec.base_force_true_n.size(), 2u);
+  const double dt = rec.time_s[1] - rec.time_s[0];
+  const double area_m2 = spec.width_m * spec.depth_m;
+  for (std::size_t k = 0; k < 2; ++k) {
+    const double r_mm = std::hypot(spec.base_sensors.offset_mm[k], spec.base_sensors.depth_mm[k]);
+    const double delay = 1e-3 * r_mm / spec.soil.wave_speed_m_s;
+    const double ratio = spec.base_sensors.stress_ratio *
+                         std::sqrt(spec.base_sensors.depth_mm[k] / r_mm);  // Exponent 1/2.
+    const double to_force =
+        ratio * 1e-6 * spec.base_sensors.area_mm2[k] * spec.pounder_mass_kg * spec.g_m_s2 / area_m2;
+    // Where the delay is a whole number of samples the record is the reading shifted exactly.
+    const auto shift = static_cast<std::size_t>(std::floor(delay / dt));
+    int compared = 0;
+    for (std::size_t i = 0; i + shift < rec.time_s.size(); i += 7) {
+      const double t_after = rec.time_s[i] - rec.impact_daq_time_s;
+      if (t_after < dt) continue;  // Before the contact the force is 0, the reading free fall.
+      ++compared;
+      const double frac = delay / dt - static_cast<double>(shift);
+      // Linear between the two readings that bracket the delayed time (the cell averages of a
+      // smooth reading): within 1 % of the peak force.
+      const double reading = (1 - frac) * rec.accel_true_g[i] +
+                             frac * (i > 0 ? rec.accel_true_g[i - 1] : rec.accel_true_g[i]);
+      EXPECT_NEAR(rec.base_force_true_n[k][i + shift], to_force * reading, 0.01 * to_force * 60)
+          << "sensor " << k << " at " << t_after << " s";
+    }
+    EXPECT_GT(compared, 150) << "the record ends too soon after the impact";
+    // Before the wave arrives the record reads its offset and noise only.
+    const auto arrival =
+        static_cast<std::size_t>(std::floor((rec.impact_daq_time_s + delay) / dt - 0.5));
+    for (std::size_t i = 0; i < arrival; ++i) ASSERT_EQ(rec.base_force_true_n[k][i], 0.0) << i;
+  }
+}
+
 TEST(ImpactScene, PreImpactFrameEqualsReferenceWhereNothingMoved) {
   const ImpactScene scene(TinySpec());
   ASSERT_LT(scene.FrameTime(1), 0.0);

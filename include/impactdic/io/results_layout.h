@@ -6,7 +6,7 @@
 //   /dic         io/dic_results.h (names here)       /strain   strain/strain_results.h (names here)
 //   /sensor      sensor/sensor_results.h             /kinematics  kinematics/kinematics_results.h
 //   /momentum    momentum/momentum_results.h         /model    model/model_results.h
-//   /time        sensor/frame_timeline.h (names here)
+//   /time        sensor/frame_timeline.h (names here) /wave     sensor/wave_results.h
 //   /frames, /xdmf, the output folder's file names: here (the run's outputs, pipeline/outputs).
 // If a name changes, change it at its owner. Shapes: F = analysed frames, N = subsets,
 // R x C = frame rows x columns, K = samples.

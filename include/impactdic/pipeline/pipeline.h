@@ -45,6 +45,7 @@
 #include "impactdic/pipeline/output_writer.h"
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/preprocess/preprocess.h"
+#include "impactdic/sensor/wave.h"
 
 namespace impactdic {
 
@@ -123,6 +124,11 @@ struct StrainFigures {
   std::vector<double> CsvValues() const;
 };
 
+// summary.json's "wave": the pounder's peak stress and time, the travel-time uncertainty and its
+// parts, and per channel (an object under "channels" keyed by its column) the WaveChannel's
+// figures (null when not available) with its "problems" (docs/wave.md).
+JsonObject WaveJson(const WaveResult& wave);
+
 // A run (RunScene) or an analysis (AnalyzeSceneResults) in which a stage produced nothing usable,
 // with partial output not allowed: Error(kNumerical) reading "PROBLEM; the option `allow_partial`
 // REMEDY". problem() says what failed and what was kept, remedy() what the option would write. The
@@ -152,6 +158,7 @@ struct PipelineSummary {
   std::vector<StageReport> stages;
   SceneFigures figures;
   std::optional<StrainFigures> strain;  // When the strain stage ran.
+  std::optional<WaveResult> wave;       // When the scene has base force channels.
   std::vector<StageFailure> failures;   // Empty: every stage that ran produced what it is for.
   std::vector<std::string> outputs;     // Files written.
   std::vector<std::string> warnings;
@@ -162,9 +169,9 @@ struct PipelineSummary {
   std::string BriefReport() const;
   std::string FullReport() const;
   // summary.json: the figures' keys (SceneFigures::ToJson), "strain" (StrainFigures::ToJson, when
-  // the strain stage ran), then "usable", "failures" (stage ->
-  // reason) and "warnings". Nothing that varies between runs of one scene (no time, rate, path
-  // or version).
+  // the strain stage ran), "wave" (WaveJson, with base force channels), then "usable", "failures"
+  // (stage -> reason) and "warnings". Nothing that varies between runs of one scene (no time, rate,
+  // path or version).
   JsonObject ToJson() const;
   // timing.json: "seconds" (the run up to its outputs), "stages" (name -> seconds, the stages that
   // ran) and "dic_subsets_per_s" (null without a correlation).

@@ -22,6 +22,7 @@
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/wave.h"
 #include "impactdic/strain/strain_results.h"
 
 namespace impactdic {
@@ -34,6 +35,8 @@ struct SceneRunData {
 
   // sensor: the accelerometer record analysed (impact time and velocity, pounder motion).
   std::optional<SensorResult> sensor;
+  // sensor, with base force channels (sensor.base_columns): the wave figures (sensor/wave.h).
+  std::optional<WaveResult> wave;
   // sensor, then momentum: the measured peak deceleration of the peak stage [g] (momentum
   // MeasuredPeakDeceleration) and that stage's length after the impact [s]: the sensor stage sets
   // them over T + 4/b of the scene's model, the momentum stage over t_e when it measured t_e. NaN

@@ -38,6 +38,7 @@
 #include "impactdic/render/strain_field.h"
 #include "impactdic/render/velocity_field.h"
 #include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/wave.h"
 #include "impactdic/strain/strain.h"
 
 namespace impactdic {
@@ -225,6 +226,8 @@ void CheckSceneOutputs(const Scene& scene);
 // caller's.
 RenderResultsOptions SceneRenderOptions(const Scene& scene);
 SensorOptions MakeSensorOptions(const Scene& scene);
+// The wave analysis' pounder (test.mass_kg, width_m, depth_m, g_m_s2; sensor/wave.h).
+WaveOptions MakeWaveOptions(const Scene& scene);
 MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px);
 // The model's parameters for impact velocity v0.
 ImpactModelParameters MakeModelParameters(const Scene& scene, double impact_velocity_m_s);

@@ -89,7 +89,8 @@ struct SensorRecordAnalysis {
 
 // Runs the sensor stage's analysis on request.scene.inputs.sensor and writes /sensor into
 // request.output if given (its other groups kept). Before reading the record: only keys of the
-// record (sensor.*, test.impact_velocity_m_s; not sensor.frame_time_offset_s) given, nor
+// record (sensor.*, test.impact_velocity_m_s; not sensor.frame_time_offset_s nor the base force
+// channels' sensor.base_*, whose wave figures need the scene's pounder) given, nor
 // --results or --allow-partial; exactly one of sensor.integrate_from release and
 // test.impact_velocity_m_s (integrate from the release, or from the impact at that velocity);
 // SensorOptions::Check; the output's location (an HDF5 file, not the record, not inside a

@@ -82,6 +82,31 @@ struct SensorColumns {
   std::string exposure = "exposure";
   // Force channels kept (filtered); empty = every column whose name starts with "force".
   std::vector<std::string> force;
+  // Base force channels (the force sensors under the sand bed, docs/wave.md): processed like the
+  // accelerometer (BaseForceChannel) and read by the wave analysis (sensor/wave.h); one entry of
+  // each of SensorOptions::base's lists per column. Empty: none.
+  std::vector<std::string> base_force;
+};
+
+// Unit of a base force channel's column.
+enum class ForceUnit { kNewton, kKilonewton };
+inline constexpr EnumNames<ForceUnit, 2> kForceUnitNames{
+    {{{ForceUnit::kNewton, "N"}, {ForceUnit::kKilonewton, "kN"}}}};
+const char* ToString(ForceUnit unit);
+ForceUnit ForceUnitFromString(const std::string& text);
+double NewtonsPer(ForceUnit unit);  // 1 or 1000.
+
+// Where each base force sensor sits and what it senses: lists parallel to
+// SensorColumns::base_force (entry k describes column k; each list as long as it). Positions are
+// relative to the pounder's impact point on the undisturbed sand surface.
+inline constexpr ValueRange kBaseOffsetRange{-1e5, 1e5, "mm"};                 // Horizontal offset.
+inline constexpr ValueRange kBaseDepthRange{0, 1e5, "mm", /*min_open=*/true};  // Below the surface.
+inline constexpr ValueRange kBaseAreaRange{0, 1e8, "mm^2", /*min_open=*/true};  // Sensing area.
+struct BaseForceOptions {
+  std::vector<ForceUnit> units;   // Unit of each column (N or kN).
+  std::vector<double> offset_mm;  // Horizontal offset from the pounder's centre line [mm].
+  std::vector<double> depth_mm;   // Depth of the sensing face below the sand surface [mm].
+  std::vector<double> area_mm2;   // Sensing area [mm^2]: the stress is force / area.
 };
 
 // The allowed values, defined once: read by SensorOptions::Check(), the scene's sensor.* keys and
@@ -127,8 +152,11 @@ struct SensorOptions {
   // comes from, for the messages (e.g. "a free fall from test.drop_height_m = 0.7 m").
   double expected_impact_velocity_m_s = kNaN;
   std::string expected_impact_velocity_source;
+  // The base force channels' units, positions and areas (columns.base_force names them).
+  BaseForceOptions base;
 
-  // Throws Error(kInvalidValue) naming the broken field.
+  // Throws Error(kInvalidValue) naming the broken field (the base lists by their scene keys,
+  // sensor.base_units, ...: each as long as sensor.base_columns, every value in its range).
   void Check() const;
 };
 
@@ -154,8 +182,10 @@ struct SensorRecord {
   std::vector<double> exposure;  // Empty when there is no exposure channel.
   std::vector<std::string> force_names;
   std::vector<std::vector<double>> force;  // force[channel][sample], units as in the file.
-  double sample_rate_hz = 0;               // 1 / median time step.
-  std::vector<std::string> column_names;   // Every column of the file, in its order.
+  // SensorColumns::base_force's columns as read [sample], units as in the file.
+  std::vector<std::vector<double>> base_force;
+  double sample_rate_hz = 0;              // 1 / median time step.
+  std::vector<std::string> column_names;  // Every column of the file, in its order.
 };
 
 // Reads and validates the DAQ CSV: columns present, every value finite, time strictly increasing
@@ -191,6 +221,38 @@ struct SensorSummary {
   std::string FullReport() const;
 };
 
+// One base force channel processed like the accelerometer (ProcessSensor):
+//  * unit: the column's unit converted to N (BaseForceOptions::units);
+//  * offset: the mean of the raw reading over the pre-impact rest, the quiet window
+//    [impact - quiet_guard_s - quiet_window_s, impact - quiet_guard_s) (the sand's static load
+//    and the sensor's zero), subtracted: the series is the DYNAMIC force, compression positive;
+//  * the accelerometer's zero-phase filter (sensor.cutoff_hz);
+//  * peak: the largest filtered dynamic force after the impact (PeakDecelerationSample, the
+//    accelerometer's definition, refined by the same parabola, RefinePeak);
+//  * onset (arrival): DetectImpactOnset, the accelerometer's impact onset, on the channel with the
+//    threshold at the fraction of its peak that impact_threshold_g is of the accelerometer's peak
+//    reading (clamped to [0.05, 0.5]), so that both onsets are fitted over the same part of their
+//    rise: walk back from the first filtered sample above it to the last one inside the noise
+//    band (noise_band_sigma standard deviations of the filtered pre-impact rest), then the
+//    change-point fit on the raw dynamic force;
+//  * an arrival needs a peak above kBaseArrivalSigma standard deviations of the filtered rest;
+//    without one, onset and peak are NaN and `problem` says why.
+// A channel whose largest excursion after the impact is negative (and beyond the noise) reads
+// compression as tension: ProcessSensor refuses it (Error naming sensor.base_columns and the
+// column), as no sign key exists to guess with.
+inline constexpr double kBaseArrivalSigma = 5;
+struct BaseForceChannel {
+  std::string column;
+  ForceUnit unit = ForceUnit::kNewton;
+  std::vector<double> force_n;  // Dynamic force [N], offset-corrected and filtered.
+  double offset_n = kNaN;       // Subtracted pre-impact level [N].
+  double noise_n = kNaN;        // Standard deviation of the filtered pre-impact rest [N].
+  double onset_time_s = kNaN;   // DAQ clock.
+  double peak_time_s = kNaN;    // DAQ clock.
+  double peak_force_n = kNaN;
+  std::string problem;  // Why onset and peak are NaN ("" when found).
+};
+
 struct SensorResult {
   std::vector<double> time_s;
   std::vector<double> accel_g;          // Offset-corrected, filtered reading [g].
@@ -200,6 +262,7 @@ struct SensorResult {
   std::vector<double> exposure;         // Raw exposure channel (empty if none).
   std::vector<std::string> force_names;
   std::vector<std::vector<double>> force;  // Filtered force channels.
+  std::vector<BaseForceChannel> base;      // The base force channels (SensorColumns::base_force).
   std::string path;                        // The record's file (empty: not from a file).
   std::vector<std::string> column_names;   // Every column of the file, in its order.
   SensorSummary summary;
@@ -282,6 +345,15 @@ int ReferenceFrameForImpact(const std::vector<double>& daq_time_s, double impact
 std::size_t PeakDecelerationSample(const std::vector<double>& time_s,
                                    const std::vector<double>& accel_g, double t_ref_s,
                                    double from_s, double to_s);
+
+// A sampled maximum refined by the parabola through sample k and its neighbours: its time and
+// value (sample k's own when k is at an end or the three samples are not concave).
+struct RefinedPeak {
+  double time_s = kNaN;
+  double value = kNaN;
+};
+RefinedPeak RefinePeak(const std::vector<double>& time_s, const std::vector<double>& series,
+                       std::size_t k);
 
 // Linear interpolation of series(time) at the query times; Error naming `what` when a query lies
 // outside [time.front(), time.back()].

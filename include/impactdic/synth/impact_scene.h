@@ -92,6 +92,33 @@ struct SceneSensorOptions {
   void Check() const;
 };
 
+// Base force sensors under the bed (docs/synth.md, docs/wave.md), none unless `columns` is set.
+// The wave model: sensor k (at horizontal offset x_k and depth d_k below the surface, sensing area
+// A_k) reads the pounder's contact stress
+//   sigma_p(t) = m_p (g - a_down(t)) / (D t_z) = m_p g a_g(t) / (D t_z)  for t >= 0 (contact),
+//   0 before (a_g: the accelerometer's noise-free reading, 0 in free fall, so sigma_p starts
+//   from 0 at the contact; it settles at the pounder's weight once it rests),
+// delayed by the travel time r_k / c from the impact point (r_k = sqrt(x_k^2 + d_k^2), c =
+// soil.wave_speed_m_s, the speed of the field's compression wave) and attenuated:
+//   F_k(t) = ratio_k sigma_p(t - r_k / c) A_k,  ratio_k = stress_ratio (d_k / r_k)^spreading,
+// so the sensor straight below reads stress_ratio times the pounder's contact stress, an
+// off-centre one less by the longer path (plane strain: cylindrical spreading, exponent 1/2).
+// Each column (in N) adds offset_n (the static load and the sensor's zero) and Gaussian noise of
+// noise_n. The reading is the accelerometer record's own cell average (shifted by r_k / c). The
+// tool's stress ratio divides by m_p a_peak / (D t_z), without the weight: stress_ratio
+// (1 + 1 / decel_peak_g); truth.h5 gives it as measured from the noise-free records.
+struct SceneBaseSensorOptions {
+  std::vector<std::string> columns;  // CSV column names (in N); empty = no base sensors.
+  std::vector<double> offset_mm;     // x_k [mm], one per column, finite.
+  std::vector<double> depth_mm;      // d_k [mm], one per column, > 0.
+  std::vector<double> area_mm2;      // A_k [mm^2], one per column, > 0.
+  double stress_ratio = 0.04;        // (0, 1]; the paper: 3-5 % at its 0.6 m deep base.
+  double spreading_exponent = 0.5;   // >= 0.
+  double offset_n = 20;              // Finite [N].
+  double noise_n = 0.05;             // >= 0 [N rms].
+  void Check() const;
+};
+
 struct ImpactSceneSpec {
   std::string name = "synthetic_impact";
   // Test (paper Table 1; SI units). Defaults: the model's (ImpactModelParameters, defined once).
@@ -131,6 +158,7 @@ struct ImpactSceneSpec {
   // Soil field, sensor.
   SceneSoilOptions soil;
   SceneSensorOptions sensor;
+  SceneBaseSensorOptions base_sensors;
   // DIC settings of the emitted scene and the default momentum grid.
   int subset_size = 21;              // Odd, >= 5.
   int step = 20;                     // >= 1.
@@ -249,11 +277,16 @@ class ImpactScene {
   // [s], reading [g] with offset and noise, exposure (0/1), and the noise-free reading.
   struct SensorRecord {
     std::vector<double> time_s, accel_g, exposure, accel_true_g;
+    // The base force channels (SceneBaseSensorOptions; [channel][sample], N): as written, and
+    // noise-free without offset.
+    std::vector<std::vector<double>> base_force_n, base_force_true_n;
     double frame0_daq_time_s = 0;  // DAQ time of frame 0 (a sample time exactly).
     double impact_daq_time_s = 0;  // DAQ time of t = 0.
     double release_daq_time_s = 0;
   };
   SensorRecord MakeSensorRecord() const;
+  // Adds the base force channels (SceneBaseSensorOptions) to a record of MakeSensorRecord.
+  void AddBaseForce(SensorRecord* rec) const;
   double DaqTime(double t_s) const { return t_s - daq_origin_s_; }
 
   // Whether the pounder covers any pixel of a subset of half-size `half` centred at the ideal

@@ -24,6 +24,7 @@
 #include "impactdic/pipeline/scene.h"
 #include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor_results.h"
+#include "impactdic/sensor/wave_results.h"
 #include "impactdic/strain/strain_results.h"
 #include "writers.h"
 
@@ -69,9 +70,14 @@ void WriteFrames(H5Writer& out, FrameStream& frames, FrameStorage storage) {
   out.SetAttribute(L::kFramesGroup, L::kFrameHeightAttr, static_cast<double>(first.rows));
 }
 
-// /sensor, /kinematics, /momentum, each by its owner's writer.
+// /sensor, /wave, /kinematics, /momentum, each by its owner's writer.
 void WriteMotion(H5Writer& out, const SceneRunData& d) {
   if (d.sensor) WriteSensorResults(out, *d.sensor);
+  if (d.wave) {
+    WriteWaveResults(out, *d.sensor, *d.wave);  // Only with base force channels.
+  } else {
+    out.Remove(L::kWaveGroup);  // An earlier analysis' (analyze SCENE), when the scene has none.
+  }
   if (d.kinematics) WriteKinematicsResults(out, *d.kinematics, d.timeline.daq_time_s, d.mm_per_px);
   if (d.momentum) WriteMomentumResults(out, *d.momentum, d.sensor->summary.impact_time_s);
 }

@@ -1,0 +1,117 @@
+// The compression wave under the pounder, from the base force channels (docs/wave.md; the paper's
+// section 3.3: Loewe, Thiele, Kanty, Kirstein, "Experimental investigation and modeling of impact
+// stages during dynamic compaction"): per base sensor the arrival (onset and peak), the wave speed
+// from the peak travel time (the paper's definition) and from the onsets with their
+// uncertainties, the predicted return time of the reflection at the surface, the peak stress and
+// its ratio to the pounder's, and whether the pounder's deceleration shows a local maximum around
+// the return time.
+//
+//   SensorResult sensor = AnalyzeSensorCsv("daq.csv", options);  // options.columns.base_force set
+//   WaveOptions wave{.pounder_mass_kg = 10, .pounder_width_m = 0.15, .pounder_depth_m = 0.192};
+//   WaveResult r = AnalyzeWave(sensor, options, wave);
+//   for (const WaveChannel& c : r.channels) std::cout << c.column << " " << c.speed_peak_m_s;
+//
+// Definitions (every time on the DAQ clock unless "after the impact"):
+//  * distance r = sqrt(offset^2 + depth^2): the straight line from the impact point (the pounder's
+//    base on its centre line at the undisturbed surface) to the sensor. For the sensor under the
+//    pounder it is the depth, the paper's distance; for an off-centre sensor the front from the
+//    contact reaches it along that line. The pounder's penetration by its peak (a few mm) is not
+//    subtracted: < 1 % of the paper's 600 mm.
+//  * peak travel time = the sensor's peak - the pounder's peak deceleration (SensorSummary::
+//    peak_time_s); onset travel time = the sensor's onset - the impact (onset) time: both found by
+//    the same rules on the same filtered records (BaseForceChannel);
+//  * speed = r / travel time, uncertainty sigma_c = c sigma_t / travel time with
+//    sigma_t = sqrt(2 dt^2 / 12 + tau_f^2): each of the two times is located on samples dt apart
+//    (dt^2 / 12 each, a uniform error over one interval), and the zero-phase filter, which moves
+//    no peak or onset of a pulse that keeps its shape, may move those of two differently shaped
+//    pulses by up to about its time constant tau_f = 1 / (2 pi f_c);
+//  * return time (after the impact) = 2 depth / c_peak: down to the base and back to the surface;
+//    its uncertainty 2 depth sigma_c / c^2;
+//  * peak stress = peak force / sensing area; the pounder's peak stress m_p a_peak / (D t_z)
+//    with a_peak = g * SensorSummary::peak_deceleration_g; their ratio is the attenuation.
+//  * reflection check: the filtered pounder deceleration in the window return time +- w,
+//    w = max(kReflectionMinHalfWindowS, 3 sigma_return). Statistic: the largest prominence of a
+//    local maximum inside the window (its height above the higher of the lowest values on either
+//    side of it, within the window). A local maximum "shows" when that prominence exceeds
+//    kReflectionSigma standard deviations of the filtered reading over the pre-impact window
+//    (SensorSummary::offset_window_s).
+// Plausibility (a figure that fails is NaN, the reason in WaveChannel::problems, never a silent
+// wrong number): a travel time > 0; a speed within kWaveSpeedRange (soils' compression-wave
+// speeds); a stress ratio below 1 (the bed spreads and damps the stress; a ratio above 1 means a
+// wrong unit or area, e.g. kN given for a record in N).
+#ifndef IMPACTDIC_SENSOR_WAVE_H_
+#define IMPACTDIC_SENSOR_WAVE_H_
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "impactdic/core/numeric.h"
+#include "impactdic/core/range.h"
+#include "impactdic/sensor/sensor.h"
+
+namespace impactdic {
+
+// Compression-wave speeds soils can have: loose dry sand ~50-100 m/s (the paper: 65 m/s), dense
+// or saturated soils up to ~1500-1800 m/s (water's 1480 m/s bounds a saturated soil's from below).
+inline constexpr ValueRange kWaveSpeedRange{10, 2000, "m/s"};
+// The reflection check's least half-window [s] and its threshold in noise standard deviations.
+inline constexpr double kReflectionMinHalfWindowS = 1e-3;
+inline constexpr double kReflectionSigma = 3;
+
+// The pounder's stress: its mass and contact area D x t_z (from the scene's test.*).
+struct WaveOptions {
+  double pounder_mass_kg = 10;     // m_p [kg], kPounderMassRange.
+  double pounder_width_m = 0.15;   // D [m], kPounderSizeRange.
+  double pounder_depth_m = 0.192;  // t_z [m], kPounderSizeRange.
+  double g_m_s2 = 9.81;            // [m/s^2], > 0.
+  // Throws Error(kInvalidValue) naming the broken field.
+  void Check() const;
+};
+
+// Reflection check of one channel's return time (definitions in the file comment).
+struct ReflectionCheck {
+  bool checked = false;                        // The window lies inside the record.
+  std::string note;                            // Why not checked ("" when checked).
+  std::array<double, 2> window_s{kNaN, kNaN};  // After the impact.
+  double prominence_g = kNaN;  // The largest local maximum's prominence in the window (0: none).
+  double threshold_g = kNaN;   // kReflectionSigma x the filtered pre-impact noise.
+  bool local_maximum = false;  // prominence_g > threshold_g.
+};
+
+struct WaveChannel {
+  std::string column;
+  std::string unit;  // The column's unit as given (N, kN).
+  double offset_mm = kNaN, depth_mm = kNaN, area_mm2 = kNaN;
+  double distance_mm = kNaN;             // r = sqrt(offset^2 + depth^2).
+  double onset_s = kNaN, peak_s = kNaN;  // Arrival after the impact.
+  double travel_onset_s = kNaN, travel_peak_s = kNaN;
+  double speed_peak_m_s = kNaN, speed_peak_sigma_m_s = kNaN;
+  double speed_onset_m_s = kNaN, speed_onset_sigma_m_s = kNaN;
+  double return_time_s = kNaN, return_time_sigma_s = kNaN;  // After the impact.
+  double peak_force_n = kNaN, peak_stress_pa = kNaN;
+  double stress_ratio = kNaN;  // peak_stress_pa / WaveResult::pounder_peak_stress_pa.
+  ReflectionCheck reflection;
+  std::vector<std::string> problems;  // Why a figure is NaN (implausible, not found).
+};
+
+struct WaveResult {
+  double pounder_peak_stress_pa = kNaN;  // m_p a_peak / (D t_z).
+  double pounder_peak_s = kNaN;          // The pounder's peak deceleration after the impact.
+  double sample_interval_s = kNaN;       // dt.
+  double filter_time_constant_s = kNaN;  // tau_f = 1 / (2 pi f_c).
+  double travel_time_sigma_s = kNaN;     // sigma_t = sqrt(2 dt^2 / 12 + tau_f^2).
+  double noise_g = kNaN;                 // Filtered pounder reading's pre-impact noise [g].
+  std::vector<WaveChannel> channels;     // One per base channel, in sensor.base_columns' order.
+  // "column: problem" for every problem of every channel.
+  std::vector<std::string> Warnings() const;
+};
+
+// The wave figures of every base channel of `sensor` (ProcessSensor with options.columns.
+// base_force). `options` gives the channels' positions and areas and the filter.
+WaveResult AnalyzeWave(const SensorResult& sensor, const SensorOptions& options,
+                       const WaveOptions& wave);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_SENSOR_WAVE_H_

@@ -1,0 +1,74 @@
+// The wave figures' results (the /wave group of results.h5, only when the scene has base force
+// channels): the names, the writer and the reader. Definitions: sensor/wave.h, docs/wave.md.
+//
+//   H5Writer out("run/results.h5");
+//   WriteWaveResults(out, sensor, wave);  // wave = AnalyzeWave(sensor, options, wave_options)
+//   out.Commit();
+//   const WaveResult back = ReadWaveResults(H5Reader("run/results.h5"), "results.h5");
+#ifndef IMPACTDIC_SENSOR_WAVE_RESULTS_H_
+#define IMPACTDIC_SENSOR_WAVE_RESULTS_H_
+
+#include <string>
+
+#include "impactdic/io/hdf5_store.h"
+#include "impactdic/sensor/sensor.h"
+#include "impactdic/sensor/wave.h"
+
+namespace impactdic {
+namespace results_layout {
+
+// [C] each, C = base channels in the order of the string attribute kWaveColumnsAttr (the CSV
+// columns, comma-separated), NaN = not available (the reason in the string attribute
+// kWaveProblemsAttr, one "column: problem" per line): the position (horizontal offset, depth,
+// straight distance from the impact point) [mm], the sensing area [mm^2], the arrival after the
+// impact (onset, peak) [s], the wave speed from the peak and from the onset travel times and
+// their standard uncertainties [m/s], the predicted return time at the surface after the impact
+// and its uncertainty [s], the peak dynamic force [N] and stress [Pa], the stress ratio to the
+// pounder's peak stress [1], and the reflection check: the window's start and end after the
+// impact [s], the statistic (largest prominence of a local maximum of the pounder's deceleration
+// in it) and its threshold [g], and its outcome (1 = a local maximum, 0 = none, NaN = not
+// checked). kWaveForceGroup/<column>: each channel's dynamic force [K] [N] (offset-corrected,
+// filtered; the time axis is /sensor/t_s).
+inline constexpr const char* kWaveGroup = "/wave";
+inline constexpr const char* kWaveOffset = "/wave/offset_mm";
+inline constexpr const char* kWaveDepth = "/wave/depth_mm";
+inline constexpr const char* kWaveDistance = "/wave/distance_mm";
+inline constexpr const char* kWaveArea = "/wave/area_mm2";
+inline constexpr const char* kWaveOnset = "/wave/onset_s";
+inline constexpr const char* kWavePeak = "/wave/peak_s";
+inline constexpr const char* kWaveSpeedPeak = "/wave/speed_peak_m_s";
+inline constexpr const char* kWaveSpeedPeakSigma = "/wave/speed_peak_sigma_m_s";
+inline constexpr const char* kWaveSpeedOnset = "/wave/speed_onset_m_s";
+inline constexpr const char* kWaveSpeedOnsetSigma = "/wave/speed_onset_sigma_m_s";
+inline constexpr const char* kWaveReturnTime = "/wave/return_time_s";
+inline constexpr const char* kWaveReturnTimeSigma = "/wave/return_time_sigma_s";
+inline constexpr const char* kWavePeakForce = "/wave/peak_force_N";
+inline constexpr const char* kWavePeakStress = "/wave/peak_stress_Pa";
+inline constexpr const char* kWaveStressRatio = "/wave/stress_ratio";
+inline constexpr const char* kWaveReflectionStart = "/wave/reflection_window_start_s";
+inline constexpr const char* kWaveReflectionEnd = "/wave/reflection_window_end_s";
+inline constexpr const char* kWaveReflectionProminence = "/wave/reflection_prominence_g";
+inline constexpr const char* kWaveReflectionThreshold = "/wave/reflection_threshold_g";
+inline constexpr const char* kWaveReflectionLocalMax = "/wave/reflection_local_maximum";
+inline constexpr const char* kWaveForceGroup = "/wave/force_N";
+// Number attributes of kWaveGroup: pounder_peak_stress_Pa, pounder_peak_s, sample_interval_s,
+// filter_time_constant_s, travel_time_sigma_s, noise_g (WaveResult); string attributes:
+inline constexpr const char* kWaveColumnsAttr = "columns";
+inline constexpr const char* kWaveUnitsAttr =
+    "units";  // The columns' units as given, comma-separated.
+inline constexpr const char* kWaveProblemsAttr = "problems";
+inline constexpr const char* kWaveDefinitionsAttr = "definitions";
+
+}  // namespace results_layout
+
+// Writes /wave (replacing an existing group), with units and descriptions on every dataset.
+void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResult& wave);
+
+// Reads /wave back: every channel's figures, problems and the reflection check's outcome and
+// statistic (not its note), and the group's numbers. Error kFileFormat naming `file` and the
+// group or dataset when it is missing or a dataset's length differs from the columns'.
+WaveResult ReadWaveResults(const H5Reader& in, const std::string& file);
+
+}  // namespace impactdic
+
+#endif  // IMPACTDIC_SENSOR_WAVE_RESULTS_H_
