@@ -91,6 +91,50 @@ JsonObject StrainFigures::ToJson() const {
   return j;
 }
 
+namespace {
+
+JsonObject DecayJson(const DepthDecayFit& d, const char* unit) {
+  JsonObject j;
+  j.Add("time_s", d.time_s)
+      .Add("subsets", static_cast<int>(d.subsets))
+      .Add(std::string("surface_") + unit, d.surface_value)
+      .Add("decay_length_mm", d.decay_length_mm)
+      .Add("decay_length_ci_mm", std::vector<double>{d.decay_length_ci_mm[0],
+                                                     d.decay_length_ci_mm[1]});
+  if (std::string(unit) == "mm") j.Add("depth_of_influence_mm", d.depth_of_influence_mm);
+  if (!d.problem.empty()) j.Add("problem", d.problem);
+  return j;
+}
+
+JsonObject FrontJson(const WaveFront& f) {
+  JsonObject j;
+  j.Add("criterion",
+        fmt::format("arrival: first downward vertical velocity above max({} x pre-impact sd, {} x "
+                    "own peak), linear between frames; speed: least squares of arrival against "
+                    "distance from the impact point, subsets outside the footprint columns",
+                    f.noise_factor, f.peak_fraction))
+      .Add("arrivals", static_cast<int>(f.arrivals))
+      .Add("fit_subsets", static_cast<int>(f.fit_subsets))
+      .Add("speed_m_s", f.speed_m_s)
+      .Add("speed_ci_m_s", std::vector<double>{f.speed_ci_m_s[0], f.speed_ci_m_s[1]})
+      .Add("intercept_s", f.intercept_s)
+      .Add("rms_residual_s", f.rms_residual_s);
+  if (!f.problem.empty()) j.Add("problem", f.problem);
+  JsonObject decay;
+  decay.Add("centre_line_subsets", static_cast<int>(f.centre_line_subsets))
+      .Add("pounder_base_depth_te_mm", f.pounder_base_depth_mm)
+      .Add("displacement_te", DecayJson(f.displacement_te, "mm"))
+      .Add("velocity_te", DecayJson(f.velocity_te, "mm_s"))
+      .Add("displacement_end", DecayJson(f.displacement_end, "mm"))
+      .Add("velocity_end", DecayJson(f.velocity_end, "mm_s"))
+      .Add("influence_fraction", kInfluenceFraction)
+      .Add("crater_depth_mm", f.crater_depth_mm);
+  j.Add("decay", decay);
+  return j;
+}
+
+}  // namespace
+
 JsonObject WaveJson(const WaveResult& wave) {
   JsonObject channels;
   for (const WaveChannel& c : wave.channels) {
@@ -135,6 +179,7 @@ JsonObject WaveJson(const WaveResult& wave) {
       .Add("filter_time_constant_s", wave.filter_time_constant_s)
       .Add("travel_time_sigma_s", wave.travel_time_sigma_s)
       .Add("channels", channels);
+  if (wave.front.computed || !wave.front.problem.empty()) j.Add("front", FrontJson(wave.front));
   return j;
 }
 
@@ -207,6 +252,15 @@ std::string PipelineSummary::FullReport() const {
           !c.reflection.checked        ? "not checked"
           : c.reflection.local_maximum ? "local maximum"
                                        : "none");
+    }
+    const WaveFront& f = wave->front;
+    if (f.computed) {
+      text += fmt::format(
+          "  wave front: speed {:.4g} m/s [{:.4g}, {:.4g}] ({} subsets); decay length at t_e "
+          "{:.4g} mm, depth of influence {:.4g} mm (crater {:.4g} mm)\n",
+          f.speed_m_s, f.speed_ci_m_s[0], f.speed_ci_m_s[1], f.fit_subsets,
+          f.displacement_te.decay_length_mm, f.displacement_te.depth_of_influence_mm,
+          f.crater_depth_mm);
     }
   }
   for (const auto& w : warnings) text += "  warning: " + w + "\n";

@@ -33,8 +33,14 @@ double StdDev(const std::vector<double>& x, std::size_t begin, std::size_t end) 
   return end - begin > 1 ? std::sqrt(s / static_cast<double>(end - begin - 1)) : 0.0;
 }
 
-// Linear interpolation of y(t) at tq, t increasing, tq inside [t.front(), t.back()].
-double Interp(const std::vector<double>& t, const std::vector<double>& y, double tq) {
+std::size_t FirstIndexAtOrAfter(const std::vector<double>& t, double tq) {
+  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), tq) - t.begin());
+}
+
+}  // namespace
+
+double InterpolateSeries(const std::vector<double>& t, const std::vector<double>& y, double tq) {
+  if (t.empty()) return kNaN;
   if (tq <= t.front()) return y.front();
   if (tq >= t.back()) return y.back();
   const auto it = std::upper_bound(t.begin(), t.end(), tq);
@@ -42,12 +48,6 @@ double Interp(const std::vector<double>& t, const std::vector<double>& y, double
   const double w = (tq - t[k - 1]) / (t[k] - t[k - 1]);
   return y[k - 1] + w * (y[k] - y[k - 1]);
 }
-
-std::size_t FirstIndexAtOrAfter(const std::vector<double>& t, double tq) {
-  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), tq) - t.begin());
-}
-
-}  // namespace
 
 const char* ToString(AccelUnit unit) { return kAccelUnitNames.Name(unit); }
 
@@ -502,8 +502,8 @@ void IntegrateFromRelease(const SensorRecord& record, const FreeFall& ff,
     i0 = FirstIndexAtOrAfter(t, s->release_time_s - options.quiet_guard_s);
   }
   IntegrateForward(t, a, i0, v, z);
-  s->impact_velocity_m_s = Interp(t, *v, s->impact_time_s);
-  const double zi = Interp(t, *z, s->impact_time_s);
+  s->impact_velocity_m_s = InterpolateSeries(t, *v, s->impact_time_s);
+  const double zi = InterpolateSeries(t, *z, s->impact_time_s);
   for (double& zk : *z) zk -= zi;
 }
 
@@ -513,7 +513,7 @@ void IntegrateFromImpact(const std::vector<double>& t, const std::vector<double>
                          std::vector<double>* z, SensorSummary* s) {
   const double ti = s->impact_time_s, v0 = options.impact_velocity_m_s;
   const std::size_t m = FirstIndexAtOrAfter(t, ti);
-  const double ai = Interp(t, a, ti);
+  const double ai = InterpolateSeries(t, a, ti);
   (*v)[m] = v0 + 0.5 * (ai + a[m]) * (t[m] - ti);
   (*z)[m] = 0.5 * (v0 + (*v)[m]) * (t[m] - ti);
   IntegrateForward(t, a, m, v, z);
@@ -570,7 +570,7 @@ std::size_t FindStop(const std::vector<double>& t, const std::vector<double>& v,
     const double level = (v[k] <= 0 && v[k - 1] > 0) ? 0.0 : options.stop_velocity_m_s;
     const double f = (v[k - 1] - level) / (v[k - 1] - v[k]);
     s->stop_time_s = t[k - 1] + std::clamp(f, 0.0, 1.0) * (t[k] - t[k - 1]);
-    s->final_penetration_m = Interp(t, z, s->stop_time_s);
+    s->final_penetration_m = InterpolateSeries(t, z, s->stop_time_s);
     return k;
   }
   const auto it = std::min_element(v.begin() + static_cast<std::ptrdiff_t>(ki), v.end());
@@ -810,7 +810,7 @@ std::vector<double> SampleSeries(const std::vector<double>& time_s,
                               "does not cover the frames",
                               time_s.front(), time_s.back()));
     }
-    out[i] = Interp(time_s, series, q);
+    out[i] = InterpolateSeries(time_s, series, q);
   }
   return out;
 }

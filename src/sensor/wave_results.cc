@@ -1,5 +1,6 @@
 #include "impactdic/sensor/wave_results.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <sstream>
@@ -86,6 +87,128 @@ void SetProblems(const std::string& text, std::vector<WaveChannel>* channels) {
   }
 }
 
+// The decay fits of one quantity: rows (t_e, end) of /wave/front/displacement or velocity.
+void WriteDecay(H5Writer& out, const std::string& group, const DepthDecayFit& te,
+                const DepthDecayFit& end, const char* unit, bool displacement) {
+  const auto row = [&](double DepthDecayFit::*field) {
+    return std::vector<double>{te.*field, end.*field};
+  };
+  out.Write(group + "/time_s", row(&DepthDecayFit::time_s), "s",
+            "the frame's time after the impact (row 0: nearest t_e, row 1: the last frame)");
+  out.Write(group + "/subsets",
+            std::vector<double>{static_cast<double>(te.subsets), static_cast<double>(end.subsets)},
+            "1", "centre-line subsets in the fit");
+  out.Write(group + "/surface", row(&DepthDecayFit::surface_value), unit,
+            "fitted value u0 at the pounder's base");
+  out.Write(group + "/decay_length_mm", row(&DepthDecayFit::decay_length_mm), "mm",
+            "decay length lambda of u0 exp(-z / lambda), z below the pounder's base");
+  out.Write(group + "/decay_length_ci_low_mm",
+            std::vector<double>{te.decay_length_ci_mm[0], end.decay_length_ci_mm[0]}, "mm",
+            "lower end of lambda's 95 % interval");
+  out.Write(group + "/decay_length_ci_high_mm",
+            std::vector<double>{te.decay_length_ci_mm[1], end.decay_length_ci_mm[1]}, "mm",
+            "upper end of lambda's 95 % interval (NaN: unbounded)");
+  if (displacement)
+    out.Write(group + "/depth_of_influence_mm", row(&DepthDecayFit::depth_of_influence_mm), "mm",
+              "depth below the surface where the fitted displacement is 10 % of u0");
+  std::vector<std::string> problems;
+  if (!te.problem.empty()) problems.push_back("0: " + te.problem);
+  if (!end.problem.empty()) problems.push_back("1: " + end.problem);
+  out.SetAttribute(group, L::kWaveFrontProblemAttr, problems.empty() ? "none" : Join(problems, "\n"));
+}
+
+void ReadDecay(const H5Reader& in, const std::string& group, const std::string& file,
+               DepthDecayFit* te, DepthDecayFit* end, bool displacement) {
+  std::size_t n = 2;
+  const auto read = [&](const std::string& name, double DepthDecayFit::*field) {
+    const std::vector<double> v = ReadSeries(in, group + "/" + name, file, &n);
+    te->*field = v[0];
+    end->*field = v[1];
+  };
+  read("time_s", &DepthDecayFit::time_s);
+  read("surface", &DepthDecayFit::surface_value);
+  read("decay_length_mm", &DepthDecayFit::decay_length_mm);
+  if (displacement) read("depth_of_influence_mm", &DepthDecayFit::depth_of_influence_mm);
+  const std::vector<double> count = ReadSeries(in, group + "/subsets", file, &n);
+  te->subsets = static_cast<std::size_t>(count[0]);
+  end->subsets = static_cast<std::size_t>(count[1]);
+  const std::vector<double> lo = ReadSeries(in, group + "/decay_length_ci_low_mm", file, &n);
+  const std::vector<double> hi = ReadSeries(in, group + "/decay_length_ci_high_mm", file, &n);
+  te->decay_length_ci_mm = {lo[0], hi[0]};
+  end->decay_length_ci_mm = {lo[1], hi[1]};
+  std::stringstream lines(ReadStringAttributeOr(in, group, L::kWaveFrontProblemAttr, ""));
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("0: ", 0) == 0) te->problem = line.substr(3);
+    if (line.rfind("1: ", 0) == 0) end->problem = line.substr(3);
+  }
+}
+
+void WriteFront(H5Writer& out, const WaveFront& f) {
+  const std::string g = L::kWaveFrontGroup;
+  out.Write(L::kWaveFrontDistance, f.distance_mm, "mm",
+            "distance of each subset's reference centre from the impact point");
+  out.Write(L::kWaveFrontArrival, f.arrival_s, "s",
+            "arrival of each subset's motion after the impact (NaN: none)");
+  out.Write(L::kWaveFrontInFit, std::vector<double>(f.in_fit.begin(), f.in_fit.end()), "1",
+            "1 = the subset's arrival is in the front speed fit");
+  out.Write(L::kWaveFrontSpeed, std::vector<double>{f.speed_m_s}, "m/s",
+            "front speed: 1 / slope of arrival against distance (least squares)");
+  out.Write(L::kWaveFrontSpeedCiLow, std::vector<double>{f.speed_ci_m_s[0]}, "m/s",
+            "lower end of the front speed's 95 % interval");
+  out.Write(L::kWaveFrontSpeedCiHigh, std::vector<double>{f.speed_ci_m_s[1]}, "m/s",
+            "upper end of the front speed's 95 % interval (NaN: unbounded)");
+  out.Write(L::kWaveFrontIntercept, std::vector<double>{f.intercept_s}, "s",
+            "fitted arrival at distance 0");
+  out.Write(L::kWaveFrontRms, std::vector<double>{f.rms_residual_s}, "s",
+            "rms residual of the arrivals in the fit");
+  WriteDecay(out, L::kWaveFrontDisplacementGroup, f.displacement_te, f.displacement_end, "mm",
+             /*displacement=*/true);
+  WriteDecay(out, L::kWaveFrontVelocityGroup, f.velocity_te, f.velocity_end, "mm/s",
+             /*displacement=*/false);
+  out.SetAttribute(g, L::kWaveFrontProblemAttr, f.problem.empty() ? "none" : f.problem);
+  for (const auto& [name, value] : std::vector<std::pair<const char*, double>>{
+           {"noise_factor", f.noise_factor},
+           {"peak_fraction", f.peak_fraction},
+           {"arrivals", static_cast<double>(f.arrivals)},
+           {"centre_line_subsets", static_cast<double>(f.centre_line_subsets)},
+           {"pounder_base_depth_te_mm", f.pounder_base_depth_mm},
+           {"crater_depth_mm", f.crater_depth_mm},
+           {"influence_fraction", kInfluenceFraction}})
+    out.SetAttribute(g, name, value);
+}
+
+WaveFront ReadFront(const H5Reader& in, const std::string& file) {
+  WaveFront f;
+  f.computed = true;
+  std::size_t s = kAnyLength;
+  f.distance_mm = ReadSeries(in, L::kWaveFrontDistance, file, &s);
+  f.arrival_s = ReadSeries(in, L::kWaveFrontArrival, file, &s);
+  for (double v : ReadSeries(in, L::kWaveFrontInFit, file, &s))
+    f.in_fit.push_back(v == 1 ? 1 : 0);
+  f.fit_subsets = static_cast<std::size_t>(std::count(f.in_fit.begin(), f.in_fit.end(), 1));
+  std::size_t one = 1;
+  f.speed_m_s = ReadSeries(in, L::kWaveFrontSpeed, file, &one)[0];
+  f.speed_ci_m_s = {ReadSeries(in, L::kWaveFrontSpeedCiLow, file, &one)[0],
+                    ReadSeries(in, L::kWaveFrontSpeedCiHigh, file, &one)[0]};
+  f.intercept_s = ReadSeries(in, L::kWaveFrontIntercept, file, &one)[0];
+  f.rms_residual_s = ReadSeries(in, L::kWaveFrontRms, file, &one)[0];
+  ReadDecay(in, L::kWaveFrontDisplacementGroup, file, &f.displacement_te, &f.displacement_end,
+            /*displacement=*/true);
+  ReadDecay(in, L::kWaveFrontVelocityGroup, file, &f.velocity_te, &f.velocity_end,
+            /*displacement=*/false);
+  const std::string g = L::kWaveFrontGroup;
+  const std::string problem = ReadStringAttributeOr(in, g, L::kWaveFrontProblemAttr, "");
+  if (problem != "none") f.problem = problem;
+  f.noise_factor = ReadNumberAttributeOr(in, g, "noise_factor", kNaN);
+  f.peak_fraction = ReadNumberAttributeOr(in, g, "peak_fraction", kNaN);
+  f.arrivals = static_cast<std::size_t>(ReadNumberAttributeOr(in, g, "arrivals", 0));
+  f.centre_line_subsets =
+      static_cast<std::size_t>(ReadNumberAttributeOr(in, g, "centre_line_subsets", 0));
+  f.pounder_base_depth_mm = ReadNumberAttributeOr(in, g, "pounder_base_depth_te_mm", kNaN);
+  f.crater_depth_mm = ReadNumberAttributeOr(in, g, "crater_depth_mm", kNaN);
+  return f;
+}
+
 }  // namespace
 
 void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResult& wave) {
@@ -126,6 +249,7 @@ void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResul
   for (const std::string& p : wave.Warnings()) problems += (problems.empty() ? "" : "\n") + p;
   out.SetAttribute(L::kWaveGroup, L::kWaveProblemsAttr, problems.empty() ? "none" : problems);
   out.SetAttribute(L::kWaveGroup, L::kWaveDefinitionsAttr, kDefinitions);
+  if (wave.front.computed) WriteFront(out, wave.front);
 }
 
 WaveResult ReadWaveResults(const H5Reader& in, const std::string& file) {
@@ -159,6 +283,7 @@ WaveResult ReadWaveResults(const H5Reader& in, const std::string& file) {
            {"travel_time_sigma_s", &w.travel_time_sigma_s},
            {"noise_g", &w.noise_g}})
     *value = ReadNumberAttributeOr(in, L::kWaveGroup, name, kNaN);
+  if (in.Exists(L::kWaveFrontGroup)) w.front = ReadFront(in, file);
   return w;
 }
 

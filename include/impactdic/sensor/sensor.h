@@ -273,6 +273,10 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
 // ReadSensorCsv + ProcessSensor.
 SensorResult AnalyzeSensorCsv(const std::string& path, const SensorOptions& options);
 
+// Linear interpolation of y(t) at tq (t increasing, as long as y); the end values outside
+// [t.front(), t.back()], NaN when t is empty. E.g. the pounder's penetration at a frame's time.
+double InterpolateSeries(const std::vector<double>& t, const std::vector<double>& y, double tq);
+
 // Impact onset on a (offset-corrected) reading that is ~0 g in free fall:
 //  1. the first filtered sample above threshold_g (after `search_from`) is certainly in the impact;
 //  2. walk back to the last filtered sample inside the free-fall noise band;

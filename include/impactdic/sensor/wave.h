@@ -43,6 +43,8 @@
 #define IMPACTDIC_SENSOR_WAVE_H_
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -95,6 +97,44 @@ struct WaveChannel {
   std::vector<std::string> problems;  // Why a figure is NaN (implausible, not found).
 };
 
+// An exponential u(z) = u0 exp(-z / lambda) fitted by least squares to ln u against the depth z
+// below the pounder's base along its centre line (the front's DecayFit, docs/wave.md "The front in
+// the DIC field"); u a vertical displacement [mm] or velocity [mm/s], downward positive.
+struct DepthDecayFit {
+  double time_s = kNaN;             // After the impact (the frame's time).
+  std::size_t subsets = 0;          // Centre-line subsets with u > 0 that entered the fit.
+  double surface_value = kNaN;      // u0 at z = 0 (the pounder's base) [mm or mm/s].
+  double decay_length_mm = kNaN;    // lambda; NaN = not determined (`problem` says why).
+  std::array<double, 2> decay_length_ci_mm{kNaN, kNaN};  // 95 %; [1] NaN: unbounded above.
+  double depth_of_influence_mm = kNaN;  // Below the surface: u falls to kInfluenceFraction u0.
+  std::string problem;                  // Why a figure is NaN ("" = all determined).
+};
+
+// The front in the DIC field (momentum/wave_front.h: the definitions in full).
+struct WaveFront {
+  bool computed = false;  // The stage had the kinematics and the pounder's position.
+  std::string problem;    // Why the front speed is NaN ("" = measured).
+  // Per subset [S] (the kinematics' order): its reference centre's distance from the impact
+  // point [mm] and the arrival of its motion after the impact [s] (NaN: no arrival), and whether
+  // the speed fit used it.
+  std::vector<double> distance_mm, arrival_s;
+  std::vector<std::uint8_t> in_fit;
+  double noise_factor = kNaN, peak_fraction = kNaN;  // The arrival criterion's k and f.
+  std::size_t arrivals = 0, fit_subsets = 0;
+  double speed_m_s = kNaN;                       // 1 / slope of arrival against distance.
+  std::array<double, 2> speed_ci_m_s{kNaN, kNaN};  // 95 %; [1] NaN: unbounded above.
+  double intercept_s = kNaN;                     // Arrival at distance 0.
+  double rms_residual_s = kNaN;
+  // Centre line: the subsets within half a pounder width of it, below the pounder's base.
+  std::size_t centre_line_subsets = 0;
+  double pounder_base_depth_mm = kNaN;  // At t_e (the crater depth's reference), below surface.
+  DepthDecayFit displacement_te, velocity_te, displacement_end, velocity_end;
+  double crater_depth_mm = kNaN;  // The sensor's final penetration, beside the depth of influence.
+};
+
+// The depth of influence's threshold: the fitted displacement at kInfluenceFraction of u0.
+inline constexpr double kInfluenceFraction = 0.1;
+
 struct WaveResult {
   double pounder_peak_stress_pa = kNaN;  // m_p a_peak / (D t_z).
   double pounder_peak_s = kNaN;          // The pounder's peak deceleration after the impact.
@@ -103,6 +143,7 @@ struct WaveResult {
   double travel_time_sigma_s = kNaN;     // sigma_t = sqrt(2 dt^2 / 12 + tau_f^2).
   double noise_g = kNaN;                 // Filtered pounder reading's pre-impact noise [g].
   std::vector<WaveChannel> channels;     // One per base channel, in sensor.base_columns' order.
+  WaveFront front;                       // The front in the DIC field (the momentum stage).
   // "column: problem" for every problem of every channel.
   std::vector<std::string> Warnings() const;
 };

@@ -51,6 +51,30 @@ inline constexpr const char* kWaveReflectionProminence = "/wave/reflection_promi
 inline constexpr const char* kWaveReflectionThreshold = "/wave/reflection_threshold_g";
 inline constexpr const char* kWaveReflectionLocalMax = "/wave/reflection_local_maximum";
 inline constexpr const char* kWaveForceGroup = "/wave/force_N";
+// The front in the DIC field (only when the run measured it: WaveFront::computed), definitions in
+// momentum/wave_front.h. [S] per subset of /kinematics, in its order: the reference centre's
+// distance from the impact point [mm], the arrival of its motion after the impact [s] (NaN =
+// none), 1 = in the speed fit. [1] each: the front speed and its interval's ends [m/s] (NaN =
+// not determined, the reason in the string attribute kWaveFrontProblemAttr), the fit's intercept
+// and rms residual [s]. The decay along the centre line, [2] each (row 0 at the frame nearest
+// t_e, row 1 at the last frame; NaN = not determined, the reasons in the string attribute
+// kWaveFrontProblemAttr of the group, one "row: problem" per line): the frame's time after the
+// impact [s], the subsets fitted [1], u0 at the pounder's base [mm or mm/s], the decay length
+// and its interval's ends [mm], and for the displacement the depth of influence below the
+// surface [mm]. Number attributes of kWaveFrontGroup: noise_factor, peak_fraction, arrivals,
+// centre_line_subsets, pounder_base_depth_te_mm, crater_depth_mm, influence_fraction.
+inline constexpr const char* kWaveFrontGroup = "/wave/front";
+inline constexpr const char* kWaveFrontDistance = "/wave/front/distance_mm";
+inline constexpr const char* kWaveFrontArrival = "/wave/front/arrival_s";
+inline constexpr const char* kWaveFrontInFit = "/wave/front/in_fit";
+inline constexpr const char* kWaveFrontSpeed = "/wave/front/speed_m_s";
+inline constexpr const char* kWaveFrontSpeedCiLow = "/wave/front/speed_ci_low_m_s";
+inline constexpr const char* kWaveFrontSpeedCiHigh = "/wave/front/speed_ci_high_m_s";
+inline constexpr const char* kWaveFrontIntercept = "/wave/front/intercept_s";
+inline constexpr const char* kWaveFrontRms = "/wave/front/rms_residual_s";
+inline constexpr const char* kWaveFrontDisplacementGroup = "/wave/front/displacement";
+inline constexpr const char* kWaveFrontVelocityGroup = "/wave/front/velocity";
+inline constexpr const char* kWaveFrontProblemAttr = "problem";
 // Number attributes of kWaveGroup: pounder_peak_stress_Pa, pounder_peak_s, sample_interval_s,
 // filter_time_constant_s, travel_time_sigma_s, noise_g (WaveResult); string attributes:
 inline constexpr const char* kWaveColumnsAttr = "columns";
@@ -65,7 +89,7 @@ inline constexpr const char* kWaveDefinitionsAttr = "definitions";
 void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResult& wave);
 
 // Reads /wave back: every channel's figures, problems and the reflection check's outcome and
-// statistic (not its note), and the group's numbers. Error kFileFormat naming `file` and the
+// statistic (not its note), the group's numbers, and the front when /wave/front exists. Error kFileFormat naming `file` and the
 // group or dataset when it is missing or a dataset's length differs from the columns'.
 WaveResult ReadWaveResults(const H5Reader& in, const std::string& file);
 

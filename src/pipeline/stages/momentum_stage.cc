@@ -1,6 +1,7 @@
 // momentum: the momentum balance of pounder and soil (needs the kinematics and the sensor record);
 // t_e not measurable is a failure. Also the measured peak deceleration of the peak stage
-// (impact .. t_e), in place of the sensor stage's over the scene model's T + 4/b.
+// (impact .. t_e), in place of the sensor stage's over the scene model's T + 4/b. With base force
+// channels, the front in the DIC field (the kinematics, the sensor and t_e are all here).
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -15,6 +16,7 @@
 #include "impactdic/momentum/fit.h"
 #include "impactdic/momentum/momentum.h"
 #include "impactdic/momentum/scene_analysis.h"
+#include "impactdic/momentum/wave_front.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
 #include "impactdic/pipeline/scene.h"
@@ -59,10 +61,31 @@ class MomentumStage : public Stage {
     if (!ms.IsUsable())
       c.summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
     MeasurePeakDeceleration(c);
-    return ms.BriefReport();
+    std::string front_note;
+    if (d.wave) front_note = MeasureWaveFront(c, options);
+    return ms.BriefReport() + front_note;
   }
 
  private:
+  // With base force channels (the wave figures): the front in the DIC field (momentum/
+  // wave_front.h), into the wave figures of the run data and the summary.
+  static std::string MeasureWaveFront(StageContext& c, const MomentumOptions& m) {
+    SceneRunData& d = c.data;
+    WaveFrontOptions o;
+    o.pounder_center_x_mm = (m.footprint.x_left_mm + m.footprint.x_right_mm) / 2;
+    o.surface_y_mm = m.footprint.bottom_y_mm;
+    o.pounder_width_mm = m.footprint.x_right_mm - m.footprint.x_left_mm;
+    d.wave->front = AnalyzeWaveFront(*d.kinematics, d.timeline.daq_time_s, *d.sensor,
+                                     d.momentum->summary.t_end_peak_s, o);
+    if (c.summary.wave) c.summary.wave->front = d.wave->front;
+    const WaveFront& f = d.wave->front;
+    if (!f.problem.empty()) {
+      c.summary.warnings.push_back("wave front: " + f.problem);
+      return "; wave front: not measured";
+    }
+    return fmt::format("; wave front {:.4g} m/s", f.speed_m_s);
+  }
+
   // The peak stage ends at t_e; without it the sensor stage's T + 4/b of the scene's model stays
   // (said in a warning).
   static void MeasurePeakDeceleration(StageContext& c) {
