@@ -348,8 +348,8 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
     }
     const std::size_t f_show = image_rows[j_show];
     out->velocity_figure_t_s = v.t_s[f_show];
-    const double interval = v.t_s.size() > 1 ? (v.t_s.back() - v.t_s.front()) / (v.t_s.size() - 1)
-                                             : kNaN;
+    const double interval =
+        v.t_s.size() > 1 ? (v.t_s.back() - v.t_s.front()) / (v.t_s.size() - 1) : kNaN;
     if (!(std::abs(v.t_s[f_show] - t_show) <= 0.5 * interval + 1e-12))
       out->notes.push_back(fmt::format(
           "the velocity-field figure is drawn at t = {:.2f} ms, the stored frame nearest t_e = "

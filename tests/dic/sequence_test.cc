@@ -276,7 +276,8 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
 
 TEST(Sequence, ResultsDoNotDependOnTheThreadCount) {
   Scene scene(200, 160, /*noise_sigma=*/2, /*seed=*/11, /*supersampling=*/2);
-  const DisplacementSequence seq = LinearSequence(Sum({Rotation(0.02, 100, 80), Translation(3, -2)}), 5);
+  const DisplacementSequence seq =
+      LinearSequence(Sum({Rotation(0.02, 100, 80), Translation(3, -2)}), 5);
   const std::vector<cv::Mat> images = RenderSequence(scene, seq);
   DicOptions options;
   options.grid.step = 7;

@@ -268,7 +268,8 @@ TEST(OutputOwnership, RenderOfAPreviewSaysWhichFrameItDrawsForTe) {
   const std::string run = dir.File("run");
   const CliResult ran = RunCli("-q run " + kSource +
                                "/sample_frames/scene.yaml --outputs.frames preview "
-                               "--outputs.animation false --outputs.figures false -o " + run);
+                               "--outputs.animation false --outputs.figures false -o " +
+                               run);
   ASSERT_EQ(ran.exit_code, 0) << ran.output;
   const CliResult r = RunCli("render " + run + "/results.h5 --no-figures");
   ASSERT_EQ(r.exit_code, 0) << r.output;

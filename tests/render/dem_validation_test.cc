@@ -185,9 +185,11 @@ TEST(DemValidation, FiguresFromARunWithTheDefaultFramePreview) {
   EXPECT_TRUE(fs::is_regular_file(fs::path(dir) / "figures_cli/velocity_field_compare.png"));
   // Every frame stored (as validation/dem/run_case.sh runs it): the figure is within half a frame
   // interval of the grains' t_e, with no note about a preview.
-  const CliResult all = RunCli("run " + report.scene_yaml + " --outputs.frames all -o " + run + "_all");
+  const CliResult all =
+      RunCli("run " + report.scene_yaml + " --outputs.frames all -o " + run + "_all");
   ASSERT_EQ(all.exit_code, 0) << all.output;
-  const DemValidation w = ValidateDemRun(report.truth_h5, run + "_all/results.h5", figures + "_all");
+  const DemValidation w =
+      ValidateDemRun(report.truth_h5, run + "_all/results.h5", figures + "_all");
   const double interval = (w.t_s.back() - w.t_s.front()) / (w.t_s.size() - 1);
   EXPECT_NEAR(w.velocity_figure_t_s, w.t_e_truth_s, 0.5 * interval + 1e-12);
   EXPECT_FALSE(std::any_of(w.notes.begin(), w.notes.end(), [](const std::string& n) {
