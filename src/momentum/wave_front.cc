@@ -66,9 +66,9 @@ double StandardDeviation(const std::vector<double>& v) {
 }
 
 struct Frames {
-  std::vector<double> t_s;            // After the impact.
-  std::vector<std::size_t> noise;     // Frames whose velocity stencil is before the impact.
-  std::size_t first_after = 0;        // The first frame not in `noise`.
+  std::vector<double> t_s;         // After the impact.
+  std::vector<std::size_t> noise;  // Frames whose velocity stencil is before the impact.
+  std::size_t first_after = 0;     // The first frame not in `noise`.
 };
 
 // The noise of `field` at subset s over the noise frames.
@@ -165,11 +165,18 @@ DepthDecayFit FitDecay(const KinematicsResult& k, const std::vector<double>& fie
   DepthDecayFit d;
   d.time_s = t_s;
   std::vector<double> z, lnu;
-  for (std::size_t s : centre) {
+  d.profile_depth_mm.assign(centre.size(), kNaN);
+  d.profile_value.assign(centre.size(), kNaN);
+  d.profile_in_fit.assign(centre.size(), 0);
+  for (std::size_t i = 0; i < centre.size(); ++i) {
+    const std::size_t s = centre[i];
     const double u = field[frame * k.subsets + s];
     const double depth = k.y_mm[s] - base_y_mm;
-    if (depth > 0 && std::isfinite(u) && std::isfinite(noise[s]) && u > o.noise_factor * noise[s] &&
-        u > 0) {
+    if (!(depth > 0)) continue;
+    d.profile_depth_mm[i] = depth;
+    d.profile_value[i] = u;
+    if (std::isfinite(u) && std::isfinite(noise[s]) && u > o.noise_factor * noise[s] && u > 0) {
+      d.profile_in_fit[i] = 1;
       z.push_back(depth);
       lnu.push_back(std::log(u));
     }
@@ -197,6 +204,41 @@ DepthDecayFit FitDecay(const KinematicsResult& k, const std::vector<double>& fie
   return d;
 }
 
+// The centre line's rows (subsets at one reference depth, within a micrometre) and each row's
+// mean downward velocity per frame; the pounder's base from the sensor's penetration.
+SpaceTime CentreLineSpaceTime(const KinematicsResult& k, const std::vector<std::size_t>& centre,
+                              const Frames& fr, const std::vector<double>& frame_daq_time_s,
+                              const SensorResult& sensor, double surface_y_mm) {
+  SpaceTime st;
+  st.time_s = fr.t_s;
+  std::vector<std::size_t> by_depth = centre;
+  std::sort(by_depth.begin(), by_depth.end(),
+            [&](std::size_t a, std::size_t b) { return k.y_mm[a] < k.y_mm[b]; });
+  std::vector<std::vector<std::size_t>> rows;
+  for (std::size_t s : by_depth) {
+    if (rows.empty() || k.y_mm[s] - k.y_mm[rows.back().front()] > 1e-3) {
+      rows.emplace_back();
+      st.depth_mm.push_back(k.y_mm[s] - surface_y_mm);
+    }
+    rows.back().push_back(s);
+  }
+  st.velocity_mm_s.assign(k.frames * rows.size(), kNaN);
+  for (std::size_t f = 0; f < k.frames; ++f) {
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      double sum = 0;
+      std::size_t n = 0;
+      for (std::size_t s : rows[r]) {
+        const double v = k.vel_y_mm_s[f * k.subsets + s];
+        if (std::isfinite(v)) sum += v, ++n;
+      }
+      if (n > 0) st.velocity_mm_s[f * rows.size() + r] = sum / static_cast<double>(n);
+    }
+    st.pounder_base_mm.push_back(std::max(
+        0.0, 1e3 * InterpolateSeries(sensor.time_s, sensor.penetration_m, frame_daq_time_s[f])));
+  }
+  return st;
+}
+
 }  // namespace
 
 void WaveFrontOptions::Check() const {
@@ -217,8 +259,8 @@ WaveFront AnalyzeWaveFront(const KinematicsResult& k, const std::vector<double>&
   w.crater_depth_mm = 1e3 * sensor.summary.final_penetration_m;
   const auto give_up = [&](const std::string& why) {
     w.problem = why;
-    for (DepthDecayFit* d : {&w.displacement_te, &w.velocity_te, &w.displacement_end,
-                             &w.velocity_end})
+    for (DepthDecayFit* d :
+         {&w.displacement_te, &w.velocity_te, &w.displacement_end, &w.velocity_end})
       d->problem = why;
     return w;
   };
@@ -260,13 +302,13 @@ WaveFront AnalyzeWaveFront(const KinematicsResult& k, const std::vector<double>&
     if (dy > 0 && std::abs(dx) <= half) centre.push_back(s);
   }
   w.centre_line_subsets = centre.size();
+  w.centre_line = centre;
+  w.space_time = CentreLineSpaceTime(k, centre, fr, frame_daq_time_s, sensor, sy);
   FitFrontSpeed(outside, o, &w);
 
   // The pounder's base at a frame: the surface + its penetration (sensor, DAQ clock).
   const auto fit_at = [&](std::size_t f, DepthDecayFit* u, DepthDecayFit* v) {
-    const double pen_mm =
-        1e3 * InterpolateSeries(sensor.time_s, sensor.penetration_m, frame_daq_time_s[f]);
-    const double base_depth = std::max(0.0, pen_mm);
+    const double base_depth = w.space_time.pounder_base_mm[f];
     *u = FitDecay(k, k.disp_y_mm, noise_u, centre, f, fr.t_s[f], sy + base_depth, base_depth, o,
                   /*displacement=*/true);
     *v = FitDecay(k, k.vel_y_mm_s, noise_v, centre, f, fr.t_s[f], sy + base_depth, base_depth, o,

@@ -132,6 +132,17 @@ bool MarkerDrawable(const PlotMarker& m, const Plot& plot) {
   return !(m.second_y_axis ? plot.log_y2 : plot.log_y) || m.value > 0;
 }
 
+bool CellDrawable(const PlotCells& c, std::size_t i) {
+  return std::isfinite(c.x[i]) && std::isfinite(c.y[i]) && std::isfinite(c.value[i]);
+}
+
+bool CellsDrawable(const Plot& plot) {
+  if (plot.log_x || plot.log_y) return false;
+  for (std::size_t i = 0; i < plot.cells.value.size(); ++i)
+    if (CellDrawable(plot.cells, i)) return true;
+  return false;
+}
+
 // Writes the drawable series as data blocks (gnuplot `index` k = k-th drawable series); a single
 // blank line inside a block breaks the line at non-drawable points. Returns the points written.
 std::size_t WriteData(const Plot& plot, const std::string& path) {
@@ -156,9 +167,28 @@ std::size_t WriteData(const Plot& plot, const std::string& path) {
       }
     }
   }
+  if (CellsDrawable(plot)) {  // The last block: x y half-width half-height value.
+    if (!first_block) out << "\n\n";
+    const PlotCells& c = plot.cells;
+    for (std::size_t i = 0; i < c.value.size(); ++i) {
+      if (!CellDrawable(c, i)) continue;
+      out << Number(c.x[i]) << ' ' << Number(c.y[i]) << ' ' << Number(c.half_width) << ' '
+          << Number(c.half_height) << ' ' << Number(c.value[i]) << '\n';
+      ++points;
+    }
+  }
   out.flush();
   if (!out) throw WriteError(path, errno != 0 ? errno : EIO);
   return points;
+}
+
+// The colour limit of the cells: value_limit, else max |value| (1 when all are 0).
+double CellLimit(const PlotCells& c) {
+  if (std::isfinite(c.value_limit) && c.value_limit > 0) return c.value_limit;
+  double m = 0;
+  for (std::size_t i = 0; i < c.value.size(); ++i)
+    if (CellDrawable(c, i)) m = std::max(m, std::abs(c.value[i]));
+  return m > 0 ? m : 1;
 }
 
 // The finite, drawable range of the data along x (axis 0), y1 (1) or y2 (2).
@@ -174,6 +204,16 @@ bool DataRange(const Plot& plot, int axis, double* lo, double* hi) {
       const double v = axis == 0 ? s.x[i] : s.y[i];
       *lo = std::min(*lo, v);
       *hi = std::max(*hi, v);
+    }
+  }
+  if (axis != 2 && CellsDrawable(plot)) {
+    const PlotCells& c = plot.cells;
+    const double half = axis == 0 ? c.half_width : c.half_height;
+    for (std::size_t i = 0; i < c.value.size(); ++i) {
+      if (!CellDrawable(c, i)) continue;
+      const double v = axis == 0 ? c.x[i] : c.y[i];
+      *lo = std::min(*lo, v - half);
+      *hi = std::max(*hi, v + half);
     }
   }
   return *lo <= *hi;
@@ -257,11 +297,23 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
   if (plot.log_y) g << "set logscale y 10\nset format y '10^{%L}'\n";
   if (plot.log_y2 && any_y2) g << "set logscale y2 10\nset format y2 '10^{%L}'\n";
   g << RangeCommand(plot, 0, plot.x_min, plot.x_max);
-  g << RangeCommand(plot, 1, plot.y_min, plot.y_max);
+  std::string y_range = RangeCommand(plot, 1, plot.y_min, plot.y_max);
+  if (plot.reverse_y) {
+    if (y_range.empty()) y_range = "set yrange [*:*]\n";
+    y_range.insert(y_range.size() - 1, " reverse");
+  }
+  g << y_range;
   if (any_y2) g << RangeCommand(plot, 2, NAN, NAN);
   // Head room above the data (autoscale then extends to the next tic).
-  if (!plot.log_y) g << "set offsets 0, 0, graph 0.05, 0\n";
-  if (plot.legend == LegendPosition::kBelow) g << "set bmargin 6\n";
+  if (!plot.log_y && !plot.reverse_y) g << "set offsets 0, 0, graph 0.05, 0\n";
+  if (plot.legend == LegendPosition::kBelow) {
+    // Room for the x label and the legend's rows: entries side by side, as many as fit (two of
+    // the longer labels per row), 1.5 character heights each.
+    const long entries = std::count_if(plot.series.begin(), plot.series.end(), [&](const auto& s) {
+      return !s.label.empty() && SeriesHasPoints(s, plot);
+    });
+    g << "set bmargin " << std::max(6L, 4 + 3 * ((entries + 1) / 2) / 2 + 1) << "\n";
+  }
   if (plot.legend == LegendPosition::kNone) {
     g << "set key off\n";
   } else {
@@ -291,10 +343,24 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
       }
     }
   }
-  // The plot command: one element per drawable series.
+  // The plot command: the cells (under everything), then one element per drawable series.
   std::ostringstream elements;
   int index = 0;
   int palette_index = 0;
+  const bool cells = CellsDrawable(plot);
+  if (cells) {
+    const double limit = CellLimit(plot.cells);
+    g << "set palette defined (-1 '#2166ac', -0.5 '#92c5de', 0 '#f7f7f7', 0.5 '#f4a582', 1 "
+         "'#b2182b')\n";
+    g << "set cbrange [" << Number(-limit) << ":" << Number(limit) << "]\n";
+    g << "set cblabel " << Quote(plot.cells.label) << lit << "\n";
+    g << "set colorbox\n";
+    const long drawn = std::count_if(plot.series.begin(), plot.series.end(),
+                                     [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
+    elements << Quote(data_path) << " index " << drawn
+             << " using 1:2:3:4:5 with boxxyerror fs solid 1.0 noborder lc palette notitle";
+    if (drawn > 0) elements << ", \\\n     ";
+  }
   for (const auto& s : plot.series) {
     const std::string color =
         s.color.empty() ? kPalette[palette_index % std::size(kPalette)] : s.color;
@@ -321,7 +387,7 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
     elements << " lc rgb " << Quote(color);
     elements << (s.label.empty() ? " notitle" : " title " + Quote(s.label) + lit);
   }
-  if (index > 0) {
+  if (index > 0 || cells) {
     g << "plot " << elements.str() << "\n";
   } else {
     // Markers only: an empty frame over the given range.
@@ -378,9 +444,17 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
                std::to_string(s.point_type), "1..15");
     CheckValue(s.point_size > 0, "plot series point_size", Number(s.point_size), "> 0");
   }
-  const bool any_points =
-      std::any_of(plot.series.begin(), plot.series.end(),
-                  [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
+  const PlotCells& c = plot.cells;
+  CheckValue(c.x.size() == c.value.size() && c.y.size() == c.value.size(), "plot cells",
+             std::to_string(c.x.size()) + " x, " + std::to_string(c.y.size()) + " y and " +
+                 std::to_string(c.value.size()) + " values",
+             "as many x and y as values");
+  CheckValue(c.empty() || (c.half_width > 0 && c.half_height > 0), "plot cells' half sizes",
+             Number(c.half_width) + " x " + Number(c.half_height), "> 0");
+  const bool any_points = CellsDrawable(plot) || std::any_of(plot.series.begin(), plot.series.end(),
+                                                             [&](const PlotSeries& s) {
+                                                               return SeriesHasPoints(s, plot);
+                                                             });
   const bool any_marker = std::any_of(plot.markers.begin(), plot.markers.end(),
                                       [&](const PlotMarker& m) { return MarkerDrawable(m, plot); });
   if (!any_points && !any_marker) {

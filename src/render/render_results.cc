@@ -19,12 +19,15 @@
 #include "impactdic/io/dic_results.h"
 #include "impactdic/io/image_io.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/io/results_io.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/kinematics/kinematics_results.h"
 #include "impactdic/model/model_results.h"
 #include "impactdic/momentum/momentum_results.h"
 #include "impactdic/render/figures.h"
+#include "impactdic/render/wave_figures.h"
 #include "impactdic/sensor/sensor_results.h"
+#include "impactdic/sensor/wave_results.h"
 
 namespace impactdic {
 namespace fs = std::filesystem;
@@ -504,6 +507,53 @@ void DrawVelocityField(const H5Reader& reader, bool has_field, double t_e_s,
   }
 }
 
+// The wave figures, when the file has /wave (else nothing: a run without base channels asks for
+// none); each figure whose data is missing is skipped with the reason.
+void DrawWaveFigures(const H5Reader& reader, const std::string& results_path,
+                     const RenderResultsOptions& options, const std::string& out_dir,
+                     RenderResultsSummary& summary) {
+  if (!reader.Exists(L::kWaveGroup)) return;
+  auto out = [&](const char* name) { return (fs::path(out_dir) / name).string(); };
+  auto skip = [&](const char* output, const std::string& reason) {
+    LogInfo("render: skipping {}: {}", output, reason);
+    summary.skipped.push_back(std::string(output) + ": " + reason);
+  };
+  const std::string file = OutputPathForMessages(results_path);
+  const WaveResult wave = ReadWaveResults(reader, file);
+  if (!wave.front.space_time.time_s.empty()) {
+    summary.written.push_back(PlotSpaceTime(wave, out(L::kWaveSpaceTimePng), options.plot).path);
+  } else {
+    skip(L::kWaveSpaceTimePng,
+         "no space-time data (/wave/front: " +
+             (wave.front.problem.empty() ? std::string("the front was not computed")
+                                         : wave.front.problem) +
+             ")");
+  }
+  if (reader.Exists(L::kSensorT) && !wave.channels.empty()) {
+    std::size_t n = kAnyLength;
+    const std::vector<double> t_s = ReadSeries(reader, L::kSensorT, file, &n);
+    std::vector<BaseForceRecord> records;
+    for (const WaveChannel& c : wave.channels) {
+      const std::string path = std::string(L::kWaveForceGroup) + "/" + c.column;
+      if (reader.Exists(path)) records.push_back({c.column, ReadSeries(reader, path, file, &n)});
+    }
+    summary.written.push_back(
+        PlotBaseForce(t_s, records, wave, out(L::kWaveBaseForcePng), options.plot).path);
+  } else {
+    skip(L::kWaveBaseForcePng, std::string("no ") + L::kSensorT + " or no base channel");
+  }
+  const auto has_profile = [](const DepthDecayFit& d) {
+    return std::any_of(d.profile_value.begin(), d.profile_value.end(),
+                       [](double v) { return v > 0; });
+  };
+  if (has_profile(wave.front.displacement_te) || has_profile(wave.front.displacement_end)) {
+    summary.written.push_back(
+        PlotDepthProfile(wave.front, out(L::kWaveDepthProfilePng), options.plot).path);
+  } else {
+    skip(L::kWaveDepthProfilePng, "no downward displacement on the centre line below the pounder");
+  }
+}
+
 // The strain maps at t_e and at the last frame and the strain animation, when the file has
 // /strain (else nothing, and no entry in the summary: a run without strain asks for none).
 void DrawStrainField(const H5Reader& reader, double t_e_s, const RenderResultsOptions& options,
@@ -648,6 +698,7 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
       }
     }
 
+    if (options.figures) DrawWaveFigures(reader, results_path, options, out_dir, summary);
     if (options.snapshot || options.animation) {
       DrawVelocityField(reader, has_field, t_e_s, options, out_dir, names, summary);
       DrawStrainField(reader, t_e_s, options, out_dir, names, summary);

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -111,14 +112,33 @@ void WriteDecay(H5Writer& out, const std::string& group, const DepthDecayFit& te
   if (displacement)
     out.Write(group + "/depth_of_influence_mm", row(&DepthDecayFit::depth_of_influence_mm), "mm",
               "depth below the surface where the fitted displacement is 10 % of u0");
+  // A row without a profile (t_e not measured) is written as NaN (in_fit 0).
+  const std::size_t c = std::max(te.profile_depth_mm.size(), end.profile_depth_mm.size());
+  if (c > 0) {
+    const auto rows = [c](const auto& a, const auto& b) {
+      std::vector<double> v(a.begin(), a.end());
+      v.resize(c, a.empty() ? kNaN : 0);
+      v.insert(v.end(), b.begin(), b.end());
+      v.resize(2 * c, b.empty() ? kNaN : 0);
+      return v;
+    };
+    out.Write(group + "/profile_depth_mm", rows(te.profile_depth_mm, end.profile_depth_mm), {2, c},
+              "mm", "each centre-line subset's depth below the pounder's base (NaN: not below)");
+    out.Write(group + "/profile_value", rows(te.profile_value, end.profile_value), {2, c}, unit,
+              "each centre-line subset's downward value at the row's frame");
+    out.Write(group + "/profile_in_fit", rows(te.profile_in_fit, end.profile_in_fit), {2, c}, "1",
+              "1 = the subset entered the decay fit");
+  }
   std::vector<std::string> problems;
   if (!te.problem.empty()) problems.push_back("0: " + te.problem);
   if (!end.problem.empty()) problems.push_back("1: " + end.problem);
-  out.SetAttribute(group, L::kWaveFrontProblemAttr, problems.empty() ? "none" : Join(problems, "\n"));
+  out.SetAttribute(group, L::kWaveFrontProblemAttr,
+                   problems.empty() ? "none" : Join(problems, "\n"));
 }
 
+// `centre`: the centre-line subsets (the profiles' length).
 void ReadDecay(const H5Reader& in, const std::string& group, const std::string& file,
-               DepthDecayFit* te, DepthDecayFit* end, bool displacement) {
+               std::size_t centre, DepthDecayFit* te, DepthDecayFit* end, bool displacement) {
   std::size_t n = 2;
   const auto read = [&](const std::string& name, double DepthDecayFit::*field) {
     const std::vector<double> v = ReadSeries(in, group + "/" + name, file, &n);
@@ -136,6 +156,23 @@ void ReadDecay(const H5Reader& in, const std::string& group, const std::string& 
   const std::vector<double> hi = ReadSeries(in, group + "/decay_length_ci_high_mm", file, &n);
   te->decay_length_ci_mm = {lo[0], hi[0]};
   end->decay_length_ci_mm = {lo[1], hi[1]};
+  if (centre > 0 && in.Exists(group + "/profile_depth_mm")) {
+    const auto read_rows = [&](const std::string& name, auto* a, auto* b) {
+      const std::vector<double> v = ReadField(in, group + "/" + name, file, {2, centre});
+      a->clear();
+      b->clear();
+      for (std::size_t i = 0; i < 2 * centre; ++i) {
+        // profile_in_fit: 1 = in the fit; anything else (0, NaN of a row without a profile) not.
+        if constexpr (std::is_same_v<std::remove_pointer_t<decltype(a)>, std::vector<double>>)
+          (i < centre ? a : b)->push_back(v[i]);
+        else
+          (i < centre ? a : b)->push_back(v[i] == 1 ? 1 : 0);
+      }
+    };
+    read_rows("profile_depth_mm", &te->profile_depth_mm, &end->profile_depth_mm);
+    read_rows("profile_value", &te->profile_value, &end->profile_value);
+    read_rows("profile_in_fit", &te->profile_in_fit, &end->profile_in_fit);
+  }
   std::stringstream lines(ReadStringAttributeOr(in, group, L::kWaveFrontProblemAttr, ""));
   for (std::string line; std::getline(lines, line);) {
     if (line.rfind("0: ", 0) == 0) te->problem = line.substr(3);
@@ -161,6 +198,19 @@ void WriteFront(H5Writer& out, const WaveFront& f) {
             "fitted arrival at distance 0");
   out.Write(L::kWaveFrontRms, std::vector<double>{f.rms_residual_s}, "s",
             "rms residual of the arrivals in the fit");
+  out.Write(L::kWaveFrontCentreLine,
+            std::vector<double>(f.centre_line.begin(), f.centre_line.end()), "1",
+            "the centre-line subsets' indices in /kinematics' order");
+  const SpaceTime& st = f.space_time;
+  if (!st.time_s.empty()) {
+    out.Write(L::kWaveSpaceTimeT, st.time_s, "s", "each frame's time after the impact");
+    out.Write(L::kWaveSpaceTimeDepth, st.depth_mm, "mm",
+              "each centre-line row's depth below the undisturbed surface");
+    out.Write(L::kWaveSpaceTimeVelocity, st.velocity_mm_s, {st.time_s.size(), st.rows()}, "mm/s",
+              "each centre-line row's mean downward velocity per frame (NaN: none measured)");
+    out.Write(L::kWaveSpaceTimeBase, st.pounder_base_mm, "mm",
+              "the pounder's base below the undisturbed surface (its penetration)");
+  }
   WriteDecay(out, L::kWaveFrontDisplacementGroup, f.displacement_te, f.displacement_end, "mm",
              /*displacement=*/true);
   WriteDecay(out, L::kWaveFrontVelocityGroup, f.velocity_te, f.velocity_end, "mm/s",
@@ -183,8 +233,7 @@ WaveFront ReadFront(const H5Reader& in, const std::string& file) {
   std::size_t s = kAnyLength;
   f.distance_mm = ReadSeries(in, L::kWaveFrontDistance, file, &s);
   f.arrival_s = ReadSeries(in, L::kWaveFrontArrival, file, &s);
-  for (double v : ReadSeries(in, L::kWaveFrontInFit, file, &s))
-    f.in_fit.push_back(v == 1 ? 1 : 0);
+  for (double v : ReadSeries(in, L::kWaveFrontInFit, file, &s)) f.in_fit.push_back(v == 1 ? 1 : 0);
   f.fit_subsets = static_cast<std::size_t>(std::count(f.in_fit.begin(), f.in_fit.end(), 1));
   std::size_t one = 1;
   f.speed_m_s = ReadSeries(in, L::kWaveFrontSpeed, file, &one)[0];
@@ -192,9 +241,24 @@ WaveFront ReadFront(const H5Reader& in, const std::string& file) {
                     ReadSeries(in, L::kWaveFrontSpeedCiHigh, file, &one)[0]};
   f.intercept_s = ReadSeries(in, L::kWaveFrontIntercept, file, &one)[0];
   f.rms_residual_s = ReadSeries(in, L::kWaveFrontRms, file, &one)[0];
-  ReadDecay(in, L::kWaveFrontDisplacementGroup, file, &f.displacement_te, &f.displacement_end,
+  if (in.Exists(L::kWaveFrontCentreLine)) {
+    std::size_t c = kAnyLength;
+    for (double v : ReadSeries(in, L::kWaveFrontCentreLine, file, &c))
+      f.centre_line.push_back(static_cast<std::size_t>(v));
+  }
+  if (in.Exists(L::kWaveSpaceTimeGroup)) {
+    SpaceTime& st = f.space_time;
+    std::size_t frames = kAnyLength, rows = kAnyLength;
+    st.time_s = ReadSeries(in, L::kWaveSpaceTimeT, file, &frames);
+    st.pounder_base_mm = ReadSeries(in, L::kWaveSpaceTimeBase, file, &frames);
+    st.depth_mm = ReadSeries(in, L::kWaveSpaceTimeDepth, file, &rows);
+    st.velocity_mm_s = ReadField(in, L::kWaveSpaceTimeVelocity, file, {frames, rows});
+  }
+  ReadDecay(in, L::kWaveFrontDisplacementGroup, file, f.centre_line.size(), &f.displacement_te,
+            &f.displacement_end,
             /*displacement=*/true);
-  ReadDecay(in, L::kWaveFrontVelocityGroup, file, &f.velocity_te, &f.velocity_end,
+  ReadDecay(in, L::kWaveFrontVelocityGroup, file, f.centre_line.size(), &f.velocity_te,
+            &f.velocity_end,
             /*displacement=*/false);
   const std::string g = L::kWaveFrontGroup;
   const std::string problem = ReadStringAttributeOr(in, g, L::kWaveFrontProblemAttr, "");

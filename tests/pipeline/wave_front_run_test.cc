@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <memory>
 #include <regex>
 #include <string>
@@ -18,10 +19,12 @@
 
 #include "../cli/cli_runner.h"
 #include "../io/test_dir.h"
+#include "../render/test_util.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/momentum/wave_front.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/scene.h"
+#include "impactdic/render/render_results.h"
 #include "impactdic/sensor/wave_results.h"
 #include "impactdic/synth/impact_scene.h"
 #include "scene_text.h"
@@ -121,9 +124,9 @@ TEST_F(WaveFrontRun, RecoversTheWaveSpeedAndTheModelsDecay) {
   for (const DepthDecayFit* d : {&f.displacement_te, &f.displacement_end}) {
     SCOPED_TRACE(d->time_s);
     ASSERT_TRUE(d->problem.empty()) << d->problem;
-    const double base_depth = d == &f.displacement_te ? f.pounder_base_depth_mm
-                                                      : d->depth_of_influence_mm -
-                                                            d->decay_length_mm * std::log(10);
+    const double base_depth = d == &f.displacement_te
+                                  ? f.pounder_base_depth_mm
+                                  : d->depth_of_influence_mm - d->decay_length_mm * std::log(10);
     const double model =
         ModelDecayLengthMm(synth, x, y, axis_mm, surface_mm, half, base_depth, d->time_s);
     // Measured (docs/wave.md): 73.4 mm against the model's 70.2 mm at t_e (+4.6 %), 36.6 against
@@ -152,6 +155,23 @@ TEST_F(WaveFrontRun, RecoversTheWaveSpeedAndTheModelsDecay) {
   const std::string json = ReadText(dir_->File("out_good/summary.json"));
   EXPECT_NE(json.find("\"front\""), std::string::npos);
   EXPECT_FALSE(HasNonFiniteNumber(json));
+}
+
+// The wave figures of the run (render/wave_figures.h): all three written, and the space-time
+// diagram's pixels show the front running downward (docs/wave.md "Figures").
+TEST_F(WaveFrontRun, TheWaveFiguresShowTheFront) {
+  if (!std::filesystem::exists(dir_->File("out_good/results.h5"))) Run("good", scene_text_);
+  RenderResultsOptions options;
+  options.output_dir = dir_->File("figures");
+  options.snapshot = options.animation = false;
+  const RenderResultsSummary r = RenderResults(dir_->File("out_good/results.h5"), options);
+  for (const char* name : {L::kWaveSpaceTimePng, L::kWaveBaseForcePng, L::kWaveDepthProfilePng})
+    EXPECT_TRUE(test::IsPngOfSize(dir_->File(std::string("figures/") + name), 640, 480)) << name;
+  int rows = 0;
+  const double rank =
+      test::FrontRankCorrelation(dir_->File(std::string("figures/") + L::kWaveSpaceTimePng), &rows);
+  EXPECT_GT(rank, 0.8) << rows << " rows with a red pixel";
+  EXPECT_GT(rows, 100);
 }
 
 TEST_F(WaveFrontRun, WithoutFramesBeforeTheImpactTheFrontIsNullWithTheReason) {

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -124,6 +125,64 @@ inline void WriteFrames(const VelocityFieldSequence& seq, H5Writer& out) {
   out.Write(L::kFrameImages, pixels, {seq.frames.size(), std::size_t(rows), std::size_t(cols)},
             "grey value", "frames");
   out.SetAttribute(L::kFramesGroup, L::kBitDepthAttr, 8.0);
+}
+
+// The front in a space-time diagram (render/wave_figures.h): in each image row of the plot area
+// (above the x axis: the row with the most dark pixels, the axis line; left of the colour bar:
+// the right 15 % of the image) the leftmost pixel of at least half the colour scale downward
+// (from the palette's #f4a582 to its top #b2182b; the red minus green test admits a legend's
+// orange #D55E00 markers only where they blend into white), i.e. the arrival at that depth;
+// *rows gets how many rows have one.
+inline double FrontRankCorrelation(const std::string& png, int* rows) {
+  const cv::Mat img = cv::imread(png, cv::IMREAD_COLOR);
+  int axis_row = img.rows, most_dark = 0;
+  for (int y = 0; y < img.rows; ++y) {
+    int dark = 0;
+    for (int x = 0; x < img.cols; ++x) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+      dark += p[0] < 80 && p[1] < 80 && p[2] < 80;
+    }
+    if (dark > most_dark) most_dark = dark, axis_row = y;
+  }
+  std::vector<double> ys, xs;
+  for (int y = 0; y < axis_row; ++y) {
+    for (int x = 0; x < img.cols * 85 / 100; ++x) {
+      const cv::Vec3b p = img.at<cv::Vec3b>(y, x);  // B, G, R.
+      if (p[2] >= 170 && p[2] - p[1] >= 75 && p[0] >= 35) {
+        ys.push_back(y);
+        xs.push_back(x);
+        break;
+      }
+    }
+  }
+  *rows = static_cast<int>(ys.size());
+  if (ys.size() < 3) return 0;
+  const auto ranks = [](const std::vector<double>& v) {
+    std::vector<std::size_t> order(v.size());
+    for (std::size_t i = 0; i < v.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+    std::vector<double> r(v.size());
+    for (std::size_t i = 0; i < v.size();) {  // Ties get their mean rank.
+      std::size_t j = i;
+      while (j + 1 < v.size() && v[order[j + 1]] == v[order[i]]) ++j;
+      for (std::size_t k = i; k <= j; ++k) r[order[k]] = 0.5 * static_cast<double>(i + j);
+      i = j + 1;
+    }
+    return r;
+  };
+  const std::vector<double> a = ranks(ys), b = ranks(xs);
+  double ma = 0, mb = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) ma += a[i], mb += b[i];
+  ma /= static_cast<double>(a.size());
+  mb /= static_cast<double>(b.size());
+  double sab = 0, saa = 0, sbb = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  return saa > 0 && sbb > 0 ? sab / std::sqrt(saa * sbb) : 0;
 }
 
 }  // namespace impactdic::test

@@ -149,6 +149,10 @@ inline constexpr const char* kBitDepthAttr = "bit_depth";
 inline constexpr const char* kMomentumPng = "momentum.png";
 inline constexpr const char* kDecelerationPng = "deceleration.png";
 inline constexpr const char* kAddedMassPng = "added_mass.png";
+// The wave figures (render/wave_figures.h), when results.h5 has /wave.
+inline constexpr const char* kWaveSpaceTimePng = "wave_space_time.png";
+inline constexpr const char* kWaveBaseForcePng = "wave_base_force.png";
+inline constexpr const char* kWaveDepthProfilePng = "wave_depth_profile.png";
 inline constexpr const char* kVelocitySnapshotPng = "velocity_field_te.png";
 inline constexpr const char* kAnimationName = "velocity.mp4";
 inline constexpr const char* kAnimationAviName = "velocity.avi";  // The MJPG fallback.

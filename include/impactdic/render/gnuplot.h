@@ -75,6 +75,18 @@ enum class LegendPosition {
 };
 const char* ToString(LegendPosition position);
 
+// Coloured cells drawn under the series (a space-time diagram, a map): cell i is centred at
+// (x[i], y[i]) with half sizes half_width x half_height, coloured by value[i] on a diverging
+// palette (blue < 0 < red) symmetric about 0 over +-max |value| (or +-value_limit when finite);
+// a cell whose value is not finite is not drawn.
+struct PlotCells {
+  std::vector<double> x, y, value;
+  double half_width = 0, half_height = 0;
+  double value_limit = kNaN;
+  std::string label;  // The colour bar's label, with units.
+  bool empty() const { return value.empty(); }
+};
+
 struct Plot {
   std::string title;
   std::string x_label;   // with units, e.g. "time since impact [ms]"
@@ -82,7 +94,9 @@ struct Plot {
   std::string y2_label;  // right axis; used when a series has second_y_axis
   std::vector<PlotSeries> series;
   std::vector<PlotMarker> markers;
-  bool log_x = false;  // logarithmic axes (non-positive values are not drawn)
+  PlotCells cells;         // None when empty.
+  bool reverse_y = false;  // y grows downward (a depth axis).
+  bool log_x = false;      // logarithmic axes (non-positive values are not drawn)
   bool log_y = false;
   bool log_y2 = false;
   // Axis ranges; NaN = automatic.

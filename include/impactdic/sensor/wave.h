@@ -101,13 +101,28 @@ struct WaveChannel {
 // below the pounder's base along its centre line (the front's DecayFit, docs/wave.md "The front in
 // the DIC field"); u a vertical displacement [mm] or velocity [mm/s], downward positive.
 struct DepthDecayFit {
-  double time_s = kNaN;             // After the impact (the frame's time).
-  std::size_t subsets = 0;          // Centre-line subsets with u > 0 that entered the fit.
-  double surface_value = kNaN;      // u0 at z = 0 (the pounder's base) [mm or mm/s].
-  double decay_length_mm = kNaN;    // lambda; NaN = not determined (`problem` says why).
+  double time_s = kNaN;           // After the impact (the frame's time).
+  std::size_t subsets = 0;        // Centre-line subsets with u > 0 that entered the fit.
+  double surface_value = kNaN;    // u0 at z = 0 (the pounder's base) [mm or mm/s].
+  double decay_length_mm = kNaN;  // lambda; NaN = not determined (`problem` says why).
   std::array<double, 2> decay_length_ci_mm{kNaN, kNaN};  // 95 %; [1] NaN: unbounded above.
   double depth_of_influence_mm = kNaN;  // Below the surface: u falls to kInfluenceFraction u0.
   std::string problem;                  // Why a figure is NaN ("" = all determined).
+  // The profile the fit saw, one entry per centre-line subset (WaveFront::centre_line's order):
+  // its depth below the pounder's base at the frame [mm] (NaN: not below it) and u (NaN: not
+  // measured); in_fit 1 = the subset entered the fit (u above its noise criterion).
+  std::vector<double> profile_depth_mm, profile_value;
+  std::vector<std::uint8_t> profile_in_fit;
+};
+
+// The vertical velocity on the centre line against depth and time (the space-time diagram): the
+// centre-line subsets grouped by their reference row, each row's mean downward velocity per frame.
+struct SpaceTime {
+  std::vector<double> time_s;           // [F] each frame's time after the impact.
+  std::vector<double> depth_mm;         // [R] each row's depth below the undisturbed surface.
+  std::vector<double> velocity_mm_s;    // [F x R] mean downward velocity, NaN = none measured.
+  std::vector<double> pounder_base_mm;  // [F] the pounder's base below the surface (penetration).
+  std::size_t rows() const { return depth_mm.size(); }
 };
 
 // The front in the DIC field (momentum/wave_front.h: the definitions in full).
@@ -121,12 +136,15 @@ struct WaveFront {
   std::vector<std::uint8_t> in_fit;
   double noise_factor = kNaN, peak_fraction = kNaN;  // The arrival criterion's k and f.
   std::size_t arrivals = 0, fit_subsets = 0;
-  double speed_m_s = kNaN;                       // 1 / slope of arrival against distance.
+  double speed_m_s = kNaN;                         // 1 / slope of arrival against distance.
   std::array<double, 2> speed_ci_m_s{kNaN, kNaN};  // 95 %; [1] NaN: unbounded above.
-  double intercept_s = kNaN;                     // Arrival at distance 0.
+  double intercept_s = kNaN;                       // Arrival at distance 0.
   double rms_residual_s = kNaN;
-  // Centre line: the subsets within half a pounder width of it, below the pounder's base.
+  // Centre line: the subsets within half a pounder width of it, below the undisturbed surface
+  // (their indices in the kinematics' order); the fits use those below the pounder's base.
   std::size_t centre_line_subsets = 0;
+  std::vector<std::size_t> centre_line;
+  SpaceTime space_time;
   double pounder_base_depth_mm = kNaN;  // At t_e (the crater depth's reference), below surface.
   DepthDecayFit displacement_te, velocity_te, displacement_end, velocity_end;
   double crater_depth_mm = kNaN;  // The sensor's final penetration, beside the depth of influence.

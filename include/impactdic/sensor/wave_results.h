@@ -75,6 +75,18 @@ inline constexpr const char* kWaveFrontRms = "/wave/front/rms_residual_s";
 inline constexpr const char* kWaveFrontDisplacementGroup = "/wave/front/displacement";
 inline constexpr const char* kWaveFrontVelocityGroup = "/wave/front/velocity";
 inline constexpr const char* kWaveFrontProblemAttr = "problem";
+// The centre line (WaveFront::centre_line): [C] the subsets' indices in /kinematics' order; each
+// decay group holds [2 x C] profile_depth_mm (below the pounder's base at the row's frame, NaN =
+// not below it), profile_value (u, NaN = not measured) and profile_in_fit (1 = in the fit). The
+// space-time diagram's data (SpaceTime): time_s [F] after the impact, depth_mm [R] below the
+// undisturbed surface, velocity_mm_s [F x R] each row's mean downward velocity, pounder_base_mm
+// [F] the pounder's base below the surface.
+inline constexpr const char* kWaveFrontCentreLine = "/wave/front/centre_line";
+inline constexpr const char* kWaveSpaceTimeGroup = "/wave/front/space_time";
+inline constexpr const char* kWaveSpaceTimeT = "/wave/front/space_time/time_s";
+inline constexpr const char* kWaveSpaceTimeDepth = "/wave/front/space_time/depth_mm";
+inline constexpr const char* kWaveSpaceTimeVelocity = "/wave/front/space_time/velocity_mm_s";
+inline constexpr const char* kWaveSpaceTimeBase = "/wave/front/space_time/pounder_base_mm";
 // Number attributes of kWaveGroup: pounder_peak_stress_Pa, pounder_peak_s, sample_interval_s,
 // filter_time_constant_s, travel_time_sigma_s, noise_g (WaveResult); string attributes:
 inline constexpr const char* kWaveColumnsAttr = "columns";
@@ -89,8 +101,9 @@ inline constexpr const char* kWaveDefinitionsAttr = "definitions";
 void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResult& wave);
 
 // Reads /wave back: every channel's figures, problems and the reflection check's outcome and
-// statistic (not its note), the group's numbers, and the front when /wave/front exists. Error kFileFormat naming `file` and the
-// group or dataset when it is missing or a dataset's length differs from the columns'.
+// statistic (not its note), the group's numbers, and the front when /wave/front exists. Error
+// kFileFormat naming `file` and the group or dataset when it is missing or a dataset's length
+// differs from the columns'.
 WaveResult ReadWaveResults(const H5Reader& in, const std::string& file);
 
 }  // namespace impactdic
