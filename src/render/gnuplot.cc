@@ -261,6 +261,74 @@ const char* KeyPlacement(LegendPosition p) {
   return "";
 }
 
+// The legend's placement; below the plot, room for the x label and its rows.
+std::string LegendCommands(const Plot& plot) {
+  std::ostringstream g;
+  if (plot.legend == LegendPosition::kBelow) {
+    // Room for the x label and the legend's rows: entries side by side, as many as fit (two of
+    // the longer labels per row), 1.5 character heights each.
+    const long entries = std::count_if(plot.series.begin(), plot.series.end(), [&](const auto& s) {
+      return !s.label.empty() && SeriesHasPoints(s, plot);
+    });
+    g << "set bmargin " << std::max(6L, 4 + 3 * ((entries + 1) / 2) / 2 + 1) << "\n";
+  }
+  if (plot.legend == LegendPosition::kNone) {
+    g << "set key off\n";
+  } else {
+    g << "set key " << KeyPlacement(plot.legend)
+      << " box lw 1 lc rgb '#b0b0b0' opaque spacing 1.3 samplen 3 width 1\n";
+  }
+  return g.str();
+}
+
+// The marker lines and their labels (`lit`: " noenhanced" unless the plot's texts are enhanced).
+std::string MarkerCommands(const Plot& plot, const std::string& lit) {
+  std::ostringstream g;
+  int arrow = 1;
+  for (const auto& m : plot.markers) {
+    if (!MarkerDrawable(m, plot)) continue;
+    const std::string color = m.color.empty() ? "#505050" : m.color;
+    const std::string v = Number(m.value);
+    if (m.orientation == MarkerOrientation::kVertical) {
+      g << "set arrow " << arrow++ << " from first " << v << ", graph 0 to first " << v
+        << ", graph 1 nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
+      if (!m.label.empty()) {
+        g << "set label " << Quote(m.label) << " at first " << v
+          << ", graph 0.97 offset character 0.6,0 left front textcolor rgb " << Quote(color) << lit
+          << "\n";
+      }
+    } else {
+      const char* sys = m.second_y_axis ? "second" : "first";
+      g << "set arrow " << arrow++ << " from graph 0, " << sys << " " << v << " to graph 1, " << sys
+        << " " << v << " nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
+      if (!m.label.empty()) {
+        g << "set label " << Quote(m.label) << " at graph 0.98, " << sys << " " << v
+          << " offset 0,character 0.7 right front textcolor rgb " << Quote(color) << lit << "\n";
+      }
+    }
+  }
+  return g.str();
+}
+
+// The cells' palette and colour bar; their plot element (the last data block) goes first into
+// `elements`, under the series.
+std::string CellCommands(const Plot& plot, const std::string& data_path, const std::string& lit,
+                         std::ostringstream& elements) {
+  std::ostringstream g;
+  const double limit = CellLimit(plot.cells);
+  g << "set palette defined (-1 '#2166ac', -0.5 '#92c5de', 0 '#f7f7f7', 0.5 '#f4a582', 1 "
+       "'#b2182b')\n";
+  g << "set cbrange [" << Number(-limit) << ":" << Number(limit) << "]\n";
+  g << "set cblabel " << Quote(plot.cells.label) << lit << "\n";
+  g << "set colorbox\n";
+  const long drawn = std::count_if(plot.series.begin(), plot.series.end(),
+                                   [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
+  elements << Quote(data_path) << " index " << drawn
+           << " using 1:2:3:4:5 with boxxyerror fs solid 1.0 noborder lc palette notitle";
+  if (drawn > 0) elements << ", \\\n     ";
+  return g.str();
+}
+
 }  // namespace
 
 std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const std::string& terminal,
@@ -306,61 +374,14 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
   if (any_y2) g << RangeCommand(plot, 2, NAN, NAN);
   // Head room above the data (autoscale then extends to the next tic).
   if (!plot.log_y && !plot.reverse_y) g << "set offsets 0, 0, graph 0.05, 0\n";
-  if (plot.legend == LegendPosition::kBelow) {
-    // Room for the x label and the legend's rows: entries side by side, as many as fit (two of
-    // the longer labels per row), 1.5 character heights each.
-    const long entries = std::count_if(plot.series.begin(), plot.series.end(), [&](const auto& s) {
-      return !s.label.empty() && SeriesHasPoints(s, plot);
-    });
-    g << "set bmargin " << std::max(6L, 4 + 3 * ((entries + 1) / 2) / 2 + 1) << "\n";
-  }
-  if (plot.legend == LegendPosition::kNone) {
-    g << "set key off\n";
-  } else {
-    g << "set key " << KeyPlacement(plot.legend)
-      << " box lw 1 lc rgb '#b0b0b0' opaque spacing 1.3 samplen 3 width 1\n";
-  }
-  int arrow = 1;
-  for (const auto& m : plot.markers) {
-    if (!MarkerDrawable(m, plot)) continue;
-    const std::string color = m.color.empty() ? "#505050" : m.color;
-    const std::string v = Number(m.value);
-    if (m.orientation == MarkerOrientation::kVertical) {
-      g << "set arrow " << arrow++ << " from first " << v << ", graph 0 to first " << v
-        << ", graph 1 nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
-      if (!m.label.empty()) {
-        g << "set label " << Quote(m.label) << " at first " << v
-          << ", graph 0.97 offset character 0.6,0 left front textcolor rgb " << Quote(color) << lit
-          << "\n";
-      }
-    } else {
-      const char* sys = m.second_y_axis ? "second" : "first";
-      g << "set arrow " << arrow++ << " from graph 0, " << sys << " " << v << " to graph 1, " << sys
-        << " " << v << " nohead dt 2 lw 2 lc rgb " << Quote(color) << " back\n";
-      if (!m.label.empty()) {
-        g << "set label " << Quote(m.label) << " at graph 0.98, " << sys << " " << v
-          << " offset 0,character 0.7 right front textcolor rgb " << Quote(color) << lit << "\n";
-      }
-    }
-  }
+  g << LegendCommands(plot);
+  g << MarkerCommands(plot, lit);
   // The plot command: the cells (under everything), then one element per drawable series.
   std::ostringstream elements;
   int index = 0;
   int palette_index = 0;
   const bool cells = CellsDrawable(plot);
-  if (cells) {
-    const double limit = CellLimit(plot.cells);
-    g << "set palette defined (-1 '#2166ac', -0.5 '#92c5de', 0 '#f7f7f7', 0.5 '#f4a582', 1 "
-         "'#b2182b')\n";
-    g << "set cbrange [" << Number(-limit) << ":" << Number(limit) << "]\n";
-    g << "set cblabel " << Quote(plot.cells.label) << lit << "\n";
-    g << "set colorbox\n";
-    const long drawn = std::count_if(plot.series.begin(), plot.series.end(),
-                                     [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); });
-    elements << Quote(data_path) << " index " << drawn
-             << " using 1:2:3:4:5 with boxxyerror fs solid 1.0 noborder lc palette notitle";
-    if (drawn > 0) elements << ", \\\n     ";
-  }
+  if (cells) g << CellCommands(plot, data_path, lit, elements);
   for (const auto& s : plot.series) {
     const std::string color =
         s.color.empty() ? kPalette[palette_index % std::size(kPalette)] : s.color;
