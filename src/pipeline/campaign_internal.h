@@ -28,6 +28,10 @@ struct ComparisonSpec {
   const char* y_label;
   const char* observed;   // A campaign.csv column.
   const char* predicted;  // A campaign.csv column.
+  // A relation between two quantities, not a model against a measurement (no 1:1 line), drawn
+  // only when a test has both values: the wave figures need base force channels, which most
+  // campaigns do not record.
+  bool relation = false;
 };
 const std::vector<ComparisonSpec>& ComparisonSpecs();
 // Every file name the campaign level writes (a test may not be named so).

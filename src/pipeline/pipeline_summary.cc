@@ -39,7 +39,11 @@ std::vector<std::string> SceneFigures::CsvNames() const {
           "crater_depth_model_m",
           "t_end_model_s",
           "dic_valid_fraction",
-          "dic_subsets_per_s"};
+          "dic_subsets_per_s",
+          "wave_speed_peak_m_s",
+          "wave_stress_ratio",
+          "wave_front_speed_m_s",
+          "wave_decay_length_te_mm"};
 }
 
 std::vector<double> SceneFigures::CsvValues() const {
@@ -63,7 +67,11 @@ std::vector<double> SceneFigures::CsvValues() const {
           crater_depth_model_m,
           t_end_model_s,
           dic_valid_fraction,
-          dic_subsets_per_s};
+          dic_subsets_per_s,
+          wave_speed_peak_m_s,
+          wave_stress_ratio,
+          wave_front_speed_m_s,
+          wave_decay_length_te_mm};
 }
 
 std::vector<std::string> StrainFigures::CsvNames() const {
@@ -99,8 +107,8 @@ JsonObject DecayJson(const DepthDecayFit& d, const char* unit) {
       .Add("subsets", static_cast<int>(d.subsets))
       .Add(std::string("surface_") + unit, d.surface_value)
       .Add("decay_length_mm", d.decay_length_mm)
-      .Add("decay_length_ci_mm", std::vector<double>{d.decay_length_ci_mm[0],
-                                                     d.decay_length_ci_mm[1]});
+      .Add("decay_length_ci_mm",
+           std::vector<double>{d.decay_length_ci_mm[0], d.decay_length_ci_mm[1]});
   if (std::string(unit) == "mm") j.Add("depth_of_influence_mm", d.depth_of_influence_mm);
   if (!d.problem.empty()) j.Add("problem", d.problem);
   return j;

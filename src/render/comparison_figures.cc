@@ -164,16 +164,26 @@ Plot MakeComparisonPlot(const ComparisonFigureData& data) {
   plot.legend = LegendPosition::kTopLeft;
   double lo = 0, hi = 0;
   if (!CommonRange(data.points, &lo, &hi)) return plot;  // nothing to draw
-  // Equal ranges on both axes, so that the 1:1 line is the diagonal, with 5 % margins.
-  const double pad = hi > lo ? 0.05 * (hi - lo) : std::max(0.05 * std::abs(hi), 1e-12);
-  plot.x_min = plot.y_min = lo - pad;
-  plot.x_max = plot.y_max = hi + pad;
-
-  plot.series.push_back(
-      Line(lo - pad, hi + pad, 1.0, 0.0, "1:1", kIdentityColor, SeriesStyle::kDashed));
+  if (data.identity_line) {
+    // Equal ranges on both axes, so that the 1:1 line is the diagonal, with 5 % margins.
+    const double pad = hi > lo ? 0.05 * (hi - lo) : std::max(0.05 * std::abs(hi), 1e-12);
+    lo -= pad;
+    hi += pad;
+    plot.x_min = plot.y_min = lo;
+    plot.x_max = plot.y_max = hi;
+    plot.series.push_back(Line(lo, hi, 1.0, 0.0, "1:1", kIdentityColor, SeriesStyle::kDashed));
+  } else {  // The fitted line over the x values (gnuplot scales each axis).
+    lo = HUGE_VAL;
+    hi = -HUGE_VAL;
+    for (const auto& p : data.points) {
+      if (!Finite(p)) continue;
+      lo = std::min(lo, p.predicted);
+      hi = std::max(hi, p.predicted);
+    }
+  }
   if (std::isfinite(fit.slope) && std::isfinite(fit.intercept)) {
-    plot.series.push_back(Line(lo - pad, hi + pad, fit.slope, fit.intercept, FitLabel(fit),
-                               kFitColor, SeriesStyle::kLines));
+    plot.series.push_back(
+        Line(lo, hi, fit.slope, fit.intercept, FitLabel(fit), kFitColor, SeriesStyle::kLines));
   }
 
   const WidthGroups groups = GroupWidths(data.points);

@@ -162,6 +162,13 @@ void WaveOptions::Check() const {
   CheckValue(std::isfinite(g_m_s2) && g_m_s2 > 0, "test.g_m_s2", fmt::format("{}", g_m_s2), "> 0");
 }
 
+const WaveChannel* WaveResult::CentreChannel() const {
+  const WaveChannel* best = nullptr;
+  for (const WaveChannel& c : channels)
+    if (best == nullptr || std::abs(c.offset_mm) < std::abs(best->offset_mm)) best = &c;
+  return best;
+}
+
 std::vector<std::string> WaveResult::Warnings() const {
   std::vector<std::string> out;
   for (const WaveChannel& c : channels)

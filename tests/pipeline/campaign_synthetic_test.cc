@@ -23,6 +23,7 @@
 //    the peak deceleration by ~3 % (slope 0.97).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -84,6 +85,53 @@ TEST(CampaignSynthetic, Table1CampaignRecoversEq4WithinItsIntervalsAndTheOneToOn
         "fig9_relative_penetration.png", "fig10_momentum_ratio.png"}) {
     EXPECT_GT(std::filesystem::file_size(dir.File(std::string("out/") + png)), 10000u) << png;
   }
+}
+
+// The wave columns and the attenuation figure (docs/wave.md, docs/campaign.md): three tests
+// synthesised with base force sensors (soil.wave_speed_m_s 80 m/s) give the wave speed from the
+// peak travel time, the stress ratio (each equal to the test's own summary), and
+// wave_attenuation.png with its fit over the three; a campaign without base sensors (the test
+// above) draws no such figure and has no such comparison.
+TEST(CampaignSynthetic, WaveColumnsAndTheAttenuationFigure) {
+  TestDir dir;
+  const std::string file =
+      dir.Write("c.yaml",
+                "synthesise:\n  mass_kg: [7, 10, 13]\n  drop_height_m: [0.7]\n  width_m: [0.15]\n"
+                "  spec:\n    frames:\n      count: 12\n    sensor:\n      tail_s: 0.05\n"
+                "    soil: {wave_speed_m_s: 80}\n    base_sensors:\n      columns: [base_center_N, "
+                "base_offset_N]\n      offsets_mm: [0, 300]\n      depths_mm: [600, 600]\n"
+                "      areas_mm2: [2000, 2000]\noutputs:\n  animation: false\n  figures: false\n");
+  CampaignOptions o;
+  o.output_folder = dir.File("out");
+  o.threads = 2;
+  const CampaignSummary s = RunCampaignPlan(LoadCampaignFile(file), o);
+  ASSERT_EQ(s.rows.size(), 3u);
+  for (const CampaignRow& r : s.rows) {
+    ASSERT_EQ(r.status, "ok") << r.name << ": " << r.error;
+    // The synth's wave at 80 m/s, read from the peaks 600 mm down (docs/wave.md: within 5 %).
+    EXPECT_NEAR(r.Figure("wave_speed_peak_m_s"), 80, 4) << r.name;
+    const double ratio = r.Figure("wave_stress_ratio");
+    EXPECT_GT(ratio, 0) << r.name;
+    EXPECT_LT(ratio, 1) << r.name;
+  }
+  CampaignOptions table;
+  table.output_folder = dir.File("table");
+  table.figures = false;
+  const std::vector<CampaignRow> back =
+      RegressCampaignTable(dir.File("out/campaign.csv"), table).rows;
+  ASSERT_EQ(back.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    for (const char* column : {"wave_speed_peak_m_s", "wave_stress_ratio", "wave_front_speed_m_s",
+                               "wave_decay_length_te_mm"}) {
+      const double a = s.rows[i].Figure(column), b = back[i].Figure(column);
+      EXPECT_TRUE(a == b || (std::isnan(a) && std::isnan(b))) << column << ": " << a << " " << b;
+    }
+  }
+  const auto it = std::find_if(s.comparisons.begin(), s.comparisons.end(),
+                               [](const auto& c) { return c.first == "wave_attenuation"; });
+  ASSERT_NE(it, s.comparisons.end());
+  EXPECT_EQ(it->second.n, 3);
+  EXPECT_GT(std::filesystem::file_size(dir.File("out/wave_attenuation.png")), 10000u);
 }
 
 }  // namespace

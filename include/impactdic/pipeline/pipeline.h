@@ -98,6 +98,14 @@ struct SceneFigures {
   double t_end_model_s = kNaN;
   double dic_valid_fraction = kNaN;
   double dic_subsets_per_s = kNaN;  // A wall-time rate: in timing.json and summary.csv only.
+  // With base force channels (docs/wave.md): the base sensor nearest the pounder's centre line
+  // (smallest horizontal offset) gives the wave speed from the peak travel time and the stress
+  // ratio (the attenuation); the DIC front's speed and the displacement's decay length along the
+  // centre line at t_e. NaN without base channels or when not determined.
+  double wave_speed_peak_m_s = kNaN;
+  double wave_stress_ratio = kNaN;
+  double wave_front_speed_m_s = kNaN;
+  double wave_decay_length_te_mm = kNaN;
 
   // summary.json's figures: every one of CsvNames() but the wall-time rate dic_subsets_per_s, so
   // that two runs of one scene give the same bytes.

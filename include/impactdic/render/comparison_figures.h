@@ -32,6 +32,10 @@ struct ComparisonPoint {
 struct ComparisonFigureData {
   std::string title, x_label, y_label;
   std::vector<ComparisonPoint> points;
+  // A model against a measurement: equal axes and the 1:1 line. False for a relation between two
+  // different quantities (the wave's attenuation against the momentum ratio): each axis its own
+  // range, no 1:1 line; the least-squares line and R^2 as for a comparison.
+  bool identity_line = true;
 };
 
 // Least-squares line through the finite points, observed = slope * predicted + intercept, its

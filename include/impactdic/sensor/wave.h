@@ -164,6 +164,9 @@ struct WaveResult {
   WaveFront front;                       // The front in the DIC field (the momentum stage).
   // "column: problem" for every problem of every channel.
   std::vector<std::string> Warnings() const;
+  // The channel nearest the pounder's centre line (smallest |offset|, the first of equals: the
+  // paper's sensor under the pounder); nullptr without channels.
+  const WaveChannel* CentreChannel() const;
 };
 
 // The wave figures of every base channel of `sensor` (ProcessSensor with options.columns.

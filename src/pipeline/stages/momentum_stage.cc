@@ -79,6 +79,8 @@ class MomentumStage : public Stage {
                                      d.momentum->summary.t_end_peak_s, o);
     if (c.summary.wave) c.summary.wave->front = d.wave->front;
     const WaveFront& f = d.wave->front;
+    c.summary.figures.wave_front_speed_m_s = f.speed_m_s;
+    c.summary.figures.wave_decay_length_te_mm = f.displacement_te.decay_length_mm;
     if (!f.problem.empty()) {
       c.summary.warnings.push_back("wave front: " + f.problem);
       return "; wave front: not measured";

@@ -41,6 +41,10 @@ class SensorStage : public Stage {
       c.summary.wave = wave;
       for (const auto& w : wave.Warnings()) c.summary.warnings.push_back("wave: " + w);
       wave_note = fmt::format("; {} base channels", wave.channels.size());
+      if (const WaveChannel* centre = wave.CentreChannel()) {
+        c.summary.figures.wave_speed_peak_m_s = centre->speed_peak_m_s;
+        c.summary.figures.wave_stress_ratio = centre->stress_ratio;
+      }
     }
     c.summary.figures.impact_velocity_m_s = sensor.summary.impact_velocity_m_s;
     c.summary.figures.crater_depth_measured_m = sensor.summary.final_penetration_m;
