@@ -84,34 +84,77 @@ struct Markers {
   std::vector<int> ids;
 };
 
-// How well the markers agree with a layout: the median over pairs of neighbouring markers (board
-// centres within 2.3 squares) of the distance between one marker's centre and where the other's
-// homography puts it, in marker sides. ~0.01 for the right layout; under the wrong one every
-// second row sits a square off (~1.3). NaN without a pair.
-double LayoutMismatch(const BoardSpec& board, CharucoLayout layout, const Markers& markers) {
+// The chessboard corners of a layout with both neighbouring markers detected: for each, the
+// corner's id and its position as each marker's homography (board mm -> image) predicts it.
+struct CornerPredictions {
+  std::vector<int> ids;
+  std::vector<std::vector<cv::Point2d>> predicted;  // Per corner: one per neighbouring marker.
+  std::vector<double> clear_px;  // Per corner: distance to the nearest marker edge [px].
+  std::vector<double> side_px;   // Per corner: the markers' mean side [px].
+};
+
+CornerPredictions PredictCorners(const BoardSpec& board, CharucoLayout layout,
+                                 const Markers& markers) {
   const std::vector<cv::Point> squares = MarkerSquares(board, layout);
-  std::vector<double> errors;
-  const double s = board.square_mm;
-  for (std::size_t a = 0; a < markers.ids.size(); ++a) {
-    if (markers.ids[a] >= static_cast<int>(squares.size())) continue;
-    const std::vector<cv::Point2f> board_a = MarkerCorners(board, squares[markers.ids[a]]);
-    const cv::Matx33d h(cv::getPerspectiveTransform(board_a, markers.corners[a]));
-    const double side_px = cv::norm(markers.corners[a][0] - markers.corners[a][2]) / std::sqrt(2.0);
-    for (std::size_t b = 0; b < markers.ids.size(); ++b) {
-      if (b == a || markers.ids[b] >= static_cast<int>(squares.size())) continue;
-      const cv::Point diff = squares[markers.ids[b]] - squares[markers.ids[a]];
-      if (std::hypot(diff.x, diff.y) > 2.3) continue;
-      cv::Point2d centre_image(0, 0);
-      for (const cv::Point2f& c : markers.corners[b]) centre_image += cv::Point2d(c) * 0.25;
-      const cv::Point2d centre_board((squares[markers.ids[b]].x - 0.5) * s,
-                                     (squares[markers.ids[b]].y - 0.5) * s);
-      errors.push_back(cv::norm(Apply(h, centre_board) - centre_image) / side_px);
-    }
+  cv::Mat_<int> marker_at(board.rows + 1, board.cols + 1, -1);  // Index into markers.
+  std::vector<cv::Matx33d> homography(markers.ids.size());
+  for (std::size_t k = 0; k < markers.ids.size(); ++k) {
+    if (markers.ids[k] < 0 || markers.ids[k] >= static_cast<int>(squares.size())) continue;
+    const cv::Point sq = squares[markers.ids[k]];
+    marker_at(sq.y, sq.x) = static_cast<int>(k);
+    homography[k] =
+        cv::Matx33d(cv::getPerspectiveTransform(MarkerCorners(board, sq), markers.corners[k]));
   }
-  if (errors.empty()) return std::numeric_limits<double>::quiet_NaN();
+  CornerPredictions out;
+  const double d_mm = (board.square_mm - board.marker_mm) / 2;
+  for (int j = 0; j < board.rows; ++j)
+    for (int i = 0; i < board.cols; ++i) {
+      // The two white squares of the four around corner (i, j) must both have their marker.
+      std::vector<int> neighbours;
+      for (const cv::Point sq : {cv::Point(i, j), cv::Point(i + 1, j), cv::Point(i, j + 1),
+                                 cv::Point(i + 1, j + 1)})
+        if (marker_at(sq.y, sq.x) >= 0) neighbours.push_back(marker_at(sq.y, sq.x));
+      if (neighbours.size() < 2) continue;
+      const cv::Point2d corner_mm(i * board.square_mm, j * board.square_mm);
+      std::vector<cv::Point2d> predicted;
+      double clear = std::numeric_limits<double>::infinity(), side = 0;
+      for (const int k : neighbours) {
+        const cv::Point2d p = Apply(homography[k], corner_mm);
+        predicted.push_back(p);
+        // The marker's corner nearest to the chessboard corner lies d_mm away along both axes.
+        const cv::Point2d dx = Apply(homography[k], corner_mm + cv::Point2d(d_mm, 0)) - p;
+        const cv::Point2d dy = Apply(homography[k], corner_mm + cv::Point2d(0, d_mm)) - p;
+        clear = std::min({clear, cv::norm(dx), cv::norm(dy)});
+        side += cv::norm(markers.corners[k][0] - markers.corners[k][2]) / std::sqrt(2.0) /
+                static_cast<double>(neighbours.size());
+      }
+      out.ids.push_back(j * board.cols + i);
+      out.predicted.push_back(std::move(predicted));
+      out.clear_px.push_back(clear);
+      out.side_px.push_back(side);
+    }
+  return out;
+}
+
+// How far apart the two markers' predictions of a corner are, in marker sides.
+double Disagreement(const CornerPredictions& c, std::size_t k) {
+  return cv::norm(c.predicted[k][0] - c.predicted[k][1]) / c.side_px[k];
+}
+
+// How well the markers agree with a layout: the median over the corners of Disagreement. Under
+// the right layout ~0.01 (noise); under the wrong one the two "neighbours" of a corner are
+// squares apart (> 1). Infinite without a corner.
+double LayoutMismatch(const CornerPredictions& corners) {
+  std::vector<double> errors;
+  for (std::size_t k = 0; k < corners.ids.size(); ++k) errors.push_back(Disagreement(corners, k));
+  if (errors.empty()) return std::numeric_limits<double>::infinity();
   std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
   return errors[errors.size() / 2];
 }
+
+// A corner whose two markers disagree by more than this [marker sides] is dropped (a misread
+// marker).
+constexpr double kMaxDisagreement = 0.25;
 
 BoardDetection DetectCharuco(const cv::Mat& image, const BoardSpec& board,
                              const DetectionOptions& options) {
@@ -127,78 +170,80 @@ BoardDetection DetectCharuco(const cv::Mat& image, const BoardSpec& board,
     return out;
   }
   out.layout = board.layout;
+  CornerPredictions corners;
   if (out.layout == CharucoLayout::kAuto) {
-    const double current = LayoutMismatch(board, CharucoLayout::kCurrent, markers);
-    const double legacy = LayoutMismatch(board, CharucoLayout::kLegacy, markers);
-    out.layout = legacy < current ? CharucoLayout::kLegacy : CharucoLayout::kCurrent;
-  }
-  const std::vector<cv::Point> squares = MarkerSquares(board, out.layout);
-  // The detected marker in each square (index into markers, -1 for none).
-  cv::Mat_<int> marker_at(board.rows + 1, board.cols + 1, -1);
-  std::vector<cv::Matx33d> homography(markers.ids.size());
-  for (std::size_t k = 0; k < markers.ids.size(); ++k) {
-    if (markers.ids[k] < 0 || markers.ids[k] >= static_cast<int>(squares.size())) continue;
-    const cv::Point sq = squares[markers.ids[k]];
-    marker_at(sq.y, sq.x) = static_cast<int>(k);
-    homography[k] =
-        cv::Matx33d(cv::getPerspectiveTransform(MarkerCorners(board, sq), markers.corners[k]));
+    CornerPredictions current = PredictCorners(board, CharucoLayout::kCurrent, markers);
+    CornerPredictions legacy = PredictCorners(board, CharucoLayout::kLegacy, markers);
+    const bool is_legacy = LayoutMismatch(legacy) < LayoutMismatch(current);
+    out.layout = is_legacy ? CharucoLayout::kLegacy : CharucoLayout::kCurrent;
+    corners = std::move(is_legacy ? legacy : current);
+  } else {
+    corners = PredictCorners(board, out.layout, markers);
   }
   cv::Mat grey_float;
   image.convertTo(grey_float, CV_32F);
-  const double d_mm = (board.square_mm - board.marker_mm) / 2;
-  for (int j = 0; j < board.rows; ++j)
-    for (int i = 0; i < board.cols; ++i) {
-      // The two white squares of the four around corner (i, j) must both have their marker.
-      std::vector<int> neighbours;
-      for (const cv::Point sq : {cv::Point(i, j), cv::Point(i + 1, j), cv::Point(i, j + 1),
-                                 cv::Point(i + 1, j + 1)})
-        if (marker_at(sq.y, sq.x) >= 0) neighbours.push_back(marker_at(sq.y, sq.x));
-      if (neighbours.size() < 2) continue;
-      const cv::Point2d corner_mm(i * board.square_mm, j * board.square_mm);
-      cv::Point2d predicted(0, 0);
-      double clear_px = std::numeric_limits<double>::infinity();
-      for (const int k : neighbours) {
-        const cv::Point2d p = Apply(homography[k], corner_mm);
-        predicted += p * (1.0 / static_cast<double>(neighbours.size()));
-        // The marker's corner nearest to the chessboard corner lies d_mm away along both axes.
-        const cv::Point2d dx = Apply(homography[k], corner_mm + cv::Point2d(d_mm, 0)) - p;
-        const cv::Point2d dy = Apply(homography[k], corner_mm + cv::Point2d(0, d_mm)) - p;
-        clear_px = std::min({clear_px, cv::norm(dx), cv::norm(dy)});
-      }
-      // cornerSubPix's window stays inside the two black and two white squares, off the markers.
-      const int w = std::clamp(static_cast<int>(0.8 * clear_px), 2, options.subpix_half_window);
-      if (predicted.x < w + 1 || predicted.y < w + 1 || predicted.x > image.cols - w - 2 ||
-          predicted.y > image.rows - w - 2)
-        continue;
-      std::vector<cv::Point2f> refined = {cv::Point2f(predicted)};
-      cv::cornerSubPix(grey_float, refined, cv::Size(w, w), cv::Size(-1, -1),
-                       cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
-                                        options.subpix_max_iterations, options.subpix_epsilon_px));
-      if (cv::norm(cv::Point2d(refined[0]) - predicted) > w) continue;  // Lost the corner.
-      out.image_points.push_back(refined[0]);
-      out.ids.push_back(j * board.cols + i);
-    }
+  for (std::size_t k = 0; k < corners.ids.size(); ++k) {
+    if (Disagreement(corners, k) > kMaxDisagreement) continue;
+    const cv::Point2d predicted = (corners.predicted[k][0] + corners.predicted[k][1]) * 0.5;
+    // cornerSubPix's window stays inside the two black and two white squares, off the markers.
+    const int w =
+        std::clamp(static_cast<int>(0.8 * corners.clear_px[k]), 2, options.subpix_half_window);
+    if (predicted.x < w + 1 || predicted.y < w + 1 || predicted.x > image.cols - w - 2 ||
+        predicted.y > image.rows - w - 2)
+      continue;
+    std::vector<cv::Point2f> refined = {cv::Point2f(predicted)};
+    cv::cornerSubPix(grey_float, refined, cv::Size(w, w), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
+                                      options.subpix_max_iterations, options.subpix_epsilon_px));
+    if (cv::norm(cv::Point2d(refined[0]) - predicted) > 0.5 * w) continue;  // Lost the corner.
+    out.image_points.push_back(refined[0]);
+    out.ids.push_back(corners.ids[k]);
+  }
   if (out.image_points.empty())
     out.failure = fmt::format("{} markers found but no ChArUco corner between two of them",
                               out.markers);
   return out;
 }
 
+// Whether detected grid points sit where a homography of the board puts them, to a tenth of the
+// spacing (the grid finder can snap a corner point to a neighbour's blob or order a view wrongly;
+// lens distortion bends a board's image by far less than that over one view).
+bool ConsistentGrid(const BoardSpec& board, const std::vector<cv::Point2f>& image) {
+  std::vector<cv::Point2f> object;
+  for (const cv::Point3f& p : board.ObjectPoints()) object.emplace_back(p.x, p.y);
+  const cv::Mat h = cv::findHomography(object, image, /*method=*/0);
+  if (h.empty()) return false;
+  const cv::Matx33d hm(h);
+  double spacing_px = 0;
+  for (int k = 0; k + 1 < board.cols; ++k) spacing_px += cv::norm(image[k + 1] - image[k]);
+  spacing_px /= board.cols - 1;
+  if (board.kind == BoardKind::kAsymmetricCircles) spacing_px /= 2;
+  for (std::size_t k = 0; k < image.size(); ++k)
+    if (cv::norm(Apply(hm, object[k]) - cv::Point2d(image[k])) > 0.1 * spacing_px) return false;
+  return true;
+}
+
+// cv::findCirclesGrid, first with its default grid finder, then with CALIB_CB_CLUSTERING (more
+// robust to perspective, which misleads the default finder on tilted views); a grid whose points
+// are not where a homography of the board puts them (ConsistentGrid) counts as not found.
 BoardDetection DetectCircles(const cv::Mat& image, const BoardSpec& board) {
   BoardDetection out;
   cv::SimpleBlobDetector::Params params;
   params.maxArea = 1e6f;  // Large circles on a big sensor (default 5000 px^2).
   const cv::Ptr<cv::FeatureDetector> blobs = cv::SimpleBlobDetector::create(params);
-  const int flags = board.kind == BoardKind::kCircles ? cv::CALIB_CB_SYMMETRIC_GRID
-                                                      : cv::CALIB_CB_ASYMMETRIC_GRID;
-  std::vector<cv::Point2f> centres;
-  if (!cv::findCirclesGrid(calib_detail::To8Bit(image), board.PatternSize(), centres, flags,
-                           blobs)) {
-    out.failure = fmt::format("the {} were not found", board.Describe());
+  const int grid = board.kind == BoardKind::kCircles ? cv::CALIB_CB_SYMMETRIC_GRID
+                                                     : cv::CALIB_CB_ASYMMETRIC_GRID;
+  const cv::Mat grey8 = calib_detail::To8Bit(image);
+  for (const int flags : {grid, grid | cv::CALIB_CB_CLUSTERING}) {
+    std::vector<cv::Point2f> centres;
+    if (!cv::findCirclesGrid(grey8, board.PatternSize(), centres, flags, blobs) ||
+        !ConsistentGrid(board, centres))
+      continue;
+    out.image_points = std::move(centres);
+    for (int k = 0; k < board.cols * board.rows; ++k) out.ids.push_back(k);
     return out;
   }
-  out.image_points = std::move(centres);
-  for (int k = 0; k < board.cols * board.rows; ++k) out.ids.push_back(k);
+  out.failure = fmt::format("the {} was not found", board.Describe());
   return out;
 }
 

@@ -30,10 +30,10 @@ struct LensFit {
   double rms_px = 0;
 };
 
-// Fits `model` (not kAuto) to all views. Error(kNumerical) when OpenCV fails or returns
-// non-finite values.
+// Fits `model` (not kAuto) to all views (held_out: the looser iteration limits of the model
+// choice). Error(kNumerical) when OpenCV fails or returns non-finite values.
 LensFit FitLens(const ViewPoints& views, cv::Size image_size, LensModel model,
-                const CalibrationOptions& options);
+                const CalibrationOptions& options, bool held_out = false);
 
 // The held-out reprojection RMS [px] of `model`: the views split into `folds` groups; each group's
 // views are predicted by the lens fitted to the others (pose of each held-out view fitted alone,

@@ -177,8 +177,12 @@ std::vector<ModelCandidate> ChooseLensModel(const calib_detail::ViewPoints& poin
   const int folds = std::min(4, views);
   if (views - (views + folds - 1) / folds < 3) return {};
   std::vector<ModelCandidate> candidates;
-  for (LensModel m : {LensModel::kBrown, LensModel::kRational, LensModel::kFisheye})
+  for (LensModel m : {LensModel::kBrown, LensModel::kRational, LensModel::kFisheye}) {
+    WallTimer timer;
     candidates.push_back(calib_detail::HeldOutError(points, image_size, m, options, folds));
+    LogInfo("calibration: {} model held out in {:.2f} s", kLensModelNames.Name(m),
+            timer.ElapsedSeconds());
+  }
   const ModelCandidate& brown = candidates[0];
   double best = brown.failure.empty() ? brown.heldout_rms_px * (1 - CalibrationOptions::kModelMargin)
                                       : std::numeric_limits<double>::infinity();

@@ -70,10 +70,10 @@ inline constexpr EnumNames<CharucoLayout, 3> kCharucoLayoutNames{
 // pattern size), circle (i, j) at (i, j) * square_mm (symmetric) or ((2i + j % 2), j) * square_mm
 // (asymmetric: square_mm is the row pitch, half the centre distance within a row).
 struct BoardSpec {
-  BoardKind kind = BoardKind::kChessboard;
   int cols = 9;           // Inner corners (circles) along the board's X axis, >= 2.
   int rows = 6;           // Inner corners (circles) along Y, >= 2.
   double square_mm = 25;  // Side of one square (circle spacing) [mm], in kSquareRange.
+  BoardKind kind = BoardKind::kChessboard;  // (After the sizes: {cols, rows, square_mm} works.)
   // ChArUco only: the side of the ArUco markers [mm], in (0, square_mm); the dictionary
   // (an OpenCV predefined name such as DICT_4X4_50, ArucoDictionaryNames()) and the layout.
   double marker_mm = 0;

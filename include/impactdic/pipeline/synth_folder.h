@@ -24,6 +24,7 @@ struct SynthFolderOptions {
   std::string output;          // The folder (created).
   std::string dem_dir;         // Film this DEM run instead (validation/dem/run_case.sh's folder).
   std::string realistic_spec;  // Render realistic footage from this spec instead.
+  std::string calibration_set;  // Render this calibration set instead (kCalibrationSetNames).
   std::optional<int> frames;   // Overrides the spec's frames.count (not with dem_dir).
   bool calibrate = true;       // Calibrate the rendered checkerboard images.
   bool force = false;          // Replace a folder another command wrote.
