@@ -337,7 +337,10 @@ std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
                                            m.fit_rms_px)
                              : fmt::format("  {:<8} failed: {}\n", kLensModelNames.Name(m.model),
                                            m.failure);
-  out += fmt::format("board: {}\n", c.board.Describe());
+  out += fmt::format("board: {}{}\n", c.board.Describe(),
+                     c.board.kind == BoardKind::kCharuco
+                         ? fmt::format(", {} marker layout", kCharucoLayoutNames.Name(c.board.layout))
+                         : std::string());
   for (const ViewRecord& v : c.views)
     out += fmt::format("  view {}: {} points, RMS {:.4f} px\n", v.image, v.corners, v.rms_px);
   out += fmt::format("residual RMS [px] over the image ({}x{} cells, top row first):\n",
@@ -362,6 +365,7 @@ std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
 }
 
 JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::string& output) const {
+  const cv::Mat coefficients = c.DistCoeffs();
   JsonObject j;
   j.Add("rms_px", c.rms_px)
       .Add("fx", c.fx)
@@ -370,9 +374,11 @@ JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::str
       .Add("cy", c.cy)
       .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()))
       .Add("model", kLensModelNames.Name(c.model))
-      .Add("model_coefficients", std::vector<double>(c.DistCoeffs().begin<double>(),
-                                                     c.DistCoeffs().end<double>()))
+      .Add("model_coefficients", std::vector<double>(coefficients.begin<double>(),
+                                                     coefficients.end<double>()))
       .Add("board", c.board.Describe());
+  if (c.board.kind == BoardKind::kCharuco)
+    j.Add("charuco_layout", kCharucoLayoutNames.Name(c.board.layout));
   JsonObject candidates;
   for (const ModelCandidate& m : c.candidates) {
     JsonObject one;

@@ -81,10 +81,19 @@ void CarryToSoil(const CameraCalibration& calibration, const std::vector<cv::Poi
   const cv::Mat h = cv::findHomography(px, mm, /*method=*/0);
   if (h.empty() || !cv::checkRange(h))
     throw Error(ErrorKind::kNumerical, "plane image " + scale->image + ": soil-plane fit failed");
+  // The scale at the centroid from the traced map itself (central differences, 1 px): the
+  // homography through the whole image averages the off-axis part in.
+  cv::Point2d soil[4];
+  const cv::Point2d steps[4] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+  for (int k = 0; k < 4; ++k)
+    if (!TraceToSoil(calibration, rvec, tvec, window, centroid_px + steps[k], &soil[k]))
+      throw Error(ErrorKind::kNumerical,
+                  "plane image " + scale->image + ": the centre's ray does not reach the window");
+  const cv::Point2d du = (soil[0] - soil[1]) * 0.5, dv = (soil[2] - soil[3]) * 0.5;
   const double relative_uncertainty = scale->mm_per_px_uncertainty / scale->mm_per_px;
   scale->board_mm_per_px = scale->mm_per_px;
   scale->mm_from_px = cv::Matx33d(h);
-  scale->mm_per_px = LocalScale(scale->mm_from_px, centroid_px);
+  scale->mm_per_px = std::sqrt(std::abs(du.x * dv.y - du.y * dv.x));
   scale->mm_per_px_uncertainty = relative_uncertainty * scale->mm_per_px;
   scale->window = window;
   scale->window_nonlinearity_mm = 0;
