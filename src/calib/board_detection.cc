@@ -23,11 +23,11 @@ namespace {
 
 // OpenCV's predefined dictionaries, in the order of cv::aruco::PREDEFINED_DICTIONARY_NAME.
 constexpr const char* kDictionaries[] = {
-    "DICT_4X4_50",         "DICT_4X4_100",        "DICT_4X4_250",        "DICT_4X4_1000",
-    "DICT_5X5_50",         "DICT_5X5_100",        "DICT_5X5_250",        "DICT_5X5_1000",
-    "DICT_6X6_50",         "DICT_6X6_100",        "DICT_6X6_250",        "DICT_6X6_1000",
-    "DICT_7X7_50",         "DICT_7X7_100",        "DICT_7X7_250",        "DICT_7X7_1000",
-    "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5",  "DICT_APRILTAG_25h9",  "DICT_APRILTAG_36h10",
+    "DICT_4X4_50",         "DICT_4X4_100",       "DICT_4X4_250",       "DICT_4X4_1000",
+    "DICT_5X5_50",         "DICT_5X5_100",       "DICT_5X5_250",       "DICT_5X5_1000",
+    "DICT_6X6_50",         "DICT_6X6_100",       "DICT_6X6_250",       "DICT_6X6_1000",
+    "DICT_7X7_50",         "DICT_7X7_100",       "DICT_7X7_250",       "DICT_7X7_1000",
+    "DICT_ARUCO_ORIGINAL", "DICT_APRILTAG_16h5", "DICT_APRILTAG_25h9", "DICT_APRILTAG_36h10",
     "DICT_APRILTAG_36h11"};
 
 int DictionaryIndex(const std::string& name) {
@@ -111,8 +111,8 @@ CornerPredictions PredictCorners(const BoardSpec& board, CharucoLayout layout,
     for (int i = 0; i < board.cols; ++i) {
       // The two white squares of the four around corner (i, j) must both have their marker.
       std::vector<int> neighbours;
-      for (const cv::Point sq : {cv::Point(i, j), cv::Point(i + 1, j), cv::Point(i, j + 1),
-                                 cv::Point(i + 1, j + 1)})
+      for (const cv::Point sq :
+           {cv::Point(i, j), cv::Point(i + 1, j), cv::Point(i, j + 1), cv::Point(i + 1, j + 1)})
         if (marker_at(sq.y, sq.x) >= 0) neighbours.push_back(marker_at(sq.y, sq.x));
       if (neighbours.size() < 2) continue;
       const cv::Point2d corner_mm(i * board.square_mm, j * board.square_mm);
@@ -200,8 +200,8 @@ BoardDetection DetectCharuco(const cv::Mat& image, const BoardSpec& board,
     out.ids.push_back(corners.ids[k]);
   }
   if (out.image_points.empty())
-    out.failure = fmt::format("{} markers found but no ChArUco corner between two of them",
-                              out.markers);
+    out.failure =
+        fmt::format("{} markers found but no ChArUco corner between two of them", out.markers);
   return out;
 }
 
@@ -284,8 +284,8 @@ void BoardSpec::Check() const {
   CheckValue(DictionaryIndex(dictionary) >= 0, "board.dictionary", "'" + dictionary + "'",
              "one of " + Join(ArucoDictionaryNames()));
   const int markers = static_cast<int>(MarkerSquares(*this, CharucoLayout::kCurrent).size());
-  const int available = cv::aruco::getPredefinedDictionary(DictionaryIndex(dictionary))
-                            ->bytesList.rows;
+  const int available =
+      cv::aruco::getPredefinedDictionary(DictionaryIndex(dictionary))->bytesList.rows;
   CheckValue(markers <= available, "board.dictionary", dictionary,
              fmt::format("a dictionary with at least {} markers (the board has {} white squares; "
                          "{} has {})",
@@ -352,10 +352,9 @@ BoardSpec ParseCharucoBoard(const std::string& text, double square_mm, double ma
 
 BoardSpec ParseCircleGrid(const std::string& text, double spacing_mm, bool asymmetric,
                           const std::string& where) {
-  const cv::Size size =
-      ParseSize(text, where, 2,
-                asymmetric ? "COLSxROWS: circles per row x rows, e.g. 4x11"
-                           : "COLSxROWS counting circles, e.g. 7x5");
+  const cv::Size size = ParseSize(text, where, 2,
+                                  asymmetric ? "COLSxROWS: circles per row x rows, e.g. 4x11"
+                                             : "COLSxROWS counting circles, e.g. 7x5");
   BoardSpec board;
   board.kind = asymmetric ? BoardKind::kAsymmetricCircles : BoardKind::kCircles;
   board.cols = size.width;

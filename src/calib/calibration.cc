@@ -32,8 +32,8 @@ std::string DistortionText(const CameraCalibration& c) {
   std::string text = fmt::format("k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}", c.dist[0],
                                  c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
   if (c.model == LensModel::kRational)
-    text += fmt::format("  k4 {:.6g}  k5 {:.6g}  k6 {:.6g}", c.dist_rational[0],
-                        c.dist_rational[1], c.dist_rational[2]);
+    text += fmt::format("  k4 {:.6g}  k5 {:.6g}  k6 {:.6g}", c.dist_rational[0], c.dist_rational[1],
+                        c.dist_rational[2]);
   return text;
 }
 
@@ -170,8 +170,8 @@ std::string TooFewViewsText(const DetectedViews& views, std::size_t images,
 // CalibrationOptions::kModelMargin; Brown-Conrady alone when a fold would leave fewer than 3
 // views to fit. Every candidate is returned, with its error or why it failed.
 std::vector<ModelCandidate> ChooseLensModel(const calib_detail::ViewPoints& points,
-                                            cv::Size image_size,
-                                            const CalibrationOptions& options, LensModel* model) {
+                                            cv::Size image_size, const CalibrationOptions& options,
+                                            LensModel* model) {
   *model = LensModel::kBrown;
   const int views = static_cast<int>(points.object.size());
   const int folds = std::min(4, views);
@@ -184,8 +184,9 @@ std::vector<ModelCandidate> ChooseLensModel(const calib_detail::ViewPoints& poin
             timer.ElapsedSeconds());
   }
   const ModelCandidate& brown = candidates[0];
-  double best = brown.failure.empty() ? brown.heldout_rms_px * (1 - CalibrationOptions::kModelMargin)
-                                      : std::numeric_limits<double>::infinity();
+  double best = brown.failure.empty()
+                    ? brown.heldout_rms_px * (1 - CalibrationOptions::kModelMargin)
+                    : std::numeric_limits<double>::infinity();
   for (const ModelCandidate& c : candidates) {
     if (c.failure.empty() && c.heldout_rms_px < best) {
       best = c.heldout_rms_px;
@@ -332,15 +333,15 @@ std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
   out += fmt::format("model: {}{}\n", kLensModelNames.Name(c.model),
                      c.candidates.empty() ? " (given)" : " (lowest held-out RMS)");
   for (const ModelCandidate& m : c.candidates)
-    out += m.failure.empty() ? fmt::format("  {:<8} held-out RMS {:.4f} px, fit {:.4f} px\n",
-                                           kLensModelNames.Name(m.model), m.heldout_rms_px,
-                                           m.fit_rms_px)
-                             : fmt::format("  {:<8} failed: {}\n", kLensModelNames.Name(m.model),
-                                           m.failure);
-  out += fmt::format("board: {}{}\n", c.board.Describe(),
-                     c.board.kind == BoardKind::kCharuco
-                         ? fmt::format(", {} marker layout", kCharucoLayoutNames.Name(c.board.layout))
-                         : std::string());
+    out += m.failure.empty()
+               ? fmt::format("  {:<8} held-out RMS {:.4f} px, fit {:.4f} px\n",
+                             kLensModelNames.Name(m.model), m.heldout_rms_px, m.fit_rms_px)
+               : fmt::format("  {:<8} failed: {}\n", kLensModelNames.Name(m.model), m.failure);
+  out +=
+      fmt::format("board: {}{}\n", c.board.Describe(),
+                  c.board.kind == BoardKind::kCharuco
+                      ? fmt::format(", {} marker layout", kCharucoLayoutNames.Name(c.board.layout))
+                      : std::string());
   for (const ViewRecord& v : c.views)
     out += fmt::format("  view {}: {} points, RMS {:.4f} px\n", v.image, v.corners, v.rms_px);
   out += fmt::format("residual RMS [px] over the image ({}x{} cells, top row first):\n",
@@ -374,8 +375,8 @@ JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::str
       .Add("cy", c.cy)
       .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()))
       .Add("model", kLensModelNames.Name(c.model))
-      .Add("model_coefficients", std::vector<double>(coefficients.begin<double>(),
-                                                     coefficients.end<double>()))
+      .Add("model_coefficients",
+           std::vector<double>(coefficients.begin<double>(), coefficients.end<double>()))
       .Add("board", c.board.Describe());
   if (c.board.kind == BoardKind::kCharuco)
     j.Add("charuco_layout", kCharucoLayoutNames.Name(c.board.layout));
@@ -518,8 +519,8 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
       const cv::Point2f observed = points.image[v][k];
       const cv::Point2f d = projected[k] - observed;
       sq += d.dot(d);
-      const int cx = std::clamp(static_cast<int>(observed.x * map.cols / result.image_width), 0,
-                                map.cols - 1);
+      const int cx =
+          std::clamp(static_cast<int>(observed.x * map.cols / result.image_width), 0, map.cols - 1);
       const int cy = std::clamp(static_cast<int>(observed.y * map.rows / result.image_height), 0,
                                 map.rows - 1);
       cell_sq[cy * map.cols + cx] += d.dot(d);
@@ -565,8 +566,8 @@ double LocalScale(const cv::Matx33d& h, cv::Point2d p) {
 }  // namespace calib_detail
 
 PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
-                             const CameraCalibration& calibration,
-                             const DetectionOptions& options, const WindowOptions& window) {
+                             const CameraCalibration& calibration, const DetectionOptions& options,
+                             const WindowOptions& window) {
   calib_detail::CheckImage(image, name);
   CheckFrameSize(calibration, image.size(), "plane image " + name);
   const BoardDetection corners = DetectBoardPoints(image, calibration.board, options);
@@ -648,9 +649,8 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
   for (const std::string& path : paths) images.push_back(ReadGreyImage(path));
   CameraCalibration calibration = CalibrateCamera(images, paths, options, summary);
   if (!plane_path.empty())
-    calibration.plane =
-        MeasurePlaneScale(ReadGreyImage(plane_path), plane_path, calibration, options.detection,
-                          options.window);
+    calibration.plane = MeasurePlaneScale(ReadGreyImage(plane_path), plane_path, calibration,
+                                          options.detection, options.window);
   return calibration;
 }
 

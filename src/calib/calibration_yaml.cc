@@ -189,8 +189,8 @@ void SaveCalibration(const CameraCalibration& c, const std::string& path) {
   out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;
   for (const ViewRecord& v : c.views)
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << v.image
-        << YAML::Key << "rms_px" << YAML::Value << v.rms_px << YAML::Key << "corners"
-        << YAML::Value << v.corners << YAML::EndMap;
+        << YAML::Key << "rms_px" << YAML::Value << v.rms_px << YAML::Key << "corners" << YAML::Value
+        << v.corners << YAML::EndMap;
   out << YAML::EndSeq;
   out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;
   for (const RejectedView& r : c.rejected)

@@ -19,8 +19,7 @@ namespace {
 const cv::TermCriteria kFitCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-15);
 // The held-out fits compare models to ~1 % of their error: 50 iterations, a relative change of
 // 1e-10 (the rational model's k4-k6 on a mild lens otherwise take all 200 iterations).
-const cv::TermCriteria kHeldOutCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50,
-                                        1e-10);
+const cv::TermCriteria kHeldOutCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 50, 1e-10);
 
 // Squared reprojection error of one view through `camera` at its pose, and the point count.
 double SquaredError(const CameraCalibration& camera, const std::vector<cv::Point3f>& object,
@@ -128,7 +127,9 @@ LensFit FitLens(const ViewPoints& views, cv::Size image_size, LensModel model,
   c.fy = k.at<double>(1, 1);
   c.cx = k.at<double>(0, 2);
   c.cy = k.at<double>(1, 2);
-  const auto coefficient = [&d](int i) { return i < static_cast<int>(d.total()) ? d.at<double>(i) : 0.0; };
+  const auto coefficient = [&d](int i) {
+    return i < static_cast<int>(d.total()) ? d.at<double>(i) : 0.0;
+  };
   if (model == LensModel::kFisheye) {
     for (int i = 0; i < 4; ++i) c.dist_fisheye[i] = coefficient(i);
   } else {

@@ -27,9 +27,8 @@ void WindowOptions::Check() const {
              "a refractive index");
 }
 
-bool TraceToSoil(const CameraCalibration& calibration, const cv::Vec3d& rvec,
-                 const cv::Vec3d& tvec, const WindowOptions& window, cv::Point2d undistorted_px,
-                 cv::Point2d* soil_mm) {
+bool TraceToSoil(const CameraCalibration& calibration, const cv::Vec3d& rvec, const cv::Vec3d& tvec,
+                 const WindowOptions& window, cv::Point2d undistorted_px, cv::Point2d* soil_mm) {
   cv::Matx33d r;
   cv::Rodrigues(rvec, r);
   // Camera centre and ray direction in board coordinates (the outer face is Z = 0).
@@ -37,7 +36,7 @@ bool TraceToSoil(const CameraCalibration& calibration, const cv::Vec3d& rvec,
   const cv::Vec3d ray = r.t() * cv::Vec3d((undistorted_px.x - calibration.cx) / calibration.fx,
                                           (undistorted_px.y - calibration.cy) / calibration.fy, 1);
   const double side = centre[2] < 0 ? -1 : 1;  // The camera's side of the face.
-  if (!(ray[2] * side < 0)) return false;       // The ray points away from the panel.
+  if (!(ray[2] * side < 0)) return false;      // The ray points away from the panel.
   const cv::Vec3d on_face = centre + ray * (-centre[2] / ray[2]);
   // Snell's law in vector form: i the unit incident direction, m the face normal towards the
   // camera, eta = n_air / n: t = eta i + (eta cos_i - cos_t) m.

@@ -19,8 +19,7 @@ namespace impactdic::cli {
 
 void RegisterCalibrateCommand(CLI::App& app) {
   struct Args {
-    std::string board, charuco, circles, dictionary = "DICT_4X4_50", plane, output,
-        format = "text";
+    std::string board, charuco, circles, dictionary = "DICT_4X4_50", plane, output, format = "text";
     double square_mm = 0, marker_mm = 0, spacing_mm = 0;
     bool asymmetric = false;
     std::vector<std::string> images;
@@ -90,8 +89,8 @@ void RegisterCalibrateCommand(CLI::App& app) {
       if (!args->charuco.empty()) {
         CheckValue(args->marker_mm > 0, "board.marker_mm", "none",
                    "the ArUco marker side of the ChArUco board");
-        options.board = ParseCharucoBoard(args->charuco, args->square_mm, args->marker_mm,
-                                          args->dictionary);
+        options.board =
+            ParseCharucoBoard(args->charuco, args->square_mm, args->marker_mm, args->dictionary);
         options.board.layout = layout;
       } else if (!args->circles.empty()) {
         options.board = ParseCircleGrid(args->circles, args->spacing_mm, args->asymmetric);

@@ -113,13 +113,11 @@ std::string RunSynthCalibrationSet(const SynthFolderOptions& args) {
   OutputGeneration generation(args.output, generation_options);
   const CalibrationSet set = RenderCalibrationPreset(preset, generation.staging_folder());
   generation.Commit();
-  std::string report = fmt::format("calibration set {}: {} views, plane view {}{}; truth {}\n",
-                                   args.calibration_set, set.view_paths.size(),
-                                   generation.FinalPath(set.plane_path),
-                                   set.soil_path.empty() ? ""
-                                                         : ", soil view " +
-                                                               generation.FinalPath(set.soil_path),
-                                   generation.FinalPath(set.board_path));
+  std::string report =
+      fmt::format("calibration set {}: {} views, plane view {}{}; truth {}\n", args.calibration_set,
+                  set.view_paths.size(), generation.FinalPath(set.plane_path),
+                  set.soil_path.empty() ? "" : ", soil view " + generation.FinalPath(set.soil_path),
+                  generation.FinalPath(set.board_path));
   return report;
 }
 

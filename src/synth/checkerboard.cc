@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstddef>
 #include <filesystem>
-#include <numbers>
 #include <limits>
+#include <numbers>
 #include <opencv2/aruco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/utility.hpp>
@@ -35,7 +35,7 @@ constexpr std::int64_t kCircle = 3000000000;      // + circle id
 // with a panel, the ray is traced in board coordinates and refracted at the panel's outer face.
 struct RayToBoard {
   cv::Matx33d h_inv;
-  cv::Matx33d r_t;  // R^T: camera -> board directions
+  cv::Matx33d r_t;   // R^T: camera -> board directions
   cv::Vec3d centre;  // Camera centre in board coordinates
   double thickness = 0, index = 1;
   bool Map(cv::Point2d n, cv::Point2d* board) const {
@@ -105,7 +105,8 @@ class Pattern {
     if (p.x < -s || p.x >= b.cols * s || p.y < -s || p.y >= b.rows * s) return kMargin;
     const auto i = static_cast<std::int64_t>(std::floor(p.x / s));
     const auto j = static_cast<std::int64_t>(std::floor(p.y / s));
-    if (b.kind == TargetKind::kCharuco && !IsBlack(static_cast<int>(i + 1), static_cast<int>(j + 1))) {
+    if (b.kind == TargetKind::kCharuco &&
+        !IsBlack(static_cast<int>(i + 1), static_cast<int>(j + 1))) {
       const int marker = marker_at_(static_cast<int>(j + 1), static_cast<int>(i + 1));
       const double d = (s - b.marker_mm) / 2;
       const double lx = (p.x - i * s - d) / b.marker_mm, ly = (p.y - j * s - d) / b.marker_mm;
@@ -134,7 +135,7 @@ class Pattern {
     const std::int64_t i = id / 100000 - 2, j = id % 100000 - 2;
     if (board_.kind == TargetKind::kCharuco)
       return IsBlack(static_cast<int>(i + 1), static_cast<int>(j + 1)) ? options_.black
-                                                                         : options_.white;
+                                                                       : options_.white;
     return ((i + j) % 2 + 2) % 2 == 0 ? options_.black : options_.white;
   }
 
@@ -154,8 +155,8 @@ class Pattern {
     for (int j = std::max(0, j0 - 1); j <= std::min(board_.rows - 1, j0 + 1); ++j) {
       const double offset = asymmetric ? j % 2 : 0;
       const double pitch = asymmetric ? 2 : 1;
-      const int i = std::clamp(static_cast<int>(std::lround((p.x / s - offset) / pitch)), 0,
-                               board_.cols - 1);
+      const int i =
+          std::clamp(static_cast<int>(std::lround((p.x / s - offset) / pitch)), 0, board_.cols - 1);
       const double distance = std::hypot(p.x - (pitch * i + offset) * s, p.y - j * s);
       if (distance < nearest) {
         nearest = distance;
@@ -169,14 +170,15 @@ class Pattern {
 
   CheckerboardSpec board_;
   CheckerboardRenderOptions options_;
-  int cells_ = 0;                   // Marker side in cells, border included.
-  cv::Mat_<int> marker_at_;         // ChArUco: marker id of each square (-1: black).
-  std::vector<cv::Mat> markers_;    // ChArUco: each marker's cells (0 black, 255 white).
+  int cells_ = 0;                 // Marker side in cells, border included.
+  cv::Mat_<int> marker_at_;       // ChArUco: marker id of each square (-1: black).
+  std::vector<cv::Mat> markers_;  // ChArUco: each marker's cells (0 black, 255 white).
 };
 
 // The middle of the board's corners (circle centres) [mm].
 cv::Vec3d BoardCentre(const CheckerboardSpec& board) {
-  const int x_span = board.kind == TargetKind::kAsymmetricCircles ? 2 * board.cols - 1 : board.cols - 1;
+  const int x_span =
+      board.kind == TargetKind::kAsymmetricCircles ? 2 * board.cols - 1 : board.cols - 1;
   return {x_span * board.square_mm / 2, (board.rows - 1) * board.square_mm / 2, 0};
 }
 
@@ -273,9 +275,11 @@ bool SynthCamera::Undistort(cv::Point2d pixel, cv::Point2d* normalised) const {
       const cv::Point2d e = DistortGeneral(*this, x) - m;
       constexpr double h = 1e-7;
       const cv::Point2d jx = (DistortGeneral(*this, x + cv::Point2d(h, 0)) -
-                              DistortGeneral(*this, x - cv::Point2d(h, 0))) / (2 * h);
+                              DistortGeneral(*this, x - cv::Point2d(h, 0))) /
+                             (2 * h);
       const cv::Point2d jy = (DistortGeneral(*this, x + cv::Point2d(0, h)) -
-                              DistortGeneral(*this, x - cv::Point2d(0, h))) / (2 * h);
+                              DistortGeneral(*this, x - cv::Point2d(0, h))) /
+                             (2 * h);
       const double det = jx.x * jy.y - jy.x * jx.y;
       if (!(std::abs(det) > 1e-12)) return false;
       const cv::Point2d step((jy.y * e.x - jy.x * e.y) / det, (jx.x * e.y - jx.y * e.x) / det);
@@ -420,8 +424,7 @@ cv::Mat RenderCheckerboard(const SynthCamera& camera, const CheckerboardSpec& bo
       for (int u = 0; u < w; ++u) {
         const std::size_t i00 = v * stride + u, i10 = i00 + 1, i01 = i00 + stride, i11 = i01 + 1;
         const std::int64_t id = corner_id[i00];
-        if (id != kMixed && id == corner_id[i10] && id == corner_id[i01] &&
-            id == corner_id[i11]) {
+        if (id != kMixed && id == corner_id[i10] && id == corner_id[i01] && id == corner_id[i11]) {
           // Uniform pixel (the board cells are convex and the map is smooth).
           cv::Point2d n, p;
           const bool ok = camera.Undistort({double(u), double(v)}, &n) && ray.Map(n, &p);
@@ -716,8 +719,7 @@ CalibrationPreset CalibrationPresetNamed(const std::string& name) {
   } else {
     std::string names;
     for (const char* n : kCalibrationSetNames) names += std::string(names.empty() ? "" : ", ") + n;
-    throw Error(ErrorKind::kInvalidValue, "--calibration-set", "'" + name + "'",
-                "one of " + names);
+    throw Error(ErrorKind::kInvalidValue, "--calibration-set", "'" + name + "'", "one of " + names);
   }
   return p;
 }

@@ -50,8 +50,8 @@ void ExpectIntrinsics(const CameraCalibration& c, const SynthCamera& truth, doub
   EXPECT_NEAR(c.cx, truth.cx, relative * truth.width);
   EXPECT_NEAR(c.cy, truth.cy, relative * truth.height);
   std::printf("%s: fx %.3f (%.3f) fy %.3f (%.3f) cx %.3f (%.3f) cy %.3f (%.3f), RMS %.4f px\n",
-              kLensModelNames.Name(c.model), c.fx, truth.fx, c.fy, truth.fy, c.cx, truth.cx,
-              c.cy, truth.cy, c.rms_px);
+              kLensModelNames.Name(c.model), c.fx, truth.fx, c.fy, truth.fy, c.cx, truth.cx, c.cy,
+              truth.cy, c.rms_px);
 }
 
 TEST(SampleViews, TheCriterionKeepsBrownConrady) {
@@ -135,7 +135,8 @@ TEST(Charuco, ViewsWithTooFewCornersAreRejectedWithTheCount) {
 }
 
 TEST(Charuco, BadBoardsNameTheField) {
-  ExpectErrorContaining([&] { ParseCharucoBoard("11x8", 20, 25, "DICT_4X4_50"); }, "board.marker_mm");
+  ExpectErrorContaining([&] { ParseCharucoBoard("11x8", 20, 25, "DICT_4X4_50"); },
+                        "board.marker_mm");
   ExpectErrorContaining([&] { ParseCharucoBoard("11x8", 20, 15, "DICT_4x4"); }, "board.dictionary");
   // 88 squares, 44 markers: DICT_4X4_50 has 50, but a 15x12 board needs 90.
   ExpectErrorContaining([&] { ParseCharucoBoard("15x12", 20, 15, "DICT_4X4_50"); }, "at least 90");

@@ -117,9 +117,9 @@ TEST(CalibrateCli, ModelChoiceAndPerViewCornersInTextAndJson) {
   const std::string out = ::testing::TempDir() + "/impactdic_cli_model.yaml";
   CliResult r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* part : {"model: brown (lowest held-out RMS)", "rational held-out RMS",
-                           "fisheye  held-out RMS", "view_00.png: 54 points, RMS",
-                           "residual RMS [px] over the image"})
+  for (const char* part :
+       {"model: brown (lowest held-out RMS)", "rational held-out RMS", "fisheye  held-out RMS",
+        "view_00.png: 54 points, RMS", "residual RMS [px] over the image"})
     EXPECT_TRUE(Contains(r.output, part)) << part << "\n" << r.output;
   r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out +
              " --model rational --format json");
@@ -136,8 +136,9 @@ TEST(CalibrateCli, WindowCarriesThePlaneScaleToTheSoil) {
   const std::string out = ::testing::TempDir() + "/impactdic_cli_window.yaml";
   const std::string base = "calibrate --board 9x6 --square 25 --model brown --plane " + kSource +
                            "/calibration/plane.png " + kViews + " -o " + out;
-  CliResult r = RunCli(base + " --calibration.window.thickness_mm 20 "
-                              "--calibration.window.refractive_index 1.5 --format json");
+  CliResult r = RunCli(base +
+                       " --calibration.window.thickness_mm 20 "
+                       "--calibration.window.refractive_index 1.5 --format json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(Contains(r.output, "\"window\": {\"thickness_mm\": 20")) << r.output;
   const CameraCalibration c = LoadCalibration(out);
@@ -145,8 +146,9 @@ TEST(CalibrateCli, WindowCarriesThePlaneScaleToTheSoil) {
   EXPECT_NEAR(c.plane->mm_per_px / c.plane->board_mm_per_px, (613.93 + 20 / 1.5) / 613.93, 2e-4);
   EXPECT_EQ(c.plane->window.board_position, BoardPosition::kOuterFace);
   // The board at the soil plane: the scale is the measured one.
-  r = RunCli(base + " --calibration.window.thickness_mm 20 "
-                    "--calibration.window.board_position soil");
+  r = RunCli(base +
+             " --calibration.window.thickness_mm 20 "
+             "--calibration.window.board_position soil");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NEAR(LoadCalibration(out).plane->mm_per_px, 0.747786537, 0.002 * 0.747786537);
 }
@@ -166,8 +168,8 @@ TEST(CalibrateCli, BoardKindsAreCheckedBeforeWork) {
            {"--circles 7x5 --spacing 0 " + kViews + " -o " + out, "--spacing"},
            {"--square 25 " + kViews + " -o " + out, "one of --board, --charuco or --circles"},
            {"--board 9x6 --square 25 --model wide " + kViews + " -o " + out, "--model"},
-           {"--board 9x6 --square 25 --calibration.window.refractive_index 0.5 " + kViews +
-                " -o " + out,
+           {"--board 9x6 --square 25 --calibration.window.refractive_index 0.5 " + kViews + " -o " +
+                out,
             "--calibration.window.refractive_index"},
        }) {
     const CliResult r = RunCli("calibrate " + c.args);

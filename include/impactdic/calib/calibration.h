@@ -1,12 +1,16 @@
 // Lens calibration and the metric scale of the measurement plane (docs/calibration.md).
 //
 // Checkerboard corners are found with cv::findChessboardCorners and refined with cv::cornerSubPix
-// (gradient-orthogonality estimator, Foerstner & Guelch 1987); the camera is calibrated with
-// cv::calibrateCamera (Zhang 2000, IEEE TPAMI 22(11):1330, doi:10.1109/34.888718): intrinsics
-// fx, fy, cx, cy and Brown-Conrady distortion k1, k2, p1, p2, k3 (Brown 1966; the model is written
-// out in synth/checkerboard.h). The plane scale is the homography from undistorted image pixels
-// to millimetres on the panel, fitted to the corners of one view of the board lying on the panel
-// (Hartley & Zisserman 2004, ch. 4, DLT + Levenberg-Marquardt refinement in cv::findHomography).
+// (gradient-orthogonality estimator, Foerstner & Guelch 1987); ChArUco corners from the ArUco
+// markers (cv::aruco::detectMarkers, Garrido-Jurado et al. 2014, doi:10.1016/j.patcog.2014.01.005)
+// and circle-grid centres by cv::findCirclesGrid (board_detection.cc). The camera is calibrated
+// with cv::calibrateCamera (Zhang 2000, IEEE TPAMI 22(11):1330, doi:10.1109/34.888718):
+// intrinsics fx, fy, cx, cy and the distortion of a LensModel (Brown-Conrady k1, k2, p1, p2, k3 by
+// default, Brown 1966; the model is written out in synth/checkerboard.h), chosen by the held-out
+// reprojection error (lens_model.cc). The plane scale is the homography from undistorted image
+// pixels to millimetres on the panel, fitted to the corners of one view of the board lying on the
+// panel (Hartley & Zisserman 2004, ch. 4, DLT + Levenberg-Marquardt refinement in
+// cv::findHomography).
 //
 //   CalibrationOptions options;
 //   options.board = ParseBoard("9x6", /*square_mm=*/25);
@@ -39,9 +43,9 @@ namespace impactdic {
 
 // The kinds of calibration target.
 enum class BoardKind {
-  kChessboard,  // cv::findChessboardCorners: the whole board must be in view.
-  kCharuco,     // Chessboard with ArUco markers in the white squares: partial views count.
-  kCircles,     // Symmetric grid of dark circles (cv::findCirclesGrid).
+  kChessboard,         // cv::findChessboardCorners: the whole board must be in view.
+  kCharuco,            // Chessboard with ArUco markers in the white squares: partial views count.
+  kCircles,            // Symmetric grid of dark circles (cv::findCirclesGrid).
   kAsymmetricCircles,  // Asymmetric (staggered) circle grid.
 };
 inline constexpr EnumNames<BoardKind, 4> kBoardKindNames{
@@ -148,8 +152,9 @@ inline constexpr EnumNames<BoardPosition, 2> kBoardPositionNames{
 // tracing each pixel's ray: refracted at the outer face (Snell), straight through the panel to
 // the inner face, where it meets the soil (window.h, docs/calibration.md).
 struct WindowOptions {
-  double thickness_mm = 0;         // Panel thickness [mm], in kThicknessRange; 0 = no window.
-  double refractive_index = 1.49;  // Panel index n (PMMA 1.49, soda-lime glass 1.52), in kIndexRange.
+  double thickness_mm = 0;  // Panel thickness [mm], in kThicknessRange; 0 = no window.
+  double refractive_index =
+      1.49;  // Panel index n (PMMA 1.49, soda-lime glass 1.52), in kIndexRange.
   BoardPosition board_position = BoardPosition::kOuterFace;
   static constexpr ValueRange kThicknessRange{0, 1e3, "mm"};
   static constexpr ValueRange kIndexRange{1, 3, ""};
@@ -259,13 +264,13 @@ struct ResidualMap {
 struct CameraCalibration {
   int image_width = 0;  // [px] The frames must have this size (CheckFrameSize).
   int image_height = 0;
-  double fx = 0, fy = 0, cx = 0, cy = 0;      // [px]
-  LensModel model = LensModel::kBrown;        // Never kAuto.
-  std::array<double, 5> dist{0, 0, 0, 0, 0};  // Brown / rational: k1, k2, p1, p2, k3
+  double fx = 0, fy = 0, cx = 0, cy = 0;           // [px]
+  LensModel model = LensModel::kBrown;             // Never kAuto.
+  std::array<double, 5> dist{0, 0, 0, 0, 0};       // Brown / rational: k1, k2, p1, p2, k3
   std::array<double, 3> dist_rational{0, 0, 0};    // Rational: k4, k5, k6
   std::array<double, 4> dist_fisheye{0, 0, 0, 0};  // Fisheye: k1, k2, k3, k4 (cv::fisheye)
   double rms_px = kNaN;                            // Overall reprojection RMS.
-  std::vector<ModelCandidate> candidates;  // The model choice (kAuto), empty when given.
+  std::vector<ModelCandidate> candidates;          // The model choice (kAuto), empty when given.
   ResidualMap residual_map;
   BoardSpec board;
   std::vector<ViewRecord> views;       // The views used, with their RMS.
@@ -357,9 +362,8 @@ PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
 // The pixel's ray meets the outer face (Z = 0), is refracted (Snell's law in vector form,
 // n_air = 1), crosses the panel and meets the soil at the inner face, Z = t on the far side
 // from the camera. False if the ray does not reach the panel.
-bool TraceToSoil(const CameraCalibration& calibration, const cv::Vec3d& rvec,
-                 const cv::Vec3d& tvec, const WindowOptions& window, cv::Point2d undistorted_px,
-                 cv::Point2d* soil_mm);
+bool TraceToSoil(const CameraCalibration& calibration, const cv::Vec3d& rvec, const cv::Vec3d& tvec,
+                 const WindowOptions& window, cv::Point2d undistorted_px, cv::Point2d* soil_mm);
 
 // Reads the images (io::ReadGreyImage; folders and globs are expanded), calibrates and, if
 // `plane_path` is not empty, measures the plane scale. The CLI's library entry point.

@@ -42,9 +42,9 @@ struct SynthCamera {
   double fy = 820;
   double cx = 319.5;  // Principal point [px] (pixel centres at integers).
   double cy = 239.5;
-  std::array<double, 5> dist{0, 0, 0, 0, 0};  // k1, k2, p1, p2, k3 (OpenCV order).
-  std::array<double, 3> rational{0, 0, 0};    // k4, k5, k6 (rational model's denominator).
-  bool fisheye = false;                        // Use the fisheye model (fisheye_k) instead.
+  std::array<double, 5> dist{0, 0, 0, 0, 0};    // k1, k2, p1, p2, k3 (OpenCV order).
+  std::array<double, 3> rational{0, 0, 0};      // k4, k5, k6 (rational model's denominator).
+  bool fisheye = false;                         // Use the fisheye model (fisheye_k) instead.
   std::array<double, 4> fisheye_k{0, 0, 0, 0};  // k1..k4 of the fisheye model.
   void Check() const;
 
@@ -83,17 +83,16 @@ struct CheckerboardSpec {
   double square_mm = 25;         // Square side (circle spacing) [mm], > 0.
   double margin_squares = 0.75;  // White margin around the squares [squares], >= 0.
   TargetKind kind = TargetKind::kChessboard;
-  double marker_mm = 0;          // kCharuco: marker side [mm], in (0, square_mm).
-  int dictionary = 0;            // kCharuco: cv::aruco predefined dictionary (0 = DICT_4X4_50).
-  bool legacy_layout = false;    // kCharuco: OpenCV <= 4.6's layout.
-  double circle_radius_mm = 0;   // Circle grids: radius [mm], in (0, 0.45 square_mm].
+  double marker_mm = 0;         // kCharuco: marker side [mm], in (0, square_mm).
+  int dictionary = 0;           // kCharuco: cv::aruco predefined dictionary (0 = DICT_4X4_50).
+  bool legacy_layout = false;   // kCharuco: OpenCV <= 4.6's layout.
+  double circle_radius_mm = 0;  // Circle grids: radius [mm], in (0, 0.45 square_mm].
   void Check() const;
   // Board extent including the margin [mm]: X in [XMin(), XMax()], Y likewise.
   double XMin() const { return -(1 + margin_squares) * square_mm; }
   double YMin() const { return XMin(); }
   double XMax() const {
-    return (kind == TargetKind::kAsymmetricCircles ? 2 * cols : cols + margin_squares) *
-           square_mm;
+    return (kind == TargetKind::kAsymmetricCircles ? 2 * cols : cols + margin_squares) * square_mm;
   }
   double YMax() const { return (rows + margin_squares) * square_mm; }
   // Every corner (circle centre) in id order, id = j * cols + i [mm, Z = 0].
@@ -119,7 +118,7 @@ struct CheckerboardRenderOptions {
   std::uint64_t seed = 1;     // Noise seed.
   // A plane-parallel panel (viewing window) in front of the board, touching it: the rays are
   // refracted at its outer face (Snell's law) and cross it to the board. 0 = none.
-  double panel_thickness_mm = 0;       // [mm], >= 0.
+  double panel_thickness_mm = 0;        // [mm], >= 0.
   double panel_refractive_index = 1.5;  // >= 1.
   void Check() const;
 };
@@ -176,7 +175,7 @@ struct CalibrationSet {
   double plane_mm_per_px = 0;  // True scale of the plane view: distance / f
   std::string soil_path;       // window preset: soil.png, the board behind the panel
   BoardPose soil_pose;
-  double soil_mm_per_px = 0;   // window preset: true scale of the soil plane at (cx, cy)
+  double soil_mm_per_px = 0;  // window preset: true scale of the soil plane at (cx, cy)
 };
 
 // Renders a calibration set into `out_dir` (created if missing): the views, the plane view and a
@@ -190,10 +189,10 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
 // The named calibration sets of `impactdic synth --calibration-set NAME` (docs/calibration.md),
 // each with its true camera and board in DIR/board.yaml:
 //   charuco, charuco_legacy: a ChArUco board of 8x6 squares (30 mm, 21 mm DICT_4X4_50 markers)
-//     in 12 views of the sample lens at 1280x960 (f = 1640 px), every third view with the board running out of the image
-//     (charuco_legacy: OpenCV <= 4.6's marker layout);
+//     in 12 views of the sample lens at 1280x960 (f = 1640 px), every third view with the board
+//     running out of the image (charuco_legacy: OpenCV <= 4.6's marker layout);
 //   circles, asymmetric_circles: a 7x5 circle grid (30 mm) / 4x9 asymmetric grid (20 mm pitch);
-//   wide_angle: the charuco board through a fisheye lens (f = 600 px at 1280x960, 146 degrees
+//   wide_angle: the charuco board through a fisheye lens (f = 600 px at 1280x960, 156 degrees
 //     across the diagonal, theta_d = theta (1 - 0.02 theta^2 + 0.004 theta^4)), whole views;
 //   window: the sample lens (12 chessboard views), the board on the outer face of a 20 mm panel of
 //     n = 1.5 seen from 1 m (plane.png), and the same board at the soil plane behind the panel
@@ -203,8 +202,8 @@ inline constexpr const char* kCalibrationSetNames[] = {
 struct CalibrationPreset {
   SynthCamera camera;
   CheckerboardSpec board;
-  CalibrationSetOptions options;   // window: options.panel_distance_mm, camera to outer face
-  double panel_thickness_mm = 0;   // window: the panel
+  CalibrationSetOptions options;  // window: options.panel_distance_mm, camera to outer face
+  double panel_thickness_mm = 0;  // window: the panel
   double panel_refractive_index = 1.5;
 };
 // Error(kInvalidValue, "--calibration-set") for another name.
