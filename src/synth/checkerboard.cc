@@ -668,6 +668,19 @@ CalibrationSet RenderCalibrationSet(const SynthCamera& camera, const Checkerboar
   return set;
 }
 
+namespace {
+
+CheckerboardSpec CircleGrid(TargetKind kind, int cols, int rows, double spacing_mm,
+                            double radius_mm) {
+  return {.cols = cols,
+          .rows = rows,
+          .square_mm = spacing_mm,
+          .kind = kind,
+          .circle_radius_mm = radius_mm};
+}
+
+}  // namespace
+
 CalibrationPreset CalibrationPresetNamed(const std::string& name) {
   CalibrationPreset p;
   p.camera = SampleCamera();
@@ -700,17 +713,11 @@ CalibrationPreset CalibrationPresetNamed(const std::string& name) {
       p.options.partial_every = 3;
     }
   } else if (name == "circles") {
-    b.kind = TargetKind::kCircles;
-    b.cols = 7;
-    b.rows = 5;
-    b.square_mm = 30;
-    b.circle_radius_mm = 9;
+    b = CircleGrid(TargetKind::kCircles, /*cols=*/7, /*rows=*/5, /*spacing_mm=*/30,
+                   /*radius_mm=*/9);
   } else if (name == "asymmetric_circles") {
-    b.kind = TargetKind::kAsymmetricCircles;
-    b.cols = 4;
-    b.rows = 9;
-    b.square_mm = 20;
-    b.circle_radius_mm = 6;
+    b = CircleGrid(TargetKind::kAsymmetricCircles, /*cols=*/4, /*rows=*/9, /*spacing_mm=*/20,
+                   /*radius_mm=*/6);
   } else if (name == "window") {
     b.square_mm = 45;
     p.options.panel_distance_mm = 1000;

@@ -143,29 +143,26 @@ TEST(Charuco, BadBoardsNameTheField) {
   ExpectErrorContaining([&] { ParseCharucoBoard("2x8", 20, 15, "DICT_4X4_50"); }, "charuco");
 }
 
-TEST(CircleGrid, SymmetricGridCalibratesTheSampleLens) {
-  const Rendered& r = Preset("circles");
+// cv::findCirclesGrid misses (or misorders, which the detector then rejects) the most tilted
+// views: at least 8 of the 12 are used. Blob centroids are not the projected centres under
+// perspective (a bias of ~0.05 px here): 1 % tolerance on the intrinsics.
+void ExpectCircleGridCalibrates(const std::string& preset, const BoardSpec& board) {
+  const Rendered& r = Preset(preset);
   CalibrationOptions options;
-  options.board = ParseCircleGrid("7x5", 30, /*asymmetric=*/false);
+  options.board = board;
   options.model = LensModel::kBrown;
   CalibrationSummary summary;
   const CameraCalibration c = Calibrate(r, options, &summary);
-  // cv::findCirclesGrid misses (or misorders, which ConsistentGrid rejects) the most tilted views.
   EXPECT_GE(summary.images_used, 8);
-  // Blob centroids are not the projected centres under perspective (a bias of ~0.05 px here):
-  // 1 % tolerance.
   ExpectIntrinsics(c, r.preset.camera, 0.01);
 }
 
+TEST(CircleGrid, SymmetricGridCalibratesTheSampleLens) {
+  ExpectCircleGridCalibrates("circles", ParseCircleGrid("7x5", 30, /*asymmetric=*/false));
+}
+
 TEST(CircleGrid, AsymmetricGridCalibratesTheSampleLens) {
-  const Rendered& r = Preset("asymmetric_circles");
-  CalibrationOptions options;
-  options.board = ParseCircleGrid("4x9", 20, /*asymmetric=*/true);
-  options.model = LensModel::kBrown;
-  CalibrationSummary summary;
-  const CameraCalibration c = Calibrate(r, options, &summary);
-  EXPECT_GE(summary.images_used, 8);
-  ExpectIntrinsics(c, r.preset.camera, 0.01);
+  ExpectCircleGridCalibrates("asymmetric_circles", ParseCircleGrid("4x9", 20, /*asymmetric=*/true));
 }
 
 // Largest distance [px] of a board row's or column's corners from their least-squares line.
@@ -275,15 +272,21 @@ TEST(Window, SoilPlaneScaleWithinAThousandth) {
   EXPECT_GT(worst_without, 2.0);
 }
 
-TEST(Window, TracedRayMatchesTheParaxialShift) {
-  // On the axis of a camera 1 m from the outer face the soil scale is (D + t / n) / D times the
-  // board's; the exact trace agrees to second order in the angle.
+// A 640x480 pinhole camera with focal length f [px] and the principal point at (320, 240).
+CameraCalibration Pinhole(double f) {
   CameraCalibration c;
   c.image_width = 640;
   c.image_height = 480;
-  c.fx = c.fy = 1000;
+  c.fx = c.fy = f;
   c.cx = 320;
   c.cy = 240;
+  return c;
+}
+
+TEST(Window, TracedRayMatchesTheParaxialShift) {
+  // On the axis of a camera 1 m from the outer face the soil scale is (D + t / n) / D times the
+  // board's; the exact trace agrees to second order in the angle.
+  const CameraCalibration c = Pinhole(1000);
   WindowOptions window;
   window.thickness_mm = 20;
   window.refractive_index = 1.5;
@@ -314,12 +317,7 @@ TEST(Window, OptionsAreChecked) {
 }
 
 TEST(LensModelYaml, RationalAndFisheyeRoundTripAndOldFilesAreBrown) {
-  CameraCalibration c;
-  c.image_width = 640;
-  c.image_height = 480;
-  c.fx = c.fy = 500;
-  c.cx = 320;
-  c.cy = 240;
+  CameraCalibration c = Pinhole(500);
   c.board = ParseCharucoBoard("11x8", 20, 15, "DICT_5X5_100");
   c.board.layout = CharucoLayout::kLegacy;
   c.model = LensModel::kRational;
