@@ -51,7 +51,7 @@ void Numbers(YamlSection& s, const std::string& key, double* out, std::size_t n,
       expected);
 }
 
-// `views` / `rejected`: lists of {image, <second>} maps.
+// `views` / `rejected`: lists of {image, <second>, ...} maps; `parse` reads the map's other keys.
 template <typename Item>
 void Items(YamlSection& s, const std::string& key, const std::string& second,
            const std::function<bool(const YAML::Node&, Item*)>& parse, std::vector<Item>* out) {
@@ -61,8 +61,7 @@ void Items(YamlSection& s, const std::string& key, const std::string& second,
         if (!list.IsSequence()) return false;
         for (const auto& node : list) {
           Item item;
-          if (!node.IsMap() || !node["image"].IsScalar() || !parse(node[second], &item))
-            return false;
+          if (!node.IsMap() || !node["image"].IsScalar() || !parse(node, &item)) return false;
           item.image = node["image"].Scalar();
           out->push_back(item);
         }
@@ -255,14 +254,17 @@ CameraCalibration LoadCalibration(const std::string& path) {
   Items<ViewRecord>(
       top, "views", "rms_px",
       [](const YAML::Node& n, ViewRecord* v) {
-        return n.IsScalar() && YAML::convert<double>::decode(n, v->rms_px);
+        // `corners` was added with partial views (ChArUco); older files have none (0).
+        return n["rms_px"].IsScalar() && YAML::convert<double>::decode(n["rms_px"], v->rms_px) &&
+               (!n["corners"] ||
+                (n["corners"].IsScalar() && YAML::convert<int>::decode(n["corners"], v->corners)));
       },
       &c.views);
   Items<RejectedView>(
       top, "rejected", "reason",
       [](const YAML::Node& n, RejectedView* r) {
-        if (!n.IsScalar()) return false;
-        r->reason = n.Scalar();
+        if (!n["reason"].IsScalar()) return false;
+        r->reason = n["reason"].Scalar();
         return true;
       },
       &c.rejected);

@@ -324,6 +324,7 @@ TEST(LensModelYaml, RationalAndFisheyeRoundTripAndOldFilesAreBrown) {
   c.dist = {0.1, 0.01, 1e-4, -1e-4, 0.002};
   c.dist_rational = {0.2, 0.03, 0.004};
   c.rms_px = 0.05;
+  c.views = {{"view_00.png", 0.04, 27}};
   const std::string path = ::testing::TempDir() + "/impactdic_rational.yaml";
   SaveCalibration(c, path);
   CameraCalibration back = LoadCalibration(path);
@@ -333,6 +334,8 @@ TEST(LensModelYaml, RationalAndFisheyeRoundTripAndOldFilesAreBrown) {
   EXPECT_EQ(back.board.kind, BoardKind::kCharuco);
   EXPECT_EQ(back.board.layout, CharucoLayout::kLegacy);
   EXPECT_EQ(back.board.dictionary, "DICT_5X5_100");
+  ASSERT_EQ(back.views.size(), 1u);
+  EXPECT_EQ(back.views[0].corners, 27);
   c.model = LensModel::kFisheye;
   c.dist_fisheye = {0.01, -0.002, 3e-4, -4e-5};
   SaveCalibration(c, path);
