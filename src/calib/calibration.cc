@@ -283,7 +283,7 @@ std::string ResidualMap::Text() const {
   for (int r = 0; r < rows; ++r) {
     out += " ";
     for (int c = 0; c < cols; ++c) {
-      const double v = rms_px[static_cast<std::size_t>(r * cols + c)];
+      const double v = rms_px[static_cast<std::size_t>(r) * cols + c];
       out += std::isfinite(v) ? fmt::format(" {:7.4f}", v) : std::string("       -");
     }
     out += "\n";
@@ -582,6 +582,7 @@ PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
   const std::vector<cv::Point2d> px = calibration.UndistortPixels(distorted);
   const std::vector<cv::Point3f> object = corners.ObjectPoints(calibration.board);
   std::vector<cv::Point2d> mm;
+  mm.reserve(object.size());
   for (const cv::Point3f& p : object) mm.emplace_back(p.x, p.y);
   const cv::Mat h = cv::findHomography(px, mm, /*method=*/0);
   if (h.empty() || !cv::checkRange(h))

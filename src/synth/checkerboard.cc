@@ -113,7 +113,7 @@ class Pattern {
       if (lx >= 0 && lx < 1 && ly >= 0 && ly < 1) {
         const auto cx = static_cast<std::int64_t>(lx * cells_);
         const auto cy = static_cast<std::int64_t>(ly * cells_);
-        return kMarkerCell + (marker * 64 + cy) * 64 + cx;
+        return kMarkerCell + (std::int64_t{marker} * 64 + cy) * 64 + cx;
       }
     }
     return (i + 2) * 100000 + (j + 2);
@@ -160,7 +160,7 @@ class Pattern {
       const double distance = std::hypot(p.x - (pitch * i + offset) * s, p.y - j * s);
       if (distance < nearest) {
         nearest = distance;
-        id = kCircle + j * board_.cols + i;
+        id = kCircle + std::int64_t{j} * board_.cols + i;
       }
     }
     if (nearest < r) return id;
