@@ -4,7 +4,8 @@
 # own impactdic_find_dependency(NAME [VERSION] [ARGS...]) (find_package REQUIRED, or
 # find_dependency).
 impactdic_find_dependency(Threads)
-impactdic_find_dependency(OpenCV 4.6 COMPONENTS core imgproc imgcodecs videoio calib3d)
+# aruco (ChArUco boards) is a contrib module: Debian's libopencv-contrib-dev.
+impactdic_find_dependency(OpenCV 4.6 COMPONENTS core imgproc imgcodecs videoio calib3d aruco)
 impactdic_find_dependency(Eigen3 3.4 NO_MODULE)
 # HDF5's C++ API (it links the C library); FindHDF5 tries its C component only where the project
 # enabled C (a consumer's C++-only project need not).
@@ -32,6 +33,9 @@ if(NOT TARGET impactdic_deps::opencv)
   add_library(impactdic_deps::opencv_calib3d INTERFACE IMPORTED)
   target_link_libraries(impactdic_deps::opencv_calib3d INTERFACE impactdic_deps::opencv
                                                                  opencv_calib3d)
+  add_library(impactdic_deps::opencv_aruco INTERFACE IMPORTED)
+  target_link_libraries(impactdic_deps::opencv_aruco INTERFACE impactdic_deps::opencv_calib3d
+                                                               opencv_aruco)
   add_library(impactdic_deps::opencv_imgcodecs INTERFACE IMPORTED)
   target_link_libraries(impactdic_deps::opencv_imgcodecs INTERFACE impactdic_deps::opencv
                                                                    opencv_imgcodecs)

@@ -6,6 +6,7 @@ set -euo pipefail
 PACKAGES=(
   cmake ninja-build g++ pkg-config git          # toolchain
   libopencv-dev                                 # OpenCV 4.6: core imgproc imgcodecs videoio calib3d
+  libopencv-contrib-dev                         # OpenCV 4.6 contrib: aruco (ChArUco calibration boards)
   libeigen3-dev                                 # Eigen 3.4
   libhdf5-dev                                   # HDF5 1.10 with the C++ API
   zlib1g-dev                                    # zlib (greyscale PNG frames; HDF5 uses it too)

@@ -7,12 +7,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
 #include <utility>
 
+#include "calib_internal.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/log.h"
 #include "impactdic/core/timer.h"
@@ -22,16 +24,20 @@
 namespace impactdic {
 namespace {
 
-std::string SizeText(cv::Size size) { return fmt::format("{}x{}", size.width, size.height); }
-
-// 16-bit images are stretched to the full 8-bit range for the corner detector (a 12-bit camera's
-// data would otherwise sit in the lowest 16th of the range).
-cv::Mat To8Bit(const cv::Mat& image) {
-  if (image.depth() == CV_8U) return image;
-  cv::Mat out;
-  cv::normalize(image, out, 0, 255, cv::NORM_MINMAX, CV_8U);
-  return out;
+// "k1 ...  k2 ..." for the calibration's model.
+std::string DistortionText(const CameraCalibration& c) {
+  if (c.model == LensModel::kFisheye)
+    return fmt::format("fisheye k1 {:.6g}  k2 {:.6g}  k3 {:.6g}  k4 {:.6g}", c.dist_fisheye[0],
+                       c.dist_fisheye[1], c.dist_fisheye[2], c.dist_fisheye[3]);
+  std::string text = fmt::format("k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}", c.dist[0],
+                                 c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
+  if (c.model == LensModel::kRational)
+    text += fmt::format("  k4 {:.6g}  k5 {:.6g}  k6 {:.6g}", c.dist_rational[0], c.dist_rational[1],
+                        c.dist_rational[2]);
+  return text;
 }
+
+std::string SizeText(cv::Size size) { return fmt::format("{}x{}", size.width, size.height); }
 
 // FNV-1a over the pixels, row by row (a Mat need not be continuous): finds repeated images.
 std::uint64_t PixelHash(const cv::Mat& image) {
@@ -46,7 +52,11 @@ std::uint64_t PixelHash(const cv::Mat& image) {
 
 // Largest distance between corresponding corners of two detections of one board [px], in either
 // order of the corners (the detector may number a near-identical view from the opposite corner).
-double MaxCornerDifference(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+// Partial views (ChArUco) compare only when they show the same corners.
+double MaxCornerDifference(const BoardDetection& da, const BoardDetection& db) {
+  const std::vector<cv::Point2f>& a = da.image_points;
+  const std::vector<cv::Point2f>& b = db.image_points;
+  if (da.ids != db.ids) return std::numeric_limits<double>::infinity();
   double forward = 0, backward = 0;
   const std::size_t n = a.size();
   for (std::size_t i = 0; i < n; ++i) {
@@ -58,7 +68,7 @@ double MaxCornerDifference(const std::vector<cv::Point2f>& a, const std::vector<
 
 // The views the calibration uses: one per distinct pose of the board.
 struct DetectedViews {
-  std::vector<std::vector<cv::Point2f>> corners;
+  std::vector<BoardDetection> corners;
   std::vector<std::string> names;
   std::vector<std::size_t> image;  // Per view: its index in the images.
   std::vector<int> repeats;  // Per view: how many other images repeated it (and were dropped).
@@ -96,16 +106,22 @@ DetectedViews DetectViews(const std::vector<cv::Mat>& images,
       repeat(k, same->second, "identical pixels");
       continue;
     }
-    auto corners = DetectBoard(images[k], options.board, options.detection);
-    if (!corners) {
-      reject(k, fmt::format("the {}x{} board (inner corners) was not found", options.board.cols,
-                            options.board.rows));
+    BoardDetection corners = DetectBoardPoints(images[k], options.board, options.detection);
+    if (corners.image_points.empty()) {
+      reject(k, corners.failure);
+      continue;
+    }
+    if (options.board.IsPartialViewBoard() &&
+        static_cast<int>(corners.ids.size()) < options.min_corners) {
+      reject(k, fmt::format("only {} ChArUco corners found ({} markers); a view needs at least {} "
+                            "(calibration.min_corners)",
+                            corners.ids.size(), corners.markers, options.min_corners));
       continue;
     }
     std::size_t view = 0;
     double difference = kNaN;
     for (; view < views.corners.size(); ++view) {
-      difference = MaxCornerDifference(*corners, views.corners[view]);
+      difference = MaxCornerDifference(corners, views.corners[view]);
       if (difference <= options.duplicate_tolerance_px) break;
     }
     if (view < views.corners.size()) {
@@ -116,7 +132,7 @@ DetectedViews DetectViews(const std::vector<cv::Mat>& images,
       continue;
     }
     view_of_hash.emplace(hash, views.corners.size());
-    views.corners.push_back(std::move(*corners));
+    views.corners.push_back(std::move(corners));
     views.names.push_back(name_of(k));
     views.repeats.push_back(0);
     views.image.push_back(k);
@@ -149,47 +165,43 @@ std::string TooFewViewsText(const DetectedViews& views, std::size_t images,
                     options.min_views);
 }
 
-void CheckImage(const cv::Mat& image, const std::string& name) {
-  if (image.empty())
-    throw Error(ErrorKind::kInvalidValue, name, "an empty image", "an 8/16-bit greyscale image");
-  if (image.channels() != 1 || (image.depth() != CV_8U && image.depth() != CV_16U))
-    throw Error(ErrorKind::kInvalidValue, name,
-                fmt::format("{} channel(s), depth code {}", image.channels(), image.depth()),
-                "an 8/16-bit single-channel (greyscale) image");
+// The model with the lowest held-out RMS over up to 4 folds of the views (each view predicted by
+// the lens fitted to the other folds), Brown-Conrady unless another beats it by more than
+// CalibrationOptions::kModelMargin; Brown-Conrady alone when a fold would leave fewer than 3
+// views to fit. Every candidate is returned, with its error or why it failed.
+std::vector<ModelCandidate> ChooseLensModel(const calib_detail::ViewPoints& points,
+                                            cv::Size image_size, const CalibrationOptions& options,
+                                            LensModel* model) {
+  *model = LensModel::kBrown;
+  const int views = static_cast<int>(points.object.size());
+  const int folds = std::min(4, views);
+  if (views - (views + folds - 1) / folds < 3) return {};
+  std::vector<ModelCandidate> candidates;
+  for (LensModel m : {LensModel::kBrown, LensModel::kRational, LensModel::kFisheye}) {
+    WallTimer timer;
+    candidates.push_back(calib_detail::HeldOutError(points, image_size, m, options, folds));
+    LogInfo("calibration: {} model held out in {:.2f} s", kLensModelNames.Name(m),
+            timer.ElapsedSeconds());
+  }
+  const ModelCandidate& brown = candidates[0];
+  double best = brown.failure.empty()
+                    ? brown.heldout_rms_px * (1 - CalibrationOptions::kModelMargin)
+                    : std::numeric_limits<double>::infinity();
+  for (const ModelCandidate& c : candidates) {
+    if (c.failure.empty() && c.heldout_rms_px < best) {
+      best = c.heldout_rms_px;
+      *model = c.model;
+    }
+    LogInfo("calibration: {} model: held-out RMS {:.4f} px, fit {:.4f} px{}",
+            kLensModelNames.Name(c.model), c.heldout_rms_px, c.fit_rms_px,
+            c.failure.empty() ? "" : " (failed: " + c.failure + ")");
+  }
+  LogInfo("calibration: model {} chosen by the held-out RMS over {} folds",
+          kLensModelNames.Name(*model), folds);
+  return candidates;
 }
 
 }  // namespace
-
-void BoardSpec::Check() const {
-  CheckValue(cols >= 2, "board.cols", std::to_string(cols), ">= 2 inner corners");
-  CheckValue(rows >= 2, "board.rows", std::to_string(rows), ">= 2 inner corners");
-  CheckRange(square_mm, kSquareRange, "board.square_mm", "a square size");
-}
-
-std::vector<cv::Point3f> BoardSpec::ObjectPoints() const {
-  std::vector<cv::Point3f> points;
-  for (int j = 0; j < rows; ++j)
-    for (int i = 0; i < cols; ++i)
-      points.emplace_back(static_cast<float>(i * square_mm), static_cast<float>(j * square_mm),
-                          0.f);
-  return points;
-}
-
-BoardSpec ParseBoard(const std::string& text, double square_mm, const std::string& where) {
-  static const std::regex pattern(R"(\s*(\d+)\s*[xX]\s*(\d+)\s*)");
-  std::smatch match;
-  if (!std::regex_match(text, match, pattern) || match[1].length() > 4 || match[2].length() > 4)
-    throw Error(ErrorKind::kInvalidValue, where, "'" + text + "'",
-                "COLSxROWS counting INNER corners, e.g. 9x6 for a board of 10x7 squares");
-  BoardSpec board;
-  board.cols = std::stoi(match[1]);
-  board.rows = std::stoi(match[2]);
-  CheckValue(board.cols >= 2 && board.rows >= 2, where, "'" + text + "'",
-             "at least 2x2 inner corners");
-  board.square_mm = square_mm;
-  CheckRange(square_mm, BoardSpec::kSquareRange, "board.square_mm", "a square size");
-  return board;
-}
 
 void DetectionOptions::Check() const {
   CheckRange(subpix_half_window, kHalfWindowRange, "calibration.detection.subpix_half_window",
@@ -207,6 +219,8 @@ void CalibrationOptions::Check() const {
   CheckRange(max_rms_px, kMaxRmsRange, "calibration.max_rms_px", "a reprojection RMS");
   CheckRange(duplicate_tolerance_px, kDuplicateToleranceRange, "calibration.duplicate_tolerance_px",
              "a corner distance");
+  CheckRange(min_corners, kMinCornersRange, "calibration.min_corners", "a corner count");
+  window.Check();
 }
 
 std::vector<YamlOptionTable> CalibrationOptionTables(CalibrationOptions* o) {
@@ -233,33 +247,53 @@ std::vector<YamlOptionTable> CalibrationOptionTables(CalibrationOptions* o) {
                 "Sub-pixel corner refinement: iteration cap");
   detection.Add("subpix_epsilon_px", &d.subpix_epsilon_px, DetectionOptions::kEpsilonRange,
                 "a corner movement", "... and stop when a corner moves less than this");
-  return {t, detection};
+  t.AddChoice(
+      "model", kLensModelNames.Names(), kLensModelNames.Name(o->model),
+      [o](const std::string& name) { o->model = kLensModelNames.Parse(name, "calibration.model"); },
+      "Distortion model: brown (k1 k2 p1 p2 k3), rational (k1-k6), fisheye, or auto (lowest "
+      "held-out reprojection RMS)");
+  t.Add("min_corners", &o->min_corners, CalibrationOptions::kMinCornersRange, "corner count",
+        "ChArUco: a view with fewer detected corners is rejected");
+  t.AddChoice(
+      "charuco_layout", kCharucoLayoutNames.Names(), kCharucoLayoutNames.Name(o->board.layout),
+      [o](const std::string& name) {
+        o->board.layout = kCharucoLayoutNames.Parse(name, "calibration.charuco_layout");
+      },
+      "ChArUco marker layout: current (top-left square black), legacy (OpenCV <= 4.6, even "
+      "rows), auto (the layout the markers agree with)");
+  WindowOptions& w = o->window;
+  YamlOptionTable window("calibration.window");
+  window.Add("thickness_mm", &w.thickness_mm, WindowOptions::kThicknessRange, "a panel thickness",
+             "Viewing window (panel) thickness; 0 = no window");
+  window.Add("refractive_index", &w.refractive_index, WindowOptions::kIndexRange,
+             "a refractive index", "The panel's refractive index (PMMA 1.49, glass 1.52)");
+  window.AddChoice(
+      "board_position", kBoardPositionNames.Names(), kBoardPositionNames.Name(w.board_position),
+      [o](const std::string& name) {
+        o->window.board_position =
+            kBoardPositionNames.Parse(name, "calibration.window.board_position");
+      },
+      "Where the plane view's board lies: outer_face (scale carried to the soil plane through "
+      "the panel) or soil (already at the soil plane)");
+  return {t, detection, window};
+}
+
+std::string ResidualMap::Text() const {
+  std::string out;
+  for (int r = 0; r < rows; ++r) {
+    out += " ";
+    for (int c = 0; c < cols; ++c) {
+      const double v = rms_px[static_cast<std::size_t>(r) * cols + c];
+      out += std::isfinite(v) ? fmt::format(" {:7.4f}", v) : std::string("       -");
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 cv::Point2d PlaneScale::ToMm(cv::Point2d px) const {
   const cv::Vec3d p = mm_from_px * cv::Vec3d(px.x, px.y, 1);
   return {p[0] / p[2], p[1] / p[2]};
-}
-
-cv::Mat CameraCalibration::DistCoeffs() const {
-  cv::Mat d(1, 5, CV_64F);
-  for (int k = 0; k < 5; ++k) d.at<double>(k) = dist[k];
-  return d;
-}
-
-bool CameraCalibration::HasDistortion() const {
-  return std::any_of(dist.begin(), dist.end(), [](double d) { return d != 0; });
-}
-
-std::vector<cv::Point2d> CameraCalibration::UndistortPixels(
-    const std::vector<cv::Point2d>& distorted) const {
-  if (distorted.empty()) return {};
-  std::vector<cv::Point2d> out;
-  const cv::Matx33d k = CameraMatrix();
-  cv::undistortPoints(
-      distorted, out, k, DistCoeffs(), cv::noArray(), k,
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100, 1e-12));
-  return out;
 }
 
 std::string CalibrationSummary::BriefReport() const {
@@ -277,10 +311,9 @@ std::string CalibrationSummary::FullReport(const CameraCalibration& c) const {
   out += fmt::format("  image size {}x{}, board {}x{} inner corners, {} mm squares\n",
                      c.image_width, c.image_height, c.board.cols, c.board.rows, c.board.square_mm);
   out += fmt::format("  fx {:.4f}  fy {:.4f}  cx {:.4f}  cy {:.4f} [px]\n", c.fx, c.fy, c.cx, c.cy);
-  out += fmt::format("  k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}\n", c.dist[0],
-                     c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
+  out += "  " + DistortionText(c) + "\n";
   for (const ViewRecord& v : c.views)
-    out += fmt::format("  view {}: RMS {:.4f} px\n", v.image, v.rms_px);
+    out += fmt::format("  view {}: {} points, RMS {:.4f} px\n", v.image, v.corners, v.rms_px);
   for (const RejectedView& r : c.rejected)
     out += fmt::format("  rejected {}: {}\n", r.image, r.reason);
   return out;
@@ -296,8 +329,34 @@ std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
                      worst_view, worst_view_rms_px);
   out += fmt::format("intrinsics: fx {:.4f}  fy {:.4f}  cx {:.4f}  cy {:.4f} [px], image {}x{}\n",
                      c.fx, c.fy, c.cx, c.cy, c.image_width, c.image_height);
-  out += fmt::format("distortion: k1 {:.6g}  k2 {:.6g}  p1 {:.6g}  p2 {:.6g}  k3 {:.6g}\n",
-                     c.dist[0], c.dist[1], c.dist[2], c.dist[3], c.dist[4]);
+  out += "distortion: " + DistortionText(c) + "\n";
+  out += fmt::format("model: {}{}\n", kLensModelNames.Name(c.model),
+                     c.candidates.empty() ? " (given)" : " (lowest held-out RMS)");
+  for (const ModelCandidate& m : c.candidates)
+    out += m.failure.empty()
+               ? fmt::format("  {:<8} held-out RMS {:.4f} px, fit {:.4f} px\n",
+                             kLensModelNames.Name(m.model), m.heldout_rms_px, m.fit_rms_px)
+               : fmt::format("  {:<8} failed: {}\n", kLensModelNames.Name(m.model), m.failure);
+  out +=
+      fmt::format("board: {}{}\n", c.board.Describe(),
+                  c.board.kind == BoardKind::kCharuco
+                      ? fmt::format(", {} marker layout", kCharucoLayoutNames.Name(c.board.layout))
+                      : std::string());
+  for (const ViewRecord& v : c.views)
+    out += fmt::format("  view {}: {} points, RMS {:.4f} px\n", v.image, v.corners, v.rms_px);
+  out += fmt::format("residual RMS [px] over the image ({}x{} cells, top row first):\n",
+                     c.residual_map.cols, c.residual_map.rows) +
+         c.residual_map.Text();
+  if (c.plane && c.plane->window.Active())
+    out += fmt::format(
+        "window: {} mm, n = {}, board on the {}: {}\n", c.plane->window.thickness_mm,
+        c.plane->window.refractive_index, kBoardPositionNames.Name(c.plane->window.board_position),
+        c.plane->window.board_position == BoardPosition::kOuterFace
+            ? fmt::format("soil-plane scale {:+.3f} % from the board's {:.6f} mm/px (homography "
+                          "residual of the traced map {:.4f} mm)",
+                          100 * (c.plane->mm_per_px / c.plane->board_mm_per_px - 1),
+                          c.plane->board_mm_per_px, c.plane->window_nonlinearity_mm)
+            : std::string("the scale is the soil plane's as measured"));
   if (c.plane)
     out += fmt::format("scale: {:.6f} +- {:.6f} mm/px (plane view {})\n", c.plane->mm_per_px,
                        c.plane->mm_per_px_uncertainty, c.plane->image);
@@ -307,16 +366,52 @@ std::string CalibrationSummary::CommandReport(const CameraCalibration& c,
 }
 
 JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::string& output) const {
+  const cv::Mat coefficients = c.DistCoeffs();
   JsonObject j;
   j.Add("rms_px", c.rms_px)
       .Add("fx", c.fx)
       .Add("fy", c.fy)
       .Add("cx", c.cx)
       .Add("cy", c.cy)
-      .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()));
+      .Add("dist", std::vector<double>(c.dist.begin(), c.dist.end()))
+      .Add("model", kLensModelNames.Name(c.model))
+      .Add("model_coefficients",
+           std::vector<double>(coefficients.begin<double>(), coefficients.end<double>()))
+      .Add("board", c.board.Describe());
+  if (c.board.kind == BoardKind::kCharuco)
+    j.Add("charuco_layout", kCharucoLayoutNames.Name(c.board.layout));
+  JsonObject candidates;
+  for (const ModelCandidate& m : c.candidates) {
+    JsonObject one;
+    if (m.failure.empty())
+      one.Add("heldout_rms_px", m.heldout_rms_px).Add("fit_rms_px", m.fit_rms_px);
+    else
+      one.Add("failure", m.failure);
+    candidates.Add(kLensModelNames.Name(m.model), one);
+  }
+  j.Add("model_candidates", candidates);
+  JsonObject views;
+  for (const ViewRecord& v : c.views) {
+    JsonObject one;
+    one.Add("corners", v.corners).Add("rms_px", v.rms_px);
+    views.Add(v.image, one);
+  }
+  j.Add("views", views);
+  j.Add("residual_map_px", c.residual_map.rms_px)
+      .Add("residual_map_cols", c.residual_map.cols)
+      .Add("residual_map_rows", c.residual_map.rows);
   if (c.plane) {
     j.Add("mm_per_px", c.plane->mm_per_px);
     j.Add("mm_per_px_uncertainty", c.plane->mm_per_px_uncertainty);
+    if (c.plane->window.Active()) {
+      JsonObject w;
+      w.Add("thickness_mm", c.plane->window.thickness_mm)
+          .Add("refractive_index", c.plane->window.refractive_index)
+          .Add("board_position", kBoardPositionNames.Name(c.plane->window.board_position))
+          .Add("board_mm_per_px", c.plane->board_mm_per_px)
+          .Add("nonlinearity_mm", c.plane->window_nonlinearity_mm);
+      j.Add("window", w);
+    }
   } else {
     j.AddNull("mm_per_px");
     j.AddNull("mm_per_px_uncertainty");
@@ -333,27 +428,6 @@ JsonObject CalibrationSummary::ToJson(const CameraCalibration& c, const std::str
   return j;
 }
 
-std::optional<std::vector<cv::Point2f>> DetectBoard(const cv::Mat& image, const BoardSpec& board,
-                                                    const DetectionOptions& options) {
-  board.Check();
-  options.Check();
-  CheckImage(image, "image");
-  const cv::Mat grey8 = To8Bit(image);
-  int flags = 0;
-  if (options.adaptive_threshold) flags |= cv::CALIB_CB_ADAPTIVE_THRESH;
-  if (options.normalize_image) flags |= cv::CALIB_CB_NORMALIZE_IMAGE;
-  std::vector<cv::Point2f> corners;
-  if (!cv::findChessboardCorners(grey8, board.PatternSize(), corners, flags)) return std::nullopt;
-  // Refine on the full-depth image (float) so 16-bit data keeps its precision.
-  cv::Mat grey_float;
-  image.convertTo(grey_float, CV_32F);
-  const int w = options.subpix_half_window;
-  cv::cornerSubPix(grey_float, corners, cv::Size(w, w), cv::Size(-1, -1),
-                   cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS,
-                                    options.subpix_max_iterations, options.subpix_epsilon_px));
-  return corners;
-}
-
 CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
                                   const std::vector<std::string>& names,
                                   const CalibrationOptions& options, CalibrationSummary* summary) {
@@ -367,7 +441,7 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
     return names.empty() ? fmt::format("image {}", k) : names[k];
   };
   for (std::size_t k = 0; k < images.size(); ++k) {
-    CheckImage(images[k], name_of(k));
+    calib_detail::CheckImage(images[k], name_of(k));
     if (images[k].size() != images[0].size())
       throw Error(ErrorKind::kInvalidValue,
                   fmt::format("mixed image sizes: {} is {} but {} is {}; all calibration images "
@@ -388,64 +462,81 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
 
   WallTimer timer;
   const DetectedViews views = DetectViews(images, name_of, options, &result);
-  const std::vector<std::vector<cv::Point2f>>& image_points = views.corners;
   const std::vector<std::string>& used_names = views.names;
   s.detection_seconds = timer.ElapsedSeconds();
-  s.images_used = static_cast<int>(image_points.size());
+  s.images_used = static_cast<int>(views.corners.size());
   s.images_rejected = static_cast<int>(result.rejected.size());
   s.images_repeated = views.repeated;
-  if (image_points.empty())
+  if (views.corners.empty() && options.board.kind == BoardKind::kChessboard)
     throw Error(ErrorKind::kInvalidValue,
                 fmt::format("no board found in any of the {} calibration images: none shows a "
                             "checkerboard with {}x{} inner corners (COLSxROWS counts inner "
                             "corners: 9x6 for a board of 10x7 squares)",
                             images.size(), options.board.cols, options.board.rows));
+  if (views.corners.empty())
+    throw Error(ErrorKind::kInvalidValue,
+                fmt::format("no board found in any of the {} calibration images: none shows the "
+                            "{} (first image: {})",
+                            images.size(), options.board.Describe(),
+                            result.rejected.empty() ? "" : result.rejected[0].reason));
   if (s.images_used < options.min_views)
     throw Error(ErrorKind::kInvalidValue, TooFewViewsText(views, images.size(), options));
 
   timer.Restart();
-  const std::vector<std::vector<cv::Point3f>> object_points(image_points.size(),
-                                                            options.board.ObjectPoints());
-  cv::Mat camera_matrix, dist;
-  std::vector<cv::Mat> rvecs, tvecs;
-  int flags = 0;
-  if (options.fix_k3) flags |= cv::CALIB_FIX_K3;
-  if (options.zero_tangential) flags |= cv::CALIB_ZERO_TANGENT_DIST;
-  const double rms = cv::calibrateCamera(
-      object_points, image_points, images[0].size(), camera_matrix, dist, rvecs, tvecs, flags,
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 200, 1e-15));
+  calib_detail::ViewPoints points;
+  for (const BoardDetection& view : views.corners) {
+    points.object.push_back(view.ObjectPoints(options.board));
+    points.image.push_back(view.image_points);
+  }
+  if (options.board.kind == BoardKind::kCharuco) result.board.layout = views.corners[0].layout;
+  LensModel model = options.model;
+  if (model == LensModel::kAuto) {
+    result.candidates = ChooseLensModel(points, images[0].size(), options, &model);
+  }
+  const calib_detail::LensFit fit = calib_detail::FitLens(points, images[0].size(), model, options);
   s.calibration_seconds = timer.ElapsedSeconds();
-  if (!std::isfinite(rms) || !cv::checkRange(camera_matrix) || !cv::checkRange(dist))
-    throw Error(ErrorKind::kNumerical,
-                "calibration failed: cv::calibrateCamera returned non-finite values (views too "
-                "similar? vary the board's tilt and position)");
-  result.fx = camera_matrix.at<double>(0, 0);
-  result.fy = camera_matrix.at<double>(1, 1);
-  result.cx = camera_matrix.at<double>(0, 2);
-  result.cy = camera_matrix.at<double>(1, 2);
-  for (int k = 0; k < 5; ++k) result.dist[k] = k < dist.cols * dist.rows ? dist.at<double>(k) : 0;
+  result.model = model;
+  result.fx = fit.camera.fx;
+  result.fy = fit.camera.fy;
+  result.cx = fit.camera.cx;
+  result.cy = fit.camera.cy;
+  result.dist = fit.camera.dist;
+  result.dist_rational = fit.camera.dist_rational;
+  result.dist_fisheye = fit.camera.dist_fisheye;
 
   // Per-view RMS; the overall RMS is over all corners of all views (what calibrateCamera returns).
   double total_sq = 0;
   std::size_t total_n = 0;
   s.worst_view_rms_px = 0;
-  for (std::size_t v = 0; v < image_points.size(); ++v) {
-    std::vector<cv::Point2f> projected;
-    cv::projectPoints(object_points[v], rvecs[v], tvecs[v], camera_matrix, dist, projected);
+  ResidualMap& map = result.residual_map;
+  std::vector<double> cell_sq(static_cast<std::size_t>(map.cols * map.rows), 0.0);
+  map.points.assign(cell_sq.size(), 0);
+  for (std::size_t v = 0; v < points.image.size(); ++v) {
+    const std::vector<cv::Point2f> projected =
+        result.Project(points.object[v], fit.rvecs[v], fit.tvecs[v]);
     double sq = 0;
     for (std::size_t k = 0; k < projected.size(); ++k) {
-      const cv::Point2f d = projected[k] - image_points[v][k];
+      const cv::Point2f observed = points.image[v][k];
+      const cv::Point2f d = projected[k] - observed;
       sq += d.dot(d);
+      const int cx =
+          std::clamp(static_cast<int>(observed.x * map.cols / result.image_width), 0, map.cols - 1);
+      const int cy = std::clamp(static_cast<int>(observed.y * map.rows / result.image_height), 0,
+                                map.rows - 1);
+      cell_sq[cy * map.cols + cx] += d.dot(d);
+      ++map.points[cy * map.cols + cx];
     }
     total_sq += sq;
     total_n += projected.size();
     const double view_rms = std::sqrt(sq / projected.size());
-    result.views.push_back({used_names[v], view_rms});
+    result.views.push_back({used_names[v], view_rms, static_cast<int>(projected.size())});
     if (view_rms > s.worst_view_rms_px) {
       s.worst_view_rms_px = view_rms;
       s.worst_view = used_names[v];
     }
   }
+  for (std::size_t c = 0; c < cell_sq.size(); ++c)
+    map.rms_px.push_back(map.points[c] > 0 ? std::sqrt(cell_sq[c] / map.points[c]) : kNaN);
   result.rms_px = std::sqrt(total_sq / total_n);
   s.rms_px = result.rms_px;
   LogInfo("{}", s.BriefReport());
@@ -460,21 +551,39 @@ CameraCalibration CalibrateCamera(const std::vector<cv::Mat>& images,
   return result;
 }
 
+namespace calib_detail {
+
+double LocalScale(const cv::Matx33d& h, cv::Point2d p) {
+  const cv::Vec3d q = h * cv::Vec3d(p.x, p.y, 1);
+  const double w = q[2];
+  const double j00 = (h(0, 0) * w - q[0] * h(2, 0)) / (w * w);
+  const double j01 = (h(0, 1) * w - q[0] * h(2, 1)) / (w * w);
+  const double j10 = (h(1, 0) * w - q[1] * h(2, 0)) / (w * w);
+  const double j11 = (h(1, 1) * w - q[1] * h(2, 1)) / (w * w);
+  return std::sqrt(std::abs(j00 * j11 - j01 * j10));
+}
+
+}  // namespace calib_detail
+
 PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
-                             const CameraCalibration& calibration,
-                             const DetectionOptions& options) {
-  CheckImage(image, name);
+                             const CameraCalibration& calibration, const DetectionOptions& options,
+                             const WindowOptions& window) {
+  calib_detail::CheckImage(image, name);
   CheckFrameSize(calibration, image.size(), "plane image " + name);
-  auto corners = DetectBoard(image, calibration.board, options);
-  if (!corners)
+  const BoardDetection corners = DetectBoardPoints(image, calibration.board, options);
+  if (corners.image_points.size() < 4)
     throw Error(ErrorKind::kInvalidValue,
-                fmt::format("plane image {}: the {}x{} board (inner corners) was not found; the "
-                            "plane scale needs one view of the board lying on the panel",
-                            name, calibration.board.cols, calibration.board.rows));
-  std::vector<cv::Point2d> distorted(corners->begin(), corners->end());
+                fmt::format("plane image {}: the {} was not found ({}); the plane scale needs "
+                            "one view of the board lying on the panel",
+                            name, calibration.board.Describe(),
+                            corners.failure.empty() ? fmt::format("{} corners", corners.ids.size())
+                                                    : corners.failure));
+  std::vector<cv::Point2d> distorted(corners.image_points.begin(), corners.image_points.end());
   const std::vector<cv::Point2d> px = calibration.UndistortPixels(distorted);
+  const std::vector<cv::Point3f> object = corners.ObjectPoints(calibration.board);
   std::vector<cv::Point2d> mm;
-  for (const cv::Point3f& p : calibration.board.ObjectPoints()) mm.emplace_back(p.x, p.y);
+  mm.reserve(object.size());
+  for (const cv::Point3f& p : object) mm.emplace_back(p.x, p.y);
   const cv::Mat h = cv::findHomography(px, mm, /*method=*/0);
   if (h.empty() || !cv::checkRange(h))
     throw Error(ErrorKind::kNumerical, "plane image " + name + ": homography fit failed");
@@ -483,16 +592,8 @@ PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
   scale.image = name;
   scale.mm_from_px = cv::Matx33d(h);
   scale.corners = static_cast<int>(px.size());
-  const cv::Matx33d& H = scale.mm_from_px;
-  // Local isotropic scale sqrt|det J| of the homography at an image point.
-  auto local_scale = [&H](cv::Point2d p) {
-    const cv::Vec3d q = H * cv::Vec3d(p.x, p.y, 1);
-    const double w = q[2];
-    const double j00 = (H(0, 0) * w - q[0] * H(2, 0)) / (w * w);
-    const double j01 = (H(0, 1) * w - q[0] * H(2, 1)) / (w * w);
-    const double j10 = (H(1, 0) * w - q[1] * H(2, 0)) / (w * w);
-    const double j11 = (H(1, 1) * w - q[1] * H(2, 1)) / (w * w);
-    return std::sqrt(std::abs(j00 * j11 - j01 * j10));
+  const auto local_scale = [&scale](cv::Point2d p) {
+    return calib_detail::LocalScale(scale.mm_from_px, p);
   };
   cv::Point2d centroid(0, 0);
   for (const auto& p : px) centroid += p;
@@ -524,6 +625,10 @@ PlaneScale MeasurePlaneScale(const cv::Mat& image, const std::string& name,
       "{:.4f} mm RMS over {} corners)",
       name, scale.mm_per_px, scale.mm_per_px_uncertainty, 100 * scale.local_scale_spread_rel,
       scale.residual_rms_mm, scale.corners);
+  if (window.Active() && window.board_position == BoardPosition::kOuterFace)
+    calib_detail::CarryToSoil(calibration, object, px, centroid, window, &scale);
+  else
+    scale.window = window;
   return scale;
 }
 
@@ -545,8 +650,8 @@ CameraCalibration CalibrateFromFiles(const std::vector<std::string>& image_sourc
   for (const std::string& path : paths) images.push_back(ReadGreyImage(path));
   CameraCalibration calibration = CalibrateCamera(images, paths, options, summary);
   if (!plane_path.empty())
-    calibration.plane =
-        MeasurePlaneScale(ReadGreyImage(plane_path), plane_path, calibration, options.detection);
+    calibration.plane = MeasurePlaneScale(ReadGreyImage(plane_path), plane_path, calibration,
+                                          options.detection, options.window);
   return calibration;
 }
 

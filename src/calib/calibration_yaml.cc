@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "impactdic/calib/calibration.h"
+#include "impactdic/core/enum_names.h"
 #include "impactdic/core/error.h"
 #include "impactdic/core/range.h"
 #include "impactdic/io/atomic_file.h"
@@ -50,7 +51,7 @@ void Numbers(YamlSection& s, const std::string& key, double* out, std::size_t n,
       expected);
 }
 
-// `views` / `rejected`: lists of {image, <second>} maps.
+// `views` / `rejected`: lists of {image, <second>, ...} maps; `parse` reads the map's other keys.
 template <typename Item>
 void Items(YamlSection& s, const std::string& key, const std::string& second,
            const std::function<bool(const YAML::Node&, Item*)>& parse, std::vector<Item>* out) {
@@ -60,14 +61,42 @@ void Items(YamlSection& s, const std::string& key, const std::string& second,
         if (!list.IsSequence()) return false;
         for (const auto& node : list) {
           Item item;
-          if (!node.IsMap() || !node["image"].IsScalar() || !parse(node[second], &item))
-            return false;
+          if (!node.IsMap() || !node["image"].IsScalar() || !parse(node, &item)) return false;
           item.image = node["image"].Scalar();
           out->push_back(item);
         }
         return true;
       },
       "a list of {image, " + second + "}");
+}
+
+// An optional name of `names` (absent: *out unchanged).
+template <typename E, std::size_t N>
+void ReadEnum(YamlSection& s, const std::string& key, const EnumNames<E, N>& names, E* out) {
+  std::string text;
+  if (s.ReadChoice(key, &text, names.Names())) *out = names.Parse(text, s.PathOf(key));
+}
+
+// The distortion coefficients of `c.model` in OpenCV's order (DistCoeffs).
+void ReadDistortion(YamlSection& top, CameraCalibration* c) {
+  // Files without `model` (written before the rational and fisheye models) are Brown-Conrady.
+  ReadEnum(top, "model", kLensModelNames, &c->model);
+  if (c->model == LensModel::kAuto) {
+    top.Problem("model", "got 'auto'; expected the fitted model: brown, rational or fisheye");
+    return;
+  }
+  if (c->model == LensModel::kFisheye) {
+    Numbers(top, "dist", c->dist_fisheye.data(), 4, "4 numbers [k1, k2, k3, k4] (fisheye)");
+    return;
+  }
+  if (c->model == LensModel::kBrown) {
+    Numbers(top, "dist", c->dist.data(), 5, "5 numbers [k1, k2, p1, p2, k3]");
+    return;
+  }
+  double d[8] = {};
+  Numbers(top, "dist", d, 8, "8 numbers [k1, k2, p1, p2, k3, k4, k5, k6] (rational)");
+  for (int k = 0; k < 5; ++k) c->dist[k] = d[k];
+  for (int k = 0; k < 3; ++k) c->dist_rational[k] = d[5 + k];
 }
 
 void ReadBoard(YamlSection& top, BoardSpec* board) {
@@ -78,6 +107,11 @@ void ReadBoard(YamlSection& top, BoardSpec* board) {
       b.Read(key, key[0] == 'c' ? &board->cols : &board->rows, ValueRange{2, 1e4, ""}, ">= 2");
   }
   Required(b, "square_mm", &board->square_mm, kPositive, "a square side [mm]");
+  // Files without `kind` (before ChArUco and circle grids) are chessboards.
+  ReadEnum(b, "kind", kBoardKindNames, &board->kind);
+  b.Read("marker_mm", &board->marker_mm, kNonNegative, "a marker side [mm]");
+  b.Read("dictionary", &board->dictionary);
+  ReadEnum(b, "layout", kCharucoLayoutNames, &board->layout);
   b.Finish();
 }
 
@@ -95,6 +129,17 @@ std::optional<PlaneScale> ReadPlane(YamlSection& top) {
   s.Read("local_scale_spread_rel", &p.local_scale_spread_rel, kNonNegative, "a relative spread");
   s.Read("residual_rms_mm", &p.residual_rms_mm, kAnyFinite, "a residual [mm]");
   s.Read("corners", &p.corners, ValueRange{0, 1e9, ""}, "a corner count");
+  if (s.Has("window")) {
+    YamlSection w = s.Sub("window");
+    Required(w, "thickness_mm", &p.window.thickness_mm, kNonNegative, "a panel thickness [mm]");
+    Required(w, "refractive_index", &p.window.refractive_index, kPositive, "a refractive index");
+    ReadEnum(w, "board_position", kBoardPositionNames, &p.window.board_position);
+    w.Read("board_mm_per_px", &p.board_mm_per_px, kPositive, "the board's scale [mm/px]");
+    w.Read("nonlinearity_mm", &p.window_nonlinearity_mm, kNonNegative, "a distance [mm]");
+    w.Finish();
+  } else {
+    s.Get("window");
+  }
   double h[9] = {};
   Numbers(s, "mm_from_px", h, 9, "9 numbers (3x3 homography, row-major)");
   for (int k = 0; k < 9; ++k) p.mm_from_px(k / 3, k % 3) = h[k];
@@ -109,7 +154,8 @@ void SaveCalibration(const CameraCalibration& c, const std::string& path) {
   out.SetDoublePrecision(17);
   out << YAML::Comment(
       "impactdic camera calibration (keys documented in docs/calibration.md). Pinhole + "
-      "Brown-Conrady distortion, OpenCV conventions; pixel centres at integer coordinates.");
+      "distortion of `model` (brown, rational or fisheye), OpenCV conventions; pixel centres at "
+      "integer coordinates.");
   out << YAML::BeginMap;
   out << YAML::Key << "format" << YAML::Value << kFormat;
   out << YAML::Key << "image_width" << YAML::Value << c.image_width;
@@ -117,19 +163,33 @@ void SaveCalibration(const CameraCalibration& c, const std::string& path) {
   out << YAML::Key << "board" << YAML::Value << YAML::Flow << YAML::BeginMap;
   out << YAML::Key << "cols" << YAML::Value << c.board.cols;
   out << YAML::Key << "rows" << YAML::Value << c.board.rows;
-  out << YAML::Key << "square_mm" << YAML::Value << c.board.square_mm << YAML::EndMap;
+  out << YAML::Key << "square_mm" << YAML::Value << c.board.square_mm;
+  if (c.board.kind != BoardKind::kChessboard)
+    out << YAML::Key << "kind" << YAML::Value << kBoardKindNames.Name(c.board.kind);
+  if (c.board.kind == BoardKind::kCharuco) {
+    out << YAML::Key << "marker_mm" << YAML::Value << c.board.marker_mm;
+    out << YAML::Key << "dictionary" << YAML::Value << c.board.dictionary;
+    out << YAML::Key << "layout" << YAML::Value << kCharucoLayoutNames.Name(c.board.layout);
+  }
+  out << YAML::EndMap;
   out << YAML::Key << "fx" << YAML::Value << c.fx;
   out << YAML::Key << "fy" << YAML::Value << c.fy;
   out << YAML::Key << "cx" << YAML::Value << c.cx;
   out << YAML::Key << "cy" << YAML::Value << c.cy;
+  out << YAML::Key << "model" << YAML::Value << kLensModelNames.Name(c.model);
   out << YAML::Key << "dist" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-  for (double d : c.dist) out << d;
-  out << YAML::EndSeq << YAML::Comment("k1, k2, p1, p2, k3");
+  const cv::Mat dist = c.DistCoeffs();
+  for (int k = 0; k < static_cast<int>(dist.total()); ++k) out << dist.at<double>(k);
+  out << YAML::EndSeq
+      << YAML::Comment(c.model == LensModel::kFisheye    ? "fisheye k1, k2, k3, k4"
+                       : c.model == LensModel::kRational ? "k1, k2, p1, p2, k3, k4, k5, k6"
+                                                         : "k1, k2, p1, p2, k3");
   out << YAML::Key << "rms_px" << YAML::Value << c.rms_px;
   out << YAML::Key << "views" << YAML::Value << YAML::BeginSeq;
   for (const ViewRecord& v : c.views)
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "image" << YAML::Value << v.image
-        << YAML::Key << "rms_px" << YAML::Value << v.rms_px << YAML::EndMap;
+        << YAML::Key << "rms_px" << YAML::Value << v.rms_px << YAML::Key << "corners" << YAML::Value
+        << v.corners << YAML::EndMap;
   out << YAML::EndSeq;
   out << YAML::Key << "rejected" << YAML::Value << YAML::BeginSeq;
   for (const RejectedView& r : c.rejected)
@@ -145,6 +205,17 @@ void SaveCalibration(const CameraCalibration& c, const std::string& path) {
     out << YAML::Key << "local_scale_spread_rel" << YAML::Value << p.local_scale_spread_rel;
     out << YAML::Key << "residual_rms_mm" << YAML::Value << p.residual_rms_mm;
     out << YAML::Key << "corners" << YAML::Value << p.corners;
+    if (p.window.Active()) {
+      out << YAML::Key << "window" << YAML::Value << YAML::BeginMap;
+      out << YAML::Key << "thickness_mm" << YAML::Value << p.window.thickness_mm;
+      out << YAML::Key << "refractive_index" << YAML::Value << p.window.refractive_index;
+      out << YAML::Key << "board_position" << YAML::Value
+          << kBoardPositionNames.Name(p.window.board_position);
+      if (std::isfinite(p.board_mm_per_px))
+        out << YAML::Key << "board_mm_per_px" << YAML::Value << p.board_mm_per_px;
+      out << YAML::Key << "nonlinearity_mm" << YAML::Value << p.window_nonlinearity_mm;
+      out << YAML::EndMap;
+    }
     out << YAML::Key << "mm_from_px" << YAML::Value << YAML::Flow << YAML::BeginSeq;
     for (int k = 0; k < 9; ++k) out << p.mm_from_px(k / 3, k % 3);
     out << YAML::EndSeq << YAML::Comment("3x3 homography, row-major: undistorted px -> plane mm");
@@ -177,20 +248,23 @@ CameraCalibration LoadCalibration(const std::string& path) {
   Required(top, "fy", &c.fy, kPositive, "a focal length [px]");
   Required(top, "cx", &c.cx, kAnyFinite, "a principal point [px]");
   Required(top, "cy", &c.cy, kAnyFinite, "a principal point [px]");
-  Numbers(top, "dist", c.dist.data(), 5, "5 numbers [k1, k2, p1, p2, k3]");
+  ReadDistortion(top, &c);
   c.rms_px = std::nan("");
   top.Read("rms_px", &c.rms_px, kNonNegative, "a reprojection RMS [px]");
   Items<ViewRecord>(
       top, "views", "rms_px",
       [](const YAML::Node& n, ViewRecord* v) {
-        return n.IsScalar() && YAML::convert<double>::decode(n, v->rms_px);
+        // `corners` was added with partial views (ChArUco); older files have none (0).
+        return n["rms_px"].IsScalar() && YAML::convert<double>::decode(n["rms_px"], v->rms_px) &&
+               (!n["corners"] ||
+                (n["corners"].IsScalar() && YAML::convert<int>::decode(n["corners"], v->corners)));
       },
       &c.views);
   Items<RejectedView>(
       top, "rejected", "reason",
       [](const YAML::Node& n, RejectedView* r) {
-        if (!n.IsScalar()) return false;
-        r->reason = n.Scalar();
+        if (!n["reason"].IsScalar()) return false;
+        r->reason = n["reason"].Scalar();
         return true;
       },
       &c.rejected);

@@ -14,8 +14,15 @@
 namespace impactdic {
 namespace {
 
+// The model's maps: Brown-Conrady and rational by cv::initUndistortRectifyMap (5 or 8
+// coefficients), fisheye by cv::fisheye::initUndistortRectifyMap.
 void ComputeMaps(const CameraCalibration& c, cv::Mat* map_x, cv::Mat* map_y) {
   const cv::Matx33d k = c.CameraMatrix();
+  if (c.model == LensModel::kFisheye) {
+    cv::fisheye::initUndistortRectifyMap(k, c.DistCoeffs(), cv::Matx33d::eye(), k, c.ImageSize(),
+                                         CV_32FC1, *map_x, *map_y);
+    return;
+  }
   cv::initUndistortRectifyMap(k, c.DistCoeffs(), cv::noArray(), k, c.ImageSize(), CV_32FC1, *map_x,
                               *map_y);
 }

@@ -31,6 +31,9 @@ void RegisterSynthCommand(CLI::App& app) {
                   "Render realistic footage instead (sand grains, uneven light, glare, motion "
                   "blur, JPEG; bearing-capacity field with a shear band): a spec YAML with a "
                   "`realistic:` section (docs/synth.md)");
+  cmd->add_option("--calibration-set", args->calibration_set,
+                  "Render a calibration set with known truth instead: charuco, charuco_legacy, "
+                  "circles, asymmetric_circles, wide_angle or window (docs/calibration.md)");
   cmd->add_option("--frames", args->frames,
                   "Override the spec's frames.count (0: auto, or at least before_impact + 2)");
   cmd->add_flag("!--no-calibrate", args->calibrate,

@@ -83,6 +83,7 @@ const std::vector<SceneFlagAlias>& SceneFlagAliases() {
       {"calibrate", "calibration.min_views", "--min-views"},
       {"calibrate", "calibration.max_rms_px", "--max-rms"},
       {"calibrate", "calibration.fix_k3", "--fix-k3", /*is_switch=*/true},
+      {"calibrate", "calibration.model", "--model"},
       {"render", "outputs.video.fps", "--fps"},
   };
   return kAliases;

@@ -13,6 +13,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/io/atomic_file.h"
 #include "impactdic/io/output_generation.h"
+#include "impactdic/synth/checkerboard.h"
 #include "impactdic/synth/dem_scene.h"
 #include "impactdic/synth/impact_scene.h"
 #include "impactdic/synth/realistic.h"
@@ -30,6 +31,8 @@ void CalibrateRendered(const ImpactSceneSpec& spec, const std::string& staging,
   const std::string yaml = (dir / "camera.yaml").string();
   if (calibrate) {
     CalibrationOptions options;  // The rendered board: 9x6 inner corners, 25 mm squares.
+    // The scene's lens is Brown-Conrady by construction: no model choice (~1.5 s).
+    options.model = LensModel::kBrown;
     CalibrationSummary summary;
     CameraCalibration calibration = CalibrateFromFiles(
         {(dir / "view_*.png").string()}, (dir / "plane.png").string(), options, &summary);
@@ -95,9 +98,38 @@ std::string RunSynthRealistic(const SynthFolderOptions& args) {
                      generation.FinalPath(report.truth_h5));
 }
 
+// impactdic synth --calibration-set NAME -o DIR: a calibration set with known truth
+// (synth/checkerboard.h, docs/calibration.md).
+std::string RunSynthCalibrationSet(const SynthFolderOptions& args) {
+  if (!args.spec_path.empty() || !args.preset.empty() || !args.dem_dir.empty() ||
+      !args.realistic_spec.empty() || args.frames)
+    throw Error(ErrorKind::kInvalidValue, "--calibration-set", args.calibration_set,
+                "no SCENE_SPEC, --preset, --dem, --realistic or --frames with --calibration-set");
+  const CalibrationPreset preset = CalibrationPresetNamed(args.calibration_set);
+  OutputGenerationOptions generation_options;
+  generation_options.command = "impactdic synth --calibration-set";
+  generation_options.own_names = {"plane.png", "soil.png", "board.yaml"};
+  for (int k = 0; k < preset.options.views; ++k)
+    generation_options.own_names.push_back(fmt::format("view_{:02d}.png", k));
+  generation_options.force = args.force;
+  OutputGeneration generation(args.output, generation_options);
+  const CalibrationSet set = RenderCalibrationPreset(preset, generation.staging_folder());
+  generation.Commit();
+  std::string report =
+      fmt::format("calibration set {}: {} views, plane view {}{}; truth {}\n", args.calibration_set,
+                  set.view_paths.size(), generation.FinalPath(set.plane_path),
+                  set.soil_path.empty() ? "" : ", soil view " + generation.FinalPath(set.soil_path),
+                  generation.FinalPath(set.board_path));
+  return report;
+}
+
 }  // namespace
 
 std::string WriteSynthFolder(const SynthFolderOptions& args) {
+  if (!args.calibration_set.empty()) {
+    CheckValue(!args.output.empty(), "-o", "nothing", "an output folder");
+    return RunSynthCalibrationSet(args);
+  }
   // Named as `impactdic synth` names them.
   if (args.realistic_spec.empty()) {
     CheckValue(!args.spec_path.empty() || !args.preset.empty(), "SCENE_SPEC", "nothing",

@@ -113,5 +113,71 @@ TEST(CalibrateCli, ImagesWithoutTheBoardAreAClearError) {
       << p.output;
 }
 
+TEST(CalibrateCli, ModelChoiceAndPerViewCornersInTextAndJson) {
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_model.yaml";
+  CliResult r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* part :
+       {"model: brown (lowest held-out RMS)", "rational held-out RMS", "fisheye  held-out RMS",
+        "view_00.png: 54 points, RMS", "residual RMS [px] over the image"})
+    EXPECT_TRUE(Contains(r.output, part)) << part << "\n" << r.output;
+  r = RunCli("calibrate --board 9x6 --square 25 " + kViews + " -o " + out +
+             " --model rational --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* part : {"\"model\": \"rational\"", "\"corners\": 54", "\"residual_map_px\"",
+                           "\"model_candidates\": {}"})
+    EXPECT_TRUE(Contains(r.output, part)) << part << "\n" << r.output;
+  EXPECT_EQ(LoadCalibration(out).DistCoeffs().total(), 8u);
+}
+
+TEST(CalibrateCli, WindowCarriesThePlaneScaleToTheSoil) {
+  // The sample's plane view is 613.93 mm from the camera: behind a 20 mm panel of n = 1.5 the
+  // soil's scale is (613.93 + 20 / 1.5) / 613.93 = 1.02172 times the board's (paraxially).
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_window.yaml";
+  const std::string base = "calibrate --board 9x6 --square 25 --model brown --plane " + kSource +
+                           "/calibration/plane.png " + kViews + " -o " + out;
+  CliResult r = RunCli(base +
+                       " --calibration.window.thickness_mm 20 "
+                       "--calibration.window.refractive_index 1.5 --format json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(Contains(r.output, "\"window\": {\"thickness_mm\": 20")) << r.output;
+  const CameraCalibration c = LoadCalibration(out);
+  ASSERT_TRUE(c.plane);
+  EXPECT_NEAR(c.plane->mm_per_px / c.plane->board_mm_per_px, (613.93 + 20 / 1.5) / 613.93, 2e-4);
+  EXPECT_EQ(c.plane->window.board_position, BoardPosition::kOuterFace);
+  // The board at the soil plane: the scale is the measured one.
+  r = RunCli(base +
+             " --calibration.window.thickness_mm 20 "
+             "--calibration.window.board_position soil");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NEAR(LoadCalibration(out).plane->mm_per_px, 0.747786537, 0.002 * 0.747786537);
+}
+
+TEST(CalibrateCli, BoardKindsAreCheckedBeforeWork) {
+  const std::string out = ::testing::TempDir() + "/impactdic_cli_kinds.yaml";
+  struct Case {
+    std::string args, message;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"--charuco 8x6 --square 30 " + kViews + " -o " + out, "--marker"},
+           {"--charuco 8x6 --square 30 --marker 40 " + kViews + " -o " + out, "--marker"},
+           {"--charuco 8x6 --square 30 --marker 21 --dictionary DICT_9X9 " + kViews + " -o " + out,
+            "--dictionary"},
+           {"--charuco 8x6 --board 9x6 --square 30 --marker 21 " + kViews + " -o " + out,
+            "excludes"},
+           {"--circles 7x5 --spacing 0 " + kViews + " -o " + out, "--spacing"},
+           {"--square 25 " + kViews + " -o " + out, "one of --board, --charuco or --circles"},
+           {"--board 9x6 --square 25 --model wide " + kViews + " -o " + out, "--model"},
+           {"--board 9x6 --square 25 --calibration.window.refractive_index 0.5 " + kViews + " -o " +
+                out,
+            "--calibration.window.refractive_index"},
+       }) {
+    const CliResult r = RunCli("calibrate " + c.args);
+    EXPECT_EQ(r.exit_code, 1) << c.args << "\n" << r.output;
+    EXPECT_TRUE(Contains(r.output, c.message)) << c.args << "\n" << r.output;
+    EXPECT_FALSE(Contains(r.output, "images used")) << c.args << "\n" << r.output;
+  }
+}
+
 }  // namespace
 }  // namespace impactdic

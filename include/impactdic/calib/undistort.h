@@ -2,11 +2,12 @@
 // (docs/calibration.md: "leave out what a scene does not need").
 //
 // The undistorted image keeps the calibration's camera matrix K: output pixel p takes the input
-// value at K * distort(K^-1 p). The maps are computed once (cv::initUndistortRectifyMap, float
-// precision ~1e-4 px) and applied per frame with our own bicubic (Keys 1981, a = -0.5,
-// doi:10.1109/TASSP.1981.1163711) interpolation at the exact map coordinates: cv::remap quantises
-// the sub-pixel position to 1/32 px (INTER_BITS = 5), an error of up to 0.016 px, larger than
-// the 0.01 px skip threshold itself and visible to subpixel DIC.
+// value at K * distort(K^-1 p), distort() of the calibration's model. The maps are computed once
+// (cv::initUndistortRectifyMap, or cv::fisheye::initUndistortRectifyMap; float precision ~1e-4 px)
+// and applied per frame with our own bicubic (Keys 1981, a = -0.5, doi:10.1109/TASSP.1981.1163711)
+// interpolation at the exact map coordinates: cv::remap quantises the sub-pixel position to 1/32 px
+// (INTER_BITS = 5), an error of up to 0.016 px, larger than the 0.01 px skip threshold itself and
+// visible to subpixel DIC.
 //
 // Skip rule: the largest displacement |map(p) - p| over every pixel p of the region of interest
 // is computed from the maps; at or below `skip_threshold_px` (0.01 px) undistortion is skipped

@@ -19,14 +19,15 @@
 namespace impactdic {
 
 struct SynthFolderOptions {
-  std::string spec_path;       // Scene spec YAML (docs/synth.md); empty: `preset`.
-  std::string preset;          // small, full or tiny (ImpactScenePreset) when no spec.
-  std::string output;          // The folder (created).
-  std::string dem_dir;         // Film this DEM run instead (validation/dem/run_case.sh's folder).
-  std::string realistic_spec;  // Render realistic footage from this spec instead.
-  std::optional<int> frames;   // Overrides the spec's frames.count (not with dem_dir).
-  bool calibrate = true;       // Calibrate the rendered checkerboard images.
-  bool force = false;          // Replace a folder another command wrote.
+  std::string spec_path;        // Scene spec YAML (docs/synth.md); empty: `preset`.
+  std::string preset;           // small, full or tiny (ImpactScenePreset) when no spec.
+  std::string output;           // The folder (created).
+  std::string dem_dir;          // Film this DEM run instead (validation/dem/run_case.sh's folder).
+  std::string realistic_spec;   // Render realistic footage from this spec instead.
+  std::string calibration_set;  // Render this calibration set instead (kCalibrationSetNames).
+  std::optional<int> frames;    // Overrides the spec's frames.count (not with dem_dir).
+  bool calibrate = true;        // Calibrate the rendered checkerboard images.
+  bool force = false;           // Replace a folder another command wrote.
 };
 
 // Writes the folder and returns the report to print (the scene's brief report and its YAML's
