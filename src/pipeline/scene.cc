@@ -1098,6 +1098,7 @@ MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px) {
   m.pounder_width_m = scene.model.width_m;
   m.depth_m = scene.model.depth_m;
   m.density_kg_m3 = scene.model.density_kg_m3;
+  m.uncertainty.subset_size_mm = scene.dic.options.grid.subset_size * mm_per_px;
   const SceneMomentum& sm = scene.momentum;
   if (sm.pounder_center_x_px && sm.surface_y_px) {
     const double cx_mm = *sm.pounder_center_x_px * mm_per_px;

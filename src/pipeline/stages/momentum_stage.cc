@@ -56,6 +56,7 @@ class MomentumStage : public Stage {
       fig.sigmoid_b_per_s = ms.sigmoid.b_per_s;
       fig.sigmoid_T_s = ms.sigmoid.T_s;
     }
+    c.summary.uncertainty = UncertaintyJson(ms);
     if (!ms.IsUsable())
       c.summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
     MeasurePeakDeceleration(c);
