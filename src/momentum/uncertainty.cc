@@ -336,10 +336,7 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
 JsonObject UncertaintyJson(const MomentumSummary& s) {
   const MomentumUncertainty& u = s.uncertainty;
   JsonObject j;
-  j.Add("method",
-        "Monte Carlo over the inputs (JCGM 101): the momentum analysis repeated on inputs "
-        "perturbed by their errors; u = standard deviation of the draws (docs/analysis.md)")
-      .Add("draws", u.draws);
+  j.Add("method", kMomentumUncertaintyMethod).Add("draws", u.draws);
   const std::vector<double> values = Figures(s);
   std::size_t i = 0;
   for (const auto& f : UncertainFigures(s)) {

@@ -43,6 +43,12 @@ namespace impactdic {
 inline constexpr ValueRange kUncertaintyDrawsRange{0, 100000, ""};
 inline constexpr ValueRange kNonNegativeUncertaintyRange{0, 1e300, ""};
 
+// How the uncertainties are propagated, as summary.json and /momentum state it.
+inline constexpr const char* kMomentumUncertaintyMethod =
+    "Monte Carlo over the inputs (JCGM 101): the momentum analysis repeated on inputs perturbed "
+    "by their errors (DIC sigma, accelerometer noise, scale, density, depth); u = standard "
+    "deviation of the draws (docs/analysis.md)";
+
 struct MomentumUncertaintyOptions {
   // Monte Carlo draws, kUncertaintyDrawsRange; 0 = no uncertainty (the figures' _u are NaN).
   // 200 draws give each standard deviation to ~5 % (1 / sqrt(2 (N - 1))).
