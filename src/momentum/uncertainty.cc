@@ -325,11 +325,13 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
         "in {} of {} draws t_e was not measurable; the figures' spread is over the others",
         not_measured, uo.draws));
   }
-  if (uo.density_u_kg_m3 == 0 || uo.depth_u_m == 0 || uo.scale_u_fraction == 0) {
-    u.notes.push_back(
-        "inputs stated without an uncertainty count as exact (0): test.density_u_kg_m3, "
-        "test.depth_u_m, the scale's (inputs.mm_per_px_u, or the calibration's "
-        "plane_scale_se_mm_per_px)");
+  std::string exact;
+  for (const auto& [key, value] : {std::pair{"inputs.mm_per_px_u", uo.scale_u_fraction},
+                                   std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
+                                   std::pair{"test.depth_u_m", uo.depth_u_m}})
+    if (value == 0) exact += (exact.empty() ? "" : ", ") + std::string(key);
+  if (!exact.empty()) {
+    u.notes.push_back("stated without an uncertainty, so counted as exact (0): " + exact);
   }
 }
 
