@@ -148,8 +148,8 @@ MomentumResultsGroup ReadMomentumResults(const H5Reader& in, const std::string& 
                                     std::pair{"p_gran_te_kg_m_s", &s.p_gran_te_kg_m_s},
                                     std::pair{"v_sand_te_m_s", &s.v_sand_te_m_s}})
     *value = ReadNumberAttributeOr(in, L::kMomentumGroup, name, kNaN);
-  s.uncertainty.draws = static_cast<int>(
-      ReadNumberAttributeOr(in, L::kMomentumGroup, L::kUncertaintyDrawsAttr, 0.0));
+  s.uncertainty.draws =
+      static_cast<int>(ReadNumberAttributeOr(in, L::kMomentumGroup, L::kUncertaintyDrawsAttr, 0.0));
   if (in.Exists(L::kPGranU))
     for (const auto& d : UncertaintySeries(m)) *d.values = ReadSeries(in, d.path, file, &k);
   g.t_e_found = ReadStringAttributeOr(in, L::kMomentumGroup, L::kTeFoundAttr, "");

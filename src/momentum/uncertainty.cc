@@ -76,9 +76,9 @@ class PounderNoise {
   PounderNoise(const SensorResult& sensor, double noise_g) : t_(sensor.time_s) {
     const SensorSummary& ss = sensor.summary;
     const std::size_t n = t_.size();
-    start_ = std::min(IndexAt(t_, std::isfinite(ss.release_time_s) ? ss.release_time_s
-                                                                    : ss.impact_time_s),
-                      n - 1);
+    start_ = std::min(
+        IndexAt(t_, std::isfinite(ss.release_time_s) ? ss.release_time_s : ss.impact_time_s),
+        n - 1);
     impact_ = std::min(ss.impact_index, n - 1);
     if (std::isfinite(ss.offset_window_s[0]) && std::isfinite(ss.offset_window_s[1])) {
       w0_ = std::min(IndexAt(t_, ss.offset_window_s[0]), n - 1);
@@ -133,8 +133,8 @@ class GridNoise {
     for (std::size_t i = 0; i < g; ++i) {
       for (std::size_t j = 0; j < g; ++j) {
         const std::size_t a = grid.subset_ids[i], b = grid.subset_ids[j];
-        r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = OverlapFraction(
-            kin.x_mm[a] - kin.x_mm[b], kin.y_mm[a] - kin.y_mm[b], subset_size_mm);
+        r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+            OverlapFraction(kin.x_mm[a] - kin.x_mm[b], kin.y_mm[a] - kin.y_mm[b], subset_size_mm);
       }
     }
     // The overlap fractions are a product of two triangle functions, positive semi-definite; a
@@ -174,7 +174,7 @@ std::vector<double> Figures(const MomentumSummary& s) {
   std::vector<double> v;
   for (const auto& f : UncertainFigures(s))
     v.push_back(s.sigmoid_fitted || std::string(f.name).rfind("sigmoid_", 0) != 0 ? *f.value
-                                                                                   : kNaN);
+                                                                                  : kNaN);
   return v;
 }
 
@@ -296,12 +296,13 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
   std::vector<double*> us;
   for (const auto& f : UncertainFigures(s)) us.push_back(f.u);
   const std::vector<double> nominal = Figures(s);
-  for (std::size_t j = 0; j < nfig; ++j) *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
+  for (std::size_t j = 0; j < nfig; ++j)
+    *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
   // t_e on a frame (not refined): the frame grid's resolution, uniform over one interval.
   if (std::isfinite(s.t_end_peak_s) && !s.t_end_refined) {
     u.t_end_grid_s = dt / std::sqrt(12.0);
-    u.t_end_peak_s = std::hypot(std::isfinite(u.t_end_peak_s) ? u.t_end_peak_s : 0.0,
-                                u.t_end_grid_s);
+    u.t_end_peak_s =
+        std::hypot(std::isfinite(u.t_end_peak_s) ? u.t_end_peak_s : 0.0, u.t_end_grid_s);
     u.notes.push_back(fmt::format(
         "t_e lies on a frame (not refined between two): its uncertainty includes the frame "
         "grid's dt / sqrt(12) = {:.4g} s; the figures at t_e do not",

@@ -160,8 +160,7 @@ Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
   plot.y_label = "added mass m_{add} [kg]";
   plot.enhanced_text = true;
   plot.legend = LegendPosition::kBottomRight;
-  AddBand(&plot, ToMs(d.t_s), d.m_add_kg, d.m_add_u_kg, "m_{add} +-1 standard uncertainty",
-          kBlue);
+  AddBand(&plot, ToMs(d.t_s), d.m_add_kg, d.m_add_u_kg, "m_{add} +-1 standard uncertainty", kBlue);
   AddSeries(&plot, ToMs(d.t_s), d.m_add_kg, "measured p_{max}/v_p - m_p (Eq. 3)", kBlue,
             SeriesStyle::kLinesPoints);
   if (!plot.series.empty()) plot.series.back().line_width = 1.5;

@@ -79,7 +79,8 @@ TEST(UncertaintySeeds, SpreadOverNoiseSeedsMatchesTheReportedUncertainty) {
   }
   for (const SeedRun& r : runs) ASSERT_TRUE(r.problem.empty()) << r.problem;
   const std::vector<std::string> held = {"t_end_peak_s", "added_mass_max_kg", "p_gran_te_kg_m_s"};
-  std::string table = "figure                        mean          SD over seeds  mean u      SD/u\n";
+  std::string table =
+      "figure                        mean          SD over seeds  mean u      SD/u\n";
   const std::size_t figures = UncertainFigures(runs[0].summary).size();
   for (std::size_t j = 0; j < figures; ++j) {
     std::vector<double> values, us;
@@ -91,8 +92,8 @@ TEST(UncertaintySeeds, SpreadOverNoiseSeedsMatchesTheReportedUncertainty) {
       us.push_back(*f.u);
     }
     const double sd = Sd(values), u = Mean(us), ratio = sd / u;
-    table += fmt::format("{:<29} {:<13.6g} {:<14.4g} {:<11.4g} {:.3f}\n", name, Mean(values), sd,
-                         u, ratio);
+    table += fmt::format("{:<29} {:<13.6g} {:<14.4g} {:<11.4g} {:.3f}\n", name, Mean(values), sd, u,
+                         ratio);
     if (std::find(held.begin(), held.end(), name) == held.end()) continue;
     EXPECT_TRUE(std::isfinite(ratio)) << name;
     EXPECT_NEAR(ratio, 1.0, 0.3) << name << ": SD over " << kSeeds << " seeds " << sd

@@ -73,8 +73,8 @@ struct MomentumUncertainty {
   // The frame grid's term in t_end_peak_s (0 when t_e was refined to a sub-frame time).
   double t_end_grid_s = 0;
   // Inputs.
-  double accel_noise_g = kNaN;         // White noise of the accelerometer (SensorSummary).
-  double dic_sigma_median_mm = kNaN;   // Median sigma of the grid's displacements.
+  double accel_noise_g = kNaN;        // White noise of the accelerometer (SensorSummary).
+  double dic_sigma_median_mm = kNaN;  // Median sigma of the grid's displacements.
   double scale_u_fraction = 0, density_u_kg_m3 = 0, depth_u_m = 0, subset_size_mm = 0;
   std::vector<std::string> notes;
 };

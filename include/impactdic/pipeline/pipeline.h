@@ -162,8 +162,8 @@ struct PipelineSummary {
   // The momentum figures' standard uncertainties (momentum UncertaintyJson), when the momentum
   // stage ran.
   std::optional<JsonObject> uncertainty;
-  std::vector<StageFailure> failures;   // Empty: every stage that ran produced what it is for.
-  std::vector<std::string> outputs;     // Files written.
+  std::vector<StageFailure> failures;  // Empty: every stage that ran produced what it is for.
+  std::vector<std::string> outputs;    // Files written.
   std::vector<std::string> warnings;
   double seconds = 0;
   bool IsUsable() const { return failures.empty(); }

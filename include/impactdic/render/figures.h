@@ -31,8 +31,8 @@ struct MomentumFigureData {
   std::vector<double> p_total_Ns;    // p_pounder + p_gran [N s]
   // Standard uncertainties of p_gran and p_total [N s], drawn as +-1 u bands; empty = none.
   std::vector<double> p_gran_u_Ns, p_total_u_Ns;
-  double p_max_Ns = kFigureUnset;    // maximum pounder momentum (horizontal line); NaN = none
-  double t_e_s = kFigureUnset;       // end of the peak stage (vertical marker); NaN = none
+  double p_max_Ns = kFigureUnset;  // maximum pounder momentum (horizontal line); NaN = none
+  double t_e_s = kFigureUnset;     // end of the peak stage (vertical marker); NaN = none
 };
 Plot MakeMomentumPlot(const MomentumFigureData& data);
 PlotSummary PlotMomentum(const MomentumFigureData& data, const std::string& png_path,
