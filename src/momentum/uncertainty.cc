@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -24,8 +25,8 @@ void MomentumUncertaintyOptions::Check() const {
              fmt::format("{}", draws), kUncertaintyDrawsRange.Text());
   for (const auto& [name, value] :
        {std::pair{"test.density_u_kg_m3", density_u_kg_m3}, std::pair{"test.depth_u_m", depth_u_m},
-        std::pair{"momentum.uncertainty.scale_u_fraction", scale_u_fraction},
-        std::pair{"momentum.uncertainty.subset_size_mm", subset_size_mm}}) {
+        std::pair{"inputs.mm_per_px_u (relative)", scale_u_fraction},
+        std::pair{"dic.subset_size (on the panel, mm)", subset_size_mm}}) {
     CheckValue(std::isfinite(value) && value >= 0, name, fmt::format("{}", value),
                "a standard uncertainty >= 0");
   }
@@ -327,9 +328,11 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
         not_measured, uo.draws));
   }
   std::string exact;
-  for (const auto& [key, value] : {std::pair{"inputs.mm_per_px_u", uo.scale_u_fraction},
-                                   std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
-                                   std::pair{"test.depth_u_m", uo.depth_u_m}})
+  for (const auto& [key, value] :
+       {std::pair{"inputs.mm_per_px_u (or a calibration's plane scale uncertainty)",
+                  uo.scale_u_fraction},
+        std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
+        std::pair{"test.depth_u_m", uo.depth_u_m}})
     if (value == 0) exact += (exact.empty() ? "" : ", ") + std::string(key);
   if (!exact.empty()) {
     u.notes.push_back("stated without an uncertainty, so counted as exact (0): " + exact);

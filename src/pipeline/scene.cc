@@ -129,7 +129,8 @@ YamlOptionTable InputsTable(Scene* s) {
   t.Add("mm_per_px", &in.mm_per_px, kMmPerPxRange, "an image scale",
         "Scale without a calibration; 0 = the calibration's plane scale");
   t.Add("mm_per_px_u", &in.mm_per_px_u, kNonNegativeUncertaintyRange, "a standard uncertainty",
-        "Standard uncertainty of the scale (mm_per_px or the calibration's) [mm/px]; 0 = exact");
+        "Standard uncertainty of the scale [mm/px]; 0 = the calibration's plane-scale one when "
+        "the scale is the calibration's, else exact");
   AddPath(t, "sensor", &in.sensor, s->folder, "DAQ CSV; none = no sensor stage");
   AddPath(t, "truth", &in.truth, s->folder, "Ground-truth HDF5 (synthetic scenes)");
   return t;
