@@ -186,6 +186,63 @@ double MedianOf(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The notes on what the draws left out: draws without a measurable t_e, inputs stated without
+// an uncertainty.
+void AddNotes(const MomentumUncertaintyOptions& uo, int not_measured, MomentumUncertainty* out) {
+  MomentumUncertainty& u = *out;
+  if (not_measured > 0) {
+    u.notes.push_back(fmt::format(
+        "in {} of {} draws t_e was not measurable; the figures' spread is over the others",
+        not_measured, uo.draws));
+  }
+  std::string exact;
+  for (const auto& [key, value] :
+       {std::pair{"inputs.mm_per_px_u (or a calibration's plane scale uncertainty)",
+                  uo.scale_u_fraction},
+        std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
+        std::pair{"test.depth_u_m", uo.depth_u_m}})
+    if (value == 0) exact += (exact.empty() ? "" : ", ") + std::string(key);
+  if (!exact.empty()) {
+    u.notes.push_back("stated without an uncertainty, so counted as exact (0): " + exact);
+  }
+}
+
+// The per-frame standard deviations of the draws (NaN where the nominal series is).
+void FrameBands(const std::vector<std::vector<double>>& v_sand,
+                const std::vector<std::vector<double>>& p_gran,
+                const std::vector<std::vector<double>>& p_total,
+                const std::vector<std::vector<double>>& m_add, MomentumResult* result) {
+  const std::size_t nf = result->frame_time_s.size();
+  result->v_sand_u_m_s.resize(nf);
+  result->p_gran_u_kg_m_s.resize(nf);
+  result->p_total_u_kg_m_s.resize(nf);
+  result->added_mass_u_kg.resize(nf);
+  for (std::size_t k = 0; k < nf; ++k) {
+    auto sd = [&](const std::vector<double>& nominal_series, const std::vector<double>& draws) {
+      return std::isfinite(nominal_series[k]) ? FiniteSd(draws) : kNaN;
+    };
+    result->v_sand_u_m_s[k] = sd(result->v_sand_m_s, v_sand[k]);
+    result->p_gran_u_kg_m_s[k] = sd(result->p_gran_kg_m_s, p_gran[k]);
+    result->p_total_u_kg_m_s[k] = sd(result->p_total_kg_m_s, p_total[k]);
+    result->added_mass_u_kg[k] = sd(result->added_mass_kg, m_add[k]);
+  }
+}
+
+// t_e on a frame (not refined): the frame grid's resolution, uniform over one interval of dt.
+void AddFrameGridTerm(double dt, MomentumSummary* summary) {
+  const MomentumSummary& s = *summary;
+  MomentumUncertainty& u = summary->uncertainty;
+  if (std::isfinite(s.t_end_peak_s) && !s.t_end_refined) {
+    u.t_end_grid_s = dt / std::sqrt(12.0);
+    u.t_end_peak_s =
+        std::hypot(std::isfinite(u.t_end_peak_s) ? u.t_end_peak_s : 0.0, u.t_end_grid_s);
+    u.notes.push_back(fmt::format(
+        "t_e lies on a frame (not refined between two): its uncertainty includes the frame "
+        "grid's dt / sqrt(12) = {:.4g} s; the figures at t_e do not",
+        u.t_end_grid_s));
+  }
+}
+
 }  // namespace
 
 void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult& sensor,
@@ -299,44 +356,9 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
   const std::vector<double> nominal = Figures(s);
   for (std::size_t j = 0; j < nfig; ++j)
     *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
-  // t_e on a frame (not refined): the frame grid's resolution, uniform over one interval.
-  if (std::isfinite(s.t_end_peak_s) && !s.t_end_refined) {
-    u.t_end_grid_s = dt / std::sqrt(12.0);
-    u.t_end_peak_s =
-        std::hypot(std::isfinite(u.t_end_peak_s) ? u.t_end_peak_s : 0.0, u.t_end_grid_s);
-    u.notes.push_back(fmt::format(
-        "t_e lies on a frame (not refined between two): its uncertainty includes the frame "
-        "grid's dt / sqrt(12) = {:.4g} s; the figures at t_e do not",
-        u.t_end_grid_s));
-  }
-  result->v_sand_u_m_s.resize(nf);
-  result->p_gran_u_kg_m_s.resize(nf);
-  result->p_total_u_kg_m_s.resize(nf);
-  result->added_mass_u_kg.resize(nf);
-  for (std::size_t k = 0; k < nf; ++k) {
-    auto sd = [&](const std::vector<double>& nominal_series, const std::vector<double>& draws) {
-      return std::isfinite(nominal_series[k]) ? FiniteSd(draws) : kNaN;
-    };
-    result->v_sand_u_m_s[k] = sd(result->v_sand_m_s, v_sand[k]);
-    result->p_gran_u_kg_m_s[k] = sd(result->p_gran_kg_m_s, p_gran[k]);
-    result->p_total_u_kg_m_s[k] = sd(result->p_total_kg_m_s, p_total[k]);
-    result->added_mass_u_kg[k] = sd(result->added_mass_kg, m_add[k]);
-  }
-  if (not_measured > 0) {
-    u.notes.push_back(fmt::format(
-        "in {} of {} draws t_e was not measurable; the figures' spread is over the others",
-        not_measured, uo.draws));
-  }
-  std::string exact;
-  for (const auto& [key, value] :
-       {std::pair{"inputs.mm_per_px_u (or a calibration's plane scale uncertainty)",
-                  uo.scale_u_fraction},
-        std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
-        std::pair{"test.depth_u_m", uo.depth_u_m}})
-    if (value == 0) exact += (exact.empty() ? "" : ", ") + std::string(key);
-  if (!exact.empty()) {
-    u.notes.push_back("stated without an uncertainty, so counted as exact (0): " + exact);
-  }
+  AddFrameGridTerm(dt, &s);
+  FrameBands(v_sand, p_gran, p_total, m_add, result);
+  AddNotes(uo, not_measured, &u);
 }
 
 JsonObject UncertaintyJson(const MomentumSummary& s) {
