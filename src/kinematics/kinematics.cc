@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "impactdic/core/error.h"
 #include "impactdic/core/numeric.h"
@@ -193,6 +194,8 @@ KinematicsResult ComputeKinematics(const CorrelationSeries& dic, const PanelMapp
   r.vel_y_mm_s.assign(n, kNaN);
   r.acc_x_mm_s2.assign(n, kNaN);
   r.acc_y_mm_s2.assign(n, kNaN);
+  const bool sigmas = dic.sigma_v_px.size() == n;
+  if (sigmas) r.disp_y_sigma_mm.assign(n, std::numeric_limits<float>::quiet_NaN());
   std::vector<double> sx(nf), sy(nf);
   for (std::size_t i = 0; i < ns; ++i) {
     for (std::size_t k = 0; k < nf; ++k) {
@@ -210,6 +213,10 @@ KinematicsResult ComputeKinematics(const CorrelationSeries& dic, const PanelMapp
       mapping.Map(dic.x_px[i] + u, dic.y_px[i] + v, &xm, &ym);
       sx[k] = xm - r.x_mm[i];
       sy[k] = ym - r.y_mm[i];
+      if (sigmas) {
+        r.disp_y_sigma_mm[j] = static_cast<float>(
+            dic.sigma_v_px[j] * mapping.LocalScale(dic.x_px[i] + u, dic.y_px[i] + v));
+      }
     }
     const std::vector<double> vx = FirstDerivative(sx, dt), vy = FirstDerivative(sy, dt);
     const std::vector<double> ax = SecondDerivative(sx, dt), ay = SecondDerivative(sy, dt);

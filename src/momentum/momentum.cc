@@ -12,6 +12,7 @@
 #include "impactdic/core/log.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/timer.h"
+#include "momentum_internal.h"
 
 namespace impactdic {
 
@@ -40,6 +41,7 @@ void MomentumOptions::Check() const {
   CheckValue(min_valid_fraction > 0 && min_valid_fraction <= 1, "momentum.min_valid_fraction",
              fmt::format("{}", min_valid_fraction), "a fraction of the grid's subsets in (0, 1]");
   sigmoid.Check();
+  uncertainty.Check();
 }
 
 namespace {
@@ -345,15 +347,14 @@ bool FindEndOfPeakStage(const MomentumResult& r, std::size_t ki, std::size_t ken
 // pounder (v_p - v_sand changed sign) and D has its maximum at the crossing: t_e is the vertex of
 // the parabola through D at frames ke-2, ke-1, ke (v_p - v_sand linear across the crossing; kept
 // in [t_{ke-1}, t_ke]). Where the soil's lead stops growing after the crossing, as in the DEM of
-// docs/validation.md and the overtaking chain test, this comes late by ~1/3 frame. Returns p_tot
-// at t_e (interpolated).
+// docs/validation.md and the overtaking chain test, this comes late by ~1/3 frame. Returns where
+// t_e lies between frames ke - 1 (0) and ke (1), for the series' values there.
 double RefineEndOfPeakStage(const KinematicsResult& kin, const SensorResult& sensor,
                             const MomentumResult& r, std::size_t ki, std::size_t ke,
                             MomentumSummary* s) {
   const std::vector<double>& t = sensor.time_s;
   const std::vector<double>& frame_time_s = r.frame_time_s;
   const std::size_t nf = kin.frames, ns = kin.subsets;
-  double p_total_te = r.p_total_kg_m_s[ke];
   if (s->t_end_found && ke >= ki + 2 && sensor.penetration_m.size() == t.size() &&
       kin.disp_y_mm.size() == nf * ns) {
     auto gap = [&](std::size_t k) {
@@ -371,21 +372,26 @@ double RefineEndOfPeakStage(const KinematicsResult& kin, const SensorResult& sen
       if (m21 > 0 && m1e < 0) {
         const double t_zero = 0.5 * (t1 + t2) + m21 * 0.5 * (t_ke - t2) / (m21 - m1e);
         s->t_end_peak_daq_s = std::clamp(t_zero, t1, t_ke);
-        const double w = (s->t_end_peak_daq_s - t1) / (t_ke - t1);
-        p_total_te =
-            r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
+        s->t_end_refined = true;
+        return (s->t_end_peak_daq_s - t1) / (t_ke - t1);
       }
-      return p_total_te;
+      return 1;
     }
     const double s1 = std::sqrt(std::max(d_e - d1, 0.0)), s2 = std::sqrt(std::max(d_e - d2, 0.0));
     if (std::isfinite(s1) && std::isfinite(s2) && s2 > s1 && s1 > 0) {
       const double t_zero = t1 + s1 * (t1 - t2) / (s2 - s1);
       s->t_end_peak_daq_s = std::clamp(t_zero, t1, frame_time_s[ke]);
-      const double w = (s->t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
-      p_total_te = r.p_total_kg_m_s[ke - 1] + w * (r.p_total_kg_m_s[ke] - r.p_total_kg_m_s[ke - 1]);
+      s->t_end_refined = true;
+      return (s->t_end_peak_daq_s - t1) / (frame_time_s[ke] - t1);
     }
   }
-  return p_total_te;
+  return 1;
+}
+
+// A per-frame series at t_e: interpolated between frames ke - 1 and ke at fraction w (1: frame
+// ke's value).
+double AtEndOfPeakStage(const std::vector<double>& series, std::size_t ke, double w) {
+  return w >= 1 ? series[ke] : series[ke - 1] + w * (series[ke] - series[ke - 1]);
 }
 
 // Added mass at the DAQ rate from the impact to t_e, and the Eq. 5 fit.
@@ -424,19 +430,18 @@ void AddedMassAndFit(const SensorResult& sensor, const MomentumOptions& options,
 
 }  // namespace
 
-MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
-                               const SensorResult& sensor, const MomentumOptions& options) {
-  WallTimer timer;
-  options.Check();
+namespace internal {
+
+MomentumResult AnalyzeMomentumOnGrid(const KinematicsResult& kin,
+                                     const std::vector<double>& frame_time_s,
+                                     const SensorResult& sensor, const MomentumOptions& options,
+                                     const MomentumGrid& grid) {
   const std::size_t nf = kin.frames;
-  CheckValue(frame_time_s.size() == nf, "frame times", fmt::format("{}", frame_time_s.size()),
-             fmt::format("one per frame ({})", nf));
   const SensorSummary& ss = sensor.summary;
-  CheckValue(std::isfinite(ss.impact_time_s) && !sensor.time_s.empty(), "sensor results",
-             "no impact time", "a processed sensor record");
   MomentumResult r;
   MomentumSummary& s = r.summary;
-  s.grid = SelectMomentumGrid(kin, options);
+  s.grid = grid;
+  s.impact_velocity_m_s = ss.impact_velocity_m_s;
   const double mp = options.pounder_mass_kg;
 
   r.frame_time_s = frame_time_s;
@@ -487,8 +492,6 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
         "t_e is not measurable: " + s.t_end_problem +
         "; so t_e, the conservation error, m_add(t), m_add,max, the sigmoid fit, v_sand,max and "
         "the momentum ratio (Eq. 11) are NaN");
-    s.seconds = timer.ElapsedSeconds();
-    for (const auto& w : s.warnings) LogWarning("momentum: {}", w);
     return r;
   }
   // v_sand,max over the peak and plateau stages (the measured frames).
@@ -503,7 +506,10 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
   }
   s.end_frame = ke;
   s.t_end_peak_daq_s = frame_time_s[ke];
-  const double p_total_te = RefineEndOfPeakStage(kin, sensor, r, ki, ke, &s);
+  const double w_te = RefineEndOfPeakStage(kin, sensor, r, ki, ke, &s);
+  const double p_total_te = AtEndOfPeakStage(r.p_total_kg_m_s, ke, w_te);
+  s.p_gran_te_kg_m_s = AtEndOfPeakStage(r.p_gran_kg_m_s, ke, w_te);
+  s.v_sand_te_m_s = AtEndOfPeakStage(r.v_sand_m_s, ke, w_te);
   s.t_end_peak_s = s.t_end_peak_daq_s - ss.impact_time_s;
   s.momentum_conservation_error = std::abs(p_total_te - s.p_max_kg_m_s) / s.p_max_kg_m_s;
   for (std::size_t k = ki; k <= ke; ++k)
@@ -517,6 +523,24 @@ MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<do
                                      100 * s.momentum_conservation_error));
   }
   AddedMassAndFit(sensor, options, &r);
+  return r;
+}
+
+}  // namespace internal
+
+MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
+                               const SensorResult& sensor, const MomentumOptions& options) {
+  WallTimer timer;
+  options.Check();
+  const std::size_t nf = kin.frames;
+  CheckValue(frame_time_s.size() == nf, "frame times", fmt::format("{}", frame_time_s.size()),
+             fmt::format("one per frame ({})", nf));
+  CheckValue(std::isfinite(sensor.summary.impact_time_s) && !sensor.time_s.empty(),
+             "sensor results", "no impact time", "a processed sensor record");
+  const MomentumGrid grid = SelectMomentumGrid(kin, options);
+  MomentumResult r = internal::AnalyzeMomentumOnGrid(kin, frame_time_s, sensor, options, grid);
+  EstimateMomentumUncertainty(kin, sensor, options, &r);
+  MomentumSummary& s = r.summary;
   s.seconds = timer.ElapsedSeconds();
   for (const auto& w : s.warnings) LogWarning("momentum: {}", w);
   return r;
@@ -565,7 +589,11 @@ JsonObject MomentumSummary::ToJson() const {
       .Add("grid_area_m2", grid.area_m2)
       .Add("t_end_found", t_end_found)
       .Add("t_end_problem", t_end_problem)
-      .Add("warnings", warnings);
+      .Add("warnings", warnings)
+      .Add("impact_velocity_m_s", impact_velocity_m_s)
+      .Add("p_gran_te_kg_m_s", p_gran_te_kg_m_s)
+      .Add("v_sand_te_m_s", v_sand_te_m_s)
+      .Add("uncertainty", UncertaintyJson(*this));
   return j;
 }
 

@@ -59,6 +59,35 @@ auto SummaryAttributes(S& s, Number* m, Number* b, Number* t, Number* se_m, Numb
       {"sigmoid_se_T_s", se_t}};
 }
 
+// The per-frame standard uncertainties (bands of the figures), [K] each, when estimated.
+template <typename R>
+auto UncertaintySeries(R& m) {
+  using Vector = std::remove_reference_t<decltype((m.frame_time_s))>;
+  return std::vector<DatasetBinding<Vector>>{
+      {L::kVSandU, "m/s", "standard uncertainty of v_sand", &m.v_sand_u_m_s},
+      {L::kPGranU, "N s", "standard uncertainty of p_gran", &m.p_gran_u_kg_m_s},
+      {L::kPTotalU, "N s", "standard uncertainty of p_total", &m.p_total_u_kg_m_s},
+      {L::kMAddU, "kg", "standard uncertainty of m_add", &m.added_mass_u_kg}};
+}
+
+// The figures' values new with the uncertainty (the others are attributes already) and every
+// figure's NAME_u (momentum UncertainFigures), the method and the draws.
+void WriteUncertainty(H5Writer& out, const MomentumResult& m) {
+  const MomentumSummary& s = m.summary;
+  const MomentumUncertainty& u = s.uncertainty;
+  for (const auto& [name, value] : {std::pair{"impact_velocity_m_s", s.impact_velocity_m_s},
+                                    std::pair{"p_gran_te_kg_m_s", s.p_gran_te_kg_m_s},
+                                    std::pair{"v_sand_te_m_s", s.v_sand_te_m_s}})
+    out.SetAttribute(L::kMomentumGroup, name, value);
+  for (const auto& f : UncertainFigures(s))
+    out.SetAttribute(L::kMomentumGroup, std::string(f.name) + "_u", u.draws > 0 ? *f.u : kNaN);
+  out.SetAttribute(L::kMomentumGroup, L::kUncertaintyDrawsAttr, static_cast<double>(u.draws));
+  out.SetAttribute(L::kMomentumGroup, L::kUncertaintyMethodAttr,
+                   std::string(kMomentumUncertaintyMethod));
+  if (m.v_sand_u_m_s.size() != m.frame_time_s.size()) return;
+  for (const auto& d : UncertaintySeries(m)) out.Write(d.path, *d.values, d.units, d.description);
+}
+
 std::string TeFoundText(const MomentumSummary& s) {
   if (!s.t_end_problem.empty()) return "not measurable: " + s.t_end_problem;
   return s.t_end_found ? "yes" : "no (max soil velocity)";
@@ -89,6 +118,7 @@ void WriteMomentumResults(H5Writer& out, const MomentumResult& m, double impact_
        SummaryAttributes(s, &sig[0], &sig[1], &sig[2], &sig[3], &sig[4], &sig[5]))
     out.SetAttribute(L::kMomentumGroup, name, *value);
   out.SetAttribute(L::kMomentumGroup, L::kTeFoundAttr, TeFoundText(s));
+  WriteUncertainty(out, m);
 }
 
 MomentumResultsGroup ReadMomentumResults(const H5Reader& in, const std::string& file) {
@@ -112,6 +142,16 @@ MomentumResultsGroup ReadMomentumResults(const H5Reader& in, const std::string& 
        SummaryAttributes(s, &f.M_kg, &f.b_per_s, &f.T_s, &f.se_M_kg, &f.se_b_per_s, &f.se_T_s))
     *value = ReadNumberAttributeOr(in, L::kMomentumGroup, name, kNaN);
   s.sigmoid_fitted = std::isfinite(f.M_kg);
+  for (const auto& figure : UncertainFigures(s))
+    *figure.u = ReadNumberAttributeOr(in, L::kMomentumGroup, std::string(figure.name) + "_u", kNaN);
+  for (const auto& [name, value] : {std::pair{"impact_velocity_m_s", &s.impact_velocity_m_s},
+                                    std::pair{"p_gran_te_kg_m_s", &s.p_gran_te_kg_m_s},
+                                    std::pair{"v_sand_te_m_s", &s.v_sand_te_m_s}})
+    *value = ReadNumberAttributeOr(in, L::kMomentumGroup, name, kNaN);
+  s.uncertainty.draws =
+      static_cast<int>(ReadNumberAttributeOr(in, L::kMomentumGroup, L::kUncertaintyDrawsAttr, 0.0));
+  if (in.Exists(L::kPGranU))
+    for (const auto& d : UncertaintySeries(m)) *d.values = ReadSeries(in, d.path, file, &k);
   g.t_e_found = ReadStringAttributeOr(in, L::kMomentumGroup, L::kTeFoundAttr, "");
   s.t_end_found = g.t_e_found == "yes";
   const std::string not_measurable = "not measurable: ";

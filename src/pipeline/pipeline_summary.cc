@@ -210,6 +210,7 @@ std::string PipelineSummary::BriefReport() const {
 
 JsonObject PipelineSummary::ToJson() const {
   JsonObject j = figures.ToJson();
+  if (uncertainty) j.Add("uncertainty", *uncertainty);
   if (strain) j.Add("strain", strain->ToJson());
   if (wave) j.Add("wave", WaveJson(*wave));
   JsonObject failed;

@@ -128,6 +128,9 @@ YamlOptionTable InputsTable(Scene* s) {
   AddPath(t, "calibration", &in.calibration, s->folder, "Calibration YAML (impactdic calibrate)");
   t.Add("mm_per_px", &in.mm_per_px, kMmPerPxRange, "an image scale",
         "Scale without a calibration; 0 = the calibration's plane scale");
+  t.Add("mm_per_px_u", &in.mm_per_px_u, kNonNegativeUncertaintyRange, "a standard uncertainty",
+        "Standard uncertainty of the scale [mm/px]; 0 = the calibration's plane-scale one when "
+        "the scale is the calibration's, else exact");
   AddPath(t, "sensor", &in.sensor, s->folder, "DAQ CSV; none = no sensor stage");
   AddPath(t, "truth", &in.truth, s->folder, "Ground-truth HDF5 (synthetic scenes)");
   return t;
@@ -146,6 +149,11 @@ YamlOptionTable TestTable(Scene* s) {
   t.Add("depth_m", &m.depth_m, kPounderSizeRange, "an out-of-plane depth t_z",
         "Out-of-plane depth t_z");
   t.Add("density_kg_m3", &m.density_kg_m3, kSoilDensityRange, "a dry density", "Dry density rho_d");
+  MomentumUncertaintyOptions& u = s->momentum.options.uncertainty;
+  t.Add("density_u_kg_m3", &u.density_u_kg_m3, kNonNegativeUncertaintyRange,
+        "a standard uncertainty", "Standard uncertainty of rho_d; 0 = exact");
+  t.Add("depth_u_m", &u.depth_u_m, kNonNegativeUncertaintyRange, "a standard uncertainty",
+        "Standard uncertainty of t_z; 0 = exact");
   t.Add("bed_height_m", &m.bed_height_m, kBedHeightRange, "a bed height", "Sand bed height");
   t.Add("g_m_s2", &m.gravity_m_s2, kSceneGravityRange, "a gravitational acceleration",
         "Gravitational acceleration g");
@@ -562,6 +570,8 @@ YamlOptionTable MomentumTable(Scene* s) {
   t.Add("fit_sigmoid", &o.fit_sigmoid, "Fit the sigmoid M, b, T to the added mass (Eq. 6)");
   t.Add("sigmoid_confidence", &o.sigmoid.confidence, kConfidenceRange, "a confidence level",
         "Level of the sigmoid fit's confidence intervals");
+  t.Add("uncertainty_draws", &o.uncertainty.draws, kUncertaintyDrawsRange, "a number of draws",
+        "Monte Carlo draws of the figures' uncertainty; 0 = none");
   return t;
 }
 
@@ -1098,6 +1108,8 @@ MomentumOptions MakeMomentumOptions(const Scene& scene, double mm_per_px) {
   m.pounder_width_m = scene.model.width_m;
   m.depth_m = scene.model.depth_m;
   m.density_kg_m3 = scene.model.density_kg_m3;
+  m.uncertainty.subset_size_mm = scene.dic.options.grid.subset_size * mm_per_px;
+  m.uncertainty.scale_u_fraction = mm_per_px > 0 ? scene.inputs.mm_per_px_u / mm_per_px : 0.0;
   const SceneMomentum& sm = scene.momentum;
   if (sm.pounder_center_x_px && sm.surface_y_px) {
     const double cx_mm = *sm.pounder_center_x_px * mm_per_px;

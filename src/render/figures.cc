@@ -42,6 +42,16 @@ void AddSeries(Plot* plot, const std::vector<double>& t_ms, const std::vector<do
   plot->series.push_back(std::move(s));
 }
 
+// A +-1 u band around y (before its line, so the line is drawn over it); nothing without u.
+void AddBand(Plot* plot, const std::vector<double>& t_ms, const std::vector<double>& y,
+             const std::vector<double>& u, const std::string& label, const char* color) {
+  if (u.empty() || y.empty()) return;
+  CheckValue(u.size() == y.size(), "figure band", std::to_string(u.size()) + " uncertainties",
+             "one per value");
+  AddSeries(plot, t_ms, y, label, color, SeriesStyle::kBand);
+  plot->series.back().y_u = u;
+}
+
 void AddTeMarker(Plot* plot, double t_e_s) {
   if (!std::isfinite(t_e_s)) return;
   plot->markers.push_back({.orientation = MarkerOrientation::kVertical,
@@ -68,6 +78,11 @@ Plot MakeMomentumPlot(const MomentumFigureData& d) {
   plot.enhanced_text = true;
   plot.legend = LegendPosition::kBelow;
   const auto t_ms = ToMs(d.t_s);
+  // Unlabelled (the legend below has room for one row): the title says what they are.
+  AddBand(&plot, t_ms, d.p_gran_Ns, d.p_gran_u_Ns, "", kGreen);
+  AddBand(&plot, t_ms, d.p_total_Ns, d.p_total_u_Ns, "", kRed);
+  if (!d.p_gran_u_Ns.empty() || !d.p_total_u_Ns.empty())
+    plot.title += " (shaded: +-1 standard uncertainty)";
   AddSeries(&plot, t_ms, d.p_pounder_Ns, "pounder p_p = m_p v_p", kBlue);
   AddSeries(&plot, t_ms, d.p_gran_Ns, "granular p_{gran}", kGreen, SeriesStyle::kDashed);
   AddSeries(&plot, t_ms, d.p_total_Ns, "total p_p + p_{gran}", kRed);
@@ -145,6 +160,7 @@ Plot MakeAddedMassPlot(const AddedMassFigureData& d) {
   plot.y_label = "added mass m_{add} [kg]";
   plot.enhanced_text = true;
   plot.legend = LegendPosition::kBottomRight;
+  AddBand(&plot, ToMs(d.t_s), d.m_add_kg, d.m_add_u_kg, "m_{add} +-1 standard uncertainty", kBlue);
   AddSeries(&plot, ToMs(d.t_s), d.m_add_kg, "measured p_{max}/v_p - m_p (Eq. 3)", kBlue,
             SeriesStyle::kLinesPoints);
   if (!plot.series.empty()) plot.series.back().line_width = 1.5;

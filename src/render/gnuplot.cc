@@ -34,13 +34,14 @@ const char* ToString(SeriesStyle style) {
     case SeriesStyle::kDashed: return "dashed";
     case SeriesStyle::kPoints: return "points";
     case SeriesStyle::kLinesPoints: return "linespoints";
+    case SeriesStyle::kBand: return "band";
   }
   return "?";
 }
 
 SeriesStyle SeriesStyleFromString(const std::string& text) {
   for (SeriesStyle s : {SeriesStyle::kLines, SeriesStyle::kDashed, SeriesStyle::kPoints,
-                        SeriesStyle::kLinesPoints}) {
+                        SeriesStyle::kLinesPoints, SeriesStyle::kBand}) {
     if (text == ToString(s)) return s;
   }
   throw Error(ErrorKind::kInvalidValue, "series style", text,
@@ -156,8 +157,12 @@ std::size_t WriteData(const Plot& plot, const std::string& path) {
     const bool log_y = s.second_y_axis ? plot.log_y2 : plot.log_y;
     bool wrote_any = false, last_blank = false;
     for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (Drawable(s.x[i], s.y[i], plot.log_x, log_y)) {
-        out << Number(s.x[i]) << ' ' << Number(s.y[i]) << '\n';
+      const bool band = s.style == SeriesStyle::kBand;
+      const double u = band && i < s.y_u.size() ? s.y_u[i] : 0.0;
+      if (Drawable(s.x[i], s.y[i], plot.log_x, log_y) && std::isfinite(u)) {
+        out << Number(s.x[i]) << ' ' << Number(s.y[i] - u);
+        if (band) out << ' ' << Number(s.y[i] + u);
+        out << '\n';
         wrote_any = true;
         last_blank = false;
         ++points;
@@ -388,7 +393,8 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
     ++palette_index;
     if (!SeriesHasPoints(s, plot)) continue;
     if (index > 0) elements << ", \\\n     ";
-    elements << Quote(data_path) << " index " << index++ << " using 1:2";
+    elements << Quote(data_path) << " index " << index++
+             << (s.style == SeriesStyle::kBand ? " using 1:2:3" : " using 1:2");
     if (s.second_y_axis) elements << " axes x1y2";
     switch (s.style) {
       case SeriesStyle::kLines:
@@ -403,6 +409,9 @@ std::string GnuplotScript(const Plot& plot, const PlotOptions& options, const st
       case SeriesStyle::kLinesPoints:
         elements << " with linespoints lw " << Number(s.line_width) << " pt " << s.point_type
                  << " ps " << Number(s.point_size);
+        break;
+      case SeriesStyle::kBand:
+        elements << " with filledcurves fs transparent solid 0.25 noborder";
         break;
     }
     elements << " lc rgb " << Quote(color);

@@ -645,6 +645,8 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
         d.p_pounder_Ns = ReadIf(reader, L::kPPounder);
         d.p_gran_Ns = ReadIf(reader, L::kPGran);
         d.p_total_Ns = ReadIf(reader, L::kPTotal);
+        d.p_gran_u_Ns = ReadIf(reader, L::kPGranU);
+        d.p_total_u_Ns = ReadIf(reader, L::kPTotalU);
         d.p_max_Ns = NumberAttribute(reader, L::kMomentumGroup, L::kPMaxAttr);
         d.t_e_s = t_e_s;
         summary.written.push_back(PlotMomentum(d, out(L::kMomentumPng), options.plot).path);
@@ -677,6 +679,7 @@ void RenderInto(const H5Reader& reader, const std::string& results_path, const s
         AddedMassFigureData d;
         d.t_s = reader.ReadDouble(L::kMomentumT);
         d.m_add_kg = reader.ReadDouble(L::kMAdd);
+        d.m_add_u_kg = ReadIf(reader, L::kMAddU);
         d.sigmoid_M_kg = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidMAttr);
         d.sigmoid_b_per_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidBAttr);
         d.sigmoid_T_s = NumberAttribute(reader, L::kMomentumGroup, L::kSigmoidTAttr);

@@ -314,9 +314,10 @@ std::vector<LibraryField> KinematicsFields() {
 // The momentum stage's options (MakeMomentumOptions, with the pounder at (100, 50) px and 1 mm/px
 // unless the scene places it).
 std::vector<LibraryField> MomentumFields() {
-  static_assert(FieldCount<MomentumOptions>() == 13);
+  static_assert(FieldCount<MomentumOptions>() == 14);
   static_assert(FieldCount<PounderFootprint>() == 3);
   static_assert(FieldCount<SigmoidFitOptions>() == 3);
+  static_assert(FieldCount<MomentumUncertaintyOptions>() == 5);
   const auto m = [](const Scene& s) {
     Scene c = s;
     if (!c.momentum.pounder_center_x_px) c.momentum.pounder_center_x_px = 100;
@@ -356,6 +357,16 @@ std::vector<LibraryField> MomentumFields() {
       {"momentum.sigmoid.step_tolerance", nullptr, nullptr, nullptr},
       {"momentum.sigmoid.confidence", "momentum.sigmoid_confidence", "0.9",
        Differs(m, [](const O& o) { return o.sigmoid.confidence; })},
+      {"momentum.uncertainty.draws", "momentum.uncertainty_draws", "10",
+       Differs(m, [](const O& o) { return o.uncertainty.draws; })},
+      {"momentum.uncertainty.density_u_kg_m3", "test.density_u_kg_m3", "20",
+       Differs(m, [](const O& o) { return o.uncertainty.density_u_kg_m3; })},
+      {"momentum.uncertainty.depth_u_m", "test.depth_u_m", "0.001",
+       Differs(m, [](const O& o) { return o.uncertainty.depth_u_m; })},
+      {"momentum.uncertainty.scale_u_fraction", "inputs.mm_per_px_u", "0.01",
+       Differs(m, [](const O& o) { return o.uncertainty.scale_u_fraction; })},
+      {"momentum.uncertainty.subset_size_mm", "dic.subset_size", "31",
+       Differs(m, [](const O& o) { return o.uncertainty.subset_size_mm; })},
   };
 }
 

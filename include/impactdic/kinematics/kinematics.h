@@ -102,6 +102,10 @@ struct KinematicsResult {
   std::vector<double> disp_x_mm, disp_y_mm;
   std::vector<double> vel_x_mm_s, vel_y_mm_s;
   std::vector<double> acc_x_mm_s2, acc_y_mm_s2;
+  // Standard deviation of disp_y_mm from the correlation's sigma_v_px times the local scale at the
+  // subset [frames x subsets] [mm]; NaN where invalid, empty when the series has no sigmas. What
+  // the momentum stage propagates (momentum/uncertainty.h).
+  std::vector<float> disp_y_sigma_mm;
   KinematicsSummary summary;
 };
 

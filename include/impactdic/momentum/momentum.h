@@ -50,6 +50,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "impactdic/core/numeric.h"
@@ -58,6 +59,7 @@
 #include "impactdic/io/json.h"
 #include "impactdic/kinematics/kinematics.h"
 #include "impactdic/momentum/fit.h"
+#include "impactdic/momentum/uncertainty.h"
 #include "impactdic/sensor/sensor.h"
 
 namespace impactdic {
@@ -99,6 +101,8 @@ struct MomentumOptions {
   double min_valid_fraction = 0.5;
   bool fit_sigmoid = true;
   SigmoidFitOptions sigmoid;
+  // The figures' standard uncertainties (momentum/uncertainty.h).
+  MomentumUncertaintyOptions uncertainty;
   void Check() const;
 };
 
@@ -127,12 +131,17 @@ struct MomentumSummary {
   double added_mass_max_kg = kNaN;
   double v_sand_max_m_s = kNaN;
   double momentum_ratio = kNaN;
-  bool t_end_found = false;  // Both t_e criteria met.
+  double impact_velocity_m_s = kNaN;  // v0, the sensor's.
+  double p_gran_te_kg_m_s = kNaN;     // p_gran at t_e (interpolated like p_tot).
+  double v_sand_te_m_s = kNaN;        // v_sand at t_e.
+  bool t_end_found = false;           // Both t_e criteria met.
+  bool t_end_refined = false;         // t_e refined between two frames (else on a frame).
   // Why t_e (and every figure that depends on it) is NaN; empty when t_e was measured.
   std::string t_end_problem;
   std::size_t unmeasured_frames = 0;  // Frames whose p_gran is NaN (too few valid grid subsets).
   SigmoidFit sigmoid;
   bool sigmoid_fitted = false;
+  MomentumUncertainty uncertainty;  // Standard uncertainties of the figures above.
   double seconds = 0;
   std::vector<std::string> warnings;
   // Whether the stage measured what it is for: t_e and m_add,max.
@@ -141,9 +150,46 @@ struct MomentumSummary {
   std::string FullReport() const;
   // The analyze command's JSON keys: p_max_kg_m_s, t_end_peak_s, momentum_conservation_error,
   // added_mass_max_kg, sigmoid_b_per_s, sigmoid_T_s, momentum_ratio, v_sand_max_m_s, then more
-  // (t_end_problem: "" when t_e was measured).
+  // (t_end_problem: "" when t_e was measured), and "uncertainty" (UncertaintyJson).
   JsonObject ToJson() const;
 };
+
+// A headline figure and its standard uncertainty, by the name summary.json and the /momentum
+// attributes give it (the uncertainty as NAME_u).
+template <typename Number>
+struct FigureWithUncertainty {
+  const char* name;
+  Number* value;
+  Number* u;
+};
+// The figures with an uncertainty, in their order (the one list summary.json's "uncertainty"
+// object and the /momentum attributes NAME_u are written from). Const for the writers, mutable
+// for the reader.
+template <typename S>
+auto UncertainFigures(S& s) {
+  using Number = std::remove_reference_t<decltype((s.p_max_kg_m_s))>;
+  auto& u = s.uncertainty;
+  return std::vector<FigureWithUncertainty<Number>>{
+      {"impact_velocity_m_s", &s.impact_velocity_m_s, &u.impact_velocity_m_s},
+      {"p_max_kg_m_s", &s.p_max_kg_m_s, &u.p_max_kg_m_s},
+      {"t_end_peak_s", &s.t_end_peak_s, &u.t_end_peak_s},
+      {"p_gran_te_kg_m_s", &s.p_gran_te_kg_m_s, &u.p_gran_te_kg_m_s},
+      {"v_sand_te_m_s", &s.v_sand_te_m_s, &u.v_sand_te_m_s},
+      {"added_mass_max_kg", &s.added_mass_max_kg, &u.added_mass_max_kg},
+      {"momentum_conservation_error", &s.momentum_conservation_error,
+       &u.momentum_conservation_error},
+      {"momentum_ratio", &s.momentum_ratio, &u.momentum_ratio},
+      {"v_sand_max_m_s", &s.v_sand_max_m_s, &u.v_sand_max_m_s},
+      {"sigmoid_M_kg", &s.sigmoid.M_kg, &u.sigmoid_M_kg},
+      {"sigmoid_b_per_s", &s.sigmoid.b_per_s, &u.sigmoid_b_per_s},
+      {"sigmoid_T_s", &s.sigmoid.T_s, &u.sigmoid_T_s}};
+}
+
+// summary.json's and `analyze`'s "uncertainty": "method" (how it was propagated), "draws",
+// then per figure of UncertainFigures {"value", "u"} (null when not available), "t_end_grid_s",
+// "inputs" (what was propagated: accel_noise_g, dic_sigma_median_mm, scale_u_fraction,
+// density_u_kg_m3, depth_u_m, subset_size_mm) and "notes".
+JsonObject UncertaintyJson(const MomentumSummary& summary);
 
 struct MomentumResult {
   // Per frame.
@@ -154,6 +200,9 @@ struct MomentumResult {
   std::vector<double> p_pounder_kg_m_s, p_gran_kg_m_s, p_total_kg_m_s;
   std::vector<double> added_mass_kg;  // NaN outside [impact, t_e].
   std::vector<double> valid_subsets;  // Count of finite velocities in the grid (all frames).
+  // Standard uncertainties of v_sand, p_gran, p_tot and m_add per frame (the Monte Carlo's,
+  // momentum/uncertainty.h); empty when not estimated, NaN where the series is.
+  std::vector<double> v_sand_u_m_s, p_gran_u_kg_m_s, p_total_u_kg_m_s, added_mass_u_kg;
   // At the DAQ rate between impact and t_e (what the sigmoid is fitted to, before thinning).
   std::vector<double> added_mass_time_after_impact_s, added_mass_daq_kg;
   MomentumSummary summary;
@@ -163,6 +212,13 @@ struct MomentumResult {
 // sensor: pounder.
 MomentumResult AnalyzeMomentum(const KinematicsResult& kin, const std::vector<double>& frame_time_s,
                                const SensorResult& sensor, const MomentumOptions& options);
+
+// The standard uncertainties of result's figures and series (momentum/uncertainty.h), by
+// options.uncertainty.draws Monte Carlo draws (none when 0 or when the kinematics carry no
+// sigmas: then a note says so). AnalyzeMomentum calls it; the draws are seeded, so a result is
+// reproducible.
+void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult& sensor,
+                                 const MomentumOptions& options, MomentumResult* result);
 
 // The whole analysis of one scene from the correlation arrays: the frames' timeline (sensor
 // MakeFrameTimeline of source frames first_frame .. first_frame + dic.frames - 1: exposure edges,

@@ -38,6 +38,12 @@ inline constexpr const char* kMAdd = "/momentum/m_add_kg";
 inline constexpr const char* kAddedMassDaqGroup = "/momentum/added_mass_daq";
 inline constexpr const char* kAddedMassDaqT = "/momentum/added_mass_daq/t_s";
 inline constexpr const char* kAddedMassDaq = "/momentum/added_mass_daq/m_add_kg";
+// Standard uncertainties of v_sand [m/s], p_gran and p_total [N s] and m_add [kg] per frame [K]
+// (the momentum Monte Carlo, momentum/uncertainty.h); only when it was estimated.
+inline constexpr const char* kVSandU = "/momentum/v_sand_u_m_s";
+inline constexpr const char* kPGranU = "/momentum/p_gran_u";
+inline constexpr const char* kPTotalU = "/momentum/p_total_u";
+inline constexpr const char* kMAddU = "/momentum/m_add_u_kg";
 // The subsets of the momentum grid (int32) [G].
 inline constexpr const char* kGridSubsetIds = "/momentum/grid_subset_ids";
 // Number attributes of kMomentumGroup: p_max [N s], t_e [s] (end of the peak stage), and the
@@ -49,6 +55,11 @@ inline constexpr const char* kSigmoidMAttr = "M";
 inline constexpr const char* kSigmoidBAttr = "b";
 inline constexpr const char* kSigmoidTAttr = "T";
 inline constexpr const char* kTeFoundAttr = "t_e_found";
+// The uncertainty (momentum/uncertainty.h): every figure of UncertainFigures as a number attribute
+// NAME_u (the standard uncertainty; NaN when not estimated), the values impact_velocity_m_s,
+// p_gran_te_kg_m_s and v_sand_te_m_s, the number of draws (0: not estimated) and the method.
+inline constexpr const char* kUncertaintyDrawsAttr = "uncertainty_draws";
+inline constexpr const char* kUncertaintyMethodAttr = "uncertainty_method";
 
 }  // namespace results_layout
 

@@ -167,8 +167,11 @@ struct PipelineSummary {
   SceneFigures figures;
   std::optional<StrainFigures> strain;  // When the strain stage ran.
   std::optional<WaveResult> wave;       // When the scene has base force channels.
-  std::vector<StageFailure> failures;   // Empty: every stage that ran produced what it is for.
-  std::vector<std::string> outputs;     // Files written.
+  // The momentum figures' standard uncertainties (momentum UncertaintyJson), when the momentum
+  // stage ran.
+  std::optional<JsonObject> uncertainty;
+  std::vector<StageFailure> failures;  // Empty: every stage that ran produced what it is for.
+  std::vector<std::string> outputs;    // Files written.
   std::vector<std::string> warnings;
   double seconds = 0;
   bool IsUsable() const { return failures.empty(); }
@@ -176,7 +179,8 @@ struct PipelineSummary {
   std::string FailureText() const;
   std::string BriefReport() const;
   std::string FullReport() const;
-  // summary.json: the figures' keys (SceneFigures::ToJson), "strain" (StrainFigures::ToJson, when
+  // summary.json: the figures' keys (SceneFigures::ToJson), "uncertainty" (momentum
+  // UncertaintyJson, when the momentum stage ran), "strain" (StrainFigures::ToJson, when
   // the strain stage ran), "wave" (WaveJson, with base force channels), then "usable", "failures"
   // (stage -> reason) and "warnings". Nothing that varies between runs of one scene (no time, rate,
   // path or version).

@@ -56,6 +56,10 @@ struct SceneInputs {
   std::string calibration;  // Calibration YAML (calib module); empty = none (scale from mm_per_px).
   // Scale when there is no calibration file [mm/px], kMmPerPxRange; 0 = from the calibration.
   double mm_per_px = 0;
+  // Standard uncertainty of the scale [mm/px], >= 0; 0 = the calibration's plane-scale
+  // uncertainty when the scale is the calibration's, else exact. The momentum figures'
+  // uncertainty propagates it (momentum/uncertainty.h; the momentum stage).
+  double mm_per_px_u = 0;
   std::string sensor;  // DAQ CSV; empty = no sensor stage.
   std::string truth;   // Optional ground-truth HDF5 (synthetic scenes) for comparison.
 };

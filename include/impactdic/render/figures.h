@@ -29,8 +29,10 @@ struct MomentumFigureData {
   std::vector<double> p_pounder_Ns;  // m_p v_p [N s]
   std::vector<double> p_gran_Ns;     // granular momentum [N s]
   std::vector<double> p_total_Ns;    // p_pounder + p_gran [N s]
-  double p_max_Ns = kFigureUnset;    // maximum pounder momentum (horizontal line); NaN = none
-  double t_e_s = kFigureUnset;       // end of the peak stage (vertical marker); NaN = none
+  // Standard uncertainties of p_gran and p_total [N s], drawn as +-1 u bands; empty = none.
+  std::vector<double> p_gran_u_Ns, p_total_u_Ns;
+  double p_max_Ns = kFigureUnset;  // maximum pounder momentum (horizontal line); NaN = none
+  double t_e_s = kFigureUnset;     // end of the peak stage (vertical marker); NaN = none
 };
 Plot MakeMomentumPlot(const MomentumFigureData& data);
 PlotSummary PlotMomentum(const MomentumFigureData& data, const std::string& png_path,
@@ -54,6 +56,7 @@ PlotSummary PlotDeceleration(const DecelerationFigureData& data, const std::stri
 struct AddedMassFigureData {
   std::vector<double> t_s;
   std::vector<double> m_add_kg;
+  std::vector<double> m_add_u_kg;  // Standard uncertainty, drawn as a +-1 u band; empty = none.
   double sigmoid_M_kg = kFigureUnset;
   double sigmoid_b_per_s = kFigureUnset;
   double sigmoid_T_s = kFigureUnset;

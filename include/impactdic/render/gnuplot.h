@@ -32,6 +32,7 @@ enum class SeriesStyle {
   kDashed,       // dashed line
   kPoints,       // markers only
   kLinesPoints,  // line with markers
+  kBand,         // shaded band y +- y_u (PlotSeries::y_u), translucent
 };
 const char* ToString(SeriesStyle style);
 SeriesStyle SeriesStyleFromString(const std::string& text);  // Error kInvalidValue if unknown
@@ -40,6 +41,8 @@ SeriesStyle SeriesStyleFromString(const std::string& text);  // Error kInvalidVa
 struct PlotSeries {
   std::vector<double> x;
   std::vector<double> y;
+  // kBand: the band's half-width at each x (drawn from y - y_u to y + y_u; NaN breaks it).
+  std::vector<double> y_u;
   std::string label;  // legend entry; empty = not in the legend
   SeriesStyle style = SeriesStyle::kLines;
   std::string color;           // "#rrggbb"; empty = the next colour of the palette

@@ -37,7 +37,15 @@ class MomentumStage : public Stage {
 
   std::string Run(StageContext& c) const override {
     SceneRunData& d = c.data;
-    const MomentumOptions options = MakeMomentumOptions(c.scene, d.mm_per_px);
+    MomentumOptions options = MakeMomentumOptions(c.scene, d.mm_per_px);
+    // The scale's uncertainty: inputs.mm_per_px_u, else the calibration's plane scale's own
+    // (the homography fit's residuals and the local scale's spread) when the scale is its.
+    const bool scale_of_calibration =
+        !(c.scene.inputs.mm_per_px > 0) && d.calibration && d.calibration->plane && d.mm_per_px > 0;
+    if (c.scene.inputs.mm_per_px_u == 0 && scale_of_calibration &&
+        std::isfinite(d.calibration->plane->mm_per_px_uncertainty))
+      options.uncertainty.scale_u_fraction =
+          d.calibration->plane->mm_per_px_uncertainty / d.mm_per_px;
     try {
       d.momentum = AnalyzeMomentum(*d.kinematics, d.timeline.daq_time_s, *d.sensor, options);
     } catch (Error& e) {
@@ -58,6 +66,7 @@ class MomentumStage : public Stage {
       fig.sigmoid_b_per_s = ms.sigmoid.b_per_s;
       fig.sigmoid_T_s = ms.sigmoid.T_s;
     }
+    c.summary.uncertainty = UncertaintyJson(ms);
     if (!ms.IsUsable())
       c.summary.failures.push_back({"momentum", "t_e is not measurable: " + ms.t_end_problem});
     MeasurePeakDeceleration(c);

@@ -1,0 +1,386 @@
+// The Monte Carlo of the momentum figures' uncertainty (momentum/uncertainty.h).
+#include "impactdic/momentum/uncertainty.h"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
+#include "impactdic/momentum/momentum.h"
+#include "momentum_internal.h"
+
+namespace impactdic {
+
+void MomentumUncertaintyOptions::Check() const {
+  CheckValue(kUncertaintyDrawsRange.Contains(draws), "momentum.uncertainty_draws",
+             fmt::format("{}", draws), kUncertaintyDrawsRange.Text());
+  for (const auto& [name, value] :
+       {std::pair{"test.density_u_kg_m3", density_u_kg_m3}, std::pair{"test.depth_u_m", depth_u_m},
+        std::pair{"inputs.mm_per_px_u (relative)", scale_u_fraction},
+        std::pair{"dic.subset_size (on the panel, mm)", subset_size_mm}}) {
+    CheckValue(std::isfinite(value) && value >= 0, name, fmt::format("{}", value),
+               "a standard uncertainty >= 0");
+  }
+}
+
+namespace {
+
+constexpr std::uint64_t kSeed = 0x5eed42;
+
+// Sample standard deviation of the finite values; NaN for fewer than two.
+double FiniteSd(const std::vector<double>& values) {
+  double sum = 0, sum2 = 0;
+  std::size_t n = 0;
+  for (double v : values) {
+    if (!std::isfinite(v)) continue;
+    sum += v;
+    ++n;
+  }
+  if (n < 2) return kNaN;
+  const double mean = sum / static_cast<double>(n);
+  for (double v : values)
+    if (std::isfinite(v)) sum2 += (v - mean) * (v - mean);
+  return std::sqrt(sum2 / static_cast<double>(n - 1));
+}
+
+// Correlation of two subsets' errors: the overlap fraction of their areas (side `size`).
+double OverlapFraction(double dx, double dy, double size) {
+  if (!(size > 0)) return dx == 0 && dy == 0 ? 1.0 : 0.0;
+  return std::max(0.0, 1 - std::abs(dx) / size) * std::max(0.0, 1 - std::abs(dy) / size);
+}
+
+// g [m/s^2] as the sensor used it: accel_down = g (1 - accel_g); 9.81 if no sample tells.
+double GravityOf(const SensorResult& sensor) {
+  for (std::size_t i = 0; i < sensor.accel_g.size() && i < sensor.accel_down_m_s2.size(); ++i)
+    if (std::abs(1 - sensor.accel_g[i]) > 0.5)
+      return sensor.accel_down_m_s2[i] / (1 - sensor.accel_g[i]);
+  return 9.81;
+}
+
+std::size_t IndexAt(const std::vector<double>& t, double time_s) {
+  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), time_s) - t.begin());
+}
+
+// The accelerometer's part: the velocity and penetration errors of one draw of white noise
+// (sigma noise_g) integrated from `start` with the mean over the offset window [w0, w1] removed.
+class PounderNoise {
+ public:
+  PounderNoise(const SensorResult& sensor, double noise_g) : t_(sensor.time_s) {
+    const SensorSummary& ss = sensor.summary;
+    const std::size_t n = t_.size();
+    start_ = std::min(
+        IndexAt(t_, std::isfinite(ss.release_time_s) ? ss.release_time_s : ss.impact_time_s),
+        n - 1);
+    impact_ = std::min(ss.impact_index, n - 1);
+    if (std::isfinite(ss.offset_window_s[0]) && std::isfinite(ss.offset_window_s[1])) {
+      w0_ = std::min(IndexAt(t_, ss.offset_window_s[0]), n - 1);
+      w1_ = std::min(IndexAt(t_, ss.offset_window_s[1]), n - 1);
+    } else {
+      w0_ = w1_ = n;
+    }
+    first_ = std::min(start_, w0_);
+    scale_ = GravityOf(sensor) * (std::isfinite(noise_g) ? noise_g : 0.0);
+    dv_.assign(n, 0);
+    dz_.assign(n, 0);
+  }
+  void Draw(std::mt19937_64& rng) {
+    const std::size_t n = t_.size();
+    std::normal_distribution<double> normal;
+    std::vector<double>& a = a_;
+    a.assign(n, 0);
+    double window_sum = 0;
+    for (std::size_t i = first_; i < n; ++i) {
+      a[i] = normal(rng);
+      if (i >= w0_ && i <= w1_) window_sum += a[i];
+    }
+    const double mean = w0_ < n ? window_sum / static_cast<double>(w1_ - w0_ + 1) : 0.0;
+    // accel_down = g (1 - reading): a reading's error e moves it by -g e.
+    for (std::size_t i = first_; i < n; ++i) a[i] = -scale_ * (a[i] - mean);
+    std::fill(dv_.begin(), dv_.end(), 0.0);
+    std::fill(dz_.begin(), dz_.end(), 0.0);
+    for (std::size_t i = start_ + 1; i < n; ++i)
+      dv_[i] = dv_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (a[i] + a[i - 1]);
+    for (std::size_t i = impact_ + 1; i < n; ++i)
+      dz_[i] = dz_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (dv_[i] + dv_[i - 1]);
+  }
+  const std::vector<double>& dv() const { return dv_; }
+  const std::vector<double>& dz() const { return dz_; }
+
+ private:
+  const std::vector<double>& t_;
+  std::size_t start_ = 0, impact_ = 0, w0_ = 0, w1_ = 0, first_ = 0;
+  double scale_ = 0;
+  std::vector<double> a_, dv_, dz_;
+};
+
+// The grid's part: displacement errors [frames x grid] of one draw, sigma * (sqrt(1/2) a_i +
+// sqrt(1/2) b_ki) with a (the reference's noise, common to the frames) and b_k (frame k's) each
+// correlated over the grid by L L^T (the overlap fractions).
+class GridNoise {
+ public:
+  GridNoise(const KinematicsResult& kin, const MomentumGrid& grid, double subset_size_mm)
+      : kin_(kin), grid_(grid) {
+    const std::size_t g = grid.subset_ids.size();
+    Eigen::MatrixXd r(g, g);
+    for (std::size_t i = 0; i < g; ++i) {
+      for (std::size_t j = 0; j < g; ++j) {
+        const std::size_t a = grid.subset_ids[i], b = grid.subset_ids[j];
+        r(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
+            OverlapFraction(kin.x_mm[a] - kin.x_mm[b], kin.y_mm[a] - kin.y_mm[b], subset_size_mm);
+      }
+    }
+    // The overlap fractions are a product of two triangle functions, positive semi-definite; a
+    // small ridge keeps the factorisation defined.
+    r.diagonal().array() += 1e-12;
+    l_ = r.llt().matrixL();
+  }
+  void Draw(std::mt19937_64& rng, std::vector<double>* err) {
+    const std::size_t g = grid_.subset_ids.size(), nf = kin_.frames;
+    std::normal_distribution<double> normal;
+    auto correlated = [&] {
+      Eigen::VectorXd z(static_cast<Eigen::Index>(g));
+      for (Eigen::Index i = 0; i < z.size(); ++i) z(i) = normal(rng);
+      return Eigen::VectorXd(l_ * z);
+    };
+    const Eigen::VectorXd common = correlated();
+    err->assign(nf * g, 0);
+    for (std::size_t k = 0; k < nf; ++k) {
+      const Eigen::VectorXd own = correlated();
+      for (std::size_t i = 0; i < g; ++i) {
+        const float sigma = kin_.disp_y_sigma_mm[k * kin_.subsets + grid_.subset_ids[i]];
+        const auto ii = static_cast<Eigen::Index>(i);
+        (*err)[k * g + i] =
+            std::isfinite(sigma) ? sigma * std::sqrt(0.5) * (common(ii) + own(ii)) : 0.0;
+      }
+    }
+  }
+
+ private:
+  const KinematicsResult& kin_;
+  const MomentumGrid& grid_;
+  Eigen::MatrixXd l_;
+};
+
+// The headline figures of one analysis, in UncertainFigures' order.
+std::vector<double> Figures(const MomentumSummary& s) {
+  std::vector<double> v;
+  for (const auto& f : UncertainFigures(s))
+    v.push_back(s.sigmoid_fitted || std::string(f.name).rfind("sigmoid_", 0) != 0 ? *f.value
+                                                                                  : kNaN);
+  return v;
+}
+
+double MedianOf(std::vector<double> v) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return kNaN;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// The notes on what the draws left out: draws without a measurable t_e, inputs stated without
+// an uncertainty.
+void AddNotes(const MomentumUncertaintyOptions& uo, int not_measured, MomentumUncertainty* out) {
+  MomentumUncertainty& u = *out;
+  if (not_measured > 0) {
+    u.notes.push_back(fmt::format(
+        "in {} of {} draws t_e was not measurable; the figures' spread is over the others",
+        not_measured, uo.draws));
+  }
+  std::string exact;
+  for (const auto& [key, value] :
+       {std::pair{"inputs.mm_per_px_u (or a calibration's plane scale uncertainty)",
+                  uo.scale_u_fraction},
+        std::pair{"test.density_u_kg_m3", uo.density_u_kg_m3},
+        std::pair{"test.depth_u_m", uo.depth_u_m}})
+    if (value == 0) exact += (exact.empty() ? "" : ", ") + std::string(key);
+  if (!exact.empty()) {
+    u.notes.push_back("stated without an uncertainty, so counted as exact (0): " + exact);
+  }
+}
+
+// The per-frame standard deviations of the draws (NaN where the nominal series is).
+void FrameBands(const std::vector<std::vector<double>>& v_sand,
+                const std::vector<std::vector<double>>& p_gran,
+                const std::vector<std::vector<double>>& p_total,
+                const std::vector<std::vector<double>>& m_add, MomentumResult* result) {
+  const std::size_t nf = result->frame_time_s.size();
+  result->v_sand_u_m_s.resize(nf);
+  result->p_gran_u_kg_m_s.resize(nf);
+  result->p_total_u_kg_m_s.resize(nf);
+  result->added_mass_u_kg.resize(nf);
+  for (std::size_t k = 0; k < nf; ++k) {
+    auto sd = [&](const std::vector<double>& nominal_series, const std::vector<double>& draws) {
+      return std::isfinite(nominal_series[k]) ? FiniteSd(draws) : kNaN;
+    };
+    result->v_sand_u_m_s[k] = sd(result->v_sand_m_s, v_sand[k]);
+    result->p_gran_u_kg_m_s[k] = sd(result->p_gran_kg_m_s, p_gran[k]);
+    result->p_total_u_kg_m_s[k] = sd(result->p_total_kg_m_s, p_total[k]);
+    result->added_mass_u_kg[k] = sd(result->added_mass_kg, m_add[k]);
+  }
+}
+
+// t_e on a frame (not refined): the frame grid's resolution, uniform over one interval of dt.
+void AddFrameGridTerm(double dt, MomentumSummary* summary) {
+  const MomentumSummary& s = *summary;
+  MomentumUncertainty& u = summary->uncertainty;
+  if (std::isfinite(s.t_end_peak_s) && !s.t_end_refined) {
+    u.t_end_grid_s = dt / std::sqrt(12.0);
+    u.t_end_peak_s =
+        std::hypot(std::isfinite(u.t_end_peak_s) ? u.t_end_peak_s : 0.0, u.t_end_grid_s);
+    u.notes.push_back(fmt::format(
+        "t_e lies on a frame (not refined between two): its uncertainty includes the frame "
+        "grid's dt / sqrt(12) = {:.4g} s; the figures at t_e do not",
+        u.t_end_grid_s));
+  }
+}
+
+}  // namespace
+
+void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult& sensor,
+                                 const MomentumOptions& options, MomentumResult* result) {
+  const MomentumUncertaintyOptions& uo = options.uncertainty;
+  MomentumSummary& s = result->summary;
+  MomentumUncertainty& u = s.uncertainty;
+  u = MomentumUncertainty{};
+  u.accel_noise_g = sensor.summary.noise_g;
+  u.scale_u_fraction = uo.scale_u_fraction;
+  u.density_u_kg_m3 = uo.density_u_kg_m3;
+  u.depth_u_m = uo.depth_u_m;
+  u.subset_size_mm = uo.subset_size_mm;
+  const std::size_t nf = kin.frames, g = s.grid.subset_ids.size();
+  if (uo.draws == 0) {
+    u.notes.push_back("not estimated: momentum.uncertainty_draws is 0");
+    return;
+  }
+  if (kin.disp_y_sigma_mm.size() != nf * kin.subsets) {
+    u.notes.push_back(
+        "not estimated: the correlation results carry no sigma_u_px / sigma_v_px (written "
+        "before they existed); correlate again");
+    return;
+  }
+  // The grid's subsets alone, ids 0..g-1, and their displacements.
+  KinematicsResult red;
+  red.frames = nf;
+  red.subsets = g;
+  red.time_s = kin.time_s;
+  std::vector<double> disp(nf * g), sigmas;
+  for (std::size_t i = 0; i < g; ++i) {
+    const std::size_t id = s.grid.subset_ids[i];
+    red.x_mm.push_back(kin.x_mm[id]);
+    red.y_mm.push_back(kin.y_mm[id]);
+    for (std::size_t k = 0; k < nf; ++k) {
+      disp[k * g + i] = kin.disp_y_mm[k * kin.subsets + id];
+      if (k > 0) sigmas.push_back(kin.disp_y_sigma_mm[k * kin.subsets + id]);
+    }
+  }
+  u.dic_sigma_median_mm = MedianOf(sigmas);
+  red.disp_y_mm.resize(nf * g);
+  red.vel_y_mm_s.resize(nf * g);
+  red.acc_y_mm_s2.resize(nf * g);
+  const double dt = nf > 1 ? kin.time_s[1] - kin.time_s[0] : 1.0;
+  MomentumGrid grid = s.grid;
+  for (std::size_t i = 0; i < g; ++i) grid.subset_ids[i] = i;
+  SensorResult pounder;
+  pounder.time_s = sensor.time_s;
+  pounder.summary = sensor.summary;
+  MomentumOptions o = options;
+  o.uncertainty.draws = 0;
+
+  GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
+  PounderNoise pounder_noise(sensor, sensor.summary.noise_g);
+  const double v0_offset =
+      sensor.summary.impact_velocity_m_s -
+      SampleSeries(sensor.time_s, sensor.velocity_m_s, {sensor.summary.impact_time_s}, "v0")[0];
+  std::mt19937_64 rng(kSeed);
+  std::normal_distribution<double> normal;
+  const std::size_t nfig = Figures(s).size();
+  std::vector<std::vector<double>> figures(nfig);
+  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
+  std::vector<double> err, column(nf);
+  int not_measured = 0;
+  for (int d = 0; d < uo.draws; ++d) {
+    const double scale = 1 + uo.scale_u_fraction * normal(rng);
+    const double density = options.density_kg_m3 + uo.density_u_kg_m3 * normal(rng);
+    const double depth = options.depth_m + uo.depth_u_m * normal(rng);
+    grid_noise.Draw(rng, &err);
+    for (std::size_t i = 0; i < g; ++i) {
+      for (std::size_t k = 0; k < nf; ++k) column[k] = scale * (disp[k * g + i] + err[k * g + i]);
+      const std::vector<double> v = FirstDerivative(column, dt), a = SecondDerivative(column, dt);
+      for (std::size_t k = 0; k < nf; ++k) {
+        red.disp_y_mm[k * g + i] = column[k];
+        red.vel_y_mm_s[k * g + i] = v[k];
+        red.acc_y_mm_s2[k * g + i] = a[k];
+      }
+    }
+    grid.area_m2 = s.grid.area_m2 * scale * scale;
+    grid.mass_kg = density * grid.area_m2 * depth;
+    pounder_noise.Draw(rng);
+    pounder.velocity_m_s = sensor.velocity_m_s;
+    pounder.penetration_m = sensor.penetration_m;
+    for (std::size_t i = 0; i < pounder.velocity_m_s.size(); ++i) {
+      pounder.velocity_m_s[i] += pounder_noise.dv()[i];
+      if (i < pounder.penetration_m.size()) pounder.penetration_m[i] += pounder_noise.dz()[i];
+    }
+    MomentumResult r;
+    try {
+      r = internal::AnalyzeMomentumOnGrid(red, result->frame_time_s, pounder, o, grid);
+    } catch (const Error&) {
+      ++not_measured;
+      continue;
+    }
+    if (!r.summary.t_end_problem.empty()) ++not_measured;
+    r.summary.impact_velocity_m_s =
+        v0_offset + SampleSeries(pounder.time_s, pounder.velocity_m_s,
+                                 {pounder.summary.impact_time_s}, "v0")[0];
+    const std::vector<double> f = Figures(r.summary);
+    for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
+    for (std::size_t k = 0; k < nf; ++k) {
+      v_sand[k].push_back(r.v_sand_m_s[k]);
+      p_gran[k].push_back(r.p_gran_kg_m_s[k]);
+      p_total[k].push_back(r.p_total_kg_m_s[k]);
+      m_add[k].push_back(r.added_mass_kg[k]);
+    }
+  }
+  u.draws = uo.draws;
+  std::vector<double*> us;
+  for (const auto& f : UncertainFigures(s)) us.push_back(f.u);
+  const std::vector<double> nominal = Figures(s);
+  for (std::size_t j = 0; j < nfig; ++j)
+    *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
+  AddFrameGridTerm(dt, &s);
+  FrameBands(v_sand, p_gran, p_total, m_add, result);
+  AddNotes(uo, not_measured, &u);
+}
+
+JsonObject UncertaintyJson(const MomentumSummary& s) {
+  const MomentumUncertainty& u = s.uncertainty;
+  JsonObject j;
+  j.Add("method", kMomentumUncertaintyMethod).Add("draws", u.draws);
+  const std::vector<double> values = Figures(s);
+  std::size_t i = 0;
+  for (const auto& f : UncertainFigures(s)) {
+    JsonObject figure;
+    figure.Add("value", values[i++]).Add("u", u.draws > 0 ? *f.u : kNaN);
+    j.Add(f.name, figure);
+  }
+  JsonObject inputs;
+  inputs.Add("accel_noise_g", u.accel_noise_g)
+      .Add("dic_sigma_median_mm", u.dic_sigma_median_mm)
+      .Add("scale_u_fraction", u.scale_u_fraction)
+      .Add("density_u_kg_m3", u.density_u_kg_m3)
+      .Add("depth_u_m", u.depth_u_m)
+      .Add("subset_size_mm", u.subset_size_mm);
+  j.Add("t_end_grid_s", u.t_end_grid_s).Add("inputs", inputs).Add("notes", u.notes);
+  return j;
+}
+
+}  // namespace impactdic
