@@ -31,7 +31,7 @@ void RegisterCalibrateCommand(CLI::App& app) {
       "calibrate",
       "Lens calibration from views of a chessboard, ChArUco board or circle grid: intrinsics, "
       "the distortion model (Brown-Conrady, rational or fisheye, chosen by the held-out "
-      "reprojection error), reprojection RMS and, with --plane, the mm-per-pixel scale of the "
+      "reprojection RMS), its overall RMS and, with --plane, the mm-per-pixel scale of the "
       "panel (carried to the soil plane through a viewing window)");
   auto* board = cmd->add_option(
       "--board", args->board,
