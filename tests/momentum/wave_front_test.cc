@@ -20,13 +20,13 @@
 namespace impactdic {
 namespace {
 
-constexpr double kC = 80;         // [m/s]
-constexpr double kLambda = 150;   // [mm]
-constexpr double kTau = 1e-3;     // [s]
-constexpr double kDt = 1e-4;      // [s]
-constexpr double kSurface = 50;   // Panel y of the surface [mm].
-constexpr double kCentre = 300;   // Panel x of the centre line [mm].
-constexpr double kWidth = 150;    // D [mm].
+constexpr double kC = 80;        // [m/s]
+constexpr double kLambda = 150;  // [mm]
+constexpr double kTau = 1e-3;    // [s]
+constexpr double kDt = 1e-4;     // [s]
+constexpr double kSurface = 50;  // Panel y of the surface [mm].
+constexpr double kCentre = 300;  // Panel x of the centre line [mm].
+constexpr double kWidth = 150;   // D [mm].
 
 double Step(double x) { return x <= 0 ? 0 : x >= 1 ? 1 : x * x * x * (10 - 15 * x + 6 * x * x); }
 
@@ -52,8 +52,7 @@ KinematicsResult Pulse(double amplitude_mm, int frames, bool centre_line = true)
       // A deterministic +-1 um "noise" so the pre-impact standard deviation is not zero.
       const double noise = 1e-3 * std::sin(1.7 * static_cast<double>(f * 31 + s * 7));
       k.disp_y_mm[f * k.subsets + s] =
-          amplitude_mm * std::exp(-r / kLambda) * Step((t - r / (1e3 * kC)) / kTau) * Y / r +
-          noise;
+          amplitude_mm * std::exp(-r / kLambda) * Step((t - r / (1e3 * kC)) / kTau) * Y / r + noise;
     }
   }
   k.vel_y_mm_s.resize(k.disp_y_mm.size());
@@ -91,7 +90,8 @@ WaveFrontOptions Options() {
 
 TEST(WaveFront, RecoversSpeedAndDecayOfAnAnalyticPulse) {
   const KinematicsResult k = Pulse(/*amplitude_mm=*/2, /*frames=*/80);
-  const WaveFront w = AnalyzeWaveFront(k, FrameTimes(k), Sensor(), /*t_end_peak_s=*/3e-3, Options());
+  const WaveFront w =
+      AnalyzeWaveFront(k, FrameTimes(k), Sensor(), /*t_end_peak_s=*/3e-3, Options());
   ASSERT_TRUE(w.computed);
   EXPECT_TRUE(w.problem.empty()) << w.problem;
   // The threshold crossing lies at a fixed phase of the pulse (f = 0.5 of the peak velocity:
@@ -102,8 +102,8 @@ TEST(WaveFront, RecoversSpeedAndDecayOfAnAnalyticPulse) {
   EXPECT_LT(w.speed_ci_m_s[0], kC);
   EXPECT_GT(w.speed_ci_m_s[1], kC);
   EXPECT_NEAR(w.intercept_s, 0.229 * kTau, 0.02e-3);
-  // At the last frame (7.3 ms) the pulse has passed every centre-line subset (r / c + tau <= 4.8 ms):
-  // u = A exp(-z / lambda) exactly, up to the 1 um noise.
+  // At the last frame (7.3 ms) the pulse has passed every centre-line subset (r / c + tau <= 4.8
+  // ms): u = A exp(-z / lambda) exactly, up to the 1 um noise.
   EXPECT_TRUE(w.displacement_end.problem.empty()) << w.displacement_end.problem;
   EXPECT_NEAR(w.displacement_end.decay_length_mm, kLambda, 0.01 * kLambda);
   EXPECT_NEAR(w.displacement_end.surface_value, 2, 0.02);

@@ -21,8 +21,8 @@
 //    surface and outside the pounder's footprint columns (|x - x_c| > D / 2: the soil under the
 //    pounder is pushed at the contact, not reached by a front) whose threshold is f peak (peak
 //    >= k sd / f: every arrival in the fit is the same phase of its pulse; where the noise term
-//    governs, the crossing comes later in a weak pulse and would bias c), with one pass that drops the
-//    arrivals more than kOutlierSigma robust standard deviations (1.4826 x the median absolute
+//    governs, the crossing comes later in a weak pulse and would bias c), with one pass that drops
+//    the arrivals more than kOutlierSigma robust standard deviations (1.4826 x the median absolute
 //    residual) off the first fit; c = 1 / slope, its interval 1 / (slope -+ t se) at `confidence`
 //    (t of Student with n - 2 degrees of freedom; the upper end NaN when slope - t se <= 0).
 //  * centre line: the subsets within D / 2 of x_c below the pounder's base; depth z = the
