@@ -146,8 +146,7 @@ bool CellsDrawable(const Plot& plot) {
 
 // Writes the drawable series as data blocks (gnuplot `index` k = k-th drawable series); a single
 // blank line inside a block breaks the line at non-drawable points. Returns the points written.
-std::size_t WriteData(const Plot& plot, const std::string& path) {
-  std::ofstream out(path);
+std::size_t WriteData(const Plot& plot, std::ostream& out) {
   std::size_t points = 0;
   bool first_block = true;
   for (const auto& s : plot.series) {
@@ -182,8 +181,6 @@ std::size_t WriteData(const Plot& plot, const std::string& path) {
       ++points;
     }
   }
-  out.flush();
-  if (!out) throw WriteError(path, errno != 0 ? errno : EIO);
   return points;
 }
 
@@ -501,7 +498,11 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
 
   TempFile data(".dat");
   TempFile script(".gp");
-  summary.points = WriteData(plot, data.path());
+  {
+    std::ostringstream text;
+    summary.points = WriteData(plot, text);
+    data.Write(text.str());
+  }
   summary.series = static_cast<int>(
       std::count_if(plot.series.begin(), plot.series.end(),
                     [&](const PlotSeries& s) { return SeriesHasPoints(s, plot); }));
@@ -518,12 +519,7 @@ PlotSummary RenderPlot(const Plot& plot, const std::string& png_path, const Plot
     }
   } cleanup{temp_png};
   const RemoveOnInterrupt png_on_interrupt(temp_png);
-  {
-    std::ofstream out(script.path());
-    out << GnuplotScript(plot, options, summary.terminal, data.path(), temp_png);
-    if (!out)
-      throw Error(ErrorKind::kIo, "gnuplot script", "write failed", "").WithFile(script.path());
-  }
+  script.Write(GnuplotScript(plot, options, summary.terminal, data.path(), temp_png));
   const auto result = RunProcess(summary.gnuplot_binary, {script.path()});
   if (!result.started) {
     throw Error(ErrorKind::kFileNotFound, MissingGnuplotMessage(summary.gnuplot_binary));

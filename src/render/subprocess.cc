@@ -12,6 +12,7 @@
 #include <system_error>
 
 #include "impactdic/core/error.h"
+#include "impactdic/io/atomic_file.h"
 #include "impactdic/io/output_generation.h"
 
 extern char** environ;
@@ -28,7 +29,11 @@ TempFile::TempFile(const std::string& suffix) {
     std::string name = "impactdic-";
     name.append(TemporaryTag()).append(suffix);
     const std::string candidate = (folder / name).string();
-    interrupt_guard_.emplace(candidate);
+    // Registered and made as one step for a signal's cleanup (which waits for the block): a
+    // cleanup between the two would find nothing to remove and leave the file behind.
+    const DeferInterrupts making;
+    if (Interrupted()) break;
+    interrupt_guard_.emplace(candidate, making);
     const int fd = open(candidate.c_str(), O_CREAT | O_EXCL | O_WRONLY | O_CLOEXEC, 0600);
     if (fd >= 0) {
       close(fd);
@@ -37,8 +42,30 @@ TempFile::TempFile(const std::string& suffix) {
     }
     interrupt_guard_.reset();
   }
+  WaitIfInterrupted();
   throw Error(ErrorKind::kIo, "temporary file", "cannot create one in " + folder.string(),
               "a writable temporary folder (TMPDIR)");
+}
+
+void TempFile::Write(const std::string& text) const {
+  // No O_CREAT: a file the interrupt cleanup removed stays removed.
+  const int fd = open(path_.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);
+  if (fd < 0) {
+    WaitIfInterrupted();
+    throw WriteError(path_, errno);
+  }
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int error = n < 0 ? errno : EIO;
+      close(fd);
+      throw WriteError(path_, error);
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (close(fd) != 0) throw WriteError(path_, errno);
 }
 
 TempFile::~TempFile() {

@@ -31,6 +31,10 @@ class TempFile {
   TempFile(const TempFile&) = delete;
   TempFile& operator=(const TempFile&) = delete;
   const std::string& path() const { return path_; }
+  // Replaces the file's contents with `text`. Never makes the file again: after a signal's cleanup
+  // removed it, waits for the process to end (core/interrupt.h). Throws WriteError on a failed
+  // write (full disk).
+  void Write(const std::string& text) const;
 
  private:
   std::string path_;

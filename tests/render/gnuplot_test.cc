@@ -10,10 +10,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../../src/render/subprocess.h"
 #include "impactdic/core/error.h"
 #include "test_util.h"
 
@@ -220,6 +222,22 @@ TEST(Gnuplot, EnumsRoundTrip) {
     EXPECT_EQ(SeriesStyleFromString(ToString(s)), s);
   }
   EXPECT_THROW(SeriesStyleFromString("wiggly"), Error);
+}
+
+// A gnuplot temporary is written without ever being made again: once removed (as a signal's
+// cleanup removes it), Write fails and the file stays absent, so an interrupted run leaves nothing
+// in TMPDIR. Until then Write replaces its contents.
+TEST(GnuplotTempFile, WriteNeverMakesARemovedFileAgain) {
+  render_internal::TempFile file(".gp");
+  ASSERT_TRUE(std::filesystem::exists(file.path()));
+  file.Write("plot 1\nplot 2\n");
+  file.Write("plot 3\n");
+  std::ifstream in(file.path());
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, "plot 3\n");
+  std::filesystem::remove(file.path());
+  EXPECT_THROW(file.Write("plot 4\n"), Error);
+  EXPECT_FALSE(std::filesystem::exists(file.path()));
 }
 
 }  // namespace
