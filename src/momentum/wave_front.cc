@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -15,6 +16,9 @@
 
 namespace impactdic {
 namespace {
+
+// Subsets of one grid row share their reference y; a row is those within this of the shallowest.
+constexpr double kRowToleranceMm = 1.0;
 
 // Ordinary least squares y = a + b x with the standard error of b.
 struct Line {
@@ -70,6 +74,30 @@ struct Frames {
   std::vector<std::size_t> noise;  // Frames whose velocity stencil is before the impact.
   std::size_t first_after = 0;     // The first frame not in `noise`.
 };
+
+// Why the front cannot be measured from these inputs ("" when it can): the pounder's position on
+// the panel, and the frames on the sensor's clock.
+std::string InputProblem(const KinematicsResult& k, const std::vector<double>& frame_daq_time_s,
+                         const SensorResult& sensor, const WaveFrontOptions& o) {
+  if (!std::isfinite(o.pounder_center_x_mm) || !std::isfinite(o.surface_y_mm) ||
+      !(o.pounder_width_mm > 0))
+    return "the pounder's position on the panel is not known (momentum.pounder_center_x_px and "
+           "surface_y_px)";
+  if (frame_daq_time_s.size() != k.frames || !std::isfinite(sensor.summary.impact_time_s))
+    return "the frames are not on the sensor's clock or the impact was not found";
+  return "";
+}
+
+// The frames' times after the impact and the noise frames (the header's definition).
+Frames MakeFrames(const KinematicsResult& k, const std::vector<double>& frame_daq_time_s,
+                  const SensorResult& sensor) {
+  Frames fr;
+  fr.t_s.reserve(frame_daq_time_s.size());
+  for (double t : frame_daq_time_s) fr.t_s.push_back(t - sensor.summary.impact_time_s);
+  for (std::size_t f = 0; f + 2 < k.frames && fr.t_s[f + 2] < 0; ++f) fr.noise.push_back(f);
+  fr.first_after = fr.noise.size();
+  return fr;
+}
 
 // The noise of `field` at subset s over the noise frames.
 double Noise(const KinematicsResult& k, const std::vector<double>& field, const Frames& fr,
@@ -264,26 +292,17 @@ WaveFront AnalyzeWaveFront(const KinematicsResult& k, const std::vector<double>&
       d->problem = why;
     return w;
   };
-  if (!std::isfinite(o.pounder_center_x_mm) || !std::isfinite(o.surface_y_mm) ||
-      !(o.pounder_width_mm > 0))
-    return give_up(
-        "the pounder's position on the panel is not known (momentum.pounder_center_x_px and "
-        "surface_y_px)");
-  if (frame_daq_time_s.size() != k.frames || !std::isfinite(sensor.summary.impact_time_s))
-    return give_up("the frames are not on the sensor's clock or the impact was not found");
+  if (const std::string why = InputProblem(k, frame_daq_time_s, sensor, o); !why.empty())
+    return give_up(why);
   w.computed = true;
-  Frames fr;
-  fr.t_s.reserve(frame_daq_time_s.size());
-  for (double t : frame_daq_time_s) fr.t_s.push_back(t - sensor.summary.impact_time_s);
-  for (std::size_t f = 0; f + 2 < k.frames && fr.t_s[f + 2] < 0; ++f) fr.noise.push_back(f);
-  fr.first_after = fr.noise.size();
+  const Frames fr = MakeFrames(k, frame_daq_time_s, sensor);
   w.distance_mm.assign(k.subsets, kNaN);
   w.arrival_s.assign(k.subsets, kNaN);
   w.in_fit.assign(k.subsets, 0);
   if (fr.noise.size() < static_cast<std::size_t>(kMinNoiseFrames) || fr.first_after == 0)
     return give_up(fmt::format(
         "{} frames before the impact have a velocity free of it; the noise needs {} (more "
-        "frames before the impact: frames.first)",
+        "frames before the impact: dic.first_frame_number)",
         fr.noise.size(), kMinNoiseFrames));
 
   const double cx = o.pounder_center_x_mm, sy = o.surface_y_mm, half = o.pounder_width_mm / 2;
@@ -325,6 +344,88 @@ WaveFront AnalyzeWaveFront(const KinematicsResult& k, const std::vector<double>&
   }
   fit_at(k.frames - 1, &w.displacement_end, &w.velocity_end);
   return w;
+}
+
+void CheckDicReflections(const KinematicsResult& k, const std::vector<double>& frame_daq_time_s,
+                         const SensorResult& sensor, const WaveFrontOptions& o,
+                         std::vector<WaveChannel>* channels) {
+  o.Check();
+  const auto not_checked = [&](const std::string& why) {
+    for (WaveChannel& c : *channels) c.dic_reflection = DicReflectionCheck{.note = why};
+  };
+  if (const std::string why = InputProblem(k, frame_daq_time_s, sensor, o); !why.empty())
+    return not_checked(why);
+  // The near-surface row: the shallowest subsets below the surface outside the footprint.
+  const double half = o.pounder_width_mm / 2;
+  double shallowest = std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < k.subsets; ++s) {
+    const double dy = k.y_mm[s] - o.surface_y_mm;
+    if (dy > 0 && std::abs(k.x_mm[s] - o.pounder_center_x_mm) > half)
+      shallowest = std::min(shallowest, dy);
+  }
+  std::vector<std::size_t> row;
+  for (std::size_t s = 0; s < k.subsets; ++s) {
+    const double dy = k.y_mm[s] - o.surface_y_mm;
+    if (dy > 0 && dy <= shallowest + kRowToleranceMm &&
+        std::abs(k.x_mm[s] - o.pounder_center_x_mm) > half)
+      row.push_back(s);
+  }
+  if (row.empty()) return not_checked("no subset below the surface outside the pounder's columns");
+  // The signal per frame: the mean over the row's measured subsets (NaN when under half are).
+  std::vector<double> signal(k.frames, kNaN);
+  for (std::size_t f = 0; f < k.frames; ++f) {
+    double sum = 0;
+    std::size_t n = 0;
+    for (std::size_t s : row) {
+      const double v = k.vel_y_mm_s[f * k.subsets + s];
+      if (std::isfinite(v)) sum += v, ++n;
+    }
+    if (2 * n >= row.size() && n > 0) signal[f] = sum / static_cast<double>(n);
+  }
+  const Frames fr = MakeFrames(k, frame_daq_time_s, sensor);
+  std::vector<double> quiet;
+  for (std::size_t f : fr.noise)
+    if (std::isfinite(signal[f])) quiet.push_back(signal[f]);
+  const double noise =
+      quiet.size() >= static_cast<std::size_t>(kMinNoiseFrames) ? StandardDeviation(quiet) : kNaN;
+  for (WaveChannel& c : *channels) {
+    DicReflectionCheck& r = c.dic_reflection;
+    r = DicReflectionCheck{.subsets = row.size()};
+    const std::array<double, 2>& window = c.reflection.window_s;
+    if (!std::isfinite(window[0]) || !std::isfinite(window[1])) {
+      r.note = "no return time (no plausible wave speed)";
+      continue;
+    }
+    if (!std::isfinite(noise)) {
+      r.note = fmt::format(
+          "{} frames before the impact have a near-surface velocity free of it; the noise needs "
+          "{}",
+          quiet.size(), kMinNoiseFrames);
+      continue;
+    }
+    if (!(fr.t_s.back() >= window[1])) {
+      r.note = fmt::format("the frames end {:.4g} ms after the impact, before the window's end",
+                           1e3 * fr.t_s.back());
+      continue;
+    }
+    std::size_t a = 0, b = k.frames - 1;
+    while (a + 1 < k.frames && fr.t_s[a + 1] <= window[0]) ++a;
+    while (b > 0 && fr.t_s[b - 1] >= window[1]) --b;
+    std::vector<double> up(signal), down(signal);
+    for (std::size_t f = a; f <= b; ++f) {
+      if (!std::isfinite(signal[f])) {
+        r.note =
+            fmt::format("the near-surface velocity is not measured at {:.4g} ms", 1e3 * fr.t_s[f]);
+        break;
+      }
+      up[f] = -signal[f];
+    }
+    if (!r.note.empty()) continue;
+    r.checked = true;
+    r.prominence_mm_s = std::max(LargestProminence(down, a, b), LargestProminence(up, a, b));
+    r.threshold_mm_s = kReflectionSigma * noise;
+    r.local_maximum = r.prominence_mm_s > r.threshold_mm_s;
+  }
 }
 
 }  // namespace impactdic

@@ -158,6 +158,21 @@ JsonObject WaveJson(const WaveResult& wave) {
     } else {
       reflection.Add("note", r.note);
     }
+    const DicReflectionCheck& rd = c.dic_reflection;
+    JsonObject dic_reflection;
+    dic_reflection.Add("checked", rd.checked);
+    if (rd.checked) {
+      dic_reflection.Add("window_s", std::vector<double>{r.window_s[0], r.window_s[1]})
+          .Add("statistic",
+               "largest prominence of a local maximum of the near-surface soil's mean vertical "
+               "velocity, either sign")
+          .Add("subsets", static_cast<std::int64_t>(rd.subsets))
+          .Add("prominence_mm_s", rd.prominence_mm_s)
+          .Add("threshold_mm_s", rd.threshold_mm_s)
+          .Add("local_maximum", rd.local_maximum);
+    } else {
+      dic_reflection.Add("note", rd.note);
+    }
     JsonObject j;
     j.Add("unit", c.unit)
         .Add("offset_mm", c.offset_mm)
@@ -176,6 +191,7 @@ JsonObject WaveJson(const WaveResult& wave) {
         .Add("peak_stress_Pa", c.peak_stress_pa)
         .Add("stress_ratio", c.stress_ratio)
         .Add("reflection", reflection)
+        .Add("reflection_dic", dic_reflection)
         .Add("plausible", c.problems.empty())
         .Add("problems", c.problems);
     channels.Add(c.column, j);
@@ -255,12 +271,15 @@ std::string PipelineSummary::FullReport() const {
     for (const WaveChannel& c : wave->channels) {
       text += fmt::format(
           "  wave {}: speed {:.4g} +- {:.2g} m/s (peak), {:.4g} +- {:.2g} m/s (onset), stress "
-          "ratio {:.4g}, return {:.4g} ms, reflection {}\n",
+          "ratio {:.4g}, return {:.4g} ms, reflection {} (pounder), {} (near-surface DIC)\n",
           c.column, c.speed_peak_m_s, c.speed_peak_sigma_m_s, c.speed_onset_m_s,
           c.speed_onset_sigma_m_s, c.stress_ratio, 1e3 * c.return_time_s,
           !c.reflection.checked        ? "not checked"
           : c.reflection.local_maximum ? "local maximum"
-                                       : "none");
+                                       : "none",
+          !c.dic_reflection.checked        ? "not checked"
+          : c.dic_reflection.local_maximum ? "local maximum"
+                                           : "none");
     }
     const WaveFront& f = wave->front;
     if (f.computed) {

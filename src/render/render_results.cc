@@ -532,11 +532,7 @@ void DrawWaveFigures(const H5Reader& reader, const std::string& results_path,
   if (reader.Exists(L::kSensorT) && !wave.channels.empty()) {
     std::size_t n = kAnyLength;
     const std::vector<double> t_s = ReadSeries(reader, L::kSensorT, file, &n);
-    std::vector<BaseForceRecord> records;
-    for (const WaveChannel& c : wave.channels) {
-      const std::string path = std::string(L::kWaveForceGroup) + "/" + c.column;
-      if (reader.Exists(path)) records.push_back({c.column, ReadSeries(reader, path, file, &n)});
-    }
+    const std::vector<BaseForceRecord> records = ReadBaseForceRecords(reader, file, wave);
     summary.written.push_back(
         PlotBaseForce(t_s, records, wave, out(L::kWaveBaseForcePng), options.plot).path);
   } else {

@@ -29,26 +29,6 @@ double StdDevOver(const std::vector<double>& x, std::size_t begin, std::size_t e
   return std::sqrt(ss / static_cast<double>(end - begin - 1));
 }
 
-// The largest prominence of an interior local maximum of y over [a, b] (indices, inclusive): its
-// height above the higher of the lowest values on its left and on its right within [a, b]; 0 when
-// there is no interior local maximum.
-double LargestProminence(const std::vector<double>& y, std::size_t a, std::size_t b) {
-  if (b < a + 2) return 0;
-  const std::size_t n = b - a + 1;
-  std::vector<double> left_min(n), right_min(n);
-  left_min[0] = y[a];
-  for (std::size_t i = 1; i < n; ++i) left_min[i] = std::min(left_min[i - 1], y[a + i]);
-  right_min[n - 1] = y[b];
-  for (std::size_t i = n - 1; i-- > 0;) right_min[i] = std::min(right_min[i + 1], y[a + i]);
-  double best = 0;
-  for (std::size_t i = 1; i + 1 < n; ++i) {
-    const double v = y[a + i];
-    if (v > y[a + i - 1] && v >= y[a + i + 1])
-      best = std::max(best, v - std::max(left_min[i], right_min[i]));
-  }
-  return best;
-}
-
 // The reflection check of a return time (wave.h): the filtered deceleration's local maxima in the
 // window around it.
 ReflectionCheck CheckReflection(const SensorResult& sensor, const WaveResult& w,
@@ -154,6 +134,23 @@ WaveChannel AnalyzeChannel(const SensorResult& sensor, const SensorOptions& opti
 }
 
 }  // namespace
+
+double LargestProminence(const std::vector<double>& y, std::size_t a, std::size_t b) {
+  if (b < a + 2) return 0;
+  const std::size_t n = b - a + 1;
+  std::vector<double> left_min(n), right_min(n);
+  left_min[0] = y[a];
+  for (std::size_t i = 1; i < n; ++i) left_min[i] = std::min(left_min[i - 1], y[a + i]);
+  right_min[n - 1] = y[b];
+  for (std::size_t i = n - 1; i-- > 0;) right_min[i] = std::min(right_min[i + 1], y[a + i]);
+  double best = 0;
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    const double v = y[a + i];
+    if (v > y[a + i - 1] && v >= y[a + i + 1])
+      best = std::max(best, v - std::max(left_min[i], right_min[i]));
+  }
+  return best;
+}
 
 void WaveOptions::Check() const {
   CheckRange(pounder_mass_kg, kPounderMassRange, "test.mass_kg", "a pounder mass");

@@ -23,7 +23,9 @@ constexpr const char* kDefinitions =
     "f_c); sigma_c = c sigma_t / travel time; return time = 2 depth / speed_peak after the "
     "impact; stress ratio = peak stress / (m_p a_peak / (D t_z)); reflection: largest prominence "
     "of a local maximum of the filtered pounder deceleration within return time +- max(1 ms, "
-    "3 sigma_return), a local maximum when above 3 noise standard deviations (docs/wave.md)";
+    "3 sigma_return), a local maximum when above 3 noise standard deviations; the same for the "
+    "mean vertical velocity of the near-surface subsets (either sign) over the frames around the "
+    "window (docs/wave.md)";
 
 // A [C] dataset of /wave: one number per channel, bound to its field.
 struct Figure {
@@ -74,6 +76,14 @@ const std::vector<Figure>& Figures() {
       {L::kWaveReflectionThreshold,
        [](WaveChannel& c) -> double& { return c.reflection.threshold_g; }, "g",
        "prominence above which a local maximum shows (3 noise standard deviations)"},
+      {L::kWaveDicReflectionProminence,
+       [](WaveChannel& c) -> double& { return c.dic_reflection.prominence_mm_s; }, "mm/s",
+       "largest prominence of a local maximum (either sign) of the near-surface soil's mean "
+       "vertical velocity in the window"},
+      {L::kWaveDicReflectionThreshold,
+       [](WaveChannel& c) -> double& { return c.dic_reflection.threshold_mm_s; }, "mm/s",
+       "prominence above which the near-surface velocity's local maximum shows (3 standard "
+       "deviations of its pre-impact noise)"},
   };
   return kFigures;
 }
@@ -291,6 +301,17 @@ void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResul
   out.Write(L::kWaveReflectionLocalMax, local_maximum, "1",
             "1 = the deceleration shows a local maximum around the return time, 0 = none, NaN = "
             "not checked");
+  std::vector<double> dic_local_maximum, dic_subsets;
+  for (const WaveChannel& c : channels) {
+    const DicReflectionCheck& r = c.dic_reflection;
+    dic_local_maximum.push_back(r.checked ? (r.local_maximum ? 1.0 : 0.0) : kNaN);
+    dic_subsets.push_back(static_cast<double>(r.subsets));
+  }
+  out.Write(L::kWaveDicReflectionLocalMax, dic_local_maximum, "1",
+            "1 = the near-surface soil's velocity shows a local maximum around the return time, "
+            "0 = none, NaN = not checked");
+  out.Write(L::kWaveDicReflectionSubsets, dic_subsets, "1",
+            "near-surface subsets averaged (the shallowest row outside the pounder's columns)");
   std::vector<std::string> columns, units;
   for (const WaveChannel& c : wave.channels) {
     columns.push_back(c.column);
@@ -333,9 +354,15 @@ WaveResult ReadWaveResults(const H5Reader& in, const std::string& file) {
     for (std::size_t k = 0; k < n; ++k) f.field(w.channels[k]) = v[k];
   }
   const std::vector<double> local_maximum = ReadSeries(in, L::kWaveReflectionLocalMax, file, &n);
+  const std::vector<double> dic_local_maximum =
+      ReadSeries(in, L::kWaveDicReflectionLocalMax, file, &n);
+  const std::vector<double> dic_subsets = ReadSeries(in, L::kWaveDicReflectionSubsets, file, &n);
   for (std::size_t k = 0; k < n; ++k) {
     w.channels[k].reflection.checked = !std::isnan(local_maximum[k]);
     w.channels[k].reflection.local_maximum = local_maximum[k] == 1;
+    w.channels[k].dic_reflection.checked = !std::isnan(dic_local_maximum[k]);
+    w.channels[k].dic_reflection.local_maximum = dic_local_maximum[k] == 1;
+    w.channels[k].dic_reflection.subsets = static_cast<std::size_t>(dic_subsets[k]);
   }
   const std::string problems = ReadStringAttributeOr(in, L::kWaveGroup, L::kWaveProblemsAttr, "");
   if (problems != "none") SetProblems(problems, &w.channels);
@@ -349,6 +376,17 @@ WaveResult ReadWaveResults(const H5Reader& in, const std::string& file) {
     *value = ReadNumberAttributeOr(in, L::kWaveGroup, name, kNaN);
   if (in.Exists(L::kWaveFrontGroup)) w.front = ReadFront(in, file);
   return w;
+}
+
+std::vector<BaseForceRecord> ReadBaseForceRecords(const H5Reader& in, const std::string& file,
+                                                  const WaveResult& wave) {
+  std::vector<BaseForceRecord> records;
+  std::size_t n = kAnyLength;
+  for (const WaveChannel& c : wave.channels) {
+    const std::string path = std::string(L::kWaveForceGroup) + "/" + c.column;
+    if (in.Exists(path)) records.push_back({c.column, ReadSeries(in, path, file, &n)});
+  }
+  return records;
 }
 
 }  // namespace impactdic

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <string>
@@ -32,7 +33,10 @@ double Step(double x) { return x <= 0 ? 0 : x >= 1 ? 1 : x * x * x * (10 - 15 * 
 
 // Subsets on the centre line (x = kCentre) and in columns outside the footprint, every 30 mm
 // down to 300 mm; `amplitude_mm` 0 = no motion. Frames from -0.6 ms every kDt for `frames`.
-KinematicsResult Pulse(double amplitude_mm, int frames, bool centre_line = true) {
+// `bump_mm` > 0 lifts the near-surface row (15 mm deep) by that much from 4.75 ms over 0.5 ms (a
+// reflection: an upward velocity pulse of 1.875 bump / 0.5 ms at its peak).
+KinematicsResult Pulse(double amplitude_mm, int frames, bool centre_line = true,
+                       double bump_mm = 0) {
   KinematicsResult k;
   std::vector<double> xs = {kCentre - 210, kCentre - 150, kCentre + 120, kCentre + 180};
   if (centre_line) xs.push_back(kCentre);
@@ -51,8 +55,10 @@ KinematicsResult Pulse(double amplitude_mm, int frames, bool centre_line = true)
       const double X = k.x_mm[s] - kCentre, Y = k.y_mm[s] - kSurface, r = std::hypot(X, Y);
       // A deterministic +-1 um "noise" so the pre-impact standard deviation is not zero.
       const double noise = 1e-3 * std::sin(1.7 * static_cast<double>(f * 31 + s * 7));
+      const double bump = Y < 20 ? -bump_mm * Step((t - 4.75e-3) / 5e-4) : 0;
       k.disp_y_mm[f * k.subsets + s] =
-          amplitude_mm * std::exp(-r / kLambda) * Step((t - r / (1e3 * kC)) / kTau) * Y / r + noise;
+          amplitude_mm * std::exp(-r / kLambda) * Step((t - r / (1e3 * kC)) / kTau) * Y / r +
+          noise + bump;
     }
   }
   k.vel_y_mm_s.resize(k.disp_y_mm.size());
@@ -157,6 +163,40 @@ TEST(WaveFront, UnknownPounderPositionGivesNullWithTheReason) {
   const WaveFront w = AnalyzeWaveFront(k, FrameTimes(k), Sensor(), 3e-3, o);
   EXPECT_FALSE(w.computed);
   EXPECT_NE(w.problem.find("pounder_center_x_px"), std::string::npos);
+}
+
+// The DIC half of the reflection check: the near-surface row's mean velocity in a window around
+// the return time. A 0.05 mm lift of the row at 4.75-5.25 ms (a 190 mm/s upward pulse) shows in
+// a window over it and not in one after it; without it none shows; a window the frames do not
+// reach, or no window, is not checked, with the reason.
+TEST(DicReflection, FindsALiftOfTheNearSurfaceSoilAroundTheReturnTime) {
+  const auto check = [](const KinematicsResult& k, std::array<double, 2> window) {
+    std::vector<WaveChannel> channels(1);
+    channels[0].reflection.window_s = window;
+    CheckDicReflections(k, FrameTimes(k), Sensor(), Options(), &channels);
+    return channels[0].dic_reflection;
+  };
+  const KinematicsResult lifted = Pulse(2, 80, true, /*bump_mm=*/0.05);
+  const DicReflectionCheck hit = check(lifted, {4e-3, 6e-3});
+  ASSERT_TRUE(hit.checked) << hit.note;
+  EXPECT_EQ(hit.subsets, 4u);  // The four columns outside the footprint; not the centre line.
+  EXPECT_TRUE(hit.local_maximum);
+  EXPECT_NEAR(hit.prominence_mm_s, 1.875 * 0.05 / 5e-4, 20);
+  EXPECT_GT(hit.threshold_mm_s, 0);
+  const DicReflectionCheck after = check(lifted, {5.8e-3, 7.2e-3});
+  ASSERT_TRUE(after.checked) << after.note;
+  EXPECT_FALSE(after.local_maximum) << after.prominence_mm_s << " > " << after.threshold_mm_s;
+  const DicReflectionCheck none = check(Pulse(2, 80), {4e-3, 6e-3});
+  ASSERT_TRUE(none.checked) << none.note;
+  EXPECT_FALSE(none.local_maximum) << none.prominence_mm_s << " > " << none.threshold_mm_s;
+  EXPECT_LT(none.prominence_mm_s, 0.1 * hit.prominence_mm_s);
+
+  const DicReflectionCheck late = check(lifted, {6e-3, 9e-3});
+  EXPECT_FALSE(late.checked);
+  EXPECT_NE(late.note.find("before the window's end"), std::string::npos) << late.note;
+  const DicReflectionCheck no_window = check(lifted, {kNaN, kNaN});
+  EXPECT_FALSE(no_window.checked);
+  EXPECT_NE(no_window.note.find("no return time"), std::string::npos) << no_window.note;
 }
 
 TEST(WaveFrontOptions, DefaultsPassAndBadFieldsAreNamed) {

@@ -103,7 +103,7 @@ TEST(CorrelateScene, TheCommandRunsTheStages) {
                              "-o " +
                              dir.File("cli.h5"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* stage : {"[frames] 3 of 50 frames", "[correlate] "})
+  for (const char* stage : {"[frames] 3 of 54 frames", "[correlate] "})
     EXPECT_NE(r.output.find(stage), std::string::npos) << stage << "\n" << r.output;
   Scene scene;
   scene.inputs.frames = frames;

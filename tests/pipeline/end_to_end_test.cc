@@ -23,10 +23,13 @@
 #include "../cli/cli_runner.h"
 #include "../core/test_paths.h"
 #include "../io/test_dir.h"
+#include "../render/test_util.h"
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/io/results_layout.h"
 #include "impactdic/io/yaml.h"
 #include "impactdic/render/animation.h"
+#include "impactdic/synth/impact_scene.h"
+#include "impactdic/synth/speckle.h"
 #include "small_scene_spec.h"
 
 namespace impactdic {
@@ -89,10 +92,20 @@ INSTANTIATE_TEST_SUITE_P(Scenes, EndToEnd,
                          ::testing::Values(Source::kGenerated, Source::kCommittedSample),
                          SourceName);
 
+// The correlated displacement against the synth field itself (ImpactScene::SoilFieldPx, the
+// model truth.h5 samples) averaged over each subset's square: what an affine subset measures where
+// the field curves within it. Points the pounder covers (truth.h5 /soil/occluded) are left out.
+// RMS error at most 0.05 px on the generated scene (its halo is 1.5 D wide: measured 0.009 px);
+// 0.2 px on the committed sample, whose punched cone has a 40 mm halo (soil.decay_length_mm,
+// docs/synth.md "The soil field") that takes up the crater's 57 mm (76 px) between the core and
+// the still soil: at the end the field departs from a plane by up to u'' (s/2)^2 / 2 = 3.8 px
+// at a 25 px subset's edge (u'' = 2 W / L^2), which an affine subset cannot follow. Measured
+// 0.149 px RMS over every subset and frame (0.056 px with a 60 mm halo; 1.97 px with 20 mm, where
+// subsets lose the speckle).
 TEST_P(EndToEnd, SoilDisplacementMatchesTruth) {
   H5Reader results(p_->Out("results.h5"));
   H5Reader truth(p_->truth);
-  Dims rd, td;
+  Dims rd;
   const auto x = results.ReadDouble("/dic/x_px");
   const auto y = results.ReadDouble("/dic/y_px");
   const auto u = results.ReadDouble("/dic/u_px", &rd);
@@ -100,11 +113,23 @@ TEST_P(EndToEnd, SoilDisplacementMatchesTruth) {
   const auto frame_index = results.ReadDouble("/time/frame_index");
   const auto gx = truth.ReadDouble("/soil/grid_x_px");
   const auto gy = truth.ReadDouble("/soil/grid_y_px");
-  const auto tu = truth.ReadDouble("/soil/u_px", &td);
-  const auto tv = truth.ReadDouble("/soil/v_px");
+  const auto t_frames = truth.ReadDouble("/frames/time_s");
   const auto occluded = truth.ReadDouble("/soil/occluded");
   const std::size_t F = rd[0], N = rd[1], T = gx.size();
-  ASSERT_EQ(td[0] * T, tu.size());
+  const fs::path scene_folder = fs::path(p_->truth).parent_path();
+  const ImpactScene scene(LoadImpactSceneSpec((scene_folder / "spec.yaml").string()));
+  const double half = 0.5 * (scene.spec().subset_size - 1);
+  // The mean of the field over a subset: 7 x 7 points spread evenly over its square.
+  const auto subset_mean = [&](const DisplacementField& field, double cx, double cy) {
+    cv::Vec2d sum(0, 0);
+    for (int a = 0; a < 7; ++a)
+      for (int b = 0; b < 7; ++b)
+        sum += field.u(cx + half * (a / 3.0 - 1), cy + half * (b / 3.0 - 1));
+    return sum / 49.0;
+  };
+  std::vector<DisplacementField> fields;
+  for (std::size_t f = 0; f < F; ++f)
+    fields.push_back(scene.SoilFieldPx(t_frames[static_cast<std::size_t>(frame_index[f])]));
   double sum_sq = 0;
   std::size_t count = 0, matched = 0;
   for (std::size_t i = 0; i < N; ++i) {
@@ -114,12 +139,12 @@ TEST_P(EndToEnd, SoilDisplacementMatchesTruth) {
       if (std::abs(gx[k] - x[i]) < 0.5 && std::abs(gy[k] - y[i]) < 0.5) j = k;
     if (j == T) continue;
     ++matched;
-    const std::size_t ref = static_cast<std::size_t>(frame_index[0]);
+    const cv::Vec2d at_ref = subset_mean(fields[0], x[i], y[i]);
     for (std::size_t f = 1; f < F; ++f) {
       const std::size_t tf = static_cast<std::size_t>(frame_index[f]);
       if (!std::isfinite(u[f * N + i]) || occluded[tf * T + j] != 0) continue;
-      const double du = u[f * N + i] - (tu[tf * T + j] - tu[ref * T + j]);
-      const double dv = v[f * N + i] - (tv[tf * T + j] - tv[ref * T + j]);
+      const cv::Vec2d d = subset_mean(fields[f], x[i], y[i]) - at_ref;
+      const double du = u[f * N + i] - d[0], dv = v[f * N + i] - d[1];
       sum_sq += du * du + dv * dv;
       ++count;
     }
@@ -131,7 +156,8 @@ TEST_P(EndToEnd, SoilDisplacementMatchesTruth) {
   const double rms = std::sqrt(sum_sq / count);
   std::printf("soil displacement: RMS error %.4f px over %zu valid samples of %zu subsets\n", rms,
               count, matched);
-  EXPECT_LE(rms, 0.05) << "displacement RMS error [px] over " << count << " samples";
+  const double tolerance = GetParam() == Source::kCommittedSample ? 0.2 : 0.05;
+  EXPECT_LE(rms, tolerance) << "displacement RMS error [px] over " << count << " samples";
 }
 
 TEST_P(EndToEnd, MomentumAddedMassAndCraterDepthMatchTruth) {
@@ -303,6 +329,67 @@ std::string Lines(const std::vector<std::string>& lines) {
   std::string text;
   for (const std::string& line : lines) text += "  " + line + "\n";
   return text;
+}
+
+// The committed sample shows the paper's wave physics (docs/wave.md, "The sample"): a cone of soil
+// punched under the pounder, not the whole bed, and a compression wave that the base sensors and
+// the DIC front both time. Against the sample's truth (truth.h5 /base_sensors): each base
+// sensor's wave speed within 5 % and its stress ratio within 10 % (the bounds), the DIC
+// front's speed within 5 % of the field's wave speed; neither half of the reflection check finds
+// a local maximum (the synth wave is not reflected); the space-time figure shows the front
+// running down (its pixels, as tests/render/wave_figures_test.cc reads them); at t_e the soil
+// at the bottom of the field moves at under a tenth of the core's speed.
+TEST(EndToEndSample, ShowsTheConeAndTheWave) {
+  const Prepared& p = Prepare(Source::kCommittedSample);
+  ASSERT_TRUE(p.ok) << p.run_output;
+  H5Reader results(p.Out("results.h5"));
+  H5Reader truth(p.truth);
+  const double c = truth.ReadNumberAttribute("/base_sensors", "wave_speed_m_s");
+  const std::vector<double> speed = results.ReadDouble("/wave/speed_peak_m_s");
+  const std::vector<double> ratio = results.ReadDouble("/wave/stress_ratio");
+  const std::vector<double> true_ratio = truth.ReadDouble("/base_sensors/stress_ratio");
+  ASSERT_EQ(speed.size(), 2u);
+  ASSERT_EQ(true_ratio.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_NEAR(speed[k], c, 0.05 * c) << "base channel " << k;
+    EXPECT_NEAR(ratio[k], true_ratio[k], 0.10 * true_ratio[k]) << "base channel " << k;
+  }
+  const double front = results.ReadDouble("/wave/front/speed_m_s")[0];
+  EXPECT_NEAR(front, c, 0.05 * c);
+  // The synth wave has no reflection: neither half of the check finds one, and both are checked.
+  for (const char* path : {"/wave/reflection_local_maximum", "/wave/reflection_dic_local_maximum"})
+    for (double v : results.ReadDouble(path)) EXPECT_EQ(v, 0) << path;
+
+  // Below the cone (the deeper half of the rows the colour reaches), where the front, not the
+  // pounder's push, sets the arrival.
+  int rows = 0;
+  const double rank =
+      test::FrontRankCorrelation(p.Out(results_layout::kWaveSpaceTimePng), &rows, 0.5);
+  std::printf("space-time figure: rank correlation %.3f over the deeper %d rows\n", rank, rows);
+  EXPECT_GT(rank, 0.8) << rows << " rows with a red pixel";
+  EXPECT_GT(rows, 50);
+
+  // The velocity at the analysed frame nearest t_e: the core (the centre line's top subsets) and
+  // the deepest row of the field.
+  const std::vector<double> t_ms = results.ReadDouble("/time/t_ms");
+  const double t_e_ms = 1e3 * results.ReadNumberAttribute("/summary", "t_end_peak_s");
+  std::size_t f = 0;
+  for (std::size_t k = 0; k < t_ms.size(); ++k)
+    if (std::abs(t_ms[k] - t_e_ms) < std::abs(t_ms[f] - t_e_ms)) f = k;
+  const std::vector<double> x = results.ReadDouble("/kinematics/x_mm");
+  const std::vector<double> y = results.ReadDouble("/kinematics/y_mm");
+  const std::vector<double> vy = results.ReadDouble("/kinematics/vy_mm_s");
+  const std::size_t n = x.size();
+  const double y_bottom = *std::max_element(y.begin(), y.end());
+  double core = 0, bottom = 0;
+  for (std::size_t s = 0; s < n; ++s) {
+    const double v = vy[f * n + s];
+    if (!std::isfinite(v)) continue;
+    core = std::max(core, v);
+    if (y[s] > y_bottom - 1) bottom = std::max(bottom, std::abs(v));
+  }
+  EXPECT_GT(core, 2000);  // mm/s: the pounder's ~3 m/s near t_e.
+  EXPECT_LT(bottom, 0.1 * core) << "the whole bed moves: " << bottom << " of " << core << " mm/s";
 }
 
 TEST(EndToEndSample, SummaryEqualsTheCommittedReference) {

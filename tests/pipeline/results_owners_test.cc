@@ -19,6 +19,7 @@
 #include "impactdic/render/render_results.h"
 #include "impactdic/sensor/frame_timeline.h"
 #include "impactdic/sensor/sensor_results.h"
+#include "impactdic/sensor/wave_results.h"
 #include "impactdic/strain/strain_results.h"
 
 namespace impactdic {
@@ -71,6 +72,8 @@ TEST_F(ResultsOwners, EveryDatasetOfARunIsReadByItsGroupsOwner) {
   const ModelResultsGroup model = ReadModelResults(in, file);
   const StrainResult strain = ReadStrainResults(in, file);
   const FrameTimeline timeline = ReadFrameTimeline(in, file);
+  const WaveResult wave = ReadWaveResults(in, file);  // The sample has base channels.
+  const std::vector<BaseForceRecord> base_force = ReadBaseForceRecords(in, file, wave);
   // /time/t_ms and /frames (the run's own outputs): the figures' reader.
   const VelocityFieldSequence field = ReadVelocityFieldSequence(in);
   // Read by validate-dem by its name (dem_validation.cc): the frames' index in the input sequence.

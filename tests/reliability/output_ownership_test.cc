@@ -274,7 +274,7 @@ TEST(OutputOwnership, RenderOfAPreviewSaysWhichFrameItDrawsForTe) {
   const CliResult r = RunCli("render " + run + "/results.h5 --no-figures");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const std::string what : {"velocity field", "strain"}) {
-    EXPECT_NE(r.output.find("no stored frame at t_e = 3.33 ms: the " + what +
+    EXPECT_NE(r.output.find("no stored frame at t_e = 3.12 ms: the " + what +
                             " is drawn at the nearest, t = 2.22 ms"),
               std::string::npos)
         << r.output;

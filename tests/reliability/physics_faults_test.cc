@@ -108,7 +108,7 @@ TEST(PhysicsFaults, ReleaseTimeOutsideTheRecordNamesItsSpan) {
   const std::string csv = kSample + "/sensor.csv";
   for (const char* time : {"-5", "0.9", "0.43"}) {
     ExpectCliFailure("-q analyze --sensor " + csv + " --from-release --release-time " + time,
-                     {csv, "--release-time", "inside the record, which spans [0 s, 0.47748 s]",
+                     {csv, "--release-time", "inside the record, which spans [0 s, 0.47752 s]",
                       "before the detected impact at 0.42776 s"});
   }
   // Inside the record: the sample's own release (0.05 s) gives its v0.
@@ -128,14 +128,14 @@ TEST(PhysicsFaults, FrameRateMustAgreeWithTheExposureChannel) {
   ExpectCliFailure("-q run " + scene + " -o " + dir.File("out"),
                    {scene, "inputs.fps", "got 16000 1/s",
                     "the frame rate of the exposure channel in " + kSample + "/sensor.csv",
-                    "1599.22 1/s (50 rising edges"});
+                    "1598.31 1/s (54 rising edges"});
   EXPECT_FALSE(fs::exists(dir.File("out")));
-  // The tolerance: 1 % plus one DAQ sample (40 us) over the edges' span (30.6 ms): 1.13 %. The
-  // sample's edges give 1599.22 1/s; 1610 (+0.68 %) passes, 1625 (+1.6 %) does not.
+  // The tolerance: 1 % plus one DAQ sample (40 us) over the edges' span (33.2 ms): 1.12 %. The
+  // sample's edges give 1598.31 1/s; 1610 (+0.73 %) passes, 1625 (+1.67 %) does not.
   const SensorResult sensor = AnalyzeSensorCsv(kSample + "/sensor.csv", SensorOptions{});
-  EXPECT_EQ(FrameTimes(sensor, 50, {.fps = 1600}).size(), 50u);
-  EXPECT_EQ(FrameTimes(sensor, 50, {.fps = 1610}).size(), 50u);
-  ExpectErrorContaining([&] { FrameTimes(sensor, 50, {.fps = 1625}); }, "within 1.1 %");
+  EXPECT_EQ(FrameTimes(sensor, 54, {.fps = 1600}).size(), 54u);
+  EXPECT_EQ(FrameTimes(sensor, 54, {.fps = 1610}).size(), 54u);
+  ExpectErrorContaining([&] { FrameTimes(sensor, 54, {.fps = 1625}); }, "within 1.1 %");
 }
 
 // A missing exposure column was reported as "frames: got 1 frames from 49 to 49" (the frames
@@ -143,15 +143,18 @@ TEST(PhysicsFaults, FrameRateMustAgreeWithTheExposureChannel) {
 TEST(PhysicsFaults, MissingExposureColumnIsNamedWithTheColumnsFound) {
   TestDir dir;
   const CsvTable table = ReadCsv(kSample + "/sensor.csv", CsvReadOptions{});
-  WriteCsv(dir.File("daq.csv"), {"time_s", "accel_g"},
-           {table.Column("time_s"), table.Column("accel_g")}, 12);
+  WriteCsv(dir.File("daq.csv"), {"time_s", "accel_g", "base_center_N", "base_offset_N"},
+           {table.Column("time_s"), table.Column("accel_g"), table.Column("base_center_N"),
+            table.Column("base_offset_N")},
+           12);
   const std::string scene =
       SampleScene(dir, {{"sensor: " + kSample + "/sensor.csv", "sensor: " + dir.File("daq.csv")}},
                   kNoCorrelation);
   const std::string output =
       ExpectCliFailure("-q run " + scene + " -o " + dir.File("out"),
                        {dir.File("daq.csv"), "column 'exposure' (sensor.exposure_column)",
-                        "its columns are time_s, accel_g", "sensor.exposure_column: \"\""});
+                        "its columns are time_s, accel_g, base_center_N, base_offset_N",
+                        "sensor.exposure_column: \"\""});
   EXPECT_FALSE(Contains(output, "got 1 frames")) << output;
   // Without an exposure channel by choice, frames timed by the default offset 0 all lie before
   // the impact (0.4278 s): the message says so.
@@ -162,7 +165,7 @@ TEST(PhysicsFaults, MissingExposureColumnIsNamedWithTheColumnsFound) {
                   kNoCorrelation);
   const std::string timing = ExpectCliFailure(
       "-q run " + no_channel + " -o " + dir.File("out"),
-      {no_channel, "frame times", "frames 0..49 at 0 s .. 0.030625 s on the DAQ clock",
+      {no_channel, "frame times", "frames 0..53 at 0 s .. 0.033125 s on the DAQ clock",
        "sensor.frame_time_offset_s + k / inputs.fps", "before the impact at 0.42776 s"});
   EXPECT_FALSE(Contains(timing, "got 1 frames")) << timing;
 }
@@ -246,7 +249,7 @@ TEST(PhysicsFaults, FramesEndingInsideThePeakStageMakeTeNull) {
 TEST(PhysicsFaults, RunWithTheFirstFrameAfterTheImpactFails) {
   TestDir dir;
   const std::string scene =
-      SampleScene(dir, {{"dic:\n", "dic:\n  first_frame: 5\n  threads: 2\n"}});
+      SampleScene(dir, {{"dic:\n", "dic:\n  first_frame: 7\n  threads: 2\n"}});
   ExpectCliFailure("-q run " + scene + " -o " + dir.File("out"),
                    {"momentum: t_e is not measurable: the first analysed frame",
                     "after the impact at 0.427760 s", "dic.first_frame", "--allow-partial"});

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -132,8 +133,11 @@ inline void WriteFrames(const VelocityFieldSequence& seq, H5Writer& out) {
 // the right 15 % of the image) the leftmost pixel of at least half the colour scale downward
 // (from the palette's #f4a582 to its top #b2182b; the red minus green test admits a legend's
 // orange #D55E00 markers only where they blend into white), i.e. the arrival at that depth;
-// *rows gets how many rows have one.
-inline double FrontRankCorrelation(const std::string& png, int* rows) {
+// *rows gets how many rows have one. `deepest_fraction` < 1 keeps only that deepest fraction of
+// those rows (below a punched cone, where the soil is reached by the front, not pushed at the
+// contact).
+inline double FrontRankCorrelation(const std::string& png, int* rows,
+                                   double deepest_fraction = 1.0) {
   const cv::Mat img = cv::imread(png, cv::IMREAD_COLOR);
   int axis_row = img.rows, most_dark = 0;
   for (int y = 0; y < img.rows; ++y) {
@@ -155,6 +159,10 @@ inline double FrontRankCorrelation(const std::string& png, int* rows) {
       }
     }
   }
+  const auto skip = static_cast<std::ptrdiff_t>(
+      std::lround(static_cast<double>(ys.size()) * (1 - std::clamp(deepest_fraction, 0.0, 1.0))));
+  ys.erase(ys.begin(), ys.begin() + skip);
+  xs.erase(xs.begin(), xs.begin() + skip);
   *rows = static_cast<int>(ys.size());
   if (ys.size() < 3) return 0;
   const auto ranks = [](const std::vector<double>& v) {

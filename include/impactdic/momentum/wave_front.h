@@ -66,6 +66,24 @@ WaveFront AnalyzeWaveFront(const KinematicsResult& kinematics,
                            const std::vector<double>& frame_daq_time_s, const SensorResult& sensor,
                            double t_end_peak_s, const WaveFrontOptions& options);
 
+// The DIC half of the reflection check (sensor/wave.h, "reflection check"), for each channel's
+// window (ReflectionCheck::window_s, set by AnalyzeWave):
+//  * signal: the mean downward vertical velocity of the near-surface subsets: the shallowest row
+//    below the undisturbed surface outside the pounder's footprint columns (|x - x_c| > D / 2;
+//    soil the reflected wave reaches, not the pounder);
+//  * statistic: the largest prominence (LargestProminence) of a local maximum of the signal or of
+//    its negative (the reflected compression wave moves the surface soil upward; either sign
+//    shows) over the frames from the last one at or before the window's start to the first at or
+//    after its end;
+//  * a local maximum shows when the prominence exceeds kReflectionSigma standard deviations of the
+//    signal over the front's noise frames (frame f with frame f + 2 before the impact).
+// Not checked (DicReflectionCheck::note says why): no window (no return time), the pounder's
+// position unknown, no near-surface subset, too few noise frames, the frames end before the
+// window's end.
+void CheckDicReflections(const KinematicsResult& kinematics,
+                         const std::vector<double>& frame_daq_time_s, const SensorResult& sensor,
+                         const WaveFrontOptions& options, std::vector<WaveChannel>* channels);
+
 }  // namespace impactdic
 
 #endif  // IMPACTDIC_MOMENTUM_WAVE_FRONT_H_

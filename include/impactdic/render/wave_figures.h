@@ -28,12 +28,8 @@ Plot MakeSpaceTimePlot(const WaveResult& wave);
 PlotSummary PlotSpaceTime(const WaveResult& wave, const std::string& png_path,
                           const PlotOptions& options = {});
 
-// One base channel's dynamic force [N] on the sensor's time axis (after the impact).
-struct BaseForceRecord {
-  std::string column;
-  std::vector<double> force_n;
-};
-// t_s: the records' time after the impact; records in wave.channels' order (matched by column).
+// The base records (sensor/wave.h BaseForceRecord). t_s: the records' time after the impact;
+// records in wave.channels' order (matched by column).
 Plot MakeBaseForcePlot(const std::vector<double>& t_s, const std::vector<BaseForceRecord>& records,
                        const WaveResult& wave);
 PlotSummary PlotBaseForce(const std::vector<double>& t_s,

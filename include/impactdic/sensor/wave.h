@@ -81,6 +81,17 @@ struct ReflectionCheck {
   bool local_maximum = false;  // prominence_g > threshold_g.
 };
 
+// The DIC half of the reflection check (momentum/wave_front.h, CheckDicReflections): the
+// near-surface soil's mean vertical velocity in the same window as `ReflectionCheck`.
+struct DicReflectionCheck {
+  bool checked = false;           // The window lies inside the analysed frames, with their noise.
+  std::string note;               // Why not checked ("" when checked).
+  std::size_t subsets = 0;        // The near-surface subsets averaged.
+  double prominence_mm_s = kNaN;  // The largest local maximum's prominence, either sign (0: none).
+  double threshold_mm_s = kNaN;   // kReflectionSigma x the signal's pre-impact noise.
+  bool local_maximum = false;     // prominence_mm_s > threshold_mm_s.
+};
+
 struct WaveChannel {
   std::string column;
   std::string unit;  // The column's unit as given (N, kN).
@@ -94,6 +105,7 @@ struct WaveChannel {
   double peak_force_n = kNaN, peak_stress_pa = kNaN;
   double stress_ratio = kNaN;  // peak_stress_pa / WaveResult::pounder_peak_stress_pa.
   ReflectionCheck reflection;
+  DicReflectionCheck dic_reflection;
   std::vector<std::string> problems;  // Why a figure is NaN (implausible, not found).
 };
 
@@ -168,6 +180,18 @@ struct WaveResult {
   // paper's sensor under the pounder); nullptr without channels.
   const WaveChannel* CentreChannel() const;
 };
+
+// One base channel's dynamic force series [N] as written under /wave/force_N
+// (ReadBaseForceRecords).
+struct BaseForceRecord {
+  std::string column;
+  std::vector<double> force_n;
+};
+
+// The largest prominence of an interior local maximum of y over [a, b] (indices, inclusive): its
+// height above the higher of the lowest values on its left and on its right within [a, b]; 0 when
+// there is no interior local maximum. The reflection checks' statistic.
+double LargestProminence(const std::vector<double>& y, std::size_t a, std::size_t b);
 
 // The wave figures of every base channel of `sensor` (ProcessSensor with options.columns.
 // base_force). `options` gives the channels' positions and areas and the filter.

@@ -9,6 +9,7 @@
 #define IMPACTDIC_SENSOR_WAVE_RESULTS_H_
 
 #include <string>
+#include <vector>
 
 #include "impactdic/io/hdf5_store.h"
 #include "impactdic/sensor/sensor.h"
@@ -27,8 +28,10 @@ namespace results_layout {
 // pounder's peak stress [1], and the reflection check: the window's start and end after the
 // impact [s], the statistic (largest prominence of a local maximum of the pounder's deceleration
 // in it) and its threshold [g], and its outcome (1 = a local maximum, 0 = none, NaN = not
-// checked). kWaveForceGroup/<column>: each channel's dynamic force [K] [N] (offset-corrected,
-// filtered; the time axis is /sensor/t_s).
+// checked); its DIC half (momentum/wave_front.h CheckDicReflections): the statistic for the
+// near-surface soil's mean vertical velocity and its threshold [mm/s], the outcome (the same
+// codes) and the subsets averaged. kWaveForceGroup/<column>: each channel's dynamic force [K] [N]
+// (offset-corrected, filtered; the time axis is /sensor/t_s).
 inline constexpr const char* kWaveGroup = "/wave";
 inline constexpr const char* kWaveOffset = "/wave/offset_mm";
 inline constexpr const char* kWaveDepth = "/wave/depth_mm";
@@ -50,6 +53,10 @@ inline constexpr const char* kWaveReflectionEnd = "/wave/reflection_window_end_s
 inline constexpr const char* kWaveReflectionProminence = "/wave/reflection_prominence_g";
 inline constexpr const char* kWaveReflectionThreshold = "/wave/reflection_threshold_g";
 inline constexpr const char* kWaveReflectionLocalMax = "/wave/reflection_local_maximum";
+inline constexpr const char* kWaveDicReflectionProminence = "/wave/reflection_dic_prominence_mm_s";
+inline constexpr const char* kWaveDicReflectionThreshold = "/wave/reflection_dic_threshold_mm_s";
+inline constexpr const char* kWaveDicReflectionLocalMax = "/wave/reflection_dic_local_maximum";
+inline constexpr const char* kWaveDicReflectionSubsets = "/wave/reflection_dic_subsets";
 inline constexpr const char* kWaveForceGroup = "/wave/force_N";
 // The front in the DIC field (only when the run measured it: WaveFront::computed), definitions in
 // momentum/wave_front.h. [S] per subset of /kinematics, in its order: the reference centre's
@@ -105,6 +112,11 @@ void WriteWaveResults(H5Writer& out, const SensorResult& sensor, const WaveResul
 // kFileFormat naming `file` and the group or dataset when it is missing or a dataset's length
 // differs from the columns'.
 WaveResult ReadWaveResults(const H5Reader& in, const std::string& file);
+
+// The dynamic force series under kWaveForceGroup (time axis /sensor/t_s), one per channel of
+// `wave` that has one, in its order.
+std::vector<BaseForceRecord> ReadBaseForceRecords(const H5Reader& in, const std::string& file,
+                                                  const WaveResult& wave);
 
 }  // namespace impactdic
 

@@ -21,6 +21,7 @@
 #include "impactdic/dic/options.h"
 #include "impactdic/io/frame_source.h"
 #include "impactdic/io/image_io.h"
+#include "impactdic/momentum/wave_front.h"
 #include "impactdic/pipeline/frame_stream.h"
 #include "impactdic/pipeline/pipeline.h"
 #include "impactdic/pipeline/run_data.h"
@@ -143,7 +144,13 @@ std::string TimeFrames(StageContext& c, FrameTimeline* all) {
   if (scene.dic.first_frame != 0 || scene.dic.first_frame_number) return "";
   const double impact_s = d.sensor->summary.impact_time_s;
   const std::vector<double>& t = all->daq_time_s;
-  d.first_frame = ReferenceFrameForImpact(t, impact_s);
+  const int reference = ReferenceFrameForImpact(t, impact_s);
+  // With base channels the run measures the front in the DIC field, whose noise is each subset's
+  // velocity over kMinNoiseFrames frames before the impact (momentum/wave_front.h: frame f with
+  // frame f + 2 before it): the run starts kMinNoiseFrames + 1 frames before the reference.
+  const int front_frames =
+      scene.sensor.options.columns.base_force.empty() ? 0 : kMinNoiseFrames + 1;
+  d.first_frame = std::max(0, reference - front_frames);
   if (d.last_frame - d.first_frame < 2) {  // Was "frames: got 1 frames from 49 to 49".
     throw Error(ErrorKind::kInvalidValue, "frame times",
                 fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
@@ -154,8 +161,15 @@ std::string TimeFrames(StageContext& c, FrameTimeline* all) {
                 "channel and dic.last_frame")
         .WithFile(scene.path);
   }
-  if (d.first_frame == 0) return "";
-  return fmt::format("; frames 0..{} before the impact are not correlated", d.first_frame - 1);
+  std::string note;
+  if (d.first_frame > 0)
+    note = fmt::format("; frames 0..{} before the impact are not correlated", d.first_frame - 1);
+  if (d.first_frame < reference)
+    note += fmt::format(
+        "; frames {}..{} before the impact are correlated for the wave front's noise (base "
+        "channels)",
+        d.first_frame, reference - 1);
+  return note;
 }
 
 // Checks the first analysed frame (the roi, the calibration's size); without a correlation to

@@ -86,7 +86,11 @@ class MomentumStage : public Stage {
     o.pounder_width_mm = m.footprint.x_right_mm - m.footprint.x_left_mm;
     d.wave->front = AnalyzeWaveFront(*d.kinematics, d.timeline.daq_time_s, *d.sensor,
                                      d.momentum->summary.t_end_peak_s, o);
-    if (c.summary.wave) c.summary.wave->front = d.wave->front;
+    CheckDicReflections(*d.kinematics, d.timeline.daq_time_s, *d.sensor, o, &d.wave->channels);
+    if (c.summary.wave) {
+      c.summary.wave->front = d.wave->front;
+      c.summary.wave->channels = d.wave->channels;
+    }
     const WaveFront& f = d.wave->front;
     c.summary.figures.wave_front_speed_m_s = f.speed_m_s;
     c.summary.figures.wave_decay_length_te_mm = f.displacement_te.decay_length_mm;
