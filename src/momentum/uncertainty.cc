@@ -58,68 +58,43 @@ double OverlapFraction(double dx, double dy, double size) {
   return std::max(0.0, 1 - std::abs(dx) / size) * std::max(0.0, 1 - std::abs(dy) / size);
 }
 
-// g [m/s^2] as the sensor used it: accel_down = g (1 - accel_g); 9.81 if no sample tells.
-double GravityOf(const SensorResult& sensor) {
-  for (std::size_t i = 0; i < sensor.accel_g.size() && i < sensor.accel_down_m_s2.size(); ++i)
-    if (std::abs(1 - sensor.accel_g[i]) > 0.5)
-      return sensor.accel_down_m_s2[i] / (1 - sensor.accel_g[i]);
-  return 9.81;
-}
-
-std::size_t IndexAt(const std::vector<double>& t, double time_s) {
-  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), time_s) - t.begin());
-}
-
-// The accelerometer's part: the velocity and penetration errors of one draw of white noise
-// (sigma noise_g) integrated from `start` with the mean over the offset window [w0, w1] removed.
-class PounderNoise {
+// The accelerometer's part: the record processed again (sensor ProcessAccelerometer: offset,
+// filter, release and impact detection, integration, stop) with fresh white noise of the
+// record's own standard deviation (SensorSummary::noise_g, from the free-fall window before the
+// impact) added to its reading. The nominal reading already carries one draw of that noise, so a
+// draw's reading carries sqrt(2) of it: the detection's noise band, in standard deviations of
+// the (draw's) quiet window, is narrowed by 1 / sqrt(2) to keep its width in g that of the
+// nominal analysis.
+class PounderDraws {
  public:
-  PounderNoise(const SensorResult& sensor, double noise_g) : t_(sensor.time_s) {
-    const SensorSummary& ss = sensor.summary;
-    const std::size_t n = t_.size();
-    start_ = std::min(
-        IndexAt(t_, std::isfinite(ss.release_time_s) ? ss.release_time_s : ss.impact_time_s),
-        n - 1);
-    impact_ = std::min(ss.impact_index, n - 1);
-    if (std::isfinite(ss.offset_window_s[0]) && std::isfinite(ss.offset_window_s[1])) {
-      w0_ = std::min(IndexAt(t_, ss.offset_window_s[0]), n - 1);
-      w1_ = std::min(IndexAt(t_, ss.offset_window_s[1]), n - 1);
-    } else {
-      w0_ = w1_ = n;
-    }
-    first_ = std::min(start_, w0_);
-    scale_ = GravityOf(sensor) * (std::isfinite(noise_g) ? noise_g : 0.0);
-    dv_.assign(n, 0);
-    dz_.assign(n, 0);
+  explicit PounderDraws(const SensorResult& sensor)
+      : reading_(sensor.reading_g), noise_g_(sensor.summary.noise_g), options_(sensor.options) {
+    record_.path = sensor.path;
+    record_.time_s = sensor.time_s;
+    record_.sample_rate_hz = sensor.summary.sample_rate_hz;
+    options_.columns.base_force.clear();
+    options_.base = BaseForceOptions{};
+    options_.noise_band_sigma /= std::sqrt(2.0);
   }
-  void Draw(std::mt19937_64& rng) {
-    const std::size_t n = t_.size();
+  // The record carries its reading (it came from ProcessSensor) and a measured noise.
+  bool Available() const {
+    return !reading_.empty() && reading_.size() == record_.time_s.size() &&
+           std::isfinite(noise_g_) && noise_g_ > 0;
+  }
+  // Throws Error when the draw's record cannot be analysed (e.g. no impact found).
+  SensorResult Draw(std::mt19937_64& rng) {
     std::normal_distribution<double> normal;
-    std::vector<double>& a = a_;
-    a.assign(n, 0);
-    double window_sum = 0;
-    for (std::size_t i = first_; i < n; ++i) {
-      a[i] = normal(rng);
-      if (i >= w0_ && i <= w1_) window_sum += a[i];
-    }
-    const double mean = w0_ < n ? window_sum / static_cast<double>(w1_ - w0_ + 1) : 0.0;
-    // accel_down = g (1 - reading): a reading's error e moves it by -g e.
-    for (std::size_t i = first_; i < n; ++i) a[i] = -scale_ * (a[i] - mean);
-    std::fill(dv_.begin(), dv_.end(), 0.0);
-    std::fill(dz_.begin(), dz_.end(), 0.0);
-    for (std::size_t i = start_ + 1; i < n; ++i)
-      dv_[i] = dv_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (a[i] + a[i - 1]);
-    for (std::size_t i = impact_ + 1; i < n; ++i)
-      dz_[i] = dz_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (dv_[i] + dv_[i - 1]);
+    record_.accel_g.resize(reading_.size());
+    for (std::size_t i = 0; i < reading_.size(); ++i)
+      record_.accel_g[i] = reading_[i] + noise_g_ * normal(rng);
+    return ProcessAccelerometer(record_, options_);
   }
-  const std::vector<double>& dv() const { return dv_; }
-  const std::vector<double>& dz() const { return dz_; }
 
  private:
-  const std::vector<double>& t_;
-  std::size_t start_ = 0, impact_ = 0, w0_ = 0, w1_ = 0, first_ = 0;
-  double scale_ = 0;
-  std::vector<double> a_, dv_, dz_;
+  const std::vector<double>& reading_;
+  double noise_g_ = 0;
+  SensorOptions options_;
+  SensorRecord record_;
 };
 
 // The grid's part: displacement errors [frames x grid] of one draw, sigma * (sqrt(1/2) a_i +
@@ -289,17 +264,16 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
   const double dt = nf > 1 ? kin.time_s[1] - kin.time_s[0] : 1.0;
   MomentumGrid grid = s.grid;
   for (std::size_t i = 0; i < g; ++i) grid.subset_ids[i] = i;
-  SensorResult pounder;
-  pounder.time_s = sensor.time_s;
-  pounder.summary = sensor.summary;
   MomentumOptions o = options;
   o.uncertainty.draws = 0;
 
   GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
-  PounderNoise pounder_noise(sensor, sensor.summary.noise_g);
-  const double v0_offset =
-      sensor.summary.impact_velocity_m_s -
-      SampleSeries(sensor.time_s, sensor.velocity_m_s, {sensor.summary.impact_time_s}, "v0")[0];
+  PounderDraws pounder_draws(sensor);
+  if (!pounder_draws.Available()) {
+    u.notes.push_back(
+        "the accelerometer's noise is not propagated: the sensor result carries no reading to "
+        "process again, or no measured noise");
+  }
   std::mt19937_64 rng(kSeed);
   std::normal_distribution<double> normal;
   const std::size_t nfig = Figures(s).size();
@@ -323,24 +297,17 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
     }
     grid.area_m2 = s.grid.area_m2 * scale * scale;
     grid.mass_kg = density * grid.area_m2 * depth;
-    pounder_noise.Draw(rng);
-    pounder.velocity_m_s = sensor.velocity_m_s;
-    pounder.penetration_m = sensor.penetration_m;
-    for (std::size_t i = 0; i < pounder.velocity_m_s.size(); ++i) {
-      pounder.velocity_m_s[i] += pounder_noise.dv()[i];
-      if (i < pounder.penetration_m.size()) pounder.penetration_m[i] += pounder_noise.dz()[i];
-    }
     MomentumResult r;
     try {
+      SensorResult drawn;
+      if (pounder_draws.Available()) drawn = pounder_draws.Draw(rng);
+      const SensorResult& pounder = pounder_draws.Available() ? drawn : sensor;
       r = internal::AnalyzeMomentumOnGrid(red, result->frame_time_s, pounder, o, grid);
     } catch (const Error&) {
       ++not_measured;
       continue;
     }
     if (!r.summary.t_end_problem.empty()) ++not_measured;
-    r.summary.impact_velocity_m_s =
-        v0_offset + SampleSeries(pounder.time_s, pounder.velocity_m_s,
-                                 {pounder.summary.impact_time_s}, "v0")[0];
     const std::vector<double> f = Figures(r.summary);
     for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
     for (std::size_t k = 0; k < nf; ++k) {
