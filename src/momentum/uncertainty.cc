@@ -2,6 +2,8 @@
 #include "impactdic/momentum/uncertainty.h"
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -34,7 +36,7 @@ void MomentumUncertaintyOptions::Check() const {
 
 namespace {
 
-constexpr std::uint64_t kSeed = 0x5eed42;
+constexpr std::uint32_t kSeed = 0x5eed42;
 
 // Sample standard deviation of the finite values; NaN for fewer than two.
 double FiniteSd(const std::vector<double>& values) {
@@ -61,40 +63,35 @@ double OverlapFraction(double dx, double dy, double size) {
 // The accelerometer's part: the record processed again (sensor ProcessAccelerometer: offset,
 // filter, release and impact detection, integration, stop) with fresh white noise of the
 // record's own standard deviation (SensorSummary::noise_g, from the free-fall window before the
-// impact) added to its reading. The nominal reading already carries one draw of that noise, so a
-// draw's reading carries sqrt(2) of it: the detection's noise band, in standard deviations of
-// the (draw's) quiet window, is narrowed by 1 / sqrt(2) to keep its width in g that of the
-// nominal analysis.
+// impact) added to its reading.
 class PounderDraws {
  public:
-  explicit PounderDraws(const SensorResult& sensor)
-      : reading_(sensor.reading_g), noise_g_(sensor.summary.noise_g), options_(sensor.options) {
-    record_.path = sensor.path;
-    record_.time_s = sensor.time_s;
-    record_.sample_rate_hz = sensor.summary.sample_rate_hz;
+  explicit PounderDraws(const SensorResult& sensor) : sensor_(sensor), options_(sensor.options) {
     options_.columns.base_force.clear();
     options_.base = BaseForceOptions{};
-    options_.noise_band_sigma /= std::sqrt(2.0);
   }
   // The record carries its reading (it came from ProcessSensor) and a measured noise.
   bool Available() const {
-    return !reading_.empty() && reading_.size() == record_.time_s.size() &&
-           std::isfinite(noise_g_) && noise_g_ > 0;
+    const double noise = sensor_.summary.noise_g;
+    return !sensor_.reading_g.empty() && sensor_.reading_g.size() == sensor_.time_s.size() &&
+           std::isfinite(noise) && noise > 0;
   }
   // Throws Error when the draw's record cannot be analysed (e.g. no impact found).
-  SensorResult Draw(std::mt19937_64& rng) {
+  SensorResult Draw(std::mt19937_64& rng) const {
     std::normal_distribution<double> normal;
-    record_.accel_g.resize(reading_.size());
-    for (std::size_t i = 0; i < reading_.size(); ++i)
-      record_.accel_g[i] = reading_[i] + noise_g_ * normal(rng);
-    return ProcessAccelerometer(record_, options_);
+    SensorRecord record;
+    record.path = sensor_.path;
+    record.time_s = sensor_.time_s;
+    record.sample_rate_hz = sensor_.summary.sample_rate_hz;
+    record.accel_g.resize(sensor_.reading_g.size());
+    for (std::size_t i = 0; i < record.accel_g.size(); ++i)
+      record.accel_g[i] = sensor_.reading_g[i] + sensor_.summary.noise_g * normal(rng);
+    return ProcessAccelerometer(record, options_);
   }
 
  private:
-  const std::vector<double>& reading_;
-  double noise_g_ = 0;
+  const SensorResult& sensor_;
   SensorOptions options_;
-  SensorRecord record_;
 };
 
 // The grid's part: displacement errors [frames x grid] of one draw, sigma * (sqrt(1/2) a_i +
@@ -118,7 +115,7 @@ class GridNoise {
     r.diagonal().array() += 1e-12;
     l_ = r.llt().matrixL();
   }
-  void Draw(std::mt19937_64& rng, std::vector<double>* err) {
+  void Draw(std::mt19937_64& rng, std::vector<double>* err) const {
     const std::size_t g = grid_.subset_ids.size(), nf = kin_.frames;
     std::normal_distribution<double> normal;
     auto correlated = [&] {
@@ -243,71 +240,92 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
     return;
   }
   // The grid's subsets alone, ids 0..g-1, and their displacements.
-  KinematicsResult red;
-  red.frames = nf;
-  red.subsets = g;
-  red.time_s = kin.time_s;
+  KinematicsResult grid_kin;
+  grid_kin.frames = nf;
+  grid_kin.subsets = g;
+  grid_kin.time_s = kin.time_s;
   std::vector<double> disp(nf * g), sigmas;
   for (std::size_t i = 0; i < g; ++i) {
     const std::size_t id = s.grid.subset_ids[i];
-    red.x_mm.push_back(kin.x_mm[id]);
-    red.y_mm.push_back(kin.y_mm[id]);
+    grid_kin.x_mm.push_back(kin.x_mm[id]);
+    grid_kin.y_mm.push_back(kin.y_mm[id]);
     for (std::size_t k = 0; k < nf; ++k) {
       disp[k * g + i] = kin.disp_y_mm[k * kin.subsets + id];
       if (k > 0) sigmas.push_back(kin.disp_y_sigma_mm[k * kin.subsets + id]);
     }
   }
   u.dic_sigma_median_mm = MedianOf(sigmas);
-  red.disp_y_mm.resize(nf * g);
-  red.vel_y_mm_s.resize(nf * g);
-  red.acc_y_mm_s2.resize(nf * g);
+  grid_kin.disp_y_mm.resize(nf * g);
+  grid_kin.vel_y_mm_s.resize(nf * g);
+  grid_kin.acc_y_mm_s2.resize(nf * g);
   const double dt = nf > 1 ? kin.time_s[1] - kin.time_s[0] : 1.0;
-  MomentumGrid grid = s.grid;
-  for (std::size_t i = 0; i < g; ++i) grid.subset_ids[i] = i;
+  MomentumGrid grid_template = s.grid;
+  for (std::size_t i = 0; i < g; ++i) grid_template.subset_ids[i] = i;
   MomentumOptions o = options;
   o.uncertainty.draws = 0;
 
-  GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
-  PounderDraws pounder_draws(sensor);
+  const GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
+  const PounderDraws pounder_draws(sensor);
   if (!pounder_draws.Available()) {
     u.notes.push_back(
         "the accelerometer's noise is not propagated: the sensor result carries no reading to "
         "process again, or no measured noise");
   }
-  std::mt19937_64 rng(kSeed);
-  std::normal_distribution<double> normal;
-  const std::size_t nfig = Figures(s).size();
-  std::vector<std::vector<double>> figures(nfig);
-  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
-  std::vector<double> err, column(nf);
-  int not_measured = 0;
-  for (int d = 0; d < uo.draws; ++d) {
+  // One draw: its own random stream (seeded by the draw's index, so that the result does not
+  // depend on the number of threads), the inputs perturbed, the analysis on the grid; `red` and
+  // `grid` are the draw's scratch copies of grid_kin and grid_template.
+  struct Draw {
+    bool analysed = false;  // false: the analysis threw (e.g. the draw's record has no impact).
+    MomentumResult result;
+  };
+  auto run_draw = [&](std::size_t d, KinematicsResult* red, MomentumGrid* grid) {
+    std::seed_seq seq{kSeed, static_cast<std::uint32_t>(d)};
+    std::mt19937_64 rng(seq);
+    std::normal_distribution<double> normal;
     const double scale = 1 + uo.scale_u_fraction * normal(rng);
     const double density = options.density_kg_m3 + uo.density_u_kg_m3 * normal(rng);
     const double depth = options.depth_m + uo.depth_u_m * normal(rng);
+    std::vector<double> err, column(nf);
     grid_noise.Draw(rng, &err);
     for (std::size_t i = 0; i < g; ++i) {
       for (std::size_t k = 0; k < nf; ++k) column[k] = scale * (disp[k * g + i] + err[k * g + i]);
       const std::vector<double> v = FirstDerivative(column, dt), a = SecondDerivative(column, dt);
       for (std::size_t k = 0; k < nf; ++k) {
-        red.disp_y_mm[k * g + i] = column[k];
-        red.vel_y_mm_s[k * g + i] = v[k];
-        red.acc_y_mm_s2[k * g + i] = a[k];
+        red->disp_y_mm[k * g + i] = column[k];
+        red->vel_y_mm_s[k * g + i] = v[k];
+        red->acc_y_mm_s2[k * g + i] = a[k];
       }
     }
-    grid.area_m2 = s.grid.area_m2 * scale * scale;
-    grid.mass_kg = density * grid.area_m2 * depth;
-    MomentumResult r;
+    grid->area_m2 = s.grid.area_m2 * scale * scale;
+    grid->mass_kg = density * grid->area_m2 * depth;
+    Draw out;
     try {
       SensorResult drawn;
       if (pounder_draws.Available()) drawn = pounder_draws.Draw(rng);
       const SensorResult& pounder = pounder_draws.Available() ? drawn : sensor;
-      r = internal::AnalyzeMomentumOnGrid(red, result->frame_time_s, pounder, o, grid);
+      out.result = internal::AnalyzeMomentumOnGrid(*red, result->frame_time_s, pounder, o, *grid);
+      out.analysed = true;
     } catch (const Error&) {
-      ++not_measured;
-      continue;
+      out.analysed = false;
     }
-    if (!r.summary.t_end_problem.empty()) ++not_measured;
+    return out;
+  };
+  std::vector<Draw> draws(static_cast<std::size_t>(uo.draws));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, draws.size()),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      KinematicsResult red = grid_kin;
+                      MomentumGrid grid = grid_template;
+                      for (std::size_t d = range.begin(); d != range.end(); ++d)
+                        draws[d] = run_draw(d, &red, &grid);
+                    });
+  const std::size_t nfig = Figures(s).size();
+  std::vector<std::vector<double>> figures(nfig);
+  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
+  int not_measured = 0;
+  for (const Draw& draw : draws) {
+    if (!draw.analysed || !draw.result.summary.t_end_problem.empty()) ++not_measured;
+    if (!draw.analysed) continue;
+    const MomentumResult& r = draw.result;
     const std::vector<double> f = Figures(r.summary);
     for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
     for (std::size_t k = 0; k < nf; ++k) {
