@@ -2,6 +2,8 @@
 #include "impactdic/momentum/uncertainty.h"
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -34,7 +36,7 @@ void MomentumUncertaintyOptions::Check() const {
 
 namespace {
 
-constexpr std::uint64_t kSeed = 0x5eed42;
+constexpr std::uint32_t kSeed = 0x5eed42;
 
 // Sample standard deviation of the finite values; NaN for fewer than two.
 double FiniteSd(const std::vector<double>& values) {
@@ -58,68 +60,38 @@ double OverlapFraction(double dx, double dy, double size) {
   return std::max(0.0, 1 - std::abs(dx) / size) * std::max(0.0, 1 - std::abs(dy) / size);
 }
 
-// g [m/s^2] as the sensor used it: accel_down = g (1 - accel_g); 9.81 if no sample tells.
-double GravityOf(const SensorResult& sensor) {
-  for (std::size_t i = 0; i < sensor.accel_g.size() && i < sensor.accel_down_m_s2.size(); ++i)
-    if (std::abs(1 - sensor.accel_g[i]) > 0.5)
-      return sensor.accel_down_m_s2[i] / (1 - sensor.accel_g[i]);
-  return 9.81;
-}
-
-std::size_t IndexAt(const std::vector<double>& t, double time_s) {
-  return static_cast<std::size_t>(std::lower_bound(t.begin(), t.end(), time_s) - t.begin());
-}
-
-// The accelerometer's part: the velocity and penetration errors of one draw of white noise
-// (sigma noise_g) integrated from `start` with the mean over the offset window [w0, w1] removed.
-class PounderNoise {
+// The accelerometer's part: the record processed again (sensor ProcessAccelerometer: offset,
+// filter, release and impact detection, integration, stop) with fresh white noise of the
+// record's own standard deviation (SensorSummary::noise_g, from the free-fall window before the
+// impact) added to its reading.
+class PounderDraws {
  public:
-  PounderNoise(const SensorResult& sensor, double noise_g) : t_(sensor.time_s) {
-    const SensorSummary& ss = sensor.summary;
-    const std::size_t n = t_.size();
-    start_ = std::min(
-        IndexAt(t_, std::isfinite(ss.release_time_s) ? ss.release_time_s : ss.impact_time_s),
-        n - 1);
-    impact_ = std::min(ss.impact_index, n - 1);
-    if (std::isfinite(ss.offset_window_s[0]) && std::isfinite(ss.offset_window_s[1])) {
-      w0_ = std::min(IndexAt(t_, ss.offset_window_s[0]), n - 1);
-      w1_ = std::min(IndexAt(t_, ss.offset_window_s[1]), n - 1);
-    } else {
-      w0_ = w1_ = n;
-    }
-    first_ = std::min(start_, w0_);
-    scale_ = GravityOf(sensor) * (std::isfinite(noise_g) ? noise_g : 0.0);
-    dv_.assign(n, 0);
-    dz_.assign(n, 0);
+  explicit PounderDraws(const SensorResult& sensor) : sensor_(sensor), options_(sensor.options) {
+    options_.columns.base_force.clear();
+    options_.base = BaseForceOptions{};
   }
-  void Draw(std::mt19937_64& rng) {
-    const std::size_t n = t_.size();
+  // The record carries its reading (it came from ProcessSensor) and a measured noise.
+  bool Available() const {
+    const double noise = sensor_.summary.noise_g;
+    return !sensor_.reading_g.empty() && sensor_.reading_g.size() == sensor_.time_s.size() &&
+           std::isfinite(noise) && noise > 0;
+  }
+  // Throws Error when the draw's record cannot be analysed (e.g. no impact found).
+  SensorResult Draw(std::mt19937_64& rng) const {
     std::normal_distribution<double> normal;
-    std::vector<double>& a = a_;
-    a.assign(n, 0);
-    double window_sum = 0;
-    for (std::size_t i = first_; i < n; ++i) {
-      a[i] = normal(rng);
-      if (i >= w0_ && i <= w1_) window_sum += a[i];
-    }
-    const double mean = w0_ < n ? window_sum / static_cast<double>(w1_ - w0_ + 1) : 0.0;
-    // accel_down = g (1 - reading): a reading's error e moves it by -g e.
-    for (std::size_t i = first_; i < n; ++i) a[i] = -scale_ * (a[i] - mean);
-    std::fill(dv_.begin(), dv_.end(), 0.0);
-    std::fill(dz_.begin(), dz_.end(), 0.0);
-    for (std::size_t i = start_ + 1; i < n; ++i)
-      dv_[i] = dv_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (a[i] + a[i - 1]);
-    for (std::size_t i = impact_ + 1; i < n; ++i)
-      dz_[i] = dz_[i - 1] + 0.5 * (t_[i] - t_[i - 1]) * (dv_[i] + dv_[i - 1]);
+    SensorRecord record;
+    record.path = sensor_.path;
+    record.time_s = sensor_.time_s;
+    record.sample_rate_hz = sensor_.summary.sample_rate_hz;
+    record.accel_g.resize(sensor_.reading_g.size());
+    for (std::size_t i = 0; i < record.accel_g.size(); ++i)
+      record.accel_g[i] = sensor_.reading_g[i] + sensor_.summary.noise_g * normal(rng);
+    return ProcessAccelerometer(record, options_);
   }
-  const std::vector<double>& dv() const { return dv_; }
-  const std::vector<double>& dz() const { return dz_; }
 
  private:
-  const std::vector<double>& t_;
-  std::size_t start_ = 0, impact_ = 0, w0_ = 0, w1_ = 0, first_ = 0;
-  double scale_ = 0;
-  std::vector<double> a_, dv_, dz_;
+  const SensorResult& sensor_;
+  SensorOptions options_;
 };
 
 // The grid's part: displacement errors [frames x grid] of one draw, sigma * (sqrt(1/2) a_i +
@@ -143,7 +115,7 @@ class GridNoise {
     r.diagonal().array() += 1e-12;
     l_ = r.llt().matrixL();
   }
-  void Draw(std::mt19937_64& rng, std::vector<double>* err) {
+  void Draw(std::mt19937_64& rng, std::vector<double>* err) const {
     const std::size_t g = grid_.subset_ids.size(), nf = kin_.frames;
     std::normal_distribution<double> normal;
     auto correlated = [&] {
@@ -268,79 +240,92 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
     return;
   }
   // The grid's subsets alone, ids 0..g-1, and their displacements.
-  KinematicsResult red;
-  red.frames = nf;
-  red.subsets = g;
-  red.time_s = kin.time_s;
+  KinematicsResult grid_kin;
+  grid_kin.frames = nf;
+  grid_kin.subsets = g;
+  grid_kin.time_s = kin.time_s;
   std::vector<double> disp(nf * g), sigmas;
   for (std::size_t i = 0; i < g; ++i) {
     const std::size_t id = s.grid.subset_ids[i];
-    red.x_mm.push_back(kin.x_mm[id]);
-    red.y_mm.push_back(kin.y_mm[id]);
+    grid_kin.x_mm.push_back(kin.x_mm[id]);
+    grid_kin.y_mm.push_back(kin.y_mm[id]);
     for (std::size_t k = 0; k < nf; ++k) {
       disp[k * g + i] = kin.disp_y_mm[k * kin.subsets + id];
       if (k > 0) sigmas.push_back(kin.disp_y_sigma_mm[k * kin.subsets + id]);
     }
   }
   u.dic_sigma_median_mm = MedianOf(sigmas);
-  red.disp_y_mm.resize(nf * g);
-  red.vel_y_mm_s.resize(nf * g);
-  red.acc_y_mm_s2.resize(nf * g);
+  grid_kin.disp_y_mm.resize(nf * g);
+  grid_kin.vel_y_mm_s.resize(nf * g);
+  grid_kin.acc_y_mm_s2.resize(nf * g);
   const double dt = nf > 1 ? kin.time_s[1] - kin.time_s[0] : 1.0;
-  MomentumGrid grid = s.grid;
-  for (std::size_t i = 0; i < g; ++i) grid.subset_ids[i] = i;
-  SensorResult pounder;
-  pounder.time_s = sensor.time_s;
-  pounder.summary = sensor.summary;
+  MomentumGrid grid_template = s.grid;
+  for (std::size_t i = 0; i < g; ++i) grid_template.subset_ids[i] = i;
   MomentumOptions o = options;
   o.uncertainty.draws = 0;
 
-  GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
-  PounderNoise pounder_noise(sensor, sensor.summary.noise_g);
-  const double v0_offset =
-      sensor.summary.impact_velocity_m_s -
-      SampleSeries(sensor.time_s, sensor.velocity_m_s, {sensor.summary.impact_time_s}, "v0")[0];
-  std::mt19937_64 rng(kSeed);
-  std::normal_distribution<double> normal;
-  const std::size_t nfig = Figures(s).size();
-  std::vector<std::vector<double>> figures(nfig);
-  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
-  std::vector<double> err, column(nf);
-  int not_measured = 0;
-  for (int d = 0; d < uo.draws; ++d) {
+  const GridNoise grid_noise(kin, s.grid, uo.subset_size_mm);
+  const PounderDraws pounder_draws(sensor);
+  if (!pounder_draws.Available()) {
+    u.notes.push_back(
+        "the accelerometer's noise is not propagated: the sensor result carries no reading to "
+        "process again, or no measured noise");
+  }
+  // One draw: its own random stream (seeded by the draw's index, so that the result does not
+  // depend on the number of threads), the inputs perturbed, the analysis on the grid; `red` and
+  // `grid` are the draw's scratch copies of grid_kin and grid_template.
+  struct Draw {
+    bool analysed = false;  // false: the analysis threw (e.g. the draw's record has no impact).
+    MomentumResult result;
+  };
+  auto run_draw = [&](std::size_t d, KinematicsResult* red, MomentumGrid* grid) {
+    std::seed_seq seq{kSeed, static_cast<std::uint32_t>(d)};
+    std::mt19937_64 rng(seq);
+    std::normal_distribution<double> normal;
     const double scale = 1 + uo.scale_u_fraction * normal(rng);
     const double density = options.density_kg_m3 + uo.density_u_kg_m3 * normal(rng);
     const double depth = options.depth_m + uo.depth_u_m * normal(rng);
+    std::vector<double> err, column(nf);
     grid_noise.Draw(rng, &err);
     for (std::size_t i = 0; i < g; ++i) {
       for (std::size_t k = 0; k < nf; ++k) column[k] = scale * (disp[k * g + i] + err[k * g + i]);
       const std::vector<double> v = FirstDerivative(column, dt), a = SecondDerivative(column, dt);
       for (std::size_t k = 0; k < nf; ++k) {
-        red.disp_y_mm[k * g + i] = column[k];
-        red.vel_y_mm_s[k * g + i] = v[k];
-        red.acc_y_mm_s2[k * g + i] = a[k];
+        red->disp_y_mm[k * g + i] = column[k];
+        red->vel_y_mm_s[k * g + i] = v[k];
+        red->acc_y_mm_s2[k * g + i] = a[k];
       }
     }
-    grid.area_m2 = s.grid.area_m2 * scale * scale;
-    grid.mass_kg = density * grid.area_m2 * depth;
-    pounder_noise.Draw(rng);
-    pounder.velocity_m_s = sensor.velocity_m_s;
-    pounder.penetration_m = sensor.penetration_m;
-    for (std::size_t i = 0; i < pounder.velocity_m_s.size(); ++i) {
-      pounder.velocity_m_s[i] += pounder_noise.dv()[i];
-      if (i < pounder.penetration_m.size()) pounder.penetration_m[i] += pounder_noise.dz()[i];
-    }
-    MomentumResult r;
+    grid->area_m2 = s.grid.area_m2 * scale * scale;
+    grid->mass_kg = density * grid->area_m2 * depth;
+    Draw out;
     try {
-      r = internal::AnalyzeMomentumOnGrid(red, result->frame_time_s, pounder, o, grid);
+      SensorResult drawn;
+      if (pounder_draws.Available()) drawn = pounder_draws.Draw(rng);
+      const SensorResult& pounder = pounder_draws.Available() ? drawn : sensor;
+      out.result = internal::AnalyzeMomentumOnGrid(*red, result->frame_time_s, pounder, o, *grid);
+      out.analysed = true;
     } catch (const Error&) {
-      ++not_measured;
-      continue;
+      out.analysed = false;
     }
-    if (!r.summary.t_end_problem.empty()) ++not_measured;
-    r.summary.impact_velocity_m_s =
-        v0_offset + SampleSeries(pounder.time_s, pounder.velocity_m_s,
-                                 {pounder.summary.impact_time_s}, "v0")[0];
+    return out;
+  };
+  std::vector<Draw> draws(static_cast<std::size_t>(uo.draws));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, draws.size()),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      KinematicsResult red = grid_kin;
+                      MomentumGrid grid = grid_template;
+                      for (std::size_t d = range.begin(); d != range.end(); ++d)
+                        draws[d] = run_draw(d, &red, &grid);
+                    });
+  const std::size_t nfig = Figures(s).size();
+  std::vector<std::vector<double>> figures(nfig);
+  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
+  int not_measured = 0;
+  for (const Draw& draw : draws) {
+    if (!draw.analysed || !draw.result.summary.t_end_problem.empty()) ++not_measured;
+    if (!draw.analysed) continue;
+    const MomentumResult& r = draw.result;
     const std::vector<double> f = Figures(r.summary);
     for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
     for (std::size_t k = 0; k < nf; ++k) {

@@ -669,7 +669,7 @@ BaseForceChannel ProcessBaseChannel(const SensorRecord& record, std::size_t c,
 
 }  // namespace
 
-SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options) {
+SensorResult ProcessAccelerometer(const SensorRecord& record, const SensorOptions& options) {
   WallTimer timer;
   options.Check();
   const double fs = SampleRate(record, options);
@@ -718,8 +718,17 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
 
   out.velocity_m_s = std::move(v);
   out.penetration_m = std::move(z);
-  out.exposure = record.exposure;
   out.path = record.path;
+  s.seconds = timer.ElapsedSeconds();
+  return out;
+}
+
+SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options) {
+  WallTimer timer;
+  SensorResult out = ProcessAccelerometer(record, options);
+  SensorSummary& s = out.summary;
+  const FirstOrderLowpass lp = DesignButterworthLowpass1(options.cutoff_hz, s.sample_rate_hz);
+  out.exposure = record.exposure;
   out.column_names = record.column_names;
   out.force_names = record.force_names;
   for (const auto& f : record.force) out.force.push_back(FiltFilt(lp, f));
@@ -728,6 +737,8 @@ SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& opti
              fmt::format("the {} of sensor.base_columns", options.columns.base_force.size()));
   for (std::size_t c = 0; c < record.base_force.size(); ++c)
     out.base.push_back(ProcessBaseChannel(record, c, options, lp, s));
+  out.reading_g = record.accel_g;
+  out.options = options;
   s.seconds = timer.ElapsedSeconds();
   for (const auto& wmsg : s.warnings) LogWarning("sensor: {}", wmsg);
   return out;

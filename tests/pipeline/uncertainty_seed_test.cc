@@ -1,12 +1,16 @@
 // Issue 42 item 4: the momentum figures' reported standard uncertainty (momentum/uncertainty.h)
-// against their actual scatter. The small synthesised scene (small_scene_spec.h) is rendered with
-// kSeeds noise seeds (the top-level `seed`: image noise and accelerometer noise; the speckle's own
-// seed is fixed, so the correlation's bias is the same in every one) and run; the standard
-// deviation of each figure over the seeds must match the mean reported u within +-30 %.
-// With N seeds the sample SD has a relative standard error of 1 / sqrt(2 (N - 1)): 16 seeds give
-// 18 %, so the tolerance holds the ratio to ~1.6 standard errors (measured ratios in
-// docs/analysis.md, "Uncertainty of the figures"). Held to it: m_add,max, t_e and p_gran at t_e
-// (the issue's Done-when); the others are printed.
+// against their actual scatter. The small synthesised scene (small_scene_spec.h, rendered without
+// supersampling so that 48 seeds cost what 16 supersampled ones did; on 48 supersampled seeds
+// every ratio lay within 0.08 of these) is rendered with kSeeds noise seeds (the top-level
+// `seed`: image noise and accelerometer noise; the speckle's own seed is fixed, so the
+// correlation's bias is the same in every one) and run; the standard deviation of each figure
+// over the seeds must match the mean reported u within +-30 %. With N seeds the sample SD has a
+// relative standard error of 1 / sqrt(2 (N - 1)): 48 seeds give 10 %, so the tolerance holds the
+// ratio to ~3 standard errors (measured ratios in docs/analysis.md, "Uncertainty of the
+// figures"). Held to it: every figure but the sigmoid's T, which is printed: its scatter over
+// the seeds is heavy-tailed (the onset's change-point fit puts the onset a whole DAQ sample early
+// in ~1 % of records, and T's time origin is the onset): one of the 48 seeds lies 5.4 SD out and
+// makes the SD; without it the ratio is 0.54, with it 0.87, so the SD over seeds checks nothing.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -24,7 +28,7 @@
 namespace impactdic {
 namespace {
 
-constexpr int kSeeds = 16;
+constexpr int kSeeds = 48;
 
 struct SeedRun {
   MomentumSummary summary;
@@ -34,8 +38,9 @@ struct SeedRun {
 // Renders and runs the small scene with noise seed `seed` in `folder`.
 SeedRun RunSeed(const TestDir& dir, int seed) {
   const std::string folder = dir.File(fmt::format("seed{}", seed));
-  const std::string spec = dir.Write(fmt::format("spec{}.yaml", seed),
-                                     fmt::format("seed: {}\n", seed) + kSmallSceneSpec);
+  const std::string spec =
+      dir.Write(fmt::format("spec{}.yaml", seed),
+                fmt::format("seed: {}\n", seed) + SmallSceneSpec({.supersampling = 1}));
   SeedRun r;
   const CliResult synth = RunCli("-q synth " + spec + " -o " + folder + "/scene");
   if (synth.exit_code != 0) {
@@ -78,7 +83,7 @@ TEST(UncertaintySeeds, SpreadOverNoiseSeedsMatchesTheReportedUncertainty) {
     runs.push_back(std::move(b));
   }
   for (const SeedRun& r : runs) ASSERT_TRUE(r.problem.empty()) << r.problem;
-  const std::vector<std::string> held = {"t_end_peak_s", "added_mass_max_kg", "p_gran_te_kg_m_s"};
+  const std::vector<std::string> not_held = {"sigmoid_T_s"};
   std::string table =
       "figure                        mean          SD over seeds  mean u      SD/u\n";
   const std::size_t figures = UncertainFigures(runs[0].summary).size();
@@ -94,7 +99,7 @@ TEST(UncertaintySeeds, SpreadOverNoiseSeedsMatchesTheReportedUncertainty) {
     const double sd = Sd(values), u = Mean(us), ratio = sd / u;
     table += fmt::format("{:<29} {:<13.6g} {:<14.4g} {:<11.4g} {:.3f}\n", name, Mean(values), sd, u,
                          ratio);
-    if (std::find(held.begin(), held.end(), name) == held.end()) continue;
+    if (std::find(not_held.begin(), not_held.end(), name) != not_held.end()) continue;
     EXPECT_TRUE(std::isfinite(ratio)) << name;
     EXPECT_NEAR(ratio, 1.0, 0.3) << name << ": SD over " << kSeeds << " seeds " << sd
                                  << ", mean reported u " << u;

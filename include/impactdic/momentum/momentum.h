@@ -39,7 +39,7 @@
 //  - m_add(t) = p_max / v_p(t) - m_p (Eq. 3) from the impact to t_e; m_add,max = m_add(t_e).
 //  - Sigmoid (Eq. 5) fitted to m_add(t) at the DAQ rate between impact and t_e, thinned to one
 //    sample per filter resolution (f_s / (2 f_c) samples) so that residuals are nearly
-//    independent.
+//    independent, counted back from the last sample before t_e (the data always reach t_e).
 //  - Momentum ratio (Eq. 11) = m_add,max * v_sand,max / (m_p * v_p,max).
 #ifndef IMPACTDIC_MOMENTUM_MOMENTUM_H_
 #define IMPACTDIC_MOMENTUM_MOMENTUM_H_

@@ -10,25 +10,31 @@
 //    correlated against that reference (it cancels in velocities and in the gap of t_e), the
 //    other half from the frame's own noise; overlapping subsets share pixels, so their errors
 //    correlate by the overlap fraction of their areas (subset_size_mm);
-//  - the pounder's velocity and penetration, by the accelerometer's white noise of the pre-impact
-//    record's standard deviation (SensorSummary::noise_g) integrated from the integration start,
-//    with the offset taken from the same noisy offset window (its mean removed): the error of
-//    v_p(t) is g dt sum (n_i - mean over the window), the low-pass filter left out (it moves
-//    little of an integral);
+//  - the accelerometer record: processed again in each draw (sensor ProcessAccelerometer: offset,
+//    zero-phase filter, release and impact detection, integration, stop) with fresh white noise
+//    of the record's own standard deviation (SensorSummary::noise_g, the free-fall window before
+//    the impact) added to the reading as read (SensorResult::reading_g). So the offset's error,
+//    the noise integrated into v_p and z_p, and the jitter of the detected release (the
+//    integration's start) and impact onset (v0 = v_p there; the time origin of t_e and of the
+//    sigmoid's samples; the start of p_max's search) all enter, each through the code that makes
+//    it. A sensor result without its reading (not made by ProcessSensor) propagates no
+//    accelerometer noise, and a note says so;
 //  - the scale (mm/px; displacements, velocities and the grid area scale with it), the density
 //    and the out-of-plane depth t_z, each by its stated standard uncertainty (relative for the
 //    scale), default 0.
 // t_e lies on the frame grid refined to a sub-frame time: the draws repeat the pick of the frame
 // and the refinement, so frame jumps enter its spread; where t_e was not refined (the fallback,
 // or too few frames), the grid's own resolution, a uniform error over one frame interval
-// (dt / sqrt(12)), is added in quadrature. Not covered (the seed-spread test of
-// tests/pipeline/uncertainty_seed_test.cc measures what that leaves out): the jitter of the
-// detected impact onset (~4 us on the small synthetic scene) and of the release, which move the
-// time origin of t_e and of the sigmoid's samples and the start of the integration: the sigmoid's
-// M, b, T scatter 2-3 times their reported u over noise seeds, v0 and p_max 1.35 times; a bias
-// of the correlation (e.g. subpixel bias, the same in every draw); a coloured accelerometer noise;
-// the growth of the displacement error across reference updates (the sigma is against the
-// current reference).
+// (dt / sqrt(12)), is added in quadrature. The draws run in parallel, each with its own random
+// stream seeded by its index (the result does not depend on the number of threads).
+// Limits (tests/pipeline/uncertainty_seed_test.cc measures the model against the scatter over
+// noise seeds; docs/analysis.md has the table): a draw's reading carries the nominal's noise and
+// the fresh one, sqrt(2) times the record's, and the onset's change-point fit is not linear in
+// the noise at that level: the draws scatter the onset ~2x as much as the noise seeds do (7.8 us
+// against 3.9-5.3 us on the small synthetic scene), which enters the sigmoid's T (its time
+// origin) at full weight and t_e and v0 little. Not covered: a bias of the correlation (e.g.
+// subpixel bias, the same in every draw); a coloured accelerometer noise; the growth of the
+// displacement error across reference updates (the sigma is against the current reference).
 #ifndef IMPACTDIC_MOMENTUM_UNCERTAINTY_H_
 #define IMPACTDIC_MOMENTUM_UNCERTAINTY_H_
 
@@ -46,8 +52,9 @@ inline constexpr ValueRange kNonNegativeUncertaintyRange{0, 1e300, ""};
 // How the uncertainties are propagated, as summary.json and /momentum state it.
 inline constexpr const char* kMomentumUncertaintyMethod =
     "Monte Carlo over the inputs (JCGM 101): the momentum analysis repeated on inputs perturbed "
-    "by their errors (DIC sigma, accelerometer noise, scale, density, depth); u = standard "
-    "deviation of the draws (docs/analysis.md)";
+    "by their errors (DIC sigma, the accelerometer record processed again with fresh noise of its "
+    "measured level, scale, density, depth); u = standard deviation of the draws "
+    "(docs/analysis.md)";
 
 struct MomentumUncertaintyOptions {
   // Monte Carlo draws, kUncertaintyDrawsRange; 0 = no uncertainty (the figures' _u are NaN).

@@ -266,10 +266,22 @@ struct SensorResult {
   std::string path;                        // The record's file (empty: not from a file).
   std::vector<std::string> column_names;   // Every column of the file, in its order.
   SensorSummary summary;
+  // The accelerometer's reading as read [g] (SensorRecord::accel_g) and the options it was
+  // processed with, so that it can be processed again: the momentum uncertainty's draws
+  // (momentum/uncertainty.h) repeat ProcessAccelerometer on it with fresh noise. Empty (and the
+  // default options) when the result was not made by ProcessSensor.
+  std::vector<double> reading_g;
+  SensorOptions options;
 };
 
-// Offset correction, zero-phase filter, impact detection, integration, summary.
+// Offset correction, zero-phase filter, impact detection, integration, summary; the force and
+// base force channels; the warnings logged.
 SensorResult ProcessSensor(const SensorRecord& record, const SensorOptions& options);
+// ProcessSensor's accelerometer part alone: time_s, accel_g, accel_down_m_s2, velocity_m_s,
+// penetration_m, path and the summary (its warnings kept there, not logged); no exposure, force
+// or base channels, no reading_g. What the momentum uncertainty's draws repeat on a reading with
+// fresh noise (options.columns.base_force may name channels the record lacks: they are not read).
+SensorResult ProcessAccelerometer(const SensorRecord& record, const SensorOptions& options);
 // ReadSensorCsv + ProcessSensor.
 SensorResult AnalyzeSensorCsv(const std::string& path, const SensorOptions& options);
 
