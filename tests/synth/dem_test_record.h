@@ -105,7 +105,7 @@ inline std::string MakeDemDir(const std::string& name, double stretch_x_per_s = 
 // starting at DEM time kFloorStart[w]. Each line is the exact average of that force over its 8
 // steps, as `fix ave/time 1 8 8` writes it.
 inline constexpr double kFloorWidth = 0.05, kFloorOffset = 0.25, kFloorPulse = 2.0e-3;
-inline constexpr double kFloorStatic[2] = {40, 35}, kFloorAmplitude[2] = {500, 200};
+inline constexpr double kFloorStatic[2] = {40, 35}, kFloorAmplitude[2] = {200, 100};
 inline constexpr double kFloorStart[2] = {4.0e-3, 4.5e-3};
 // Average of A sin(pi (t - t0) / T) (zero outside [t0, t0 + T]) over [a, b].
 inline double HalfSineAverage(double A, double t0, double T, double a, double b) {
