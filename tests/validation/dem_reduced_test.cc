@@ -1,7 +1,9 @@
 // The physics validation in CI (docs/validation_dem.md, "The reduced case in CI"): a DEM impact
 // that nobody here wrote the physics of, run end to end with the DEFAULT settings of every stage.
-// validation/dem/run_case.sh does the four steps: LAMMPS (`lmp`) drops the 10 kg, 0.15 m wide
-// pounder at sqrt(2 g 0.7 m) onto the committed settled bed validation/dem/reduced_bed.data.gz,
+// validation/dem/run_case.sh does the steps: LAMMPS (`lmp`) drops the 10 kg, 0.15 m wide
+// pounder at sqrt(2 g 0.7 m) onto the committed settled bed validation/dem/reduced_bed.data.gz
+// (recording the floor's force under two sensor windows) and measures the bed's own P-wave speed
+// with a small-strain pulse (pwave.in, with and without the pulse),
 // `impactdic synth --dem` films it with validation/dem/camera_spec.yaml, `impactdic run` processes
 // the rendered scene as it is (no setting but the camera's grid geometry) and `impactdic
 // validate-dem` compares the run with the grains and draws its figures. The test then compares
