@@ -86,7 +86,7 @@ struct DemFloorSample {
 struct DemPWaveRecord {
   double timestep_s = 0, pulse_start_s = 0, pulse_duration_s = 0, bed_top_m = 0;
   std::vector<double> layer_depth_m;              // Below bed_top_m.
-  std::vector<std::int64_t> step;                 // Output steps (the average over 4 steps ends).
+  std::vector<std::int64_t> step;                 // Output steps (every 4: 100 kHz).
   std::vector<std::vector<double>> response_m_s;  // [layer][sample]: downward velocity.
   bool empty() const { return layer_depth_m.empty(); }
 };
