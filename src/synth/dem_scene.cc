@@ -275,8 +275,17 @@ DemPWaveRecord ReadDemPWave(const std::string& dir) {
   return r;
 }
 
-DemPWave MeasurePWave(const DemPWaveRecord& record, double min_depth_fraction,
-                      double max_depth_fraction) {
+void DemPWaveOptions::Check() const {
+  CheckValue(
+      min_depth_fraction >= 0 && min_depth_fraction < max_depth_fraction && max_depth_fraction <= 1,
+      "min/max_depth_fraction", fmt::format("{}/{}", min_depth_fraction, max_depth_fraction),
+      "0 <= min < max <= 1");
+}
+
+DemPWave MeasurePWave(const DemPWaveRecord& record, const DemPWaveOptions& options) {
+  options.Check();
+  const double min_depth_fraction = options.min_depth_fraction;
+  const double max_depth_fraction = options.max_depth_fraction;
   DemPWave w;
   const std::size_t L = record.layer_depth_m.size(), n = record.step.size();
   w.layer_depth_m = record.layer_depth_m;

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 
 #include "dem_test_record.h"
 #include "impactdic/core/error.h"
@@ -297,6 +298,21 @@ DemPWaveRecord KnownPlaneWave(double c_m_s) {
     }
   }
   return r;
+}
+
+TEST(DemPWave, DefaultOptionsPassAndBadFractionsAreNamed) {
+  EXPECT_NO_THROW(DemPWaveOptions{}.Check());
+  for (const auto& [lo, hi] : {std::pair{0.5, 0.5}, {-0.1, 0.8}, {0.2, 1.1}}) {
+    DemPWaveOptions o;
+    o.min_depth_fraction = lo;
+    o.max_depth_fraction = hi;
+    try {
+      o.Check();
+      FAIL() << lo << " " << hi;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("depth_fraction"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(DemPWave, KnownPlaneWaveSpeedComesBack) {

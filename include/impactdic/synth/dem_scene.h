@@ -95,8 +95,7 @@ struct DemPWaveRecord {
 // first time its downward velocity reaches half its peak (the DIC front's criterion,
 // momentum/wave_front.h), linear between samples; its peak time is the largest sample, refined
 // by a parabola. Speeds: least squares of depth against time over the layers between
-// `min_depth_fraction` and `max_depth_fraction` of the bed depth (the pulse forms in the top
-// layers; near the floor its reflection meets it) with a peak inside the record; sigma is the
+// DemPWaveOptions' fractions of the bed depth with a peak inside the record; sigma is the
 // slope's standard error (n - 2 degrees of freedom).
 struct DemPWave {
   std::vector<double> layer_depth_m, half_peak_s, peak_s, peak_m_s;  // Since the pulse start.
@@ -106,8 +105,15 @@ struct DemPWave {
   double rms_residual_s = kNaN;                               // Of the half-peak fit.
   std::string problem;                                        // Why a speed is NaN.
 };
-DemPWave MeasurePWave(const DemPWaveRecord& record, double min_depth_fraction = 0.15,
-                      double max_depth_fraction = 0.85);
+struct DemPWaveOptions {
+  // The layers in the fits: depth within [min, max] x the bed depth, 0 <= min < max <= 1. The
+  // pulse forms in the top layers (its half-peak arrivals there lie off the line); near the floor
+  // its reflection meets it.
+  double min_depth_fraction = 0.15;
+  double max_depth_fraction = 0.85;
+  void Check() const;
+};
+DemPWave MeasurePWave(const DemPWaveRecord& record, const DemPWaveOptions& options = {});
 
 struct DemRecord {
   DemMeta meta;
