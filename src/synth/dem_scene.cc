@@ -205,6 +205,9 @@ std::vector<DemFloorSample> ReadDemFloor(const std::string& path) {
     if (out.size() > 1 && !(out.back().step > out[out.size() - 2].step))
       BadLine(path, ln, line, "increasing steps");
   }
+  if (out.empty())
+    throw Error(ErrorKind::kFileFormat, path, "no samples",
+                "step and two forces per line (meta.txt names floor windows)");
   return out;
 }
 
