@@ -1,4 +1,5 @@
 // impactdic validate-dem TRUTH.h5 RESULTS.h5 [--figures DIR] [--csv TABLE.csv]
+//   [--wave-csv WAVE.csv]
 // Compares a run on footage filmed from a DEM simulation (impactdic synth --dem) with the truth
 // measured on the grains (render/dem_validation.h, docs/validation.md) and prints the table.
 #include <CLI/CLI.hpp>
@@ -13,7 +14,7 @@ namespace impactdic::cli {
 
 void RegisterValidateDemCommand(CLI::App& app) {
   struct Args {
-    std::string truth, results, figures, csv;
+    std::string truth, results, figures, csv, wave_csv;
   };
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
@@ -25,10 +26,12 @@ void RegisterValidateDemCommand(CLI::App& app) {
                   "Folder for velocity_field_compare.png, momentum_compare.png and "
                   "deceleration_compare.png");
   cmd->add_option("--csv", args->csv, "Write the per-frame series (tool and grains) as CSV");
+  cmd->add_option("--wave-csv", args->wave_csv,
+                  "Write the wave figures per base sensor (tool and grains) as CSV");
   cmd->callback([args] {
     const Args& a = *args;
     std::cout << WithFlagNames({{"figures folder", "--figures"}}, [&] {
-                   return ValidateDemFiles(a.truth, a.results, a.figures, a.csv);
+                   return ValidateDemFiles(a.truth, a.results, a.figures, a.csv, a.wave_csv);
                  }).Report();
   });
 }

@@ -9,6 +9,8 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>  // flag values only (WriteImage encodes)
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <string>
 #include <system_error>
 #include <utility>
 
@@ -30,6 +32,7 @@
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/velocity_field.h"
 #include "impactdic/sensor/sensor_results.h"
+#include "impactdic/sensor/wave_results.h"
 
 namespace impactdic {
 namespace {
@@ -428,6 +431,70 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
   PlotXy(d, (fs::path(dir) / "deceleration_compare.png").string());
 }
 
+// The wave figures of both files (DemWaveChannel); nothing without the truth's base_sensors/.
+void CompareWave(const H5Reader& truth, const std::string& truth_h5, const H5Reader& res,
+                 const std::string& results_h5, DemValidation* out) {
+  if (truth.Exists("/p_wave")) {
+    out->p_wave_speed_m_s = Scalar(truth, "p_wave/speed_m_s");
+    out->p_wave_speed_sigma_m_s = Scalar(truth, "p_wave/speed_sigma_m_s");
+    out->p_wave_speed_peak_m_s = Scalar(truth, "p_wave/speed_peak_m_s");
+    out->p_wave_speed_peak_sigma_m_s = Scalar(truth, "p_wave/speed_peak_sigma_m_s");
+  }
+  if (!truth.Exists("/base_sensors")) return;
+  if (!res.Exists("/wave")) {
+    out->notes.push_back(results_h5 + " has no /wave: the run did not process the base channels");
+    return;
+  }
+  std::vector<std::string> columns;
+  {
+    std::stringstream list(truth.ReadStringAttribute("base_sensors", "columns"));
+    for (std::string name; std::getline(list, name, ',');) columns.push_back(name);
+  }
+  const WaveResult tool = ReadWaveResults(res, results_h5);
+  out->pounder_peak_truth_s = Attr(truth, "base_sensors", "pounder_peak_s");
+  out->pounder_peak_tool_s = tool.pounder_peak_s;
+  out->pounder_peak_stress_truth_Pa = Attr(truth, "base_sensors", "pounder_peak_stress_Pa");
+  out->pounder_peak_stress_tool_Pa = tool.pounder_peak_stress_pa;
+  auto at = [](const std::vector<double>& v, std::size_t i) { return i < v.size() ? v[i] : kNaN; };
+  const std::vector<double> distance = truth.ReadDouble("base_sensors/distance_mm");
+  const std::vector<double> onset = truth.ReadDouble("base_sensors/onset_s");
+  const std::vector<double> peak = truth.ReadDouble("base_sensors/peak_s");
+  const std::vector<double> speed = truth.ReadDouble("base_sensors/speed_peak_m_s");
+  const std::vector<double> ratio = truth.ReadDouble("base_sensors/stress_ratio");
+  const std::vector<double> rise_10 = truth.ReadDouble("base_sensors/rise_10_s");
+  const std::vector<double> rise_50 = truth.ReadDouble("base_sensors/rise_50_s");
+  std::vector<double> travel;
+  if (truth.Exists("/base_sensors/p_wave_travel_s"))
+    travel = truth.ReadDouble("base_sensors/p_wave_travel_s");
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    DemWaveChannel c;
+    c.column = columns[k];
+    c.distance_mm = at(distance, k);
+    c.onset_truth_s = at(onset, k);
+    c.peak_truth_s = at(peak, k);
+    c.speed_peak_truth_m_s = at(speed, k);
+    c.stress_ratio_truth = at(ratio, k);
+    c.rise_10_truth_s = at(rise_10, k);
+    c.rise_50_truth_s = at(rise_50, k);
+    c.p_wave_travel_s = at(travel, k);
+    const auto it = std::find_if(tool.channels.begin(), tool.channels.end(),
+                                 [&](const WaveChannel& w) { return w.column == columns[k]; });
+    if (it == tool.channels.end()) {
+      out->notes.push_back(
+          fmt::format("{}: /wave has no channel '{}' of {}", results_h5, columns[k], truth_h5));
+    } else {
+      c.onset_tool_s = it->onset_s;
+      c.peak_tool_s = it->peak_s;
+      c.speed_peak_tool_m_s = it->speed_peak_m_s;
+      c.speed_peak_sigma_m_s = it->speed_peak_sigma_m_s;
+      c.speed_onset_tool_m_s = it->speed_onset_m_s;
+      c.speed_onset_sigma_m_s = it->speed_onset_sigma_m_s;
+      c.stress_ratio_tool = it->stress_ratio;
+    }
+    out->wave.push_back(c);
+  }
+}
+
 }  // namespace
 
 DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& results_h5,
@@ -450,6 +517,7 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
   CompareMomentum(ReadMomentumResults(res, results_h5), t, frame, &out);
   std::vector<double> model_t, model_g;
   CompareModel(t, &out, &model_t, &model_g);
+  CompareWave(H5Reader(truth_h5), truth_h5, res, results_h5, &out);
   if (!figures_dir.empty()) {
     // The frames `run` stored (render_results.h): all, a preview (/frames/row) or none.
     const VelocityFieldSequence stored = ReadVelocityFieldSequence(res, /*require_frames=*/false);
@@ -477,8 +545,28 @@ const std::vector<std::string>& DemValidationCsvColumns() {
   return kColumns;
 }
 
+const std::vector<std::string>& DemValidationWaveCsvColumns() {
+  static const std::vector<std::string> kColumns = {"distance_mm",
+                                                    "onset_tool_s",
+                                                    "onset_dem_s",
+                                                    "p_wave_travel_s",
+                                                    "peak_tool_s",
+                                                    "peak_dem_s",
+                                                    "speed_peak_tool_m_s",
+                                                    "speed_peak_sigma_m_s",
+                                                    "speed_peak_dem_m_s",
+                                                    "speed_onset_tool_m_s",
+                                                    "speed_onset_sigma_m_s",
+                                                    "p_wave_speed_m_s",
+                                                    "p_wave_speed_sigma_m_s",
+                                                    "stress_ratio_tool",
+                                                    "stress_ratio_dem"};
+  return kColumns;
+}
+
 DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& results_h5,
-                               const std::string& figures_dir, const std::string& csv_path) {
+                               const std::string& figures_dir, const std::string& csv_path,
+                               const std::string& wave_csv_path) {
   for (const auto& [name, path] : {std::pair{"TRUTH", truth_h5}, {"RESULTS", results_h5}}) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec))
@@ -490,7 +578,35 @@ DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& r
     CheckOutputLocation(csv_path,
                         {"--csv", {".csv"}, {truth_h5, results_h5}, {CsvHeaderLine(columns)}});
   }
+  const std::vector<std::string>& wave_columns = DemValidationWaveCsvColumns();
+  if (!wave_csv_path.empty()) {
+    CheckOutputLocation(
+        wave_csv_path,
+        {"--wave-csv", {".csv"}, {truth_h5, results_h5, csv_path}, {CsvHeaderLine(wave_columns)}});
+  }
   DemValidation v = ValidateDemRun(truth_h5, results_h5, figures_dir);
+  if (!wave_csv_path.empty()) {
+    std::vector<std::vector<double>> cols(wave_columns.size());
+    for (const DemWaveChannel& c : v.wave) {
+      const double row[] = {c.distance_mm,
+                            c.onset_tool_s,
+                            c.onset_truth_s,
+                            c.p_wave_travel_s,
+                            c.peak_tool_s,
+                            c.peak_truth_s,
+                            c.speed_peak_tool_m_s,
+                            c.speed_peak_sigma_m_s,
+                            c.speed_peak_truth_m_s,
+                            c.speed_onset_tool_m_s,
+                            c.speed_onset_sigma_m_s,
+                            v.p_wave_speed_m_s,
+                            v.p_wave_speed_sigma_m_s,
+                            c.stress_ratio_tool,
+                            c.stress_ratio_truth};
+      for (std::size_t i = 0; i < cols.size(); ++i) cols[i].push_back(row[i]);
+    }
+    WriteCsv(wave_csv_path, wave_columns, cols, 8);
+  }
   if (!csv_path.empty()) {
     WriteCsv(csv_path, columns,
              {v.t_s, v.p_pounder_tool_Ns, v.p_pounder_truth_Ns, v.p_gran_tool_Ns, v.p_gran_truth_Ns,
@@ -535,6 +651,37 @@ std::string DemValidation::Report() const {
   r += fmt::format("| deceleration RMS difference [g] | {:.1f} | |\n", decel_rms_g);
   r += fmt::format("| crater depth [mm] | Eq. 9 fitted: {:.1f} | {:.1f} (max penetration) |\n",
                    1e3 * model_crater_depth_m, 1e3 * dem_max_penetration_m);
+  if (std::isfinite(p_wave_speed_m_s))
+    r += fmt::format(
+        "| P-wave speed of the settled bed [m/s] (pulse run: half-peak arrivals; peaks) | | "
+        "{:.1f} +- {:.1f}; {:.1f} +- {:.1f} |\n",
+        p_wave_speed_m_s, p_wave_speed_sigma_m_s, p_wave_speed_peak_m_s,
+        p_wave_speed_peak_sigma_m_s);
+  if (!wave.empty())
+    r += fmt::format(
+        "| pounder's peak stress m_p a_peak / (D t_z) [kPa] at [ms] | {:.1f} at {:.3f} | {:.1f} "
+        "at {:.3f} |\n",
+        1e-3 * pounder_peak_stress_tool_Pa, 1e3 * pounder_peak_tool_s,
+        1e-3 * pounder_peak_stress_truth_Pa, 1e3 * pounder_peak_truth_s);
+  for (const DemWaveChannel& c : wave) {
+    r += fmt::format(
+        "| {} (r = {:.0f} mm): wave speed from peaks [m/s] | {:.1f} +- {:.1f} | {:.1f} "
+        "(noise-free floor force) |\n",
+        c.column, c.distance_mm, c.speed_peak_tool_m_s, c.speed_peak_sigma_m_s,
+        c.speed_peak_truth_m_s);
+    r += fmt::format(
+        "| {}: wave speed from onsets [m/s] | {:.1f} +- {:.1f} | P-wave {:.1f} +- {:.1f} |\n",
+        c.column, c.speed_onset_tool_m_s, c.speed_onset_sigma_m_s, p_wave_speed_m_s,
+        p_wave_speed_sigma_m_s);
+    r += fmt::format(
+        "| {}: arrival onset, peak [ms] | {:.3f}, {:.3f} | {:.3f}, {:.3f} (rise 10 % {:.3f}, "
+        "50 % {:.3f}; r / P-wave speed {:.3f}) |\n",
+        c.column, 1e3 * c.onset_tool_s, 1e3 * c.peak_tool_s, 1e3 * c.onset_truth_s,
+        1e3 * c.peak_truth_s, 1e3 * c.rise_10_truth_s, 1e3 * c.rise_50_truth_s,
+        1e3 * c.p_wave_travel_s);
+    r += fmt::format("| {}: stress ratio | {:.4f} | {:.4f} |\n", c.column, c.stress_ratio_tool,
+                     c.stress_ratio_truth);
+  }
   for (const auto& n : notes) r += "note: " + n + "\n";
   return r;
 }

@@ -169,7 +169,186 @@ DemMeta ReadDemMeta(const std::string& path) {
     if (std::string(key) == "bed_top_m" || std::string(key) == "pounder_axis_x_m") continue;
     CheckValue(*ptr > 0, path + ": " + key, fmt::format("{}", *ptr), "> 0");
   }
+  // The floor windows: all three or none (a record of impact.in before them has none).
+  const std::pair<const char*, double*> windows[] = {
+      {"floor_window_width_m", &m.floor_window_width_m},
+      {"floor_window_center_x_m", &m.floor_window_center_x_m},
+      {"floor_window_offset_x_m", &m.floor_window_offset_x_m}};
+  int found = 0;
+  for (const auto& [key, ptr] : windows)
+    if (auto it = kv.find(key); it != kv.end()) {
+      CheckValue(std::isfinite(it->second), path + ": " + key, fmt::format("{}", it->second),
+                 "a finite value");
+      *ptr = it->second, ++found;
+    }
+  if (found != 0 && found != 3)
+    throw Error(ErrorKind::kFileFormat, path, fmt::format("{} of the 3 floor_window_* keys", found),
+                "floor_window_width_m, floor_window_center_x_m and floor_window_offset_x_m");
+  if (found == 3)
+    CheckValue(m.floor_window_width_m > 0, path + ": floor_window_width_m",
+               fmt::format("{}", m.floor_window_width_m), "> 0");
   return m;
+}
+
+std::vector<DemFloorSample> ReadDemFloor(const std::string& path) {
+  std::ifstream in = OpenText(path);
+  std::vector<DemFloorSample> out;
+  std::string line;
+  long ln = 0;
+  std::vector<double> nums;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (line.empty() || line[0] == '#') continue;
+    if (!ParseNumbers(line, &nums) || nums.size() != 3)
+      BadLine(path, ln, line, "3 numbers: step, the centre window's force, the offset window's");
+    out.push_back({static_cast<std::int64_t>(nums[0]), {nums[1], nums[2]}});
+    if (out.size() > 1 && !(out.back().step > out[out.size() - 2].step))
+      BadLine(path, ln, line, "increasing steps");
+  }
+  if (out.empty())
+    throw Error(ErrorKind::kFileFormat, path, "no samples",
+                "step and two forces per line (meta.txt names floor windows)");
+  return out;
+}
+
+DemPWaveRecord ReadDemPWave(const std::string& dir) {
+  DemPWaveRecord r;
+  const std::string meta = dir + "/pwave_meta.txt";
+  {
+    std::ifstream in = OpenText(meta);
+    std::string line;
+    long ln = 0;
+    std::map<std::string, double> kv;
+    while (std::getline(in, line)) {
+      ++ln;
+      std::istringstream s(line);
+      std::string key, value;
+      if (!(s >> key >> value)) continue;
+      char* end = nullptr;
+      const double v = std::strtod(value.c_str(), &end);
+      if (end == value.c_str() || !std::isfinite(v)) BadLine(meta, ln, line, "key and a number");
+      if (key == "layer_depth_m") {
+        if (!(v > 0)) BadLine(meta, ln, line, "a layer depth > 0");
+        r.layer_depth_m.push_back(v);
+      } else {
+        kv[key] = v;
+      }
+    }
+    for (const auto& [key, ptr] : {std::pair<const char*, double*>{"timestep_s", &r.timestep_s},
+                                   {"pulse_start_s", &r.pulse_start_s},
+                                   {"pulse_duration_s", &r.pulse_duration_s},
+                                   {"bed_top_m", &r.bed_top_m}}) {
+      auto it = kv.find(key);
+      if (it == kv.end() || !(it->second > 0))
+        throw Error(ErrorKind::kFileFormat, meta, fmt::format("no '{}' > 0", key),
+                    fmt::format("a line '{} VALUE'", key));
+      *ptr = it->second;
+    }
+    if (r.layer_depth_m.empty())
+      throw Error(ErrorKind::kFileFormat, meta, "no layer_depth_m line", "one per layer");
+  }
+  // Each file: step, then one mean vy per layer (y up).
+  auto read = [&](const std::string& path, std::vector<std::int64_t>* steps) {
+    std::ifstream in = OpenText(path);
+    std::vector<std::vector<double>> vy(r.layer_depth_m.size());
+    std::string line;
+    long ln = 0;
+    std::vector<double> nums;
+    while (std::getline(in, line)) {
+      ++ln;
+      if (line.empty() || line[0] == '#') continue;
+      if (!ParseNumbers(line, &nums) || nums.size() != vy.size() + 1)
+        BadLine(path, ln, line, fmt::format("{} numbers: step, each layer's vy", vy.size() + 1));
+      steps->push_back(static_cast<std::int64_t>(nums[0]));
+      for (std::size_t k = 0; k < vy.size(); ++k) vy[k].push_back(nums[k + 1]);
+    }
+    return vy;
+  };
+  std::vector<std::int64_t> rest_steps;
+  const std::vector<std::vector<double>> with = read(dir + "/pwave.txt", &r.step);
+  const std::vector<std::vector<double>> without = read(dir + "/pwave_rest.txt", &rest_steps);
+  if (rest_steps != r.step)
+    throw Error(ErrorKind::kFileFormat, dir + "/pwave_rest.txt",
+                fmt::format("{} samples", rest_steps.size()),
+                fmt::format("the steps of pwave.txt ({} samples)", r.step.size()));
+  r.response_m_s.resize(with.size());
+  for (std::size_t k = 0; k < with.size(); ++k)
+    for (std::size_t i = 0; i < with[k].size(); ++i)
+      r.response_m_s[k].push_back(-(with[k][i] - without[k][i]));
+  return r;
+}
+
+void DemPWaveOptions::Check() const {
+  CheckValue(
+      min_depth_fraction >= 0 && min_depth_fraction < max_depth_fraction && max_depth_fraction <= 1,
+      "min/max_depth_fraction", fmt::format("{}/{}", min_depth_fraction, max_depth_fraction),
+      "0 <= min < max <= 1");
+}
+
+DemPWave MeasurePWave(const DemPWaveRecord& record, const DemPWaveOptions& options) {
+  options.Check();
+  const double min_depth_fraction = options.min_depth_fraction;
+  const double max_depth_fraction = options.max_depth_fraction;
+  DemPWave w;
+  const std::size_t L = record.layer_depth_m.size(), n = record.step.size();
+  w.layer_depth_m = record.layer_depth_m;
+  w.half_peak_s.assign(L, kNaN);
+  w.peak_s.assign(L, kNaN);
+  w.peak_m_s.assign(L, kNaN);
+  w.in_fit.assign(L, 0);
+  std::vector<double> t(n);
+  for (std::size_t i = 0; i < n; ++i)
+    t[i] = static_cast<double>(record.step[i]) * record.timestep_s - record.pulse_start_s;
+  std::vector<double> zf, thf, tpf;
+  for (std::size_t k = 0; k < L; ++k) {
+    const std::vector<double>& v = record.response_m_s[k];
+    std::size_t ip = n;
+    for (std::size_t i = 0; i < n; ++i)
+      if (t[i] > 0 && (ip == n || v[i] > v[ip])) ip = i;
+    if (ip == n || !(v[ip] > 0)) continue;
+    double tp = t[ip];
+    if (ip > 0 && ip + 1 < n && t[ip - 1] > 0) {  // Parabola through the peak and its neighbours.
+      const double a = v[ip - 1], b = v[ip], c = v[ip + 1], den = a - 2 * b + c;
+      if (den < 0) tp += 0.5 * (a - c) / den * (t[ip + 1] - t[ip]);
+    }
+    std::size_t j = ip;
+    while (j > 0 && v[j] > 0.5 * v[ip]) --j;
+    if (v[j] > 0.5 * v[ip]) continue;
+    w.half_peak_s[k] = t[j] + (0.5 * v[ip] - v[j]) / (v[j + 1] - v[j]) * (t[j + 1] - t[j]);
+    w.peak_s[k] = tp;
+    w.peak_m_s[k] = v[ip];
+    const double depth = record.layer_depth_m[k], H = record.bed_top_m;
+    // A peak at the record's last sample may lie beyond it.
+    if (depth >= min_depth_fraction * H && depth <= max_depth_fraction * H && ip + 1 < n) {
+      w.in_fit[k] = 1;
+      zf.push_back(depth), thf.push_back(w.half_peak_s[k]), tpf.push_back(tp);
+    }
+  }
+  if (zf.size() < 3) {
+    w.problem = fmt::format("{} layers with a pulse between {} and {} of the bed depth (need 3)",
+                            zf.size(), min_depth_fraction, max_depth_fraction);
+    return w;
+  }
+  // depth = z0 + c t: c and its standard error.
+  auto fit = [&](const std::vector<double>& x, double* c, double* sigma, double* rms_t) {
+    const double m = static_cast<double>(x.size());
+    double mx = 0, mz = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) mx += x[i] / m, mz += zf[i] / m;
+    double sxx = 0, sxz = 0;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      sxx += (x[i] - mx) * (x[i] - mx), sxz += (x[i] - mx) * (zf[i] - mz);
+    *c = sxz / sxx;
+    double ss = 0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      const double r = zf[i] - (mz + *c * (x[i] - mx));
+      ss += r * r;
+    }
+    *sigma = std::sqrt(ss / (m - 2) / sxx);
+    if (rms_t) *rms_t = std::sqrt(ss / m) / std::abs(*c);
+  };
+  fit(thf, &w.speed_m_s, &w.speed_sigma_m_s, &w.rms_residual_s);
+  fit(tpf, &w.speed_peak_m_s, &w.speed_peak_sigma_m_s, nullptr);
+  return w;
 }
 
 DemRecord ReadDemRecord(const std::string& dir) {
@@ -179,6 +358,8 @@ DemRecord ReadDemRecord(const std::string& dir) {
   std::ifstream near(dir + "/near.dump");
   if (near) r.near = ReadLammpsDump(dir + "/near.dump");
   r.pounder = ReadDemPounder(dir + "/pounder.txt");
+  if (std::isfinite(r.meta.floor_window_width_m)) r.floor = ReadDemFloor(dir + "/floor.txt");
+  if (std::ifstream pw(dir + "/pwave_meta.txt"); pw) r.pwave = ReadDemPWave(dir);
   return r;
 }
 
@@ -268,6 +449,7 @@ DemScene::DemScene(DemRecord record, ImpactSceneSpec spec, DemSceneOptions optio
   spec_.frames = frame_count();
   spec_.frames_before_impact = before;
   spec_.impact_phase = std::clamp(-FrameTime(before - 1) * spec_.fps, 1e-6, 1.0);
+  if (!record_.floor.empty()) SetUpFloorSensors();
   base_ = std::make_unique<ImpactScene>(spec_);
 
   const SynthCamera& cam = base_->camera();
@@ -286,6 +468,65 @@ DemScene::DemScene(DemRecord record, ImpactSceneSpec spec, DemSceneOptions optio
   daq_origin_s_ =
       t0 - std::ceil((t0 - nominal) * spec_.sensor.rate_hz - 1e-9) / spec_.sensor.rate_hz;
   ComputeTruth();
+}
+
+// The base force sensors of the scene are the floor windows: at the floor (its depth below the
+// surface), offset from the pounder axis, sensing area window width x t_z. The impulse series
+// integrates floor.txt's interval averages, so any interval's average comes back exactly.
+void DemScene::SetUpFloorSensors() {
+  const DemMeta& m = record_.meta;
+  const std::vector<DemFloorSample>& F = record_.floor;
+  const std::size_t W = F[0].force_N.size();
+  floor_t_s_.assign(1, 0.0);
+  floor_impulse_Ns_.assign(W, std::vector<double>(1, 0.0));
+  std::int64_t prev = 0;
+  for (const DemFloorSample& s : F) {
+    CheckValue(s.step > prev, "floor.txt", fmt::format("step {}", s.step),
+               "increasing steps after step 0");
+    const double dt = static_cast<double>(s.step - prev) * m.timestep_s;
+    floor_t_s_.push_back(static_cast<double>(s.step) * m.timestep_s);
+    for (std::size_t w = 0; w < W; ++w)
+      floor_impulse_Ns_[w].push_back(floor_impulse_Ns_[w].back() + s.force_N[w] * dt);
+    prev = s.step;
+  }
+  CheckValue(floor_t_s_[1] < t_contact_s_ && floor_t_s_.back() > t_contact_s_, "floor.txt",
+             fmt::format("DEM times {:.6g} to {:.6g} s", floor_t_s_[1], floor_t_s_.back()),
+             fmt::format("a record spanning the contact at {:.6g} s", t_contact_s_));
+  floor_static_N_.assign(W, 0.0);
+  auto impulse_at = [&](std::size_t w, double tau) {
+    const auto it = std::upper_bound(floor_t_s_.begin(), floor_t_s_.end(), tau);
+    const auto i = static_cast<std::size_t>(it - floor_t_s_.begin());
+    const double a = floor_t_s_[i - 1], b = floor_t_s_[i];
+    return floor_impulse_Ns_[w][i - 1] +
+           (tau - a) / (b - a) * (floor_impulse_Ns_[w][i] - floor_impulse_Ns_[w][i - 1]);
+  };
+  for (std::size_t w = 0; w < W; ++w)
+    floor_static_N_[w] = impulse_at(w, t_contact_s_) / t_contact_s_;
+  SceneBaseSensorOptions& b = spec_.base_sensors;
+  b.columns = {"base_center_N", "base_offset_N"};
+  b.offset_mm = {(m.floor_window_center_x_m - m.pounder_axis_x_m) * 1000,
+                 (m.floor_window_offset_x_m - m.pounder_axis_x_m) * 1000};
+  b.depth_mm.assign(W, surface_y_m_ * 1000);  // The floor is y = 0.
+  b.area_mm2.assign(W, m.floor_window_width_m * m.depth_m * 1e6);
+}
+
+double DemScene::FloorDynamicForce(std::size_t w, double t0_s, double t1_s) const {
+  const std::vector<double>& T = floor_t_s_;
+  const std::vector<double>& I = floor_impulse_Ns_[w];
+  const double s = floor_static_N_[w];
+  // Impulse since DEM time 0 at DEM time tau: the static load before the record, the last
+  // force after it.
+  auto impulse = [&](double tau) {
+    if (tau <= 0) return s * tau;
+    if (tau >= T.back()) {
+      const double last = (I.back() - I[I.size() - 2]) / (T.back() - T[T.size() - 2]);
+      return I.back() + last * (tau - T.back());
+    }
+    const auto i = static_cast<std::size_t>(std::upper_bound(T.begin(), T.end(), tau) - T.begin());
+    return I[i - 1] + (tau - T[i - 1]) / (T[i] - T[i - 1]) * (I[i] - I[i - 1]);
+  };
+  const double a = t0_s + t_contact_s_, b = t1_s + t_contact_s_;
+  return (impulse(b) - impulse(a)) / (b - a) - s;
 }
 
 double DemScene::FrameTime(int k) const {
@@ -459,6 +700,18 @@ ImpactScene::SensorRecord DemScene::MakeSensorRecord() const {
       e = (since > -1e-12 && since < so.exposure_s) ? 1.0 : 0.0;
     }
     rec.exposure[i] = e;
+  }
+  const SceneBaseSensorOptions& b = spec_.base_sensors;
+  for (std::size_t w = 0; w < floor_windows(); ++w) {
+    std::vector<double> truth(n), written(n);
+    Rng base_noise(SplitMix64(spec_.seed + 17 * (w + 1)) ^ 0xBA5E5E45ull);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double t = daq_origin_s_ + static_cast<double>(i) * dt;
+      truth[i] = FloorDynamicForce(w, t - dt / 2, t + dt / 2);
+      written[i] = floor_static_N_[w] + truth[i] + b.offset_n + b.noise_n * base_noise.Normal();
+    }
+    rec.base_force_true_n.push_back(std::move(truth));
+    rec.base_force_n.push_back(std::move(written));
   }
   return rec;
 }

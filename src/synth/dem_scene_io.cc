@@ -213,6 +213,59 @@ void DemScene::ComputeTruth() {
   for (std::size_t i = 0; i < G; ++i)
     if (grid_cell[i] >= 0) grid_mass_of[ref.grains[i].id] = ref.grains[i].mass_kg;
   ComputePeakStageTruth(grid_mass_of);
+  ComputeWaveTruth();
+}
+
+// The base force sensors' figures from the noise-free DAQ record (DemTruth::base_peak_s) and
+// the bed's own P-wave speed.
+void DemScene::ComputeWaveTruth() {
+  DemTruth& T = truth_;
+  if (!record_.pwave.empty()) {
+    T.pwave = MeasurePWave(record_.pwave);
+    if (!T.pwave.problem.empty()) T.notes.push_back("P-wave run: " + T.pwave.problem);
+  }
+  if (floor_windows() == 0) return;
+  const ImpactScene::SensorRecord rec = MakeSensorRecord();
+  const SceneBaseSensorOptions& b = spec_.base_sensors;
+  const std::size_t n = rec.time_s.size();
+  double peak_decel_g = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = rec.time_s[i] - rec.impact_daq_time_s;
+    if (t >= 0 && rec.accel_true_g[i] - 1 > peak_decel_g)
+      peak_decel_g = rec.accel_true_g[i] - 1, T.pounder_peak_decel_s = t;
+  }
+  T.pounder_peak_stress_Pa =
+      spec_.pounder_mass_kg * spec_.g_m_s2 * peak_decel_g / (spec_.width_m * spec_.depth_m);
+  for (std::size_t w = 0; w < floor_windows(); ++w) {
+    const std::vector<double>& f = rec.base_force_true_n[w];
+    std::size_t ip = n;
+    for (std::size_t i = 0; i < n; ++i)
+      if (rec.time_s[i] >= rec.impact_daq_time_s && (ip == n || f[i] > f[ip])) ip = i;
+    double peak_t = kNaN, onset_t = kNaN, peak_f = kNaN, t10 = kNaN, t50 = kNaN;
+    if (ip < n && f[ip] > 0) {
+      peak_f = f[ip];
+      peak_t = rec.time_s[ip] - rec.impact_daq_time_s;
+      // The 50 % and 10 % crossings of the rise before the peak, linear between samples.
+      auto crossing = [&](double level) {
+        std::size_t j = ip;
+        while (j > 0 && f[j] > level) --j;
+        if (f[j] > level) return kNaN;
+        return rec.time_s[j] +
+               (level - f[j]) / (f[j + 1] - f[j]) * (rec.time_s[j + 1] - rec.time_s[j]) -
+               rec.impact_daq_time_s;
+      };
+      t10 = crossing(0.1 * peak_f), t50 = crossing(0.5 * peak_f);
+      onset_t = t10 - (t50 - t10) / 4;  // The line through both meets 0 there.
+    }
+    const double r_m = 1e-3 * std::hypot(b.offset_mm[w], b.depth_mm[w]);
+    T.base_peak_s.push_back(peak_t);
+    T.base_peak_force_N.push_back(peak_f);
+    T.base_onset_s.push_back(onset_t);
+    T.base_rise_10_s.push_back(t10);
+    T.base_rise_50_s.push_back(t50);
+    T.base_peak_speed_m_s.push_back(r_m / (peak_t - T.pounder_peak_decel_s));
+    T.base_stress_ratio.push_back(peak_f / (1e-6 * b.area_mm2[w]) / T.pounder_peak_stress_Pa);
+  }
 }
 
 // p_max, the fine series from near.dump and t_e by the paper's definition (DemTruth::t_e_s).
@@ -293,6 +346,86 @@ std::string DemSceneReport::BriefReport() const {
 }
 
 namespace {
+
+// truth.h5 base_sensors/ (with floor.txt; the names of synth's where the meaning is the same,
+// docs/synth.md) and p_wave/ (with the P-wave run).
+void WriteDemWaveTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec, H5Writer& out) {
+  const DemTruth& T = scene.truth();
+  const DemPWave& pw = T.pwave;
+  const double c_p = pw.speed_m_s;
+  if (!pw.layer_depth_m.empty()) {
+    out.Write("p_wave/layer_depth_m", pw.layer_depth_m, "m", "layer centre below the bed top");
+    out.Write("p_wave/half_peak_s", pw.half_peak_s, "s",
+              "first time the layer's downward velocity reaches half its peak, after the pulse "
+              "start (NaN: no pulse)");
+    out.Write("p_wave/peak_s", pw.peak_s, "s", "the layer's peak time after the pulse start");
+    out.Write("p_wave/peak_m_s", pw.peak_m_s, "m/s", "the layer's peak downward velocity");
+    out.Write("p_wave/in_fit", pw.in_fit, Dims{pw.in_fit.size()}, "1",
+              "1 = the layer is in the speed fits");
+    auto scalar = [&](const std::string& name, double v, const std::string& units,
+                      const std::string& what) {
+      out.Write("p_wave/" + name, std::vector<double>{v}, units, what);
+    };
+    scalar("speed_m_s", c_p, "m/s",
+           "small-strain P-wave speed: least squares of depth against the half-peak arrivals");
+    scalar("speed_sigma_m_s", pw.speed_sigma_m_s, "m/s", "its standard error");
+    scalar("speed_peak_m_s", pw.speed_peak_m_s, "m/s", "the same from the layers' peak times");
+    scalar("speed_peak_sigma_m_s", pw.speed_peak_sigma_m_s, "m/s", "its standard error");
+    scalar("rms_residual_s", pw.rms_residual_s, "s", "rms time residual of the half-peak fit");
+    const DemPWaveRecord& pr = scene.record().pwave;
+    out.SetAttribute("p_wave", "pulse_duration_s", pr.pulse_duration_s);
+    out.SetAttribute("p_wave", "bed_top_m", pr.bed_top_m);
+    out.SetAttribute("p_wave", "problem", pw.problem.empty() ? std::string("none") : pw.problem);
+    out.SetAttribute("p_wave", "definition",
+                     "validation/dem/pwave.in: a half-sine body-force pulse on the top band of "
+                     "the settled bed; each layer's mean downward velocity with the pulse minus "
+                     "without it; speeds fitted over the layers 0.15-0.85 of the bed depth "
+                     "(synth/dem_scene.h, MeasurePWave)");
+  }
+  if (scene.floor_windows() == 0) return;
+  const SceneBaseSensorOptions& b = scene.base().spec().base_sensors;
+  std::vector<double> distance, peak_stress, p_wave_arrival, static_load;
+  for (std::size_t w = 0; w < scene.floor_windows(); ++w) {
+    distance.push_back(std::hypot(b.offset_mm[w], b.depth_mm[w]));
+    peak_stress.push_back(T.base_peak_force_N[w] / (1e-6 * b.area_mm2[w]));
+    p_wave_arrival.push_back(1e-3 * distance.back() / c_p);
+    static_load.push_back(scene.floor_static_N(w));
+    out.Write("base_sensors/force_true_N/" + b.columns[w], rec.base_force_true_n[w], "N",
+              "noise-free dynamic floor force of the window (DAQ-interval average minus its "
+              "mean before the contact); time axis: sensor.csv time_s");
+  }
+  out.Write("base_sensors/offset_mm", b.offset_mm, "mm", "horizontal offset from the pounder axis");
+  out.Write("base_sensors/depth_mm", b.depth_mm, "mm", "depth of the floor below the surface");
+  out.Write("base_sensors/area_mm2", b.area_mm2, "mm^2", "window width x t_z");
+  out.Write("base_sensors/distance_mm", distance, "mm", "straight distance from the impact point");
+  out.Write("base_sensors/static_load_N", static_load, "N", "mean floor force before the contact");
+  out.Write("base_sensors/peak_s", T.base_peak_s, "s",
+            "peak of the noise-free dynamic floor force after the contact (a sample time)");
+  out.Write("base_sensors/peak_force_N", T.base_peak_force_N, "N", "its value");
+  out.Write("base_sensors/peak_stress_Pa", peak_stress, "Pa", "peak force / area");
+  out.Write("base_sensors/onset_s", T.base_onset_s, "s",
+            "where the line through the rise's 10 % and 50 % of peak crossings meets zero");
+  out.Write("base_sensors/rise_10_s", T.base_rise_10_s, "s",
+            "last time before the peak that the force is at 10 % of the peak (linear)");
+  out.Write("base_sensors/rise_50_s", T.base_rise_50_s, "s", "the same at 50 %");
+  out.Write("base_sensors/speed_peak_m_s", T.base_peak_speed_m_s, "m/s",
+            "distance / (peak_s - the pounder's peak deceleration time): the paper's definition "
+            "on the noise-free records");
+  out.Write("base_sensors/stress_ratio", T.base_stress_ratio, "1",
+            "peak stress / the pounder's noise-free peak stress m_p a_peak / (D t_z) (the "
+            "tool's definition, on the record's samples)");
+  if (!pw.layer_depth_m.empty())
+    out.Write("base_sensors/p_wave_travel_s", p_wave_arrival, "s",
+              "distance / the bed's small-strain P-wave speed (p_wave/speed_m_s)");
+  out.SetAttribute("base_sensors", "pounder_peak_stress_Pa", T.pounder_peak_stress_Pa);
+  out.SetAttribute("base_sensors", "pounder_peak_s", T.pounder_peak_decel_s);
+  out.SetAttribute("base_sensors", "columns", fmt::format("{}", fmt::join(b.columns, ",")));
+  out.SetAttribute("base_sensors", "offset_n", b.offset_n);
+  out.SetAttribute("base_sensors", "noise_n", b.noise_n);
+  out.SetAttribute("base_sensors", "model",
+                   "DEM floor force (validation/dem/impact.in floor.txt) in two windows: the "
+                   "floor's contact force on the grains whose centres lie in the window");
+}
 
 void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
                    const std::string& path, const std::string& spec_yaml) {
@@ -391,6 +524,7 @@ void WriteDemTruth(const DemScene& scene, const ImpactScene::SensorRecord& rec,
   out.SetAttribute("sensor", "frame0_daq_time_s", rec.frame0_daq_time_s);
   out.SetAttribute("sensor", "impact_daq_time_s", rec.impact_daq_time_s);
   out.SetAttribute("sensor", "release_daq_time_s", rec.release_daq_time_s);
+  WriteDemWaveTruth(scene, rec, out);
   out.CreateGroup("dem");
   out.SetAttribute("dem", "pounder_mass_kg", m.pounder_mass_kg);
   out.SetAttribute("dem", "pounder_width_m", m.pounder_width_m);

@@ -5,10 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
 
 #include "dem_test_record.h"
 #include "impactdic/core/error.h"
@@ -182,6 +186,198 @@ TEST(DemScene, AFolderInPlaceOfADumpIsNamed) {
     const std::string text = e.what();
     EXPECT_NE(text.find("grains.dump"), std::string::npos) << text;
     EXPECT_NE(text.find("a folder"), std::string::npos) << text;
+  }
+  fs::remove_all(dir);
+}
+
+// The floor windows become the scene's base force channels: position, area, the DAQ record
+// (each sample the force's average over its interval, the static load subtracted in the truth)
+// and the truth's peak, onset and stress ratio, all of a known half-sine pulse.
+TEST(DemScene, FloorWindowsBecomeBaseChannelsWithKnownTruth) {
+  const std::string dir = MakeDemDir("floor");
+  AddFloorRecord(dir);
+  ImpactSceneSpec spec = TinySpec();
+  spec.base_sensors.noise_n = 0;
+  DemScene scene(ReadDemRecord(dir), spec);
+  const SceneBaseSensorOptions& b = scene.base().spec().base_sensors;
+  ASSERT_EQ(b.columns.size(), 2u);
+  EXPECT_EQ(b.columns[0], "base_center_N");
+  EXPECT_EQ(b.columns[1], "base_offset_N");
+  EXPECT_NEAR(b.offset_mm[0], 0, 1e-9);
+  EXPECT_NEAR(b.offset_mm[1], 1000 * kFloorOffset, 1e-9);
+  for (int w = 0; w < 2; ++w) {
+    EXPECT_NEAR(b.depth_mm[w], 1000 * kSurfaceY, 1e-6);  // the floor is y = 0
+    EXPECT_NEAR(b.area_mm2[w], 1e6 * kFloorWidth * kDepth, 1e-6);
+    EXPECT_NEAR(scene.floor_static_N(w), kFloorStatic[w], 1e-9);
+  }
+  const ImpactScene::SensorRecord rec = scene.MakeSensorRecord();
+  ASSERT_EQ(rec.base_force_true_n.size(), 2u);
+  const double dt = 1 / spec.sensor.rate_hz;
+  const DemTruth& t = scene.truth();
+  // The pounder's peak stress: its constant contact force less its weight over D t_z.
+  const double pounder_stress = (kForce - kMass * kG) / (0.15 * kDepth);
+  EXPECT_NEAR(t.pounder_peak_stress_Pa, pounder_stress, 1e-6 * pounder_stress);
+  for (std::size_t w = 0; w < 2; ++w) {
+    const double A = kFloorAmplitude[w], t0 = kFloorStart[w] - kContact;  // since contact
+    for (std::size_t i = 0; i < rec.time_s.size(); ++i) {
+      const double ti = rec.time_s[i] - rec.impact_daq_time_s;
+      // The impulse is exact at the 8-step nodes and linear between them: a DAQ interval that
+      // does not start on a node differs by the force's change over 20 us, < 0.5 % of A.
+      const double expected = HalfSineAverage(A, t0, kFloorPulse, ti - dt / 2, ti + dt / 2);
+      EXPECT_NEAR(rec.base_force_true_n[w][i], expected, 0.005 * A) << ti;
+      EXPECT_NEAR(rec.base_force_n[w][i], kFloorStatic[w] + expected + spec.base_sensors.offset_n,
+                  0.005 * A);
+    }
+    // Peak at the pulse's middle (to a DAQ sample), of height A (a 40 us average of the top of
+    // the sine: 1 - (pi dt / T)^2 / 24 = 1 - 2.6e-5).
+    EXPECT_NEAR(t.base_peak_s[w], t0 + kFloorPulse / 2, dt / 2 + 1e-9);
+    EXPECT_NEAR(t.base_peak_force_N[w], A, 1e-3 * A);
+    // Onset: the line through the 10 % and 50 % crossings, sin(pi tau / T) = 0.1 and 0.5,
+    // meets 0 at tau10 - (tau50 - tau10) / 4; the crossings are interpolated linearly between
+    // samples, within ~1 us here.
+    const double pi = 3.14159265358979323846;
+    const double tau10 = kFloorPulse / pi * std::asin(0.1), tau50 = kFloorPulse / 6;
+    EXPECT_NEAR(t.base_rise_10_s[w], t0 + tau10, 5e-6);
+    EXPECT_NEAR(t.base_rise_50_s[w], t0 + tau50, 5e-6);
+    EXPECT_NEAR(t.base_onset_s[w], t0 + tau10 - (tau50 - tau10) / 4, 5e-6);
+    const double ratio = t.base_peak_force_N[w] / (kFloorWidth * kDepth) / pounder_stress;
+    EXPECT_NEAR(t.base_stress_ratio[w], ratio, 1e-9);
+    const double r = std::hypot(b.offset_mm[w], b.depth_mm[w]) / 1000;
+    EXPECT_NEAR(t.base_peak_speed_m_s[w], r / (t.base_peak_s[w] - t.pounder_peak_decel_s), 1e-9);
+  }
+  fs::remove_all(dir);
+}
+
+TEST(DemScene, FloorWindowKeysComeAllThreeOrNone) {
+  const std::string dir = MakeDemDir("floor_keys");
+  {
+    std::ofstream meta(dir + "/meta.txt", std::ios::app);
+    meta << "floor_window_width_m 0.05\n";
+  }
+  try {
+    ReadDemRecord(dir);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("floor_window_center_x_m"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+TEST(DemScene, MalformedFloorLineNamesFileAndLine) {
+  const std::string dir = MakeDemDir("floor_bad");
+  AddFloorRecord(dir);
+  {
+    std::ofstream floor(dir + "/floor.txt", std::ios::app);
+    floor << "99999 12\n";
+  }
+  try {
+    ReadDemRecord(dir);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("floor.txt:"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+// A plane pulse of fixed shape (a Gaussian of width 0.15 ms) travelling at 80 m/s: both speeds
+// come back to the fit's precision, the layers outside 0.15-0.85 of the depth stay out.
+DemPWaveRecord KnownPlaneWave(double c_m_s) {
+  DemPWaveRecord r;
+  r.timestep_s = 2.5e-6;
+  r.pulse_start_s = 5e-4;
+  r.pulse_duration_s = 4e-4;
+  r.bed_top_m = 0.3;
+  for (int k = 1; k <= 14; ++k) r.layer_depth_m.push_back(0.02 * k);
+  r.response_m_s.resize(r.layer_depth_m.size());
+  for (std::int64_t step = 4; step <= 2400; step += 4) {
+    r.step.push_back(step);
+    const double t = static_cast<double>(step) * r.timestep_s - r.pulse_start_s;
+    for (std::size_t k = 0; k < r.layer_depth_m.size(); ++k) {
+      const double x = (t - 2e-4 - r.layer_depth_m[k] / c_m_s) / 1.5e-4;
+      r.response_m_s[k].push_back(0.005 * std::exp(-x * x));
+    }
+  }
+  return r;
+}
+
+TEST(DemPWave, DefaultOptionsPassAndBadFractionsAreNamed) {
+  EXPECT_NO_THROW(DemPWaveOptions{}.Check());
+  for (const auto& [lo, hi] : {std::pair{0.5, 0.5}, {-0.1, 0.8}, {0.2, 1.1}}) {
+    DemPWaveOptions o;
+    o.min_depth_fraction = lo;
+    o.max_depth_fraction = hi;
+    try {
+      o.Check();
+      FAIL() << lo << " " << hi;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("depth_fraction"), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(DemPWave, KnownPlaneWaveSpeedComesBack) {
+  const DemPWave w = MeasurePWave(KnownPlaneWave(80));
+  EXPECT_TRUE(w.problem.empty()) << w.problem;
+  EXPECT_NEAR(w.speed_m_s, 80, 0.1);
+  EXPECT_NEAR(w.speed_peak_m_s, 80, 0.1);
+  EXPECT_LT(w.speed_sigma_m_s, 0.1);
+  ASSERT_EQ(w.in_fit.size(), 14u);
+  for (std::size_t k = 0; k < 14; ++k) {
+    const double z = w.layer_depth_m[k];
+    EXPECT_EQ(w.in_fit[k], z >= 0.045 && z <= 0.255 ? 1 : 0) << z;
+    // Half peak at the Gaussian's half width before its centre.
+    EXPECT_NEAR(w.half_peak_s[k], 2e-4 + z / 80 - 1.5e-4 * std::sqrt(std::log(2.0)), 1e-6) << z;
+  }
+  // Without a pulse: no speed, and the reason.
+  DemPWaveRecord flat = KnownPlaneWave(80);
+  for (auto& layer : flat.response_m_s) std::fill(layer.begin(), layer.end(), 0.0);
+  const DemPWave none = MeasurePWave(flat);
+  EXPECT_TRUE(std::isnan(none.speed_m_s));
+  EXPECT_NE(none.problem.find("0 layers"), std::string::npos) << none.problem;
+}
+
+// pwave.txt minus pwave_rest.txt: the settled grains' own motion (the same in both) drops out.
+TEST(DemPWave, ReadSubtractsTheRunWithoutThePulse) {
+  const std::string dir = MakeDemDir("pwave");
+  const DemPWaveRecord known = KnownPlaneWave(80);
+  {
+    std::ofstream meta(dir + "/pwave_meta.txt");
+    meta << "timestep_s 2.5e-06\npulse_start_s 0.0005\npulse_duration_s 0.0004\n"
+         << "pulse_stress_Pa 2000\nbed_top_m 0.3\nlayer_thickness_m 0.02\n";
+    for (double z : known.layer_depth_m) meta << "layer_depth_m " << z << "\n";
+    std::ofstream with(dir + "/pwave.txt"), without(dir + "/pwave_rest.txt");
+    with.precision(14);
+    without.precision(14);
+    with << "# Time-averaged data for fix rec\n# TimeStep c_L1 ...\n";
+    for (std::size_t i = 0; i < known.step.size(); ++i) {
+      with << known.step[i];
+      without << known.step[i];
+      for (std::size_t k = 0; k < known.layer_depth_m.size(); ++k) {
+        const double background = 1e-3 * std::sin(0.01 * static_cast<double>(i * (k + 1)));
+        with << " " << background - known.response_m_s[k][i];  // vy up
+        without << " " << background;
+      }
+      with << "\n";
+      without << "\n";
+    }
+  }
+  const DemRecord record = ReadDemRecord(dir);
+  ASSERT_EQ(record.pwave.layer_depth_m.size(), known.layer_depth_m.size());
+  for (std::size_t k = 0; k < known.layer_depth_m.size(); ++k)
+    for (std::size_t i = 0; i < known.step.size(); ++i)
+      EXPECT_NEAR(record.pwave.response_m_s[k][i], known.response_m_s[k][i], 1e-12);
+  // A rest run of another length is refused by name.
+  {
+    std::ofstream without(dir + "/pwave_rest.txt", std::ios::app);
+    without << "999999";
+    for (std::size_t k = 0; k < known.layer_depth_m.size(); ++k) without << " 0";
+    without << "\n";
+  }
+  try {
+    ReadDemPWave(dir);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pwave_rest.txt"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -96,6 +97,37 @@ inline std::string MakeDemDir(const std::string& name, double stretch_x_per_s = 
     for (const auto& l : lines) dump << l << "\n";
   }
   return dir.string();
+}
+
+// Floor windows (impact.in's floor.txt) for a record of MakeDemDir: window 0 under the axis,
+// window 1 kFloorOffset beside it, each kFloorWidth wide; window w carries its static load
+// kFloorStatic[w] plus a half sine of amplitude kFloorAmplitude[w] and duration kFloorPulse
+// starting at DEM time kFloorStart[w]. Each line is the exact average of that force over its 8
+// steps, as `fix ave/time 1 8 8` writes it.
+inline constexpr double kFloorWidth = 0.05, kFloorOffset = 0.25, kFloorPulse = 2.0e-3;
+inline constexpr double kFloorStatic[2] = {40, 35}, kFloorAmplitude[2] = {200, 100};
+inline constexpr double kFloorStart[2] = {4.0e-3, 4.5e-3};
+// Average of A sin(pi (t - t0) / T) (zero outside [t0, t0 + T]) over [a, b].
+inline double HalfSineAverage(double A, double t0, double T, double a, double b) {
+  const double pi = 3.14159265358979323846;
+  const double lo = std::clamp(a, t0, t0 + T), hi = std::clamp(b, t0, t0 + T);
+  return A * T / pi * (std::cos(pi * (lo - t0) / T) - std::cos(pi * (hi - t0) / T)) / (b - a);
+}
+inline void AddFloorRecord(const std::string& dir) {
+  std::ofstream meta(fs::path(dir) / "meta.txt", std::ios::app);
+  meta << "floor_window_width_m " << kFloorWidth << "\nfloor_window_center_x_m " << kAxisX
+       << "\nfloor_window_offset_x_m " << kAxisX + kFloorOffset << "\n";
+  std::ofstream floor(fs::path(dir) / "floor.txt");
+  floor.precision(14);
+  floor << "# Time-averaged data for fix frec\n# TimeStep c_fc c_fo\n";
+  for (long step = 8; step <= kSteps + 40; step += 8) {
+    floor << step;
+    for (int w = 0; w < 2; ++w)
+      floor << " "
+            << kFloorStatic[w] + HalfSineAverage(kFloorAmplitude[w], kFloorStart[w], kFloorPulse,
+                                                 (step - 8) * kDt, step * kDt);
+    floor << "\n";
+  }
 }
 
 // The tiny preset at 1600 fps without noise, offset or sensor noise.

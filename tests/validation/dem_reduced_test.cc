@@ -1,12 +1,15 @@
 // The physics validation in CI (docs/validation_dem.md, "The reduced case in CI"): a DEM impact
 // that nobody here wrote the physics of, run end to end with the DEFAULT settings of every stage.
-// validation/dem/run_case.sh does the four steps: LAMMPS (`lmp`) drops the 10 kg, 0.15 m wide
-// pounder at sqrt(2 g 0.7 m) onto the committed settled bed validation/dem/reduced_bed.data.gz,
+// validation/dem/run_case.sh does the steps: LAMMPS (`lmp`) drops the 10 kg, 0.15 m wide
+// pounder at sqrt(2 g 0.7 m) onto the committed settled bed validation/dem/reduced_bed.data.gz
+// (recording the floor's force under two sensor windows) and measures the bed's own P-wave speed
+// with a small-strain pulse (pwave.in, with and without the pulse),
 // `impactdic synth --dem` films it with validation/dem/camera_spec.yaml, `impactdic run` processes
 // the rendered scene as it is (no setting but the camera's grid geometry) and `impactdic
 // validate-dem` compares the run with the grains and draws its figures. The test then compares
 // the run with the truth measured on the grains (render/dem_validation.h) under the tolerances
-// below, whose reasons are in docs/validation.md. It fails, never skips, when LAMMPS or the bed
+// below, whose reasons are in docs/validation.md (the wave's: docs/validation_dem.md "DEM
+// agreement"). It fails, never skips, when LAMMPS or the bed
 // is missing: scripts/install_deps.sh installs lammps.
 #include <gtest/gtest.h>
 
@@ -97,6 +100,53 @@ void ExpectStrainMatchesTheGrains(const std::string& truth_h5, const std::string
   }
 }
 
+// The base force sensors (the floor's force in two windows) and the bed's own P-wave speed (the
+// pulse run, pwave.in) against the tool's /wave figures, under the bounds of
+// docs/validation_dem.md "DEM agreement" (the reasons are there):
+// (a) the case: a clean pulse measurement (sigma within 2 % of c_P) and the wave the floor feels
+//     travels at the bed's P-wave speed: the grains' own peak travel speed within 10 % of c_P;
+// (b) the tool against the grains on the same definitions: the speed from peaks within 2 of the
+//     tool's own standard uncertainties, the peak arrival within 2 sigma_t (sample interval and
+//     filter), the onset on the rise's foot (no later than the grains' 10-50 % line onset by
+//     2 sigma_t, no earlier than it by the rise's 10-50 % time), the stress ratio within 10 %;
+// (c) the tool's speed from peaks against c_P: within the sum of (a) and (b), 10 % of c_P plus
+//     2 sqrt(sigma_tool^2 + sigma_P^2).
+void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& results_h5) {
+  ASSERT_TRUE(std::isfinite(v.p_wave_speed_m_s)) << "no P-wave speed in truth.h5 (pwave.in)";
+  EXPECT_LE(v.p_wave_speed_sigma_m_s, 0.02 * v.p_wave_speed_m_s);
+  EXPECT_GE(v.p_wave_speed_m_s, 50);
+  EXPECT_LE(v.p_wave_speed_m_s, 120);
+  ASSERT_EQ(v.wave.size(), 2u) << "two floor windows";
+  const H5Reader res(results_h5);
+  const double sigma_t = res.ReadNumberAttribute("wave", "travel_time_sigma_s");
+  const double c_p = v.p_wave_speed_m_s, sigma_p = v.p_wave_speed_sigma_m_s;
+  for (const DemWaveChannel& c : v.wave) {
+    SCOPED_TRACE(c.column);
+    ASSERT_TRUE(std::isfinite(c.speed_peak_tool_m_s)) << "the tool measured no speed";
+    ASSERT_TRUE(std::isfinite(c.speed_peak_truth_m_s));
+    // (a)
+    EXPECT_NEAR(c.speed_peak_truth_m_s, c_p, 0.10 * c_p);
+    // (b)
+    EXPECT_NEAR(c.speed_peak_tool_m_s, c.speed_peak_truth_m_s, 2 * c.speed_peak_sigma_m_s);
+    EXPECT_NEAR(c.peak_tool_s, c.peak_truth_s, 2 * sigma_t);
+    EXPECT_LE(c.onset_tool_s, c.onset_truth_s + 2 * sigma_t);
+    EXPECT_GE(c.onset_tool_s, c.onset_truth_s - (c.rise_50_truth_s - c.rise_10_truth_s));
+    EXPECT_NEAR(c.stress_ratio_tool, c.stress_ratio_truth, 0.10 * c.stress_ratio_truth);
+    // (c)
+    EXPECT_NEAR(c.speed_peak_tool_m_s, c_p,
+                0.10 * c_p + 2 * std::hypot(c.speed_peak_sigma_m_s, sigma_p));
+    std::printf(
+        "wave %s (r = %.0f mm): speed from peaks %.1f +- %.1f m/s (grains %.1f, P-wave %.1f +- "
+        "%.1f); from onsets %.1f +- %.1f; peak %.3f ms (grains %.3f, 2 sigma_t %.3f); onset "
+        "%.3f ms (grains %.3f, rise 10-50 %% %.3f ms); stress ratio %.4f (grains %.4f)\n",
+        c.column.c_str(), c.distance_mm, c.speed_peak_tool_m_s, c.speed_peak_sigma_m_s,
+        c.speed_peak_truth_m_s, c_p, sigma_p, c.speed_onset_tool_m_s, c.speed_onset_sigma_m_s,
+        1e3 * c.peak_tool_s, 1e3 * c.peak_truth_s, 2e3 * sigma_t, 1e3 * c.onset_tool_s,
+        1e3 * c.onset_truth_s, 1e3 * (c.rise_50_truth_s - c.rise_10_truth_s), c.stress_ratio_tool,
+        c.stress_ratio_truth);
+  }
+}
+
 TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   const fs::path source = impactdic::SourceDir();
   const fs::path bed = source / "validation/dem/reduced_bed.data.gz";
@@ -124,6 +174,8 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   for (const char* png :
        {"velocity_field_compare.png", "momentum_compare.png", "deceleration_compare.png"})
     EXPECT_TRUE(fs::is_regular_file(fs::path(work) / ("run_" + name) / "compare" / png)) << png;
+  // and its wave table (one row per floor window).
+  EXPECT_TRUE(fs::is_regular_file(fs::path(work) / ("run_" + name) / "compare" / "wave.csv"));
 
   const DemValidation v = ValidateDemRun(truth_h5, results_h5);
 
@@ -199,6 +251,9 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
 
   // 5. The strain against the grains'.
   ExpectStrainMatchesTheGrains(truth_h5, results_h5);
+
+  // 6. The wave (docs/validation_dem.md "DEM agreement").
+  ExpectWaveMatchesTheGrains(v, results_h5);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# One validation case of docs/validation.md: DEM impact (LAMMPS, one core), filmed by
+# One validation case of docs/validation.md: DEM impact (LAMMPS, one core) and the bed's own
+# P-wave speed (pwave.in, two single-core runs side by side), filmed by
 # `impactdic synth --dem`, processed by `impactdic run`, compared by `impactdic validate-dem`.
 #
 #   validation/dem/run_case.sh MASS_KG DROP_HEIGHT_M WIDTH_M WORK_DIR
@@ -58,6 +59,16 @@ start=$SECONDS
 (cd "$dem" && "$lmp" -in "$here/impact.in" -var bed "$bed" -var dir "$dem" \
   -var mp "$mass" -var D "$width" -var v0 "$v0" -var tafter "$tafter" -var muroll "$muroll" -log log.lammps > out.txt)
 echo "DEM impact $case_name: $((SECONDS - start)) s wall"
+# The bed's own P-wave speed (pwave.in): the pulse and the same run without it, side by side.
+start=$SECONDS
+(cd "$dem" && "$lmp" -in "$here/pwave.in" -var bed "$bed" -var dir "$dem" -var muroll "$muroll" \
+  -log pwave.log > pwave.out) &
+pulse=$!
+(cd "$dem" && "$lmp" -in "$here/pwave.in" -var bed "$bed" -var dir "$dem" -var muroll "$muroll" \
+  -var sigma 0 -var out pwave_rest.txt -var meta pwave_rest_meta.txt -log pwave_rest.log \
+  > pwave_rest.out)
+wait "$pulse"
+echo "DEM P-wave pulse: $((SECONDS - start)) s wall"
 
 "$impactdic" synth "$here/camera_spec.yaml" --dem "$dem" -o "$scene"
 if [ -n "${SCENE_DIC:-}" ]; then
@@ -74,4 +85,4 @@ fi
 }
 mkdir -p "$run/compare"
 "$impactdic" validate-dem "$scene/truth.h5" "$run/results.h5" --figures "$run/compare" \
-  --csv "$run/compare/series.csv" | tee "$run/compare/table.md"
+  --csv "$run/compare/series.csv" --wave-csv "$run/compare/wave.csv" | tee "$run/compare/table.md"

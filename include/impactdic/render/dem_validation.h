@@ -19,6 +19,25 @@
 
 namespace impactdic {
 
+// One base force sensor of the DEM case (a floor window, docs/validation_dem.md "DEM
+// agreement"): the tool's /wave figures next to the grains' (truth.h5 base_sensors/).
+struct DemWaveChannel {
+  std::string column;
+  double distance_mm = kNaN;
+  // The tool (results.h5 /wave): arrival times after the detected impact, speeds with their
+  // standard uncertainties, stress ratio.
+  double onset_tool_s = kNaN, peak_tool_s = kNaN;
+  double speed_peak_tool_m_s = kNaN, speed_peak_sigma_m_s = kNaN;
+  double speed_onset_tool_m_s = kNaN, speed_onset_sigma_m_s = kNaN;
+  double stress_ratio_tool = kNaN;
+  // The grains, on the noise-free floor force (after the contact): onset (the rise's 10-50 %
+  // line at zero), peak, distance / peak travel time from the pounder's peak, stress ratio;
+  // and the travel time at the bed's own P-wave speed.
+  double onset_truth_s = kNaN, peak_truth_s = kNaN, speed_peak_truth_m_s = kNaN;
+  double rise_10_truth_s = kNaN, rise_50_truth_s = kNaN;  // The rise's 10 % and 50 % times.
+  double stress_ratio_truth = kNaN, p_wave_travel_s = kNaN;
+};
+
 struct DemValidation {
   // Per analysed frame (time since contact on the DEM clock).
   std::vector<double> t_s, p_gran_tool_Ns, p_gran_truth_Ns, p_pounder_tool_Ns, p_pounder_truth_Ns;
@@ -53,6 +72,12 @@ struct DemValidation {
   // The time of the velocity-field figure: the stored frame after the contact nearest the
   // grains' t_e (NaN when no figure was drawn).
   double velocity_figure_t_s = kNaN;
+  // Wave propagation (with the DEM's floor windows and P-wave run; empty / NaN without them).
+  std::vector<DemWaveChannel> wave;
+  double p_wave_speed_m_s = kNaN, p_wave_speed_sigma_m_s = kNaN;            // Half-peak arrivals.
+  double p_wave_speed_peak_m_s = kNaN, p_wave_speed_peak_sigma_m_s = kNaN;  // Peak times.
+  double pounder_peak_tool_s = kNaN, pounder_peak_truth_s = kNaN;  // Peak deceleration time.
+  double pounder_peak_stress_tool_Pa = kNaN, pounder_peak_stress_truth_Pa = kNaN;  // m_p a / D t_z
   std::vector<std::string> notes;
 
   std::string Report() const;  // The table of docs/validation.md for this case, as text.
@@ -72,9 +97,14 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
 // (Error kFileNotFound naming "TRUTH" / "RESULTS") and that `csv_path` (when not empty) is a .csv
 // that is not one of them ("--csv"); then writes the per-frame series there (t_s, then each
 // quantity of the tool and of the grains: DemValidationCsvColumns).
+// wave_csv_path (when not empty, a .csv, checked the same way, "--wave-csv"): one row per base
+// sensor, DemValidationWaveCsvColumns (the DemWaveChannel figures, times in s, speeds in m/s;
+// the bed's P-wave speed repeated on each row).
 DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& results_h5,
-                               const std::string& figures_dir, const std::string& csv_path);
+                               const std::string& figures_dir, const std::string& csv_path,
+                               const std::string& wave_csv_path = "");
 const std::vector<std::string>& DemValidationCsvColumns();
+const std::vector<std::string>& DemValidationWaveCsvColumns();
 
 }  // namespace impactdic
 

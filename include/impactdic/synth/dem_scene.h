@@ -14,6 +14,14 @@
 //   near.dump    id x y vx vy of the grains near the footprint at the DAQ rate (optional)
 //   pounder.txt  `fix ave/time` text: step, time, centre-of-mass y, vy, net force fy
 //                (gravity included) at twice the DAQ rate
+//   floor.txt    `fix ave/time` text (optional): step, then the floor's contact force on the
+//                grains (y up) in two windows, averaged over the steps since the last line: the
+//                base force sensors (meta.txt: floor_window_width_m, floor_window_center_x_m,
+//                floor_window_offset_x_m; the floor at y = 0)
+//   pwave_meta.txt, pwave.txt, pwave_rest.txt  (optional, validation/dem/pwave.in): the bed's
+//                own small-strain P-wave speed: "key value" lines of the set-up (timestep_s,
+//                pulse_start_s, pulse_duration_s, bed_top_m, one layer_depth_m per layer), and
+//                step, then each layer's mean vy, with the pulse and without it (the same run)
 //
 // Conventions of the rendered scene are those of docs/synth.md: t = 0 at contact (the first
 // pounder sample with a contact force), panel mm with X right from the pounder axis and Y DOWN
@@ -60,19 +68,69 @@ struct DemMeta {
   double pounder_mass_kg = 0, pounder_width_m = 0, depth_m = 0, impact_velocity_m_s = 0;
   double pounder_axis_x_m = 0, pounder_bottom_offset_m = 0, bed_top_m = 0, box_width_m = 0;
   double timestep_s = 0, gravity_m_s2 = 0;
+  // The floor force windows (floor.txt; NaN without them): width and centres [m].
+  double floor_window_width_m = kNaN, floor_window_center_x_m = kNaN,
+         floor_window_offset_x_m = kNaN;
 };
+
+// floor.txt: the floor's force on the grains of each window, y up [N], averaged over the DEM
+// steps (previous line's step, step].
+struct DemFloorSample {
+  std::int64_t step = 0;
+  std::vector<double> force_N;  // One per window: centre, offset.
+};
+
+// The P-wave run (validation/dem/pwave.in). Each layer's pulse response is the mean vy with the
+// pulse minus the same without it (serial LAMMPS is deterministic, so the difference is the
+// pulse's alone, free of the settled grains' own motion).
+struct DemPWaveRecord {
+  double timestep_s = 0, pulse_start_s = 0, pulse_duration_s = 0, bed_top_m = 0;
+  std::vector<double> layer_depth_m;              // Below bed_top_m.
+  std::vector<std::int64_t> step;                 // Output steps (every 4: 100 kHz).
+  std::vector<std::vector<double>> response_m_s;  // [layer][sample]: downward velocity.
+  bool empty() const { return layer_depth_m.empty(); }
+};
+
+// The small-strain P-wave speed of the bed from a DemPWaveRecord. A layer's arrival is the
+// first time its downward velocity reaches half its peak (the DIC front's criterion,
+// momentum/wave_front.h), linear between samples; its peak time is the largest sample, refined
+// by a parabola. Speeds: least squares of depth against time over the layers between
+// DemPWaveOptions' fractions of the bed depth with a peak inside the record; sigma is the
+// slope's standard error (n - 2 degrees of freedom).
+struct DemPWave {
+  std::vector<double> layer_depth_m, half_peak_s, peak_s, peak_m_s;  // Since the pulse start.
+  std::vector<int> in_fit;
+  double speed_m_s = kNaN, speed_sigma_m_s = kNaN;            // From the half-peak arrivals.
+  double speed_peak_m_s = kNaN, speed_peak_sigma_m_s = kNaN;  // From the peak times.
+  double rms_residual_s = kNaN;                               // Of the half-peak fit.
+  std::string problem;                                        // Why a speed is NaN.
+};
+struct DemPWaveOptions {
+  // The layers in the fits: depth within [min, max] x the bed depth, 0 <= min < max <= 1. The
+  // pulse forms in the top layers (its half-peak arrivals there lie off the line); near the floor
+  // its reflection meets it.
+  double min_depth_fraction = 0.15;
+  double max_depth_fraction = 0.85;
+  void Check() const;
+};
+DemPWave MeasurePWave(const DemPWaveRecord& record, const DemPWaveOptions& options = {});
 
 struct DemRecord {
   DemMeta meta;
   std::vector<DemSnapshot> frames;  // grains.dump, one per camera frame.
   std::vector<DemSnapshot> near;    // near.dump (may be empty).
   std::vector<DemPounderSample> pounder;
+  std::vector<DemFloorSample> floor;  // floor.txt (may be empty).
+  DemPWaveRecord pwave;               // pwave*.txt (may be empty).
 };
 
 // Readers. Errors (kFileFormat / kIo) name the file, the line and what was expected.
 std::vector<DemSnapshot> ReadLammpsDump(const std::string& path);
 std::vector<DemPounderSample> ReadDemPounder(const std::string& path);
 DemMeta ReadDemMeta(const std::string& path);
+std::vector<DemFloorSample> ReadDemFloor(const std::string& path);
+// dir/pwave_meta.txt, pwave.txt and pwave_rest.txt.
+DemPWaveRecord ReadDemPWave(const std::string& dir);
 DemRecord ReadDemRecord(const std::string& dir);
 
 // Truth measured on the grains. A DIC cell is the step x step px square around a subset centre
@@ -112,6 +170,18 @@ struct DemTruth {
   double t_e_s = 0, v_te_m_s = 0, m_add_max_kg = 0;
   double conservation_error_te = 0;    // |p_p + p_gran - p_max| / p_max at t_e.
   double conservation_error_peak = 0;  // Its maximum over [t_pmax, t_e].
+  // Base force sensors (with floor.txt): per window (centre, offset), from the noise-free DAQ
+  // record (the floor force's DAQ-interval averages minus its mean before the contact): the
+  // peak and its time (largest sample), and the onset: where the straight line through the
+  // 10 % and 50 % of peak crossings of the rise meets zero (the rise's front extrapolated to
+  // the rest level). peak_speed_m_s: distance / (peak time - the pounder's peak time), the
+  // paper's definition on the noise-free records; stress ratio: peak force / area over
+  // m_p a_peak / (D t_z), a_peak the pounder's noise-free peak deceleration (the tool's).
+  std::vector<double> base_peak_s, base_peak_force_N, base_onset_s, base_peak_speed_m_s,
+      base_stress_ratio;
+  std::vector<double> base_rise_10_s, base_rise_50_s;  // The 10 % and 50 % crossings.
+  double pounder_peak_decel_s = kNaN, pounder_peak_stress_Pa = kNaN;
+  DemPWave pwave;  // The bed's own P-wave speed (empty without pwave*.txt).
   std::vector<std::string> notes;
 };
 
@@ -147,10 +217,21 @@ class DemScene {
   cv::Point2d PanelFromDem(double x_m, double y_m) const;
 
   cv::Mat RenderFrame(int k, bool with_noise = true) const;
+  // The accelerometer and, with floor.txt, the base force channels (base_center_N,
+  // base_offset_N): each DAQ sample the floor force's average over the sample interval, its
+  // static load before the contact held before the DEM starts, plus base_sensors.offset_n and
+  // noise_n of the spec.
   ImpactScene::SensorRecord MakeSensorRecord() const;
+  // Average over [t0_s, t1_s] (since contact) of window w's floor force minus its mean before
+  // the contact (the dynamic force) [N]; 0 before the DEM starts.
+  double FloorDynamicForce(std::size_t w, double t0_s, double t1_s) const;
+  std::size_t floor_windows() const { return floor_static_N_.size(); }
+  double floor_static_N(std::size_t w) const { return floor_static_N_[w]; }
 
  private:
   void ComputeTruth();
+  void SetUpFloorSensors();
+  void ComputeWaveTruth();
   // grid_mass_of: mass of each grid grain by id.
   void ComputePeakStageTruth(const std::unordered_map<std::int64_t, double>& grid_mass_of);
 
@@ -161,6 +242,11 @@ class DemScene {
   std::vector<cv::Point2d> corner_map_;  // Ideal px of the pixel corners, (w+1) x (h+1).
   double t_contact_s_ = 0, surface_y_m_ = 0, release_time_s_ = 0, v_start_m_s_ = 0;
   double daq_origin_s_ = 0;  // Time since contact of DAQ sample 0.
+  // Floor force: DEM times of floor.txt's lines (from 0) and each window's impulse since DEM
+  // time 0 there [N s]; its mean before the contact [N].
+  std::vector<double> floor_t_s_;
+  std::vector<std::vector<double>> floor_impulse_Ns_;
+  std::vector<double> floor_static_N_;
   DemTruth truth_;
 };
 
