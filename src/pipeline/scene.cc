@@ -220,7 +220,8 @@ void AddDicFrameKeys(YamlOptionTable& t, Scene* s) {
       },
       "Worker threads");
   t.Add("first_frame", &d.first_frame, ValueRange{0, 1e300, ""}, "frame index",
-        "First frame to correlate; 0 with a sensor record: the last frame before the impact");
+        "First frame to correlate; 0 with a sensor record: the last frame before the impact (4 "
+        "before it with base channels, for the wave front's noise)");
   t.Add("last_frame", &d.last_frame, ValueRange{-1, 1e300, ""}, "frame index (-1: the last)",
         "Last frame (inclusive); -1 = the last frame");
   // The same selection by the frames' own numbers (io FrameSource::FrameNumber).

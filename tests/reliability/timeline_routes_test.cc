@@ -97,7 +97,7 @@ INSTANTIATE_TEST_SUITE_P(FirstFrame, TimelineRoutes, ::testing::Values(0, 1, 5))
 TEST(TimelineRoutes, ACorrelateResultOfOtherFramesIsRefused) {
   const TestDir dir;
   const std::string sample = std::string(SourceDir()) + "/sample_frames";
-  // The scene's frames are 0..49; the correlation's are numbered 0.. too, but the scene only
+  // The scene's frames are 0..53; the correlation's are numbered 0.. too, but the scene only
   // lists frames 10..19 (a glob of its own).
   const std::string scene = SampleScene(
       dir, {{"xdmf: true", "xdmf: false"},
