@@ -215,6 +215,43 @@ void AddFrameGridTerm(double dt, MomentumSummary* summary) {
   }
 }
 
+// One Monte Carlo draw's analysis.
+struct Draw {
+  bool analysed = false;  // false: the analysis threw (e.g. the draw's record has no impact).
+  MomentumResult result;
+};
+
+// The draws' spread: each headline figure's standard deviation into its u in result->summary
+// (NaN where the nominal figure is), the per-frame bands into `result`. Returns how many draws
+// did not measure t_e.
+int Aggregate(const std::vector<Draw>& draws, std::size_t nf, MomentumResult* result) {
+  MomentumSummary& s = result->summary;
+  const std::size_t nfig = Figures(s).size();
+  std::vector<std::vector<double>> figures(nfig);
+  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
+  int not_measured = 0;
+  for (const Draw& draw : draws) {
+    if (!draw.analysed || !draw.result.summary.t_end_problem.empty()) ++not_measured;
+    if (!draw.analysed) continue;
+    const MomentumResult& r = draw.result;
+    const std::vector<double> f = Figures(r.summary);
+    for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
+    for (std::size_t k = 0; k < nf; ++k) {
+      v_sand[k].push_back(r.v_sand_m_s[k]);
+      p_gran[k].push_back(r.p_gran_kg_m_s[k]);
+      p_total[k].push_back(r.p_total_kg_m_s[k]);
+      m_add[k].push_back(r.added_mass_kg[k]);
+    }
+  }
+  std::vector<double*> us;
+  for (const auto& f : UncertainFigures(s)) us.push_back(f.u);
+  const std::vector<double> nominal = Figures(s);
+  for (std::size_t j = 0; j < nfig; ++j)
+    *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
+  FrameBands(v_sand, p_gran, p_total, m_add, result);
+  return not_measured;
+}
+
 }  // namespace
 
 void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult& sensor,
@@ -274,10 +311,6 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
   // One draw: its own random stream (seeded by the draw's index, so that the result does not
   // depend on the number of threads), the inputs perturbed, the analysis on the grid; `red` and
   // `grid` are the draw's scratch copies of grid_kin and grid_template.
-  struct Draw {
-    bool analysed = false;  // false: the analysis threw (e.g. the draw's record has no impact).
-    MomentumResult result;
-  };
   auto run_draw = [&](std::size_t d, KinematicsResult* red, MomentumGrid* grid) {
     std::seed_seq seq{kSeed, static_cast<std::uint32_t>(d)};
     std::mt19937_64 rng(seq);
@@ -318,31 +351,9 @@ void EstimateMomentumUncertainty(const KinematicsResult& kin, const SensorResult
                       for (std::size_t d = range.begin(); d != range.end(); ++d)
                         draws[d] = run_draw(d, &red, &grid);
                     });
-  const std::size_t nfig = Figures(s).size();
-  std::vector<std::vector<double>> figures(nfig);
-  std::vector<std::vector<double>> v_sand(nf), p_gran(nf), p_total(nf), m_add(nf);
-  int not_measured = 0;
-  for (const Draw& draw : draws) {
-    if (!draw.analysed || !draw.result.summary.t_end_problem.empty()) ++not_measured;
-    if (!draw.analysed) continue;
-    const MomentumResult& r = draw.result;
-    const std::vector<double> f = Figures(r.summary);
-    for (std::size_t j = 0; j < nfig; ++j) figures[j].push_back(f[j]);
-    for (std::size_t k = 0; k < nf; ++k) {
-      v_sand[k].push_back(r.v_sand_m_s[k]);
-      p_gran[k].push_back(r.p_gran_kg_m_s[k]);
-      p_total[k].push_back(r.p_total_kg_m_s[k]);
-      m_add[k].push_back(r.added_mass_kg[k]);
-    }
-  }
   u.draws = uo.draws;
-  std::vector<double*> us;
-  for (const auto& f : UncertainFigures(s)) us.push_back(f.u);
-  const std::vector<double> nominal = Figures(s);
-  for (std::size_t j = 0; j < nfig; ++j)
-    *us[j] = std::isfinite(nominal[j]) ? FiniteSd(figures[j]) : kNaN;
+  const int not_measured = Aggregate(draws, nf, result);
   AddFrameGridTerm(dt, &s);
-  FrameBands(v_sand, p_gran, p_total, m_add, result);
   AddNotes(uo, not_measured, &u);
 }
 
