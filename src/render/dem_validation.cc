@@ -27,10 +27,12 @@
 #include "impactdic/model/impact_model.h"
 #include "impactdic/model/model_results.h"
 #include "impactdic/momentum/momentum_results.h"
+#include "impactdic/momentum/wave_front.h"
 #include "impactdic/render/figures.h"
 #include "impactdic/render/gnuplot.h"
 #include "impactdic/render/render_results.h"
 #include "impactdic/render/velocity_field.h"
+#include "impactdic/sensor/sensor.h"
 #include "impactdic/sensor/sensor_results.h"
 #include "impactdic/sensor/wave_results.h"
 
@@ -431,6 +433,68 @@ void DrawFigures(const TruthFile& t, DemValidation* out, const VelocityFieldSequ
   PlotXy(d, (fs::path(dir) / "deceleration_compare.png").string());
 }
 
+DemFront FromWaveFront(const WaveFront& f) {
+  DemFront d;
+  d.speed_m_s = f.speed_m_s;
+  d.ci_low_m_s = f.speed_ci_m_s[0];
+  d.ci_high_m_s = f.speed_ci_m_s[1];
+  d.intercept_s = f.intercept_s;
+  d.rms_residual_s = f.rms_residual_s;
+  d.fit_subsets = f.fit_subsets;
+  d.problem = f.computed || !f.problem.empty() ? f.problem : "not computed by the run";
+  return d;
+}
+
+// The front criterion (momentum/wave_front.h) on the grains' cells at the analysed frames
+// `frame`, times since the contact (the impact at 0): their mean vertical velocity, or with
+// `finite_difference` the central difference of their mean displacement (NaN at the record's
+// ends). The panel: x from the pounder's axis, y from the surface (truth.h5 /camera), D of /dem.
+DemFront GrainsFront(const H5Reader& truth, const TruthFile& t,
+                     const std::vector<std::size_t>& frame, bool finite_difference) {
+  const double axis_px = Attr(truth, "camera", "pounder_axis_x_px");
+  const double surface_px = Attr(truth, "camera", "surface_y_px");
+  const double sy = Attr(truth, "camera", "sy_mm_per_px");
+  if (!std::isfinite(axis_px) || !std::isfinite(surface_px) || !std::isfinite(sy) ||
+      !std::isfinite(t.sx) || t.frame_t.size() < 2 || t.pounder_z.size() != t.frame_t.size())
+    return DemFront{.problem =
+                        "truth.h5 lacks /camera pounder_axis_x_px, surface_y_px, "
+                        "sx/sy_mm_per_px or the frames' pounder positions"};
+  const std::size_t N = t.cells, F = frame.size(), T = t.frame_t.size();
+  const double fps = 1 / (t.frame_t[1] - t.frame_t[0]);
+  KinematicsResult k;
+  k.frames = F;
+  k.subsets = N;
+  for (std::size_t c = 0; c < N; ++c) {
+    k.x_mm.push_back((t.gx[c] - axis_px) * t.sx);
+    k.y_mm.push_back((t.gy[c] - surface_px) * sy);
+  }
+  k.disp_y_mm.assign(F * N, kNaN);
+  k.vel_y_mm_s.assign(F * N, kNaN);
+  std::vector<double> time_s;
+  for (std::size_t f = 0; f < F; ++f) {
+    const std::size_t kf = frame[f];
+    time_s.push_back(t.frame_t[kf]);
+    for (std::size_t c = 0; c < N; ++c) {
+      k.disp_y_mm[f * N + c] = t.v[kf * N + c] * sy;
+      if (!finite_difference)
+        k.vel_y_mm_s[f * N + c] = t.vy[kf * N + c];
+      else if (kf >= 1 && kf + 1 < T)
+        k.vel_y_mm_s[f * N + c] = (t.v[(kf + 1) * N + c] - t.v[(kf - 1) * N + c]) * sy * fps / 2;
+    }
+  }
+  k.time_s = time_s;
+  SensorResult sensor;
+  sensor.summary.impact_time_s = 0;
+  sensor.time_s = t.frame_t;
+  sensor.penetration_m = t.pounder_z;
+  sensor.summary.final_penetration_m = t.pounder_z.back();
+  WaveFrontOptions o;
+  o.pounder_center_x_mm = 0;
+  o.surface_y_mm = 0;
+  o.pounder_width_mm = 1e3 * t.width;
+  return FromWaveFront(AnalyzeWaveFront(k, time_s, sensor, t.t_e, o));
+}
+
 // The wave figures of both files (DemWaveChannel); nothing without the truth's base_sensors/.
 void CompareWave(const H5Reader& truth, const std::string& truth_h5, const H5Reader& res,
                  const std::string& results_h5, DemValidation* out) {
@@ -451,6 +515,7 @@ void CompareWave(const H5Reader& truth, const std::string& truth_h5, const H5Rea
     for (std::string name; std::getline(list, name, ',');) columns.push_back(name);
   }
   const WaveResult tool = ReadWaveResults(res, results_h5);
+  out->front_tool = FromWaveFront(tool.front);
   out->pounder_peak_truth_s = Attr(truth, "base_sensors", "pounder_peak_s");
   out->pounder_peak_tool_s = tool.pounder_peak_s;
   out->pounder_peak_stress_truth_Pa = Attr(truth, "base_sensors", "pounder_peak_stress_Pa");
@@ -517,7 +582,14 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
   CompareMomentum(ReadMomentumResults(res, results_h5), t, frame, &out);
   std::vector<double> model_t, model_g;
   CompareModel(t, &out, &model_t, &model_g);
-  CompareWave(H5Reader(truth_h5), truth_h5, res, results_h5, &out);
+  {
+    const H5Reader truth(truth_h5);
+    CompareWave(truth, truth_h5, res, results_h5, &out);
+    if (!out.wave.empty()) {
+      out.front_grains = GrainsFront(truth, t, frame, /*finite_difference=*/false);
+      out.front_grains_fd = GrainsFront(truth, t, frame, /*finite_difference=*/true);
+    }
+  }
   if (!figures_dir.empty()) {
     // The frames `run` stored (render_results.h): all, a preview (/frames/row) or none.
     const VelocityFieldSequence stored = ReadVelocityFieldSequence(res, /*require_frames=*/false);
@@ -560,7 +632,16 @@ const std::vector<std::string>& DemValidationWaveCsvColumns() {
                                                     "p_wave_speed_m_s",
                                                     "p_wave_speed_sigma_m_s",
                                                     "stress_ratio_tool",
-                                                    "stress_ratio_dem"};
+                                                    "stress_ratio_dem",
+                                                    "front_speed_tool_m_s",
+                                                    "front_speed_tool_ci_low_m_s",
+                                                    "front_speed_tool_ci_high_m_s",
+                                                    "front_speed_dem_m_s",
+                                                    "front_speed_dem_ci_low_m_s",
+                                                    "front_speed_dem_ci_high_m_s",
+                                                    "front_speed_dem_fd_m_s",
+                                                    "front_speed_dem_fd_ci_low_m_s",
+                                                    "front_speed_dem_fd_ci_high_m_s"};
   return kColumns;
 }
 
@@ -602,7 +683,16 @@ DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& r
                             v.p_wave_speed_m_s,
                             v.p_wave_speed_sigma_m_s,
                             c.stress_ratio_tool,
-                            c.stress_ratio_truth};
+                            c.stress_ratio_truth,
+                            v.front_tool.speed_m_s,
+                            v.front_tool.ci_low_m_s,
+                            v.front_tool.ci_high_m_s,
+                            v.front_grains.speed_m_s,
+                            v.front_grains.ci_low_m_s,
+                            v.front_grains.ci_high_m_s,
+                            v.front_grains_fd.speed_m_s,
+                            v.front_grains_fd.ci_low_m_s,
+                            v.front_grains_fd.ci_high_m_s};
       for (std::size_t i = 0; i < cols.size(); ++i) cols[i].push_back(row[i]);
     }
     WriteCsv(wave_csv_path, wave_columns, cols, 8);
@@ -681,6 +771,19 @@ std::string DemValidation::Report() const {
         1e3 * c.p_wave_travel_s);
     r += fmt::format("| {}: stress ratio | {:.4f} | {:.4f} |\n", c.column, c.stress_ratio_tool,
                      c.stress_ratio_truth);
+  }
+  if (!wave.empty()) {
+    auto front = [](const DemFront& f) {
+      if (!f.problem.empty()) return "not measured: " + f.problem;
+      return fmt::format("{:.1f} [{:.1f}, {:.1f}] ({} subsets, intercept {:.3f} ms)", f.speed_m_s,
+                         f.ci_low_m_s, f.ci_high_m_s, f.fit_subsets, 1e3 * f.intercept_s);
+    };
+    r += fmt::format(
+        "| front in the DIC field: speed [m/s] [95 % interval] | {} | the grains' velocity: {}; "
+        "central differences of their displacement (a perfect DIC): {}; P-wave {:.1f} +- {:.1f} "
+        "|\n",
+        front(front_tool), front(front_grains), front(front_grains_fd), p_wave_speed_m_s,
+        p_wave_speed_sigma_m_s);
   }
   for (const auto& n : notes) r += "note: " + n + "\n";
   return r;

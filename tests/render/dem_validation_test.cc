@@ -256,6 +256,18 @@ TEST(DemValidation, WaveFiguresOfARunOnFloorWindows) {
   const CsvTable table = ReadCsv(wave_csv, nan_ok);
   EXPECT_EQ(table.names, DemValidationWaveCsvColumns());
   EXPECT_EQ(table.rows(), 2u);
+  // The DIC front, the tool's and the grains': measured, or NaN with the reason (never a bare
+  // NaN), and in the CSV as in the comparison.
+  for (const auto& [name, f] : {std::pair<const char*, const DemFront&>{"tool", v.front_tool},
+                                {"dem", v.front_grains},
+                                {"dem_fd", v.front_grains_fd}}) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(std::isfinite(f.speed_m_s), f.problem.empty()) << f.problem;
+    std::printf("front %s: %.2f m/s (%s)\n", name, f.speed_m_s, f.problem.c_str());
+    const std::vector<double>& col = table.Column(std::string("front_speed_") + name + "_m_s");
+    for (double x : col)
+      EXPECT_TRUE(x == f.speed_m_s || (std::isnan(x) && std::isnan(f.speed_m_s))) << x;
+  }
   fs::remove_all(dir);
 }
 

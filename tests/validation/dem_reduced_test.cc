@@ -40,6 +40,7 @@ constexpr const char* kCaseArgs = "10 0.7 0.15";
 constexpr const char* kCaseName = "m10_h0.7_D0.15";
 constexpr double kMassKg = 10, kHeightM = 0.7;
 constexpr double kTimeAfterContactS = 0.008;  // TAFTER: DEM time simulated after the contact
+constexpr int kFramesBeforeContact = 7;       // impact.in's tfree: contact 3.86 ms after frame 0
 constexpr double kFps = 1600;                 // validation/dem/camera_spec.yaml
 constexpr double kDaqHz = 25000;              // its accelerometer (the synthetic DAQ's default)
 
@@ -100,18 +101,49 @@ void ExpectStrainMatchesTheGrains(const std::string& truth_h5, const std::string
   }
 }
 
+// Where the grains' noise-free floor force stays within kPeakLevel of its peak: the times after
+// the contact [a, b] around peak_s, linear between the DAQ samples. kPeakLevel is twice what
+// the tool's zero-phase filter lowers the floor's broad peak by (1.4 %, docs/validation_dem.md):
+// samples of a flat top closer to the peak than that are not ordered by the filtered record.
+constexpr double kPeakLevel = 0.03;
+std::pair<double, double> PeakSpan(const H5Reader& truth, const std::string& column,
+                                   double peak_s) {
+  // force_true_N spans the whole DAQ record; sensor/t_s its samples from 2 ms before the contact.
+  const std::vector<double> f = truth.ReadDouble("base_sensors/force_true_N/" + column);
+  const std::vector<double> t_tail = truth.ReadDouble("sensor/t_s");
+  EXPECT_GE(f.size(), t_tail.size());
+  const std::size_t skip = f.size() - t_tail.size();
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < t_tail.size(); ++i)
+    if (std::abs(t_tail[i] - peak_s) < std::abs(t_tail[k] - peak_s)) k = i;
+  const double level = (1 - kPeakLevel) * f[skip + k];
+  std::size_t a = k, b = k;
+  while (a > 0 && f[skip + a - 1] >= level) --a;
+  while (b + 1 < t_tail.size() && f[skip + b + 1] >= level) ++b;
+  const auto cross = [&](std::size_t in, std::size_t out) {  // in: >= level, out: below.
+    if (out == in) return t_tail[in];
+    const double fi = f[skip + in], fo = f[skip + out];
+    return t_tail[in] + (fi - level) / (fi - fo) * (t_tail[out] - t_tail[in]);
+  };
+  return {cross(a, a > 0 ? a - 1 : a), cross(b, b + 1 < t_tail.size() ? b + 1 : b)};
+}
+
 // The base force sensors (the floor's force in two windows) and the bed's own P-wave speed (the
 // pulse run, pwave.in) against the tool's /wave figures, under the bounds of
 // docs/validation_dem.md "DEM agreement" (the reasons are there):
 // (a) the case: a clean pulse measurement (sigma within 2 % of c_P) and the wave the floor feels
 //     travels at the bed's P-wave speed: the grains' own peak travel speed within 10 % of c_P;
-// (b) the tool against the grains on the same definitions: the speed from peaks within 2 of the
-//     tool's own standard uncertainties, the peak arrival within 2 sigma_t (sample interval and
-//     filter), the onset on the rise's foot (no later than the grains' 10-50 % line onset by
-//     2 sigma_t, no earlier than it by the rise's 10-50 % time), the stress ratio within 10 %;
+// (b) the tool against the grains on the same definitions: the peak arrival within 2 sigma_t
+//     (sample interval and filter) of the grains' peak span (PeakSpan: where their force is
+//     within 3 % of its peak), the speed from peaks within 2 of the tool's own standard
+//     uncertainties of the speeds that span gives, the onset on the rise's foot (no later than the
+//     grains' 10-50 % line onset by 2 sigma_t, no earlier than it by the rise's 10-50 % time), the
+//     stress ratio within 10 %;
 // (c) the tool's speed from peaks against c_P: within the sum of (a) and (b), 10 % of c_P plus
 //     2 sqrt(sigma_tool^2 + sigma_P^2).
-void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& results_h5) {
+void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& truth_h5,
+                                const std::string& results_h5) {
+  const H5Reader truth(truth_h5);
   ASSERT_TRUE(std::isfinite(v.p_wave_speed_m_s)) << "no P-wave speed in truth.h5 (pwave.in)";
   EXPECT_LE(v.p_wave_speed_sigma_m_s, 0.02 * v.p_wave_speed_m_s);
   EXPECT_GE(v.p_wave_speed_m_s, 50);
@@ -126,9 +158,17 @@ void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& resul
     ASSERT_TRUE(std::isfinite(c.speed_peak_truth_m_s));
     // (a)
     EXPECT_NEAR(c.speed_peak_truth_m_s, c_p, 0.10 * c_p);
-    // (b)
-    EXPECT_NEAR(c.speed_peak_tool_m_s, c.speed_peak_truth_m_s, 2 * c.speed_peak_sigma_m_s);
-    EXPECT_NEAR(c.peak_tool_s, c.peak_truth_s, 2 * sigma_t);
+    // (b) The grains' peak is a time only to within the span where their force stays within
+    // kPeakLevel of its peak (a flat top: the offset window's lasts ~0.6 ms), so the peak arrival
+    // and the speed from peaks are held to that span widened by the tool's uncertainties.
+    const auto [span_a, span_b] = PeakSpan(truth, c.column, c.peak_truth_s);
+    const double r_m = 1e-3 * c.distance_mm, t_p = v.pounder_peak_truth_s;
+    EXPECT_LE(span_a, c.peak_truth_s);
+    EXPECT_GE(span_b, c.peak_truth_s);
+    EXPECT_GE(c.speed_peak_tool_m_s, r_m / (span_b - t_p) - 2 * c.speed_peak_sigma_m_s);
+    EXPECT_LE(c.speed_peak_tool_m_s, r_m / (span_a - t_p) + 2 * c.speed_peak_sigma_m_s);
+    EXPECT_GE(c.peak_tool_s, span_a - 2 * sigma_t);
+    EXPECT_LE(c.peak_tool_s, span_b + 2 * sigma_t);
     EXPECT_LE(c.onset_tool_s, c.onset_truth_s + 2 * sigma_t);
     EXPECT_GE(c.onset_tool_s, c.onset_truth_s - (c.rise_50_truth_s - c.rise_10_truth_s));
     EXPECT_NEAR(c.stress_ratio_tool, c.stress_ratio_truth, 0.10 * c.stress_ratio_truth);
@@ -136,15 +176,57 @@ void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& resul
     EXPECT_NEAR(c.speed_peak_tool_m_s, c_p,
                 0.10 * c_p + 2 * std::hypot(c.speed_peak_sigma_m_s, sigma_p));
     std::printf(
-        "wave %s (r = %.0f mm): speed from peaks %.1f +- %.1f m/s (grains %.1f, P-wave %.1f +- "
-        "%.1f); from onsets %.1f +- %.1f; peak %.3f ms (grains %.3f, 2 sigma_t %.3f); onset "
+        "wave %s (r = %.0f mm): speed from peaks %.1f +- %.1f m/s (grains %.1f; %.1f..%.1f over "
+        "their peak span; P-wave %.1f +- %.1f); from onsets %.1f +- %.1f; peak %.3f ms (grains "
+        "%.3f, span %.3f..%.3f, 2 sigma_t %.3f); onset "
         "%.3f ms (grains %.3f, rise 10-50 %% %.3f ms); stress ratio %.4f (grains %.4f)\n",
         c.column.c_str(), c.distance_mm, c.speed_peak_tool_m_s, c.speed_peak_sigma_m_s,
-        c.speed_peak_truth_m_s, c_p, sigma_p, c.speed_onset_tool_m_s, c.speed_onset_sigma_m_s,
-        1e3 * c.peak_tool_s, 1e3 * c.peak_truth_s, 2e3 * sigma_t, 1e3 * c.onset_tool_s,
-        1e3 * c.onset_truth_s, 1e3 * (c.rise_50_truth_s - c.rise_10_truth_s), c.stress_ratio_tool,
-        c.stress_ratio_truth);
+        c.speed_peak_truth_m_s, r_m / (span_b - t_p), r_m / (span_a - t_p), c_p, sigma_p,
+        c.speed_onset_tool_m_s, c.speed_onset_sigma_m_s, 1e3 * c.peak_tool_s, 1e3 * c.peak_truth_s,
+        1e3 * span_a, 1e3 * span_b, 2e3 * sigma_t, 1e3 * c.onset_tool_s, 1e3 * c.onset_truth_s,
+        1e3 * (c.rise_50_truth_s - c.rise_10_truth_s), c.stress_ratio_tool, c.stress_ratio_truth);
   }
+}
+
+// The front in the DIC field (docs/validation_dem.md "The front in the DIC field against c_P";
+// the DEM film has 6 frames before the contact, impact.in's tfree) against the grains and the
+// bed's P-wave speed, under bounds built from what measures each speed's error:
+// (a) the grains' own front (the tool's criterion on the cells' mean velocity) against c_P:
+//     within the DEM's own spread of speeds of one wave by the feature tracked (the pulse's
+//     half-peak arrivals against its peaks, c_P - c_P,peak: 13 %), plus 2 sqrt(sigma_P^2 +
+//     sigma_P,peak^2) and the half-width of the front fit's 95 % interval;
+// (b) the tool against the grains on the same criterion (the DIC's error): within the
+//     half-widths of the two 95 % intervals in quadrature;
+// (c) the tool's front against c_P: the bound of (a) with the tool's interval.
+void ExpectFrontMatchesTheGrains(const DemValidation& v) {
+  const DemFront& tool = v.front_tool;
+  const DemFront& grains = v.front_grains;
+  ASSERT_TRUE(tool.problem.empty()) << "the tool measured no front: " << tool.problem;
+  ASSERT_TRUE(grains.problem.empty()) << "no front of the grains: " << grains.problem;
+  for (const DemFront* f : {&tool, &grains}) {
+    ASSERT_TRUE(std::isfinite(f->ci_low_m_s) && std::isfinite(f->ci_high_m_s));
+    EXPECT_GE(f->fit_subsets, 50u) << "the fit's subsets outside the footprint";
+  }
+  const auto half_width = [](const DemFront& f) { return (f.ci_high_m_s - f.ci_low_m_s) / 2; };
+  const double c_p = v.p_wave_speed_m_s;
+  const double spread = (c_p - v.p_wave_speed_peak_m_s) +
+                        2 * std::hypot(v.p_wave_speed_sigma_m_s, v.p_wave_speed_peak_sigma_m_s);
+  ASSERT_TRUE(std::isfinite(spread));
+  // (a)
+  EXPECT_NEAR(grains.speed_m_s, c_p, spread + half_width(grains));
+  // (b)
+  EXPECT_NEAR(tool.speed_m_s, grains.speed_m_s, std::hypot(half_width(tool), half_width(grains)));
+  // (c)
+  EXPECT_NEAR(tool.speed_m_s, c_p, spread + half_width(tool));
+  std::printf(
+      "front: tool %.1f [%.1f, %.1f] m/s (%zu subsets); grains' velocity %.1f [%.1f, %.1f] (%zu); "
+      "perfect DIC %.1f [%.1f, %.1f]; P-wave %.1f +- %.1f (peaks %.1f +- %.1f); bounds (a) %.1f "
+      "(b) %.1f (c) %.1f m/s\n",
+      tool.speed_m_s, tool.ci_low_m_s, tool.ci_high_m_s, tool.fit_subsets, grains.speed_m_s,
+      grains.ci_low_m_s, grains.ci_high_m_s, grains.fit_subsets, v.front_grains_fd.speed_m_s,
+      v.front_grains_fd.ci_low_m_s, v.front_grains_fd.ci_high_m_s, c_p, v.p_wave_speed_sigma_m_s,
+      v.p_wave_speed_peak_m_s, v.p_wave_speed_peak_sigma_m_s, spread + half_width(grains),
+      std::hypot(half_width(tool), half_width(grains)), spread + half_width(tool));
 }
 
 TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
@@ -192,6 +274,10 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   ASSERT_TRUE(std::isfinite(v.t_e_truth_s));
   EXPECT_GE(v.t_e_truth_s * kFps, 2) << "the peak stage must span two frames";
   EXPECT_LE(v.t_e_truth_s, kTimeAfterContactS / 2) << "the record must outlast the peak stage";
+  const std::vector<double> frame_t = truth.ReadDouble("frames/time_s");
+  EXPECT_EQ(std::count_if(frame_t.begin(), frame_t.end(), [](double t) { return t < 0; }),
+            kFramesBeforeContact)
+      << "frames before the contact (the front's noise needs 5)";
 
   // 1. p_gran through the peak stage: within 5 % of p_max of the grains' at every analysed
   // frame, and within 1 % of what a perfect DIC gives at this frame rate (the DIC's
@@ -253,7 +339,9 @@ TEST(DemReducedCase, DefaultRunMatchesTheGrains) {
   ExpectStrainMatchesTheGrains(truth_h5, results_h5);
 
   // 6. The wave (docs/validation_dem.md "DEM agreement").
-  ExpectWaveMatchesTheGrains(v, results_h5);
+  ExpectWaveMatchesTheGrains(v, truth_h5, results_h5);
+  // 7. The front in the DIC field.
+  ExpectFrontMatchesTheGrains(v);
 }
 
 }  // namespace

@@ -38,6 +38,17 @@ struct DemWaveChannel {
   double stress_ratio_truth = kNaN, p_wave_travel_s = kNaN;
 };
 
+// The front in the DIC field (docs/wave.md "The front in the DIC field"): its speed, the 95 %
+// interval ([1] NaN: unbounded above), the intercept and rms residual of the arrival fit, the
+// subsets in the fit; NaN with the reason in `problem` when not measured.
+struct DemFront {
+  double speed_m_s = kNaN;
+  double ci_low_m_s = kNaN, ci_high_m_s = kNaN;
+  double intercept_s = kNaN, rms_residual_s = kNaN;
+  std::size_t fit_subsets = 0;
+  std::string problem;
+};
+
 struct DemValidation {
   // Per analysed frame (time since contact on the DEM clock).
   std::vector<double> t_s, p_gran_tool_Ns, p_gran_truth_Ns, p_pounder_tool_Ns, p_pounder_truth_Ns;
@@ -78,6 +89,13 @@ struct DemValidation {
   double p_wave_speed_peak_m_s = kNaN, p_wave_speed_peak_sigma_m_s = kNaN;  // Peak times.
   double pounder_peak_tool_s = kNaN, pounder_peak_truth_s = kNaN;  // Peak deceleration time.
   double pounder_peak_stress_tool_Pa = kNaN, pounder_peak_stress_truth_Pa = kNaN;  // m_p a / D t_z
+  // The front: the tool's (results.h5 /wave/front), and the same criterion
+  // (momentum/wave_front.h) applied to the grains on the analysed frames, times since the
+  // contact: to the cells' mean vertical velocity at each frame (truth.h5 soil/velocity_y_mm_s,
+  // the grains' own front) and to central differences of the cells' mean displacement (what a
+  // perfect DIC gives at this frame rate). Geometry from truth.h5 (/camera: the pounder's axis
+  // and the surface; /dem: D). problem "not run" without base channels (no /wave).
+  DemFront front_tool, front_grains, front_grains_fd;
   std::vector<std::string> notes;
 
   std::string Report() const;  // The table of docs/validation.md for this case, as text.
@@ -99,7 +117,8 @@ DemValidation ValidateDemRun(const std::string& truth_h5, const std::string& res
 // quantity of the tool and of the grains: DemValidationCsvColumns).
 // wave_csv_path (when not empty, a .csv, checked the same way, "--wave-csv"): one row per base
 // sensor, DemValidationWaveCsvColumns (the DemWaveChannel figures, times in s, speeds in m/s;
-// the bed's P-wave speed repeated on each row).
+// the bed's P-wave speed and the three DIC-field front speeds with their intervals repeated on
+// each row).
 DemValidation ValidateDemFiles(const std::string& truth_h5, const std::string& results_h5,
                                const std::string& figures_dir, const std::string& csv_path,
                                const std::string& wave_csv_path = "");
