@@ -189,7 +189,7 @@ void ExpectWaveMatchesTheGrains(const DemValidation& v, const std::string& truth
 }
 
 // The front in the DIC field (docs/validation_dem.md "The front in the DIC field against c_P";
-// the DEM film has 6 frames before the contact, impact.in's tfree) against the grains and the
+// the DEM film has 7 frames before the contact, impact.in's tfree) against the grains and the
 // bed's P-wave speed, under bounds built from what measures each speed's error:
 // (a) the grains' own front (the tool's criterion on the cells' mean velocity) against c_P:
 //     within the DEM's own spread of speeds of one wave by the feature tracked (the pulse's
