@@ -151,7 +151,7 @@ std::string TimeFrames(StageContext& c, FrameTimeline* all) {
   const int front_frames =
       scene.sensor.options.columns.base_force.empty() ? 0 : kMinNoiseFrames + 1;
   d.first_frame = std::max(0, reference - front_frames);
-  if (d.last_frame - d.first_frame < 2) {  // Was "frames: got 1 frames from 49 to 49".
+  if (d.last_frame - reference < 2) {  // Was "frames: got 1 frames from 49 to 49".
     throw Error(ErrorKind::kInvalidValue, "frame times",
                 fmt::format("frames {}..{} at {:.6g} s .. {:.6g} s on the DAQ clock (by {}), "
                             "fewer than 3 of them from the last one before the impact at "
