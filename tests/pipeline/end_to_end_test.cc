@@ -271,9 +271,15 @@ constexpr double kUncertaintyTolerance = 1e-3;
 // relative 1e-4: its threshold is 3 standard deviations of the near-surface velocity in the few
 // frames before the impact, where the soil is still and the subsets' displacements are noise of
 // ~0.01 px whose last IC-GN step the ASan preset (-O1) moves (measured: threshold_mm_s 6.73420459
-// against 6.73422336 in the release build, 2.8e-6). A change of the check or its window moves
-// the figures by percents.
+// against 6.73422336 in the release build, 2.8e-6).
 constexpr double kReflectionDicTolerance = 1e-4;
+
+// The relative tolerance of the figure at `path` (above).
+double ToleranceFor(const std::string& path) {
+  if (path.rfind("uncertainty.", 0) == 0) return kUncertaintyTolerance;
+  if (path.find(".reflection_dic.") != std::string::npos) return kReflectionDicTolerance;
+  return kRelativeTolerance;
+}
 
 // JSON read as YAML (JSON is YAML's flow style) by the project's one YAML loader. A plain
 // (unquoted) scalar that reads as a number is a number; a quoted one (tag "!") is a string.
@@ -315,10 +321,7 @@ void CompareJson(const YAML::Node& run, const YAML::Node& reference, const std::
   } else if (reference.IsScalar()) {
     double a = 0, b = 0;
     if (AsNumber(run, &a) && AsNumber(reference, &b)) {
-      const double tolerance = path.rfind("uncertainty.", 0) == 0 ? kUncertaintyTolerance
-                               : path.find(".reflection_dic.") != std::string::npos
-                                   ? kReflectionDicTolerance
-                                   : kRelativeTolerance;
+      const double tolerance = ToleranceFor(path);
       if (!(std::abs(a - b) <= tolerance * std::max(std::abs(a), std::abs(b))))
         differences->push_back(at + ": " + run.Scalar() + ", the reference " + reference.Scalar());
     } else if (run.Scalar() != reference.Scalar() || run.Tag() != reference.Tag()) {
