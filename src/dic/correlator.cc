@@ -82,7 +82,7 @@ FrameResult Correlator::Correlate(const cv::Mat& image) {
   m.MakeFrame(image, out.frame, frame.get());
   out.seconds_coefficients += timer.ElapsedSeconds();
   StopPoint();
-  std::vector<Attempt> at = m.Solve(*frame, &out);
+  internal::Attempts at = m.Solve(*frame, &out);
   StopPoint();
   m.RedoIfThePolicyAsks(*frame, &at, &out);
   out.reference_frame = m.ref.frame;

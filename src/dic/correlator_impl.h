@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "icgn.h"
+#include "impactdic/core/memory.h"
 #include "impactdic/core/numeric.h"
 #include "impactdic/core/progress.h"
 #include "impactdic/dic/bspline.h"
@@ -31,15 +32,15 @@
 namespace impactdic {
 namespace internal {
 
-// tbb::parallel_for(0, n, body) in blocks of kBlock indices with a stop point (core/progress.h)
+// tbb::parallel_for(0, n, body) in blocks of kStopBlock indices with a stop point (core/progress.h)
 // after each, so that a caller can stop a loop over every subset within about 0.1 s (a block of
 // 4096 subsets on 2 threads). Only for loops whose iterations do not depend on each other: the
 // results are those of one parallel_for.
+constexpr int kStopBlock = 4096;
 template <typename Body>
 void ParallelForWithStops(int n, const Body& body) {
-  constexpr int kBlock = 4096;
-  for (int begin = 0; begin < n; begin += kBlock) {
-    tbb::parallel_for(begin, std::min(n, begin + kBlock), body);
+  for (int begin = 0; begin < n; begin += kStopBlock) {
+    tbb::parallel_for(begin, std::min(n, begin + kStopBlock), body);
     StopPoint();
   }
 }
@@ -83,8 +84,9 @@ struct Reference {
   int frame = 0;
   cv::Mat image32;
   RefImages images;
-  std::vector<SubsetRef> subsets;
-  std::vector<double> hinv;
+  // Filled by BuildReference's parallel loop.
+  FilledInParallel<SubsetRef> subsets;
+  FilledInParallel<double> hinv;
 };
 
 // What an orphan keeps of the reference it was last found in: what IC-GN (RunIcgn reads the
@@ -148,11 +150,14 @@ struct Attempt {
   IcgnResult r;
   bool solved = false, searched = false, propagated = false;
 };
+// One per subset, set up by a parallel loop (FrameSolver).
+using Attempts = FilledInParallel<Attempt>;
 
 }  // namespace internal
 
 struct Correlator::Impl {
   using Attempt = internal::Attempt;
+  using Attempts = internal::Attempts;
   using Frame = internal::Frame;
 
   DicOptions options;
@@ -188,7 +193,7 @@ struct Correlator::Impl {
 
   // propagation.cc: solves every tracked subset of `frame` against the current reference, then
   // the orphans (FrameSolver).
-  std::vector<Attempt> Solve(Frame& frame, FrameResult* out);
+  Attempts Solve(Frame& frame, FrameResult* out);
   class FrameSolver;
   // The search template of subset s: `image32` (the reference's search image) over its
   // footprint, a view; empty if the footprint leaves the image.
@@ -198,7 +203,7 @@ struct Correlator::Impl {
               double gv, cv::Mat* scratch_mat, internal::Params* p0) const;
 
   // orphans.cc
-  void SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out);
+  void SolveOrphans(Frame& frame, Attempts& at, FrameResult* out);
   // Makes the tracked points in the last solved frame (pos_last, NaN = not found) the reference
   // points, their gradient_last their gradients since the first reference.
   void MoveReferencePoints();
@@ -211,28 +216,27 @@ struct Correlator::Impl {
     std::vector<float> zncc;
     std::vector<char> trackable;
   };
-  SolvedFrame View(int frame_index, const std::vector<Attempt>& at, FrameView* storage) const;
-  std::vector<char> RescuedByLastFrame(const std::vector<int>& which,
-                                       const std::vector<Attempt>& at, const Frame& frame,
-                                       FrameResult* out);
+  SolvedFrame View(int frame_index, const Attempts& at, FrameView* storage) const;
+  std::vector<char> RescuedByLastFrame(const std::vector<int>& which, const Attempts& at,
+                                       const Frame& frame, FrameResult* out);
   // Redoes the frame against the last solved frame when the policy asks and that rescues one of
   // the subsets it named.
-  void RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* at, FrameResult* out);
+  void RedoIfThePolicyAsks(Frame& frame, Attempts* at, FrameResult* out);
   // Makes the frame the reference if the policy says so (its tracked positions are the tracks'
   // pos_last), else keeps it if the policy needs it.
-  void AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame,
-                        const std::vector<Attempt>& at, FrameResult* out);
+  void AdvanceReference(const cv::Mat& image, std::unique_ptr<Frame> frame, const Attempts& at,
+                        FrameResult* out);
 
   // result_store.cc
   // The results of `at` into out (displacements, ZNCC, sigma, status), the warps kept for the
   // next prediction; returns the tracked positions (NaN where not converged).
-  std::vector<cv::Point2d> StoreResults(const std::vector<Attempt>& at, FrameResult* out);
+  std::vector<cv::Point2d> StoreResults(const Attempts& at, FrameResult* out);
   // The post-checks on the stored results: the continuity check (options.continuity), then the
   // normalized median test (options.outliers). Flagged subsets become `discontinuous` or
   // `outlier` in out and `at`, untracked in this frame (NaN position) like other failures.
-  void PostCheck(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos, FrameResult* out);
+  void PostCheck(Attempts* at, std::vector<cv::Point2d>* pos, FrameResult* out);
   // Makes the subsets that a post-check set to `flagged` in out failures in `at` too.
-  void Untrack(SubsetStatus flagged, std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
+  void Untrack(SubsetStatus flagged, Attempts* at, std::vector<cv::Point2d>* pos,
                const FrameResult& out);
   // options.keep_warp_gradient: NaN gradients where a post-check failed the subset, and the
   // frame's gradients kept as gradient_last.

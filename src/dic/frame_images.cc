@@ -1,6 +1,7 @@
 // The images correlation reads: the reference (its images in the region or patch layout and
 // every subset's reference data) and each deformed frame (its B-spline over the reach of the
 // subsets), with the frame buffers reused from frame to frame.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -107,7 +108,15 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
       im.f.create(im.region.size(), CV_32F);
       AdviseHugePages(im.f.data, im.f.total() * im.f.elemSize());
     }
-    raw(im.region).convertTo(im.f, CV_32F);
+    // In bands of at least 4 MiB on the threads (the first touch of a fresh image's huge pages
+    // too: a smaller band would share its pages with its neighbour's).
+    const cv::Mat source = raw(im.region);
+    const int band_rows = std::max<int>(1, (4 << 20) / static_cast<int>(im.f.step[0]));
+    tbb::parallel_for(tbb::blocked_range<int>(0, source.rows, band_rows),
+                      [&](const tbb::blocked_range<int>& rows) {
+                        const cv::Range band(rows.begin(), rows.end());
+                        source.rowRange(band).convertTo(im.f.rowRange(band), CV_32F);
+                      });
   }
   // Several MB each for a dense grid: allocated, advised, then filled.
   const std::size_t hinv_size = static_cast<std::size_t>(n) * shape.n * shape.n;
@@ -115,10 +124,14 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   ref.hinv.reserve(hinv_size);
   AdviseHugePages(ref.subsets.data(), ref.subsets.capacity() * sizeof(SubsetRef));
   AdviseHugePages(ref.hinv.data(), ref.hinv.capacity() * sizeof(double));
-  ref.subsets.assign(n, SubsetRef{});
-  ref.hinv.assign(hinv_size, 0.0);
+  // Every element is assigned by the loop (FilledInParallel).
+  ref.subsets.resize(n);
+  ref.hinv.resize(hinv_size);
   internal::ParallelForWithStops(n, [&](int i) {
     SubsetRef& s = ref.subsets[i];
+    s = SubsetRef{};
+    double* hinv = &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n];
+    std::fill_n(hinv, shape.n * shape.n, 0.0);
     if (!tracks[i].active) {
       s.status = tracks[i].permanent;
       return;
@@ -132,8 +145,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
       raw(box).convertTo(f, CV_32F);
       spline->NodeGradients(box, &gx, &gy);
     }
-    internal::PrepareSubset(shape, im, options.icgn, &s,
-                            &ref.hinv[static_cast<std::size_t>(i) * shape.n * shape.n]);
+    internal::PrepareSubset(shape, im, options.icgn, &s, hinv);
   });
   for (internal::SubsetTrack& t : tracks) t.params_valid = false;
   if (timing) timing->seconds_reference += timer.ElapsedSeconds() - coef_seconds;

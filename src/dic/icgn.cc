@@ -527,6 +527,35 @@ bool WarpedSubsetInside(const Shape& shape, const SubsetRef& s, const Params& p,
 
 }  // namespace
 
+void PrefetchSubset(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                    const DeformedImage& def, double u, double v) {
+  if (s.status != SubsetStatus::kConverged) return;
+  constexpr int kLine = 64;  // Bytes per cache line.
+  const int h = shape.half, size = 2 * h + 1;
+  const MomentInput in = RefMoments(shape, ref, s);
+  const auto row = [](const float* p, int floats) {
+    const char* first = reinterpret_cast<const char*>(p);
+    for (int b = 0; b < floats * static_cast<int>(sizeof(float)); b += kLine)
+      __builtin_prefetch(first + b);
+    __builtin_prefetch(first + floats * sizeof(float) - 1);
+  };
+  for (int j = 0; j < size; ++j) {
+    const std::ptrdiff_t o = j * in.stride;
+    row(in.f + o, size);
+    row(in.gx + o, size);
+    row(in.gy + o, size);
+  }
+  const BsplineImage& spline = *def.spline;
+  const cv::Mat& coef = spline.coefficients();
+  const cv::Rect r = spline.region();
+  const int margin = h + 3;  // The taps of a warped subset near a translation.
+  const int x0 = static_cast<int>(std::lround(s.cx + u)) - margin - r.x;
+  const int y0 = static_cast<int>(std::lround(s.cy + v)) - margin - r.y;
+  const int cols = 2 * margin + 1;
+  if (x0 < 0 || y0 < 0 || x0 + cols > coef.cols || y0 + cols > coef.rows) return;
+  for (int j = 0; j < cols; ++j) row(coef.ptr<float>(y0 + j) + x0, cols);
+}
+
 IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& s, const double* hinv,
                    const DeformedImage& def, const IcgnOptions& options, const Params& initial) {
   IcgnResult result;

@@ -127,6 +127,13 @@ IcgnResult RunIcgn(const Shape& shape, const RefImages& ref, const SubsetRef& su
                    const double* hinv, const DeformedImage& def, const IcgnOptions& options,
                    const Params& initial);
 
+// Asks the CPU to load what RunIcgn will read of subset s first (its reference intensities and
+// node gradients, and the B-spline coefficients around it displaced by about (u, v) px) while
+// the caller works on another subset: subsets far apart in the image (the propagation's waves)
+// then do not wait for memory. A hint only: nothing is read or changed.
+void PrefetchSubset(const Shape& shape, const RefImages& ref, const SubsetRef& s,
+                    const DeformedImage& def, double u, double v);
+
 }  // namespace impactdic::internal
 
 #endif  // IMPACTDIC_SRC_DIC_ICGN_H_

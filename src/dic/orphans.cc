@@ -26,7 +26,7 @@ using internal::Usable;
 // Guess: the position found in the last frame; else the mean accumulated displacement of the
 // solved tracked subsets among the 3x3 neighbours in this frame; else no motion. If IC-GN fails
 // from it, an integer search around it. Runs after the tracked subsets are solved.
-void Correlator::Impl::SolveOrphans(Frame& frame, std::vector<Attempt>& at, FrameResult* out) {
+void Correlator::Impl::SolveOrphans(Frame& frame, Attempts& at, FrameResult* out) {
   const int n = static_cast<int>(initial.size());
   std::vector<int> list;
   for (int i = 0; i < n; ++i)

@@ -1,5 +1,6 @@
 // One frame against the reference: every tracked subset from its prediction, then
 // reliability-guided propagation with integer searches at seeds (FrameSolver), then the orphans.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Dense>
@@ -99,15 +100,16 @@ class Correlator::Impl::FrameSolver {
         n_(static_cast<int>(m.initial.size())),
         at_(n_),
         usable_(n_, 0) {
-    for (int i = 0; i < n_; ++i) {
+    tbb::parallel_for(0, n_, [&](int i) {  // at_ is assigned here (Attempts).
       const internal::SubsetTrack& t = m.tracks[i];
       usable_[i] = t.active && Usable(m.ref.subsets[i].status);
+      at_[i] = Attempt{};
       at_[i].r.status =
           t.active ? (usable_[i] ? SubsetStatus::kNotFound : m.ref.subsets[i].status) : t.permanent;
-    }
+    });
   }
 
-  std::vector<Attempt> Run() {
+  Attempts Run() {
     SolveFromPredictions();
     constexpr int kCoarse = 2;
     if (m_.nx > kCoarse && m_.ny > kCoarse) {
@@ -120,6 +122,30 @@ class Correlator::Impl::FrameSolver {
   }
 
  private:
+  // body(k) for k = 0 .. list.size() - 1 as ParallelForWithStops runs it; before each, the
+  // subset list[k + 1] that the same thread solves next is prefetched (PrefetchSubset) at the
+  // translation of subset from[k + 1] (a solved neighbour, or a lattice node of the fill: a hint).
+  template <typename Body>
+  void ForEachPrefetched(const std::vector<int>& list, const std::vector<int>& from,
+                         const Body& body) {
+    const int nm = m_.shape.nm, n = static_cast<int>(list.size());
+    for (int begin = 0; begin < n; begin += internal::kStopBlock) {
+      tbb::parallel_for(tbb::blocked_range<int>(begin, std::min(n, begin + internal::kStopBlock)),
+                        [&](const tbb::blocked_range<int>& range) {
+                          for (int k = range.begin(); k != range.end(); ++k) {
+                            if (k + 1 < range.end()) {
+                              const Params& p = at_[from[k + 1]].r.p;
+                              internal::PrefetchSubset(m_.shape, m_.ref.images,
+                                                       m_.ref.subsets[list[k + 1]], frame_.view,
+                                                       p[0], p[nm]);
+                            }
+                            body(k);
+                          }
+                        });
+      StopPoint();
+    }
+  }
+
   IcgnResult Icgn(int i, const Params& p0) const {
     const std::size_t nn = static_cast<std::size_t>(m_.shape.n) * m_.shape.n;
     return internal::RunIcgn(m_.shape, m_.ref.images, m_.ref.subsets[i], &m_.ref.hinv[i * nn],
@@ -298,9 +324,9 @@ class Correlator::Impl::FrameSolver {
     }
     if (frontier.empty()) return false;
     const internal::Shape& warp = m_.shape;
-    const std::vector<SubsetRef>& subsets = m_.ref.subsets;
+    const auto& subsets = m_.ref.subsets;
     timer_.Restart();
-    tbb::parallel_for(0, static_cast<int>(frontier.size()), [&](int k) {
+    ForEachPrefetched(frontier, best, [&](int k) {
       const int i = frontier[k], j = best[k];
       const SubsetRef& si = subsets[i];
       const SubsetRef& sj = subsets[j];
@@ -376,12 +402,16 @@ class Correlator::Impl::FrameSolver {
   // iterations.
   void FillFromLattice(int stride) {
     const int grid_nx = m_.nx, grid_ny = m_.ny;
-    std::vector<int> fill;
-    for (int i = 0; i < n_; ++i)
-      if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride))
+    std::vector<int> fill, node;  // node: a lattice node next to it (its guess's scale).
+    for (int i = 0; i < n_; ++i) {
+      if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride)) {
         fill.push_back(i);
+        const int r = i / grid_nx, c = i % grid_nx;
+        node.push_back((r - r % stride) * grid_nx + (c - c % stride));
+      }
+    }
     timer_.Restart();
-    internal::ParallelForWithStops(static_cast<int>(fill.size()), [&](int k) {
+    ForEachPrefetched(fill, node, [&](int k) {
       const int i = fill[k], r = i / grid_nx, c = i % grid_nx;
       const SubsetRef& si = m_.ref.subsets[i];
       std::array<int, 8> from;
@@ -408,12 +438,12 @@ class Correlator::Impl::FrameSolver {
   Frame& frame_;
   FrameResult* out_;
   const int n_;
-  std::vector<Attempt> at_;
+  Attempts at_;
   std::vector<char> usable_;
   WallTimer timer_;
 };
 
-std::vector<Attempt> Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
+Correlator::Impl::Attempts Correlator::Impl::Solve(Frame& frame, FrameResult* out) {
   return FrameSolver(*this, frame, out).Run();
 }
 

@@ -31,8 +31,8 @@ using internal::Usable;
 // against the current reference if it converged, else from the constant-velocity prediction.
 // Subsets not tracked in the last frame cannot pass.
 std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& which,
-                                                       const std::vector<Attempt>& at,
-                                                       const Frame& frame, FrameResult* out) {
+                                                       const Attempts& at, const Frame& frame,
+                                                       FrameResult* out) {
   WallTimer timer;
   const Frame& last = *last_frame;
   std::vector<char> rescued(which.size(), 0);
@@ -89,8 +89,7 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
   return rescued;
 }
 
-SolvedFrame Correlator::Impl::View(int frame_index, const std::vector<Attempt>& at,
-                                   FrameView* storage) const {
+SolvedFrame Correlator::Impl::View(int frame_index, const Attempts& at, FrameView* storage) const {
   const std::size_t n = at.size();
   storage->status.resize(n);
   storage->zncc.resize(n);
@@ -107,8 +106,7 @@ SolvedFrame Correlator::Impl::View(int frame_index, const std::vector<Attempt>& 
           .trackable = storage->trackable};
 }
 
-void Correlator::Impl::RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* at,
-                                           FrameResult* out) {
+void Correlator::Impl::RedoIfThePolicyAsks(Frame& frame, Attempts* at, FrameResult* out) {
   if (!policy->KeepsLastFrame() || !last_frame || last_frame->index <= ref.frame) return;
   FrameView storage;
   const std::vector<int> candidates = policy->RedoCandidates(View(out->frame, *at, &storage));
@@ -132,8 +130,8 @@ void Correlator::Impl::RedoIfThePolicyAsks(Frame& frame, std::vector<Attempt>* a
 }
 
 void Correlator::Impl::AdvanceReference(const cv::Mat& image,
-                                        std::unique_ptr<internal::Frame> frame,
-                                        const std::vector<Attempt>& at, FrameResult* out) {
+                                        std::unique_ptr<internal::Frame> frame, const Attempts& at,
+                                        FrameResult* out) {
   FrameView storage;
   if (policy->MakesFrameTheReference(View(out->frame, at, &storage))) {
     // The frame just solved becomes the reference.

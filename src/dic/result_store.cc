@@ -24,8 +24,7 @@ internal::Gradient internal::ComposeGradients(const Gradient& second, const Grad
           d + h + c * f + d * h};
 }
 
-std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attempt>& at,
-                                                        FrameResult* out) {
+std::vector<cv::Point2d> Correlator::Impl::StoreResults(const Attempts& at, FrameResult* out) {
   const int n = static_cast<int>(at.size());
   out->u_px.assign(n, kNaN);
   out->v_px.assign(n, kNaN);
@@ -78,8 +77,7 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const std::vector<Attemp
   return pos;
 }
 
-void Correlator::Impl::PostCheck(std::vector<Attempt>* at, std::vector<cv::Point2d>* pos,
-                                 FrameResult* out) {
+void Correlator::Impl::PostCheck(Attempts* at, std::vector<cv::Point2d>* pos, FrameResult* out) {
   if (options.continuity.enabled) {
     const ContinuityFlags flags = CheckContinuity(*out, nx, ny, options.continuity);
     if (flags.flagged > 0) {
@@ -96,8 +94,8 @@ void Correlator::Impl::PostCheck(std::vector<Attempt>* at, std::vector<cv::Point
   }
 }
 
-void Correlator::Impl::Untrack(SubsetStatus flagged, std::vector<Attempt>* at,
-                               std::vector<cv::Point2d>* pos, const FrameResult& out) {
+void Correlator::Impl::Untrack(SubsetStatus flagged, Attempts* at, std::vector<cv::Point2d>* pos,
+                               const FrameResult& out) {
   for (std::size_t i = 0; i < at->size(); ++i) {
     IcgnResult& r = (*at)[i].r;
     if (out.status[i] != flagged || r.status != SubsetStatus::kConverged) continue;

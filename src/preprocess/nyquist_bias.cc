@@ -1,5 +1,7 @@
 #include "impactdic/preprocess/nyquist_bias.h"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -80,27 +82,41 @@ NyquistBias MeasureNyquistBias(const cv::Mat& image, cv::Rect roi) {
   const std::vector<int> xs = TileOrigins(roi.width, n, per_axis);
   const std::vector<int> ys = TileOrigins(roi.height, n, per_axis);
   const cv::Mat window = HannWindow(n);
-  std::vector<double> px(static_cast<std::size_t>(n / 2 + 1), 0.0), py = px;
-  cv::Mat tile, spectrum;
-  for (int y0 : ys) {
-    for (int x0 : xs) {
-      image(cv::Rect(roi.x + x0, roi.y + y0, n, n)).convertTo(tile, CV_64F);
-      tile -= cv::mean(tile)[0];
-      tile = tile.mul(window);
-      cv::dft(tile, spectrum, cv::DFT_COMPLEX_OUTPUT);
-      for (int v = 0; v < n; ++v) {
-        const int fv = v <= n / 2 ? v : n - v;
-        const cv::Vec2d* row = spectrum.ptr<cv::Vec2d>(v);
-        for (int u = 0; u < n; ++u) {
-          const int fu = u <= n / 2 ? u : n - u;
-          const double p = row[u][0] * row[u][0] + row[u][1] * row[u][1];
-          px[static_cast<std::size_t>(fu)] += p;
-          py[static_cast<std::size_t>(fv)] += p;
-        }
+  // The marginal spectra of each tile (tiles in parallel), then summed in the tiles' order: the
+  // same figures for any number of threads.
+  const std::size_t bins = static_cast<std::size_t>(n / 2 + 1);
+  const int tiles = static_cast<int>(xs.size() * ys.size());
+  std::vector<double> marginals(static_cast<std::size_t>(tiles) * 2 * bins, 0.0);
+  tbb::parallel_for(0, tiles, [&](int k) {
+    const int x0 = xs[static_cast<std::size_t>(k) % xs.size()];
+    const int y0 = ys[static_cast<std::size_t>(k) / xs.size()];
+    double* tx = &marginals[static_cast<std::size_t>(k) * 2 * bins];
+    double* ty = tx + bins;
+    cv::Mat tile, spectrum;
+    image(cv::Rect(roi.x + x0, roi.y + y0, n, n)).convertTo(tile, CV_64F);
+    tile -= cv::mean(tile)[0];
+    tile = tile.mul(window);
+    cv::dft(tile, spectrum, cv::DFT_COMPLEX_OUTPUT);
+    for (int v = 0; v < n; ++v) {
+      const int fv = v <= n / 2 ? v : n - v;
+      const cv::Vec2d* row = spectrum.ptr<cv::Vec2d>(v);
+      for (int u = 0; u < n; ++u) {
+        const int fu = u <= n / 2 ? u : n - u;
+        const double p = row[u][0] * row[u][0] + row[u][1] * row[u][1];
+        tx[fu] += p;
+        ty[fv] += p;
       }
-      ++out.tiles;
+    }
+  });
+  std::vector<double> px(bins, 0.0), py = px;
+  for (int k = 0; k < tiles; ++k) {
+    const double* tx = &marginals[static_cast<std::size_t>(k) * 2 * bins];
+    for (std::size_t b = 0; b < bins; ++b) {
+      px[b] += tx[b];
+      py[b] += tx[bins + b];
     }
   }
+  out.tiles = tiles;
   out.tile_size = n;
   out.bias_x_px = out.bias_y_px = 0;
   for (int i = 1; i < 20; ++i) {
