@@ -84,7 +84,7 @@ NyquistBias MeasureNyquistBias(const cv::Mat& image, cv::Rect roi) {
   const cv::Mat window = HannWindow(n);
   // The marginal spectra of each tile (tiles in parallel), then summed in the tiles' order: the
   // same figures for any number of threads.
-  const std::size_t bins = static_cast<std::size_t>(n / 2 + 1);
+  const std::size_t bins = static_cast<std::size_t>(n) / 2 + 1;
   const int tiles = static_cast<int>(xs.size() * ys.size());
   std::vector<double> marginals(static_cast<std::size_t>(tiles) * 2 * bins, 0.0);
   tbb::parallel_for(0, tiles, [&](int k) {
