@@ -11,6 +11,7 @@
 #ifndef IMPACTDIC_SRC_DIC_CORRELATOR_IMPL_H_
 #define IMPACTDIC_SRC_DIC_CORRELATOR_IMPL_H_
 
+#include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
@@ -32,17 +33,24 @@
 namespace impactdic {
 namespace internal {
 
-// tbb::parallel_for(0, n, body) in blocks of kStopBlock indices with a stop point (core/progress.h)
-// after each, so that a caller can stop a loop over every subset within about 0.1 s (a block of
-// 4096 subsets on 2 threads). Only for loops whose iterations do not depend on each other: the
-// results are those of one parallel_for.
+// tbb::parallel_for over [0, n) in blocks of kStopBlock indices with a stop point
+// (core/progress.h) after each, so that a caller can stop a loop over every subset within about
+// 0.1 s (a block of 4096 subsets on 2 threads). Only for loops whose iterations do not depend on
+// each other: the results are those of one parallel_for. range_body(range) gets each thread's
+// tbb::blocked_range<int> (to look ahead within it); ParallelForWithStops' body one index.
 constexpr int kStopBlock = 4096;
-template <typename Body>
-void ParallelForWithStops(int n, const Body& body) {
+template <typename RangeBody>
+void ParallelRangesWithStops(int n, const RangeBody& range_body) {
   for (int begin = 0; begin < n; begin += kStopBlock) {
-    tbb::parallel_for(begin, std::min(n, begin + kStopBlock), body);
+    tbb::parallel_for(tbb::blocked_range<int>(begin, std::min(n, begin + kStopBlock)), range_body);
     StopPoint();
   }
+}
+template <typename Body>
+void ParallelForWithStops(int n, const Body& body) {
+  ParallelRangesWithStops(n, [&body](const tbb::blocked_range<int>& range) {
+    for (int i = range.begin(); i != range.end(); ++i) body(i);
+  });
 }
 
 inline bool Usable(SubsetStatus s) { return s == SubsetStatus::kConverged; }

@@ -16,6 +16,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "icgn_kernels.h"
@@ -533,11 +534,14 @@ void PrefetchSubset(const Shape& shape, const RefImages& ref, const SubsetRef& s
   constexpr int kLine = 64;  // Bytes per cache line.
   const int h = shape.half, size = 2 * h + 1;
   const MomentInput in = RefMoments(shape, ref, s);
+  // Every cache line of floats [p, p + floats).
   const auto row = [](const float* p, int floats) {
-    const char* first = reinterpret_cast<const char*>(p);
-    for (int b = 0; b < floats * static_cast<int>(sizeof(float)); b += kLine)
-      __builtin_prefetch(first + b);
-    __builtin_prefetch(first + floats * sizeof(float) - 1);
+    const auto first = reinterpret_cast<std::uintptr_t>(p) & ~std::uintptr_t{kLine - 1};
+    const auto end = reinterpret_cast<std::uintptr_t>(p + floats);
+    for (std::uintptr_t a = first; a < end; a += kLine) {
+      // NOLINTNEXTLINE(performance-no-int-to-ptr): addresses inside the caller's image rows
+      __builtin_prefetch(reinterpret_cast<const void*>(a));
+    }
   };
   for (int j = 0; j < size; ++j) {
     const std::ptrdiff_t o = j * in.stride;
@@ -548,6 +552,7 @@ void PrefetchSubset(const Shape& shape, const RefImages& ref, const SubsetRef& s
   const BsplineImage& spline = *def.spline;
   const cv::Mat& coef = spline.coefficients();
   const cv::Rect r = spline.region();
+  if (!(std::abs(u) < 1e6 && std::abs(v) < 1e6)) return;  // A hint from a failed subset.
   const int margin = h + 3;  // The taps of a warped subset near a translation.
   const int x0 = static_cast<int>(std::lround(s.cx + u)) - margin - r.x;
   const int y0 = static_cast<int>(std::lround(s.cy + v)) - margin - r.y;

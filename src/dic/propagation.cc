@@ -128,22 +128,18 @@ class Correlator::Impl::FrameSolver {
   template <typename Body>
   void ForEachPrefetched(const std::vector<int>& list, const std::vector<int>& from,
                          const Body& body) {
-    const int nm = m_.shape.nm, n = static_cast<int>(list.size());
-    for (int begin = 0; begin < n; begin += internal::kStopBlock) {
-      tbb::parallel_for(tbb::blocked_range<int>(begin, std::min(n, begin + internal::kStopBlock)),
-                        [&](const tbb::blocked_range<int>& range) {
-                          for (int k = range.begin(); k != range.end(); ++k) {
-                            if (k + 1 < range.end()) {
-                              const Params& p = at_[from[k + 1]].r.p;
-                              internal::PrefetchSubset(m_.shape, m_.ref.images,
-                                                       m_.ref.subsets[list[k + 1]], frame_.view,
-                                                       p[0], p[nm]);
-                            }
-                            body(k);
-                          }
-                        });
-      StopPoint();
-    }
+    const int nm = m_.shape.nm;
+    internal::ParallelRangesWithStops(
+        static_cast<int>(list.size()), [&](const tbb::blocked_range<int>& range) {
+          for (int k = range.begin(); k != range.end(); ++k) {
+            if (k + 1 < range.end()) {
+              const Params& p = at_[from[k + 1]].r.p;
+              internal::PrefetchSubset(m_.shape, m_.ref.images, m_.ref.subsets[list[k + 1]],
+                                       frame_.view, p[0], p[nm]);
+            }
+            body(k);
+          }
+        });
   }
 
   IcgnResult Icgn(int i, const Params& p0) const {
