@@ -1,5 +1,8 @@
 #include "impactdic/core/memory.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <cstdint>
 
 #if defined(__linux__)
@@ -23,6 +26,19 @@ void AdviseHugePages(void* data, std::size_t bytes) {
   (void)data;
   (void)bytes;
 #endif
+}
+
+void FaultInParallel(void* data, std::size_t bytes) {
+  constexpr std::size_t kPage = 4096;
+  if (data == nullptr || bytes == 0) return;
+  auto* const bytes_of = static_cast<volatile unsigned char*>(data);
+  const std::size_t pages = (bytes + kPage - 1) / kPage;
+  // Blocks of 64 pages: one task per 256 KiB, so that the pool's threads share a few MB.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pages, 64),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t p = range.begin(); p != range.end(); ++p)
+                        bytes_of[p * kPage] = 0;
+                    });
 }
 
 }  // namespace impactdic

@@ -23,10 +23,15 @@ bool Valid(const FrameResult& r, int i) { return r.status[i] == SubsetStatus::kC
 // One of each pair of opposite grid neighbours (row, column offsets).
 constexpr std::array<std::pair<int, int>, 4> kHalfNeighbourhood{{{0, 1}, {1, -1}, {1, 0}, {1, 1}}};
 
-// Median of the first n values (sorted in place; n <= 8 here, where sorting costs less than
-// nth_element): the middle one, or the mean of the two middle ones.
+// Median of the first n values (sorted in place by insertion; n <= 8 here, where that costs
+// less than std::sort or nth_element): the middle one, or the mean of the two middle ones.
 double Median(double* values, int n) {
-  std::sort(values, values + n);
+  for (int i = 1; i < n; ++i) {
+    const double v = values[i];
+    int j = i;
+    for (; j > 0 && values[j - 1] > v; --j) values[j] = values[j - 1];
+    values[j] = v;
+  }
   const double upper = values[n / 2];
   if (n % 2 == 1) return upper;
   return 0.5 * (upper + values[n / 2 - 1]);
@@ -60,10 +65,13 @@ void FlagOutlier(const FrameResult& result, int cols, int rows, const OutlierChe
     v[k] = result.v_px[near[k]];
   }
   const double um = Median(u.data(), count), vm = Median(v.data(), count);
+  // Distances as sqrt(du^2 + dv^2): displacements in pixels neither overflow nor underflow, so
+  // std::hypot's guard (several times the cost, on ~10 distances per subset) is not needed.
+  const auto distance = [](double du, double dv) { return std::sqrt(du * du + dv * dv); };
   for (int k = 0; k < count; ++k)
-    r[k] = std::hypot(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
+    r[k] = distance(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
   const double rm = Median(r.data(), count);
-  const double deviation = std::hypot(result.u_px[i] - um, result.v_px[i] - vm);
+  const double deviation = distance(result.u_px[i] - um, result.v_px[i] - vm);
   const double normalized = deviation / (rm + options.noise_px);
   flags->normalized_residual[i] = normalized;
   double sigma = 0;

@@ -61,8 +61,12 @@ void Correlator::Impl::SetUpGrid(const cv::Mat& image) {
   ny = (roi.height - size) / g.step + 1;
   const int n = nx * ny;
   initial.resize(n);
-  tracks.reserve(n);  // Several MB for a dense grid: allocated, advised, then filled.
+  // Several MB for a dense grid: allocated, advised, its pages faulted in on the pool's threads,
+  // then filled.
+  tracks.clear();
+  tracks.reserve(n);
   AdviseHugePages(tracks.data(), tracks.capacity() * sizeof(internal::SubsetTrack));
+  FaultInParallel(tracks.data(), tracks.capacity() * sizeof(internal::SubsetTrack));
   tracks.assign(n, internal::SubsetTrack{});
   for (int r = 0; r < ny; ++r) {
     for (int c = 0; c < nx; ++c) {

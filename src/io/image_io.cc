@@ -479,7 +479,8 @@ cv::Mat ReadGreyImage(const std::string& path, int* file_channels) {
   try {
     // Greyscale PNGs without OpenCV's codecs (loading them costs more than decoding a frame).
     // Any other PNG's image data are checked first, so that libpng has nothing to complain of.
-    if (!DecodeGreyPng(bytes, &image)) {
+    // CheckImageBytes has checked a PNG's chunk CRCs.
+    if (!DecodeGreyPng(bytes, &image, PngChunkCrcs::kCheckedByCaller)) {
       const std::string problem = PngImageDataProblem(bytes);
       if (!problem.empty())
         throw Error(ErrorKind::kFileFormat, "image", problem, "a valid PNG file").WithFile(path);

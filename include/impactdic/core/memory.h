@@ -23,6 +23,13 @@ namespace impactdic {
 // and its values are not affected.
 void AdviseHugePages(void* data, std::size_t bytes);
 
+// Writes one byte of every 4 KiB page of [data, data + bytes) on the thread pool, so that the
+// page faults (and the kernel's zeroing) of a new buffer's first touch run in parallel rather than
+// in the serial loop that then constructs its elements (types a parallel loop cannot construct:
+// FilledInParallel is for trivially copyable ones). Only for memory not yet holding objects: the
+// bytes written become zero.
+void FaultInParallel(void* data, std::size_t bytes);
+
 // The allocator of FilledInParallel: resize() leaves the new elements of a trivially copyable
 // type as the memory has them, for the caller's parallel loop to assign every one; any other
 // construction (copies, values given) is std::allocator's.

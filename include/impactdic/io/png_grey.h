@@ -19,7 +19,11 @@
 
 namespace impactdic {
 
-bool DecodeGreyPng(const std::string& bytes, cv::Mat* image);
+// kCheckedByCaller: the chunks' CRC-32s were verified already (PngStructureProblem in image_io's
+// checks), so the decoder does not compute them again.
+enum class PngChunkCrcs { kCheck, kCheckedByCaller };
+bool DecodeGreyPng(const std::string& bytes, cv::Mat* image,
+                   PngChunkCrcs crcs = PngChunkCrcs::kCheck);
 
 // For any PNG (every colour type and bit depth, interlaced or not) whose chunks are whole: its
 // header and image data as libpng reads them, so that a damaged file is reported in one message
