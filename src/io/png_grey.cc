@@ -3,6 +3,10 @@
 #include <fmt/format.h>
 #include <zlib.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -27,11 +31,67 @@ inline unsigned char Paeth(int a, int b, int c) {
   return static_cast<unsigned char>(pb <= pc ? b : c);
 }
 
+// Sub, Average and Paeth for one byte per pixel (8-bit grey), the left neighbour carried in a
+// register: read back from `out`, each byte waited for the store of the one before (~5 cycles a
+// byte, 4 ms for a 2.8 MB frame). Sub, a running sum mod 256, adds 16 bytes at a time where SSE2
+// is there: the sums inside the vector by shifted adds, plus the last byte of the one before.
+void UnfilterSub1(const unsigned char* in, unsigned char* out, std::size_t bytes) {
+  std::size_t i = 0;
+#if defined(__SSE2__)
+  __m128i carry = _mm_setzero_si128();  // Every byte: out[i - 1].
+  for (; i + 16 <= bytes; i += 16) {
+    __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
+    x = _mm_add_epi8(x, _mm_slli_si128(x, 1));
+    x = _mm_add_epi8(x, _mm_slli_si128(x, 2));
+    x = _mm_add_epi8(x, _mm_slli_si128(x, 4));
+    x = _mm_add_epi8(x, _mm_slli_si128(x, 8));
+    x = _mm_add_epi8(x, carry);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out + i), x);
+    const __m128i high = _mm_unpackhi_epi16(_mm_unpackhi_epi8(x, x), _mm_unpackhi_epi8(x, x));
+    carry = _mm_shuffle_epi32(high, 0xFF);  // Byte 15 in every byte.
+  }
+#endif
+  unsigned char left = i > 0 ? out[i - 1] : 0;
+  for (; i < bytes; ++i) out[i] = left = static_cast<unsigned char>(in[i] + left);
+}
+
+void UnfilterAverage1(const unsigned char* in, unsigned char* out, const unsigned char* prev,
+                      std::size_t bytes) {
+  int left = 0;
+  for (std::size_t i = 0; i < bytes; ++i) {
+    left = static_cast<unsigned char>(in[i] + ((left + (prev ? prev[i] : 0)) >> 1));
+    out[i] = static_cast<unsigned char>(left);
+  }
+}
+
+void UnfilterPaeth1(const unsigned char* in, unsigned char* out, const unsigned char* prev,
+                    std::size_t bytes) {
+  int left = 0, up_left = 0;
+  for (std::size_t i = 0; i < bytes; ++i) {
+    const int up = prev ? prev[i] : 0;
+    left = static_cast<unsigned char>(in[i] + Paeth(left, up, up_left));
+    out[i] = static_cast<unsigned char>(left);
+    up_left = up;
+  }
+}
+
 // Reverses the filter of one scanline: the filtered bytes `in` into `out` (which may be `in`
 // itself); `prev` is the previous reconstructed line, or null for the first. bpp = bytes per
 // pixel. False for an unknown filter type.
 bool Unfilter(int type, const unsigned char* in, unsigned char* out, const unsigned char* prev,
               std::size_t bytes, std::size_t bpp) {
+  if (bpp == 1 && type == 1) {
+    UnfilterSub1(in, out, bytes);
+    return true;
+  }
+  if (bpp == 1 && type == 3) {
+    UnfilterAverage1(in, out, prev, bytes);
+    return true;
+  }
+  if (bpp == 1 && type == 4) {
+    UnfilterPaeth1(in, out, prev, bytes);
+    return true;
+  }
   switch (type) {
     case 0:
       if (out != in) std::memcpy(out, in, bytes);

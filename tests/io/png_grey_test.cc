@@ -201,6 +201,30 @@ TEST(PngGrey, SplitDataAndAncillaryChunks) {
   EXPECT_TRUE(SameImage(ours, OpenCvDecode(png)));
 }
 
+TEST(PngGrey, ZlibHeaderSplitOverDataChunksAndAWrongHeaderRefused) {
+  // One byte per IDAT chunk: the zlib stream's 2-byte header straddles two chunks (the decoder
+  // inflates the raw deflate data after it and checks the header itself).
+  const int w = 37, h = 9;
+  const auto pixels = RandomPixels(w, h, 8, 21);
+  const std::string png = MakePng(pixels, w, h, {.idat_piece = 1});
+  cv::Mat ours;
+  ASSERT_TRUE(DecodeGreyPng(png, &ours));
+  EXPECT_TRUE(SameImage(ours, ToMat(pixels, w, h, 8)));
+  EXPECT_TRUE(SameImage(ours, OpenCvDecode(png)));
+  // A preset dictionary flagged in the header (FDICT, with the check bits kept right): refused
+  // when the CRCs are left to the caller too.
+  std::string bad = MakePng(pixels, w, h, {});
+  const std::size_t idat = bad.find("IDAT");
+  ASSERT_NE(idat, std::string::npos);
+  auto& flg = reinterpret_cast<unsigned char&>(bad[idat + 5]);
+  const unsigned cmf = static_cast<unsigned char>(bad[idat + 4]);
+  flg = static_cast<unsigned char>(0x20);
+  flg = static_cast<unsigned char>(flg + (31 - (cmf * 256 + flg) % 31) % 31);
+  cv::Mat image;
+  EXPECT_FALSE(DecodeGreyPng(bad, &image, PngChunkCrcs::kCheckedByCaller));
+  EXPECT_TRUE(image.empty());
+}
+
 TEST(PngGrey, FilesWrittenByOpenCvDecodeIdentically) {
   // libpng's adaptive filter choice, several zlib strategies and levels, 8 and 16 bit.
   cv::Mat noise8(97, 131, CV_8UC1), noise16(97, 131, CV_16UC1);
