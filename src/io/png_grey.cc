@@ -16,6 +16,8 @@
 #include <utility>
 #include <vector>
 
+#include "inflate.h"
+
 namespace impactdic {
 namespace {
 
@@ -121,12 +123,10 @@ bool Unfilter(int type, const unsigned char* in, unsigned char* out, const unsig
   }
 }
 
-// window_bits: zlib's (15 for a zlib stream with its header and Adler-32 check; -15 for the raw
-// deflate data inside one).
 struct Inflater {
   z_stream z{};
   bool ok = false;
-  explicit Inflater(int window_bits = 15) { ok = inflateInit2(&z, window_bits) == Z_OK; }
+  Inflater() { ok = inflateInit(&z) == Z_OK; }
   ~Inflater() {
     if (ok) inflateEnd(&z);
   }
@@ -286,17 +286,10 @@ bool DecodeGreyPng(const std::string& bytes, cv::Mat* image, PngChunkCrcs crcs) 
   if (size < 8 + 25 || std::memcmp(data, kSignature, 8) != 0) return false;
 
   std::size_t width = 0, height = 0, bpp = 0, row_bytes = 0;
-  // Filter byte + row_bytes per line, every byte written by the inflation (not zeroed first).
-  std::unique_ptr<unsigned char[]> raw;
-  std::size_t raw_size = 0;
-  // The image data are a zlib stream: its 2-byte header (checked here, which may straddle IDAT
-  // chunks), then raw deflate data, then an Adler-32 of the inflated bytes, which is not checked:
-  // the chunks' CRC-32s cover the same bytes (Adler-32 cost 1 ms a frame of 2.8 MB).
-  Inflater inflater(-15);
-  if (!inflater.ok) return false;
-  unsigned char zlib_header[2];
-  int header_bytes = 0;
-  bool header = false, stream_end = false, end = false;
+  // The image data: the IDAT chunks' bodies, one zlib stream.
+  std::vector<std::pair<const unsigned char*, std::size_t>> pieces;
+  std::size_t data_bytes = 0;
+  bool header = false, end = false;
   for (std::size_t at = 8; at + 12 <= size && !end;) {
     const std::uint32_t length = BigEndian32(data + at);
     if (length > size - at - 12) return false;
@@ -319,42 +312,35 @@ bool DecodeGreyPng(const std::string& bytes, cv::Mat* image, PngChunkCrcs crcs) 
         return false;
       bpp = depth / 8;
       row_bytes = width * bpp;
-      raw_size = height * (row_bytes + 1);
-      raw.reset(new unsigned char[raw_size]);  // NOLINT(cppcoreguidelines-owning-memory)
-      inflater.z.next_out = raw.get();
-      inflater.z.avail_out = static_cast<uInt>(raw_size);
       header = true;
     } else if (std::memcmp(type, "IDAT", 4) == 0) {
-      if (stream_end) continue;  // trailing empty IDATs are allowed; extra data is ignored
-      std::uint32_t skip = 0;
-      while (header_bytes < 2 && skip < length) zlib_header[header_bytes++] = body[skip++];
-      if (header_bytes < 2) continue;
-      if (skip > 0) {
-        // Deflate, a window of at most 32 KiB, no preset dictionary, the check bits right
-        // (RFC 1950, section 2.2).
-        const int cmf = zlib_header[0], flg = zlib_header[1];
-        if ((cmf & 0x0F) != 8 || (cmf >> 4) > 7 || (flg & 0x20) != 0 || (cmf * 256 + flg) % 31 != 0)
-          return false;
-      }
-      inflater.z.next_in = const_cast<unsigned char*>(body + skip);
-      inflater.z.avail_in = length - skip;
-      while (inflater.z.avail_in > 0) {
-        const uInt before = inflater.z.avail_in;
-        const int r = inflate(&inflater.z, Z_NO_FLUSH);
-        if (r == Z_STREAM_END) {
-          stream_end = true;
-          break;
-        }
-        if (r != Z_OK) return false;                                                   // damaged
-        if (inflater.z.avail_in == before && inflater.z.avail_out == 0) return false;  // too long
-      }
+      if (length > 0) pieces.emplace_back(body, length);
+      data_bytes += length;
     } else if (std::memcmp(type, "IEND", 4) == 0) {
       end = true;
     } else if ((type[0] & 0x20) == 0 || std::memcmp(type, "tRNS", 4) == 0) {
       return false;  // a critical chunk (PLTE, or one we do not know), or transparency
     }
   }
-  if (!end || !stream_end || inflater.z.avail_out != 0) return false;
+  if (!end || data_bytes < 2) return false;
+  // One contiguous stream (a copy when the encoder split it into several chunks).
+  std::vector<unsigned char> joined;
+  const unsigned char* stream = pieces.front().first;
+  if (pieces.size() > 1) {
+    joined.reserve(data_bytes);
+    for (const auto& [piece, length] : pieces) joined.insert(joined.end(), piece, piece + length);
+    stream = joined.data();
+  }
+  // The zlib header (RFC 1950, 2.2): deflate, a window of at most 32 KiB, no preset dictionary,
+  // the check bits right. Then raw deflate data, inflated by our decoder (inflate.h); the
+  // Adler-32 after them is not checked: the chunks' CRC-32s cover the same bytes.
+  const int cmf = stream[0], flg = stream[1];
+  if ((cmf & 0x0F) != 8 || (cmf >> 4) > 7 || (flg & 0x20) != 0 || (cmf * 256 + flg) % 31 != 0)
+    return false;
+  // Filter byte + row_bytes per line, every byte written by the inflation (not zeroed first).
+  const std::size_t raw_size = height * (row_bytes + 1);
+  std::unique_ptr<unsigned char[]> raw(new unsigned char[raw_size]);  // NOLINT(*-owning-memory)
+  if (!InflateRaw(stream + 2, data_bytes - 2, raw.get(), raw_size)) return false;
 
   cv::Mat out(static_cast<int>(height), static_cast<int>(width), bpp == 1 ? CV_8UC1 : CV_16UC1);
   const unsigned char* prev = nullptr;
