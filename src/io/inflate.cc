@@ -7,17 +7,19 @@
 namespace impactdic {
 namespace {
 
-// A table entry (uint32): bits 0-4 the code's length in bits (a subtable link: unused), bits 5-7
-// its kind, bits 8-12 the extra bits that follow the code (length, distance) or a subtable's index
-// bits, bits 16-31 the value (literal byte, length or distance base, subtable start).
+// A table entry (uint32): bits 0-5 the code's length in bits (bit 5 always 0; a subtable link:
+// 0), so that the entry itself is the shift that drops the code (x86 shifts take the count mod
+// 64: one instruction less on the literals' dependency chain), bits 6-8 its kind, bits 9-13 the
+// extra bits that follow the code (length, distance) or a subtable's index bits, bits 16-31 the
+// value (literal byte, length or distance base, subtable start).
 enum Kind : std::uint32_t { kLiteral = 0, kLength = 1, kEnd = 2, kLink = 3, kInvalid = 4 };
 constexpr std::uint32_t Entry(std::uint32_t kind, std::uint32_t value, std::uint32_t extra,
                               std::uint32_t length = 0) {
-  return value << 16 | extra << 8 | kind << 5 | length;
+  return value << 16 | extra << 9 | kind << 6 | length;
 }
-constexpr std::uint32_t KindOf(std::uint32_t e) { return (e >> 5) & 7; }
-constexpr std::uint32_t LengthOf(std::uint32_t e) { return e & 31; }
-constexpr std::uint32_t ExtraOf(std::uint32_t e) { return (e >> 8) & 31; }
+constexpr std::uint32_t KindOf(std::uint32_t e) { return (e >> 6) & 7; }
+constexpr std::uint32_t LengthOf(std::uint32_t e) { return e & 63; }
+constexpr std::uint32_t ExtraOf(std::uint32_t e) { return (e >> 9) & 31; }
 constexpr std::uint32_t ValueOf(std::uint32_t e) { return e >> 16; }
 
 constexpr int kMaxCodeBits = 15;
