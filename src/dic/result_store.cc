@@ -1,6 +1,10 @@
 // A frame's results: stored into FrameResult (accumulated displacements, ZNCC, uncertainty,
 // status, warp gradients), the post-checks that untrack flagged subsets, the positions kept for
 // the next prediction, and the run's summary.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -38,42 +42,52 @@ std::vector<cv::Point2d> Correlator::Impl::StoreResults(const Attempts& at, Fram
   if (gradients)
     for (auto* g : {&out->dudx, &out->dudy, &out->dvdx, &out->dvdy}) g->assign(n, kNaN);
   std::vector<cv::Point2d> pos(n, cv::Point2d(kNaN, kNaN));
-  for (int i = 0; i < n; ++i) {
-    const IcgnResult& r = at[i].r;
-    out->status[i] = r.status;
-    out->iterations[i] = r.iterations;
-    if (r.iterations > 0) out->zncc[i] = r.zncc;
-    if (r.status != SubsetStatus::kConverged) {
-      tracks[i].params_valid = false;
-      continue;
+  // Each subset on its own, in parallel; the iteration and convergence counts summed per block
+  // (integers: the same totals in any order).
+  std::atomic<long long> iterations{0}, converged{0};
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 1024), [&](const tbb::blocked_range<int>& range) {
+    long long block_iterations = 0, block_converged = 0;
+    for (int i = range.begin(); i != range.end(); ++i) {
+      const IcgnResult& r = at[i].r;
+      out->status[i] = r.status;
+      out->iterations[i] = r.iterations;
+      if (r.iterations > 0) out->zncc[i] = r.zncc;
+      if (r.status != SubsetStatus::kConverged) {
+        tracks[i].params_valid = false;
+        continue;
+      }
+      const internal::Orphan& orphan = tracks[i].orphan;
+      const SubsetRef& s = orphan.ref ? orphan.ref->subset : ref.subsets[i];
+      double du, dv;
+      internal::Displacement(shape, r.p, s.ox, s.oy, &du, &dv);
+      pos[i] = (orphan.ref ? orphan.ref_pos : tracks[i].ref_pos) + cv::Point2d(du, dv);
+      out->u_px[i] = pos[i].x - initial[i].x;
+      out->v_px[i] = pos[i].y - initial[i].y;
+      out->sigma_u_px[i] = r.sigma_u_px;
+      out->sigma_v_px[i] = r.sigma_v_px;
+      out->sigma_px[i] = r.sigma_px;
+      if (gradients) {
+        // The warp's gradient at the tracked point (the subset centre moved by (ox, oy)), against
+        // the reference the subset was solved in, composed with the gradient it had there.
+        const Params at_point = internal::Transfer(shape, r.p, s.ox, s.oy);
+        const Gradient h = internal::ComposeGradients(
+            {at_point[1], at_point[2], at_point[shape.nm + 1], at_point[shape.nm + 2]},
+            tracks[i].gradient_at_ref);
+        out->dudx[i] = h[0];
+        out->dudy[i] = h[1];
+        out->dvdx[i] = h[2];
+        out->dvdy[i] = h[3];
+      }
+      tracks[i].params_last = r.p;
+      tracks[i].params_valid = !orphan.ref;
+      block_iterations += r.iterations;
+      ++block_converged;
     }
-    const internal::Orphan& orphan = tracks[i].orphan;
-    const SubsetRef& s = orphan.ref ? orphan.ref->subset : ref.subsets[i];
-    double du, dv;
-    internal::Displacement(shape, r.p, s.ox, s.oy, &du, &dv);
-    pos[i] = (orphan.ref ? orphan.ref_pos : tracks[i].ref_pos) + cv::Point2d(du, dv);
-    out->u_px[i] = pos[i].x - initial[i].x;
-    out->v_px[i] = pos[i].y - initial[i].y;
-    out->sigma_u_px[i] = r.sigma_u_px;
-    out->sigma_v_px[i] = r.sigma_v_px;
-    out->sigma_px[i] = r.sigma_px;
-    if (gradients) {
-      // The warp's gradient at the tracked point (the subset centre moved by (ox, oy)), against
-      // the reference the subset was solved in, composed with the gradient it had there.
-      const Params at_point = internal::Transfer(shape, r.p, s.ox, s.oy);
-      const Gradient h = internal::ComposeGradients(
-          {at_point[1], at_point[2], at_point[shape.nm + 1], at_point[shape.nm + 2]},
-          tracks[i].gradient_at_ref);
-      out->dudx[i] = h[0];
-      out->dudy[i] = h[1];
-      out->dvdx[i] = h[2];
-      out->dvdy[i] = h[3];
-    }
-    tracks[i].params_last = r.p;
-    tracks[i].params_valid = !orphan.ref;
-    iteration_sum += r.iterations;
-    ++converged_sum;
-  }
+    iterations += block_iterations;
+    converged += block_converged;
+  });
+  iteration_sum += iterations;
+  converged_sum += converged;
   return pos;
 }
 
