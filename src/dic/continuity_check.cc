@@ -11,6 +11,7 @@
 #include <string>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 #include "impactdic/dic/options.h"
 
 namespace impactdic {
@@ -64,7 +65,7 @@ void Differences(const FrameResult& r, int cols, int rows, std::vector<double> s
                  std::vector<double> jump[2]) {
   const int n = cols * rows;
   const auto dist = [&r](int i, double u, double v) {
-    return std::hypot(r.u_px[i] - u, r.v_px[i] - v);
+    return PixelDistance(r.u_px[i] - u, r.v_px[i] - v);
   };
   for (int d = 0; d < 2; ++d) {
     second[d].assign(n, kNaNd);

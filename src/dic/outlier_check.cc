@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "impactdic/core/error.h"
+#include "impactdic/core/numeric.h"
 
 namespace impactdic {
 
@@ -65,19 +66,16 @@ void FlagOutlier(const FrameResult& result, int cols, int rows, const OutlierChe
     v[k] = result.v_px[near[k]];
   }
   const double um = Median(u.data(), count), vm = Median(v.data(), count);
-  // Distances as sqrt(du^2 + dv^2): displacements in pixels neither overflow nor underflow, so
-  // std::hypot's guard (several times the cost, on ~10 distances per subset) is not needed.
-  const auto distance = [](double du, double dv) { return std::sqrt(du * du + dv * dv); };
   for (int k = 0; k < count; ++k)
-    r[k] = distance(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
+    r[k] = PixelDistance(result.u_px[near[k]] - um, result.v_px[near[k]] - vm);
   const double rm = Median(r.data(), count);
-  const double deviation = distance(result.u_px[i] - um, result.v_px[i] - vm);
+  const double deviation = PixelDistance(result.u_px[i] - um, result.v_px[i] - vm);
   const double normalized = deviation / (rm + options.noise_px);
   flags->normalized_residual[i] = normalized;
   double sigma = 0;
   if (has_sigma) {
     const double su = result.sigma_u_px[i], sv = result.sigma_v_px[i];
-    if (std::isfinite(su) && std::isfinite(sv)) sigma = std::hypot(su, sv);
+    if (std::isfinite(su) && std::isfinite(sv)) sigma = PixelDistance(su, sv);
   }
   if (normalized > options.threshold && deviation > options.sigma_factor * sigma)
     flags->outlier[i] = 1;
