@@ -206,6 +206,14 @@ class Correlator::Impl::FrameSolver {
   bool OnLattice(int i, int stride) const {
     return (i / m_.nx) % stride == 0 && (i % m_.nx) % stride == 0;
   }
+  // f(i) for the subsets on the lattice of `stride`, in increasing index order: the waves' scans
+  // visit those alone (a scan of every subset read each one's Attempt, 0.6 ms per wave for the
+  // 1920x1440 pair, on one thread).
+  template <typename F>
+  void ForEachOnLattice(int stride, const F& f) const {
+    for (int r = 0; r < m_.ny; r += stride)
+      for (int c = 0; c < m_.nx; c += stride) f(r * m_.nx + c);
+  }
 
   // The solved lattice neighbour of i with the highest ZNCC (lowest index on ties); -1 if none.
   int SolvedNeighbour(int i, int stride) const {
@@ -296,10 +304,10 @@ class Correlator::Impl::FrameSolver {
     // Solved neighbours are listed before the wave runs (the wave changes `at_`).
     std::vector<int> frontier, best, neighbour_count;
     std::vector<std::array<int, 8>> neighbours;
-    for (int i = 0; i < n_; ++i) {
-      if (!usable_[i] || at_[i].solved || at_[i].propagated || !OnLattice(i, stride)) continue;
+    ForEachOnLattice(stride, [&](int i) {
+      if (!usable_[i] || at_[i].solved || at_[i].propagated) return;
       const int j = SolvedNeighbour(i, stride);
-      if (j < 0) continue;
+      if (j < 0) return;
       frontier.push_back(i);
       best.push_back(j);
       if (stride > 1) {
@@ -317,7 +325,7 @@ class Correlator::Impl::FrameSolver {
         neighbours.push_back(from);
         neighbour_count.push_back(count);
       }
-    }
+    });
     if (frontier.empty()) return false;
     const internal::Shape& warp = m_.shape;
     const auto& subsets = m_.ref.subsets;
@@ -369,11 +377,12 @@ class Correlator::Impl::FrameSolver {
     const int lattice_nx = (grid_nx + stride - 1) / stride,
               lattice_ny = (grid_ny + stride - 1) / stride;
     std::vector<int> candidates, seeds;
-    for (int i = 0; i < n_; ++i)
+    ForEachOnLattice(stride, [&](int i) {
       // Not those whose guess from a solved neighbour left the image: nothing to search for.
-      if (usable_[i] && !at_[i].solved && !at_[i].searched && OnLattice(i, stride) &&
+      if (usable_[i] && !at_[i].solved && !at_[i].searched &&
           !(at_[i].propagated && at_[i].r.status == SubsetStatus::kOutOfImage))
         candidates.push_back(i);
+    });
     if (candidates.empty()) return false;
     for (int i : candidates) {
       const int r = i / grid_nx / stride, c = i % grid_nx / stride;
