@@ -92,20 +92,27 @@ NyquistBias MeasureNyquistBias(const cv::Mat& image, cv::Rect roi) {
     const int y0 = ys[static_cast<std::size_t>(k) / xs.size()];
     double* tx = &marginals[static_cast<std::size_t>(k) * 2 * bins];
     double* ty = tx + bins;
-    cv::Mat tile, spectrum;
+    // The tile less its mean, times the window, in the thread's buffers.
+    thread_local cv::Mat tile, spectrum;
     image(cv::Rect(roi.x + x0, roi.y + y0, n, n)).convertTo(tile, CV_64F);
-    tile -= cv::mean(tile)[0];
-    tile = tile.mul(window);
+    const double mean = cv::mean(tile)[0];
+    for (int y = 0; y < n; ++y) {
+      double* t = tile.ptr<double>(y);
+      const double* w = window.ptr<double>(y);
+      for (int x = 0; x < n; ++x) t[x] = (t[x] - mean) * w[x];
+    }
     cv::dft(tile, spectrum, cv::DFT_COMPLEX_OUTPUT);
     for (int v = 0; v < n; ++v) {
       const int fv = v <= n / 2 ? v : n - v;
       const cv::Vec2d* row = spectrum.ptr<cv::Vec2d>(v);
+      double row_power = 0;  // Added to ty once per row (not one dependent add per bin).
       for (int u = 0; u < n; ++u) {
         const int fu = u <= n / 2 ? u : n - u;
         const double p = row[u][0] * row[u][0] + row[u][1] * row[u][1];
         tx[fu] += p;
-        ty[fv] += p;
+        row_power += p;
       }
+      ty[fv] += row_power;
     }
   });
   std::vector<double> px(bins, 0.0), py = px;
