@@ -188,9 +188,8 @@ class Correlator::Impl::FrameSolver {
   // 1. Prediction from previous increments, all subsets in parallel.
   void SolveFromPredictions() {
     timer_.Restart();
-    std::vector<int> list;
-    for (int i = 0; i < n_; ++i)
-      if (usable_[i] && !std::isnan(m_.tracks[i].pos_last.x)) list.push_back(i);
+    const std::vector<int> list = internal::IndicesWhere(
+        n_, [&](int i) { return usable_[i] && !std::isnan(m_.tracks[i].pos_last.x); });
     internal::ParallelForWithStops(static_cast<int>(list.size()), [&](int k) {
       const int i = list[k];
       Params p0;
@@ -206,13 +205,16 @@ class Correlator::Impl::FrameSolver {
   bool OnLattice(int i, int stride) const {
     return (i / m_.nx) % stride == 0 && (i % m_.nx) % stride == 0;
   }
-  // f(i) for the subsets on the lattice of `stride`, in increasing index order: the waves' scans
-  // visit those alone (a scan of every subset read each one's Attempt, 0.6 ms per wave for the
-  // 1920x1440 pair, on one thread).
-  template <typename F>
-  void ForEachOnLattice(int stride, const F& f) const {
-    for (int r = 0; r < m_.ny; r += stride)
-      for (int c = 0; c < m_.nx; c += stride) f(r * m_.nx + c);
+  // The subsets i on the lattice of `stride` with keep(i), in increasing order (IndicesWhere): the
+  // waves' scans visit the lattice alone (a scan of every subset read each one's Attempt).
+  template <typename Keep>
+  std::vector<int> OnLatticeWhere(int stride, const Keep& keep) const {
+    const int cols = (m_.nx + stride - 1) / stride, rows = (m_.ny + stride - 1) / stride;
+    std::vector<int> found = internal::IndicesWhere(cols * rows, [&](int k) {
+      return keep((k / cols) * stride * m_.nx + (k % cols) * stride);
+    });
+    for (int& k : found) k = (k / cols) * stride * m_.nx + (k % cols) * stride;
+    return found;
   }
 
   // The solved lattice neighbour of i with the highest ZNCC (lowest index on ties); -1 if none.
@@ -304,10 +306,11 @@ class Correlator::Impl::FrameSolver {
     // Solved neighbours are listed before the wave runs (the wave changes `at_`).
     std::vector<int> frontier, best, neighbour_count;
     std::vector<std::array<int, 8>> neighbours;
-    ForEachOnLattice(stride, [&](int i) {
-      if (!usable_[i] || at_[i].solved || at_[i].propagated) return;
+    const std::vector<int> open = OnLatticeWhere(stride, [&](int i) {
+      return usable_[i] && !at_[i].solved && !at_[i].propagated && SolvedNeighbour(i, stride) >= 0;
+    });
+    for (const int i : open) {
       const int j = SolvedNeighbour(i, stride);
-      if (j < 0) return;
       frontier.push_back(i);
       best.push_back(j);
       if (stride > 1) {
@@ -325,7 +328,7 @@ class Correlator::Impl::FrameSolver {
         neighbours.push_back(from);
         neighbour_count.push_back(count);
       }
-    });
+    }
     if (frontier.empty()) return false;
     const internal::Shape& warp = m_.shape;
     const auto& subsets = m_.ref.subsets;
@@ -377,11 +380,10 @@ class Correlator::Impl::FrameSolver {
     const int lattice_nx = (grid_nx + stride - 1) / stride,
               lattice_ny = (grid_ny + stride - 1) / stride;
     std::vector<int> candidates, seeds;
-    ForEachOnLattice(stride, [&](int i) {
-      // Not those whose guess from a solved neighbour left the image: nothing to search for.
-      if (usable_[i] && !at_[i].solved && !at_[i].searched &&
-          !(at_[i].propagated && at_[i].r.status == SubsetStatus::kOutOfImage))
-        candidates.push_back(i);
+    // Not those whose guess from a solved neighbour left the image: nothing to search for.
+    candidates = OnLatticeWhere(stride, [&](int i) {
+      return usable_[i] && !at_[i].solved && !at_[i].searched &&
+             !(at_[i].propagated && at_[i].r.status == SubsetStatus::kOutOfImage);
     });
     if (candidates.empty()) return false;
     for (int i : candidates) {
@@ -407,13 +409,14 @@ class Correlator::Impl::FrameSolver {
   // iterations.
   void FillFromLattice(int stride) {
     const int grid_nx = m_.nx, grid_ny = m_.ny;
-    std::vector<int> fill, node;  // node: a lattice node next to it (its guess's scale).
-    for (int i = 0; i < n_; ++i) {
-      if (usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride)) {
-        fill.push_back(i);
-        const int r = i / grid_nx, c = i % grid_nx;
-        node.push_back((r - r % stride) * grid_nx + (c - c % stride));
-      }
+    const std::vector<int> fill = internal::IndicesWhere(n_, [&](int i) {
+      return usable_[i] && !at_[i].solved && !at_[i].searched && !OnLattice(i, stride);
+    });
+    std::vector<int> node;  // A lattice node next to each (its guess's scale).
+    node.reserve(fill.size());
+    for (const int i : fill) {
+      const int r = i / grid_nx, c = i % grid_nx;
+      node.push_back((r - r % stride) * grid_nx + (c - c % stride));
     }
     timer_.Restart();
     ForEachPrefetched(fill, node, [&](int k) {
