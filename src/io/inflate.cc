@@ -337,7 +337,7 @@ bool InflateRaw(const unsigned char* in, std::size_t in_size, unsigned char* out
       if (static_cast<std::size_t>(bits.end - p) < length ||
           static_cast<std::size_t>(end - out) < length)
         return false;
-      std::memcpy(out, p, length);
+      if (length > 0) std::memcpy(out, p, length);
       out += length;
       bits.p = p + length;
     } else if (type == 1) {

@@ -16,7 +16,7 @@ namespace impactdic {
 
 // Inflates the raw deflate stream in [in, in + in_size) into [out, out + out_size). True when the
 // stream is valid, ends (its final block) within the input, and fills the output exactly; bytes
-// after its end are not looked at. False for anything else (an invalid block type, code or
+// after its end do not change the result (the decoder may read up to 8 of them, inside the input). False for anything else (an invalid block type, code or
 // distance, a stream longer or shorter than out_size, input ending early); the output is then
 // undefined. Never reads or writes outside the two ranges.
 bool InflateRaw(const unsigned char* in, std::size_t in_size, unsigned char* out,

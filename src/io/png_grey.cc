@@ -338,7 +338,10 @@ bool DecodeGreyPng(const std::string& bytes, cv::Mat* image, PngChunkCrcs crcs) 
   if ((cmf & 0x0F) != 8 || (cmf >> 4) > 7 || (flg & 0x20) != 0 || (cmf * 256 + flg) % 31 != 0)
     return false;
   // Filter byte + row_bytes per line, every byte written by the inflation (not zeroed first).
+  // Deflate expands at most ~1032:1 (258 bytes per 2-bit code): a header claiming more than the
+  // data can hold is refused before its buffer is allocated.
   const std::size_t raw_size = height * (row_bytes + 1);
+  if (raw_size / 1032 > data_bytes) return false;
   std::unique_ptr<unsigned char[]> raw(new unsigned char[raw_size]);  // NOLINT(*-owning-memory)
   if (!InflateRaw(stream + 2, data_bytes - 2, raw.get(), raw_size)) return false;
 
