@@ -3,6 +3,7 @@
 // subsets), with the frame buffers reused from frame to frame.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
@@ -72,6 +73,10 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
                                 static_cast<int>(std::ceil(y1)) + m + 1)) &
              full;
   }
+  // The image's noise and range (a serial pass over sampled bands) on another thread meanwhile.
+  internal::ImageLevels levels;
+  tbb::task_group levels_task;
+  levels_task.run([&] { levels = internal::ImageLevelsOf(raw, region); });
   BsplineImage local;
   const BsplineImage* spline = spline_in;
   WallTimer coef_timer;
@@ -89,7 +94,7 @@ void Correlator::Impl::BuildReference(int frame_index, const cv::Mat& raw,
   RefImages& im = ref.images;
   im.region = spline->region();
   im.full_scale = full_scale;
-  const internal::ImageLevels levels = internal::ImageLevelsOf(raw, region);
+  levels_task.wait();
   im.noise = levels.noise;
   im.range = levels.range;
   const long long tracked = std::count_if(tracks.begin(), tracks.end(),
