@@ -863,6 +863,18 @@ inline void FoldLanes(float* a) {
   if constexpr (kW > 1) FoldLanes<kW / 2>(a);
 }
 
+#if IMPACTDIC_DIC_AVX512
+static_assert(kResidualLanes == 16, "FoldLanes16 folds one AVX-512 register");
+// FoldLanes<8> of the 16 lanes of v, in its order: lane l + lane l + 8, then + 4, + 2, + 1.
+inline float FoldLanes16(__m512 v) {
+  const __m256 h8 = _mm256_add_ps(_mm512_maskz_extractf32x8_ps(0xFF, v, 0),
+                                  _mm512_maskz_extractf32x8_ps(0xFF, v, 1));
+  const __m128 h4 = _mm_add_ps(_mm256_castps256_ps128(h8), _mm256_extractf128_ps(h8, 1));
+  const __m128 h2 = _mm_add_ps(h4, _mm_movehl_ps(h4, h4));
+  return _mm_cvtss_f32(_mm_add_ss(h2, _mm_shuffle_ps(h2, h2, 1)));
+}
+#endif
+
 template <int kTerms, typename Term>
 void LaneSums(int length, Term term, double sums[kTerms]) {
   float acc[kTerms][kResidualLanes] = {};
@@ -934,6 +946,28 @@ void CorrelatedSums(const ResidualInput& in, const float* r, const float* coef, 
   // its opposite -d: all kLags sums of one array in one sweep, each cell loaded once and multiplied
   // by its kLags partners.
   constexpr int kL = kResidualLagPx, kLags = 1 + kL + kL * (2 * kL + 1);
+#if IMPACTDIC_DIC_AVX512
+  // The same sums in registers: one load of x per 16 cells, one FMA per lag, each lag's lanes
+  // folded as FoldLanes folds them (the same sums, bit for bit, without the generic version's
+  // stack array: its zeroing and its folds through memory were a fifth of the function).
+  int offset[kLags];
+  {
+    int q = 0;
+    for (int dx = 0; dx <= kL; ++dx) offset[q++] = dx;
+    for (int dy = 1; dy <= kL; ++dy)
+      for (int dx = -kL; dx <= kL; ++dx) offset[q++] = dy * stride + dx;
+  }
+  const auto lags = [&](const float* x, double out[kLags]) {
+    __m512 acc[kLags];
+    for (int q = 0; q < kLags; ++q) acc[q] = _mm512_setzero_ps();
+    for (int k = 0; k < in.length; k += 16) {
+      const __m512 xk = _mm512_loadu_ps(x + k);
+      for (int q = 0; q < kLags; ++q)
+        acc[q] = _mm512_fmadd_ps(xk, _mm512_loadu_ps(x + k + offset[q]), acc[q]);
+    }
+    for (int q = 0; q < kLags; ++q) out[q] = FoldLanes16(acc[q]);
+  };
+#else
   const auto lags = [&](const float* x, double out[kLags]) {
     LaneSums<kLags>(
         in.length,
@@ -948,6 +982,7 @@ void CorrelatedSums(const ResidualInput& in, const float* r, const float* coef, 
         },
         out);
   };
+#endif
   double rr[kLags], uu[kLags], vv[kLags];
   lags(rs, rr);
   lags(us, uu);
