@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <random>
@@ -64,9 +65,11 @@ std::vector<Bytes> Inputs() {
     const int length = 1 + static_cast<int>(rng() % 700);
     const auto value = static_cast<unsigned char>(rng() % 4);
     runs.insert(runs.end(), static_cast<std::size_t>(length), value);
-    if (k % 3 == 0)  // A copy of an earlier stretch: matches at many distances.
-      runs.insert(runs.end(), runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2),
-                  runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2 + 300));
+    if (k % 3 == 0) {  // A copy of an earlier stretch: matches at many distances.
+      const auto from = runs.begin() + static_cast<std::ptrdiff_t>(runs.size() / 2);
+      const Bytes stretch(from, from + std::min<std::ptrdiff_t>(300, runs.end() - from));
+      runs.insert(runs.end(), stretch.begin(), stretch.end());
+    }
   }
   inputs.push_back(runs);
   inputs.push_back(Bytes{});
