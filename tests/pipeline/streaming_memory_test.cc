@@ -125,9 +125,11 @@ TEST_F(StreamingRun, PeakMemoryDoesNotGrowWithTheNumberOfFrames) {
 // of it in memory at a time: with `outputs.frames: all` (the file grows by a compressed frame per
 // frame) the peak does not grow with the file. Without figures and animation the commit is the
 // run's peak. The bound: the 4 MB the writer may hold before it returns the pages it wrote, and
-// 1 MB. Measured (1024 x 768, 8 -> 31 analysed frames): file +14.2 MB, peak +1.6 to +2.4 MB; with
-// the file in memory (main at f14896c) +13.0 MB, and with its image copied on commit (main at
-// 9f1eed4) +32.6 MB; both fail.
+// 3 MB for the scatter of a single run's peak, which moves in steps of the 2 MB huge pages the
+// large buffers are given (core/memory.h). Measured (1024 x 768, 8 -> 31 analysed frames): file
+// +14.2 MB, peak +1.6 to +2.4 MB; 2026-12-07, 8 runs each: +0.3 to +4.6 MB (main at 0c678fe),
+// -1.6 to +3.3 MB (main at 49c723c), once +6.2 MB in a CI run; with the file in memory (main at
+// f14896c) +13.0 MB, and with its image copied on commit (main at 9f1eed4) +32.6 MB; both fail.
 TEST_F(StreamingRun, PeakMemoryDoesNotHoldTheResultsFile) {
   const std::vector<std::pair<std::string, std::string>> all_frames = {
       {"figures: true", "figures: false"},
@@ -155,7 +157,7 @@ TEST_F(StreamingRun, PeakMemoryDoesNotHoldTheResultsFile) {
   GTEST_SKIP() << "peak RSS is not asserted under AddressSanitizer (its allocator keeps freed "
                   "memory resident); the release build asserts it";
 #else
-  EXPECT_LT(growth_mb, 5.0) << "peak RSS " << a.peak_rss_kb << " kB with dic.last_frame "
+  EXPECT_LT(growth_mb, 7.0) << "peak RSS " << a.peak_rss_kb << " kB with dic.last_frame "
                             << kShortLast << ", " << b.peak_rss_kb << " kB for all " << kFrames
                             << "; results.h5 grew by " << file_growth_mb << " MB";
 #endif
