@@ -30,17 +30,16 @@ constexpr int kLitlenTable = (1 << kLitlenBits) + 288 * (1 << (kMaxCodeBits - kL
 constexpr int kDistanceTable = (1 << kDistanceBits) + 32 * (1 << (kMaxCodeBits - kDistanceBits));
 constexpr int kCodeLengthTable = 1 << kCodeLengthBits;
 
-constexpr std::array<std::uint16_t, 29> kLengthBase = {3,  4,  5,  6,  7,  8,  9,   10,  11, 13,
-                                                       15, 17, 19, 23, 27, 31, 35,  43,  51, 59,
+constexpr std::array<std::uint16_t, 29> kLengthBase = {3,  4,  5,  6,   7,   8,   9,   10,  11, 13,
+                                                       15, 17, 19, 23,  27,  31,  35,  43,  51, 59,
                                                        67, 83, 99, 115, 131, 163, 195, 227, 258};
-constexpr std::array<std::uint8_t, 29> kLengthExtra = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1,
-                                                       1, 1, 2, 2, 2, 2, 3, 3, 3, 3,
-                                                       4, 4, 4, 4, 5, 5, 5, 5, 0};
+constexpr std::array<std::uint8_t, 29> kLengthExtra = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                                       2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
 constexpr std::array<std::uint16_t, 30> kDistanceBase = {
     1,   2,   3,   4,   5,   7,    9,    13,   17,   25,   33,   49,   65,    97,    129,
     193, 257, 385, 513, 769, 1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
-constexpr std::array<std::uint8_t, 30> kDistanceExtra = {0, 0, 0, 0, 1, 1, 2,  2,  3,  3,
-                                                         4, 4, 5, 5, 6, 6, 7,  7,  8,  8,
+constexpr std::array<std::uint8_t, 30> kDistanceExtra = {0, 0, 0,  0,  1,  1,  2,  2,  3,  3,
+                                                         4, 4, 5,  5,  6,  6,  7,  7,  8,  8,
                                                          9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
 
 // What a symbol decodes to, without its code length.
@@ -164,8 +163,7 @@ struct Bits {
 // One code from a table built with `bits` (Refill first: at most 15 bits).
 inline std::uint32_t Decode(const Bits& in, const std::uint32_t* table, int bits) {
   std::uint32_t e = table[in.Peek(bits)];
-  if (KindOf(e) == kLink)
-    e = table[ValueOf(e) + ((in.buffer >> bits) & ((1u << ExtraOf(e)) - 1))];
+  if (KindOf(e) == kLink) e = table[ValueOf(e) + ((in.buffer >> bits) & ((1u << ExtraOf(e)) - 1))];
   return e;
 }
 
@@ -277,14 +275,12 @@ bool InflateBlock(Bits& in, const Tables& t, unsigned char* begin, unsigned char
     }
     if (KindOf(e) != kLength) return false;
     int bits = static_cast<int>(LengthOf(e));
-    const std::size_t length =
-        ValueOf(e) + ((in.buffer >> bits) & ((1u << ExtraOf(e)) - 1));
+    const std::size_t length = ValueOf(e) + ((in.buffer >> bits) & ((1u << ExtraOf(e)) - 1));
     in.Drop(bits + static_cast<int>(ExtraOf(e)));
     const std::uint32_t d = Decode(in, t.distance, kDistanceBits);
     if (KindOf(d) != kLength) return false;
     bits = static_cast<int>(LengthOf(d));
-    const std::size_t distance =
-        ValueOf(d) + ((in.buffer >> bits) & ((1u << ExtraOf(d)) - 1));
+    const std::size_t distance = ValueOf(d) + ((in.buffer >> bits) & ((1u << ExtraOf(d)) - 1));
     in.Drop(bits + static_cast<int>(ExtraOf(d)));
     if (distance > static_cast<std::size_t>(out - begin) ||
         length > static_cast<std::size_t>(end - out))

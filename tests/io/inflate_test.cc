@@ -3,6 +3,8 @@
 // strategies; flushes that insert empty stored blocks) on data from random bytes to long runs,
 // gives zlib's bytes; a stream that is damaged, cut short, longer or shorter than the buffer is
 // refused, never read or written outside its ranges (the asan preset runs this too).
+#include "../../src/io/inflate.h"
+
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -12,8 +14,6 @@
 #include <random>
 #include <string>
 #include <vector>
-
-#include "../../src/io/inflate.h"
 
 namespace impactdic {
 namespace {
