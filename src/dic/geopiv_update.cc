@@ -37,9 +37,7 @@ class AliasUpdate final : public ReferenceUpdatePolicy {
   std::vector<int> RedoCandidates(const SolvedFrame& frame) const override {
     return policy_->RedoCandidates(frame);
   }
-  bool Rescues(SubsetStatus status, float zncc) const override {
-    return policy_->Rescues(status, zncc);
-  }
+  bool Rescues(const RescueTrial& trial) const override { return policy_->Rescues(trial); }
   bool MakesFrameTheReference(const SolvedFrame& frame) const override {
     return policy_->MakesFrameTheReference(frame);
   }

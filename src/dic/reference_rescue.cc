@@ -24,10 +24,12 @@ using internal::Usable;
 
 // For policies that redo frames (`auto`): whether the subsets `which` (failed or below
 // auto_min_zncc against the current reference) would pass against the candidate reference, the
-// last frame, i.e. converge with a result the policy Rescues (ZNCC >= auto_min_zncc). Only these
-// subsets are prepared, each centred on the pixel nearest to its tracked point in the last frame as
-// BuildReference would, with its intensities and the node gradients of the last frame's spline over
-// the subset alone (so the test costs a few subsets, not a reference). IC-GN starts from the result
+// last frame, i.e. converge with a result the policy Rescues (`auto`: ZNCC >= auto_min_zncc with
+// at most a third of the decorrelation it had against the current reference). Only these subsets
+// are prepared (the test costs a few subsets, not a reference), each centred on the pixel nearest
+// to its tracked point in the last frame as BuildReference would, with its intensities and the
+// node gradients of the last frame's spline over the subset alone (BsplineImage::NodeGradients
+// over its rectangle: the values BuildReference computes there). IC-GN starts from the result
 // against the current reference if it converged, else from the constant-velocity prediction.
 // Subsets not tracked in the last frame cannot pass.
 std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& which,
@@ -50,16 +52,8 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
     im.full_scale = full_scale;
     im.noise = ref.images.noise;  // The camera's noise and range: the reference's.
     im.range = ref.images.range;
-    im.gx.create(size, size, CV_32F);
-    im.gy.create(size, size, CV_32F);
-    for (int r = 0; r < size; ++r) {
-      for (int c = 0; c < size; ++c) {
-        double value, gx, gy;
-        last.spline.ValueGradient(im.region.x + c, im.region.y + r, &value, &gx, &gy);
-        im.gx.at<float>(r, c) = static_cast<float>(gx);
-        im.gy.at<float>(r, c) = static_cast<float>(gy);
-      }
-    }
+    // The node gradients BuildReference would give these pixels, over the subset alone.
+    last.spline.NodeGradients(im.region, &im.gx, &im.gy);
     std::array<double, std::size_t{12} * 12> hinv;  // At most 12 warp parameters (quadratic).
     internal::PrepareSubset(shape, im, options.icgn, &s, hinv.data());
     if (!Usable(s.status)) return;
@@ -83,7 +77,11 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
     p0[0] = expected.x - t.pos_last.x;
     p0[shape.nm] = expected.y - t.pos_last.y;
     const IcgnResult r = internal::RunIcgn(shape, im, s, hinv.data(), frame.view, options.icgn, p0);
-    rescued[k] = policy->Rescues(r.status, r.zncc);
+    rescued[k] =
+        policy->Rescues({.status = r.status,
+                         .zncc = r.zncc,
+                         .reference_status = st,
+                         .reference_zncc = at[i].r.iterations > 0 ? at[i].r.zncc : std::nanf("")});
   });
   out->seconds_reference += timer.ElapsedSeconds();
   return rescued;

@@ -53,8 +53,8 @@ std::vector<int> ReferenceUpdatePolicy::RedoCandidates(const SolvedFrame& /*fram
   return {};
 }
 
-bool ReferenceUpdatePolicy::Rescues(SubsetStatus status, float /*zncc*/) const {
-  return status == SubsetStatus::kConverged;
+bool ReferenceUpdatePolicy::Rescues(const RescueTrial& trial) const {
+  return trial.status == SubsetStatus::kConverged;
 }
 
 std::unique_ptr<ReferenceUpdatePolicy> ReferenceUpdatePolicyFromString(

@@ -80,9 +80,13 @@ TEST(GeopivSchemes, EachSchemeDecidesAsThePolicyItNames) {
     if (policy->KeepsLastFrame()) {
       EXPECT_EQ(scheme->RedoCandidates(frame), policy->RedoCandidates(frame)) << p.scheme;
       for (const float z : {0.94f, 0.96f}) {
-        EXPECT_EQ(scheme->Rescues(SubsetStatus::kConverged, z),
-                  policy->Rescues(SubsetStatus::kConverged, z))
-            << p.scheme;
+        for (const float reference_zncc : {std::nanf(""), 0.5f, 0.93f}) {
+          const RescueTrial trial{.status = SubsetStatus::kConverged,
+                                  .zncc = z,
+                                  .reference_status = SubsetStatus::kLowCorrelation,
+                                  .reference_zncc = reference_zncc};
+          EXPECT_EQ(scheme->Rescues(trial), policy->Rescues(trial)) << p.scheme;
+        }
       }
     }
   }
@@ -92,8 +96,14 @@ TEST(GeopivSchemes, EachSchemeDecidesAsThePolicyItNames) {
   // leap, the decorrelated one still does; a result at 0.85 now counts as rescued.
   const auto leapfrog = ReferenceUpdatePolicyFromString("leapfrog:0.8", options);
   EXPECT_EQ(leapfrog->RedoCandidates(frame), (std::vector<int>{2}));
-  EXPECT_TRUE(leapfrog->Rescues(SubsetStatus::kConverged, 0.85f));
-  EXPECT_FALSE(leapfrog->Rescues(SubsetStatus::kConverged, 0.75f));
+  const RescueTrial at_085{.status = SubsetStatus::kConverged,
+                           .zncc = 0.85f,
+                           .reference_status = SubsetStatus::kLowCorrelation,
+                           .reference_zncc = 0.5f};
+  RescueTrial at_075 = at_085;
+  at_075.zncc = 0.75f;
+  EXPECT_TRUE(leapfrog->Rescues(at_085));
+  EXPECT_FALSE(leapfrog->Rescues(at_075));
   EXPECT_FALSE(leapfrog->MakesFrameTheReference(frame));
 }
 

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
@@ -118,8 +119,45 @@ TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
   EXPECT_TRUE(automatic->KeepsLastFrame());
   // Below the threshold or decorrelated, among trackable subsets only.
   EXPECT_EQ(automatic->RedoCandidates(frame), (std::vector<int>{1, 2}));
-  EXPECT_TRUE(automatic->Rescues(SubsetStatus::kConverged, 0.96f));
-  EXPECT_FALSE(automatic->Rescues(SubsetStatus::kConverged, 0.94f));
+  const float no_result = std::nanf("");
+  // Converged at or above the threshold, with no result against the reference to compare with.
+  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                  .zncc = 0.96f,
+                                  .reference_status = SubsetStatus::kNotFound,
+                                  .reference_zncc = no_result}));
+  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                   .zncc = 0.94f,
+                                   .reference_status = SubsetStatus::kNotFound,
+                                   .reference_zncc = no_result}));
+  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kMaxIterations,
+                                   .zncc = 0.99f,
+                                   .reference_status = SubsetStatus::kNotFound,
+                                   .reference_zncc = no_result}));
+  // Against a match at the reference (converged, or the iteration cap): at most a third of its
+  // decorrelation (1 - ZNCC) is left. 0.85 -> 0.96 removes 73 % of it; 0.93 -> 0.96 (two draws of
+  // the noise) 43 %; a subset that hit the iteration cap at 0.99 is not rescued by converging at
+  // 0.99.
+  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                  .zncc = 0.96f,
+                                  .reference_status = SubsetStatus::kConverged,
+                                  .reference_zncc = 0.85f}));
+  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                   .zncc = 0.96f,
+                                   .reference_status = SubsetStatus::kConverged,
+                                   .reference_zncc = 0.93f}));
+  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                   .zncc = 0.99f,
+                                   .reference_status = SubsetStatus::kMaxIterations,
+                                   .reference_zncc = 0.99f}));
+  // A subset that failed a check against the reference has no value there: passing suffices.
+  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                  .zncc = 0.96f,
+                                  .reference_status = SubsetStatus::kUncertain,
+                                  .reference_zncc = 0.99f}));
+  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
+                                  .zncc = 0.96f,
+                                  .reference_status = SubsetStatus::kLowCorrelation,
+                                  .reference_zncc = 0.7f}));
   EXPECT_FALSE(automatic->MakesFrameTheReference(frame));
   EXPECT_FALSE(ReferenceUpdatePolicyFromString("fixed")->MakesFrameTheReference(frame));
   EXPECT_TRUE(ReferenceUpdatePolicyFromString("incremental")->MakesFrameTheReference(frame));

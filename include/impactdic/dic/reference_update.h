@@ -36,6 +36,17 @@ struct SolvedFrame {
   std::span<const char> trackable;  // 1: a tracked subset with a usable reference subset.
 };
 
+// A redo candidate solved against the last frame, beside its result against the current
+// reference (Rescues).
+struct RescueTrial {
+  SubsetStatus status = SubsetStatus::kNotFound;  // Against the last frame.
+  float zncc = 0;                                 // Against the last frame (if converged).
+  SubsetStatus reference_status = SubsetStatus::kNotFound;  // Against the current reference.
+  // ZNCC reached against the current reference; NaN when IC-GN did not iterate there (no guess,
+  // unusable subset), so that no comparison is possible.
+  float reference_zncc = 0;
+};
+
 class ReferenceUpdatePolicy {
  public:
   virtual ~ReferenceUpdatePolicy() = default;
@@ -50,8 +61,8 @@ class ReferenceUpdatePolicy {
   // correlator switches only if one of them is rescued (Rescues) against the last frame. Called
   // only when KeepsLastFrame() and a frame after the reference was solved.
   virtual std::vector<int> RedoCandidates(const SolvedFrame& frame) const;
-  // Whether a candidate's result against the last frame counts as rescued.
-  virtual bool Rescues(SubsetStatus status, float zncc) const;
+  // Whether a candidate's result against the last frame counts as rescued (default: converged).
+  virtual bool Rescues(const RescueTrial& trial) const;
 
   // Once `frame` is final: whether it becomes the reference for the next frames.
   virtual bool MakesFrameTheReference(const SolvedFrame& frame) const = 0;
