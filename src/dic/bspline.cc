@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <cstddef>
@@ -44,12 +45,15 @@ Prefilter PrefilterFor(Interpolation kind) {
 constexpr int kRowLanes = 8;
 // Columns are filtered 32 at a time: two full cache lines of each row per pass.
 constexpr int kColumnLanes = 32;
+constexpr int kFloatsPerLine = 16;  // 64-byte cache lines.
+constexpr int kColumnPrefetch = 8;  // Rows ahead (measured on 4096x3000: 4, 8 and 16 alike).
 
-// Causal initial values for mirror boundary conditions (Unser et al. 1993).
+// Causal initial values for mirror boundary conditions (Unser et al. 1993), to this tolerance:
+// the sum is cut after `horizon` samples, z^horizon <= kTolerance.
+constexpr double kTolerance = 1e-12;
 template <int kLanes>
 void InitialCausalLanes(const double* c, int n, double z, double* out) {
-  const double tolerance = 1e-12;
-  const int horizon = static_cast<int>(std::ceil(std::log(tolerance) / std::log(std::abs(z))));
+  const int horizon = static_cast<int>(std::ceil(std::log(kTolerance) / std::log(std::abs(z))));
   if (horizon < n) {
     double sum[kLanes];
     for (int l = 0; l < kLanes; ++l) sum[l] = c[l];
@@ -75,26 +79,44 @@ void InitialCausalLanes(const double* c, int n, double z, double* out) {
   for (int l = 0; l < kLanes; ++l) out[l] = sum[l] / (1 - zn * zn);
 }
 
-// The lines c must already be multiplied by p.gain (done as they are read: one pass less).
-template <int kLanes>
-void FilterLines(double* c, int n, const Prefilter& p) {
-  if (n < 2) return;
+// The prefilter on kLanes lines of n samples, fused with reading and writing them: load(k, c_k)
+// writes sample k of every line, times p.gain, into c_k[0 .. kLanes); store(k, c_k) takes the
+// filtered sample k. The first pole's causal recursion runs as the samples are loaded (the
+// samples its initial value reads are loaded first), the last pole's anti-causal recursion as they
+// are stored: the buffer c (n * kLanes doubles) is passed over twice per pole instead of four
+// times, and every sample sees the same operations in the same order as in separate passes.
+template <int kLanes, typename Load, typename Store>
+void FilterLines(double* c, int n, const Prefilter& p, const Load& load, const Store& store) {
+  if (n < 2) {
+    for (int k = 0; k < n; ++k) load(k, c + static_cast<std::ptrdiff_t>(k) * kLanes);
+    for (int k = 0; k < n; ++k) store(k, c + static_cast<std::ptrdiff_t>(k) * kLanes);
+    return;
+  }
   for (int j = 0; j < p.n_poles; ++j) {
+    const bool first_pole = j == 0, last_pole = j + 1 == p.n_poles;
     const double z = p.poles[j];
+    // The causal initial value reads the first `horizon` samples (all of a short line).
+    const int horizon = static_cast<int>(std::ceil(std::log(kTolerance) / std::log(std::abs(z))));
+    const int loaded = first_pole ? std::min(n, horizon) : n;
+    for (int k = 0; first_pole && k < loaded; ++k)
+      load(k, c + static_cast<std::ptrdiff_t>(k) * kLanes);
     double first[kLanes];
     InitialCausalLanes<kLanes>(c, n, z, first);
     for (int l = 0; l < kLanes; ++l) c[l] = first[l];
     for (int k = 1; k < n; ++k) {
       double* ck = c + static_cast<std::ptrdiff_t>(k) * kLanes;
+      if (k >= loaded) load(k, ck);
       const double* prev = ck - kLanes;
       for (int l = 0; l < kLanes; ++l) ck[l] += z * prev[l];
     }
     double* last = c + static_cast<std::ptrdiff_t>(n - 1) * kLanes;
     for (int l = 0; l < kLanes; ++l) last[l] = (z / (z * z - 1)) * (z * last[l - kLanes] + last[l]);
+    if (last_pole) store(n - 1, last);
     for (int k = n - 2; k >= 0; --k) {
       double* ck = c + static_cast<std::ptrdiff_t>(k) * kLanes;
       const double* next = ck + kLanes;
       for (int l = 0; l < kLanes; ++l) ck[l] = z * (next[l] - ck[l]);
+      if (last_pole) store(k, ck);
     }
   }
 }
@@ -183,63 +205,75 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
   coefficients_ = storage_(cv::Rect(0, 0, w, h));
   cv::Mat source = image(region);
 
-  // Rows (in double), kRowLanes rows at a time (interleaved), groups in parallel.
-  // Lines are read times the prefilter's gain (FilterLines).
+  // Rows (in double), kRowLanes rows at a time (interleaved), groups in parallel. Each sample
+  // of the kRowLanes rows is read and written in turn (one pass along the rows, each line of the
+  // interleaved buffer touched once), times the prefilter's gain (FilterLines). The lanes past the
+  // image's last row repeat it: their results are that row's, bit for bit.
   const double gain = prefilter.gain;
-  auto read_row = [&](int r, double* out, int lane) {
-    switch (source.depth()) {
-      case CV_8U: {
-        const std::uint8_t* in = source.ptr<std::uint8_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
-        break;
+  const auto rows = [&]<typename T>(T /*depth*/) {
+    tbb::parallel_for(0, (h + kRowLanes - 1) / kRowLanes, [&](int group) {
+      constexpr int kLanes = kRowLanes;
+      const int r0 = group * kLanes, lanes = std::min(kLanes, h - r0);
+      std::array<const T*, kLanes> in;
+      std::array<float*, kLanes> out;
+      for (int l = 0; l < kLanes; ++l) {
+        in[l] = source.ptr<T>(r0 + std::min(l, lanes - 1));
+        out[l] = coefficients_.ptr<float>(r0 + std::min(l, lanes - 1));
       }
-      case CV_16U: {
-        const std::uint16_t* in = source.ptr<std::uint16_t>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
-        break;
-      }
-      case CV_32F: {
-        const float* in = source.ptr<float>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
-        break;
-      }
-      default: {
-        const double* in = source.ptr<double>(r);
-        for (int c = 0; c < w; ++c) out[c * kRowLanes + lane] = gain * in[c];
-      }
-    }
+      FilterLines<kLanes>(
+          Scratch(static_cast<std::size_t>(w) * kLanes), w, prefilter,
+          [&](int k, double* b) {
+            for (int l = 0; l < kLanes; ++l) b[l] = gain * in[l][k];
+          },
+          [&](int k, const double* b) {  // Repeated lanes write their row's own value again.
+            for (int l = 0; l < kLanes; ++l) out[l][k] = static_cast<float>(b[l]);
+          });
+    });
   };
-  tbb::parallel_for(0, (h + kRowLanes - 1) / kRowLanes, [&](int group) {
-    constexpr int kLanes = kRowLanes;
-    const int r0 = group * kLanes, lanes = std::min(kLanes, h - r0);
-    double* buffer = Scratch(static_cast<std::size_t>(w) * kLanes);
-    for (int l = 0; l < lanes; ++l) read_row(r0 + l, buffer, l);
-    for (int l = lanes; l < kLanes; ++l) {  // Unused lanes: zeros (no denormals or NaN).
-      for (int c = 0; c < w; ++c) buffer[c * kLanes + l] = 0;
-    }
-    FilterLines<kLanes>(buffer, w, prefilter);
-    for (int l = 0; l < lanes; ++l) {
-      float* out = coefficients_.ptr<float>(r0 + l);
-      for (int c = 0; c < w; ++c) out[c] = static_cast<float>(buffer[c * kLanes + l]);
-    }
-  });
-  // Columns, kColumnLanes adjacent columns at a time (contiguous in each row), groups in parallel.
+  switch (source.depth()) {
+    case CV_8U: rows(std::uint8_t{}); break;
+    case CV_16U: rows(std::uint16_t{}); break;
+    case CV_32F: rows(float{}); break;
+    default: rows(double{});
+  }
+  // Columns, kColumnLanes adjacent columns at a time (contiguous in each row), groups in parallel;
+  // lanes past the last column are zeros (no denormals or NaN). The rows kColumnPrefetch ahead are
+  // prefetched (down the columns while reading, up while writing): a row of the coefficients is
+  // a page or more away from the next, where the hardware's prefetcher does not follow (4096x3000:
+  // the column pass 2x faster).
   tbb::parallel_for(0, (w + kColumnLanes - 1) / kColumnLanes, [&](int group) {
     constexpr int kLanes = kColumnLanes;
     const int c0 = group * kLanes, lanes = std::min(kLanes, w - c0);
-    double* buffer = Scratch(static_cast<std::size_t>(h) * kLanes);
-    for (int r = 0; r < h; ++r) {
-      const float* in = coefficients_.ptr<float>(r) + c0;
-      double* b = buffer + static_cast<std::size_t>(r) * kLanes;
-      for (int l = 0; l < lanes; ++l) b[l] = gain * in[l];
-      for (int l = lanes; l < kLanes; ++l) b[l] = 0;
-    }
-    FilterLines<kLanes>(buffer, h, prefilter);
-    for (int r = 0; r < h; ++r) {
-      float* out = coefficients_.ptr<float>(r) + c0;
-      const double* b = buffer + static_cast<std::size_t>(r) * kLanes;
-      for (int l = 0; l < lanes; ++l) out[l] = static_cast<float>(b[l]);
-    }
+    const auto prefetch = [&](int r, int write) {
+      const float* row = coefficients_.ptr<float>(r) + c0;
+      for (int l = 0; l < lanes; l += kFloatsPerLine) {
+        if (write)
+          __builtin_prefetch(row + l, 1);
+        else
+          __builtin_prefetch(row + l, 0);
+      }
+    };
+    FilterLines<kLanes>(
+        Scratch(static_cast<std::size_t>(h) * kLanes), h, prefilter,
+        [&](int r, double* b) {
+          if (r + kColumnPrefetch < h) prefetch(r + kColumnPrefetch, 0);
+          const float* in = coefficients_.ptr<float>(r) + c0;
+          if (lanes == kLanes) {  // Whole groups with a fixed count (vectorised).
+            for (int l = 0; l < kLanes; ++l) b[l] = gain * in[l];
+          } else {
+            for (int l = 0; l < lanes; ++l) b[l] = gain * in[l];
+            for (int l = lanes; l < kLanes; ++l) b[l] = 0;
+          }
+        },
+        [&](int r, const double* b) {
+          if (r >= kColumnPrefetch) prefetch(r - kColumnPrefetch, 1);
+          float* out = coefficients_.ptr<float>(r) + c0;
+          if (lanes == kLanes) {
+            for (int l = 0; l < kLanes; ++l) out[l] = static_cast<float>(b[l]);
+          } else {
+            for (int l = 0; l < lanes; ++l) out[l] = static_cast<float>(b[l]);
+          }
+        });
   });
   // Evaluable domain: floor(x) - half_low >= 0 and floor(x) + half_high <= w - 1.
   const int low = kind == Interpolation::kBicubic ? 1 : 2;
