@@ -112,7 +112,10 @@ void Correlator::Impl::MoveReferencePoints() {
   for (int i : lost) {
     internal::SubsetTrack& t = tracks[i];
     t.active = false;
-    t.permanent = SubsetStatus::kLost;
+    // A subset the reference could not use (low contrast, saturated, out of the image) was never
+    // tracked: it keeps the reason, not `lost`.
+    const SubsetStatus own = ref.subsets[i].status;
+    t.permanent = Usable(own) ? SubsetStatus::kLost : own;
     t.orphan = Orphan{KeepForOrphan(i), t.ref_pos};
   }
   std::size_t bytes = 0;

@@ -274,6 +274,47 @@ TEST(Sequence, AutoRecoversAfterASingleBadFrame) {
   ExpectSameForOneAndTwoThreads(images, options);
 }
 
+// A subset the first reference cannot use (a flat patch of the view) is never
+// tracked; it keeps that status at every reference update instead of being reported `lost` (a
+// subset that failed in the frame that became the reference), under every policy that updates.
+TEST(Sequence, SubsetsTheReferenceCannotUseKeepTheirStatusAcrossUpdates) {
+  Scene scene(200, 160, /*noise_sigma=*/2, /*seed=*/7, /*supersampling=*/2);
+  const int frames = 6;
+  std::vector<cv::Mat> images =
+      RenderSequence(scene, LinearSequence(Translation(0.3 * (frames - 1), 0), frames));
+  const cv::Rect flat(20, 20, 60, 60);  // Uniform grey in every frame: no texture to track.
+  for (cv::Mat& image : images) image(flat).setTo(128);
+  DicOptions options;
+  options.grid.step = 12;
+  for (const char* policy : {"incremental", "every:2"}) {
+    options.update.policy = policy;
+    const DicResult r = CorrelateSequence(images, options);
+    EXPECT_GE(r.summary.reference_updates, 2) << policy;
+    const int h = options.grid.subset_size / 2;
+    std::size_t inside = 0;
+    for (std::size_t i = 0; i < r.positions.size(); ++i) {
+      const cv::Point2d& x = r.positions[i];
+      const bool in_flat = x.x - h >= flat.x && x.x + h < flat.x + flat.width &&
+                           x.y - h >= flat.y && x.y + h < flat.y + flat.height;
+      inside += in_flat;
+      // In the flat patch: unusable in the first reference (featureless: singular_hessian, or
+      // low_contrast where the speckle's edge reaches in), and so in every later frame.
+      const SubsetStatus first = r.frames.front().status[i];
+      if (in_flat) {
+        EXPECT_TRUE(first == SubsetStatus::kSingularHessian || first == SubsetStatus::kLowContrast)
+            << policy << " subset " << i << ": " << static_cast<int>(first);
+      }
+      for (const FrameResult& f : r.frames) {
+        EXPECT_NE(f.status[i], SubsetStatus::kLost)
+            << policy << " frame " << f.frame << " subset " << i;
+        if (in_flat)
+          EXPECT_EQ(f.status[i], first) << policy << " frame " << f.frame << " subset " << i;
+      }
+    }
+    EXPECT_GT(inside, 4u);
+  }
+}
+
 TEST(Sequence, ResultsDoNotDependOnTheThreadCount) {
   Scene scene(200, 160, /*noise_sigma=*/2, /*seed=*/11, /*supersampling=*/2);
   const DisplacementSequence seq =
