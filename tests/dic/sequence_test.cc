@@ -307,8 +307,9 @@ TEST(Sequence, SubsetsTheReferenceCannotUseKeepTheirStatusAcrossUpdates) {
       for (const FrameResult& f : r.frames) {
         EXPECT_NE(f.status[i], SubsetStatus::kLost)
             << policy << " frame " << f.frame << " subset " << i;
-        if (in_flat)
+        if (in_flat) {
           EXPECT_EQ(f.status[i], first) << policy << " frame " << f.frame << " subset " << i;
+        }
       }
     }
     EXPECT_GT(inside, 4u);
