@@ -6,7 +6,7 @@
 # sequence), so that no frame is the reference again and every frame pair is a real pair of the
 # camera's. For each N given, correlates the first N + 1 frames with the issue's grid (subset 25,
 # step 50, whole image, defaults otherwise) for each binary, alternating, RUNS times, and prints
-#   binary | frames | wall median (min) [s] | peak RSS [MB] | reference updates
+#   binary | deformed frames | wall median (min) [s] | peak RSS [MB] | reference updates
 # and, for two or more N, the marginal wall time per frame between the smallest and the largest N.
 # A benchmark, not a test: the times depend on the machine and its load; compare within one run.
 #
@@ -24,12 +24,17 @@ while getopts "r:t:d:b:" opt; do
 done
 shift $((OPTIND - 1))
 [ $# -ge 1 ] || { echo "usage: $0 [-r RUNS] [-t THREADS] [-d DIR] [-b BINARY]... N..." >&2; exit 2; }
+[[ "$runs" =~ ^[1-9][0-9]*$ ]] || { echo "$0: -r RUNS must be >= 1 (got $runs)" >&2; exit 2; }
+for n in "$@"; do
+  [[ "$n" =~ ^[1-9][0-9]*$ ]] || { echo "$0: N must be >= 1 (got $n)" >&2; exit 2; }
+done
+for tool in bc /usr/bin/time; do
+  command -v "$tool" > /dev/null || { echo "$0: $tool is needed (Debian packages bc, time)" >&2; exit 1; }
+done
 [ ${#binaries[@]} -ge 1 ] || binaries=("$here/../build/release/src/cli/impactdic")
 for k in 1 2 3 4 5; do
   [ -f "$data/IMG_$k.jpg" ] || { echo "$0: $data/IMG_$k.jpg missing (../shared/data)" >&2; exit 1; }
 done
-max=0
-for n in "$@"; do [ "$n" -ge 1 ] || { echo "$0: N must be >= 1 (got $n)" >&2; exit 2; }; [ "$n" -gt "$max" ] && max=$n; done
 for n in "$@"; do
   rm -rf "$dir/seq$n" && mkdir -p "$dir/seq$n"
   cp "$data/IMG_1.jpg" "$dir/seq$n/f00000.jpg"
@@ -37,33 +42,49 @@ for n in "$@"; do
     cp "$data/IMG_$(( (k - 1) % 4 + 2 )).jpg" "$dir/seq$n/$(printf 'f%05d.jpg' "$k")"
   done
 done
-printf '| binary | deformed frames | wall median (min) [s] | peak RSS [MB] | reference updates |\n|---|---|---|---|---|\n'
+printf '| binary | deformed frames | wall median (min) [s] | peak RSS [MB] | reference updates |\n'
+printf '|---|---|---|---|---|\n'
 declare -A median
 for n in "$@"; do
-  for b in "${binaries[@]}"; do : > "$dir/times_${n}_$(echo "$b" | md5sum | cut -c1-8)"; done
+  for i in "${!binaries[@]}"; do : > "$dir/times_${n}_$i"; done
   for ((r = 0; r < runs; ++r)); do
-    for b in "${binaries[@]}"; do
-      key="${n}_$(echo "$b" | md5sum | cut -c1-8)"
+    for i in "${!binaries[@]}"; do
+      b=${binaries[$i]}
       rm -f "$dir/out.h5"
-      /usr/bin/time -f '%e %M' -o "$dir/time" "$b" correlate --frames "$dir/seq$n/f*.jpg" \
-        --subset 25 --step 50 --threads "$threads" -o "$dir/out.h5" > "$dir/log" 2>&1
-      echo "$(cat "$dir/time") $(grep -o '[0-9]* reference updates' "$dir/log" | head -1 | cut -d' ' -f1)" >> "$dir/times_$key"
+      if ! /usr/bin/time -f '%e %M' -o "$dir/time" "$b" correlate --frames "$dir/seq$n/f*.jpg" \
+        --subset 25 --step 50 --threads "$threads" -o "$dir/out.h5" > "$dir/log" 2>&1; then
+        echo "$0: $b failed on $n frames:" >&2
+        cat "$dir/log" >&2
+        exit 1
+      fi
+      updates=$(grep -o '[0-9]* reference updates' "$dir/log" | head -1 | cut -d' ' -f1)
+      echo "$(cat "$dir/time") ${updates:-?}" >> "$dir/times_${n}_$i"
     done
   done
-  for b in "${binaries[@]}"; do
-    key="${n}_$(echo "$b" | md5sum | cut -c1-8)"
-    read -r med mn rss upd < <(sort -n "$dir/times_$key" | awk '{t[NR]=$1; m=($2>m?$2:m); u=$3} END {printf "%s %s %d %s\n", t[int((NR+1)/2)], t[1], m/1024, u}')
-    median["$key"]=$med
-    printf '| %s | %d | %s (%s) | %d | %s |\n' "$b" "$n" "$med" "$mn" "$rss" "$upd"
+  for i in "${!binaries[@]}"; do
+    # The median of the wall times (the mean of the two middle ones for an even count), the
+    # least, the largest peak RSS and the update counts seen (one number: the runs agree).
+    read -r med mn rss upd < <(sort -n "$dir/times_${n}_$i" | awk '
+      { t[NR] = $1; m = ($2 > m ? $2 : m); u[$3] = 1 }
+      END {
+        med = NR % 2 ? t[(NR + 1) / 2] : (t[NR / 2] + t[NR / 2 + 1]) / 2
+        list = ""; for (k in u) list = list (list == "" ? "" : "/") k
+        printf "%.3f %s %d %s\n", med, t[1], m / 1024, list
+      }')
+    median["${n}_$i"]=$med
+    printf '| %s | %d | %s (%s) | %d | %s |\n' "${binaries[$i]}" "$n" "$med" "$mn" "$rss" "$upd"
   done
 done
 if [ $# -ge 2 ]; then
   lo=$1 hi=$1
-  for n in "$@"; do [ "$n" -lt "$lo" ] && lo=$n; [ "$n" -gt "$hi" ] && hi=$n; done
+  for n in "$@"; do
+    if [ "$n" -lt "$lo" ]; then lo=$n; fi
+    if [ "$n" -gt "$hi" ]; then hi=$n; fi
+  done
   if [ "$lo" -lt "$hi" ]; then
-    for b in "${binaries[@]}"; do
-      h=$(echo "$b" | md5sum | cut -c1-8)
-      echo "$b: marginal wall per frame, $lo -> $hi frames: $(echo "scale=4; (${median[${hi}_$h]} - ${median[${lo}_$h]}) / ($hi - $lo)" | bc) s"
+    for i in "${!binaries[@]}"; do
+      per=$(echo "scale=4; (${median[${hi}_$i]} - ${median[${lo}_$i]}) / ($hi - $lo)" | bc)
+      echo "${binaries[$i]}: marginal wall per frame, $lo -> $hi frames: $per s"
     done
   fi
 fi

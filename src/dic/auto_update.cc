@@ -1,5 +1,4 @@
 // "auto": switch the reference when subsets decorrelate (docs/dic.md, "Reference updating").
-#include <cmath>
 #include <cstddef>
 #include <memory>
 #include <span>
@@ -20,21 +19,21 @@ namespace {
 // (covered by the pounder) keep the reference and are found again when they reappear.
 //
 // Rescued: converged against the last frame with ZNCC >= auto_min_zncc and, when against the
-// reference it converged (below the threshold) or ran into the iteration cap, with at most a third
-// of the decorrelation it had there: 1 - ZNCC_last <= (1 - ZNCC_reference) / 3. On noise-limited
-// frames (real 4k JPEG sand: 5-8 % of the subsets below 0.95 and ~1 % at the iteration cap in
-// every static pair) the two results are two draws of the same noise: over 12,192 such candidates
-// in 38 static frames the ratio of the two decorrelations had its 1st-99th percentiles at
-// 0.65-1.3 and its minimum at 0.36, and the threshold alone switched the reference at 38 of 38
-// frames (a random walk: 0.78 px RMS after 39 static frames against 0.145 px with the first
-// reference kept, at twice the cost). A subset that failed a check against the reference (low
-// correlation, uncertain) or had no result there is rescued by passing against the last frame:
-// its result against the reference is not a value (docs/dic.md, "Reference updating").
-constexpr float kMaxRescuedDecorrelation = 1.0f / 3.0f;
-
+// reference it converged (below the threshold) or ran into the iteration cap, with at most
+// UpdateOptions::auto_rescue_decorrelation (1/3) of the decorrelation it had there:
+// 1 - ZNCC_last <= (1 - ZNCC_reference) / 3. On noise-limited frames (real 4k JPEG sand: 5-8 % of
+// the subsets below 0.95 and ~1 % at the iteration cap in every static pair) the two results are
+// two draws of the same noise: over 12,192 such candidates in 38 static frames the ratio of the
+// two decorrelations had its 1st-99th percentiles at 0.65-1.3 and its minimum at 0.36, and the
+// threshold alone switched the reference at 38 of 38 frames (a random walk: 0.78 px RMS after 39
+// static frames against 0.145 px with the first reference kept, at twice the cost). A subset that
+// failed a check against the reference (low correlation, uncertain) or had no result there is
+// rescued by passing against the last frame: it has no value against the reference (docs/dic.md,
+// "Reference updating").
 class AutoUpdate final : public ReferenceUpdatePolicy {
  public:
-  explicit AutoUpdate(double min_zncc) : min_zncc_(min_zncc) {}
+  AutoUpdate(double min_zncc, double rescue_decorrelation)
+      : min_zncc_(min_zncc), rescue_decorrelation_(rescue_decorrelation) {}
   std::string Name() const override { return "auto"; }
   bool KeepsLastFrame() const override { return true; }
   std::vector<int> RedoCandidates(const SolvedFrame& frame) const override {
@@ -58,13 +57,14 @@ class AutoUpdate final : public ReferenceUpdatePolicy {
     // result is rescued by converging at or above the threshold.
     const bool matched = trial.reference_status == SubsetStatus::kConverged ||
                          trial.reference_status == SubsetStatus::kMaxIterations;
-    if (!matched || std::isnan(trial.reference_zncc)) return true;
-    return 1.0f - trial.zncc <= kMaxRescuedDecorrelation * (1.0f - trial.reference_zncc);
+    if (!matched || !trial.reference_zncc) return true;
+    return 1.0 - trial.zncc <= rescue_decorrelation_ * (1.0 - *trial.reference_zncc);
   }
   bool MakesFrameTheReference(const SolvedFrame& /*frame*/) const override { return false; }
 
  private:
   double min_zncc_;
+  double rescue_decorrelation_;
 };
 
 }  // namespace
@@ -72,7 +72,8 @@ class AutoUpdate final : public ReferenceUpdatePolicy {
 ReferenceUpdatePolicyInfo AutoPolicy() {
   return {"auto", "auto", [](const std::string& argument, const UpdateOptions& options) {
             CheckNoArgument(argument);
-            return std::make_unique<AutoUpdate>(options.auto_min_zncc);
+            return std::make_unique<AutoUpdate>(options.auto_min_zncc,
+                                                options.auto_rescue_decorrelation);
           }};
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "impactdic/core/error.h"
@@ -45,15 +46,18 @@ Prefilter PrefilterFor(Interpolation kind) {
 constexpr int kRowLanes = 8;
 // Columns are filtered 32 at a time: two full cache lines of each row per pass.
 constexpr int kColumnLanes = 32;
-constexpr int kFloatsPerLine = 16;  // 64-byte cache lines.
-constexpr int kColumnPrefetch = 8;  // Rows ahead (measured on 4096x3000: 4, 8 and 16 alike).
+constexpr int kFloatsPerLine = 16;      // 64-byte cache lines.
+constexpr int kColumnPrefetchRows = 8;  // Measured on 4096x3000: 4, 8 and 16 rows alike.
 
 // Causal initial values for mirror boundary conditions (Unser et al. 1993), to this tolerance:
-// the sum is cut after `horizon` samples, z^horizon <= kTolerance.
-constexpr double kTolerance = 1e-12;
+// the sum is cut after CausalHorizon(z) samples, |z|^horizon <= kCausalTolerance.
+constexpr double kCausalTolerance = 1e-12;
+int CausalHorizon(double z) {
+  return static_cast<int>(std::ceil(std::log(kCausalTolerance) / std::log(std::abs(z))));
+}
 template <int kLanes>
 void InitialCausalLanes(const double* c, int n, double z, double* out) {
-  const int horizon = static_cast<int>(std::ceil(std::log(kTolerance) / std::log(std::abs(z))));
+  const int horizon = CausalHorizon(z);
   if (horizon < n) {
     double sum[kLanes];
     for (int l = 0; l < kLanes; ++l) sum[l] = c[l];
@@ -95,9 +99,8 @@ void FilterLines(double* c, int n, const Prefilter& p, const Load& load, const S
   for (int j = 0; j < p.n_poles; ++j) {
     const bool first_pole = j == 0, last_pole = j + 1 == p.n_poles;
     const double z = p.poles[j];
-    // The causal initial value reads the first `horizon` samples (all of a short line).
-    const int horizon = static_cast<int>(std::ceil(std::log(kTolerance) / std::log(std::abs(z))));
-    const int loaded = first_pole ? std::min(n, horizon) : n;
+    // The causal initial value reads the first CausalHorizon(z) samples (all of a short line).
+    const int loaded = first_pole ? std::min(n, CausalHorizon(z)) : n;
     for (int k = 0; first_pole && k < loaded; ++k)
       load(k, c + static_cast<std::ptrdiff_t>(k) * kLanes);
     double first[kLanes];
@@ -184,6 +187,10 @@ Interpolation InterpolationFromString(const std::string& name) {
 void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect region, int guard_px) {
   CheckValue(!image.empty() && image.channels() == 1, "BsplineImage image",
              image.empty() ? "empty image" : "multi-channel image", "a one-channel image");
+  const int depth = image.depth();
+  CheckValue(depth == CV_8U || depth == CV_16U || depth == CV_32F || depth == CV_64F,
+             "BsplineImage image", "pixel depth " + std::to_string(depth),
+             "8-bit or 16-bit unsigned, 32-bit or 64-bit float pixels");
   const cv::Rect full(0, 0, image.cols, image.rows);
   if (region.area() == 0) region = full;
   region = cv::Rect(region.x - guard_px, region.y - guard_px, region.width + 2 * guard_px,
@@ -237,26 +244,26 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
     default: rows(double{});
   }
   // Columns, kColumnLanes adjacent columns at a time (contiguous in each row), groups in parallel;
-  // lanes past the last column are zeros (no denormals or NaN). The rows kColumnPrefetch ahead are
-  // prefetched (down the columns while reading, up while writing): a row of the coefficients is
+  // lanes past the last column are zeros (no denormals or NaN). The rows kColumnPrefetchRows ahead
+  // are prefetched (down the columns while reading, up while writing): a row of the coefficients is
   // a page or more away from the next, where the hardware's prefetcher does not follow (4096x3000:
   // the column pass 2x faster).
   tbb::parallel_for(0, (w + kColumnLanes - 1) / kColumnLanes, [&](int group) {
     constexpr int kLanes = kColumnLanes;
     const int c0 = group * kLanes, lanes = std::min(kLanes, w - c0);
-    const auto prefetch = [&](int r, int write) {
+    const auto prefetch = [&](int r, bool write) {
       const float* row = coefficients_.ptr<float>(r) + c0;
       for (int l = 0; l < lanes; l += kFloatsPerLine) {
         if (write)
-          __builtin_prefetch(row + l, 1);
+          __builtin_prefetch(row + l, /*rw=*/1);
         else
-          __builtin_prefetch(row + l, 0);
+          __builtin_prefetch(row + l, /*rw=*/0);
       }
     };
     FilterLines<kLanes>(
         Scratch(static_cast<std::size_t>(h) * kLanes), h, prefilter,
         [&](int r, double* b) {
-          if (r + kColumnPrefetch < h) prefetch(r + kColumnPrefetch, 0);
+          if (r + kColumnPrefetchRows < h) prefetch(r + kColumnPrefetchRows, /*write=*/false);
           const float* in = coefficients_.ptr<float>(r) + c0;
           if (lanes == kLanes) {  // Whole groups with a fixed count (vectorised).
             for (int l = 0; l < kLanes; ++l) b[l] = gain * in[l];
@@ -266,7 +273,7 @@ void BsplineImage::Build(const cv::Mat& image, Interpolation kind, cv::Rect regi
           }
         },
         [&](int r, const double* b) {
-          if (r >= kColumnPrefetch) prefetch(r - kColumnPrefetch, 1);
+          if (r >= kColumnPrefetchRows) prefetch(r - kColumnPrefetchRows, /*write=*/true);
           float* out = coefficients_.ptr<float>(r) + c0;
           if (lanes == kLanes) {
             for (int l = 0; l < kLanes; ++l) out[l] = static_cast<float>(b[l]);

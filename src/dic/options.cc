@@ -128,6 +128,9 @@ void UpdateOptions::Check() const {
   }
   CheckValue(kAutoMinZnccRange.Contains(auto_min_zncc), "dic.update.auto_min_zncc",
              Num(auto_min_zncc), "in " + kAutoMinZnccRange.Text());
+  CheckValue(kAutoRescueDecorrelationRange.Contains(auto_rescue_decorrelation),
+             "dic.update.auto_rescue_decorrelation", Num(auto_rescue_decorrelation),
+             "in " + kAutoRescueDecorrelationRange.Text());
 }
 
 void OutlierCheckOptions::Check() const {

@@ -196,7 +196,7 @@ class Correlator::Impl::FrameSolver {
     const int nm = m_.shape.nm;
     internal::ParallelRangesWithStops(
         static_cast<int>(list.size()), [&](const tbb::blocked_range<int>& range) {
-          Params next;
+          Params next{};  // Every listed subset has a prediction (pos_last is known).
           Predict(list[range.begin()], &next);
           for (int k = range.begin(); k != range.end(); ++k) {
             const int i = list[k];

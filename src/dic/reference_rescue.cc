@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "correlator_impl.h"
@@ -77,11 +78,12 @@ std::vector<char> Correlator::Impl::RescuedByLastFrame(const std::vector<int>& w
     p0[0] = expected.x - t.pos_last.x;
     p0[shape.nm] = expected.y - t.pos_last.y;
     const IcgnResult r = internal::RunIcgn(shape, im, s, hinv.data(), frame.view, options.icgn, p0);
-    rescued[k] =
-        policy->Rescues({.status = r.status,
-                         .zncc = r.zncc,
-                         .reference_status = st,
-                         .reference_zncc = at[i].r.iterations > 0 ? at[i].r.zncc : std::nanf("")});
+    rescued[k] = policy->Rescues({.status = r.status,
+                                  .zncc = r.zncc,
+                                  .reference_status = st,
+                                  .reference_zncc = at[i].r.iterations > 0
+                                                        ? std::optional<float>(at[i].r.zncc)
+                                                        : std::nullopt});
   });
   out->seconds_reference += timer.ElapsedSeconds();
   return rescued;

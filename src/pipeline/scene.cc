@@ -344,6 +344,10 @@ YamlOptionTable DicTable(Scene* s) {
         "A converged subset below it is low_correlation (failed); not the auto threshold");
   t.Add("auto_min_zncc", &o.update.auto_min_zncc, kAutoMinZnccRange, "a ZNCC threshold",
         "reference_update auto: the reference moves on once a tracked subset falls below it");
+  t.Add("auto_rescue_decorrelation", &o.update.auto_rescue_decorrelation,
+        kAutoRescueDecorrelationRange, "a share of 1 - ZNCC",
+        "reference_update auto: a subset that matched the reference counts as rescued by the last "
+        "frame only with at most this share of its decorrelation left");
   t.AddNumber(
       "max_uncertainty_px", "an uncertainty limit >= 0 [px], or none (0 and none: no limit)",
       MaxUncertaintyText(o.icgn.max_uncertainty_px),

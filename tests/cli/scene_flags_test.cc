@@ -116,7 +116,7 @@ std::vector<LibraryField> DicFields() {
   static_assert(FieldCount<GridOptions>() == 4);
   static_assert(FieldCount<InitialGuessOptions>() == 3);
   static_assert(FieldCount<IcgnOptions>() == 10);
-  static_assert(FieldCount<UpdateOptions>() == 2);
+  static_assert(FieldCount<UpdateOptions>() == 3);
   static_assert(FieldCount<ContinuityCheckOptions>() == 6);
   static_assert(FieldCount<OutlierCheckOptions>() == 5);
   static_assert(FieldCount<DicOptions>() == 9);
@@ -166,6 +166,10 @@ std::vector<LibraryField> DicFields() {
        [&](const Scene& s) { return o(s).update.policy != d.update.policy; }},
       {"dic.update.auto_min_zncc", "dic.auto_min_zncc", "0.9",
        [&](const Scene& s) { return o(s).update.auto_min_zncc != d.update.auto_min_zncc; }},
+      {"dic.update.auto_rescue_decorrelation", "dic.auto_rescue_decorrelation", "0.5",
+       [&](const Scene& s) {
+         return o(s).update.auto_rescue_decorrelation != d.update.auto_rescue_decorrelation;
+       }},
       {"dic.continuity.enabled", "dic.continuity_check", "true",
        [&](const Scene& s) { return o(s).continuity.enabled != d.continuity.enabled; }},
       {"dic.continuity.misfit_ratio", "dic.continuity_misfit_ratio", "3",

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -80,6 +81,42 @@ TEST(Bspline, InterpolatesPixelsAndHonoursTheRegion) {
   for (int r = 15; r < 35; r += 4)
     for (int c = 25; c < 45; c += 3)
       EXPECT_NEAR(spline.Value(c, r), image.at<std::uint8_t>(r, c), 2e-3);
+}
+
+// The interpolation condition at every node the spline can evaluate, for images whose sides are
+// and are not multiples of the prefilter's line groups (8 rows, 32 columns), shorter and longer
+// than its causal horizon (21 samples for the bicubic pole, 33 for the quintic's larger one: the
+// short lines take the exact mirror-boundary initial value), for every pixel depth Build reads.
+// A sample filtered with another line's data, or one left unfiltered, misses by grey levels.
+TEST(Bspline, InterpolatesEveryPixelForEverySizeAndDepth) {
+  for (const Interpolation kind : {Interpolation::kBicubic, Interpolation::kBiquintic}) {
+    for (const int rows : {8, 9, 15, 21, 22, 33, 34, 40, 71}) {
+      for (const int cols : {8, 9, 21, 22, 33, 34, 40, 65, 97}) {
+        cv::Mat grey(rows, cols, CV_8U);
+        cv::randu(grey, 0, 256);
+        for (const int depth : {CV_8U, CV_16U, CV_32F, CV_64F}) {
+          const double scale = depth == CV_16U ? 200 : 1;  // 16-bit data up to 51000.
+          cv::Mat image;
+          grey.convertTo(image, depth, scale);
+          BsplineImage spline;
+          spline.Build(image, kind);
+          double worst = 0;
+          for (int r = 0; r < rows; ++r) {
+            for (int c = 0; c < cols; ++c) {
+              if (!spline.Inside(c, r)) continue;
+              worst = std::max(worst,
+                               std::abs(spline.Value(c, r) / scale - grey.at<std::uint8_t>(r, c)));
+            }
+          }
+          // Float coefficients of values up to 255: rounding ~1e-4 grey levels.
+          EXPECT_LT(worst, 2e-3) << ToString(kind) << " " << cols << "x" << rows << " depth "
+                                 << depth;
+        }
+      }
+    }
+  }
+  BsplineImage spline;
+  EXPECT_THROW(spline.Build(cv::Mat(16, 16, CV_8S, cv::Scalar(1)), Interpolation::kBicubic), Error);
 }
 
 TEST(Bspline, NamesRoundTrip) {

@@ -4,9 +4,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -119,7 +119,7 @@ TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
   EXPECT_TRUE(automatic->KeepsLastFrame());
   // Below the threshold or decorrelated, among trackable subsets only.
   EXPECT_EQ(automatic->RedoCandidates(frame), (std::vector<int>{1, 2}));
-  const float no_result = std::nanf("");
+  const std::optional<float> no_result;  // IC-GN did not iterate against the reference.
   // Converged at or above the threshold, with no result against the reference to compare with.
   EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
                                   .zncc = 0.96f,
@@ -158,6 +158,16 @@ TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
                                   .zncc = 0.96f,
                                   .reference_status = SubsetStatus::kLowCorrelation,
                                   .reference_zncc = 0.7f}));
+  // The share left is an option: at 0.5, 0.93 -> 0.97 (43 % left) is a rescue.
+  UpdateOptions half = options;
+  half.auto_rescue_decorrelation = 0.5;
+  EXPECT_TRUE(ReferenceUpdatePolicyFromString("auto", half)
+                  ->Rescues({.status = SubsetStatus::kConverged,
+                             .zncc = 0.97f,
+                             .reference_status = SubsetStatus::kConverged,
+                             .reference_zncc = 0.93f}));
+  half.auto_rescue_decorrelation = 0;
+  EXPECT_THROW(half.Check(), Error);
   EXPECT_FALSE(automatic->MakesFrameTheReference(frame));
   EXPECT_FALSE(ReferenceUpdatePolicyFromString("fixed")->MakesFrameTheReference(frame));
   EXPECT_TRUE(ReferenceUpdatePolicyFromString("incremental")->MakesFrameTheReference(frame));

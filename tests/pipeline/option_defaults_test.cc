@@ -61,6 +61,7 @@ TEST(OptionDefaults, SceneDicKeysDefaultToDicOptions) {
   EXPECT_EQ(s.icgn.max_uncertainty_px, d.icgn.max_uncertainty_px);
   EXPECT_EQ(s.update.policy, d.update.policy);
   EXPECT_EQ(s.update.auto_min_zncc, d.update.auto_min_zncc);
+  EXPECT_EQ(s.update.auto_rescue_decorrelation, d.update.auto_rescue_decorrelation);
 }
 
 TEST(OptionDefaults, SceneModelAndTestKeysDefaultToImpactModelParameters) {

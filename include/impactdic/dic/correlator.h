@@ -40,7 +40,9 @@
 //     pixel centre) is read from the subset's warp, so the same material points are followed
 //     through every update and their displacements compose exactly. `auto` switches to the last
 //     frame only if that rescues a subset that decorrelated (it passes against the last frame,
-//     tested on those subsets alone); subsets that fail against both references (covered by an
+//     tested on those subsets alone, keeping at most UpdateOptions::auto_rescue_decorrelation of
+//     the decorrelation it had against the reference if it matched there); subsets that fail
+//     against both references (covered by an
 //     object entering the view, a blurred frame) keep the reference and are found again when
 //     they reappear. A subset not found in the frame that becomes the reference (any mode) is
 //     kept against the reference it was last found in, tried against it in every frame (`lost`

@@ -43,6 +43,7 @@ inline constexpr ValueRange kConvergenceSigmaFractionRange{0, 1, ""};
 inline constexpr ValueRange kMaxIterationsRange{1, 200, ""};
 inline constexpr ValueRange kMinZnccRange{-1, 1, "", /*min_open=*/false, /*max_open=*/true};
 inline constexpr ValueRange kAutoMinZnccRange{-1, 1, "", /*min_open=*/true};
+inline constexpr ValueRange kAutoRescueDecorrelationRange{0, 1, "", /*min_open=*/true};
 inline constexpr ValueRange kMinMisfitRange{0, 1, "", /*min_open=*/false, /*max_open=*/true};
 // An 8-bit image's standard deviation is at most 127.5 grey levels.
 inline constexpr ValueRange kMinContrastRange{0, 255, "grey levels"};
@@ -129,7 +130,9 @@ struct IcgnOptions {
 // "fixed": always the first image; "incremental": the previous frame; "every:N": every N frames;
 // "auto": keep the reference while every subset that is still tracked correlates at or above
 // auto_min_zncc; when one does not, switch to the last good frame and redo the frame against it,
-// but only if that rescues one of the subsets that failed (tested on those subsets alone);
+// but only if that rescues one of the subsets that failed (tested on those subsets alone; a
+// subset that matched the reference must keep at most auto_rescue_decorrelation of its
+// decorrelation);
 // subsets that fail against both references (e.g. covered by the pounder) keep the reference and
 // are found again when they reappear.
 struct UpdateOptions {
@@ -138,6 +141,12 @@ struct UpdateOptions {
   // kAutoMinZnccRange. Above IcgnOptions::min_zncc on purpose: the reference moves on while the
   // subsets still correlate well, before they fail.
   double auto_min_zncc = 0.95;
+  // "auto": the share of a subset's decorrelation (1 - ZNCC) against the reference that may be left
+  // against the last frame for the subset to count as rescued, when against the reference it
+  // converged (below auto_min_zncc) or reached the iteration cap: the last frame must do clearly
+  // better than two draws of the same noise (docs/dic.md, "Reference updating"),
+  // kAutoRescueDecorrelationRange (0, 1]; 1: any result at or above auto_min_zncc that is no worse.
+  double auto_rescue_decorrelation = 1.0 / 3.0;
   void Check() const;
 };
 

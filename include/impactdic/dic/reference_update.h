@@ -19,6 +19,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,9 +43,9 @@ struct RescueTrial {
   SubsetStatus status = SubsetStatus::kNotFound;  // Against the last frame.
   float zncc = 0;                                 // Against the last frame (if converged).
   SubsetStatus reference_status = SubsetStatus::kNotFound;  // Against the current reference.
-  // ZNCC reached against the current reference; NaN when IC-GN did not iterate there (no guess,
-  // unusable subset), so that no comparison is possible.
-  float reference_zncc = 0;
+  // ZNCC reached against the current reference; none when IC-GN did not iterate there (no guess,
+  // unusable subset).
+  std::optional<float> reference_zncc;
 };
 
 class ReferenceUpdatePolicy {
