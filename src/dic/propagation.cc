@@ -122,22 +122,24 @@ class Correlator::Impl::FrameSolver {
   }
 
  private:
-  // body(k) for k = 0 .. list.size() - 1 as ParallelForWithStops runs it; before each, the
-  // subset list[k + 1] that the same thread solves next is prefetched (PrefetchSubset) at the
-  // translation of subset from[k + 1] (a solved neighbour, or a lattice node of the fill: a hint).
-  template <typename Body>
-  void ForEachPrefetched(const std::vector<int>& list, const std::vector<int>& from,
-                         const Body& body) {
+  // body(k, guess(k)) for k = 0 .. list.size() - 1 as ParallelForWithStops runs it; before each,
+  // the subset list[k + 1] that the same thread solves next is prefetched (PrefetchSubset) at the
+  // translation of guess(k + 1), each guess computed once (a prediction, or a solved neighbour's
+  // warp as a hint).
+  template <typename Guess, typename Body>
+  void ForEachPrefetched(const std::vector<int>& list, const Guess& guess, const Body& body) {
     const int nm = m_.shape.nm;
     internal::ParallelRangesWithStops(
         static_cast<int>(list.size()), [&](const tbb::blocked_range<int>& range) {
+          Params next = guess(range.begin());
           for (int k = range.begin(); k != range.end(); ++k) {
+            const Params current = next;
             if (k + 1 < range.end()) {
-              const Params& p = at_[from[k + 1]].r.p;
+              next = guess(k + 1);
               internal::PrefetchSubset(m_.shape, m_.ref.images, m_.ref.subsets[list[k + 1]],
-                                       frame_.view, p[0], p[nm]);
+                                       frame_.view, next[0], next[nm]);
             }
-            body(k);
+            body(k, current);
           }
         });
   }
@@ -190,25 +192,19 @@ class Correlator::Impl::FrameSolver {
     timer_.Restart();
     const std::vector<int> list = internal::IndicesWhere(
         n_, [&](int i) { return usable_[i] && !std::isnan(m_.tracks[i].pos_last.x); });
-    // Each thread predicts the next subset of its range and prefetches its data at that
-    // displacement before solving the current one (on 4k frames at step 50, no two subsets share
-    // a cache line: without it each waits for memory).
-    const int nm = m_.shape.nm;
-    internal::ParallelRangesWithStops(
-        static_cast<int>(list.size()), [&](const tbb::blocked_range<int>& range) {
-          Params next{};  // Every listed subset has a prediction (pos_last is known).
-          Predict(list[range.begin()], &next);
-          for (int k = range.begin(); k != range.end(); ++k) {
-            const int i = list[k];
-            const Params p0 = next;
-            if (k + 1 < range.end()) {
-              Predict(list[k + 1], &next);
-              internal::PrefetchSubset(m_.shape, m_.ref.images, m_.ref.subsets[list[k + 1]],
-                                       frame_.view, next[0], next[nm]);
-            }
-            at_[i].r = Icgn(i, p0);
-            at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
-          }
+    // Each subset starts from its prediction, which is also the hint of its prefetch (on 4k
+    // frames at step 50, no two subsets share a cache line: without it each waits for memory).
+    ForEachPrefetched(
+        list,
+        [&](int k) {
+          Params p0{};  // Every listed subset has a prediction (pos_last is known).
+          Predict(list[k], &p0);
+          return p0;
+        },
+        [&](int k, const Params& p0) {
+          const int i = list[k];
+          at_[i].r = Icgn(i, p0);
+          at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
         });
     out_->seconds_icgn += timer_.ElapsedSeconds();
   }
@@ -346,19 +342,21 @@ class Correlator::Impl::FrameSolver {
     const internal::Shape& warp = m_.shape;
     const auto& subsets = m_.ref.subsets;
     timer_.Restart();
-    ForEachPrefetched(frontier, best, [&](int k) {
-      const int i = frontier[k], j = best[k];
-      const SubsetRef& si = subsets[i];
-      const SubsetRef& sj = subsets[j];
-      at_[i].propagated = true;
-      if (stride == 1) {
-        at_[i].r = Icgn(i, internal::Transfer(warp, at_[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
-      } else {
-        // On the coarse lattice the neighbours are far apart: fit all solved ones.
-        at_[i].r = Icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k]));
-      }
-      at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
-    });
+    ForEachPrefetched(
+        frontier, [&](int k) { return at_[best[k]].r.p; },
+        [&](int k, const Params& /*hint*/) {
+          const int i = frontier[k], j = best[k];
+          const SubsetRef& si = subsets[i];
+          const SubsetRef& sj = subsets[j];
+          at_[i].propagated = true;
+          if (stride == 1) {
+            at_[i].r = Icgn(i, internal::Transfer(warp, at_[j].r.p, si.cx - sj.cx, si.cy - sj.cy));
+          } else {
+            // On the coarse lattice the neighbours are far apart: fit all solved ones.
+            at_[i].r = Icgn(i, FitGuess(si, neighbours[k].data(), neighbour_count[k]));
+          }
+          at_[i].solved = at_[i].r.status == SubsetStatus::kConverged;
+        });
     out_->seconds_icgn += timer_.ElapsedSeconds();
     // Subsets that failed from their neighbour get their own search around its guess.
     std::vector<int> retry, from;
@@ -432,26 +430,28 @@ class Correlator::Impl::FrameSolver {
       node.push_back((r - r % stride) * grid_nx + (c - c % stride));
     }
     timer_.Restart();
-    ForEachPrefetched(fill, node, [&](int k) {
-      const int i = fill[k], r = i / grid_nx, c = i % grid_nx;
-      const SubsetRef& si = m_.ref.subsets[i];
-      std::array<int, 8> from;
-      int count = 0;
-      for (int dr = -1; dr <= 1; ++dr) {
-        for (int dc = -1; dc <= 1; ++dc) {
-          const int rr = r + dr, cc = c + dc;
-          if (rr < 0 || rr >= grid_ny || cc < 0 || cc >= grid_nx) continue;
-          const int j = rr * grid_nx + cc;
-          if (OnLattice(j, stride) && at_[j].solved) from[count++] = j;
-        }
-      }
-      if (count == 0) return;
-      const IcgnResult r0 = Icgn(i, FitGuess(si, from.data(), count));
-      if (r0.status == SubsetStatus::kConverged) {
-        at_[i].r = r0;
-        at_[i].solved = true;
-      }
-    });
+    ForEachPrefetched(
+        fill, [&](int k) { return at_[node[k]].r.p; },
+        [&](int k, const Params& /*hint*/) {
+          const int i = fill[k], r = i / grid_nx, c = i % grid_nx;
+          const SubsetRef& si = m_.ref.subsets[i];
+          std::array<int, 8> from;
+          int count = 0;
+          for (int dr = -1; dr <= 1; ++dr) {
+            for (int dc = -1; dc <= 1; ++dc) {
+              const int rr = r + dr, cc = c + dc;
+              if (rr < 0 || rr >= grid_ny || cc < 0 || cc >= grid_nx) continue;
+              const int j = rr * grid_nx + cc;
+              if (OnLattice(j, stride) && at_[j].solved) from[count++] = j;
+            }
+          }
+          if (count == 0) return;
+          const IcgnResult r0 = Icgn(i, FitGuess(si, from.data(), count));
+          if (r0.status == SubsetStatus::kConverged) {
+            at_[i].r = r0;
+            at_[i].solved = true;
+          }
+        });
     out_->seconds_icgn += timer_.ElapsedSeconds();
   }
 

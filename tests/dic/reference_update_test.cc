@@ -119,53 +119,37 @@ TEST(ReferenceUpdate, BuiltinPoliciesDecideAsDocumented) {
   EXPECT_TRUE(automatic->KeepsLastFrame());
   // Below the threshold or decorrelated, among trackable subsets only.
   EXPECT_EQ(automatic->RedoCandidates(frame), (std::vector<int>{1, 2}));
-  const std::optional<float> no_result;  // IC-GN did not iterate against the reference.
+  // A candidate's result against the last frame (converged at `zncc` unless said otherwise) and
+  // against the reference (none: IC-GN did not iterate there).
+  const auto trial = [](float last_zncc, SubsetStatus reference_status,
+                        std::optional<float> reference_zncc,
+                        SubsetStatus last_status = SubsetStatus::kConverged) {
+    return RescueTrial{.status = last_status,
+                       .zncc = last_zncc,
+                       .reference_status = reference_status,
+                       .reference_zncc = reference_zncc};
+  };
+  const auto rescues = [&](const RescueTrial& t) { return automatic->Rescues(t); };
   // Converged at or above the threshold, with no result against the reference to compare with.
-  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                  .zncc = 0.96f,
-                                  .reference_status = SubsetStatus::kNotFound,
-                                  .reference_zncc = no_result}));
-  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                   .zncc = 0.94f,
-                                   .reference_status = SubsetStatus::kNotFound,
-                                   .reference_zncc = no_result}));
-  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kMaxIterations,
-                                   .zncc = 0.99f,
-                                   .reference_status = SubsetStatus::kNotFound,
-                                   .reference_zncc = no_result}));
+  EXPECT_TRUE(rescues(trial(0.96f, SubsetStatus::kNotFound, std::nullopt)));
+  EXPECT_FALSE(rescues(trial(0.94f, SubsetStatus::kNotFound, std::nullopt)));
+  EXPECT_FALSE(
+      rescues(trial(0.99f, SubsetStatus::kNotFound, std::nullopt, SubsetStatus::kMaxIterations)));
   // Against a match at the reference (converged, or the iteration cap): at most a third of its
   // decorrelation (1 - ZNCC) is left. 0.85 -> 0.96 removes 73 % of it; 0.93 -> 0.96 (two draws of
   // the noise) 43 %; a subset that hit the iteration cap at 0.99 is not rescued by converging at
   // 0.99.
-  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                  .zncc = 0.96f,
-                                  .reference_status = SubsetStatus::kConverged,
-                                  .reference_zncc = 0.85f}));
-  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                   .zncc = 0.96f,
-                                   .reference_status = SubsetStatus::kConverged,
-                                   .reference_zncc = 0.93f}));
-  EXPECT_FALSE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                   .zncc = 0.99f,
-                                   .reference_status = SubsetStatus::kMaxIterations,
-                                   .reference_zncc = 0.99f}));
+  EXPECT_TRUE(rescues(trial(0.96f, SubsetStatus::kConverged, 0.85f)));
+  EXPECT_FALSE(rescues(trial(0.96f, SubsetStatus::kConverged, 0.93f)));
+  EXPECT_FALSE(rescues(trial(0.99f, SubsetStatus::kMaxIterations, 0.99f)));
   // A subset that failed a check against the reference has no value there: passing suffices.
-  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                  .zncc = 0.96f,
-                                  .reference_status = SubsetStatus::kUncertain,
-                                  .reference_zncc = 0.99f}));
-  EXPECT_TRUE(automatic->Rescues({.status = SubsetStatus::kConverged,
-                                  .zncc = 0.96f,
-                                  .reference_status = SubsetStatus::kLowCorrelation,
-                                  .reference_zncc = 0.7f}));
+  EXPECT_TRUE(rescues(trial(0.96f, SubsetStatus::kUncertain, 0.99f)));
+  EXPECT_TRUE(rescues(trial(0.96f, SubsetStatus::kLowCorrelation, 0.7f)));
   // The share left is an option: at 0.5, 0.93 -> 0.97 (43 % left) is a rescue.
   UpdateOptions half = options;
   half.auto_rescue_decorrelation = 0.5;
   EXPECT_TRUE(ReferenceUpdatePolicyFromString("auto", half)
-                  ->Rescues({.status = SubsetStatus::kConverged,
-                             .zncc = 0.97f,
-                             .reference_status = SubsetStatus::kConverged,
-                             .reference_zncc = 0.93f}));
+                  ->Rescues(trial(0.97f, SubsetStatus::kConverged, 0.93f)));
   half.auto_rescue_decorrelation = 0;
   EXPECT_THROW(half.Check(), Error);
   EXPECT_FALSE(automatic->MakesFrameTheReference(frame));
