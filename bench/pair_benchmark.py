@@ -20,6 +20,14 @@ OpenCV loader. Build its example `test_2d_dic_fftcc_icgn1` (FFTW 3, Eigen 3, Ope
 `g++ -O3 -march=native -fopenmp`, edited to take the two image paths from argv, use 2 threads and
 skip its CSV output, and give it as --anchor '/path/to/fftcc_icgn1 {ref} {def}'. Speed figures
 belong here and in docs/dic.md, never in timed unit tests.
+
+Where the anchor cannot run (it is not installed on the benchmark VM, and the VM's speed drifts
+through the day by up to 1.6x, so a figure from another run does not compare), --anchor-via
+BINARY RATIO estimates it from a program measured against it once: BINARY is timed in the same
+runs as the others and RATIO times its median stands for the anchor's. Issue 38 timed OpenCorr
+at 1.00 s and impactdic at main ffeac34 at 0.43 s in one run: build that commit's `impactdic`
+(`git worktree add /tmp/ffeac34 ffeac34`, then the README's build) and give
+--anchor-via /tmp/ffeac34/build/src/cli/impactdic 2.326.
 """
 import argparse
 import os
@@ -63,6 +71,9 @@ def main():
     ap.add_argument("--impactdic", action="append", required=True,
                     help="impactdic binary (repeat to compare several)")
     ap.add_argument("--anchor", help="command line of the anchor, with {ref} and {def}")
+    ap.add_argument("--anchor-via", nargs=2, metavar=("BINARY", "RATIO"),
+                    help="estimate the anchor as RATIO x the median of this impactdic binary, "
+                         "timed in the same runs")
     ap.add_argument("--runs", type=int, default=15)
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--pair", nargs=2, default=["/tmp/impactdic_dic_bench/frame_0.png",
@@ -70,6 +81,16 @@ def main():
     ap.add_argument("--out", default="/dev/shm/impactdic_pair_benchmark.h5",
                     help="correlate output (on tmpfs by default: the disk is not timed)")
     args = ap.parse_args()
+    if args.anchor and args.anchor_via:
+        sys.exit("--anchor and --anchor-via: give one (the anchor itself, or its estimate)")
+    via_ratio = None
+    if args.anchor_via:
+        try:
+            via_ratio = float(args.anchor_via[1])
+        except ValueError:
+            via_ratio = -1.0
+        if not via_ratio > 0:
+            sys.exit(f"--anchor-via RATIO: a number > 0 expected, got {args.anchor_via[1]}")
     for p in args.pair:
         if not os.path.isfile(p):
             sys.exit(f"{p} does not exist: run bench/dic_benchmark once (it writes the pair), or "
@@ -82,6 +103,8 @@ def main():
     programs = {b: correlate(b) for b in args.impactdic}
     if args.anchor:
         programs["anchor"] = shlex.split(args.anchor.format(ref=args.pair[0], **{"def": args.pair[1]}))
+    if args.anchor_via:
+        programs["anchor proxy"] = correlate(args.anchor_via[0])
     walls = {name: [] for name in programs}
     split = {b: {p: [] for p in PHASES} for b in args.impactdic}
     load = []
@@ -99,14 +122,23 @@ def main():
     print(f"{args.runs} runs each, {os.cpu_count()} CPUs, load average {min(load):.2f}-"
           f"{max(load):.2f} (1 min); pair {args.pair[0]} {args.pair[1]}, subset 25, step 10, "
           f"{args.threads} threads")
+    anchor = None
+    if args.anchor:
+        anchor = statistics.median(walls["anchor"])
+    elif args.anchor_via:
+        anchor = via_ratio * statistics.median(walls["anchor proxy"])
     for name in programs:
-        print(f"\n{name}\n  whole process wall {summary(walls[name])}")
+        shown = f"{name} ({args.anchor_via[0]})" if name == "anchor proxy" else name
+        print(f"\n{shown}\n  whole process wall {summary(walls[name])}")
+        if name == "anchor proxy":
+            print(f"  the anchor estimated: {via_ratio:g} x {statistics.median(walls[name]):.4f} s "
+                  f"= {anchor:.4f} s")
         if name in split:
             parts = ", ".join(f"{p} {statistics.median(v):.4f}" for p, v in split[name].items() if v)
             print(f"  phases (median, s): {parts}")
-            if args.anchor:
-                ratio = statistics.median(walls["anchor"]) / statistics.median(walls[name])
-                print(f"  anchor / this: {ratio:.2f}x")
+            if anchor is not None:
+                ratio = anchor / statistics.median(walls[name])
+                print(f"  anchor{' (estimated)' if args.anchor_via else ''} / this: {ratio:.2f}x")
     if len(args.impactdic) == 2:
         a, b = args.impactdic
         ma, mb = statistics.median(walls[a]), statistics.median(walls[b])

@@ -404,8 +404,9 @@ double LargestNoiseRatio(const double* hinv, const double* nn, int n, int nm) {
 const double* TrueHessianInverse(const Shape& shape, const double* hinv,
                                  const std::array<double, 2>& noise2, double* htinv) {
   const int n = shape.n, nm = shape.nm;
-  double hh[144], nn[144] = {}, ht[144];
+  double hh[144], nn[144], ht[144];
   if (!InvertSpd(hinv, n, hh)) return hinv;
+  std::fill_n(nn, n * n, 0.0);
   for (int a = 0; a < n; ++a) {
     for (int b = 0; b < n; ++b) {
       if (a / nm == b / nm)

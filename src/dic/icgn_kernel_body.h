@@ -891,6 +891,29 @@ void LaneSums(int length, Term term, double sums[kTerms]) {
   }
 }
 
+#if IMPACTDIC_DIC_AVX512
+// The lanes of a row of n pixels from pixel i on: all 16, or those before the row's end.
+inline __mmask16 RowMask16(int n, int i) {
+  return n - i >= 16 ? kAll : static_cast<__mmask16>((1u << (n - i)) - 1);
+}
+
+// The positions xi = i - h of the 16 pixels from pixel i on.
+inline __m512 RowXi16(int i, int h) {
+  return _mm512_add_ps(_mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                       Splat16(static_cast<float>(i - h)));
+}
+
+// (c0 + xi (c1 + xi c2)) gx + (c3 + xi (c4 + xi c5)) gy, lane by lane (the row's polynomials
+// of J dp or of the influences: Residuals, CorrelatedSums).
+inline __m512 RowTerm16(const float* c, __m512 xi, __m512 gx, __m512 gy) {
+  const __m512 px =
+      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[2]), Splat16(c[1])), Splat16(c[0]));
+  const __m512 py =
+      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[5]), Splat16(c[4])), Splat16(c[3]));
+  return _mm512_fmadd_ps(px, gx, _mm512_mul_ps(py, gy));
+}
+#endif
+
 void Residuals(const ResidualInput& in, float* r, double noise[2]) {
   const int size = 2 * in.half + 1, stride = in.stride;
   float* rs = r + in.lead;
@@ -904,14 +927,40 @@ void Residuals(const ResidualInput& in, float* r, double noise[2]) {
     const float* g = in.g + static_cast<std::ptrdiff_t>(j) * size;
     const float* c = in.step + static_cast<std::ptrdiff_t>(6) * j;
     float* rj = rs + static_cast<std::ptrdiff_t>(j) * stride;
+#if IMPACTDIC_DIC_AVX512
+    // 16 pixels at a time, the lanes past the row's end masked (its padding stays zero).
+    for (int i = 0; i < size; i += 16) {
+      const __mmask16 m = RowMask16(size, i);
+      const __m512 own = _mm512_fnmadd_ps(
+          Splat16(ratio), _mm512_sub_ps(_mm512_maskz_loadu_ps(m, g + i), Splat16(gm)),
+          _mm512_sub_ps(_mm512_maskz_loadu_ps(m, f + i), Splat16(fm)));
+      const __m512 step = RowTerm16(c, RowXi16(i, h), _mm512_maskz_loadu_ps(m, gx + i),
+                                    _mm512_maskz_loadu_ps(m, gy + i));
+      _mm512_mask_storeu_ps(rj + i, m, _mm512_add_ps(own, step));
+    }
+#else
     for (int i = 0; i < size; ++i) {
       const float xi = static_cast<float>(i - h);
       rj[i] = ((f[i] - fm) - ratio * (g[i] - gm)) +
               ((c[0] + xi * (c[1] + xi * c[2])) * gx[i] + (c[3] + xi * (c[4] + xi * c[5])) * gy[i]);
     }
+#endif
   }
   const float* xm = in.x_inside + in.lead;
   const float* ym = in.y_inside + in.lead;
+#if IMPACTDIC_DIC_AVX512
+  // As LaneSums<2> below: lane l sums the cells l, l + 16, ... in order, then the lanes fold.
+  __m512 ax = _mm512_setzero_ps(), ay = _mm512_setzero_ps();
+  for (int k = 0; k < in.length; k += 16) {
+    const __m512 dx = _mm512_sub_ps(_mm512_loadu_ps(rs + k + 1), _mm512_loadu_ps(rs + k - 1));
+    const __m512 dy =
+        _mm512_sub_ps(_mm512_loadu_ps(rs + k + stride), _mm512_loadu_ps(rs + k - stride));
+    ax = _mm512_fmadd_ps(_mm512_loadu_ps(xm + k), _mm512_mul_ps(dx, dx), ax);
+    ay = _mm512_fmadd_ps(_mm512_loadu_ps(ym + k), _mm512_mul_ps(dy, dy), ay);
+  }
+  noise[0] = FoldLanes16(ax);
+  noise[1] = FoldLanes16(ay);
+#else
   LaneSums<2>(
       in.length,
       [&](int k, float t[2]) {
@@ -920,6 +969,7 @@ void Residuals(const ResidualInput& in, float* r, double noise[2]) {
         t[1] = ym[k] * (dy * dy);
       },
       noise);
+#endif
 }
 
 // The influences, then sum_d rho(d) A(d) over all lags d with |dx|, |dy| <= kResidualLagPx
@@ -936,11 +986,21 @@ void CorrelatedSums(const ResidualInput& in, const float* r, const float* coef, 
     const float* c = coef + static_cast<std::ptrdiff_t>(12) * j;
     float* uj = us + static_cast<std::ptrdiff_t>(j) * stride;
     float* vj = vs + static_cast<std::ptrdiff_t>(j) * stride;
+#if IMPACTDIC_DIC_AVX512
+    for (int i = 0; i < size; i += 16) {  // As Residuals.
+      const __mmask16 m = RowMask16(size, i);
+      const __m512 xi = RowXi16(i, h);
+      const __m512 x = _mm512_maskz_loadu_ps(m, gx + i), y = _mm512_maskz_loadu_ps(m, gy + i);
+      _mm512_mask_storeu_ps(uj + i, m, RowTerm16(c, xi, x, y));
+      _mm512_mask_storeu_ps(vj + i, m, RowTerm16(c + 6, xi, x, y));
+    }
+#else
     for (int i = 0; i < size; ++i) {
       const float xi = static_cast<float>(i - h);
       uj[i] = (c[0] + xi * (c[1] + xi * c[2])) * gx[i] + (c[3] + xi * (c[4] + xi * c[5])) * gy[i];
       vj[i] = (c[6] + xi * (c[7] + xi * c[8])) * gx[i] + (c[9] + xi * (c[10] + xi * c[11])) * gy[i];
     }
+#endif
   }
   // The lags d with dy > 0, or dy == 0 and dx >= 0 (d = 0 first), each standing for itself and
   // its opposite -d: all kLags sums of one array in one sweep, each cell loaded once and multiplied

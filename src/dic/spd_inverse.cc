@@ -16,7 +16,10 @@ namespace {
 template <int kN>
 bool CholeskyInverse(const double* a, int n_runtime, double* inv) {
   const int n = kN > 0 ? kN : n_runtime;
-  double l[144] = {}, m[144] = {};
+  // Only the lower triangles are read; sized for kN (zeroing 12 x 12 for a 6 x 6 matrix was a
+  // visible share of the call).
+  constexpr int kCells = kN > 0 ? kN * kN : 144;
+  double l[kCells] = {}, m[kCells] = {};
   for (int j = 0; j < n; ++j) {  // A = L L^T.
     double d = a[j * n + j];
     for (int k = 0; k < j; ++k) d -= l[j * n + k] * l[j * n + k];

@@ -210,6 +210,7 @@ std::set<std::string> HelpFlags() {
 const std::map<std::string, std::string>& OtherProgramsFlags() {
   static const std::map<std::string, std::string> flags = {
       {"--anchor", "bench/pair_benchmark.py"},
+      {"--anchor-via", "bench/pair_benchmark.py"},
       // Slurm's sbatch, as the job-array test submits it.
       {"--array", "tests/pipeline/slurm_campaign_test.sh"},
       {"--cpus-per-task", "tests/pipeline/slurm_campaign_test.sh"},
