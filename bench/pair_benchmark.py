@@ -22,12 +22,16 @@ skip its CSV output, and give it as --anchor '/path/to/fftcc_icgn1 {ref} {def}'.
 belong here and in docs/dic.md, never in timed unit tests.
 
 Where the anchor cannot run (it is not installed on the benchmark VM, and the VM's speed drifts
-through the day by up to 1.6x, so a figure from another run does not compare), --anchor-via
+through the day by up to 2x, so a figure from another run does not compare), --anchor-via
 BINARY RATIO estimates it from a program measured against it once: BINARY is timed in the same
-runs as the others and RATIO times its median stands for the anchor's. Issue 38 timed OpenCorr
-at 1.00 s and impactdic at main ffeac34 at 0.43 s in one run: build that commit's `impactdic`
-(`git worktree add /tmp/ffeac34 ffeac34`, then the README's build) and give
---anchor-via /tmp/ffeac34/build/src/cli/impactdic 2.326.
+runs as the others and RATIO times its median stands for the anchor's (assuming both slow down
+alike with the machine). Issue 38 timed OpenCorr at 1.00 s and impactdic at main ffeac34 at
+0.43 s in one run: build that commit's `impactdic`
+
+  git worktree add /tmp/ffeac34 ffeac34 && cd /tmp/ffeac34 && \\
+      cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release && cmake --build build --target impactdic
+
+and give --anchor-via /tmp/ffeac34/build/src/cli/impactdic 2.326.
 """
 import argparse
 import os
