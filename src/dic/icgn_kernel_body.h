@@ -587,6 +587,27 @@ inline __m512 Splat16(float v) { return _mm512_set1_ps(v); }
 // -Wmaybe-uninitialized in the unmasked ones).
 constexpr __mmask16 kAll = 0xFFFF;
 
+// The lanes of a row of n pixels from pixel i on: all 16, or those before the row's end.
+inline __mmask16 RowMask16(int n, int i) {
+  return n - i >= 16 ? kAll : static_cast<__mmask16>((1u << (n - i)) - 1);
+}
+
+// The positions xi = i - h of the 16 pixels from pixel i on.
+inline __m512 RowXi16(int i, int h) {
+  return _mm512_add_ps(_mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
+                       Splat16(static_cast<float>(i - h)));
+}
+
+// (c0 + xi (c1 + xi c2)) gx + (c3 + xi (c4 + xi c5)) gy, lane by lane (the row's polynomials
+// of J dp or of the influences: Residuals, CorrelatedSums).
+inline __m512 RowTerm16(const float* c, __m512 xi, __m512 gx, __m512 gy) {
+  const __m512 px =
+      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[2]), Splat16(c[1])), Splat16(c[0]));
+  const __m512 py =
+      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[5]), Splat16(c[4])), Splat16(c[3]));
+  return _mm512_fmadd_ps(px, gx, _mm512_mul_ps(py, gy));
+}
+
 // Sum of the 16 lanes, in a fixed order.
 inline double Sum16(__m512 v) {
   alignas(64) float lanes[16];
@@ -670,7 +691,6 @@ void AccumulateAvx512(const PassInput& in, PassSums* out) {
   const double* p = in.p;
   const double u = in.u, v = in.v;
   const float* centre = in.centre;
-  const __m512 lane = _mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15);
   const int blocks = (size + 15) / 16;
   const int istride = static_cast<int>(in.stride);
   constexpr float kScale2 = kWeightScale<kTaps> * kWeightScale<kTaps>;
@@ -700,9 +720,9 @@ void AccumulateAvx512(const PassInput& in, PassSums* out) {
     __m512 ra00 = _mm512_setzero_ps(), ra10 = ra00, ra20 = ra00, rb00 = ra00, rb10 = ra00,
            rb20 = ra00;
     for (int b = 0; b < blocks; ++b) {
-      const int i0 = 16 * b, valid = Min(16, size - i0);
-      const __mmask16 m = static_cast<__mmask16>((1u << valid) - 1);
-      const __m512 xi = _mm512_add_ps(lane, Splat16(static_cast<float>(i0 - h)));
+      const int i0 = 16 * b;
+      const __mmask16 m = RowMask16(size, i0);
+      const __m512 xi = RowXi16(i0, h);
       __m512 x, y;
       if constexpr (kQuad) {
         x = _mm512_fmadd_ps(_mm512_fmadd_ps(xi, Splat16(ax2), Splat16(ax1)), xi, Splat16(ax0));
@@ -890,29 +910,6 @@ void LaneSums(int length, Term term, double sums[kTerms]) {
     sums[q] = acc[q][0];
   }
 }
-
-#if IMPACTDIC_DIC_AVX512
-// The lanes of a row of n pixels from pixel i on: all 16, or those before the row's end.
-inline __mmask16 RowMask16(int n, int i) {
-  return n - i >= 16 ? kAll : static_cast<__mmask16>((1u << (n - i)) - 1);
-}
-
-// The positions xi = i - h of the 16 pixels from pixel i on.
-inline __m512 RowXi16(int i, int h) {
-  return _mm512_add_ps(_mm512_setr_ps(0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15),
-                       Splat16(static_cast<float>(i - h)));
-}
-
-// (c0 + xi (c1 + xi c2)) gx + (c3 + xi (c4 + xi c5)) gy, lane by lane (the row's polynomials
-// of J dp or of the influences: Residuals, CorrelatedSums).
-inline __m512 RowTerm16(const float* c, __m512 xi, __m512 gx, __m512 gy) {
-  const __m512 px =
-      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[2]), Splat16(c[1])), Splat16(c[0]));
-  const __m512 py =
-      _mm512_fmadd_ps(xi, _mm512_fmadd_ps(xi, Splat16(c[5]), Splat16(c[4])), Splat16(c[3]));
-  return _mm512_fmadd_ps(px, gx, _mm512_mul_ps(py, gy));
-}
-#endif
 
 void Residuals(const ResidualInput& in, float* r, double noise[2]) {
   const int size = 2 * in.half + 1, stride = in.stride;

@@ -16,8 +16,7 @@ namespace {
 template <int kN>
 bool CholeskyInverse(const double* a, int n_runtime, double* inv) {
   const int n = kN > 0 ? kN : n_runtime;
-  // Only the lower triangles are read; sized for kN (zeroing 12 x 12 for a 6 x 6 matrix was a
-  // visible share of the call).
+  // Only the lower triangles are read; sized for kN (not 12 x 12 zeroed for every 6 x 6 matrix).
   constexpr int kCells = kN > 0 ? kN * kN : 144;
   double l[kCells] = {}, m[kCells] = {};
   for (int j = 0; j < n; ++j) {  // A = L L^T.
